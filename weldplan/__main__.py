@@ -1,0 +1,5 @@
+import sys
+
+from weldplan.cli import main
+
+sys.exit(main())

@@ -1,0 +1,1 @@
+"""One module per ``weldplan`` command (see weldplan.cli)."""

@@ -1,0 +1,26 @@
+"""``weldplan bench NAME``: the runnable reproductions of the papers' tables."""
+
+from __future__ import annotations
+
+import argparse
+from importlib import import_module
+
+HELP = "reproduce a paper's table or measure a target (writes markdown and PNG)"
+
+#: benchmark name -> module with ``HELP``, ``add_arguments(parser)`` and ``run(args) -> int``
+BENCHES: dict[str, str] = {}
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    sub = parser.add_subparsers(dest="bench", metavar="NAME")
+    sub.required = True
+    for name, module_name in BENCHES.items():
+        module = import_module(module_name)
+        p = sub.add_parser(name, help=module.HELP, description=module.HELP)
+        p.add_argument("--out", default="bench-results", help="folder for the table and plots")
+        module.add_arguments(p)
+        p.set_defaults(_bench_run=module.run)
+
+
+def run(args: argparse.Namespace) -> int:
+    return int(args._bench_run(args) or 0)

@@ -1,0 +1,29 @@
+"""The registry of continuous optimisers by name, used by the CLI, the benchmarks and the tests.
+
+Adding an algorithm: one file under ``weldplan/optim/algorithms/`` and one line here.
+"""
+
+from __future__ import annotations
+
+from importlib import import_module
+from typing import Any
+
+from weldplan.errors import WeldplanError
+from weldplan.optim.core import Optimizer
+
+#: name -> "module:Class" (imported on first use so the CLI starts fast)
+ALGORITHMS: dict[str, str] = {}
+
+
+def available() -> list[str]:
+    """Registered algorithm names, sorted."""
+    return sorted(ALGORITHMS)
+
+
+def get_optimizer(name: str, **params: Any) -> Optimizer:
+    """A new optimiser of the registered ``name`` with ``params`` overriding its defaults."""
+    key = name.lower()
+    if key not in ALGORITHMS:
+        raise WeldplanError(f"unknown algorithm '{name}'; choose one of: {', '.join(available())}")
+    module, cls = ALGORITHMS[key].split(":")
+    return getattr(import_module(module), cls)(**params)
