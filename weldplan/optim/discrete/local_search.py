@@ -1,0 +1,311 @@
+"""Local-search polish of tours: 2-opt and Or-opt with neighbour lists, plus iterated kicks.
+
+Moves (on a closed tour over ``A``; open paths and fixed ends arrive as closed tours through
+:mod:`weldplan.optim.discrete.costs`):
+
+* 2-opt (Croes 1958): remove edges ``(t_i, t_i+1)`` and ``(t_j, t_j+1)``, reconnect as
+  ``(t_i, t_j)``, ``(t_i+1, t_j+1)``, i.e. reverse ``t_i+1 .. t_j``. For asymmetric costs the
+  change of the reversed segment's own edges is added exactly from prefix sums.
+* Or-opt (Or 1976): move a segment of 1 to ``max_segment`` consecutive nodes to another edge,
+  forwards or reversed.
+
+Candidates follow the standard neighbour-list rule (Johnson and McGeoch 1997): a move is tried
+only when it creates an edge between a node and one of its ``neighbours`` nearest nodes; with
+don't-look bits, only nodes next to a recent change are tried. Each pass evaluates *all* active
+nodes' candidates at once as numpy arrays and applies the best improving move.
+
+:func:`polish` then runs iterated local search (Lourenco, Martin and Stuetzle 2003): a random
+double-bridge kick within a window of nearby positions, local search again, and keep the result
+when it is no worse. Without kicks (``kicks=0``) it is plain 2-opt + Or-opt descent.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import asdict, dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+log = logging.getLogger(__name__)
+
+#: A move must improve the cost by more than this (relative to the tour cost) to be applied.
+REL_EPS = 1e-12
+
+
+@dataclass(frozen=True)
+class PolishParams:
+    """Settings of :func:`polish`.
+
+    Attributes
+    ----------
+    neighbours
+        Candidate list length ``K`` (nearest nodes by ``min(A[i, j], A[j, i])``).
+    max_segment
+        Longest segment Or-opt moves (Or 1976: 3).
+    kicks
+        Double-bridge kicks of the iterated local search (0: plain descent).
+    window
+        Kicks cut the tour at three positions within this many consecutive nodes.
+    time_budget
+        Stop kicking after this many seconds (``None``: only ``kicks`` limits); a time limit
+        makes results depend on the machine, so it is off by default.
+    """
+
+    neighbours: int = 10
+    max_segment: int = 3
+    kicks: int = 1000
+    window: int = 50
+    time_budget: float | None = None
+
+    def to_dict(self) -> dict[str, float | int | None]:
+        return asdict(self)
+
+
+def neighbour_lists(A: NDArray[np.float64], k: int) -> NDArray[np.intp]:
+    """``(m, min(k, m-1)) int``: each node's nearest other nodes by ``min(A[i,j], A[j,i])``."""
+    m = A.shape[0]
+    k = max(1, min(k, m - 1))
+    S = np.minimum(A, A.T).astype(np.float64)
+    np.fill_diagonal(S, np.inf)
+    idx = np.argpartition(S, k - 1, axis=1)[:, :k] if k < m - 1 else np.argsort(S, axis=1)[:, :k]
+    order = np.argsort(np.take_along_axis(S, idx, axis=1), axis=1, kind="stable")
+    return np.take_along_axis(idx, order, axis=1).astype(np.intp)
+
+
+def tour_cost(A: NDArray[np.float64], t: NDArray[np.intp]) -> float:
+    """Cost of the closed tour ``t`` over ``A``."""
+    return float(A[t, np.roll(t, -1)].sum())
+
+
+class _Tour:
+    """A closed tour with the arrays the move evaluation needs (positions, prefix sums)."""
+
+    def __init__(self, A: NDArray[np.float64], t: NDArray[np.intp]) -> None:
+        self.A = A
+        self.set(t)
+
+    def set(self, t: NDArray[np.intp]) -> None:
+        m = len(t)
+        self.t = t
+        self.pos = np.empty(m, dtype=np.intp)
+        self.pos[t] = np.arange(m)
+        t2 = np.concatenate([t, t, t[:1]])
+        fw = self.A[t2[:-1], t2[1:]]
+        bw = self.A[t2[1:], t2[:-1]]
+        self.f = np.concatenate([[0.0], np.cumsum(fw)])  # (2m + 1,)
+        self.r = np.concatenate([[0.0], np.cumsum(bw)])
+        self.cost = float(self.f[m])
+
+
+def _best_two_opt(T: _Tour, P: NDArray[np.intp], N: NDArray[np.intp]):
+    """Best 2-opt move creating an edge from a node at positions ``P`` to a neighbour.
+
+    Returns per-candidate arrays ``(delta, i, j)`` flattened, plus ``owner`` (index into P).
+    """
+    A, t, pos, f, r = T.A, T.t, T.pos, T.f, T.r
+    m = len(t)
+    q = pos[N[t[P]]]  # (p, K)
+    p = np.broadcast_to(P[:, None], q.shape)
+    i1, j1 = np.minimum(p, q), np.maximum(p, q)
+    i2, j2 = (i1 - 1) % m, (j1 - 1) % m
+    lo = np.concatenate([i1, np.minimum(i2, j2)], axis=1)
+    hi = np.concatenate([j1, np.maximum(i2, j2)], axis=1)
+    gap = hi - lo
+    ok = (gap >= 2) & (gap <= m - 2)
+    ti, ti1 = t[lo], t[(lo + 1) % m]
+    tj, tj1 = t[hi], t[(hi + 1) % m]
+    delta = (
+        A[ti, tj]
+        + A[ti1, tj1]
+        - A[ti, ti1]
+        - A[tj, tj1]
+        + (r[hi] - r[lo + 1])
+        - (f[hi] - f[lo + 1])
+    )
+    delta = np.where(ok, delta, np.inf)
+    return delta, lo, hi
+
+
+def _best_or_opt(T: _Tour, P: NDArray[np.intp], N: NDArray[np.intp], L: int):
+    """Or-opt moves of the ``L``-node segments that start or end at positions ``P``.
+
+    Returns ``(delta, s, j, reverse)`` arrays of shape ``(p, 2, 8K)`` flattened later.
+    """
+    A, t, pos, f, r = T.A, T.t, T.pos, T.f, T.r
+    m = len(t)
+    S = np.stack([P, (P - L + 1) % m], axis=1)  # segment starts, (p, 2)
+    s0 = t[S]
+    se = t[(S + L - 1) % m]
+    pv = t[(S - 1) % m]
+    nx = t[(S + L) % m]
+    q0 = pos[N[s0]]  # (p, 2, K)
+    qe = pos[N[se]]
+    J = np.concatenate([q0, q0 - 1, qe, qe - 1], axis=2) % m  # (p, 2, 4K)
+    rel = (J - S[..., None]) % m
+    ok = (rel >= L) & (rel <= m - 2)
+    u, v = t[J], t[(J + 1) % m]
+    base = A[pv, nx] - A[pv, s0] - A[se, nx]
+    seg_f = f[S + L - 1] - f[S]
+    seg_r = r[S + L - 1] - r[S]
+    s0b, seb = s0[..., None], se[..., None]
+    fwd = base[..., None] + A[u, s0b] + A[seb, v] - A[u, v]
+    rev = base[..., None] + A[u, seb] + A[s0b, v] - A[u, v] + (seg_r - seg_f)[..., None]
+    fwd = np.where(ok, fwd, np.inf)
+    rev = np.where(ok, rev, np.inf)
+    Sb = np.broadcast_to(S[..., None], J.shape)
+    return fwd, rev, Sb, J
+
+
+def _apply_two_opt(t: NDArray[np.intp], i: int, j: int) -> NDArray[np.intp]:
+    t = t.copy()
+    t[i + 1 : j + 1] = t[i + 1 : j + 1][::-1]
+    return t
+
+
+def _apply_or_opt(t: NDArray[np.intp], s: int, L: int, j: int, reverse: bool) -> NDArray[np.intp]:
+    m = len(t)
+    rolled = np.roll(t, -s)
+    seg = rolled[:L][::-1] if reverse else rolled[:L]
+    rest = rolled[L:]
+    k = (j - s) % m - L + 1  # insert after rest[k - 1]
+    return np.concatenate([rest[:k], seg, rest[k:]])
+
+
+def local_search(
+    A: NDArray[np.float64],
+    tour: NDArray[np.intp],
+    *,
+    neighbours: NDArray[np.intp],
+    max_segment: int = 3,
+    active: NDArray[np.bool_] | None = None,
+) -> tuple[NDArray[np.intp], float, int]:
+    """2-opt + Or-opt descent to a local optimum of the closed tour over ``A``.
+
+    Parameters
+    ----------
+    A
+        ``(m, m) float``, finite.
+    tour
+        ``(m,) int`` start tour.
+    neighbours
+        ``(m, K) int`` candidate lists (:func:`neighbour_lists`).
+    max_segment
+        Longest Or-opt segment.
+    active
+        ``(m,) bool`` don't-look bits cleared (nodes to try); all by default.
+
+    Returns
+    -------
+    tour, cost, moves
+        The local optimum (a rotation of a tour over the same nodes), its cost, moves applied.
+    """
+    m = len(tour)
+    T = _Tour(A, np.asarray(tour, dtype=np.intp))
+    if m < 4:
+        return T.t, T.cost, 0
+    act = np.ones(m, dtype=bool) if active is None else active.copy()  # indexed by node
+    moves = 0
+    Ls = [L for L in range(1, max_segment + 1) if L <= m - 3]
+    while act.any():
+        P = T.pos[np.flatnonzero(act)]
+        eps = REL_EPS * max(abs(T.cost), 1.0)
+        d2, lo, hi = _best_two_opt(T, P, neighbours)
+        node_best = d2.min(axis=1)
+        best = ("2opt", float(d2.min()), np.unravel_index(np.argmin(d2), d2.shape))
+        for L in Ls:
+            fwd, rev, Sb, J = _best_or_opt(T, P, neighbours, L)
+            node_best = np.minimum(node_best, np.minimum(fwd, rev).min(axis=(1, 2)))
+            for rv, arr in ((False, fwd), (True, rev)):
+                k = int(np.argmin(arr))
+                if arr.flat[k] < best[1]:
+                    best = ("or", float(arr.flat[k]), (L, int(Sb.flat[k]), int(J.flat[k]), rv))
+        # don't-look bits: a node with no improving candidate is switched off
+        act[T.t[P[node_best >= -eps]]] = False
+        if best[1] >= -eps:
+            break
+        t = T.t
+        if best[0] == "2opt":
+            a, b = best[2]
+            i, j = int(lo[a, b]), int(hi[a, b])
+            touched = t[[i, (i + 1) % m, j, (j + 1) % m]]
+            new = _apply_two_opt(t, i, j)
+        else:
+            L, s, j, rv = best[2]
+            touched = t[[(s - 1) % m, s, (s + L - 1) % m, (s + L) % m, j % m, (j + 1) % m]]
+            new = _apply_or_opt(t, s, L, j, rv)
+        T.set(new)
+        act[touched] = True
+        moves += 1
+    return T.t, T.cost, moves
+
+
+def double_bridge(
+    t: NDArray[np.intp], window: int, rng: np.random.Generator
+) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """A random double-bridge kick ``A B C D -> A C B D`` with its cuts within ``window`` nodes.
+
+    Returns the new tour and the six nodes whose edges changed.
+    """
+    m = len(t)
+    w = min(window, m - 1)
+    r = np.roll(t, -int(rng.integers(m)))
+    c = np.sort(rng.choice(np.arange(1, w + 1), size=3, replace=False))
+    p1, p2, p3 = (int(x) for x in c)
+    new = np.concatenate([r[:p1], r[p2:p3], r[p1:p2], r[p3:]])
+    touched = r[[p1 - 1, p1, p2 - 1, p2, p3 - 1, p3 % m]]
+    return new, touched
+
+
+def polish(
+    A: NDArray[np.float64],
+    tour: NDArray[np.intp],
+    params: PolishParams,
+    rng: np.random.Generator,
+    neighbours: NDArray[np.intp] | None = None,
+) -> tuple[NDArray[np.intp], float, dict[str, int]]:
+    """2-opt + Or-opt descent, then iterated local search with double-bridge kicks.
+
+    Parameters
+    ----------
+    A
+        ``(m, m) float``, finite.
+    tour
+        ``(m,) int`` start tour.
+    params
+        :class:`PolishParams`.
+    rng
+        Generator for the kicks.
+    neighbours
+        Precomputed candidate lists (computed from ``A`` when ``None``).
+
+    Returns
+    -------
+    tour, cost, stats
+        The best tour found (a rotation), its cost, and counts (``moves``, ``kicks``,
+        ``improving_kicks``).
+    """
+    N = neighbour_lists(A, params.neighbours) if neighbours is None else neighbours
+    t, c, moves = local_search(A, tour, neighbours=N, max_segment=params.max_segment)
+    m = len(t)
+    stats = {"moves": moves, "kicks": 0, "improving_kicks": 0}
+    if m < 8 or params.kicks <= 0:
+        return t, c, stats
+    t0 = time.perf_counter()
+    for _ in range(params.kicks):
+        if params.time_budget is not None and time.perf_counter() - t0 > params.time_budget:
+            break
+        kicked, touched = double_bridge(t, params.window, rng)
+        act = np.zeros(m, dtype=bool)
+        act[touched] = True
+        t2, c2, mv = local_search(
+            A, kicked, neighbours=N, max_segment=params.max_segment, active=act
+        )
+        stats["kicks"] += 1
+        stats["moves"] += mv
+        if c2 <= c:
+            if c2 < c - REL_EPS * max(abs(c), 1.0):
+                stats["improving_kicks"] += 1
+            t, c = t2, c2
+    return t, c, stats

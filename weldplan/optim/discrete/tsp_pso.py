@@ -1,0 +1,273 @@
+"""Discrete particle swarm for tours, after Clerc (2004), as used by Wang et al. (2017), section 5.
+
+Clerc, M. (2004), "Discrete particle swarm optimization, illustrated by the traveling salesman
+problem", in *New Optimization Techniques in Engineering*, Springer, pp. 219-239. Wang et al.
+(2017), "Collision-free path planning for arc welding robot based on ACO-PSO", section 5.2, use it
+with the parameters of their Table 4 (the defaults of :class:`PSOParams`).
+
+A *position* is a permutation (the visiting order), a *velocity* an ordered list of
+transpositions. Clerc's algebra:
+
+* ``x + v``: apply the transpositions of ``v`` to ``x`` in order;
+* ``x - y``: the velocity ``v`` with ``y + v = x`` (built greedily position by position, so it has
+  at most ``n - 1`` transpositions);
+* ``c * v`` for ``c >= 0``: ``floor(c)`` copies of ``v`` followed by the first
+  ``floor(frac(c) |v|)`` transpositions of ``v`` (truncation when ``c < 1``);
+* ``v + w``: concatenation.
+
+The update is Eqs. (6)-(7) of the paper with these operators:
+
+    v <- w * v  +  c1 r1 * (pbest - x)  +  c2 r2 * (gbest - x),      x <- x + v
+
+with ``r1, r2 ~ U[0, 1]`` drawn per particle and iteration.
+
+Implementation: the swarm is arrays (positions ``(P, k) int``, velocities as two ``(P, L) int``
+arrays of transposition ends padded with no-op swaps ``(0, 0)``, lengths ``(P,)``); every operator
+loops over list positions with the whole swarm at once, and tour costs of the swarm are one
+gather-and-sum. Deviation (named): when a velocity grows longer than ``n - 1`` transpositions it is
+replaced by the equivalent minimal one ``(x + v) - x`` (same move, shorter list; Clerc notes that
+equivalent velocities can be substituted), which bounds memory and time per iteration.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class PSOParams:
+    """Settings of the discrete swarm; defaults are Table 4 of Wang et al. (2017).
+
+    Attributes
+    ----------
+    iterations
+        Swarm iterations ``N`` (Table 4: 100).
+    particles
+        Population size (Table 4: 50).
+    c1, c2
+        Learning rates towards the personal and global best (Table 4: 1.0, 1.0).
+    weight
+        Inertia weight ``w`` on the previous velocity (Table 4: 0.4).
+    """
+
+    iterations: int = 100
+    particles: int = 50
+    c1: float = 1.0
+    c2: float = 1.0
+    weight: float = 0.4
+
+    def __post_init__(self) -> None:
+        if self.iterations < 0 or self.particles < 1:
+            raise ValueError("PSOParams needs iterations >= 0 and particles >= 1")
+        if min(self.c1, self.c2, self.weight) < 0:
+            raise ValueError("PSOParams coefficients c1, c2, weight must be >= 0")
+
+    def to_dict(self) -> dict[str, float | int]:
+        return asdict(self)
+
+
+@dataclass
+class Velocity:
+    """Transposition lists of the whole swarm: swap positions ``a[p, t]`` and ``b[p, t]``.
+
+    ``a``, ``b`` are ``(P, L) int``; entries at ``t >= length[p]`` are the no-op ``(0, 0)``.
+    """
+
+    a: NDArray[np.intp]
+    b: NDArray[np.intp]
+    length: NDArray[np.intp]
+
+
+def tour_costs(
+    A: NDArray[np.float64], start: int, X: NDArray[np.intp], others: NDArray[np.intp]
+) -> NDArray[np.float64]:
+    """Costs ``(P,)`` of the closed tours ``start -> others[X[p]] -> start`` over ``A``."""
+    nodes = others[X]
+    c = A[start, nodes[:, 0]] + A[nodes[:, -1], start]
+    if nodes.shape[1] > 1:
+        c = c + A[nodes[:, :-1], nodes[:, 1:]].sum(axis=1)
+    return c
+
+
+def apply_velocity(X: NDArray[np.intp], v: Velocity) -> NDArray[np.intp]:
+    """``x + v`` for every particle: a new ``(P, k)`` array of positions."""
+    X = X.copy()
+    rows = np.arange(X.shape[0])
+    for t in range(int(v.length.max(initial=0))):
+        a, b = v.a[:, t], v.b[:, t]
+        xa = X[rows, a]
+        X[rows, a] = X[rows, b]
+        X[rows, b] = xa
+    return X
+
+
+def difference(X: NDArray[np.intp], Y: NDArray[np.intp]) -> Velocity:
+    """``x - y`` for every particle: transpositions that turn ``Y[p]`` into ``X[p]``."""
+    P, k = X.shape
+    rows = np.arange(P)
+    Y = Y.copy()
+    pos = np.empty_like(Y)
+    pos[rows[:, None], Y] = np.arange(k)
+    a = np.zeros((P, k), dtype=np.intp)
+    b = np.zeros((P, k), dtype=np.intp)
+    for q in range(k - 1):
+        want = X[:, q]
+        j = pos[rows, want]
+        a[:, q] = q
+        b[:, q] = j
+        yq = Y[:, q]
+        Y[rows, j] = yq
+        Y[:, q] = want
+        pos[rows, yq] = j
+        pos[rows, want] = q
+    real = a != b
+    order = np.argsort(~real, axis=1, kind="stable")
+    a = np.take_along_axis(a, order, axis=1)
+    b = np.take_along_axis(b, order, axis=1)
+    length = real.sum(axis=1)
+    pad = np.arange(k)[None, :] >= length[:, None]
+    a[pad] = 0
+    b[pad] = 0
+    return Velocity(a, b, length)
+
+
+def scale(c: NDArray[np.float64], v: Velocity) -> Velocity:
+    """``c * v`` for every particle (``c (P,) >= 0``): repeat ``floor(c)`` times, then truncate."""
+    new_len = np.floor(c * v.length).astype(np.intp)
+    L = int(new_len.max(initial=0))
+    P = v.length.shape[0]
+    if L == 0:
+        return Velocity(np.zeros((P, 1), np.intp), np.zeros((P, 1), np.intp), new_len)
+    t = np.arange(L)[None, :]
+    src = t % np.maximum(v.length, 1)[:, None]
+    src = np.minimum(src, v.a.shape[1] - 1)
+    a = np.take_along_axis(v.a, src, axis=1)
+    b = np.take_along_axis(v.b, src, axis=1)
+    pad = t >= new_len[:, None]
+    a[pad] = 0
+    b[pad] = 0
+    return Velocity(a, b, new_len)
+
+
+def concat(v: Velocity, w: Velocity) -> Velocity:
+    """``v + w`` for every particle: ``w``'s transpositions after ``v``'s."""
+    P = v.length.shape[0]
+    length = v.length + w.length
+    L = max(int(length.max(initial=0)), 1)
+    a = np.zeros((P, L), np.intp)
+    b = np.zeros((P, L), np.intp)
+    Lv = min(v.a.shape[1], L)
+    a[:, :Lv] = v.a[:, :Lv]
+    b[:, :Lv] = v.b[:, :Lv]
+    t = np.arange(w.a.shape[1])[None, :]
+    keep = t < w.length[:, None]
+    r, q = np.nonzero(keep)
+    dest = v.length[r] + q
+    a[r, dest] = w.a[r, q]
+    b[r, dest] = w.b[r, q]
+    return Velocity(a, b, length)
+
+
+def random_velocity(P: int, k: int, rng: np.random.Generator) -> Velocity:
+    """Random initial velocities: ``U{0..k-1}`` random transpositions per particle."""
+    length = rng.integers(0, max(k, 1), size=P)
+    L = max(int(length.max(initial=0)), 1)
+    a = rng.integers(0, k, size=(P, L))
+    b = rng.integers(0, k, size=(P, L))
+    pad = np.arange(L)[None, :] >= length[:, None]
+    a[pad] = 0
+    b[pad] = 0
+    return Velocity(a.astype(np.intp), b.astype(np.intp), length.astype(np.intp))
+
+
+@dataclass(frozen=True)
+class SwarmResult:
+    """What one run of :func:`tsp_pso` found (internal; :class:`Sequence` is the public result).
+
+    ``tour`` is ``(m,) int`` starting at ``start``; ``history`` the best cost after
+    initialisation and after each iteration.
+    """
+
+    tour: NDArray[np.intp]
+    cost: float
+    history: tuple[float, ...]
+    evaluations: int
+    iterations: int
+
+
+def tsp_pso(
+    A: NDArray[np.float64],
+    start: int,
+    params: PSOParams,
+    rng: np.random.Generator,
+    callback: Callable[[int, float], bool | None] | None = None,
+) -> SwarmResult:
+    """Clerc's discrete PSO for the closed tour over ``A`` that starts at ``start``.
+
+    Parameters
+    ----------
+    A
+        ``(m, m) float``, finite (replace ``inf`` by a penalty first, see
+        :func:`~weldplan.optim.discrete.costs.penalised`).
+    start
+        The fixed first node; particles permute the other ``m - 1``.
+    params
+        Swarm settings (paper defaults).
+    rng
+        The generator every random draw comes from.
+    callback
+        ``callback(iteration, best_cost)`` after initialisation (iteration 0) and after every
+        iteration; returning ``True`` stops the swarm.
+    """
+    m = A.shape[0]
+    others = np.array([v for v in range(m) if v != start], dtype=np.intp)
+    k = m - 1
+    P = params.particles
+    if k <= 1:
+        tour = np.concatenate([[start], others]).astype(np.intp)
+        c = float(tour_costs(A, start, np.zeros((1, k), np.intp), others)[0]) if k else 0.0
+        return SwarmResult(tour, c, (c,), 1, 0)
+    X = np.argsort(rng.random((P, k)), axis=1).astype(np.intp)
+    V = random_velocity(P, k, rng)
+    F = tour_costs(A, start, X, others)
+    evals = P
+    pbest, pbest_f = X.copy(), F.copy()
+    g = int(np.argmin(F))
+    gbest, gbest_f = X[g].copy(), float(F[g])
+    history = [gbest_f]
+    done = 0
+    if callback is not None and callback(0, gbest_f):
+        params = PSOParams(0, P, params.c1, params.c2, params.weight)
+    for it in range(1, params.iterations + 1):
+        r1 = rng.random(P)
+        r2 = rng.random(P)
+        inertia = scale(np.full(P, params.weight), V)
+        cognitive = scale(params.c1 * r1, difference(pbest, X))
+        social = scale(params.c2 * r2, difference(np.broadcast_to(gbest, X.shape), X))
+        V = concat(concat(inertia, cognitive), social)
+        Xn = apply_velocity(X, V)
+        if int(V.length.max(initial=0)) > k - 1:
+            V = difference(Xn, X)  # equivalent minimal velocity (named deviation)
+        X = Xn
+        F = tour_costs(A, start, X, others)
+        evals += P
+        better = F < pbest_f
+        pbest[better] = X[better]
+        pbest_f[better] = F[better]
+        g = int(np.argmin(pbest_f))
+        if pbest_f[g] < gbest_f:
+            gbest, gbest_f = pbest[g].copy(), float(pbest_f[g])
+        history.append(gbest_f)
+        done = it
+        if callback is not None and callback(it, gbest_f):
+            break
+    tour = np.concatenate([[start], others[gbest]]).astype(np.intp)
+    log.debug("TSP-PSO: %d iterations, %d evaluations, best %.6g", done, evals, gbest_f)
+    return SwarmResult(tour, gbest_f, tuple(history), evals, done)
