@@ -88,6 +88,8 @@ def held_karp_tour(A: NDArray[np.float64], start: int = 0) -> tuple[NDArray[np.i
     total = D[full] + to_start
     j = int(np.argmin(total))
     best = float(total[j])
+    if not np.isfinite(best):
+        return np.concatenate([[start], others]).astype(np.intp), best
     # Backtrack: the same expressions, so argmin finds the stored minimum exactly.
     path = [j]
     S = full

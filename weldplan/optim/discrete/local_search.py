@@ -15,8 +15,9 @@ don't-look bits, only nodes next to a recent change are tried. Each pass evaluat
 nodes' candidates at once as numpy arrays and applies the best improving move.
 
 :func:`polish` then runs iterated local search (Lourenco, Martin and Stuetzle 2003): a random
-double-bridge kick within a window of nearby positions, local search again, and keep the result
-when it is no worse. Without kicks (``kicks=0``) it is plain 2-opt + Or-opt descent.
+double-bridge kick within a window of nearby positions (on small tours a random shuffle of a few
+consecutive nodes), local search again, and keep the result when it is no worse. Without kicks
+(``kicks=0``) it is plain 2-opt + Or-opt descent.
 """
 
 from __future__ import annotations
@@ -29,6 +30,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 log = logging.getLogger(__name__)
+
+#: Default number of kicks per tour node (``PolishParams.kicks=None``).
+KICKS_PER_NODE = 10
 
 #: A move must improve the cost by more than this (relative to the tour cost) to be applied.
 REL_EPS = 1e-12
@@ -45,9 +49,15 @@ class PolishParams:
     max_segment
         Longest segment Or-opt moves (Or 1976: 3).
     kicks
-        Double-bridge kicks of the iterated local search (0: plain descent).
+        Double-bridge kicks of the iterated local search (0: plain descent; ``None``:
+        ``KICKS_PER_NODE`` per node).
     window
-        Kicks cut the tour at three positions within this many consecutive nodes.
+        Double-bridge kicks cut the tour at three positions within this many consecutive nodes.
+    scramble
+        Tours of at most ``4 scramble`` nodes are kicked by shuffling ``scramble`` consecutive
+        nodes instead: on small tours a double bridge has segments short enough for one Or-opt
+        move to undo it, and the search stalls (measured: 12 of 96 small asymmetric instances
+        missed the optimum with double bridges, none with this kick).
     time_budget
         Stop kicking after this many seconds (``None``: only ``kicks`` limits); a time limit
         makes results depend on the machine, so it is off by default.
@@ -55,8 +65,9 @@ class PolishParams:
 
     neighbours: int = 10
     max_segment: int = 3
-    kicks: int = 1000
+    kicks: int | None = None
     window: int = 50
+    scramble: int = 8
     time_budget: float | None = None
 
     def to_dict(self) -> dict[str, float | int | None]:
@@ -128,34 +139,42 @@ def _best_two_opt(T: _Tour, P: NDArray[np.intp], N: NDArray[np.intp]):
     return delta, lo, hi
 
 
-def _best_or_opt(T: _Tour, P: NDArray[np.intp], N: NDArray[np.intp], L: int):
-    """Or-opt moves of the ``L``-node segments that start or end at positions ``P``.
+def _best_or_opt(T: _Tour, P: NDArray[np.intp], N: NDArray[np.intp], Ls: NDArray[np.intp]):
+    """Or-opt moves of the segments of lengths ``Ls`` that start or end at positions ``P``.
 
-    Returns ``(delta, s, j, reverse)`` arrays of shape ``(p, 2, 8K)`` flattened later.
+    A candidate puts a segment end next to one of its neighbours ``c``: inserted on the edge
+    ``(c, succ c)`` or ``(pred c, c)``, forwards or reversed. Returns ``(fwd, rev, S, L, J)``:
+    the cost changes ``(p, 2 * nL * 4K)`` of moving the segment starting at ``S`` of length ``L``
+    onto edge ``J`` forwards / reversed (``inf`` where invalid).
     """
     A, t, pos, f, r = T.A, T.t, T.pos, T.f, T.r
     m = len(t)
-    S = np.stack([P, (P - L + 1) % m], axis=1)  # segment starts, (p, 2)
-    s0 = t[S]
-    se = t[(S + L - 1) % m]
-    pv = t[(S - 1) % m]
-    nx = t[(S + L) % m]
-    q0 = pos[N[s0]]  # (p, 2, K)
+    Lb = Ls[None, None, :]
+    S = np.stack([P[:, None] + 0 * Lb[0], (P[:, None] - Lb[0] + 1) % m], axis=1)  # (p, 2, nL)
+    E = (S + Lb - 1) % m
+    s0, se = t[S], t[E]
+    base = A[t[(S - 1) % m], t[(E + 1) % m]] - A[t[(S - 1) % m], s0] - A[se, t[(E + 1) % m]]
+    seg = (r[S + Lb - 1] - r[S]) - (f[S + Lb - 1] - f[S])
+    q0 = pos[N[s0]]  # (p, 2, nL, K)
     qe = pos[N[se]]
-    J = np.concatenate([q0, q0 - 1, qe, qe - 1], axis=2) % m  # (p, 2, 4K)
-    rel = (J - S[..., None]) % m
-    ok = (rel >= L) & (rel <= m - 2)
+    J = np.concatenate([q0, q0 - 1, qe, qe - 1], axis=3) % m  # (p, 2, nL, 4K)
+    Sx, Lx = S[..., None], np.broadcast_to(Lb[..., None], J.shape)
+    rel = (J - Sx) % m
+    ok = (rel >= Lx) & (rel <= m - 2)
     u, v = t[J], t[(J + 1) % m]
-    base = A[pv, nx] - A[pv, s0] - A[se, nx]
-    seg_f = f[S + L - 1] - f[S]
-    seg_r = r[S + L - 1] - r[S]
     s0b, seb = s0[..., None], se[..., None]
-    fwd = base[..., None] + A[u, s0b] + A[seb, v] - A[u, v]
-    rev = base[..., None] + A[u, seb] + A[s0b, v] - A[u, v] + (seg_r - seg_f)[..., None]
-    fwd = np.where(ok, fwd, np.inf)
-    rev = np.where(ok, rev, np.inf)
-    Sb = np.broadcast_to(S[..., None], J.shape)
-    return fwd, rev, Sb, J
+    uv = base[..., None] - A[u, v]
+    fwd = np.where(ok, uv + A[u, s0b] + A[seb, v], np.inf)
+    rev = np.where(ok, uv + A[u, seb] + A[s0b, v] + seg[..., None], np.inf)
+    p = len(P)
+    Sx = np.broadcast_to(Sx, J.shape)
+    return (
+        fwd.reshape(p, -1),
+        rev.reshape(p, -1),
+        Sx.reshape(p, -1),
+        Lx.reshape(p, -1),
+        J.reshape(p, -1),
+    )
 
 
 def _apply_two_opt(t: NDArray[np.intp], i: int, j: int) -> NDArray[np.intp]:
@@ -207,20 +226,24 @@ def local_search(
         return T.t, T.cost, 0
     act = np.ones(m, dtype=bool) if active is None else active.copy()  # indexed by node
     moves = 0
-    Ls = [L for L in range(1, max_segment + 1) if L <= m - 3]
+    Ls = np.arange(1, min(max_segment, m - 3) + 1, dtype=np.intp)
     while act.any():
         P = T.pos[np.flatnonzero(act)]
         eps = REL_EPS * max(abs(T.cost), 1.0)
         d2, lo, hi = _best_two_opt(T, P, neighbours)
         node_best = d2.min(axis=1)
         best = ("2opt", float(d2.min()), np.unravel_index(np.argmin(d2), d2.shape))
-        for L in Ls:
-            fwd, rev, Sb, J = _best_or_opt(T, P, neighbours, L)
-            node_best = np.minimum(node_best, np.minimum(fwd, rev).min(axis=(1, 2)))
+        if len(Ls):
+            fwd, rev, Sb, Lb, J = _best_or_opt(T, P, neighbours, Ls)
+            node_best = np.minimum(node_best, np.minimum(fwd.min(axis=1), rev.min(axis=1)))
             for rv, arr in ((False, fwd), (True, rev)):
                 k = int(np.argmin(arr))
                 if arr.flat[k] < best[1]:
-                    best = ("or", float(arr.flat[k]), (L, int(Sb.flat[k]), int(J.flat[k]), rv))
+                    best = (
+                        "or",
+                        float(arr.flat[k]),
+                        (int(Lb.flat[k]), int(Sb.flat[k]), int(J.flat[k]), rv),
+                    )
         # don't-look bits: a node with no improving candidate is switched off
         act[T.t[P[node_best >= -eps]]] = False
         if best[1] >= -eps:
@@ -258,6 +281,18 @@ def double_bridge(
     return new, touched
 
 
+def scramble(
+    t: NDArray[np.intp], size: int, rng: np.random.Generator
+) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """A random shuffle of ``size`` consecutive nodes; returns the tour and the touched nodes."""
+    m = len(t)
+    size = min(size, m)
+    r = np.roll(t, -int(rng.integers(m)))
+    r[:size] = rng.permutation(r[:size])
+    touched = np.concatenate([r[: size + 1], r[-1:]]) if size < m else r
+    return r, touched
+
+
 def polish(
     A: NDArray[np.float64],
     tour: NDArray[np.intp],
@@ -290,13 +325,17 @@ def polish(
     t, c, moves = local_search(A, tour, neighbours=N, max_segment=params.max_segment)
     m = len(t)
     stats = {"moves": moves, "kicks": 0, "improving_kicks": 0}
-    if m < 8 or params.kicks <= 0:
+    kicks = KICKS_PER_NODE * m if params.kicks is None else params.kicks
+    if m < 8 or kicks <= 0:
         return t, c, stats
     t0 = time.perf_counter()
-    for _ in range(params.kicks):
+    for _ in range(kicks):
         if params.time_budget is not None and time.perf_counter() - t0 > params.time_budget:
             break
-        kicked, touched = double_bridge(t, params.window, rng)
+        if m > 4 * params.scramble:
+            kicked, touched = double_bridge(t, params.window, rng)
+        else:
+            kicked, touched = scramble(t, params.scramble, rng)
         act = np.zeros(m, dtype=bool)
         act[touched] = True
         t2, c2, mv = local_search(

@@ -24,9 +24,10 @@ with ``r1, r2 ~ U[0, 1]`` drawn per particle and iteration.
 Implementation: the swarm is arrays (positions ``(P, k) int``, velocities as two ``(P, L) int``
 arrays of transposition ends padded with no-op swaps ``(0, 0)``, lengths ``(P,)``); every operator
 loops over list positions with the whole swarm at once, and tour costs of the swarm are one
-gather-and-sum. Deviation (named): when a velocity grows longer than ``n - 1`` transpositions it is
-replaced by the equivalent minimal one ``(x + v) - x`` (same move, shorter list; Clerc notes that
-equivalent velocities can be substituted), which bounds memory and time per iteration.
+gather-and-sum. Safeguard (named): when a velocity grows longer than ``MAX_VELOCITY (n - 1)``
+transpositions it is replaced by the equivalent minimal one ``(x + v) - x`` (same move, shorter
+list), which bounds memory and time per iteration for large coefficients; with Table 4's
+parameters ``|v| <= 0.4 |v| + 2 (n - 1)`` stays below ``3.34 (n - 1)`` and it never fires.
 """
 
 from __future__ import annotations
@@ -39,6 +40,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 log = logging.getLogger(__name__)
+
+#: Velocities longer than ``MAX_VELOCITY (n - 1)`` transpositions are contracted (see above).
+#: With Table 4's coefficients a velocity stays below ``(0.4 / 0.6 + ...) < 3.4 (n - 1)``, so
+#: the contraction never fires with the paper's parameters.
+MAX_VELOCITY = 4
 
 
 @dataclass(frozen=True)
@@ -75,9 +81,11 @@ class PSOParams:
 
 @dataclass
 class Velocity:
-    """Transposition lists of the whole swarm: swap positions ``a[p, t]`` and ``b[p, t]``.
+    """Transposition lists of the whole swarm: particle ``p`` swaps positions ``a[t, p]`` and
+    ``b[t, p]`` for ``t = 0, 1, ...``.
 
-    ``a``, ``b`` are ``(P, L) int``; entries at ``t >= length[p]`` are the no-op ``(0, 0)``.
+    ``a``, ``b`` are ``(L, P) int`` (list position first, so each step is a contiguous row);
+    entries at ``t >= length[p]`` are the no-op ``(0, 0)``.
     """
 
     a: NDArray[np.intp]
@@ -85,72 +93,84 @@ class Velocity:
     length: NDArray[np.intp]
 
 
+# Layout: positions are stored transposed, ``X[q, p]`` = node at position ``q`` of particle
+# ``p`` (``(k, P)``), so the operators' loops over list positions touch contiguous rows and use
+# flat 1-D gathers (measured 2-3x faster than row-major 2-D fancy indexing for P = 50).
+
+
 def tour_costs(
     A: NDArray[np.float64], start: int, X: NDArray[np.intp], others: NDArray[np.intp]
 ) -> NDArray[np.float64]:
-    """Costs ``(P,)`` of the closed tours ``start -> others[X[p]] -> start`` over ``A``."""
+    """Costs ``(P,)`` of the closed tours ``start -> others[X[:, p]] -> start`` over ``A``."""
     nodes = others[X]
-    c = A[start, nodes[:, 0]] + A[nodes[:, -1], start]
-    if nodes.shape[1] > 1:
-        c = c + A[nodes[:, :-1], nodes[:, 1:]].sum(axis=1)
+    c = A[start, nodes[0]] + A[nodes[-1], start]
+    if nodes.shape[0] > 1:
+        c = c + A[nodes[:-1], nodes[1:]].sum(axis=0)
     return c
 
 
 def apply_velocity(X: NDArray[np.intp], v: Velocity) -> NDArray[np.intp]:
-    """``x + v`` for every particle: a new ``(P, k)`` array of positions."""
-    X = X.copy()
-    rows = np.arange(X.shape[0])
-    for t in range(int(v.length.max(initial=0))):
-        a, b = v.a[:, t], v.b[:, t]
-        xa = X[rows, a]
-        X[rows, a] = X[rows, b]
-        X[rows, b] = xa
-    return X
+    """``x + v`` for every particle: a new ``(k, P)`` array of positions."""
+    k, P = X.shape
+    flat = X.ravel().copy()
+    rows = np.arange(P)
+    n_steps = int(v.length.max(initial=0))
+    ia = v.a[:n_steps] * P + rows
+    ib = v.b[:n_steps] * P + rows
+    for t in range(n_steps):
+        xa = flat[ia[t]]
+        flat[ia[t]] = flat[ib[t]]
+        flat[ib[t]] = xa
+    return flat.reshape(k, P)
 
 
 def difference(X: NDArray[np.intp], Y: NDArray[np.intp]) -> Velocity:
-    """``x - y`` for every particle: transpositions that turn ``Y[p]`` into ``X[p]``."""
-    P, k = X.shape
+    """``x - y`` for every particle: transpositions that turn ``Y[:, p]`` into ``X[:, p]``.
+
+    Clerc's construction: for each position ``q`` in turn, swap into it the node ``x`` has
+    there; a swap is recorded only when the node was elsewhere.
+    """
+    k, P = X.shape
     rows = np.arange(P)
-    Y = Y.copy()
-    pos = np.empty_like(Y)
-    pos[rows[:, None], Y] = np.arange(k)
-    a = np.zeros((P, k), dtype=np.intp)
-    b = np.zeros((P, k), dtype=np.intp)
+    y = Y.ravel().copy()  # y[q * P + p]
+    pos = np.empty(k * P, dtype=np.intp)  # pos[node * P + p] = position of node in y_p
+    pos[(Y * P + rows).ravel()] = np.repeat(np.arange(k), P)
+    b = np.repeat(np.arange(k, dtype=np.intp)[:, None], P, axis=1)  # (q, q): no-op
+    XP = X * P + rows  # flat index of (node, particle) into pos
     for q in range(k - 1):
-        want = X[:, q]
-        j = pos[rows, want]
-        a[:, q] = q
-        b[:, q] = j
-        yq = Y[:, q]
-        Y[rows, j] = yq
-        Y[:, q] = want
-        pos[rows, yq] = j
-        pos[rows, want] = q
+        w = XP[q]
+        j = pos[w]
+        b[q] = j
+        yq = y[q * P : (q + 1) * P].copy()
+        y[j * P + rows] = yq
+        y[q * P : (q + 1) * P] = X[q]
+        pos[yq * P + rows] = j
+        pos[w] = q
+    a = np.broadcast_to(np.arange(k)[:, None], (k, P))
     real = a != b
-    order = np.argsort(~real, axis=1, kind="stable")
-    a = np.take_along_axis(a, order, axis=1)
-    b = np.take_along_axis(b, order, axis=1)
-    length = real.sum(axis=1)
-    pad = np.arange(k)[None, :] >= length[:, None]
+    order = np.argsort(~real, axis=0, kind="stable")
+    a = np.take_along_axis(a, order, axis=0)
+    b = np.take_along_axis(b, order, axis=0)
+    length = real.sum(axis=0)
+    pad = np.arange(k)[:, None] >= length[None, :]
     a[pad] = 0
     b[pad] = 0
     return Velocity(a, b, length)
 
 
 def scale(c: NDArray[np.float64], v: Velocity) -> Velocity:
-    """``c * v`` for every particle (``c (P,) >= 0``): repeat ``floor(c)`` times, then truncate."""
+    """``c * v`` for every particle (``c (P,) >= 0``): ``floor(c)`` copies of ``v``, then the
+    first ``floor(frac(c) |v|)`` transpositions (so truncation when ``c < 1``)."""
     new_len = np.floor(c * v.length).astype(np.intp)
     L = int(new_len.max(initial=0))
     P = v.length.shape[0]
     if L == 0:
-        return Velocity(np.zeros((P, 1), np.intp), np.zeros((P, 1), np.intp), new_len)
-    t = np.arange(L)[None, :]
-    src = t % np.maximum(v.length, 1)[:, None]
-    src = np.minimum(src, v.a.shape[1] - 1)
-    a = np.take_along_axis(v.a, src, axis=1)
-    b = np.take_along_axis(v.b, src, axis=1)
-    pad = t >= new_len[:, None]
+        return Velocity(np.zeros((1, P), np.intp), np.zeros((1, P), np.intp), new_len)
+    t = np.arange(L)[:, None]
+    src = np.minimum(t % np.maximum(v.length, 1)[None, :], v.a.shape[0] - 1)
+    a = np.take_along_axis(v.a, src, axis=0)
+    b = np.take_along_axis(v.b, src, axis=0)
+    pad = t >= new_len[None, :]
     a[pad] = 0
     b[pad] = 0
     return Velocity(a, b, new_len)
@@ -161,17 +181,16 @@ def concat(v: Velocity, w: Velocity) -> Velocity:
     P = v.length.shape[0]
     length = v.length + w.length
     L = max(int(length.max(initial=0)), 1)
-    a = np.zeros((P, L), np.intp)
-    b = np.zeros((P, L), np.intp)
-    Lv = min(v.a.shape[1], L)
-    a[:, :Lv] = v.a[:, :Lv]
-    b[:, :Lv] = v.b[:, :Lv]
-    t = np.arange(w.a.shape[1])[None, :]
-    keep = t < w.length[:, None]
-    r, q = np.nonzero(keep)
+    a = np.zeros((L, P), np.intp)
+    b = np.zeros((L, P), np.intp)
+    Lv = min(v.a.shape[0], L)
+    a[:Lv] = v.a[:Lv]
+    b[:Lv] = v.b[:Lv]
+    keep = np.arange(w.a.shape[0])[:, None] < w.length[None, :]
+    q, r = np.nonzero(keep)
     dest = v.length[r] + q
-    a[r, dest] = w.a[r, q]
-    b[r, dest] = w.b[r, q]
+    a[dest, r] = w.a[q, r]
+    b[dest, r] = w.b[q, r]
     return Velocity(a, b, length)
 
 
@@ -179,9 +198,9 @@ def random_velocity(P: int, k: int, rng: np.random.Generator) -> Velocity:
     """Random initial velocities: ``U{0..k-1}`` random transpositions per particle."""
     length = rng.integers(0, max(k, 1), size=P)
     L = max(int(length.max(initial=0)), 1)
-    a = rng.integers(0, k, size=(P, L))
-    b = rng.integers(0, k, size=(P, L))
-    pad = np.arange(L)[None, :] >= length[:, None]
+    a = rng.integers(0, k, size=(L, P))
+    b = rng.integers(0, k, size=(L, P))
+    pad = np.arange(L)[:, None] >= length[None, :]
     a[pad] = 0
     b[pad] = 0
     return Velocity(a.astype(np.intp), b.astype(np.intp), length.astype(np.intp))
@@ -232,15 +251,15 @@ def tsp_pso(
     P = params.particles
     if k <= 1:
         tour = np.concatenate([[start], others]).astype(np.intp)
-        c = float(tour_costs(A, start, np.zeros((1, k), np.intp), others)[0]) if k else 0.0
+        c = float(tour_costs(A, start, np.zeros((k, 1), np.intp), others)[0]) if k else 0.0
         return SwarmResult(tour, c, (c,), 1, 0)
-    X = np.argsort(rng.random((P, k)), axis=1).astype(np.intp)
+    X = np.argsort(rng.random((k, P)), axis=0).astype(np.intp)
     V = random_velocity(P, k, rng)
     F = tour_costs(A, start, X, others)
     evals = P
     pbest, pbest_f = X.copy(), F.copy()
     g = int(np.argmin(F))
-    gbest, gbest_f = X[g].copy(), float(F[g])
+    gbest, gbest_f = X[:, g].copy(), float(F[g])
     history = [gbest_f]
     done = 0
     if callback is not None and callback(0, gbest_f):
@@ -250,20 +269,20 @@ def tsp_pso(
         r2 = rng.random(P)
         inertia = scale(np.full(P, params.weight), V)
         cognitive = scale(params.c1 * r1, difference(pbest, X))
-        social = scale(params.c2 * r2, difference(np.broadcast_to(gbest, X.shape), X))
+        social = scale(params.c2 * r2, difference(np.broadcast_to(gbest[:, None], X.shape), X))
         V = concat(concat(inertia, cognitive), social)
         Xn = apply_velocity(X, V)
-        if int(V.length.max(initial=0)) > k - 1:
+        if int(V.length.max(initial=0)) > MAX_VELOCITY * (k - 1):
             V = difference(Xn, X)  # equivalent minimal velocity (named deviation)
         X = Xn
         F = tour_costs(A, start, X, others)
         evals += P
         better = F < pbest_f
-        pbest[better] = X[better]
+        pbest[:, better] = X[:, better]
         pbest_f[better] = F[better]
         g = int(np.argmin(pbest_f))
         if pbest_f[g] < gbest_f:
-            gbest, gbest_f = pbest[g].copy(), float(pbest_f[g])
+            gbest, gbest_f = pbest[:, g].copy(), float(pbest_f[g])
         history.append(gbest_f)
         done = it
         if callback is not None and callback(it, gbest_f):
