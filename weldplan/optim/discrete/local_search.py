@@ -50,7 +50,7 @@ class PolishParams:
         Longest segment Or-opt moves (Or 1976: 3).
     kicks
         Double-bridge kicks of the iterated local search (0: plain descent; ``None``:
-        ``KICKS_PER_NODE`` per node).
+        ``KICKS_PER_NODE`` per node, or unlimited when ``time_budget`` is set).
     window
         Double-bridge kicks cut the tour at three positions within this many consecutive nodes.
     scramble
@@ -142,38 +142,47 @@ def _best_two_opt(T: _Tour, P: NDArray[np.intp], N: NDArray[np.intp]):
 def _best_or_opt(T: _Tour, P: NDArray[np.intp], N: NDArray[np.intp], Ls: NDArray[np.intp]):
     """Or-opt moves of the segments of lengths ``Ls`` that start or end at positions ``P``.
 
-    A candidate puts a segment end next to one of its neighbours ``c``: inserted on the edge
-    ``(c, succ c)`` or ``(pred c, c)``, forwards or reversed. Returns ``(fwd, rev, S, L, J)``:
-    the cost changes ``(p, 2 * nL * 4K)`` of moving the segment starting at ``S`` of length ``L``
-    onto edge ``J`` forwards / reversed (``inf`` where invalid).
+    A candidate puts the active segment end ``a = t[P]`` next to one of its neighbours ``c``:
+    a segment starting at ``a`` goes forwards after ``c`` (edge ``c -> a``) or reversed before
+    ``c`` (``a -> c``); a segment ending at ``a`` goes forwards before ``c`` (``a -> c``) or
+    reversed after it (``c -> a``). Returns ``(fwd, rev, S, L, Jf, Jr)`` flattened per active node:
+    cost changes of moving the segment that starts at ``S`` with length ``L`` onto the edge
+    ``(t[J], t[J+1])``, forwards / reversed (``inf`` where invalid).
     """
     A, t, pos, f, r = T.A, T.t, T.pos, T.f, T.r
     m = len(t)
-    Lb = Ls[None, None, :]
-    S = np.stack([P[:, None] + 0 * Lb[0], (P[:, None] - Lb[0] + 1) % m], axis=1)  # (p, 2, nL)
+    p = len(P)
+    Lb = Ls[None, None, :, None]  # (1, 1, nL, 1)
+    Pb = P[:, None, None, None]
+    S = np.concatenate([Pb + 0 * Lb, (Pb - Lb + 1) % m], axis=1)  # (p, 2, nL, 1)
     E = (S + Lb - 1) % m
     s0, se = t[S], t[E]
-    base = A[t[(S - 1) % m], t[(E + 1) % m]] - A[t[(S - 1) % m], s0] - A[se, t[(E + 1) % m]]
+    pv, nx = t[(S - 1) % m], t[(E + 1) % m]
+    base = A[pv, nx] - A[pv, s0] - A[se, nx]
     seg = (r[S + Lb - 1] - r[S]) - (f[S + Lb - 1] - f[S])
-    q0 = pos[N[s0]]  # (p, 2, nL, K)
-    qe = pos[N[se]]
-    J = np.concatenate([q0, q0 - 1, qe, qe - 1], axis=3) % m  # (p, 2, nL, 4K)
-    Sx, Lx = S[..., None], np.broadcast_to(Lb[..., None], J.shape)
-    rel = (J - Sx) % m
-    ok = (rel >= Lx) & (rel <= m - 2)
-    u, v = t[J], t[(J + 1) % m]
-    s0b, seb = s0[..., None], se[..., None]
-    uv = base[..., None] - A[u, v]
-    fwd = np.where(ok, uv + A[u, s0b] + A[seb, v], np.inf)
-    rev = np.where(ok, uv + A[u, seb] + A[s0b, v] + seg[..., None], np.inf)
-    p = len(P)
-    Sx = np.broadcast_to(Sx, J.shape)
+    q = pos[N[t[P]]][:, None, None, :]  # (p, 1, 1, K)
+    Jf = np.concatenate([q, q - 1], axis=1) % m  # (p, 2, 1, K)
+    Jr = np.concatenate([q - 1, q], axis=1) % m
+    out = []
+    for J, rev in ((Jf, False), (Jr, True)):
+        rel = (J - S) % m
+        ok = (rel >= Lb) & (rel <= m - 2)
+        u, v = t[J], t[(J + 1) % m]
+        if rev:
+            d = base + seg + A[u, se] + A[s0, v] - A[u, v]
+        else:
+            d = base + A[u, s0] + A[se, v] - A[u, v]
+        out.append(np.where(ok, d, np.inf).reshape(p, -1))
+    shape = (p, 2, len(Ls), q.shape[-1])
+    Sx = np.broadcast_to(S, shape).reshape(p, -1)
+    Lx = np.broadcast_to(Lb, shape).reshape(p, -1)
     return (
-        fwd.reshape(p, -1),
-        rev.reshape(p, -1),
-        Sx.reshape(p, -1),
-        Lx.reshape(p, -1),
-        J.reshape(p, -1),
+        out[0],
+        out[1],
+        Sx,
+        Lx,
+        np.broadcast_to(Jf, shape).reshape(p, -1),
+        np.broadcast_to(Jr, shape).reshape(p, -1),
     )
 
 
@@ -234,9 +243,9 @@ def local_search(
         node_best = d2.min(axis=1)
         best = ("2opt", float(d2.min()), np.unravel_index(np.argmin(d2), d2.shape))
         if len(Ls):
-            fwd, rev, Sb, Lb, J = _best_or_opt(T, P, neighbours, Ls)
+            fwd, rev, Sb, Lb, Jf, Jr = _best_or_opt(T, P, neighbours, Ls)
             node_best = np.minimum(node_best, np.minimum(fwd.min(axis=1), rev.min(axis=1)))
-            for rv, arr in ((False, fwd), (True, rev)):
+            for rv, arr, J in ((False, fwd, Jf), (True, rev, Jr)):
                 k = int(np.argmin(arr))
                 if arr.flat[k] < best[1]:
                     best = (
@@ -325,11 +334,16 @@ def polish(
     t, c, moves = local_search(A, tour, neighbours=N, max_segment=params.max_segment)
     m = len(t)
     stats = {"moves": moves, "kicks": 0, "improving_kicks": 0}
-    kicks = KICKS_PER_NODE * m if params.kicks is None else params.kicks
+    if params.kicks is not None:
+        kicks = params.kicks
+    else:
+        kicks = KICKS_PER_NODE * m if params.time_budget is None else np.iinfo(np.int64).max
     if m < 8 or kicks <= 0:
         return t, c, stats
     t0 = time.perf_counter()
-    for _ in range(kicks):
+    done = 0
+    while done < kicks:
+        done += 1
         if params.time_budget is not None and time.perf_counter() - t0 > params.time_budget:
             break
         if m > 4 * params.scramble:

@@ -25,7 +25,7 @@ import json
 import logging
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -171,6 +171,7 @@ def solve_sequence(
     pso: PSOParams | None = None,
     polish_params: PolishParams | None = None,
     callback: Callable[[int, float], bool | None] | None = None,
+    time_budget: float | None = None,
 ) -> Sequence:
     """Order the nodes of ``cost`` to minimise the total cost.
 
@@ -198,6 +199,10 @@ def solve_sequence(
         Polish settings (:class:`PolishParams`).
     callback
         ``callback(iteration, best_cost)`` from the swarm; return ``True`` to stop it early.
+    time_budget
+        Seconds for the whole solve: the polish stops kicking when they are spent (and, unless
+        ``polish_params.kicks`` is set, kicks until then). The swarm always runs its iterations.
+        Results then depend on the machine's speed; leave it ``None`` for reproducible runs.
 
     Returns
     -------
@@ -246,6 +251,9 @@ def solve_sequence(
         name = method
         if polish:
             start_cost = order_cost(C, red.to_order(tour), closed)
+            if time_budget is not None:
+                left = max(0.0, time_budget - (time.perf_counter() - t0))
+                pp = replace(pp, time_budget=left)
             tour, _, stats = polish_tour(Ap, tour, pp, gen)
             params["polish"] = pp.to_dict()
             params["polish_stats"] = stats

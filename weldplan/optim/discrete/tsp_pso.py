@@ -132,20 +132,25 @@ def difference(X: NDArray[np.intp], Y: NDArray[np.intp]) -> Velocity:
     """
     k, P = X.shape
     rows = np.arange(P)
-    y = Y.ravel().copy()  # y[q * P + p]
-    pos = np.empty(k * P, dtype=np.intp)  # pos[node * P + p] = position of node in y_p
-    pos[(Y * P + rows).ravel()] = np.repeat(np.arange(k), P)
-    b = np.repeat(np.arange(k, dtype=np.intp)[:, None], P, axis=1)  # (q, q): no-op
-    XP = X * P + rows  # flat index of (node, particle) into pos
+    # Work on flat keys: node v of particle p is ``v * P + p``, position q of particle p is
+    # ``q * P + p``; then each step is gathers and scatters with no index arithmetic.
+    XP = X * P + rows
+    y = (Y * P + rows).ravel()  # y[q * P + p] = key of the node at position q
+    pos = np.empty(k * P, dtype=np.intp)  # pos[key] = flat position of that node
+    pos[y] = np.arange(k * P)
+    QP = np.arange(k * P).reshape(k, P)
+    bf = QP.copy()  # (q, q): no-op
     for q in range(k - 1):
         w = XP[q]
-        j = pos[w]
-        b[q] = j
-        yq = y[q * P : (q + 1) * P].copy()
-        y[j * P + rows] = yq
-        y[q * P : (q + 1) * P] = X[q]
-        pos[yq * P + rows] = j
-        pos[w] = q
+        jf = pos[w]
+        bf[q] = jf
+        lo, hi = q * P, (q + 1) * P
+        yq = y[lo:hi].copy()
+        y[jf] = yq
+        y[lo:hi] = w
+        pos[yq] = jf
+        pos[w] = QP[q]
+    b = bf // P
     a = np.broadcast_to(np.arange(k)[:, None], (k, P))
     real = a != b
     order = np.argsort(~real, axis=0, kind="stable")
