@@ -216,6 +216,7 @@ def test_polish_asymmetric_is_exact_about_costs():
     assert stats["kicks"] == 50
 
 
+@pytest.mark.slow
 def test_asymmetric_twelve_nodes_heuristics_reach_exact():
     rng = np.random.default_rng(21)
     C = random_matrix(rng, 12, asymmetric=True)

@@ -74,6 +74,10 @@ class PolishParams:
         return asdict(self)
 
 
+def _is_symmetric(A: NDArray[np.float64]) -> bool:
+    return bool(np.array_equal(A, A.T))
+
+
 def neighbour_lists(A: NDArray[np.float64], k: int) -> NDArray[np.intp]:
     """``(m, min(k, m-1)) int``: each node's nearest other nodes by ``min(A[i,j], A[j,i])``."""
     m = A.shape[0]
@@ -91,10 +95,15 @@ def tour_cost(A: NDArray[np.float64], t: NDArray[np.intp]) -> float:
 
 
 class _Tour:
-    """A closed tour with the arrays the move evaluation needs (positions, prefix sums)."""
+    """A closed tour with the arrays the move evaluation needs (positions, prefix sums).
 
-    def __init__(self, A: NDArray[np.float64], t: NDArray[np.intp]) -> None:
+    For a symmetric ``A`` reversing a segment leaves its own cost unchanged, so the prefix sums
+    of forward and backward edge costs (needed only for asymmetric costs) are skipped.
+    """
+
+    def __init__(self, A: NDArray[np.float64], t: NDArray[np.intp], symmetric: bool) -> None:
         self.A = A
+        self.symmetric = symmetric
         self.set(t)
 
     def set(self, t: NDArray[np.intp]) -> None:
@@ -102,6 +111,9 @@ class _Tour:
         self.t = t
         self.pos = np.empty(m, dtype=np.intp)
         self.pos[t] = np.arange(m)
+        if self.symmetric:
+            self.cost = float(self.A[t[:-1], t[1:]].sum() + self.A[t[-1], t[0]])
+            return
         t2 = np.concatenate([t, t, t[:1]])
         fw = self.A[t2[:-1], t2[1:]]
         bw = self.A[t2[1:], t2[:-1]]
@@ -111,32 +123,26 @@ class _Tour:
 
 
 def _best_two_opt(T: _Tour, P: NDArray[np.intp], N: NDArray[np.intp]):
-    """Best 2-opt move creating an edge from a node at positions ``P`` to a neighbour.
-
-    Returns per-candidate arrays ``(delta, i, j)`` flattened, plus ``owner`` (index into P).
-    """
-    A, t, pos, f, r = T.A, T.t, T.pos, T.f, T.r
+    """2-opt moves that create an edge between the node at each position of ``P`` and one of
+    its neighbours. Returns ``(delta, lo, hi)``, each ``(p, 2K)``: reversing ``t[lo+1 .. hi]``
+    changes the cost by ``delta`` (``inf`` where invalid)."""
+    A, t, pos = T.A, T.t, T.pos
     m = len(t)
     q = pos[N[t[P]]]  # (p, K)
-    p = np.broadcast_to(P[:, None], q.shape)
+    p = P[:, None]
     i1, j1 = np.minimum(p, q), np.maximum(p, q)
-    i2, j2 = (i1 - 1) % m, (j1 - 1) % m
-    lo = np.concatenate([i1, np.minimum(i2, j2)], axis=1)
-    hi = np.concatenate([j1, np.maximum(i2, j2)], axis=1)
+    lo = np.concatenate([i1, (i1 - 1) % m], axis=1)
+    hi = np.concatenate([j1, (j1 - 1) % m], axis=1)
+    swap = lo > hi
+    lo, hi = np.where(swap, hi, lo), np.where(swap, lo, hi)
     gap = hi - lo
     ok = (gap >= 2) & (gap <= m - 2)
     ti, ti1 = t[lo], t[(lo + 1) % m]
     tj, tj1 = t[hi], t[(hi + 1) % m]
-    delta = (
-        A[ti, tj]
-        + A[ti1, tj1]
-        - A[ti, ti1]
-        - A[tj, tj1]
-        + (r[hi] - r[lo + 1])
-        - (f[hi] - f[lo + 1])
-    )
-    delta = np.where(ok, delta, np.inf)
-    return delta, lo, hi
+    delta = A[ti, tj] + A[ti1, tj1] - A[ti, ti1] - A[tj, tj1]
+    if not T.symmetric:
+        delta += (T.r[hi] - T.r[lo + 1]) - (T.f[hi] - T.f[lo + 1])
+    return np.where(ok, delta, np.inf), lo, hi
 
 
 def _best_or_opt(T: _Tour, P: NDArray[np.intp], N: NDArray[np.intp], Ls: NDArray[np.intp]):
@@ -145,13 +151,13 @@ def _best_or_opt(T: _Tour, P: NDArray[np.intp], N: NDArray[np.intp], Ls: NDArray
     A candidate puts the active segment end ``a = t[P]`` next to one of its neighbours ``c``:
     a segment starting at ``a`` goes forwards after ``c`` (edge ``c -> a``) or reversed before
     ``c`` (``a -> c``); a segment ending at ``a`` goes forwards before ``c`` (``a -> c``) or
-    reversed after it (``c -> a``). Returns ``(fwd, rev, S, L, Jf, Jr)`` flattened per active node:
-    cost changes of moving the segment that starts at ``S`` with length ``L`` onto the edge
-    ``(t[J], t[J+1])``, forwards / reversed (``inf`` where invalid).
+    reversed after it (``c -> a``). Returns ``(fwd, rev, S, Jf, Jr)``: cost changes
+    ``(p, 2, nL, K)`` of moving the segment that starts at ``S (p, 2, nL, 1)`` with length
+    ``Ls[l]`` onto the edge ``(t[J], t[J+1])`` (``J (p, 2, 1, K)``), forwards / reversed
+    (``inf`` where invalid).
     """
-    A, t, pos, f, r = T.A, T.t, T.pos, T.f, T.r
+    A, t, pos = T.A, T.t, T.pos
     m = len(t)
-    p = len(P)
     Lb = Ls[None, None, :, None]  # (1, 1, nL, 1)
     Pb = P[:, None, None, None]
     S = np.concatenate([Pb + 0 * Lb, (Pb - Lb + 1) % m], axis=1)  # (p, 2, nL, 1)
@@ -159,7 +165,6 @@ def _best_or_opt(T: _Tour, P: NDArray[np.intp], N: NDArray[np.intp], Ls: NDArray
     s0, se = t[S], t[E]
     pv, nx = t[(S - 1) % m], t[(E + 1) % m]
     base = A[pv, nx] - A[pv, s0] - A[se, nx]
-    seg = (r[S + Lb - 1] - r[S]) - (f[S + Lb - 1] - f[S])
     q = pos[N[t[P]]][:, None, None, :]  # (p, 1, 1, K)
     Jf = np.concatenate([q, q - 1], axis=1) % m  # (p, 2, 1, K)
     Jr = np.concatenate([q - 1, q], axis=1) % m
@@ -169,21 +174,13 @@ def _best_or_opt(T: _Tour, P: NDArray[np.intp], N: NDArray[np.intp], Ls: NDArray
         ok = (rel >= Lb) & (rel <= m - 2)
         u, v = t[J], t[(J + 1) % m]
         if rev:
-            d = base + seg + A[u, se] + A[s0, v] - A[u, v]
+            d = base + A[u, se] + A[s0, v] - A[u, v]
+            if not T.symmetric:
+                d += (T.r[S + Lb - 1] - T.r[S]) - (T.f[S + Lb - 1] - T.f[S])
         else:
             d = base + A[u, s0] + A[se, v] - A[u, v]
-        out.append(np.where(ok, d, np.inf).reshape(p, -1))
-    shape = (p, 2, len(Ls), q.shape[-1])
-    Sx = np.broadcast_to(S, shape).reshape(p, -1)
-    Lx = np.broadcast_to(Lb, shape).reshape(p, -1)
-    return (
-        out[0],
-        out[1],
-        Sx,
-        Lx,
-        np.broadcast_to(Jf, shape).reshape(p, -1),
-        np.broadcast_to(Jr, shape).reshape(p, -1),
-    )
+        out.append(np.where(ok, d, np.inf))
+    return out[0], out[1], S, Jf, Jr
 
 
 def _apply_two_opt(t: NDArray[np.intp], i: int, j: int) -> NDArray[np.intp]:
@@ -194,7 +191,7 @@ def _apply_two_opt(t: NDArray[np.intp], i: int, j: int) -> NDArray[np.intp]:
 
 def _apply_or_opt(t: NDArray[np.intp], s: int, L: int, j: int, reverse: bool) -> NDArray[np.intp]:
     m = len(t)
-    rolled = np.roll(t, -s)
+    rolled = np.concatenate([t[s:], t[:s]])
     seg = rolled[:L][::-1] if reverse else rolled[:L]
     rest = rolled[L:]
     k = (j - s) % m - L + 1  # insert after rest[k - 1]
@@ -230,7 +227,7 @@ def local_search(
         The local optimum (a rotation of a tour over the same nodes), its cost, moves applied.
     """
     m = len(tour)
-    T = _Tour(A, np.asarray(tour, dtype=np.intp))
+    T = _Tour(A, np.asarray(tour, dtype=np.intp), _is_symmetric(A))
     if m < 4:
         return T.t, T.cost, 0
     act = np.ones(m, dtype=bool) if active is None else active.copy()  # indexed by node
@@ -241,26 +238,25 @@ def local_search(
         eps = REL_EPS * max(abs(T.cost), 1.0)
         d2, lo, hi = _best_two_opt(T, P, neighbours)
         node_best = d2.min(axis=1)
-        best = ("2opt", float(d2.min()), np.unravel_index(np.argmin(d2), d2.shape))
+        k = int(np.argmin(d2))
+        best = ("2opt", float(d2.flat[k]), (int(lo.flat[k]), int(hi.flat[k])))
         if len(Ls):
-            fwd, rev, Sb, Lb, Jf, Jr = _best_or_opt(T, P, neighbours, Ls)
-            node_best = np.minimum(node_best, np.minimum(fwd.min(axis=1), rev.min(axis=1)))
+            fwd, rev, S, Jf, Jr = _best_or_opt(T, P, neighbours, Ls)
+            node_best = np.minimum(node_best, fwd.min(axis=(1, 2, 3)))
+            node_best = np.minimum(node_best, rev.min(axis=(1, 2, 3)))
             for rv, arr, J in ((False, fwd, Jf), (True, rev, Jr)):
                 k = int(np.argmin(arr))
                 if arr.flat[k] < best[1]:
-                    best = (
-                        "or",
-                        float(arr.flat[k]),
-                        (int(Lb.flat[k]), int(Sb.flat[k]), int(J.flat[k]), rv),
-                    )
+                    a, fam, li, kk = np.unravel_index(k, arr.shape)
+                    move = (int(Ls[li]), int(S[a, fam, li, 0]), int(J[a, fam, 0, kk]), rv)
+                    best = ("or", float(arr.flat[k]), move)
         # don't-look bits: a node with no improving candidate is switched off
         act[T.t[P[node_best >= -eps]]] = False
         if best[1] >= -eps:
             break
         t = T.t
         if best[0] == "2opt":
-            a, b = best[2]
-            i, j = int(lo[a, b]), int(hi[a, b])
+            i, j = best[2]
             touched = t[[i, (i + 1) % m, j, (j + 1) % m]]
             new = _apply_two_opt(t, i, j)
         else:
@@ -282,7 +278,8 @@ def double_bridge(
     """
     m = len(t)
     w = min(window, m - 1)
-    r = np.roll(t, -int(rng.integers(m)))
+    k = int(rng.integers(m))
+    r = np.concatenate([t[k:], t[:k]])
     c = np.sort(rng.choice(np.arange(1, w + 1), size=3, replace=False))
     p1, p2, p3 = (int(x) for x in c)
     new = np.concatenate([r[:p1], r[p2:p3], r[p1:p2], r[p3:]])
