@@ -297,3 +297,21 @@ def test_held_karp_tour_starts_at_start():
     tour, cost = held_karp_tour(C, start=4)
     assert tour[0] == 4 and sorted(tour) == list(range(7))
     assert cost == pytest.approx(tour_cost(C, tour))
+
+
+def test_callback_stops_swarm_and_exact_size_guard():
+    C = cost_matrix(PAPER_JOINTS)
+    seen = []
+
+    def cb(it, best):
+        seen.append((it, best))
+        return it >= 5
+
+    s = solve_sequence(C, method="pso", polish=False, rng=0, callback=cb)
+    assert [it for it, _ in seen] == [0, 1, 2, 3, 4, 5]
+    assert len(s.history) == 6 and s.evaluations == 6 * 50
+    big = cost_matrix(np.random.default_rng(0).uniform(size=(25, 2)))
+    with pytest.raises(ValueError, match="at most"):
+        solve_sequence(big, method="exact")
+    t = solve_sequence(big, method="nn", rng=0, time_budget=0.05)  # kicks until the budget
+    assert sorted(t.order) == list(range(25)) and t.method == "nn+polish"

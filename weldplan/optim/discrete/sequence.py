@@ -229,7 +229,10 @@ def solve_sequence(
     if method == "auto":
         method = "exact" if n <= EXACT_MAX_NODES else "pso"
     if method == "exact" and red.m > MAX_NODES:
-        raise ValueError(f"method='exact' handles at most {MAX_NODES - 1} nodes here, got {n}")
+        raise ValueError(
+            f"method='exact' handles at most {MAX_NODES - 1} nodes for an open path and "
+            f"{MAX_NODES} for a closed tour (memory grows as 8 n 2^n bytes); got {n}"
+        )
 
     history: tuple[float, ...] = ()
     evaluations = 0
