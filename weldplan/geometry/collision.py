@@ -14,6 +14,8 @@ import numpy as np
 import trimesh
 from numpy.typing import ArrayLike, NDArray
 
+from weldplan.geometry.distance import SurfaceDistance
+
 log = logging.getLogger(__name__)
 
 #: segments shorter than this (mm) are checked as a sphere at their midpoint's ends
@@ -52,6 +54,14 @@ class CollisionModel:
         self._bvh = bvh
         self._part = fcl.CollisionObject(bvh, fcl.Transform())
         self._request = fcl.CollisionRequest()
+        self._distance: SurfaceDistance | None = None
+
+    @property
+    def distance(self) -> SurfaceDistance:
+        """Exact unsigned point-to-surface distances (open3d, built on first use)."""
+        if self._distance is None:
+            self._distance = SurfaceDistance(self.mesh)
+        return self._distance
 
     def __getstate__(self) -> dict:
         return {"mesh": self.mesh}
@@ -79,7 +89,9 @@ class CollisionModel:
         A = np.asarray(A, dtype=np.float64).reshape(-1, 3)
         B = np.asarray(B, dtype=np.float64).reshape(-1, 3)
         return np.fromiter(
-            (self.segment_free(a, b, radius) for a, b in zip(A, B)), dtype=bool, count=len(A)
+            (self.segment_free(a, b, radius) for a, b in zip(A, B, strict=True)),
+            dtype=bool,
+            count=len(A),
         )
 
     def path_free(self, points: ArrayLike, radius: float) -> bool:
