@@ -55,7 +55,9 @@ TABLE1_XYZ: NDArray[np.float64] = np.array(
 )
 
 #: bracket width, height and the offset of the 3 -> 7 line from its edge (mm)
-BRACKET = (40, 30, 8)
+BRACKET = (24.0, 20.0, 5.0)
+#: side of the square tab carrying joint 7 (mm)
+TAB = 24.0
 
 _X = np.array([1.0, 0.0, 0.0])
 _Z = np.array([0.0, 0.0, 1.0])
@@ -175,6 +177,18 @@ def bracket(
     return _parallelepiped(corner, width * w1, height * w2, thickness * t)
 
 
+def tab(
+    centre: ArrayLike, *, normal: ArrayLike, size: float, thickness: float
+) -> trimesh.Trimesh:
+    """A square plate of side ``size`` (mm) whose front face, normal to ``normal``, is centred
+    on ``centre`` (3,); the sheet ``thickness`` lies behind the face."""
+    n = _unit(normal)
+    w1 = _unit(np.cross(n, _Z))
+    w2 = np.cross(n, w1)
+    corner = np.asarray(centre, dtype=np.float64) - 0.5 * size * (w1 + w2)
+    return _parallelepiped(corner, size * w1, size * w2, -thickness * n)
+
+
 def demo_assets() -> tuple[trimesh.Trimesh, NDArray[np.float64]]:
     """The demo part (mm) and the torch approach direction ``(15, 3)`` of each joint.
 
@@ -218,28 +232,14 @@ def demo_assets() -> tuple[trimesh.Trimesh, NDArray[np.float64]]:
         web_at="down",
     )
     # upper rail flange: joints 12-11-10-9-8 facing the lap (+y), its panel leaving the top edge
-    add(
-        [11, 10, 9, 8, 7],
-        sweep=_Z,
-        front=-inside,
-        down=10.0,
-        up=16.0,
-        thickness=2.0,
-        extend=(30.0, 0.0),
-        web=50.0,
-        web_at="up",
-    )
-    # the rail turns at joint 8: the strip 8-7 faces the lap rows it is seen from
-    add(
-        [7, 6],
-        look_at=J[:6].mean(axis=0),
-        down=10.0,
-        up=16.0,
-        thickness=2.0,
-        extend=(0.0, 30.0),
-        web=50.0,
-        web_at="up",
-    )
+    add([11, 10, 9, 8], sweep=_Z, front=-inside, down=10.0, up=16.0, thickness=2.0,
+        extend=(30.0, 0.0), web=50.0, web_at="up")
+    # its last strip (joints 9-8) has no panel above, so joint 7 stays open to the lap rows
+    add([8, 7], sweep=_Z, front=-inside, down=4.0, up=16.0, thickness=2.0, extend=0.0)
+    # a tab welded to the end of the rail carries joint 7, its face turned towards the lap rows
+    look = _unit(J[:6].mean(axis=0) - J[6])
+    parts.append(tab(J[6], normal=look, size=TAB, thickness=2.0))
+    normal_sum[6] += look
     # roof flange bent at joint 13: riser 14-13 and arm 13-15, both facing into the bend
     add([13, 12], sweep=_X, front=-inside, down=10.0, up=10.0, thickness=1.5, extend=(5.0, 0.0))
     add([12, 14], sweep=_X, front=-_Z, down=10.0, up=10.0, thickness=1.5, extend=(0.0, 10.0))
