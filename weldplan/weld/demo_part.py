@@ -177,9 +177,7 @@ def bracket(
     return _parallelepiped(corner, width * w1, height * w2, thickness * t)
 
 
-def tab(
-    centre: ArrayLike, *, normal: ArrayLike, size: float, thickness: float
-) -> trimesh.Trimesh:
+def tab(centre: ArrayLike, *, normal: ArrayLike, size: float, thickness: float) -> trimesh.Trimesh:
     """A square plate of side ``size`` (mm) whose front face, normal to ``normal``, is centred
     on ``centre`` (3,); the sheet ``thickness`` lies behind the face."""
     n = _unit(normal)
@@ -232,8 +230,17 @@ def demo_assets() -> tuple[trimesh.Trimesh, NDArray[np.float64]]:
         web_at="down",
     )
     # upper rail flange: joints 12-11-10-9-8 facing the lap (+y), its panel leaving the top edge
-    add([11, 10, 9, 8], sweep=_Z, front=-inside, down=10.0, up=16.0, thickness=2.0,
-        extend=(30.0, 0.0), web=50.0, web_at="up")
+    add(
+        [11, 10, 9, 8],
+        sweep=_Z,
+        front=-inside,
+        down=10.0,
+        up=16.0,
+        thickness=2.0,
+        extend=(30.0, 0.0),
+        web=50.0,
+        web_at="up",
+    )
     # its last strip (joints 9-8) has no panel above, so joint 7 stays open to the lap rows
     add([8, 7], sweep=_Z, front=-inside, down=4.0, up=16.0, thickness=2.0, extend=0.0)
     # a tab welded to the end of the rail carries joint 7, its face turned towards the lap rows
