@@ -24,6 +24,13 @@ ALGORITHMS: dict[str, str] = {
     "mpso": "weldplan.optim.algorithms.mpso:MPSO",
     "gwo": "weldplan.optim.algorithms.gwo:GWO",
     "woa": "weldplan.optim.algorithms.woa:WOA",
+    "afsa": "weldplan.optim.algorithms.fish:AFSA",
+    "hafsa": "weldplan.optim.algorithms.fish:HAFSA",
+    "abc": "weldplan.optim.algorithms.bee:ABC",
+    "mabc": "weldplan.optim.algorithms.bee:MABC",
+    "parapa": "weldplan.optim.algorithms.parapa:ParaPA",
+    "lso": "weldplan.optim.algorithms.lion:LSO",
+    "ssa": "weldplan.optim.algorithms.sparrow:SSA",
 }
 
 
