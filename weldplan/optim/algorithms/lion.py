@@ -24,7 +24,9 @@ Notes (named)
 -------------
 * The multiplicative form ``p (1 + alpha gamma)`` perturbs a coordinate in proportion to its
   value, so the search is not shift-invariant (it favours optima at the origin). That is the
-  published update; we keep it.
+  published update; we keep it. Measured: 10-d Sphere reaches 1e-30 in 15000 evaluations, but
+  the same Sphere shifted to (37, ..., 37) ends near 3e2-1.5e3, a few times better than random
+  search only (``tests/test_optim_lion_sparrow.py``).
 * The king's own historical best is ``g``, so ``||p_king - g|| = 0`` and the king re-samples ``g``;
   we keep the published rule (one evaluation per iteration spent on it).
 * Roles are reassigned from the historical-best ranking every iteration (the paper re-ranks the
