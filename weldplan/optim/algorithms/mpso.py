@@ -71,8 +71,12 @@ class MPSO(PSO):
 
     def step(self, ctx: Context) -> None:
         super().step(ctx)
-        if self.n_swarms < 2:
-            return
+        if self.n_swarms > 1:
+            self._migrate()
+            self._update_guides(ctx)
+
+    def _migrate(self) -> None:
+        """Replace each swarm's worst memory by the best pool elite of the other swarms."""
         best = self._swarm_bests()
         order = np.lexsort((-self.PF, self.swarm))
         worst = order[np.searchsorted(self.swarm[order], np.arange(self.n_swarms))]
@@ -84,4 +88,3 @@ class MPSO(PSO):
                 self.P[worst[s]] = pool_x[e]
                 self.PF[worst[s]] = pool_f[e]
                 self.X[worst[s]] = pool_x[e]
-        self._update_guides(ctx)
