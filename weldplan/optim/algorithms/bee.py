@@ -174,7 +174,8 @@ class MABC(Optimizer):
     pop_size
         Total colony size over all sub-colonies (default 3 x 50: 003's NP = 50 per swarm).
     n_swarms
-        Number of sub-colonies (003 does not state it; 3 is our default).
+        Number of sub-colonies (003 does not state it; 3 is our default). A colony too small for
+        that many (two bees each) is split into ``pop_size // 2``.
     limit
         Abandonment limit per sub-colony; ``None`` gives ``5 * NP_swarm`` (003 section 5.2).
     migration_interval
@@ -191,8 +192,8 @@ class MABC(Optimizer):
         migration_interval: int = 10,
     ) -> None:
         super().__init__(pop_size)
-        if n_swarms < 1 or pop_size < 2 * n_swarms:
-            raise ValueError(f"need pop_size >= 2 * n_swarms, got {pop_size} and {n_swarms}")
+        if n_swarms < 1 or pop_size < 2:
+            raise ValueError(f"need pop_size >= 2 and n_swarms >= 1, got {pop_size}, {n_swarms}")
         if migration_interval < 1:
             raise ValueError("migration_interval must be >= 1")
         self.n_swarms = int(n_swarms)
@@ -200,29 +201,36 @@ class MABC(Optimizer):
         self.migration_interval = int(migration_interval)
 
     def initialize(self, ctx: Context) -> None:
-        np_swarm = self.pop_size // self.n_swarms
+        # a sub-colony needs two bees (one source); fewer colonies when the colony is small
+        self._ns = min(self.n_swarms, self.pop_size // 2)
+        if self._ns < self.n_swarms:
+            log.info(
+                "MABC: %d bees make %d sub-colonies, not %d", self.pop_size, self._ns, self.n_swarms
+            )
+        np_swarm = self.pop_size // self._ns
         self._sn = max(np_swarm // 2, 1)
         self._lim = self.limit if self.limit is not None else LIMIT_FACTOR * np_swarm
-        n = self.n_swarms * self._sn
-        X = random_in_bounds(ctx.rng, ctx.lower, ctx.upper, n)
+        ns = self._ns
+        X = random_in_bounds(ctx.rng, ctx.lower, ctx.upper, ns * self._sn)
         F = ctx.evaluate(X)
-        self.X = X.reshape(self.n_swarms, self._sn, -1)
-        self.F = F.reshape(self.n_swarms, self._sn)
-        self.trial = np.zeros((self.n_swarms, self._sn), dtype=np.int64)
+        self.X = X.reshape(ns, self._sn, -1)
+        self.F = F.reshape(ns, self._sn)
+        self.trial = np.zeros((ns, self._sn), dtype=np.int64)
 
     def step(self, ctx: Context) -> None:
         # One cycle per sub-colony (n_swarms is small): partners must come from the bee's own
         # colony, which a single cycle on the stacked colonies would not guarantee.
-        for s in range(self.n_swarms):
+        ns = self._ns
+        for s in range(ns):
             if ctx.exhausted():
                 break
             abc_cycle(ctx, self.X[s], self.F[s], self.trial[s], self._lim)
-        if self.n_swarms > 1 and (ctx.iteration + 1) % self.migration_interval == 0:
+        if ns > 1 and (ctx.iteration + 1) % self.migration_interval == 0:
             best = np.argmin(self.F, axis=1)
             worst = np.argmax(self.F, axis=1)
-            s = np.arange(self.n_swarms)
+            s = np.arange(ns)
             Xb, Fb = self.X[s, best].copy(), self.F[s, best].copy()
-            to = (s + 1) % self.n_swarms
+            to = (s + 1) % ns
             self.X[to, worst[to]] = Xb
             self.F[to, worst[to]] = Fb
             self.trial[to, worst[to]] = 0

@@ -55,8 +55,9 @@ class AFSA(Optimizer):
     visual
         Visual distance (problem units); ``None`` gives ``VISUAL_FRACTION`` of the mean box side
         (001: v = 10 on 20 x 20 maps).
-    step
-        Largest move (problem units); ``None`` gives ``STEP_FRACTION`` of the mean box side.
+    step_size
+        Largest move ``step`` of eq. 1-3 (problem units); ``None`` gives ``STEP_FRACTION`` of the
+        mean box side. (Named ``step_size`` because ``step`` is the optimiser's iteration.)
     delta
         Crowd factor (001 section 4: 0.618).
     try_number
@@ -75,7 +76,7 @@ class AFSA(Optimizer):
         self,
         pop_size: int = 50,
         visual: float | None = None,
-        step: float | None = None,
+        step_size: float | None = None,
         delta: float = 0.618,
         try_number: int = 5,
     ) -> None:
@@ -85,7 +86,7 @@ class AFSA(Optimizer):
         if not 0.0 < delta:
             raise ValueError(f"crowd factor delta must be > 0, got {delta}")
         self.visual = visual
-        self.step_size = step
+        self.step_size = step_size
         self.delta = float(delta)
         self.try_number = int(try_number)
 
@@ -237,7 +238,7 @@ class HAFSA(AFSA):
         self,
         pop_size: int = 50,
         visual: float | None = None,
-        step: float | None = None,
+        step_size: float | None = None,
         delta: float = 0.618,
         try_number: int = 5,
         w_max: float = 1.5,
@@ -246,7 +247,7 @@ class HAFSA(AFSA):
         goal: NDArray[np.float64] | None = None,
         schedule_iters: int = 500,
     ) -> None:
-        super().__init__(pop_size, visual, step, delta, try_number)
+        super().__init__(pop_size, visual, step_size, delta, try_number)
         if w_max < 1.0:
             raise ValueError(f"w_max must be >= 1, got {w_max}")
         self.w_max = float(w_max)
