@@ -7,7 +7,14 @@ import math
 import numpy as np
 import pytest
 
-from weldplan.optim.algorithms.bee import ABC, MABC, abc_cycle, abc_fitness, neighbour_search
+from weldplan.optim.algorithms.bee import (
+    ABC,
+    MABC,
+    abc_cycle,
+    abc_fitness,
+    neighbour_search,
+    roulette_rows,
+)
 from weldplan.optim.algorithms.fish import AFSA, HAFSA
 from weldplan.optim.core import Context, FunctionProblem, minimize
 from weldplan.optim.functions import get_function
@@ -26,19 +33,33 @@ def test_abc_fitness_is_karabogas_transform():
     np.testing.assert_allclose(abc_fitness(F), [1.0, 0.5, 0.25, 3.0, 0.0])
 
 
-def test_neighbour_search_changes_one_coordinate_towards_or_away_from_a_partner():
+def test_neighbour_search_changes_one_coordinate_within_the_partner_spread():
     rng = np.random.default_rng(3)
-    X = rng.normal(size=(6, 5))
-    rows = np.array([0, 1, 2, 3, 4, 5, 0, 0])
-    V = neighbour_search(rng, X, rows, X)
-    diff = V != X[rows]
-    assert np.all(diff.sum(axis=1) <= 1)  # eq. 1 moves exactly one dimension j
-    # |v_ij - x_ij| = |phi| |x_ij - x_kj| <= max over partners k != i
-    for r, i in enumerate(rows):
-        j = np.flatnonzero(diff[r])
-        if j.size:
-            spread = np.abs(X[i, j] - np.delete(X[:, j], i, axis=0)).max()
-            assert abs(V[r, j] - X[i, j]) <= spread + 1e-12
+    X = rng.normal(size=(2, 6, 5))  # two colonies of six sources
+    rows = np.array([[0, 1, 2, 3, 4, 5, 0, 0], [5, 5, 4, 3, 2, 1, 0, 0]])
+    V = neighbour_search(rng, X, rows)
+    for s in range(2):
+        diff = V[s] != X[s, rows[s]]
+        assert np.all(diff.sum(axis=1) <= 1)  # eq. 1 moves exactly one dimension j
+        # |v_ij - x_ij| = |phi| |x_ij - x_kj| <= the largest gap to a partner of the same colony
+        for r, i in enumerate(rows[s]):
+            changed = np.flatnonzero(diff[r])
+            if changed.size:
+                j = int(changed[0])
+                spread = np.abs(X[s, i, j] - np.delete(X[s, :, j], i)).max()
+                assert abs(V[s, r, j] - X[s, i, j]) <= spread + 1e-12
+
+
+def test_roulette_rows_follows_each_rows_weights():
+    rng = np.random.default_rng(0)
+    W = np.array([[1.0, 0.0, 3.0], [0.0, 0.0, 0.0], [0.0, np.inf, 2.0]])
+    idx = roulette_rows(rng, W, 40000)
+    assert idx.shape == (3, 40000)
+    f0 = np.bincount(idx[0], minlength=3) / 40000
+    np.testing.assert_allclose(f0, [0.25, 0.0, 0.75], atol=0.01)
+    f1 = np.bincount(idx[1], minlength=3) / 40000  # all zero: uniform
+    np.testing.assert_allclose(f1, [1 / 3] * 3, atol=0.01)
+    assert np.all(idx[2] == 2)  # inf counts as 0
 
 
 def test_abc_scout_resamples_the_exhausted_source_on_a_flat_function():
@@ -48,7 +69,7 @@ def test_abc_scout_resamples_the_exhausted_source_on_a_flat_function():
     opt = ABC(pop_size=8, limit=0)
     opt.initialize(ctx)
     X0 = opt.X.copy()
-    abc_cycle(ctx, opt.X, opt.F, opt.trial, limit=0)
+    abc_cycle(ctx, opt.X[None], opt.F[None], opt.trial[None], limit=0)
     changed = np.flatnonzero(np.any(opt.X != X0, axis=1))
     assert changed.size == 1  # one scout per cycle (Karaboga)
     assert opt.trial[changed[0]] == 0

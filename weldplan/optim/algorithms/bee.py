@@ -8,7 +8,8 @@ Named deviations (vectorisation)
 --------------------------------
 * Karaboga's employed and onlooker phases visit the sources one after another, so a bee may copy
   a neighbour that was improved a moment earlier. Here every bee of a phase searches from the
-  colony as it was at the start of the phase (one batch, one ``ctx.evaluate``). When several
+  colony as it was at the start of the phase (one batch, one ``ctx.evaluate``, over all the
+  sub-colonies of MABC at once). When several
   onlookers land on one source the best candidate competes with it (greedy); a source that no
   onlooker improves has its trial counter raised once per unsuccessful onlooker.
 * Candidates leaving the box are clipped to it.
@@ -22,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from weldplan.optim.core import Context, Optimizer
-from weldplan.optim.operators import clip_to_bounds, random_in_bounds, roulette
+from weldplan.optim.operators import clip_to_bounds, random_in_bounds
 
 log = logging.getLogger(__name__)
 
@@ -38,39 +39,58 @@ def abc_fitness(F: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.where(np.isfinite(F), out, 0.0)
 
 
+def roulette_rows(
+    rng: np.random.Generator, weights: NDArray[np.float64], size: int
+) -> NDArray[np.intp]:
+    """Roulette draws within each row: ``weights (S, n)`` -> ``(S, size)`` column indices.
+
+    Row ``s`` draws with probability proportional to ``weights[s]`` (non-finite counts as 0; a
+    row of zeros draws uniformly), all rows in one ``searchsorted`` (the colonies of MABC and
+    the swarms of ParaPA choose at once).
+    """
+    W = np.where(np.isfinite(weights), weights, 0.0)
+    S, n = W.shape
+    total = W.sum(axis=1, keepdims=True)
+    W = np.where(total > 0, W, 1.0)
+    cdf = np.cumsum(W, axis=1)
+    cdf /= cdf[:, -1:]
+    offs = np.arange(S, dtype=np.float64)[:, None]
+    r = rng.random((S, size)) + offs
+    idx = np.searchsorted((cdf + offs).ravel(), r.ravel(), side="right").reshape(S, size)
+    return np.clip(idx - np.arange(S)[:, None] * n, 0, n - 1)
+
+
 def neighbour_search(
-    rng: np.random.Generator,
-    X: NDArray[np.float64],
-    rows: NDArray[np.intp],
-    pool: NDArray[np.float64],
+    rng: np.random.Generator, X: NDArray[np.float64], rows: NDArray[np.intp]
 ) -> NDArray[np.float64]:
-    """Eq. 1: ``v_ij = x_ij + phi (x_ij - x_kj)`` for one random ``j`` and partner ``k != i``.
+    """Eq. 1: ``v_ij = x_ij + phi (x_ij - x_kj)``, one random ``j``, partner ``k != i``.
 
     Parameters
     ----------
     X
-        ``(n, n_var)`` food sources.
+        ``(S, n, n_var)``: ``S`` colonies of ``n`` food sources; partners come from the bee's
+        own colony.
     rows
-        ``(m,)`` index of the source each bee exploits.
-    pool
-        ``(n, n_var)`` sources partners are drawn from (``X`` itself in ABC).
+        ``(S, m)`` index (within its colony) of the source each bee exploits.
 
     Returns
     -------
-    ``(m, n_var)`` candidates (not clipped)
+    ``(S, m, n_var)`` candidates (not clipped)
     """
-    n, n_var = pool.shape
-    m = rows.shape[0]
+    S, n, n_var = X.shape
+    m = rows.shape[1]
+    sidx = np.arange(S)[:, None]
     if n > 1:
-        k = rng.integers(0, n - 1, m)
+        k = rng.integers(0, n - 1, (S, m))
         k = k + (k >= rows)  # uniform over the sources other than the bee's own
     else:
-        k = np.zeros(m, dtype=np.intp)
-    j = rng.integers(0, n_var, m)
-    phi = rng.uniform(-1.0, 1.0, m)
-    V = X[rows].copy()
-    r = np.arange(m)
-    V[r, j] = V[r, j] + phi * (V[r, j] - pool[k, j])
+        k = np.zeros((S, m), dtype=np.intp)
+    j = rng.integers(0, n_var, (S, m))
+    phi = rng.uniform(-1.0, 1.0, (S, m))
+    V = X[sidx, rows]
+    b = np.arange(m)[None, :]
+    xj = V[sidx, b, j]
+    V[sidx, b, j] = xj + phi * (xj - X[sidx, k, j])
     return V
 
 
@@ -113,7 +133,7 @@ class ABC(Optimizer):
         self.trial = np.zeros(self.n_sources, dtype=np.int64)
 
     def step(self, ctx: Context) -> None:
-        abc_cycle(ctx, self.X, self.F, self.trial, self._limit())
+        abc_cycle(ctx, self.X[None], self.F[None], self.trial[None], self._limit())
 
 
 def abc_cycle(
@@ -123,42 +143,51 @@ def abc_cycle(
     trial: NDArray[np.int64],
     limit: int,
 ) -> None:
-    """One ABC cycle on the colony ``(X (n, n_var), F (n,), trial (n,))``, updated in place."""
+    """One ABC cycle on ``S`` colonies at once, updated in place.
+
+    ``X (S, n, n_var)``, ``F (S, n)``, ``trial (S, n)``; bees search within their own colony.
+    Each phase is one ``ctx.evaluate`` over all colonies.
+    """
     rng = ctx.rng
-    n = X.shape[0]
+    S, n, D = X.shape
     lo, hi = ctx.lower, ctx.upper
-    rows = np.arange(n)
+    sidx = np.arange(S)[:, None]
     # Employed bees (eq. 1) with greedy selection.
-    V = clip_to_bounds(neighbour_search(rng, X, rows, X), lo, hi)
-    Fv = ctx.evaluate(V)
+    rows = np.broadcast_to(np.arange(n), (S, n))
+    V = clip_to_bounds(neighbour_search(rng, X, rows), lo, hi)
+    Fv = ctx.evaluate(V.reshape(-1, D)).reshape(S, n)
     better = Fv < F
     X[better] = V[better]
     F[better] = Fv[better]
     trial[better] = 0
     trial[~better] += 1
     # Onlookers: sources by roulette on fitness (eq. 2), then eq. 1 from the chosen source.
-    chosen = np.asarray(roulette(rng, abc_fitness(F), size=n), dtype=np.intp)
-    V = clip_to_bounds(neighbour_search(rng, X, chosen, X), lo, hi)
-    Fv = ctx.evaluate(V)
-    order = np.lexsort((Fv, chosen))  # by source, best candidate first
-    first = np.ones(n, dtype=bool)
-    first[1:] = chosen[order][1:] != chosen[order][:-1]
+    chosen = roulette_rows(rng, abc_fitness(F), n)
+    V = clip_to_bounds(neighbour_search(rng, X, chosen), lo, hi).reshape(-1, D)
+    Fv = ctx.evaluate(V).reshape(-1)
+    key = (sidx * n + chosen).reshape(-1)  # global source index of every onlooker
+    order = np.lexsort((Fv, key))  # by source, best candidate first
+    first = np.ones(key.size, dtype=bool)
+    first[1:] = key[order][1:] != key[order][:-1]
     best_c = order[first]  # best candidate of each chosen source
-    src = chosen[best_c]
-    imp = Fv[best_c] < F[src]
-    X[src[imp]] = V[best_c[imp]]
-    F[src[imp]] = Fv[best_c[imp]]
-    trial[src[imp]] = 0
-    visits = np.bincount(chosen, minlength=n)
-    not_improved = np.ones(n, dtype=bool)
+    src = key[best_c]
+    Xf, Ff, Tf = X.reshape(-1, D), F.reshape(-1), trial.reshape(-1)
+    imp = Fv[best_c] < Ff[src]
+    Xf[src[imp]] = V[best_c[imp]]
+    Ff[src[imp]] = Fv[best_c[imp]]
+    visits = np.bincount(key, minlength=S * n)
+    not_improved = np.ones(S * n, dtype=bool)
     not_improved[src[imp]] = False
-    trial[not_improved] += visits[not_improved]
-    # Scout (eq. 3): the most exhausted source, if past the limit, is re-sampled.
-    s = int(np.argmax(trial))
-    if trial[s] > limit and not ctx.exhausted():
-        X[s] = random_in_bounds(rng, lo, hi, 1)[0]
-        F[s] = ctx.evaluate(X[s : s + 1])[0]
-        trial[s] = 0
+    Tf[src[imp]] = 0
+    Tf[not_improved] += visits[not_improved]
+    X[:], F[:], trial[:] = Xf.reshape(S, n, D), Ff.reshape(S, n), Tf.reshape(S, n)
+    # Scouts (eq. 3): the most exhausted source of each colony, if past the limit, is re-sampled.
+    worn = np.argmax(trial, axis=1)
+    cols = np.flatnonzero(trial[np.arange(S), worn] > limit)
+    if cols.size and not ctx.exhausted():
+        X[cols, worn[cols]] = random_in_bounds(rng, lo, hi, cols.size)
+        F[cols, worn[cols]] = ctx.evaluate(X[cols, worn[cols]])
+        trial[cols, worn[cols]] = 0
 
 
 class MABC(Optimizer):
@@ -218,13 +247,8 @@ class MABC(Optimizer):
         self.trial = np.zeros((ns, self._sn), dtype=np.int64)
 
     def step(self, ctx: Context) -> None:
-        # One cycle per sub-colony (n_swarms is small): partners must come from the bee's own
-        # colony, which a single cycle on the stacked colonies would not guarantee.
         ns = self._ns
-        for s in range(ns):
-            if ctx.exhausted():
-                break
-            abc_cycle(ctx, self.X[s], self.F[s], self.trial[s], self._lim)
+        abc_cycle(ctx, self.X, self.F, self.trial, self._lim)
         if ns > 1 and (ctx.iteration + 1) % self.migration_interval == 0:
             best = np.argmin(self.F, axis=1)
             worst = np.argmax(self.F, axis=1)

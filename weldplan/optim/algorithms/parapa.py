@@ -56,9 +56,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from weldplan.optim.algorithms._common import iteration_fraction
-from weldplan.optim.algorithms.bee import abc_fitness
+from weldplan.optim.algorithms.bee import abc_fitness, roulette_rows
 from weldplan.optim.core import Context, Optimizer
-from weldplan.optim.operators import chaotic_population, clip_to_bounds, random_in_bounds, roulette
+from weldplan.optim.operators import chaotic_population, clip_to_bounds, random_in_bounds
 
 log = logging.getLogger(__name__)
 
@@ -172,9 +172,7 @@ class ParaPA(Optimizer):
         S, NP, NO, D = self.n_swarms, self._np, self._no, ctx.n_var
         lo, hi = ctx.lower, ctx.upper
         # Each particle picks a host by roulette on ABC fitness (eq. 2).
-        choice = np.stack(
-            [np.asarray(roulette(rng, abc_fitness(self.Of[s]), size=NP)) for s in range(S)]
-        )
+        choice = roulette_rows(rng, abc_fitness(self.Of), NP)
         s_idx = np.arange(S)[:, None]
         G = self.O[s_idx, choice]  # (S, NP, D): the host replaces gbest
         w = self.w_max - (self.w_max - self.w_min) * iteration_fraction(ctx)  # eq. 7
