@@ -44,8 +44,11 @@ PAIRS: dict[str, tuple[str, str, dict[str, Any], dict[str, Any]]] = {
         {"c1": 2.05, "c2": 2.05, "w": 0.4},
         {"w_start": 0.4, "w_end": 0.4, "c1": 2.05, "c2": 2.05, "v_max": 0.5},
     ),
-    "abc": ("ABC", "OriginalABC", {}, {}),
+    # mealpy's pop_size counts food sources (employed bees; as many onlookers), ours counts bees
+    "abc": ("ABC", "OriginalABC", {"n_limits": 25}, {"limit": 25}),
 }
+#: our pop_size = factor * mealpy's, so both evaluate the same number of solutions an iteration
+POP_FACTOR: dict[str, int] = {"abc": 2}
 FUNCS = ("sphere", "rastrigin", "ackley")
 
 
@@ -100,7 +103,7 @@ def run(args: argparse.Namespace) -> int:
                 t = time.perf_counter()
                 r = minimize(
                     problem,
-                    get_optimizer(algo, pop_size=args.pop, **okw),
+                    get_optimizer(algo, pop_size=POP_FACTOR.get(algo, 1) * args.pop, **okw),
                     max_iter=args.iters,
                     rng=seed,
                 )
