@@ -43,6 +43,14 @@ class SMA(Optimizer):
     z
         Probability of a random restart of a mould: 0.03 (002, the default); 000 Table 2 uses 0.3.
 
+    Notes
+    -----
+    At the last iteration ``b = 1 - t/T = 0``, so every mould that takes the ``vc * X`` branch
+    lands exactly on the origin (this happens in the reference code too). On functions whose
+    optimum is the origin (all of 002 Table 1) that alone yields the exact zeros of 002 Table 2;
+    shift the optimum (``get_function(..., shift=...)``, ``bench functions --shift``) to see
+    the algorithm without that help.
+
     Deviations
     ----------
     - ``vc`` is drawn from ``U(-b, b)`` with ``b`` falling linearly from 1 to 0 (the reference
