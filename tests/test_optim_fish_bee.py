@@ -204,3 +204,10 @@ def test_hafsa_detection_replaces_the_worst_fish_near_the_best():
     opt._after_behaviours(ctx)
     assert opt.F[worst] < F0[worst]
     assert np.linalg.norm(opt.X[worst] - best0) <= 2 * math.sqrt(2) * 10.0 + 1e-9
+
+
+def test_hafsa_goal_must_match_the_problem():
+    with pytest.raises(ValueError, match="goal"):
+        minimize(get_function("sphere", 3), HAFSA(goal=np.zeros(2)), max_iter=2, rng=0)
+    r = minimize(get_function("sphere", 3), HAFSA(goal=np.zeros(3)), max_iter=5, rng=0)
+    assert np.isfinite(r.f)

@@ -256,6 +256,11 @@ class HAFSA(AFSA):
         self.goal = None if goal is None else np.asarray(goal, dtype=np.float64)
         self.schedule_iters = int(schedule_iters)
 
+    def initialize(self, ctx: Context) -> None:
+        if self.goal is not None and self.goal.shape != (ctx.n_var,):
+            raise ValueError(f"goal must have shape ({ctx.n_var},), got {self.goal.shape}")
+        super().initialize(ctx)
+
     def _log_factor(self, ctx: Context) -> float:
         """``b = log_N p`` of eq. 5, in ``[0, 1]``."""
         N = ctx.max_iter if ctx.max_iter else self.schedule_iters
