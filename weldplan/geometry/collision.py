@@ -8,6 +8,7 @@ space; every path that leaves weldplan has been re-checked here (DESIGN.md).
 from __future__ import annotations
 
 import logging
+import math
 
 import fcl
 import numpy as np
@@ -61,16 +62,27 @@ class CollisionModel:
 
     def segment_free(self, a: ArrayLike, b: ArrayLike, radius: float) -> bool:
         """Whether a sphere of ``radius`` mm swept from ``a`` to ``b`` (3,) misses the part."""
-        a = np.asarray(a, dtype=np.float64)
-        b = np.asarray(b, dtype=np.float64)
-        d = b - a
-        length = float(np.linalg.norm(d))
+        ax, ay, az = (float(v) for v in np.ravel(a)[:3])
+        bx, by, bz = (float(v) for v in np.ravel(b)[:3])
+        dx, dy, dz = bx - ax, by - ay, bz - az
+        length = math.sqrt(dx * dx + dy * dy + dz * dz)
         if length < _MIN_LENGTH:
             geom = fcl.Sphere(radius)
-            tf = fcl.Transform(a)
+            tf = fcl.Transform(np.array([ax, ay, az]))
         else:
+            # quaternion (w, x, y, z) taking +z (the capsule's axis) to the segment's direction:
+            # half-angle form of the rotation about z x d. Scalar maths: this check runs
+            # thousands of times a pair, and small numpy calls cost 5x more than the FCL query.
+            uz = dz / length
+            w = 1.0 + uz
+            if w < 1e-12:
+                quat = np.array([0.0, 1.0, 0.0, 0.0])
+            else:
+                qx, qy = -dy / length, dx / length
+                n = math.sqrt(w * w + qx * qx + qy * qy)
+                quat = np.array([w / n, qx / n, qy / n, 0.0])
             geom = fcl.Capsule(radius, length)
-            tf = fcl.Transform(_rotation_z_to(d / length), 0.5 * (a + b))
+            tf = fcl.Transform(quat, np.array([0.5 * (ax + bx), 0.5 * (ay + by), 0.5 * (az + bz)]))
         obj = fcl.CollisionObject(geom, tf)
         return fcl.collide(obj, self._part, self._request, fcl.CollisionResult()) == 0
 
@@ -79,7 +91,9 @@ class CollisionModel:
         A = np.asarray(A, dtype=np.float64).reshape(-1, 3)
         B = np.asarray(B, dtype=np.float64).reshape(-1, 3)
         return np.fromiter(
-            (self.segment_free(a, b, radius) for a, b in zip(A, B)), dtype=bool, count=len(A)
+            (self.segment_free(a, b, radius) for a, b in zip(A, B, strict=True)),
+            dtype=bool,
+            count=len(A),
         )
 
     def path_free(self, points: ArrayLike, radius: float) -> bool:
