@@ -84,8 +84,9 @@ def _split(points: NDArray[np.float64], step: float) -> NDArray[np.float64]:
     out = [points[:1]]
     for a, b in zip(points[:-1], points[1:], strict=True):
         n = max(1, math.ceil(float(np.linalg.norm(b - a)) / step - 1e-9))
-        t = np.arange(1, n + 1, dtype=np.float64)[:, None] / n
+        t = np.arange(1, n, dtype=np.float64)[:, None] / n
         out.append(a + t * (b - a))
+        out.append(b[None])  # the vertex itself, bit for bit
     return np.concatenate(out)
 
 
