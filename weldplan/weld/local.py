@@ -215,6 +215,10 @@ class LocalParams:
         Searches re-run after forbidding lattice moves that FCL rejected.
     connectivity
         Lattice of the exact baseline (26; 6 gives the ants' lattice).
+    corner_cutting
+        Let the exact baseline's diagonal moves pass between obstacle voxels (True: plain
+        26-connectivity). False allows a diagonal move only when the box it spans is free, which
+        makes FCL repairs rarer at the price of more expansions.
     """
 
     colony: AntColonyParams = field(default_factory=AntColonyParams)
@@ -222,6 +226,7 @@ class LocalParams:
     max_so_passes: int = 100
     max_repairs: int = 3
     connectivity: int = 26
+    corner_cutting: bool = True
 
     @classmethod
     def coerce(
@@ -518,7 +523,7 @@ def plan_local_path(
         if method == "exact":
             r = shortest_grid_path(
                 pg, s, g, connectivity=conn, pitch=grid.pitch, blocked_edges=blocked,
-                deadline=deadline,
+                deadline=deadline, corner_cutting=prm.corner_cutting,
             )  # fmt: skip
             stats["evaluations"] += r.expansions
         else:
