@@ -18,15 +18,25 @@ from weldplan.geometry.gridsearch import (
 from weldplan.optim.discrete.aco_grid import AntColonyParams, ant_colony_grid
 
 
-def brute_dijkstra(free: np.ndarray, s, g, moves) -> float:
+def brute_dijkstra(free: np.ndarray, s, g, moves, corner_cutting: bool = True) -> float:
     """Textbook Dijkstra over an explicit adjacency dict (no padding, no heuristic)."""
     nodes = [tuple(int(v) for v in x) for x in np.argwhere(free)]
     node_set = set(nodes)
+
+    def box_free(u, mv) -> bool:
+        # every voxel of the box spanned by the move
+        ranges = [range(min(0, m), max(0, m) + 1) for m in mv]
+        return all(
+            (u[0] + a, u[1] + b, u[2] + c) in node_set for a in ranges[0] for b in ranges[1]
+            for c in ranges[2]
+        )  # fmt: skip
+
     adj = {
         u: [
             (v, math.sqrt(sum(m * m for m in mv)))
             for mv in moves
             if (v := (u[0] + mv[0], u[1] + mv[1], u[2] + mv[2])) in node_set
+            and (corner_cutting or box_free(u, mv))
         ]
         for u in nodes
     }
@@ -58,16 +68,20 @@ def _path_is_valid(free, path, moves) -> None:
         assert tuple(np.subtract(b, a)) in steps
 
 
-@pytest.mark.parametrize("connectivity", [6, 26])
+@pytest.mark.parametrize(("connectivity", "corner_cutting"), [(6, True), (26, True), (26, False)])
 @pytest.mark.parametrize("seed", range(6))
-def test_astar_equals_brute_force_dijkstra(connectivity: int, seed: int) -> None:
+def test_astar_equals_brute_force_dijkstra(
+    connectivity: int, corner_cutting: bool, seed: int
+) -> None:
     rng = np.random.default_rng(seed)
-    free = random_free(rng)
+    free = random_free(rng, p_obstacle=0.3 if corner_cutting else 0.15)
     cells = np.argwhere(free)
     s, g = cells[rng.choice(len(cells), 2, replace=False)]
     moves = neighbour_offsets(connectivity)
-    expected = brute_dijkstra(free, s, g, moves.tolist())
-    r = shortest_grid_path(free, s, g, connectivity=connectivity, pitch=5.0)
+    expected = brute_dijkstra(free, s, g, moves.tolist(), corner_cutting)
+    r = shortest_grid_path(
+        free, s, g, connectivity=connectivity, pitch=5.0, corner_cutting=corner_cutting
+    )
     if math.isinf(expected):
         assert not r.success and r.path is None and "not reachable" in r.reason
         return
@@ -196,3 +210,13 @@ def test_params_round_trip_and_validation() -> None:
     assert AntColonyParams() == AntColonyParams(1.0, 11.0, 0.9, 5.0, 50, 50, 0.5)
     with pytest.raises(ValueError):
         AntColonyParams(rho=1.5)
+
+
+def test_no_corner_cutting_goes_round_the_edge() -> None:
+    # a single obstacle voxel beside the diagonal move (0,0,0) -> (1,1,0)
+    free = np.ones((2, 2, 1), dtype=bool)
+    free[1, 0, 0] = False
+    cut = shortest_grid_path(free, (0, 0, 0), (1, 1, 0), connectivity=26)
+    assert cut.length == pytest.approx(math.sqrt(2))
+    no_cut = shortest_grid_path(free, (0, 0, 0), (1, 1, 0), connectivity=26, corner_cutting=False)
+    assert no_cut.length == pytest.approx(2.0)
