@@ -246,6 +246,7 @@ def ant_colony_grid(
     allowed = np.ones(m * n_vox, dtype=bool)  # not in the tabu list, per ant (flat)
     ants = np.arange(m)
     base = ants * n_vox
+    offs7 = np.append(offs, 0)  # move 6: stay (an ant at a dead end)
     code = np.full(2 * int(np.abs(offs).max()) + 1, -1, dtype=np.int64)
     code[offs + int(np.abs(offs).max())] = np.arange(6)  # flat move -> direction
 
@@ -259,30 +260,31 @@ def ant_colony_grid(
     timed_out = False
     for it in range(p.n_iterations):
         pos = np.full(m, s, dtype=np.int64)
-        steps = np.zeros(m, dtype=np.int64)
         active = np.ones(m, dtype=bool)
         allowed[base + s] = False
         hist = [pos]
+        t = 0  # every walking ant moves at every step: its move count is the step count
         while True:
-            nb = pos[:, None] + offs  # (M, 6); the padding keeps it inside the array
-            w = weight[pos] * allowed[base[:, None] + nb]
+            bp = base + pos
+            w = weight[pos] * allowed[bp[:, None] + offs]  # (M, 6); padding keeps it inside
             cs = w.cumsum(axis=1)
             tot = cs[:, 5]
-            r = gen.random(m) * tot
-            choice = (cs <= r[:, None]).sum(axis=1)
-            np.minimum(choice, 5, out=choice)
-            nxt = nb[ants, choice]
+            # roulette wheel: r < tot, so the count is at most 5 when tot > 0; 6 (a stay,
+            # offs7[6] = 0) for an ant with no allowed move
+            choice = (cs <= (gen.random(m) * tot)[:, None]).sum(axis=1)
+            nxt = pos + offs7[choice]
             moving = active & (tot > 0)
-            near = near_food[pos] & active
+            near = near_food[pos]
             if near.any():
+                near &= active
                 nxt[near] = g
                 moving |= near
             pos = np.where(moving, nxt, pos)
             allowed[base + pos] = False
             hist.append(pos)
-            steps += moving
-            active = moving & (pos != g) & (steps < max_steps)
-            if not active.any():
+            t += 1
+            active = moving & (pos != g)
+            if t >= max_steps or not active.any():
                 break
             if deadline is not None and time.perf_counter() > deadline:
                 timed_out = True
@@ -292,6 +294,7 @@ def ant_colony_grid(
         if timed_out:
             break
         reached = pos == g
+        steps = (H[1:] != H[:-1]).sum(axis=0)
         lengths = np.where(reached, steps * pitch, np.inf)
         # equations 4-5: evaporate, then every ant that reached the food adds Q / L_k on its moves
         scale *= p.rho
