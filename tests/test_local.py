@@ -270,3 +270,14 @@ def test_adjacent_check_reports_the_grazing_move() -> None:
     r = secondary_optimization(pts, free, check_adjacent=True)
     assert r.bad_segment == 1 and np.array_equal(r.points, pts)
     assert secondary_optimization(pts, free).bad_segment is None
+
+
+def test_exact_with_and_without_corner_cutting(cell: BoxCell) -> None:
+    s, g = cell.virtual(J3), cell.virtual(J7)
+    cut = plan_local_path(
+        cell.grid, cell.collision, J3, J7, s, g, method="exact", params={"corner_cutting": True}
+    )
+    no_cut = plan_local_path(cell.grid, cell.collision, J3, J7, s, g, method="exact")
+    assert_valid(cell, cut, J3, J7, s, g)
+    assert_valid(cell, no_cut, J3, J7, s, g)
+    assert cut.raw_length <= no_cut.raw_length  # the plain lattice is the less constrained

@@ -17,8 +17,10 @@ import itertools
 import logging
 import math
 import time
+import weakref
 from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -160,6 +162,10 @@ class GridPathResult:
         return self.path is not None
 
 
+#: per padded grid and connectivity: the move tables without corner cutting (built once)
+_TABLES: weakref.WeakKeyDictionary[PaddedGrid, dict[int, Any]] = weakref.WeakKeyDictionary()
+
+
 def _move_tables(
     pg: PaddedGrid, moves: NDArray[np.int64], pairs: list[tuple[int, float]]
 ) -> tuple[dict[int, list[tuple[int, float]]], list[int]]:
@@ -257,7 +263,10 @@ def shortest_grid_path(
     pairs = list(zip(offs, costs, strict=True))
     table, maskl = None, None
     if not corner_cutting:
-        table, maskl = _move_tables(pg, moves, pairs)
+        per_grid = _TABLES.setdefault(pg, {})
+        if connectivity not in per_grid:
+            per_grid[connectivity] = _move_tables(pg, moves, pairs)
+        table, maskl = per_grid[connectivity]
     expansions = 0
     push, pop = heapq.heappush, heapq.heappop
     while heap:

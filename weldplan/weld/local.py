@@ -13,7 +13,8 @@ Methods (``method=``):
     The ant colony alone: the shortest 6-connected route the ants found.
 ``"exact"``
     The baseline: the exact shortest 26-connected lattice path (A*,
-    :func:`weldplan.geometry.gridsearch.shortest_grid_path`), then the same secondary optimisation.
+    :func:`weldplan.geometry.gridsearch.shortest_grid_path`; by default a diagonal move must
+    cross free voxels only, see :class:`LocalParams`), then the same secondary optimisation.
 
 For every method, when the straight segment between the two virtual joints is free at the
 clearance, that segment is the path and no search runs (``LocalPath.fast_path``).
@@ -217,8 +218,10 @@ class LocalParams:
         Lattice of the exact baseline (26; 6 gives the ants' lattice).
     corner_cutting
         Let the exact baseline's diagonal moves pass between obstacle voxels (True: plain
-        26-connectivity). False allows a diagonal move only when the box it spans is free, which
-        makes FCL repairs rarer at the price of more expansions.
+        26-connectivity). False (default) allows a diagonal move only when every voxel of the
+        box it spans is free: such moves rarely graze the part, so the FCL repair (a second
+        search) is rarely needed; on the stand-in panel cell it removed the repair and halved
+        the FCL checks for the same time.
     """
 
     colony: AntColonyParams = field(default_factory=AntColonyParams)
@@ -226,7 +229,7 @@ class LocalParams:
     max_so_passes: int = 100
     max_repairs: int = 3
     connectivity: int = 26
-    corner_cutting: bool = True
+    corner_cutting: bool = False
 
     @classmethod
     def coerce(
@@ -512,11 +515,13 @@ def plan_local_path(
         )
 
     conn = 6 if method != "exact" else prm.connectivity
-    if not _connected(grid, s, g, conn):
+    # diagonal moves without corner cutting reach exactly the 6-connected region
+    label_conn = 6 if method != "exact" or not prm.corner_cutting else conn
+    if not _connected(grid, s, g, label_conn):
         return done(
             inner_length=math.inf,
-            reason=f"goal not reachable from start: different {conn}-connected free regions "
-            "(enclosed, or cut off by the region of interest)",
+            reason=f"goal not reachable from start: different {label_conn}-connected free "
+            "regions (enclosed, or cut off by the region of interest)",
         )
 
     pg = _padded(grid)
