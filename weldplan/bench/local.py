@@ -15,7 +15,6 @@ import math
 import os
 import time
 from pathlib import Path
-from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -50,49 +49,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _cell() -> tuple[Any, str]:
-    """The demo cell of issue 2, or a stand-in until it exists."""
-    try:
-        from weldplan.weld.cell import demo_cell  # type: ignore[import-not-found]
-    except ImportError:
-        return _stand_in_cell(), (
-            "stand-in cell (weldplan.weld.cell.demo_cell not available): a 2 mm panel "
-            "100 x 100 mm across the straight line from joint 3 to joint 7, region = joints' box "
-            "+ 40 mm, obstacle rule by exact box distance"
-        )
+    from weldplan.weld.cell import demo_cell
+
     return demo_cell(), "demo cell (weldplan.weld.cell.demo_cell)"
-
-
-def _stand_in_cell() -> Any:
-    import trimesh
-
-    from weldplan.geometry.collision import CollisionModel
-    from weldplan.geometry.grid import ObstacleGrid
-
-    j3 = np.array([1356.00, -66.67, 689.57])
-    j7 = np.array([1504.91, -126.99, 813.51])
-    pitch = clearance = 5.0
-    mid = 0.5 * (j3 + j7)
-    lo_p = np.array([1429.0, mid[1] - 50, mid[2] - 50])
-    hi_p = np.array([1431.0, mid[1] + 50, mid[2] + 50])
-    lo = np.minimum(j3, j7) - 40.0
-    hi = np.maximum(j3, j7) + 40.0
-    shape = tuple(int(v) for v in np.floor((hi - lo) / pitch) + 1)
-    centres = lo + pitch * np.indices(shape).reshape(3, -1).T
-    q = np.abs(centres - 0.5 * (lo_p + hi_p)) - 0.5 * (hi_p - lo_p)
-    d = np.linalg.norm(np.maximum(q, 0.0), axis=1)
-    grid = ObstacleGrid((d < clearance).reshape(shape), lo, pitch, clearance)
-    mesh = trimesh.creation.box(extents=hi_p - lo_p)
-    mesh.apply_translation(0.5 * (lo_p + hi_p))
-    xyz = np.stack([j3, j7])
-    free = np.argwhere(grid.free)
-    fw = grid.index_to_world(free)
-    vidx = np.stack([free[np.argmin(np.linalg.norm(fw - p, axis=1))] for p in xyz])
-    return SimpleNamespace(
-        grid=grid,
-        collision=CollisionModel(mesh),
-        joints=SimpleNamespace(ids=("3", "7"), xyz=xyz),
-        virtual_index=vidx,
-    )
 
 
 def _calibrate() -> tuple[float, float]:
