@@ -281,3 +281,53 @@ def test_exact_with_and_without_corner_cutting(cell: BoxCell) -> None:
     assert_valid(cell, cut, J3, J7, s, g)
     assert_valid(cell, no_cut, J3, J7, s, g)
     assert cut.raw_length <= no_cut.raw_length  # the plain lattice is the less constrained
+
+
+# ------------------------------------------------------------------------------ the demo cell
+
+
+@pytest.fixture(scope="module")
+def demo():
+    from weldplan.weld.cell import demo_cell
+
+    return demo_cell()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("method", ["so-aco", "exact"])
+def test_demo_pair_3_to_7(demo, method: str) -> None:
+    from weldplan.weld.local import plan_pair
+
+    ids = list(demo.joints.ids)
+    i, j = ids.index("3"), ids.index("7")
+    lp = plan_pair(demo, i, j, method=method, params=QUICK, rng=0)
+    assert lp.success and not lp.fast_path  # the demo part blocks the straight line
+    P = lp.points
+    assert np.allclose(P[0], demo.joints.xyz[i]) and np.allclose(P[-1], demo.joints.xyz[j])
+    assert np.allclose(P[1], demo.virtual_xyz[i]) and np.allclose(P[-2], demo.virtual_xyz[j])
+    inner = P[1:-1]
+    r = demo.clearance
+    # fcl (the judge) and open3d sphere tracing (an independent distance-based check)
+    assert demo.collision.path_free(inner, r, method="fcl")
+    assert demo.collision.path_free(inner, r, method="auto")
+    straight = np.linalg.norm(demo.virtual_xyz[j] - demo.virtual_xyz[i])
+    assert straight < lp.inner_length < 1.25 * straight
+
+
+@pytest.mark.slow
+def test_demo_fast_path_and_bad_indices(demo) -> None:
+    from weldplan.weld.local import plan_pair
+
+    V = demo.virtual_xyz
+    pairs = [
+        (a, b)
+        for a in range(len(V))
+        for b in range(a + 1, len(V))
+        if demo.collision.segment_free(V[a], V[b], demo.clearance)
+    ]
+    a, b = pairs[0]
+    lp = plan_pair(demo, a, b, method="so-aco", rng=0)
+    assert lp.fast_path and lp.success and lp.iterations == 0
+    assert lp.inner_length == pytest.approx(np.linalg.norm(V[b] - V[a]))
+    with pytest.raises(IndexError):
+        plan_pair(demo, 0, len(V))
