@@ -28,6 +28,17 @@ times). Every shortcut the secondary optimisation takes is an FCL-checked segmen
 a checked segment is free, so the path that leaves this module is collision-free at the clearance
 between the virtual joints. The two legs real joint -> virtual joint touch the part by
 construction (a real joint lies on its surface) and are not checked.
+
+Deviations from the paper, named (each a :class:`LocalParams` field):
+
+- the FCL check of kept lattice moves and the repair search above (``max_repairs``);
+- the colony searches a box around the pair (``crop_margin``, 50 mm), the whole grid when the box
+  does not connect the pair;
+- the exact baseline forbids corner cutting by default (``corner_cutting``);
+- the secondary optimisation stops after ``max_so_passes`` passes (a guard; it converges first).
+
+Lengths: ``LocalPath.inner_length`` is measured between the virtual joints, like the paper's
+Table 3 (the paper ignores the legs); ``LocalPath.length`` includes the legs.
 """
 
 from __future__ import annotations
