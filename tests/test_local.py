@@ -331,3 +331,28 @@ def test_demo_fast_path_and_bad_indices(demo) -> None:
     assert lp.inner_length == pytest.approx(np.linalg.norm(V[b] - V[a]))
     with pytest.raises(IndexError):
         plan_pair(demo, 0, len(V))
+
+
+def test_fcl_capsule_orientation_matches_the_rotation_matrix_form() -> None:
+    # the scalar quaternion in CollisionModel._fcl_segment_free against the matrix construction
+    import fcl
+    import trimesh
+
+    from weldplan.geometry.collision import _rotation_z_to
+
+    mesh = trimesh.creation.box(extents=(60.0, 4.0, 80.0))
+    mesh.apply_translation([3.0, 1.0, -2.0])
+    cm = CollisionModel(mesh)
+    rng = np.random.default_rng(0)
+    A = rng.uniform(-60, 60, (600, 3))
+    B = rng.uniform(-60, 60, (600, 3))
+    B[::5] = A[::5] + np.array([0.0, 0.0, 30.0]) * rng.choice([-1, 1], (120, 1))  # +-z axis
+    got = cm.segments_free(A, B, 5.0, method="fcl")
+    want = []
+    for a, b in zip(A, B, strict=True):
+        d = b - a
+        L = float(np.linalg.norm(d))
+        tf = fcl.Transform(_rotation_z_to(d / L), 0.5 * (a + b))
+        obj = fcl.CollisionObject(fcl.Capsule(5.0, L), tf)
+        want.append(fcl.collide(obj, cm._part, fcl.CollisionRequest(), fcl.CollisionResult()) == 0)
+    assert np.array_equal(got, want) and 0 < got.sum() < len(got)
