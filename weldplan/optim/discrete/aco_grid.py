@@ -58,6 +58,11 @@ log = logging.getLogger(__name__)
 
 __all__ = ["AntColonyParams", "ColonyResult", "ant_colony_grid"]
 
+# direct C entry points: ndarray.any() and .sum() go through Python wrappers that cost more than
+# the work on (M, 6) arrays
+_add_reduce = np.add.reduce
+_count_nonzero = np.count_nonzero
+
 
 @dataclass(frozen=True)
 class AntColonyParams:
@@ -277,11 +282,11 @@ def ant_colony_grid(
             tot = cs[:, 5]
             # roulette wheel: r < tot, so the count is at most 5 when tot > 0; 6 (a stay,
             # offs7[6] = 0) for an ant with no allowed move
-            choice = (cs <= (gen.random(m) * tot)[:, None]).sum(axis=1)
+            choice = _add_reduce(cs <= (gen.random(m) * tot)[:, None], axis=1)
             nxt = pos + offs7[choice]
             moving = active & (tot > 0)
             near = near_food[pos]
-            if near.any():
+            if _count_nonzero(near):
                 near &= active
                 nxt[near] = g
                 moving |= near
@@ -290,7 +295,7 @@ def ant_colony_grid(
             hist.append(pos)
             t += 1
             active = moving & (pos != g)
-            if t >= max_steps or not active.any():
+            if t >= max_steps or not _count_nonzero(active):
                 break
             if deadline is not None and time.perf_counter() > deadline:
                 timed_out = True
