@@ -11,6 +11,7 @@ HELP = "reproduce a paper's table or measure a target (writes markdown and PNG)"
 BENCHES: dict[str, str] = {
     "functions": "weldplan.bench.functions",
     "mealpy": "weldplan.bench.mealpy_peer",
+    "local": "weldplan.bench.local",
 }
 
 
