@@ -1,4 +1,5 @@
-"""Discrete optimisation: the sequencer (TSP-PSO, Held-Karp, 2-opt/Or-opt polish).
+"""Discrete optimisation: ant colony on grids (:mod:`.aco_grid`) and the sequencer (TSP-PSO,
+Held-Karp, 2-opt/Or-opt polish).
 
 ``solve_sequence(cost)`` orders the nodes of any cost matrix; see
 :mod:`weldplan.optim.discrete.sequence`.
