@@ -1,9 +1,9 @@
 """Discrete particle swarm for tours, after Clerc (2004), as used by Wang et al. (2017), section 5.
 
 Clerc, M. (2004), "Discrete particle swarm optimization, illustrated by the traveling salesman
-problem", in *New Optimization Techniques in Engineering*, Springer, pp. 219-239. Wang et al.
-(2017), "Collision-free path planning for arc welding robot based on ACO-PSO", section 5.2, use it
-with the parameters of their Table 4 (the defaults of :class:`PSOParams`).
+problem", in *New Optimization Techniques in Engineering*, Springer, pp. 219-239. Wang, Xue, Yan
+and Gu (2017), "Welding robot collision-free path optimization", Applied Sciences 7(2) 89,
+section 5.2, use it with the parameters of their Table 4 (the defaults of :class:`PSOParams`).
 
 A *position* is a permutation (the visiting order), a *velocity* an ordered list of
 transpositions. Clerc's algebra:
@@ -21,10 +21,12 @@ The update is Eqs. (6)-(7) of the paper with these operators:
 
 with ``r1, r2 ~ U[0, 1]`` drawn per particle and iteration.
 
-Implementation: the swarm is arrays (positions ``(P, k) int``, velocities as two ``(P, L) int``
+Implementation: the swarm is arrays (positions ``(k, P) int``, velocities as two ``(L, P) int``
 arrays of transposition ends padded with no-op swaps ``(0, 0)``, lengths ``(P,)``); every operator
-loops over list positions with the whole swarm at once, and tour costs of the swarm are one
-gather-and-sum. Safeguard (named): when a velocity grows longer than ``MAX_VELOCITY (n - 1)``
+loops over list positions with the whole swarm at once (``pbest - x`` and ``gbest - x`` share one
+sweep), and tour costs of the swarm are one gather-and-sum. Deviation (named): Clerc's refinements
+beyond the basic update (NoHope/ReHope restarts, velocity reduction) are not used, as the paper
+lists none. Safeguard (named): when a velocity grows longer than ``MAX_VELOCITY (n - 1)``
 transpositions it is replaced by the equivalent minimal one ``(x + v) - x`` (same move, shorter
 list), which bounds memory and time per iteration for large coefficients; with Table 4's
 parameters ``|v| <= 0.4 |v| + 2 (n - 1)`` stays below ``3.34 (n - 1)`` and it never fires.
@@ -42,8 +44,8 @@ from numpy.typing import NDArray
 log = logging.getLogger(__name__)
 
 #: Velocities longer than ``MAX_VELOCITY (n - 1)`` transpositions are contracted (see above).
-#: With Table 4's coefficients a velocity stays below ``(0.4 / 0.6 + ...) < 3.4 (n - 1)``, so
-#: the contraction never fires with the paper's parameters.
+#: With Table 4's coefficients ``|v'| <= 0.4 |v| + 2 (n - 1)``, so ``|v|`` stays below
+#: ``2 (n - 1) / 0.6 < 3.4 (n - 1)`` and the contraction never fires with the paper's parameters.
 MAX_VELOCITY = 4
 
 
