@@ -36,3 +36,5 @@ def test_bench_sequence_quick(tmp_path: Path) -> None:
     assert "Held-Karp: 595.10 mm" in md and "the paper's order: yes" in md
     assert "| + polish | 1 / 1 |" in md
     assert "| 8 |" in md and "load average" in md
+    png = tmp_path / "sequence-convergence.png"
+    assert png.stat().st_size > 1000 and png.read_bytes()[:4] == b"\x89PNG"

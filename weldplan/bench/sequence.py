@@ -186,12 +186,15 @@ def paper_table(args: argparse.Namespace) -> list[str]:
     C = cost_matrix(PAPER_JOINTS)
     exact = solve_sequence(C, method="exact")
     opt = exact.cost
+    histories = []
     found = {"alone": 0, "polish": 0}
     costs: dict[str, list[float]] = {"alone": [], "polish": []}
     secs: dict[str, list[float]] = {"alone": [], "polish": []}
     for seed in range(args.paper_seeds):
         for key, pol in (("alone", False), ("polish", True)):
             s = solve_sequence(C, method="pso", rng=seed, polish=pol)
+            if not pol:
+                histories.append(s.history)
             found[key] += int(abs(s.cost - opt) < 1e-9 * opt)
             costs[key].append(s.cost)
             secs[key].append(s.seconds)
@@ -214,7 +217,34 @@ def paper_table(args: argparse.Namespace) -> list[str]:
             f"| {label} | {found[key]} / {k} | {c.mean():.2f} | {c.max():.2f} "
             f"| {np.mean(secs[key]):.3f} |"
         )
+    png = _convergence_plot(histories, opt, Path(args.out) / "sequence-convergence.png")
+    if png is not None:
+        rows += ["", f"Convergence of the swarm alone (best cost per iteration): `{png.name}`."]
     return rows
+
+
+def _convergence_plot(histories: list[tuple[float, ...]], opt: float, path: Path) -> Path | None:
+    """Best cost per iteration of each seed, with the optimum; ``None`` without matplotlib."""
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:  # pragma: no cover
+        return None
+    fig, ax = plt.subplots(figsize=(6, 3.5))
+    for h in histories:
+        ax.plot(h, color="tab:blue", alpha=0.3, lw=0.8)
+    ax.plot(np.mean(np.asarray(histories), axis=0), color="tab:blue", lw=2, label="PSO, mean")
+    ax.axhline(opt, color="k", ls="--", lw=1, label=f"optimum {opt:.2f} mm")
+    ax.set_xlabel("iteration")
+    ax.set_ylabel("open path length (mm)")
+    ax.set_title("TSP-PSO (Table 4 parameters) on the paper's 15 joints")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
 
 
 def held_karp_table(args: argparse.Namespace) -> list[str]:

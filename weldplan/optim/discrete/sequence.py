@@ -111,7 +111,7 @@ class Sequence:
         return cls(**d)
 
 
-def nearest_neighbour_tour(A: NDArray[np.float64], start: int, n_starts: int = 256) -> NDArray:
+def nearest_neighbour_tour(A: NDArray[np.float64], start: int, n_starts: int = 64) -> NDArray:
     """Best nearest-neighbour closed tour over ``A`` beginning ``start -> s`` over seeds ``s``.
 
     Every second node ``s`` (up to ``n_starts`` of them, evenly spread) seeds one greedy tour; all
