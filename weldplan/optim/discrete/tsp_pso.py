@@ -153,16 +153,15 @@ def difference(X: NDArray[np.intp], Y: NDArray[np.intp]) -> Velocity:
         pos[yq] = jf
         pos[w] = QP[q]
     b = bf // P
-    a = np.broadcast_to(np.arange(k)[:, None], (k, P))
-    real = a != b
-    order = np.argsort(~real, axis=0, kind="stable")
-    a = np.take_along_axis(a, order, axis=0)
-    b = np.take_along_axis(b, order, axis=0)
-    length = real.sum(axis=0)
-    pad = np.arange(k)[:, None] >= length[None, :]
-    a[pad] = 0
-    b[pad] = 0
-    return Velocity(a, b, length)
+    # compact each column's real transpositions (q != b[q]) to the front, keeping their order
+    real = b != np.arange(k)[:, None]
+    qi, col = np.nonzero(real)
+    dest = (np.cumsum(real, axis=0) - 1)[qi, col]
+    a_out = np.zeros((k, P), dtype=np.intp)
+    b_out = np.zeros((k, P), dtype=np.intp)
+    a_out[dest, col] = qi
+    b_out[dest, col] = b[qi, col]
+    return Velocity(a_out, b_out, real.sum(axis=0))
 
 
 def scale(c: NDArray[np.float64], v: Velocity) -> Velocity:
@@ -174,9 +173,12 @@ def scale(c: NDArray[np.float64], v: Velocity) -> Velocity:
     if L == 0:
         return Velocity(np.zeros((1, P), np.intp), np.zeros((1, P), np.intp), new_len)
     t = np.arange(L)[:, None]
-    src = np.minimum(t % np.maximum(v.length, 1)[None, :], v.a.shape[0] - 1)
-    a = np.take_along_axis(v.a, src, axis=0)
-    b = np.take_along_axis(v.b, src, axis=0)
+    if L <= v.a.shape[0] and np.all(new_len <= v.length):  # c <= 1: a plain truncation
+        a, b = v.a[:L].copy(), v.b[:L].copy()
+    else:
+        src = np.minimum(t % np.maximum(v.length, 1)[None, :], v.a.shape[0] - 1)
+        a = np.take_along_axis(v.a, src, axis=0)
+        b = np.take_along_axis(v.b, src, axis=0)
     pad = t >= new_len[None, :]
     a[pad] = 0
     b[pad] = 0
