@@ -4,7 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from tests.conftest import require_shared
+from conftest import require_shared
+
 from weldplan.cli import main
 
 

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import require_shared
 
-from tests.conftest import require_shared
 from weldplan.errors import InputError
 from weldplan.io.tsplib import (
     distance_matrix,
