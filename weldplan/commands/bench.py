@@ -12,6 +12,7 @@ BENCHES: dict[str, str] = {
     "functions": "weldplan.bench.functions",
     "mealpy": "weldplan.bench.mealpy_peer",
     "local": "weldplan.bench.local",
+    "sequence": "weldplan.bench.sequence",
 }
 
 
