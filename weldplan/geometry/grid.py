@@ -64,6 +64,21 @@ class ObstacleGrid:
         free.setflags(write=False)
         object.__setattr__(self, "_free", free)
 
+    def __getstate__(self) -> dict:
+        # bit-packed: a whole-car grid of 1.5e8 voxels pickles in 18 MB, for worker processes
+        return {
+            "bits": np.packbits(self.occupied, axis=None),
+            "shape": self.occupied.shape,
+            "origin": self.origin,
+            "pitch": self.pitch,
+            "clearance": self.clearance,
+        }
+
+    def __setstate__(self, state: dict) -> None:
+        n = int(np.prod(state["shape"]))
+        occ = np.unpackbits(state["bits"], count=n).astype(bool).reshape(state["shape"])
+        self.__init__(occ, state["origin"], state["pitch"], state["clearance"])  # type: ignore[misc]
+
     @property
     def shape(self) -> tuple[int, int, int]:
         return self.occupied.shape  # type: ignore[return-value]
