@@ -120,3 +120,13 @@ def test_cli_demo_prints_the_summary(capsys):
     assert main(["demo"]) == 0
     out = capsys.readouterr().out
     assert "virtual joints" in out and "grid:" in out and "part:" in out
+
+
+def test_demo_cell_without_asset_files_is_generated_in_memory(demo, monkeypatch, tmp_path):
+    from weldplan.weld import demo_part
+
+    monkeypatch.setattr(demo_part, "DEMO_PART", tmp_path / "absent.stl")
+    cell = demo_cell()
+    assert cell.joints.source is None
+    np.testing.assert_array_equal(cell.grid.occupied, demo.grid.occupied)
+    np.testing.assert_allclose(cell.virtual_xyz, demo.virtual_xyz)
