@@ -62,7 +62,7 @@ t = time.perf_counter()
 vox = mesh.voxelized(pitch=5.0)
 dt = time.perf_counter() - t
 print(json.dumps(dict(seconds=dt, peak_mib=peak_mib(), before_mib=rss0,
-                      shape=list(vox.shape), filled=int(vox.filled_count))))
+                      shape=[int(s) for s in vox.shape], filled=int(vox.filled_count))))
 """
 )
 
