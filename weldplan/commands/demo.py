@@ -9,13 +9,29 @@ import sys
 HELP = "load the embedded demo cell and print its summary"
 
 
+def positive_mm(text: str) -> float:
+    """argparse type: a positive, finite number of millimetres."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (value > 0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"must be a positive number of mm, got {text!r}")
+    return value
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--pitch", type=float, default=5.0, help="voxel side in mm (default 5)")
     parser.add_argument(
-        "--clearance", type=float, default=5.0, help="torch-tip clearance in mm (default 5)"
+        "--pitch", type=positive_mm, default=5.0, help="voxel side in mm (default 5)"
     )
     parser.add_argument(
-        "--margin", type=float, default=150.0, help="margin around the joints in mm (default 150)"
+        "--clearance", type=positive_mm, default=5.0, help="torch-tip clearance in mm (default 5)"
+    )
+    parser.add_argument(
+        "--margin",
+        type=positive_mm,
+        default=150.0,
+        help="margin around the joints in mm (default 150)",
     )
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
 
