@@ -8,7 +8,8 @@ from pathlib import Path
 import numpy as np
 
 #: values plotted on the log axis are floored here, so exact zeros (SMA on Sphere) stay visible
-LOG_FLOOR = 1e-300
+#: and the curves above the floor keep a readable scale
+LOG_FLOOR = 1e-30
 
 
 def plot_convergence(
@@ -17,6 +18,7 @@ def plot_convergence(
     *,
     title: str = "",
     xlabel: str = "iteration",
+    floor: float = LOG_FLOOR,
 ) -> Path:
     """Median best-so-far curve (and the 25-75 % band) per algorithm on a log scale, to a PNG.
 
@@ -27,6 +29,8 @@ def plot_convergence(
         differ in length (they are cut to the shortest).
     path
         Output PNG file.
+    floor
+        Values below this are drawn at it (the axis label says so).
     """
     import matplotlib
 
@@ -36,7 +40,7 @@ def plot_convergence(
     fig, ax = plt.subplots(figsize=(7.0, 4.5))
     for name, runs in histories.items():
         n = min(len(h) for h in runs)
-        H = np.maximum(np.array([np.asarray(h[:n], dtype=float) for h in runs]), LOG_FLOOR)
+        H = np.maximum(np.array([np.asarray(h[:n], dtype=float) for h in runs]), floor)
         H = np.where(np.isfinite(H), H, np.nan)
         med = np.nanmedian(H, axis=0)
         x = np.arange(n)
@@ -45,7 +49,7 @@ def plot_convergence(
             lo, hi = np.nanpercentile(H, [25, 75], axis=0)
             ax.fill_between(x, lo, hi, color=line.get_color(), alpha=0.15, lw=0)
     ax.set_xlabel(xlabel)
-    ax.set_ylabel("best value so far (median, 25-75 %)")
+    ax.set_ylabel(f"best value so far (median, 25-75 %; floor {floor:g})")
     ax.set_title(title)
     ax.grid(True, which="major", alpha=0.3)
     ax.legend(fontsize=7, ncol=2)
