@@ -302,11 +302,13 @@ class Obstacles2D:
 
     # ---------------------------------------------------------------- segments
     def inside_length(
-        self, A: ArrayLike, B: ArrayLike, *, per_obstacle: bool = False
+        self, A: ArrayLike, B: ArrayLike, *, per_obstacle: bool = False, closed: bool = False
     ) -> FloatArray:
         """Length of segments ``A -> B (..., 2)`` inside obstacles.
 
         Returns ``(...)`` summed over obstacles, or ``(..., O)`` with ``per_obstacle``.
+        ``closed=True`` counts stretches along a polygon's boundary as inside (for polygons that
+        tile free space, such as navigation meshes); otherwise only the interior counts.
         Circles by the chord formula, rectangles by Liang-Barsky clipping, polygons by splitting
         each segment at its crossings with the polygon's edges and testing the pieces' midpoints.
         """
@@ -320,7 +322,7 @@ class Obstacles2D:
         if len(self.rectangles):
             parts.append(self._rect_fraction(A, B) * seglen[..., None])
         if self.polygons:
-            parts.append(self._polygon_fraction(A, B) * seglen[..., None])
+            parts.append(self._polygon_fraction(A, B, closed) * seglen[..., None])
         out = np.concatenate(parts, axis=-1) if parts else np.zeros((*A.shape[:-1], 0))
         return out if per_obstacle else np.sum(out, axis=-1)
 
@@ -339,7 +341,9 @@ class Obstacles2D:
         t1 = np.clip((-bb + sq) / den, 0.0, 1.0)
         return np.where(ok, np.maximum(t1 - t0, 0.0), 0.0)
 
-    def _rect_fraction(self, A: FloatArray, B: FloatArray) -> FloatArray:
+    def _rect_interval(self, A: FloatArray, B: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Parameter interval ``[t0, t1]`` of segments ``(..., 2)`` strictly inside each
+        rectangle by Liang-Barsky clipping: two ``(..., R)`` arrays (``t1 <= t0`` when empty)."""
         r = self.rectangles
         d = (B - A)[..., None, :]
         a = A[..., None, :]
@@ -356,9 +360,13 @@ class Obstacles2D:
         tmax = np.where(par, np.where(inslab, np.inf, -np.inf), tmax)
         t0 = np.maximum(np.max(tmin, axis=-1), 0.0)
         t1 = np.minimum(np.min(tmax, axis=-1), 1.0)
+        return t0, t1
+
+    def _rect_fraction(self, A: FloatArray, B: FloatArray) -> FloatArray:
+        t0, t1 = self._rect_interval(A, B)
         return np.maximum(t1 - t0, 0.0)
 
-    def _polygon_fraction(self, A: FloatArray, B: FloatArray) -> FloatArray:
+    def _polygon_fraction(self, A: FloatArray, B: FloatArray, closed: bool = False) -> FloatArray:
         lead = A.shape[:-1]
         A2 = A.reshape(-1, 2)
         B2 = B.reshape(-1, 2)
@@ -382,7 +390,8 @@ class Obstacles2D:
             single = Obstacles2D(polygons=(poly,))
             sd = single._polygon_signed_distance(M)[..., 0]
             scale = np.maximum(np.linalg.norm(d, axis=1), 1e-300)[:, None]
-            inside = sd < -GRAZE_TOL * np.maximum(scale, 1.0)
+            tol = GRAZE_TOL * np.maximum(scale, 1.0)
+            inside = sd <= tol if closed else sd < -tol
             out[:, k] = np.sum(np.where(inside & (lens > 0), lens, 0.0), axis=1)
         return out.reshape(*lead, len(self.polygons))
 
@@ -442,10 +451,49 @@ class Obstacles2D:
         A, B = np.broadcast_arrays(A, B)
         tol = GRAZE_TOL * self.scale
         hit = self.inside_length(A, B) > tol
+        hit = hit | self._along_shared_boundary(A, B, hit, tol)
         pinch = self.pinch_points()
         if len(pinch):
             hit = hit | self._through_points(A, B, pinch, tol)
         return hit
+
+    def _along_shared_boundary(
+        self, A: FloatArray, B: FloatArray, hit: NDArray[np.bool_], tol: float
+    ) -> NDArray[np.bool_]:
+        """Axis-parallel segments that run along a boundary shared by two rectangles.
+
+        Two rectangles that share an edge (the row runs of an occupancy grid) block the line
+        between them although neither interior contains it. For each segment parallel to an
+        axis, the copies shifted just off both of its sides are clipped against every
+        rectangle; a stretch inside rectangles on both sides is blocked. (Polygons sharing
+        edges are not detected; the shipped maps have none.)
+        """
+        out = np.zeros(A.shape[:-1], dtype=bool)
+        if not len(self.rectangles):
+            return out
+        d = B - A
+        L = np.linalg.norm(d, axis=-1)
+        flat = (np.abs(d[..., 1]) <= 1e-12 * L) | (np.abs(d[..., 0]) <= 1e-12 * L)
+        idx = np.nonzero((flat & (L > tol) & ~hit).reshape(-1))[0]
+        if not len(idx):
+            return out
+        A2, B2 = A.reshape(-1, 2)[idx], B.reshape(-1, 2)[idx]
+        L2 = L.reshape(-1)[idx]
+        nrm = np.stack([-(B2 - A2)[:, 1], (B2 - A2)[:, 0]], 1) / L2[:, None]
+        delta = 1e-7 * self.scale
+        both = np.zeros(len(idx), dtype=bool)
+        chunk = max(1, 2_000_000 // len(self.rectangles) ** 2)
+        for s in range(0, len(idx), chunk):
+            sl = slice(s, s + chunk)
+            u0, u1 = self._rect_interval(A2[sl] + delta * nrm[sl], B2[sl] + delta * nrm[sl])
+            d0, d1 = self._rect_interval(A2[sl] - delta * nrm[sl], B2[sl] - delta * nrm[sl])
+            lo = np.maximum(u0[:, :, None], d0[:, None, :])
+            hi = np.minimum(u1[:, :, None], d1[:, None, :])
+            overlap = np.sum(np.maximum(hi - lo, 0.0), axis=(1, 2))
+            both[sl] = overlap * L2[sl] > tol
+        flat_out = out.reshape(-1)
+        flat_out[idx] = both
+        return flat_out.reshape(out.shape)
 
     @staticmethod
     def _through_points(A: FloatArray, B: FloatArray, pts: FloatArray, tol: float) -> NDArray:
