@@ -32,7 +32,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from weldplan.errors import InputError, PlanningError
-from weldplan.geometry.obstacles2d import GRAZE_TOL, Obstacles2D, point_segment_distance
+from weldplan.geometry.obstacles2d import GRAZE_TOL, point_segment_distance
 from weldplan.geometry.pathmetrics import path_length
 
 log = logging.getLogger(__name__)

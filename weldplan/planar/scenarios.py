@@ -144,7 +144,9 @@ def _num_array(value: Any, shape: tuple[int, ...], where: str, path: Any) -> NDA
         arr = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError):
         raise InputError(f"expected numbers, got {value!r}", path=path, field=where) from None
-    if arr.ndim != len(shape) or any(s != -1 and a != s for a, s in zip(arr.shape, shape)):
+    if arr.ndim != len(shape) or any(
+        s != -1 and a != s for a, s in zip(arr.shape, shape, strict=False)
+    ):
         want = " x ".join("n" if s == -1 else str(s) for s in shape)
         raise InputError(
             f"expected an array of shape {want}, got {value!r}", path=path, field=where
