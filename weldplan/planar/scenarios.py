@@ -32,6 +32,7 @@ from __future__ import annotations
 import json
 import logging
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 from typing import Any
 
@@ -112,6 +113,27 @@ class Scenario:
     @property
     def straight_distance(self) -> float:
         return float(np.linalg.norm(self.goal - self.start))
+
+    @cached_property
+    def world(self) -> Obstacles2D:
+        """The obstacles plus four frame rectangles around the bounds, so that leaving the
+        map is a collision (what encodings, exact planners and metrics judge paths against)."""
+        x0, y0, x1, y1 = (float(v) for v in self.bounds)
+        m = max(x1 - x0, y1 - y0)
+        frame = np.array(
+            [
+                [x0 - m, y0 - m, x1 + m, y0],
+                [x0 - m, y1, x1 + m, y1 + m],
+                [x0 - m, y0, x0, y1],
+                [x1, y0, x1 + m, y1],
+            ]
+        )
+        o = self.obstacles
+        return Obstacles2D(
+            circles=o.circles,
+            rectangles=np.concatenate([o.rectangles, frame]),
+            polygons=o.polygons,
+        )
 
 
 def scenario_path(name_or_path: str | Path) -> Path:
