@@ -84,7 +84,7 @@ def circle_maps() -> None:
     )
 
 
-S20 = {"bounds": [0, 0, 20, 20], "start": [0.5, 0.5], "goal": [19.5, 19.5], "segments": 12}
+S20 = {"bounds": [0, 0, 20, 20], "start": [0.5, 0.5], "goal": [19.5, 19.5], "nodes": 12}
 
 
 def maps20() -> None:
@@ -215,7 +215,7 @@ def maps50() -> None:
                 "start": start,
                 "goal": goal,
                 "encoding": "segments",
-                "segments": 20,
+                "nodes": 20,
                 "obstacles": random_rects(seed, 50, 24, start, goal),
             },
         )
@@ -257,7 +257,7 @@ def building() -> None:
             "start": [3.5, 3.5],
             "goal": [99.5, 99.5],
             "encoding": "segments",
-            "segments": 30,
+            "nodes": 30,
             "obstacles": walls,
         },
     )

@@ -300,6 +300,30 @@ class Obstacles2D:
         """Penetration depth ``max(0, -signed distance)`` into each obstacle: ``(..., O)``."""
         return np.maximum(-self.signed_distance(points), 0.0)
 
+    def total_penetration(self, points: ArrayLike) -> FloatArray:
+        """Sum over obstacles of the penetration depth of points ``(..., 2)``: ``(...)``.
+
+        The fast path of ``penetration(points).sum(-1)`` for population fitness.
+        """
+        P = np.asarray(points, dtype=np.float64)
+        total = np.zeros(P.shape[:-1])
+        x = P[..., 0, None]
+        y = P[..., 1, None]
+        if len(self.circles):
+            c = self.circles
+            d = np.sqrt((x - c[:, 0]) ** 2 + (y - c[:, 1]) ** 2)
+            total += np.sum(np.maximum(c[:, 2] - d, 0.0), axis=-1)
+        if len(self.rectangles):
+            r = self.rectangles
+            # inside a rectangle the depth is the distance to its nearest side
+            depth = np.minimum(
+                np.minimum(x - r[:, 0], r[:, 2] - x), np.minimum(y - r[:, 1], r[:, 3] - y)
+            )
+            total += np.sum(np.maximum(depth, 0.0), axis=-1)
+        if self.polygons:
+            total += np.sum(np.maximum(-self._polygon_signed_distance(P), 0.0), axis=-1)
+        return total
+
     # ---------------------------------------------------------------- segments
     def inside_length(
         self, A: ArrayLike, B: ArrayLike, *, per_obstacle: bool = False, closed: bool = False

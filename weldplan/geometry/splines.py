@@ -6,6 +6,8 @@ dimension ``d``: 2 for the planar maps, 3 for torch routes) give points ``(..., 
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.interpolate import BSpline, CubicSpline
@@ -47,19 +49,28 @@ def cubic_spline_path(
     N = np.asarray(nodes, dtype=np.float64)
     if N.ndim < 2 or N.shape[-2] < 2:
         raise ValueError(f"nodes must be (..., k >= 2, d), got {N.shape}")
-    k = N.shape[-2]
-    t = node_parameters(k)
-    tt = np.linspace(0.0, 1.0, int(n_points))
-    Y = np.moveaxis(N, -2, 0)  # (k, ..., d)
-    if k == 2:
-        out = Y[0] + tt.reshape(-1, *([1] * (Y.ndim - 1))) * (Y[1] - Y[0])
-    else:
-        bc = bc_type if k > 3 or bc_type != "not-a-knot" else "not-a-knot"
-        out = CubicSpline(t, Y, axis=0, bc_type=bc)(tt)
-    out = np.moveaxis(out, 0, -2)
+    M = cubic_spline_matrix(N.shape[-2], int(n_points), bc_type)
+    out = M @ N
     out[..., 0, :] = N[..., 0, :]
     out[..., -1, :] = N[..., -1, :]
     return out
+
+
+@lru_cache(maxsize=64)
+def cubic_spline_matrix(k: int, n_points: int, bc_type: str = "not-a-knot") -> NDArray:
+    """The ``(n_points, k)`` matrix taking ``k`` nodes to the spline's sample points.
+
+    A cubic spline with linear boundary conditions is linear in its data, so sampling it is
+    one matrix product: ``points = M @ nodes``. Built once per ``(k, n_points)`` by
+    interpolating the identity with :class:`scipy.interpolate.CubicSpline`.
+    """
+    tt = np.linspace(0.0, 1.0, n_points)
+    if k == 2:
+        M = np.stack([1.0 - tt, tt], axis=1)
+    else:
+        M = CubicSpline(node_parameters(k), np.eye(k), axis=0, bc_type=bc_type)(tt)
+    M.setflags(write=False)
+    return M
 
 
 def bspline_path(control: ArrayLike, n_points: int = N_INTERP, degree: int = 3) -> NDArray:

@@ -15,7 +15,7 @@ A scenario file is one JSON object::
         {"type": "grid", "origin": [x, y], "cell": 1.0, "rows": ["..#.", "...."]}
       ],
       "encoding": "spline" | "segments" | "grid",   (the encoding the scenario was made for)
-      "segments": 12                                 (N of the segment encoding, optional)
+      "nodes": 12                                    (free nodes of the segment encoding)
     }
 
 A ``grid`` obstacle is an occupancy grid written as text, ``#`` occupied and ``.`` free, the
@@ -92,8 +92,9 @@ class Scenario:
         The occupancy grid when the scenario has one.
     encoding
         The encoding the scenario was made for.
-    segments
-        N of the rotated-frame segment encoding (paper 003 uses 12 on the 20 x 20 maps).
+    nodes
+        Free nodes of the rotated-frame segment encoding, N - 1 for N segments (paper 003's
+        "chromosome length", 12 on the 20 x 20 maps).
     description, path
         Free text and the file it came from.
     """
@@ -105,7 +106,7 @@ class Scenario:
     obstacles: Obstacles2D
     grid: GridMap | None = None
     encoding: str = "spline"
-    segments: int = 12
+    nodes: int = 12
     description: str = ""
     path: str | None = None
     extra: dict[str, Any] = field(default_factory=dict)
@@ -284,13 +285,13 @@ def scenario_from_dict(data: Any, *, path: Any = None) -> Scenario:
             path=path,
             field="encoding",
         )
-    segments = data.get("segments", 12)
-    if not isinstance(segments, int) or segments < 2:
-        raise InputError("segments must be an integer >= 2", path=path, field="segments")
+    nodes = data.get("nodes", 12)
+    if not isinstance(nodes, int) or isinstance(nodes, bool) or nodes < 1:
+        raise InputError("nodes must be an integer >= 1", path=path, field="nodes")
     for arr in (bounds, start, goal):
         arr.setflags(write=False)
     name = data.get("name") or (Path(path).stem if path is not None else "scenario")
-    known = {"name", "description", "bounds", "start", "goal", "obstacles", "encoding", "segments"}
+    known = {"name", "description", "bounds", "start", "goal", "obstacles", "encoding", "nodes"}
     return Scenario(
         name=str(name),
         bounds=bounds,
@@ -299,7 +300,7 @@ def scenario_from_dict(data: Any, *, path: Any = None) -> Scenario:
         obstacles=obs,
         grid=grid,
         encoding=encoding,
-        segments=segments,
+        nodes=nodes,
         description=str(data.get("description", "")),
         path=None if path is None else str(path),
         extra={k: v for k, v in data.items() if k not in known},
