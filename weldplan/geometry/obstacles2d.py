@@ -311,8 +311,15 @@ class Obstacles2D:
         y = P[..., 1, None]
         if len(self.circles):
             c = self.circles
-            d = np.sqrt((x - c[:, 0]) ** 2 + (y - c[:, 1]) ** 2)
-            total += np.sum(np.maximum(c[:, 2] - d, 0.0), axis=-1)
+            # squared distances by one matrix product; square roots only where inside
+            d2 = (P @ (-2.0 * c[:, :2].T)) + np.sum(P * P, axis=-1)[..., None]
+            d2 += np.sum(c[:, :2] ** 2, axis=1)
+            inside = d2 < c[:, 2] ** 2
+            if np.any(inside):
+                depth = np.zeros_like(d2)
+                rr = np.broadcast_to(c[:, 2], d2.shape)
+                depth[inside] = rr[inside] - np.sqrt(np.maximum(d2[inside], 0.0))
+                total += np.sum(depth, axis=-1)
         if len(self.rectangles):
             r = self.rectangles
             # inside a rectangle the depth is the distance to its nearest side

@@ -20,7 +20,10 @@ FloatArray = NDArray[np.float64]
 def segment_lengths(points: ArrayLike) -> FloatArray:
     """Lengths of the segments of polylines ``(..., n, d)``: ``(..., n - 1)``."""
     P = np.asarray(points, dtype=np.float64)
-    return np.linalg.norm(np.diff(P, axis=-2), axis=-1)
+    d = np.diff(P, axis=-2)
+    if d.shape[-1] == 2:  # the planar fast path
+        return np.hypot(d[..., 0], d[..., 1])
+    return np.linalg.norm(d, axis=-1)
 
 
 def path_length(points: ArrayLike) -> FloatArray:
