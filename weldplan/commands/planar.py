@@ -74,7 +74,8 @@ def run(args: argparse.Namespace) -> int:
             f"gap        {100 * r.gap:+.2f} %\n"
             f"smoothness {r.smoothness:.4f} rad (sum of turning angles)\n"
             f"clearance  {r.min_clearance:.4f}\n"
-            f"success    {'yes' if r.success else 'no (the path collides)'}\n"
+            f"success    {'yes' if r.success else 'no (the path collides)'}"
+            f" ({r.collisions} polyline segments touch obstacles)\n"
             f"time       {r.seconds:.3f} s\n"
         )
     if args.plot:

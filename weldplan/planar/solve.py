@@ -72,8 +72,13 @@ class PlanarRun:
         What was run.
     points
         The best path's polyline.
-    length, smoothness, min_clearance, success
+    length, smoothness, min_clearance
         Its metrics (map units, radians).
+    success
+        Collision-free by the encoding's criterion (:meth:`PathProblem.success`; for splines
+        paper 000's ``f2 = 0``).
+    collisions
+        Segments of the polyline that enter an obstacle (exact check).
     fitness
         The Problem's fitness of the best solution.
     optimum
@@ -96,6 +101,7 @@ class PlanarRun:
     smoothness: float
     min_clearance: float
     success: bool
+    collisions: int
     fitness: float
     optimum: float
     seconds: float
@@ -157,7 +163,8 @@ def solve(
         length=m.length,
         smoothness=m.smoothness,
         min_clearance=m.min_clearance,
-        success=m.success,
+        success=bool(prob.success(res.x_array[None])[0]),
+        collisions=m.collisions,
         fitness=res.f,
         optimum=optimum,
         seconds=seconds,
