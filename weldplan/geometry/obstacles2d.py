@@ -137,6 +137,15 @@ def _segments_touch(a: FloatArray, b: FloatArray, c: FloatArray, d: FloatArray) 
     return proper | on(a, b, c, o1) | on(a, b, d, o2) | on(c, d, a, o3) | on(c, d, b, o4)
 
 
+def _even_odd(P: FloatArray, a: FloatArray, b: FloatArray) -> NDArray[np.bool_]:
+    """Even-odd point-in-polygon of points ``(..., 2)`` for one polygon's edges ``a -> b``."""
+    py = P[..., None, 1]
+    cond = (a[:, 1] > py) != (b[:, 1] > py)
+    dy = b[:, 1] - a[:, 1]
+    xint = a[:, 0] + (py - a[:, 1]) * (b[:, 0] - a[:, 0]) / np.where(dy == 0, 1.0, dy)
+    return np.sum(cond & (P[..., None, 0] < xint), axis=-1) % 2 == 1
+
+
 def point_segment_distance(P: FloatArray, A: FloatArray, B: FloatArray) -> FloatArray:
     """Distance from points to segments, broadcasting ``P, A, B (..., d)`` -> ``(...)``."""
     ab = B - A
@@ -418,11 +427,17 @@ class Obstacles2D:
             mids = 0.5 * (ts[:, 1:] + ts[:, :-1])  # (S, K+1)
             lens = ts[:, 1:] - ts[:, :-1]
             M = A2[:, None, :] + mids[..., None] * d[:, None, :]
-            single = Obstacles2D(polygons=(poly,))
-            sd = single._polygon_signed_distance(M)[..., 0]
-            scale = np.maximum(np.linalg.norm(d, axis=1), 1e-300)[:, None]
-            tol = GRAZE_TOL * np.maximum(scale, 1.0)
-            inside = sd <= tol if closed else sd < -tol
+            # even-odd test of the pieces' midpoints; the distance to the boundary is needed
+            # only for the pieces it calls inside (open) or outside (closed), to sort out
+            # pieces that run along an edge
+            par = _even_odd(M, pa, pb)
+            tol = GRAZE_TOL * np.maximum(np.linalg.norm(d, axis=1), 1.0)[:, None]
+            check = (par if not closed else ~par) & (lens > 0)
+            on_edge = np.zeros_like(par)
+            if np.any(check):
+                dist = point_segment_distance(M[check][:, None, :], pa, pb).min(axis=1)
+                on_edge[check] = dist <= np.broadcast_to(tol, par.shape)[check]
+            inside = (par | on_edge) if closed else (par & ~on_edge)
             out[:, k] = np.sum(np.where(inside & (lens > 0), lens, 0.0), axis=1)
         return out.reshape(*lead, len(self.polygons))
 
@@ -477,16 +492,21 @@ class Obstacles2D:
         A segment collides when more than ``GRAZE_TOL x map scale`` of it lies inside obstacles,
         or when a pinch point (:meth:`pinch_points`) lies in its relative interior.
         """
+        return self.segments_hit_length(A, B)[0]
+
+    def segments_hit_length(self, A: ArrayLike, B: ArrayLike) -> tuple[NDArray, FloatArray]:
+        """:meth:`segments_hit` and :meth:`inside_length` in one pass: ``((...), (...))``."""
         A = np.asarray(A, dtype=np.float64)
         B = np.asarray(B, dtype=np.float64)
         A, B = np.broadcast_arrays(A, B)
         tol = GRAZE_TOL * self.scale
-        hit = self.inside_length(A, B) > tol
+        inside = self.inside_length(A, B)
+        hit = inside > tol
         hit = hit | self._along_shared_boundary(A, B, hit, tol)
         pinch = self.pinch_points()
         if len(pinch):
             hit = hit | self._through_points(A, B, pinch, tol)
-        return hit
+        return hit, inside
 
     def _along_shared_boundary(
         self, A: FloatArray, B: FloatArray, hit: NDArray[np.bool_], tol: float

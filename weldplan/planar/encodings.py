@@ -262,8 +262,7 @@ class SegmentPathProblem(PathProblem):
         paths = self.decode(X)
         A, B = paths[:, :-1], paths[:, 1:]
         f1 = path_length(paths)
-        inside = self.world.inside_length(A, B)  # (P, N)
-        hit = self.world.segments_hit(A, B)
+        hit, inside = self.world.segments_hit_length(A, B)  # (P, N) each
         n_inf = np.sum(hit, axis=1)
         feasible = f1 + self.k * smoothness(paths)
         f3 = n_inf / self.n_segments
