@@ -17,6 +17,7 @@ from weldplan.errors import WeldplanError
 #: command name -> module implementing it
 COMMANDS: dict[str, str] = {
     "bench": "weldplan.commands.bench",
+    "demo": "weldplan.commands.demo",
     "planar": "weldplan.commands.planar",
 }
 
