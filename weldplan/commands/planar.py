@@ -71,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
             f"algorithm  {r.algorithm}, {r.n_eval} evaluations, seed {r.seed}\n"
             f"length     {r.length:.4f}\n"
             f"optimum    {r.optimum:.4f} (exact)\n"
-            f"gap        {100 * r.gap:+.2f} %\n"
+            f"gap        {100 * r.gap:+.2f} %{'' if r.success else ' (of a colliding path)'}\n"
             f"smoothness {r.smoothness:.4f} rad (sum of turning angles)\n"
             f"clearance  {r.min_clearance:.4f}\n"
             f"success    {'yes' if r.success else 'no (the path collides)'}"
