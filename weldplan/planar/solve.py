@@ -153,7 +153,9 @@ def solve(
     m = prob.measure(res.x_array)
     pts = prob.path(res.x_array)
     X = getattr(opt, "X", None)
-    div = population_diversity(X) if isinstance(X, np.ndarray) and X.ndim == 2 else float("nan")
+    # multi-swarm optimisers keep (swarms, NP, n_var): DI over all their individuals
+    ok = isinstance(X, np.ndarray) and X.ndim >= 2 and X.shape[-1] == prob.n_var
+    div = population_diversity(X.reshape(-1, prob.n_var)) if ok else float("nan")
     optimum = exact_optimum(scenario, enc).length if with_optimum else float("nan")
     return PlanarRun(
         scenario=scenario.name,
