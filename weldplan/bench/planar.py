@@ -132,8 +132,14 @@ def _stats(rows: Iterable[dict]) -> dict:
         "t_mean": float(np.mean(T)),
         "t_max": float(np.max(T)),
         "mean_all": float(np.mean(L)),
-        "di": float(np.nanmean([r["diversity"] for r in rows])),
+        "di": _nanmean([r["diversity"] for r in rows]),
     }
+
+
+def _nanmean(values: list[float]) -> float:
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    return float(np.mean(v)) if len(v) else float("nan")
 
 
 def _fmt(v: float, nd: int = 3) -> str:
