@@ -91,3 +91,23 @@ def test_missing_field_and_bad_json(tmp_path: Path) -> None:
         load_scenario(_write(tmp_path, bad))
     with pytest.raises(InputError, match="line 2"):
         load_scenario(_write(tmp_path, '{"bounds": [0, 0, 1, 1],\n "start": [0, 0],,}'))
+
+
+def test_generator_script_rewrites_the_shipped_files(tmp_path: Path, monkeypatch) -> None:
+    import importlib.util
+
+    from weldplan.planar.scenarios import SCENARIO_DIR
+
+    root = Path(__file__).resolve().parents[1]
+    spec = importlib.util.spec_from_file_location(
+        "make_scenarios", root / "scripts" / "make_scenarios.py"
+    )
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    monkeypatch.setattr(mod, "OUT", tmp_path)
+    for make in (mod.circle_maps, mod.maps20, mod.maps50, mod.building, mod.grids):
+        make()
+    made = sorted(p.name for p in tmp_path.glob("*.json"))
+    assert made == sorted(p.name for p in SCENARIO_DIR.glob("*.json"))
+    for name in made:
+        assert (tmp_path / name).read_text() == (SCENARIO_DIR / name).read_text(), name
