@@ -18,6 +18,7 @@ from weldplan.errors import WeldplanError
 COMMANDS: dict[str, str] = {
     "bench": "weldplan.commands.bench",
     "demo": "weldplan.commands.demo",
+    "planar": "weldplan.commands.planar",
 }
 
 
