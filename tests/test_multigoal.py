@@ -153,3 +153,41 @@ def test_starved_budget_does_measurably_worse():
     ]
     assert max(full) < 0.02
     assert np.mean(starved) > max(full) + 0.05
+
+
+def test_cli_planar_tour_prints_table_and_plots(tmp_path, capsys):
+    from weldplan.cli import main
+
+    png = tmp_path / "t.png"
+    rc = main(
+        ["planar", "tour", "tour-1", "--order-by", "sma,exact", "--pop", "20", "--iters", "10",
+         "--seed", "1", "--plot", str(png)]
+    )  # fmt: skip
+    out = capsys.readouterr().out
+    assert rc == 0
+    assert "exact" in out and "sma" in out and "0.00%" in out
+    assert png.stat().st_size > 10_000
+    rc = main(["planar", "tour", "tour-1", "--order-by", "exact", "--json"])
+    rows = json.loads(capsys.readouterr().out)
+    assert rc == 0 and rows[0]["algorithm"] == "exact" and rows[0]["collision_free"]
+
+
+def test_cli_planar_tour_rejects_unknown_algorithm(capsys):
+    from weldplan.cli import main
+
+    assert main(["planar", "tour", "tour-1", "--order-by", "nope"]) == 2
+    assert "--order-by" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_bench_tour_writes_tables(tmp_path):
+    from weldplan.cli import main
+
+    rc = main(
+        ["bench", "tour", "--runs", "1", "--pop", "10", "--iters", "5", "--m-values", "50",
+         "--out", str(tmp_path)]
+    )  # fmt: skip
+    text = (tmp_path / "tour.md").read_text()
+    assert rc == 0
+    assert "Table 4" in text and "Table 3" in text and "ISMA+2opt" in text
+    assert (tmp_path / "tour-tour-3.png").exists() and (tmp_path / "tour-table3.png").exists()

@@ -16,6 +16,7 @@ BENCHES: dict[str, str] = {
     "local": "weldplan.bench.local",
     "sequence": "weldplan.bench.sequence",
     "planar": "weldplan.bench.planar",
+    "tour": "weldplan.bench.tour",
 }
 
 
