@@ -191,3 +191,26 @@ def test_bench_tour_writes_tables(tmp_path):
     assert rc == 0
     assert "Table 4" in text and "Table 3" in text and "ISMA+2opt" in text
     assert (tmp_path / "tour-tour-3.png").exists() and (tmp_path / "tour-table3.png").exists()
+
+
+def test_navmesh_tour_on_polyanya_arena():
+    """Polyanya's arena navmesh as a real multi-goal map: the ISMA tour equals the ground
+    truth on 8 targets, and the smoothed path stays in the navmesh."""
+    from conftest import require_shared
+
+    from weldplan.planar.exact import MeshFreeSpace
+    from weldplan.planar.multigoal import navmesh_tour
+
+    space = MeshFreeSpace.read(require_shared("meshmaps", "arena.mesh"))
+    rng = np.random.default_rng(0)
+    P = rng.uniform(space.vertices_xy.min(0), space.vertices_xy.max(0), size=(200, 2))
+    P = P[space.contains_free(P)][:9]
+    task = navmesh_tour(space, P[0], P[1:], label="arena")
+    r = plan_tour(task, "isma", pop_size=100, max_iter=100, rng=0)
+    assert sorted(r.order) == list(range(1, 9))
+    assert r.gap < 0.02
+    assert r.collision_free
+    Q = r.points_array
+    assert space.contains_free(Q).all()
+    with pytest.raises(InputError):
+        navmesh_tour(space, [-100.0, -100.0], P[1:])

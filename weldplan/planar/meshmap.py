@@ -54,6 +54,8 @@ MAX_CIRCLE_SIDES = 256
 #: relative margin on circumscribed circle polygons: their sides touch the circle at their
 #: midpoints, which an exact collision check would count as grazing
 CIRCLE_PAD = 1e-6
+#: triangle centroids x obstacle edges tested per chunk by the free-space filter
+KEEP_CHUNK = 2_000_000
 
 
 @dataclass(frozen=True, eq=False)
@@ -272,7 +274,9 @@ def triangulate_segments(
         ``(s, 2)``: segment ends (obstacle outlines and the map frame); crossing segments are
         split by Triangle at their intersection.
     keep
-        ``keep(centroids (k, 2)) -> (k,) bool``: which triangles are free space.
+        ``keep(centroids (k, 2)) -> (k,) bool``: which triangles are free space; or
+        ``(r, 2)`` seed points, one inside each free region bounded by the segments (Triangle's
+        regional attributes then mark the free triangles, in linear time).
     max_edge
         ``M``: input segments are split to at most ``M`` and triangles get at most the area of
         the equilateral triangle of side ``M`` (``inf``: no limit).
@@ -301,15 +305,30 @@ def triangulate_segments(
     segs = inv[len(extra) + S]
     segs = segs[segs[:, 0] != segs[:, 1]]
     opts = "pzQ"
+    seeds = None if callable(keep) else np.asarray(keep, dtype=np.float64).reshape(-1, 2)
+    if seeds is not None:
+        opts += "A"
     if min_angle > 0:
         opts += f"q{min_angle:g}"
     if np.isfinite(max_edge):
         opts += f"a{math.sqrt(3.0) / 4.0 * max_edge**2:.17g}"
-    out = tr.triangulate({"vertices": verts_u, "segments": segs}, opts)
+    pslg: dict[str, Any] = {"vertices": verts_u, "segments": segs}
+    if seeds is not None:
+        pslg["regions"] = np.concatenate(
+            [seeds, np.ones((len(seeds), 1)), np.zeros((len(seeds), 1))], axis=1
+        )
+    out = tr.triangulate(pslg, opts)
     nodes = np.asarray(out["vertices"], dtype=np.float64)
     tris = np.asarray(out["triangles"], dtype=np.int64)
-    cen = nodes[tris].mean(axis=1)
-    tris = tris[np.asarray(keep(cen), dtype=bool)]
+    if seeds is not None:
+        tris = tris[np.asarray(out["triangle_attributes"]).reshape(-1) == 1]
+    else:
+        cen = nodes[tris].mean(axis=1)
+        step = max(1, KEEP_CHUNK // max(1, len(A)))  # keep() may cost (points x segments)
+        kept = np.concatenate(
+            [np.asarray(keep(cen[s : s + step]), dtype=bool) for s in range(0, len(cen), step)]
+        )
+        tris = tris[kept]
     # drop nodes no kept triangle uses, renumber
     used = np.zeros(len(nodes), dtype=bool)
     used[tris.reshape(-1)] = True
@@ -409,9 +428,8 @@ def triangulate_navmesh(
     free space the triangles kept; ``max_edge`` refines it (``inf``: Triangle's quality mesh of
     the boundary alone)."""
 
-    def keep(c: NDArray[np.float64]) -> NDArray[np.bool_]:
-        return space.contains_free(c)
-
+    # one seed inside each (convex) navmesh polygon marks the free regions
+    seeds = np.array([space.vertices_xy[p].mean(axis=0) for p in space.polygon_vertices])
     return triangulate_segments(
-        space.edge_a, space.edge_b, keep, max_edge=max_edge, points=points, min_angle=min_angle
+        space.edge_a, space.edge_b, seeds, max_edge=max_edge, points=points, min_angle=min_angle
     )

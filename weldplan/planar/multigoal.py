@@ -43,7 +43,7 @@ from weldplan.geometry.pathmetrics import path_length
 from weldplan.optim.core import Problem, minimize
 from weldplan.optim.discrete.sequence import solve_sequence
 from weldplan.optim.registry import get_optimizer
-from weldplan.planar.meshmap import TriangleMap, triangulate_map
+from weldplan.planar.meshmap import TriangleMap, triangulate_map, triangulate_navmesh
 from weldplan.planar.scenarios import SCENARIO_DIR, Scenario, scenario_from_dict
 from weldplan.random import RNGLike, as_generator, seed_of
 
@@ -69,20 +69,65 @@ EXACT_STOPS = 16
 @dataclass(frozen=True, eq=False)
 class TourScenario:
     """A multi-goal traversal task: a planar map (``scenario``, whose ``start`` is the depot),
-    ``goals (t, 2)`` to visit, and the mesh edge length ``max_edge`` (M) it was made for."""
+    ``goals (t, 2)`` to visit, and the mesh edge length ``max_edge`` (M) it was made for.
 
-    scenario: Scenario
+    A task on a Polyanya navigation mesh (:func:`navmesh_tour`) has ``space`` (a
+    :class:`~weldplan.planar.exact.MeshFreeSpace`) instead of ``scenario``.
+    """
+
+    scenario: Scenario | None
     goals: NDArray[np.float64]
     max_edge: float
+    space: Any = None
+    start_point: NDArray[np.float64] | None = None
+    label: str = ""
 
     @property
     def name(self) -> str:
-        return self.scenario.name
+        return self.scenario.name if self.scenario is not None else self.label
+
+    @property
+    def start(self) -> NDArray[np.float64]:
+        if self.scenario is not None:
+            return np.asarray(self.scenario.start, dtype=np.float64)
+        return np.asarray(self.start_point, dtype=np.float64)
+
+    @property
+    def world(self) -> Any:
+        """What paths are checked against: the scenario's obstacles with the map frame, or the
+        navigation mesh's free space."""
+        return self.scenario.world if self.scenario is not None else self.space
 
     @property
     def stops(self) -> NDArray[np.float64]:
         """``(t + 1, 2)``: the start, then the goals."""
-        return np.concatenate([self.scenario.start[None], self.goals])
+        return np.concatenate([self.start[None], self.goals])
+
+
+def navmesh_tour(
+    space: Any, start: ArrayLike, goals: ArrayLike, max_edge: float = np.inf, label: str = "navmesh"
+) -> TourScenario:
+    """A multi-goal task on a Polyanya navigation mesh (``space``: a
+    :class:`~weldplan.planar.exact.MeshFreeSpace`), refined to edges of ``max_edge`` (``inf``:
+    Triangle's quality mesh of the navmesh boundary alone).
+
+    Raises
+    ------
+    InputError
+        When the start or a goal is outside the mesh.
+    """
+    S = np.asarray(start, dtype=np.float64).reshape(2)
+    G = np.asarray(goals, dtype=np.float64).reshape(-1, 2)
+    inside = space.contains_free(np.concatenate([S[None], G]))
+    if not inside.all():
+        k = int(np.argmin(inside))
+        raise InputError(
+            f"point {np.concatenate([S[None], G])[k].tolist()} is outside the navigation mesh",
+            field="start" if k == 0 else f"goals[{k - 1}]",
+        )
+    return TourScenario(
+        scenario=None, goals=G, max_edge=float(max_edge), space=space, start_point=S, label=label
+    )
 
 
 def tour_path(name_or_path: str | Path) -> Path:
@@ -186,7 +231,10 @@ def build_tour_graph(task: TourScenario, max_edge: float | None = None) -> TourG
     stop-to-stop shortest paths."""
     t0 = time.perf_counter()
     M = task.max_edge if max_edge is None else float(max_edge)
-    mesh = triangulate_map(task.scenario.obstacles, task.scenario.bounds, M, points=task.stops)
+    if task.scenario is None:
+        mesh = triangulate_navmesh(task.space, M, points=task.stops)
+    else:
+        mesh = triangulate_map(task.scenario.obstacles, task.scenario.bounds, M, points=task.stops)
     dist, pred = mesh.distances(mesh.terminals)
     return TourGraph(mesh=mesh, dist=dist, pred=pred, build_seconds=time.perf_counter() - t0)
 
@@ -273,7 +321,8 @@ def segments_clear(world: Any, A: ArrayLike, B: ArrayLike, depth_tol: float | No
 
     A segment passes when ``world.segments_free`` says so, or when none of five points along it
     is deeper than ``depth_tol`` inside an obstacle (default ``GRAZE_TOL`` x map scale, the
-    planar core's grazing tolerance): a B-spline that runs along an obstacle side, as mesh paths
+    planar core's grazing tolerance; on a navigation mesh: when the five points are in the mesh,
+    its boundary included): a B-spline that runs along an obstacle side, as mesh paths
     do, sits on it up to rounding (1e-14 inside), which an exact check would call a collision.
     """
     from weldplan.geometry.obstacles2d import GRAZE_TOL
@@ -281,13 +330,16 @@ def segments_clear(world: Any, A: ArrayLike, B: ArrayLike, depth_tol: float | No
     A = np.asarray(A, dtype=np.float64)
     B = np.asarray(B, dtype=np.float64)
     ok = np.asarray(world.segments_free(A, B), dtype=bool)
-    if ok.all() or not hasattr(world, "clearance"):
+    if ok.all():
         return ok
-    tol = GRAZE_TOL * float(world.scale) if depth_tol is None else float(depth_tol)
     a, b = A[~ok], B[~ok]
     t = np.linspace(0.0, 1.0, 5)[:, None, None]
-    depth = -np.asarray(world.clearance(a + t * (b - a)))
-    ok[~ok] = np.max(depth, axis=0) <= tol
+    Q = a + t * (b - a)
+    if hasattr(world, "clearance"):
+        tol = GRAZE_TOL * float(world.scale) if depth_tol is None else float(depth_tol)
+        ok[~ok] = np.max(-np.asarray(world.clearance(Q)), axis=0) <= tol
+    elif hasattr(world, "contains_free"):  # a navigation mesh: boundary points count as free
+        ok[~ok] = np.all(world.contains_free(Q), axis=0)
     return ok
 
 
@@ -515,7 +567,7 @@ def plan_tour(
         name, seconds, n_eval = algorithm, res.seconds, res.n_eval
         used = {**res.params, "pop_size": pop_size, "max_iter": max_iter, "two_opt": two_opt}
     poly, at = g.polyline(order)
-    world = task.scenario.world
+    world = task.world
     t1 = time.perf_counter()
     if smooth:
         curve, smoothed = smooth_tour(poly, at, world)

@@ -28,7 +28,14 @@ def plot_tour(
         ax.triplot(
             mesh.nodes[:, 0], mesh.nodes[:, 1], mesh.cells, color="#cccccc", lw=0.3, zorder=0
         )
-    draw_scenario(ax, task.scenario)
+    if task.scenario is not None:
+        draw_scenario(ax, task.scenario)
+    else:
+        sp = task.space
+        for a, b in zip(sp.edge_a, sp.edge_b, strict=True):
+            ax.plot([a[0], b[0]], [a[1], b[1]], "k-", lw=0.8)
+        ax.plot(*task.start, marker="D", color="gold", mec="k", ms=7, zorder=5)
+        ax.set_aspect("equal")
     for k, (x, y) in enumerate(task.goals, start=1):
         ax.plot(x, y, "o", color="crimson", ms=5, zorder=6)
         ax.annotate(str(k), (x, y), textcoords="offset points", xytext=(4, 4), fontsize=7)
