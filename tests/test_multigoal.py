@@ -214,3 +214,24 @@ def test_navmesh_tour_on_polyanya_arena():
     assert space.contains_free(Q).all()
     with pytest.raises(InputError):
         navmesh_tour(space, [-100.0, -100.0], P[1:])
+
+
+def test_house_floorplan_tour():
+    """rtb-data's house.mat: 11 named places from the kitchen; ISMA (paper budget) within 2 %
+    of the ground truth, smoothed tour inside free cells, and the grid outline check agrees
+    with the cells."""
+    pytest.importorskip("rtbdata")
+    from weldplan.planar.multigoal import SampledGridWorld, house_tour
+
+    task = house_tour()
+    assert len(task.goals) == 11
+    r = plan_tour(task, "isma", rng=0)
+    assert sorted(r.order) == list(range(1, 12))
+    assert r.gap < 0.02 and r.smoothed and r.collision_free
+    w = task.world
+    assert isinstance(w, SampledGridWorld)
+    # a segment straight through a wall is caught
+    occ = task.scenario.grid.occupied
+    i, j = np.argwhere(occ)[len(np.argwhere(occ)) // 2]
+    c = task.scenario.grid.centre(np.array([i, j]))
+    assert not w.segments_free(c[None] - [0.3, 0.0], c[None] + [0.3, 0.0])[0]

@@ -364,6 +364,38 @@ def triangulate_segments(
     return tmap
 
 
+def grid_boundary_segments(
+    occupied: NDArray[np.bool_], origin: tuple[float, float] = (0.0, 0.0), cell: float = 1.0
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The outline of an occupancy grid ``occupied (nx, ny)`` (cell ``(i, j)`` covers
+    ``[x0 + i c, x0 + (i+1) c] x [y0 + j c, ...]``) as maximal axis-aligned segments between
+    occupied and free cells: ``(a (s, 2), b (s, 2))``. Unlike the rectangles of a grid, these
+    never overlap, which Triangle's quality refinement needs."""
+    occ = np.asarray(occupied, dtype=bool)
+    nx, ny = occ.shape
+    x0, y0 = origin
+    A: list[list[float]] = []
+    B: list[list[float]] = []
+    pad = np.zeros((nx + 2, ny + 2), dtype=bool)
+    pad[1:-1, 1:-1] = occ
+
+    def runs(mask: NDArray[np.bool_]) -> list[tuple[int, int]]:
+        d = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
+        return list(
+            zip(np.nonzero(d == 1)[0].tolist(), np.nonzero(d == -1)[0].tolist(), strict=True)
+        )
+
+    for j in range(ny + 1):  # horizontal edges at y = y0 + j c
+        for s, e in runs(pad[1:-1, j] != pad[1:-1, j + 1]):
+            A.append([x0 + s * cell, y0 + j * cell])
+            B.append([x0 + e * cell, y0 + j * cell])
+    for i in range(nx + 1):  # vertical edges at x = x0 + i c
+        for s, e in runs(pad[i, 1:-1] != pad[i + 1, 1:-1]):
+            A.append([x0 + i * cell, y0 + s * cell])
+            B.append([x0 + i * cell, y0 + e * cell])
+    return np.array(A).reshape(-1, 2), np.array(B).reshape(-1, 2)
+
+
 def triangulate_map(
     obstacles: Obstacles2D,
     bounds: ArrayLike,
@@ -371,6 +403,7 @@ def triangulate_map(
     *,
     points: ArrayLike | None = None,
     min_angle: float = MIN_ANGLE,
+    grid: Any = None,
 ) -> TriangleMap:
     """Triangulate the free space of a planar map (paper 002, sec. 2.1).
 
@@ -385,6 +418,9 @@ def triangulate_map(
         ``M``, the maximum triangle edge length (map units).
     points
         ``(t, 2)``: points to make mesh nodes (start and goals), see :attr:`TriangleMap.terminals`.
+    grid
+        An occupancy grid (:class:`weldplan.planar.scenarios.GridMap`) whose outline is added as
+        segments (``obstacles`` must then not hold the grid's rectangles).
 
     Raises
     ------
@@ -399,6 +435,9 @@ def triangulate_map(
     rings = [frame, *polys]
     A = np.concatenate(rings)
     B = np.concatenate([np.roll(r, -1, axis=0) for r in rings])
+    if grid is not None:
+        ga, gb = grid_boundary_segments(grid.occupied, grid.origin, grid.cell)
+        A, B = np.concatenate([A, ga]), np.concatenate([B, gb])
     solid = Obstacles2D(polygons=tuple(polys)) if polys else None
     eps = 1e-9 * max(x1 - x0, y1 - y0)
 
@@ -411,6 +450,13 @@ def triangulate_map(
         )
         if solid is not None:
             ok &= ~solid.contains(c)
+        if grid is not None:
+            ij = grid.cell_of(c)
+            nx, ny = grid.shape
+            inside = (ij[:, 0] >= 0) & (ij[:, 0] < nx) & (ij[:, 1] >= 0) & (ij[:, 1] < ny)
+            occ = np.zeros(len(c), dtype=bool)
+            occ[inside] = grid.occupied[ij[inside, 0], ij[inside, 1]]
+            ok &= ~occ
         return ok
 
     return triangulate_segments(A, B, keep, max_edge=max_edge, points=points, min_angle=min_angle)

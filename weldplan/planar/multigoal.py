@@ -39,6 +39,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from weldplan.errors import InputError
+from weldplan.geometry.obstacles2d import Obstacles2D
 from weldplan.geometry.pathmetrics import path_length
 from weldplan.optim.core import Problem, minimize
 from weldplan.optim.discrete.sequence import solve_sequence
@@ -94,9 +95,16 @@ class TourScenario:
 
     @property
     def world(self) -> Any:
-        """What paths are checked against: the scenario's obstacles with the map frame, or the
-        navigation mesh's free space."""
-        return self.scenario.world if self.scenario is not None else self.space
+        """What paths are checked against: the scenario's obstacles with the map frame, the
+        navigation mesh's free space, or for a map that is only an occupancy grid a
+        :class:`SampledGridWorld` (the exact check of thousands of touching grid rectangles
+        is too slow there)."""
+        if self.scenario is None:
+            return self.space
+        sc = self.scenario
+        if sc.grid is not None and not len(sc.obstacles.circles) and not sc.obstacles.polygons:
+            return SampledGridWorld(sc.grid, sc.bounds)
+        return sc.world
 
     @property
     def stops(self) -> NDArray[np.float64]:
@@ -128,6 +136,60 @@ def navmesh_tour(
     return TourScenario(
         scenario=None, goals=G, max_edge=float(max_edge), space=space, start_point=S, label=label
     )
+
+
+class SampledGridWorld:
+    """Segment checks on an occupancy grid by sampling: a segment is free when every point at
+    steps of at most ``cell / samples_per_cell`` along it (ends included) lies in a free cell
+    inside the bounds, cell boundaries counting as free. A stated approximation: a segment may
+    clip the corner of an occupied cell by less than ``cell / samples_per_cell``."""
+
+    def __init__(self, grid: Any, bounds: ArrayLike, samples_per_cell: int = 16) -> None:
+        self.grid = grid
+        self.bounds = np.asarray(bounds, dtype=np.float64)
+        self.step = grid.cell / float(samples_per_cell)
+        self.scale = float(np.hypot(*(self.bounds[2:] - self.bounds[:2])))
+
+    def points_free(self, P: ArrayLike) -> NDArray[np.bool_]:
+        P = np.asarray(P, dtype=np.float64)
+        g = self.grid
+        nx, ny = g.shape
+        eps = 1e-9 * g.cell
+        b = self.bounds
+        ok = (
+            (P[..., 0] >= b[0] - eps)
+            & (P[..., 0] <= b[2] + eps)
+            & (P[..., 1] >= b[1] - eps)
+            & (P[..., 1] <= b[3] + eps)
+        )
+        # a point on a cell boundary is free when any cell it touches is free
+        free = np.zeros(P.shape[:-1], dtype=bool)
+        for dx in (-eps, eps):
+            for dy in (-eps, eps):
+                ij = g.cell_of(P + np.array([dx, dy]))
+                inside = (
+                    (ij[..., 0] >= 0) & (ij[..., 0] < nx) & (ij[..., 1] >= 0) & (ij[..., 1] < ny)
+                )
+                occ = np.ones(P.shape[:-1], dtype=bool)
+                occ[inside] = g.occupied[ij[inside][:, 0], ij[inside][:, 1]]
+                free |= ~occ
+        return ok & free
+
+    def segments_free(self, A: ArrayLike, B: ArrayLike) -> NDArray[np.bool_]:
+        A = np.asarray(A, dtype=np.float64).reshape(-1, 2)
+        B = np.asarray(B, dtype=np.float64).reshape(-1, 2)
+        n = np.maximum(1, np.ceil(np.linalg.norm(B - A, axis=1) / self.step)).astype(np.int64)
+        seg = np.repeat(np.arange(len(A)), n + 1)
+        t = np.concatenate([np.linspace(0.0, 1.0, k + 1) for k in n.tolist()]) if len(A) else []
+        t = np.asarray(t)[:, None]
+        P = A[seg] + t * (B[seg] - A[seg])
+        ok = self.points_free(P)
+        out = np.ones(len(A), dtype=bool)
+        np.logical_and.at(out, seg, ok)
+        return out
+
+    def contains_free(self, P: ArrayLike) -> NDArray[np.bool_]:
+        return self.points_free(P)
 
 
 def tour_path(name_or_path: str | Path) -> Path:
@@ -234,7 +296,17 @@ def build_tour_graph(task: TourScenario, max_edge: float | None = None) -> TourG
     if task.scenario is None:
         mesh = triangulate_navmesh(task.space, M, points=task.stops)
     else:
-        mesh = triangulate_map(task.scenario.obstacles, task.scenario.bounds, M, points=task.stops)
+        sc = task.scenario
+        obs, grid = sc.obstacles, sc.grid
+        if grid is not None:  # the grid's outline, not its (touching) rectangles
+            from weldplan.geometry.obstacles2d import grid_to_rectangles
+
+            gr = grid_to_rectangles(grid.occupied, grid.origin, grid.cell)
+            rest = ~(obs.rectangles[:, None, :] == gr[None]).all(-1).any(-1)
+            obs = Obstacles2D(
+                circles=obs.circles, rectangles=obs.rectangles[rest], polygons=obs.polygons
+            )
+        mesh = triangulate_map(obs, sc.bounds, M, points=task.stops, grid=grid)
     dist, pred = mesh.distances(mesh.terminals)
     return TourGraph(mesh=mesh, dist=dist, pred=pred, build_seconds=time.perf_counter() - t0)
 
@@ -603,3 +675,50 @@ def plan_tour(
         n_eval=int(n_eval),
         params=used,
     )
+
+
+# ------------------------------------------------------------------------------ real maps
+#: the named places of rtb-data's house floorplan, in the order they are read
+HOUSE_START = "kitchen"
+
+
+def house_tour(max_edge: float = 4.0, start: str = HOUSE_START) -> TourScenario:
+    """The floorplan ``house.mat`` of the PyPI package ``rtb-data`` (Corke's Robotics Toolbox
+    data, MIT) as a multi-goal task: the occupancy grid (596 x 397 cells of 1 unit, value 1 =
+    obstacle, indexed ``[y, x]``) becomes grid obstacles, ``start`` the depot and the other
+    named places the goals (place coordinates are cell centres ``(x, y)``).
+
+    Raises
+    ------
+    ImportError
+        When ``rtb-data`` is not installed (``pip install weldplan[test]``).
+    """
+    try:
+        import rtbdata
+    except ImportError as exc:
+        raise ImportError(
+            "the house floorplan needs the 'rtb-data' package (pip install 'weldplan[test]')"
+        ) from exc
+    from scipy.io import loadmat
+
+    path = Path(rtbdata.__file__).parent / "data" / "house.mat"
+    d = loadmat(path, squeeze_me=True, struct_as_record=False)
+    occ = np.asarray(d["floorplan"]) != 0  # (ny, nx), row 0 at y = 0
+    places = {n: np.asarray(getattr(d["places"], n), dtype=np.float64)
+              for n in d["places"]._fieldnames}  # fmt: skip
+    if start not in places:
+        raise InputError(f"unknown place {start!r}; one of {sorted(places)}", path=path)
+    ny, nx = occ.shape
+    rows = ["".join("#" if v else "." for v in r) for r in occ[::-1]]
+    goals = [p.tolist() for n, p in places.items() if n != start]
+    data = {
+        "name": "house",
+        "description": "rtb-data house.mat floorplan; goals: "
+        + ", ".join(n for n in places if n != start),
+        "bounds": [-0.5, -0.5, nx - 0.5, ny - 0.5],
+        "start": places[start].tolist(),
+        "goals": goals,
+        "max_edge": float(max_edge),
+        "obstacles": [{"type": "grid", "origin": [-0.5, -0.5], "cell": 1.0, "rows": rows}],
+    }
+    return tour_from_dict(data, path=path)
