@@ -438,7 +438,11 @@ def triangulate_map(
     if grid is not None:
         ga, gb = grid_boundary_segments(grid.occupied, grid.origin, grid.cell)
         A, B = np.concatenate([A, ga]), np.concatenate([B, gb])
-    solid = Obstacles2D(polygons=tuple(polys)) if polys else None
+    # point-in-polygon by matplotlib's compiled Path test behind a bounding-box filter (centroids
+    # are never on an outline: the outlines are triangle edges)
+    from matplotlib.path import Path as MplPath
+
+    solid = [(p, p.min(axis=0), p.max(axis=0), MplPath(p)) for p in polys]
     eps = 1e-9 * max(x1 - x0, y1 - y0)
 
     def keep(c: NDArray[np.float64]) -> NDArray[np.bool_]:
@@ -448,8 +452,10 @@ def triangulate_map(
             & (c[:, 1] > y0 - eps)
             & (c[:, 1] < y1 + eps)
         )
-        if solid is not None:
-            ok &= ~solid.contains(c)
+        for _poly, lo, hi, path in solid:
+            m = ok & np.all(c >= lo, axis=1) & np.all(c <= hi, axis=1)
+            if m.any():
+                ok[m] &= ~path.contains_points(c[m])
         if grid is not None:
             ij = grid.cell_of(c)
             nx, ny = grid.shape
