@@ -28,3 +28,41 @@ def test_score_eq15():
     np.testing.assert_array_equal(score([10.0, 10.0], [10.0, 20.0]), [99, 99])
     with pytest.raises(ValueError):
         score(1.0, 0.0)
+
+
+def _check_moves(sc, run):
+    free = ~sc.grid.occupied
+    for path in run.paths:
+        P = np.array(path)
+        assert free[P[:, 0], P[:, 1]].all()
+        d = np.diff(P, axis=0)
+        assert np.abs(d).max() <= 1
+        for a, m in zip(P[:-1], d, strict=True):
+            if m[0] and m[1]:  # no corner cutting
+                assert free[a[0] + m[0], a[1]] and free[a[0], a[1] + m[1]]
+
+
+@pytest.mark.slow
+def test_paper_three_robot_case_with_hafsa():
+    from weldplan.planar.multirobot import PAPER_GOALS, PAPER_STARTS, simulate_robots
+    from weldplan.planar.scenarios import load_scenario
+
+    sc = load_scenario("grid20")
+    run = simulate_robots(sc, algorithm="hafsa", rng=0)
+    assert run.all_arrived
+    assert min(run.min_distance) > run.safety
+    for k in range(3):
+        assert run.paths[k][0] == PAPER_STARTS[k] and run.paths[k][-1] == PAPER_GOALS[k]
+    _check_moves(sc, run)
+
+
+def test_head_on_robots_replan_and_keep_distance():
+    from weldplan.planar.multirobot import simulate_robots
+    from weldplan.planar.scenarios import load_scenario
+
+    sc = load_scenario("grid20")
+    run = simulate_robots(sc, starts=[(1, 1), (10, 1)], goals=[(10, 1), (1, 1)], algorithm="astar")
+    assert run.all_arrived
+    assert sum(run.replans) >= 1
+    assert min(run.min_distance) > run.safety
+    _check_moves(sc, run)
