@@ -66,3 +66,15 @@ def test_head_on_robots_replan_and_keep_distance():
     assert sum(run.replans) >= 1
     assert min(run.min_distance) > run.safety
     _check_moves(sc, run)
+
+
+def test_cli_planar_robots_writes_png_and_gif(tmp_path, capsys):
+    from weldplan.cli import main
+
+    png, gif = tmp_path / "r.png", tmp_path / "r.gif"
+    rc = main(["planar", "robots", "grid20", "--global-planner", "astar", "--plot", str(png),
+               "--gif", str(gif)])  # fmt: skip
+    out = capsys.readouterr().out
+    assert rc == 0
+    assert out.count("arrives at step") == 3 and "> safety radius" in out
+    assert png.stat().st_size > 10_000 and gif.read_bytes()[:3] == b"GIF"

@@ -19,6 +19,7 @@ HELP = "plan a 2D path on a scenario with one optimiser (length, gap to optimum,
 #: planar sub-forms: name -> module (added by later work; the plain form needs none)
 SUBCOMMANDS: dict[str, str] = {
     "tour": "weldplan.commands.planar_tour",
+    "robots": "weldplan.commands.planar_robots",
 }
 
 
