@@ -124,3 +124,27 @@ def test_headless_chromium_draws_the_scene(tmp_path):
     mid = img[200:500, 250:650]
     greyish = (np.abs(mid[..., 0] - mid[..., 2]) < 40) & (mid[..., 1] > 90)
     assert greyish.mean() > 0.2, "part not drawn"
+
+
+def test_convergence_plots_draw(tmp_path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from weldplan.viz.plots import plot_convergence, plot_leg_lengths, plot_route_convergence
+
+    r = box_route()
+    stats = dict(r.stats)
+    stats["local_paths"] = {"C-B": {"length": 150.0, "history": [200.0, 170.0, 150.0]}}
+    stats["sequence_history"] = [300.0, 260.0, 250.0]
+    from weldplan.weld.route import Route
+
+    r = Route(r.order, r.legs, r.joint_ids, r.joint_xyz, lower_bound=160.0, stats=stats)
+    fig = plot_route_convergence(r)
+    fig.savefig(tmp_path / "c.png")
+    a1, a2 = fig.axes
+    np.testing.assert_allclose(a1.lines[0].get_ydata(), [200 / 150, 170 / 150, 1.0])
+    np.testing.assert_allclose(a2.lines[0].get_ydata(), [300.0, 260.0, 250.0])
+    ax = plot_leg_lengths(r)
+    assert len(ax.patches) == 2
+    ax = plot_convergence([3.0, float("inf"), 1.0], reference=0.5)
+    assert len(ax.lines) == 2
