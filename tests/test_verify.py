@@ -138,3 +138,13 @@ def test_report_round_trip(part):
     P[2] = [0.0, 30.0, 10.0]
     rep = verify_route(_with_leg(r, 1, P), part)
     assert VerifyReport.from_dict(rep.to_dict()) == rep
+
+
+def test_spot_declared_its_own_virtual_joint_gets_no_exemption(part):
+    r = box_route()
+    V = r.virtual_xyz.copy()
+    V[0] = SPOTS[0]  # A "in free space": its first segment must be free at full clearance
+    r2 = Route(r.order, r.legs, r.joint_ids, r.joint_xyz, virtual_xyz=V, settings=r.settings)
+    rep = verify_route(r2, part)
+    assert [(v.leg, v.segment, v.kind) for v in rep.violations] == [(0, 0, "collision")]
+    assert rep.approach_segments == 3

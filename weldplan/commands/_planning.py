@@ -81,7 +81,7 @@ def config_from_args(args: argparse.Namespace) -> Any:
         margin=getattr(args, "margin", 150.0),
         planner=args.planner,
         sequencer=args.sequencer,
-        aco={"n_iter": args.aco, "n_ants": args.aco},
+        aco={"n_iterations": args.aco, "n_ants": args.aco},
     )
 
 

@@ -52,7 +52,7 @@ SEQUENCERS = ("auto", "pso", "exact", "nn")
 LOWER_BOUND_EXACT_MAX = 16
 
 #: SO-ACO settings of the demo target (N = M = 10; the paper's Table 3 also runs 50/50)
-DEFAULT_ACO: dict[str, Any] = {"n_iter": 10, "n_ants": 10}
+DEFAULT_ACO: dict[str, Any] = {"n_iterations": 10, "n_ants": 10}
 
 
 @dataclass(frozen=True)
@@ -319,8 +319,10 @@ def plan_route(
                 pts = pts[::-1]
             leg = Leg(ids[a], ids[b], pts, str(getattr(lp, "method", config.planner)))
         else:
-            mid = [V[a]] if np.all(V[a] == V[b]) else [V[a], V[b]]
-            leg = Leg(ids[a], ids[b], np.array([P[a], *mid, P[b]]), "straight")
+            pts = np.array([P[a], V[a], V[b], P[b]])
+            # drop repeats: a joint that is its own virtual joint, two joints sharing one
+            keep = np.r_[True, np.any(pts[1:] != pts[:-1], axis=1)]
+            leg = Leg(ids[a], ids[b], pts[keep] if keep.sum() >= 2 else pts[[0, -1]], "straight")
         legs.append(leg)
         methods.append(leg.method)
     t0 = time.perf_counter()
@@ -338,7 +340,8 @@ def plan_route(
         f"{ids[iu[p]]}-{ids[ju[p]]}": {
             "length": float(lp.length),
             "method": str(getattr(lp, "method", config.planner)),
-            "history": [float(h) for h in (getattr(lp, "stats", {}) or {}).get("history", [])],
+            "history": [float(h) for h in getattr(lp, "history", ())],
+            "seconds": float(getattr(lp, "seconds", 0.0)),
         }
         for p, lp in sorted(paths.items())
     }

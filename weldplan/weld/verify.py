@@ -25,6 +25,9 @@ down. It is checked with :data:`APPROACH_PIECES` capsules covering ``s`` from
 than the cone) and touching contact at equality (e.g. a spot in a 90-degree inside corner, where
 the cone is tangent to both walls) is not reported. The first ``APPROACH_EXEMPT_MM`` mm around the
 spot, where the torch is at the weld, are the only part of the route not checked at all.
+
+A weld spot that is its own virtual joint (it lies in free space, at least ``c`` from the part)
+has no approach: the segment leaving it is checked at the full clearance like any other.
 """
 
 from __future__ import annotations
@@ -136,6 +139,14 @@ def _collision_model(part: Any) -> CollisionModel:
     if not isinstance(mesh, trimesh.Trimesh):
         raise TypeError(f"expected a trimesh.Trimesh, a Cell or a CollisionModel, got {type(part)}")
     return CollisionModel(mesh)
+
+
+def _is_virtual(route: Route, joint_id: str, p: NDArray[np.float64]) -> bool:
+    """Whether weld spot ``p`` of ``joint_id`` is its own virtual joint (no approach segment)."""
+    if route.virtual_xyz is None or joint_id not in route.joint_ids:
+        return False
+    v = route.virtual_xyz[route.index_of(joint_id)]
+    return bool(np.linalg.norm(v - p) <= ENDPOINT_TOL_MM)
 
 
 def approach_pieces(
@@ -266,7 +277,12 @@ def verify_route(
         if not np.all(np.isfinite(P)):
             violations.append(Violation("points", "the leg has non-finite points", **tag))
             continue
-        if len(P) < 3:
+        # A segment is an approach when it leaves a weld spot that is not its own virtual joint
+        # (a joint lying in free space is its own virtual joint and has no approach).
+        start_app = not _is_virtual(route, leg.from_id, P[0])
+        end_app = not _is_virtual(route, leg.to_id, P[-1])
+        last = len(P) - 2
+        if last == 0 and start_app and end_app:
             violations.append(
                 Violation(
                     "approach",
@@ -276,18 +292,22 @@ def verify_route(
                 )
             )
             continue
-        last = len(P) - 2
-        for seg, (spot, virt) in ((0, (P[0], P[1])), (last, (P[-1], P[-2]))):
+        for seg in range(last + 1):
+            if seg == 0 and start_app:
+                spot, virt = P[0], P[1]
+            elif seg == last and end_app:
+                spot, virt = P[-1], P[-2]
+            else:
+                mid_a.append(P[seg])
+                mid_b.append(P[seg + 1])
+                mid_where.append((k, seg))
+                continue
             A, B, r = approach_pieces(spot, virt, clearance, pieces=approach_pieces_per_segment)
             for a, b, rr in zip(A, B, r, strict=True):
                 app_a.append(a)
                 app_b.append(b)
                 app_r.append(rr)
                 app_where.append((k, seg))
-        for seg in range(1, last):
-            mid_a.append(P[seg])
-            mid_b.append(P[seg + 1])
-            mid_where.append((k, seg))
 
     failed: dict[tuple[int, int], str] = {}
     if mid_a:
@@ -309,7 +329,7 @@ def verify_route(
         leg = route.legs[k]
         violations.append(Violation("collision", msg, k, seg, leg.from_id, leg.to_id))
 
-    n_app = len({w for w in app_where})
+    n_app = len(set(app_where))
     report = VerifyReport(
         ok=not violations,
         violations=tuple(violations),
