@@ -8,7 +8,9 @@ from importlib import import_module
 HELP = "reproduce a paper's table or measure a target (writes markdown and PNG)"
 
 #: benchmark name -> module with ``HELP``, ``add_arguments(parser)`` and ``run(args) -> int``
-BENCHES: dict[str, str] = {}
+BENCHES: dict[str, str] = {
+    "route": "weldplan.bench.route",
+}
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
