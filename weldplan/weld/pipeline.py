@@ -273,6 +273,18 @@ def plan_route(
     def sequence(round_: int) -> Any:
         nonlocal t_seq
         t = time.perf_counter()
+        off = ~np.eye(n, dtype=bool)
+        stranded = [ids[k] for k in range(n) if n > 1 and not np.isfinite(C[k][off[k]]).any()]
+        if stranded:
+            raise PlanningError(
+                f"no collision-free path from joint(s) {', '.join(stranded)} to any other joint "
+                f"at {clearance:g} mm clearance (planner {config.planner}); failed pairs: "
+                + ", ".join(
+                    f"{ids[iu[p]]}-{ids[ju[p]]}"
+                    for p in sorted(paths)
+                    if not np.isfinite(C[iu[p], ju[p]])
+                )
+            )
         report("sequence", round_, round_ + 1)
         try:
             seq = solve_sequence(C, method=config.sequencer, polish=config.polish, rng=gen, pso=pso)
