@@ -2,11 +2,9 @@
 
 from __future__ import annotations
 
-from typing import Union
-
 import numpy as np
 
-RNGLike = Union[np.random.Generator, int, np.random.SeedSequence, None]
+RNGLike = np.random.Generator | int | np.random.SeedSequence | None
 
 
 def as_generator(rng: RNGLike = None) -> np.random.Generator:

@@ -10,6 +10,13 @@ HELP = "plan, verify and export the embedded demo cell (15 joints of Wang et al.
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--pitch", type=float, default=5.0, help="voxel side in mm (default 5)")
+    p.add_argument(
+        "--clearance", type=float, default=5.0, help="torch-tip clearance in mm (default 5)"
+    )
+    p.add_argument(
+        "--margin", type=float, default=150.0, help="margin around the joints in mm (default 150)"
+    )
     add_planning_arguments(p, default_output="route.csv")
     p.set_defaults(html="route.html")
     p.add_argument(
@@ -18,9 +25,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from weldplan.weld.pipeline import PlanConfig
+
+    PlanConfig(clearance=args.clearance, pitch=args.pitch, margin=args.margin)  # validates
+
     def make_cell():
         from weldplan.weld.cell import demo_cell
 
-        return demo_cell()
+        return demo_cell(pitch=args.pitch, clearance=args.clearance, margin=args.margin)
 
     return run_planning(args, make_cell, title="weldplan demo (Wang et al. 2017, 15 joints)")

@@ -14,10 +14,16 @@ import numpy as np
 import trimesh
 from numpy.typing import ArrayLike, NDArray
 
+from weldplan.geometry.distance import SurfaceDistance
+
 log = logging.getLogger(__name__)
 
-#: segments shorter than this (mm) are checked as a sphere at their midpoint's ends
+#: segments shorter than this (mm) are checked by fcl as a sphere at their start
 _MIN_LENGTH = 1e-9
+#: sphere tracing gives a front up when its step falls below this fraction of the radius
+_MIN_STEP_FRACTION = 0.02
+#: sphere-tracing rounds before the remaining segments go to fcl
+_MAX_TRACE_STEPS = 48
 
 
 def _rotation_z_to(d: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -52,6 +58,14 @@ class CollisionModel:
         self._bvh = bvh
         self._part = fcl.CollisionObject(bvh, fcl.Transform())
         self._request = fcl.CollisionRequest()
+        self._distance: SurfaceDistance | None = None
+
+    @property
+    def distance(self) -> SurfaceDistance:
+        """Exact unsigned point-to-surface distances (open3d, built on first use)."""
+        if self._distance is None:
+            self._distance = SurfaceDistance(self.mesh)
+        return self._distance
 
     def __getstate__(self) -> dict:
         return {"mesh": self.mesh}
@@ -61,8 +75,112 @@ class CollisionModel:
 
     def segment_free(self, a: ArrayLike, b: ArrayLike, radius: float) -> bool:
         """Whether a sphere of ``radius`` mm swept from ``a`` to ``b`` (3,) misses the part."""
-        a = np.asarray(a, dtype=np.float64)
-        b = np.asarray(b, dtype=np.float64)
+        return bool(self.segments_free(np.reshape(a, (1, 3)), np.reshape(b, (1, 3)), radius)[0])
+
+    def segments_free(
+        self, A: ArrayLike, B: ArrayLike, radius: float, *, method: str = "auto"
+    ) -> NDArray[np.bool_]:
+        """``(n,) bool`` for segments ``A[i] -> B[i]``, ``A`` and ``B`` of shape ``(n, 3)`` (mm).
+
+        A segment is free when no point of the part lies within ``radius`` of it (the capsule
+        swept by the torch tip).
+
+        Parameters
+        ----------
+        A, B
+            ``(n, 3)`` segment end points (mm).
+        radius
+            The torch-tip radius (mm), normally the cell's clearance.
+        method
+            ``"auto"`` (default): decide most segments exactly from point-surface distances
+            (sphere tracing, below), and let python-fcl judge the rest; ``"fcl"``: python-fcl
+            for every segment (the independent check used to verify routes).
+
+        Notes
+        -----
+        Sphere tracing from both ends at once: if the surface is ``d`` away from a point ``p``
+        of the segment, the capsule piece from ``p`` to ``p + (d - radius) u`` is free (every
+        point within ``radius`` of it is closer than ``d`` to ``p``), so each end advances by
+        ``d - radius`` until the two meet (free). A point of the segment closer than ``radius``
+        to the surface proves a collision. Fronts that stall (``d`` within a hair of
+        ``radius``: grazing segments) are probed one radius further and otherwise handed to
+        fcl. Distances come from open3d in single precision; every decision keeps a margin of
+        :attr:`SurfaceDistance.tolerance` so that rounding cannot flip it.
+        """
+        A = np.asarray(A, dtype=np.float64).reshape(-1, 3)
+        B = np.asarray(B, dtype=np.float64).reshape(-1, 3)
+        if A.shape != B.shape:
+            raise ValueError(f"A and B must have the same shape, got {A.shape} and {B.shape}")
+        radius = float(radius)
+        if method == "fcl":
+            return self._fcl_segments_free(A, B, radius)
+        if method != "auto":
+            raise ValueError(f'method must be "auto" or "fcl", got {method!r}')
+        status = self._trace(A, B, radius)
+        rest = np.flatnonzero(status == 0)
+        if len(rest):
+            status[rest] = np.where(self._fcl_segments_free(A[rest], B[rest], radius), 1, -1)
+        log.debug("segments_free: %d of %d segments went to fcl", len(rest), len(A))
+        return status > 0
+
+    def _trace(self, A: NDArray, B: NDArray, radius: float) -> NDArray[np.int8]:
+        """Status per segment: 1 free, -1 collides, 0 undecided (sphere tracing from both ends)."""
+        n = len(A)
+        status = np.zeros(n, dtype=np.int8)
+        if n == 0 or len(self.mesh.faces) == 0:
+            status[:] = 1
+            return status
+        dist = self.distance
+        tol = dist.tolerance
+        min_step = max(_MIN_STEP_FRACTION * radius, 4.0 * tol)
+        D = B - A
+        L = np.linalg.norm(D, axis=1)
+        U = np.divide(D, L[:, None], out=np.zeros_like(D), where=L[:, None] > 0)
+        t0 = np.zeros(n)
+        t1 = L.copy()
+        active = np.arange(n)
+        probe_ids: list[NDArray[np.int64]] = []
+        probe_pts: list[NDArray[np.float64]] = []
+        for _ in range(_MAX_TRACE_STEPS):
+            if len(active) == 0:
+                break
+            a = active
+            P0 = A[a] + t0[a, None] * U[a]
+            P1 = A[a] + t1[a, None] * U[a]
+            d = dist(np.concatenate([P0, P1]))
+            d0, d1 = d[: len(a)], d[len(a) :]
+            hit = (d0 < radius - tol) | (d1 < radius - tol)
+            s0 = d0 - radius - tol
+            s1 = d1 - radius - tol
+            new0 = np.where(s0 >= 0, t0[a] + s0, t0[a])
+            new1 = np.where(s1 >= 0, t1[a] - s1, t1[a])
+            free = ~hit & (s0 >= 0) & (s1 >= 0) & (new0 >= new1)
+            stall0 = s0 < min_step
+            stall1 = s1 < min_step
+            stalled = ~hit & ~free & (stall0 | stall1)
+            status[a[hit]] = -1
+            status[a[free]] = 1
+            t0[a] = new0
+            t1[a] = new1
+            if stalled.any():
+                # probe one radius beyond each stalled front: a hit there proves a collision
+                sa = a[stalled]
+                gap = np.maximum(t1[sa] - t0[sa], 0.0)
+                step = np.minimum(radius, gap)
+                f = stall0[stalled]
+                b = stall1[stalled]
+                pf = A[sa] + (t0[sa] + step)[:, None] * U[sa]
+                pb = A[sa] + (t1[sa] - step)[:, None] * U[sa]
+                probe_ids += [sa[f], sa[b]]
+                probe_pts += [pf[f], pb[b]]
+            active = a[~hit & ~free & ~stalled]
+        if probe_ids:
+            ids = np.concatenate(probe_ids)
+            hit = dist(np.concatenate(probe_pts)) < radius - tol
+            status[ids[hit]] = -1
+        return status
+
+    def _fcl_segment_free(self, a: NDArray, b: NDArray, radius: float) -> bool:
         d = b - a
         length = float(np.linalg.norm(d))
         if length < _MIN_LENGTH:
@@ -74,24 +192,32 @@ class CollisionModel:
         obj = fcl.CollisionObject(geom, tf)
         return fcl.collide(obj, self._part, self._request, fcl.CollisionResult()) == 0
 
-    def segments_free(self, A: ArrayLike, B: ArrayLike, radius: float) -> NDArray[np.bool_]:
-        """``(n,) bool`` for segments ``A[i] -> B[i]``, ``A`` and ``B`` of shape ``(n, 3)``."""
-        A = np.asarray(A, dtype=np.float64).reshape(-1, 3)
-        B = np.asarray(B, dtype=np.float64).reshape(-1, 3)
+    def _fcl_segments_free(self, A: NDArray, B: NDArray, radius: float) -> NDArray[np.bool_]:
         return np.fromiter(
-            (self.segment_free(a, b, radius) for a, b in zip(A, B)), dtype=bool, count=len(A)
+            (self._fcl_segment_free(a, b, radius) for a, b in zip(A, B, strict=True)),
+            dtype=bool,
+            count=len(A),
         )
 
-    def path_free(self, points: ArrayLike, radius: float) -> bool:
-        """Whether every segment of the polyline ``points (n, 3)`` is free."""
+    def path_free(self, points: ArrayLike, radius: float, *, method: str = "auto") -> bool:
+        """Whether every segment of the polyline ``points (n, 3)`` is free (see
+        :meth:`segments_free` for ``method``)."""
         P = np.asarray(points, dtype=np.float64).reshape(-1, 3)
         if len(P) == 1:
             return self.segment_free(P[0], P[0], radius)
-        return bool(np.all(self.segments_free(P[:-1], P[1:], radius)))
+        return bool(np.all(self.segments_free(P[:-1], P[1:], radius, method=method)))
 
-    def clearance(self, points: ArrayLike) -> NDArray[np.float64]:
-        """``(n,) float``: distance (mm) from each point ``(n, 3)`` to the part's surface."""
+    def clearance(self, points: ArrayLike, *, method: str = "auto") -> NDArray[np.float64]:
+        """``(n,) float``: distance (mm) from each point ``(n, 3)`` to the part's surface.
+
+        ``method="auto"`` uses open3d (exact point-triangle distance, single precision, see
+        :class:`SurfaceDistance`); ``"fcl"`` asks python-fcl one point at a time.
+        """
         P = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+        if method == "auto":
+            return self.distance(P)
+        if method != "fcl":
+            raise ValueError(f'method must be "auto" or "fcl", got {method!r}')
         out = np.empty(len(P))
         req = fcl.DistanceRequest()
         probe = fcl.Sphere(1e-9)

@@ -1,0 +1,122 @@
+"""The cell: virtual joints are free and nearest, errors name the joint, the demo cell's shape."""
+
+from __future__ import annotations
+
+import pickle
+
+import numpy as np
+import pytest
+import trimesh
+
+from weldplan.cli import main
+from weldplan.errors import PlanningError
+from weldplan.geometry.grid import ObstacleGrid
+from weldplan.io.joints import Joints
+from weldplan.weld.cell import build_cell, demo_cell, virtual_joints
+
+
+@pytest.fixture(scope="module")
+def demo():
+    return demo_cell()
+
+
+def brute_nearest_free(grid: ObstacleGrid, p: np.ndarray, direction=None) -> float:
+    free = np.argwhere(grid.free)
+    c = grid.index_to_world(free)
+    if direction is not None:
+        c = c[(c - p) @ direction >= 0]
+    return float(np.min(np.linalg.norm(c - p, axis=1)))
+
+
+def test_virtual_joints_are_free_and_nearest_on_a_random_grid():
+    rng = np.random.default_rng(5)
+    occ = rng.random((30, 25, 20)) < 0.6
+    grid = ObstacleGrid(occ, np.array([10.0, -20.0, 3.0]), 2.0, 2.0)
+    P = grid.index_to_world([15, 12, 10]) + rng.uniform(-20, 20, (40, 3))
+    idx, xyz, off = virtual_joints(grid, P, search_radius=1e9)
+    assert grid.is_free(idx).all()
+    np.testing.assert_allclose(xyz, grid.index_to_world(idx))
+    np.testing.assert_allclose(off, np.linalg.norm(xyz - P, axis=1))
+    np.testing.assert_allclose(off, [brute_nearest_free(grid, p) for p in P])
+
+
+def test_virtual_joints_respect_approach_directions():
+    occ = np.zeros((11, 11, 11), bool)
+    occ[:, :, 4:7] = True  # a slab: free above and below
+    grid = ObstacleGrid(occ, np.zeros(3), 1.0, 1.0)
+    p = np.array([[5.0, 5.0, 5.9]])  # nearer the top face
+    up, _, off_up = virtual_joints(grid, p)
+    down, _, off_down = virtual_joints(grid, p, directions=[[0, 0, -1]])
+    assert up[0, 2] == 7 and down[0, 2] == 3
+    assert off_up[0] == pytest.approx(1.1) and off_down[0] == pytest.approx(2.9)
+
+
+def test_a_joint_without_free_voxels_in_reach_is_an_error_naming_it():
+    solid = trimesh.creation.box(extents=(200, 200, 200))
+    joints = Joints(ids=("ok", "buried"), xyz=[[0, 0, 110], [0, 0, 100]])
+    with pytest.raises(PlanningError, match="'buried'"):
+        # the outside of the box is only reachable 5 mm from the surface + lattice offsets
+        build_cell(solid, joints, clearance=30.0, margin=40.0, search_radius=20.0)
+    cell = build_cell(solid, joints, clearance=30.0, margin=40.0, search_radius=40.0)
+    assert np.all(cell.offsets <= 40.0)
+
+
+def test_demo_joints_sit_on_the_part(demo):
+    assert demo.n_joints == 15
+    assert np.max(demo.collision.clearance(demo.joints.xyz)) < 1e-3
+
+
+def test_demo_virtual_joints_are_free_nearest_and_on_the_torch_side(demo):
+    g = demo.grid
+    assert g.is_free(demo.virtual_index).all()
+    assert np.all(demo.offsets >= demo.clearance)  # a free centre is >= clearance from the part
+    assert np.all(demo.offsets < 2 * (demo.clearance + demo.pitch))
+    for k in range(demo.n_joints):
+        p, d = demo.joints.xyz[k], demo.joints.directions[k]
+        assert demo.offsets[k] == pytest.approx(brute_nearest_free(g, p, d))
+        assert (demo.virtual_xyz[k] - p) @ d >= 0
+
+
+def test_demo_obstacle_blocks_3_to_7_while_neighbours_are_free(demo):
+    V = demo.virtual_xyz
+    c, r = demo.collision, demo.clearance
+    assert not c.segment_free(V[2], V[6], r)  # joints 3 -> 7: the paper's blocked pair
+    assert not c.segments_free(V[[2]], V[[6]], r, method="fcl")[0]
+    neighbours = [(0, 1), (0, 3), (0, 4), (3, 4), (8, 9), (9, 10), (10, 11), (12, 13), (12, 14)]
+    a, b = np.array(neighbours).T
+    assert c.segments_free(V[a], V[b], r).all()
+    # and the blocked line is avoidable inside the margin: a free detour over the bracket's edge
+    # exists (checked by the planners' tests); here: many pairs are free, several blocked
+    I, J = np.triu_indices(15, 1)
+    free = c.segments_free(V[I], V[J], r)
+    assert 10 <= (~free).sum() <= 60 and free.sum() >= 50
+
+
+def test_summary_and_text(demo):
+    s = demo.summary()
+    assert s["joints"]["count"] == 15
+    assert s["grid"]["free"] + s["grid"]["obstacle"] == s["grid"]["voxels"]
+    assert len(s["virtual_joints"]) == 15
+    assert s["virtual_joints"][2]["id"] == "3"
+    text = demo.format_summary()
+    assert "15" in text and "virtual joints" in text and "offsets" in text
+
+
+def test_cell_pickles_compactly_and_still_works(demo):
+    data = pickle.dumps(demo)
+    assert len(data) < 5_000_000
+    clone = pickle.loads(data)
+    np.testing.assert_array_equal(clone.grid.occupied, demo.grid.occupied)
+    V = clone.virtual_xyz
+    assert clone.collision.segment_free(V[0], V[1], clone.clearance)
+
+
+def test_cell_arrays_are_read_only(demo):
+    with pytest.raises(ValueError):
+        demo.offsets[0] = 0.0
+
+
+def test_cli_demo_prints_the_summary(capsys):
+    assert main(["demo"]) == 0
+    out = capsys.readouterr().out
+    assert "virtual joints" in out and "grid:" in out and "part:" in out

@@ -1,0 +1,38 @@
+"""weldplan: collision-free welding-torch routes through car bodies, and 2D path planning.
+
+The 3D entry points are importable from the top level (loaded lazily, so ``import weldplan`` stays
+cheap)::
+
+    import weldplan
+    cell = weldplan.load_cell("body.stl", "joints.csv")
+    cell = weldplan.demo_cell()
+"""
+
+from __future__ import annotations
+
+from importlib import import_module
+from typing import Any
+
+__version__ = "0.1.0"
+
+#: public name -> module that defines it
+_LAZY: dict[str, str] = {
+    "Cell": "weldplan.weld.cell",
+    "build_cell": "weldplan.weld.cell",
+    "load_cell": "weldplan.weld.cell",
+    "demo_cell": "weldplan.weld.cell",
+    "Joints": "weldplan.io.joints",
+    "read_joints": "weldplan.io.joints",
+    "load_part": "weldplan.io.mesh",
+    "ObstacleGrid": "weldplan.geometry.grid",
+    "build_grid": "weldplan.geometry.grid",
+    "CollisionModel": "weldplan.geometry.collision",
+}
+
+__all__ = ["__version__", *_LAZY]
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        return getattr(import_module(_LAZY[name]), name)
+    raise AttributeError(f"module 'weldplan' has no attribute {name!r}")

@@ -1,0 +1,325 @@
+"""The welding cell: part, joints, obstacle grid, collision model and virtual weld joints.
+
+This is section 3 of Wang et al. 2017 (3D environment modelling) put together:
+
+1. the part is a triangle mesh (mm);
+2. a voxel grid of 5 mm cubes covers the region of interest; a cube centre is an obstacle when
+   the part is closer than the clearance (:func:`weldplan.geometry.grid.build_grid`);
+3. the other centres are free: the torch tip may stand there;
+4. each weld joint lies on the surface, hence on an obstacle centre: its *virtual weld joint* is
+   the nearest free centre, and planning runs between virtual joints; the offset (joint to virtual
+   joint) is recorded. A joint with no free centre within ``search_radius`` is an error naming it.
+
+The python-fcl :class:`~weldplan.geometry.collision.CollisionModel` is the judge every route
+passes before it leaves weldplan.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from os import PathLike
+from typing import Any
+
+import numpy as np
+import trimesh
+from numpy.typing import ArrayLike, NDArray
+
+from weldplan.errors import PlanningError
+from weldplan.geometry.collision import CollisionModel
+from weldplan.geometry.grid import (
+    DEFAULT_CLEARANCE,
+    DEFAULT_MARGIN,
+    DEFAULT_PITCH,
+    ObstacleGrid,
+    build_grid,
+)
+from weldplan.io.joints import Joints, read_joints
+from weldplan.io.mesh import load_part
+
+log = logging.getLogger(__name__)
+
+#: default search radius (mm) for a joint's virtual joint, in units of (clearance + pitch)
+_SEARCH_FACTOR = 4.0
+
+
+@dataclass(frozen=True, eq=False)
+class Cell:
+    """Everything the planners need about one welding station.
+
+    Attributes
+    ----------
+    part
+        The part mesh (mm).
+    joints
+        The weld joints (mm).
+    grid
+        The obstacle grid over the region of interest.
+    collision
+        The python-fcl collision judge of the part.
+    virtual_index
+        ``(n, 3) int64``: grid index of each joint's virtual weld joint (a free voxel).
+    virtual_xyz
+        ``(n, 3) float``: world position (mm) of each virtual weld joint (a voxel centre).
+    offsets
+        ``(n,) float``: distance (mm) from each joint to its virtual joint.
+    clearance
+        Torch-tip clearance (mm) used by the grid and the collision checks.
+    pitch
+        Voxel side (mm).
+    """
+
+    part: trimesh.Trimesh
+    joints: Joints
+    grid: ObstacleGrid
+    collision: CollisionModel
+    virtual_index: NDArray[np.int64]
+    virtual_xyz: NDArray[np.float64]
+    offsets: NDArray[np.float64]
+    clearance: float
+    pitch: float
+
+    def __post_init__(self) -> None:
+        for name, dtype in (
+            ("virtual_index", np.int64),
+            ("virtual_xyz", np.float64),
+            ("offsets", np.float64),
+        ):
+            arr = np.array(getattr(self, name), dtype=dtype)
+            arr.setflags(write=False)
+            object.__setattr__(self, name, arr)
+
+    @property
+    def n_joints(self) -> int:
+        return len(self.joints)
+
+    def summary(self) -> dict[str, Any]:
+        """Plain-data description: part bounds, joints, grid size, free/obstacle counts, offsets."""
+        g = self.grid
+        return {
+            "part": {
+                "vertices": int(len(self.part.vertices)),
+                "faces": int(len(self.part.faces)),
+                "bounds_mm": np.round(self.part.bounds, 3).tolist(),
+                "extents_mm": np.round(self.part.extents, 3).tolist(),
+            },
+            "joints": {
+                "count": self.n_joints,
+                "ids": list(self.joints.ids),
+                "source": None if self.joints.source is None else str(self.joints.source),
+            },
+            "grid": {
+                "shape": list(g.shape),
+                "voxels": int(np.prod(g.shape)),
+                "pitch_mm": g.pitch,
+                "clearance_mm": g.clearance,
+                "bounds_mm": np.round(g.bounds, 3).tolist(),
+                "free": g.n_free,
+                "obstacle": g.n_obstacle,
+            },
+            "virtual_joints": [
+                {
+                    "id": jid,
+                    "joint_mm": np.round(self.joints.xyz[k], 3).tolist(),
+                    "virtual_mm": np.round(self.virtual_xyz[k], 3).tolist(),
+                    "offset_mm": round(float(self.offsets[k]), 3),
+                }
+                for k, jid in enumerate(self.joints.ids)
+            ],
+        }
+
+    def format_summary(self) -> str:
+        """:meth:`summary` as a few lines of text for a terminal."""
+        s = self.summary()
+        p, g = s["part"], s["grid"]
+        lo, hi = (np.asarray(b) for b in p["bounds_mm"])
+        lines = [
+            f"part: {p['vertices']} vertices, {p['faces']} faces, "
+            f"bounds {_fmt(lo)} .. {_fmt(hi)} mm (extents {_fmt(p['extents_mm'])} mm)",
+            f"joints: {s['joints']['count']}"
+            + (f" from {s['joints']['source']}" if s["joints"]["source"] else ""),
+            f"grid: {' x '.join(map(str, g['shape']))} voxels of {g['pitch_mm']:g} mm, "
+            f"clearance {g['clearance_mm']:g} mm, {g['free']:,} free / {g['obstacle']:,} obstacle",
+            "virtual joints (joint -> nearest free voxel centre, offset):",
+        ]
+        for v in s["virtual_joints"]:
+            lines.append(
+                f"  {v['id']:>4}: {_fmt(v['joint_mm'])} -> {_fmt(v['virtual_mm'])}"
+                f"  {v['offset_mm']:6.2f} mm"
+            )
+        off = self.offsets
+        lines.append(f"offsets: min {off.min():.2f}, mean {off.mean():.2f}, max {off.max():.2f} mm")
+        return "\n".join(lines)
+
+
+def _fmt(v: ArrayLike) -> str:
+    return "(" + ", ".join(f"{x:.2f}" for x in np.asarray(v, dtype=float)) + ")"
+
+
+def virtual_joints(
+    grid: ObstacleGrid,
+    xyz: ArrayLike,
+    *,
+    ids: tuple[str, ...] | None = None,
+    search_radius: float | None = None,
+    directions: ArrayLike | None = None,
+) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
+    """Nearest free voxel centre of each point (Wang et al. 2017, section 3, step 4).
+
+    Parameters
+    ----------
+    grid
+        The obstacle grid.
+    xyz
+        ``(n, 3)`` joint positions (mm).
+    ids
+        Joint names for error messages (default: 1-based row numbers).
+    search_radius
+        Largest allowed offset (mm); default ``4 * (clearance + pitch)`` (40 mm at 5/5 mm).
+    directions
+        Optional ``(n, 3)`` torch approach directions (pointing from the joint towards the torch):
+        when given, only free centres on that side (``(c - p) . d >= 0``) are candidates.
+
+    Returns
+    -------
+    index, centre, offset
+        ``(n, 3) int64`` grid indices, ``(n, 3) float`` centres (mm), ``(n,) float`` distances.
+        Ties are broken by the lowest flat grid index, so the answer is deterministic.
+
+    Raises
+    ------
+    PlanningError
+        A joint has no free centre within ``search_radius`` (the message names the joint).
+    """
+    P = np.asarray(xyz, dtype=np.float64).reshape(-1, 3)
+    if ids is None:
+        ids = tuple(str(k + 1) for k in range(len(P)))
+    if search_radius is None:
+        search_radius = _SEARCH_FACTOR * (grid.clearance + grid.pitch)
+    D = None if directions is None else np.asarray(directions, dtype=np.float64).reshape(-1, 3)
+    reach = int(np.ceil(search_radius / grid.pitch)) + 1
+    shape = np.asarray(grid.shape)
+    index = np.empty((len(P), 3), dtype=np.int64)
+    offset = np.empty(len(P))
+    for k, p in enumerate(P):
+        c = grid.world_to_index(p)
+        lo = np.clip(c - reach, 0, shape)
+        hi = np.clip(c + reach + 1, 0, shape)
+        block = grid.free[lo[0] : hi[0], lo[1] : hi[1], lo[2] : hi[2]]
+        cand = np.argwhere(block) + lo
+        if len(cand):
+            centres = grid.index_to_world(cand)
+            dist = np.linalg.norm(centres - p, axis=1)
+            ok = dist <= search_radius
+            if D is not None:
+                ok &= (centres - p) @ D[k] >= 0.0
+            cand, dist = cand[ok], dist[ok]
+        if len(cand) == 0:
+            raise PlanningError(
+                f"weld joint {ids[k]!r} at {_fmt(p)} mm has no free voxel centre within "
+                f"{search_radius:g} mm (clearance {grid.clearance:g} mm, pitch {grid.pitch:g} mm)"
+                + ("" if grid.contains(c) else "; it lies outside the grid region")
+            )
+        flat = grid.ravel(cand)
+        best = np.lexsort((flat, dist))[0]
+        index[k] = cand[best]
+        offset[k] = dist[best]
+    return index, grid.index_to_world(index), offset
+
+
+def build_cell(
+    part: trimesh.Trimesh,
+    joints: Joints,
+    *,
+    pitch: float = DEFAULT_PITCH,
+    clearance: float = DEFAULT_CLEARANCE,
+    margin: float = DEFAULT_MARGIN,
+    region: str | ArrayLike = "joints",
+    search_radius: float | None = None,
+) -> Cell:
+    """Model a welding cell (Wang et al. 2017, section 3).
+
+    Parameters
+    ----------
+    part
+        The part (mm).
+    joints
+        The weld joints (mm); their approach directions, when given, restrict each virtual
+        joint to the torch side.
+    pitch, clearance, margin, region
+        Grid settings, see :func:`weldplan.geometry.grid.build_grid`.
+    search_radius
+        See :func:`virtual_joints`.
+
+    Returns
+    -------
+    Cell
+    """
+    collision = CollisionModel(part)
+    grid = build_grid(
+        part,
+        pitch=pitch,
+        clearance=clearance,
+        region=region,
+        points=joints.xyz,
+        margin=margin,
+        distance=collision.distance,
+    )
+    vidx, vxyz, off = virtual_joints(
+        grid,
+        joints.xyz,
+        ids=joints.ids,
+        search_radius=search_radius,
+        directions=joints.directions,
+    )
+    return Cell(
+        part=part,
+        joints=joints,
+        grid=grid,
+        collision=collision,
+        virtual_index=vidx,
+        virtual_xyz=vxyz,
+        offsets=off,
+        clearance=float(clearance),
+        pitch=float(pitch),
+    )
+
+
+def load_cell(
+    mesh_path: str | PathLike[str],
+    joints_path: str | PathLike[str],
+    *,
+    units: str = "mm",
+    scale: float | None = None,
+    length: float | None = None,
+    joint_units: str | None = None,
+    **kw: Any,
+) -> Cell:
+    """Load a part and its joints from files and model the cell.
+
+    Parameters
+    ----------
+    mesh_path, joints_path
+        The part mesh (see :func:`weldplan.io.mesh.load_part`) and the joints CSV (see
+        :func:`weldplan.io.joints.read_joints`).
+    units, scale, length
+        Units of the mesh file, and its extra scale or target length (mm).
+    joint_units
+        Units of the joints CSV (default: ``units``). ``scale``/``length`` do not apply to joints.
+    **kw
+        Passed to :func:`build_cell` (``pitch``, ``clearance``, ``margin``, ``region``,
+        ``search_radius``).
+    """
+    part = load_part(mesh_path, units=units, scale=scale, length=length)
+    joints = read_joints(joints_path, units=joint_units or units)
+    return build_cell(part, joints, **kw)
+
+
+def demo_cell(**kw: Any) -> Cell:
+    """The embedded demo cell: the 15 joints of Wang et al. 2017, Table 1, on the demo part.
+
+    ``**kw`` go to :func:`build_cell` (``pitch``, ``clearance``, ``margin``, ...).
+    """
+    from weldplan.weld.demo_part import DEMO_JOINTS, DEMO_PART
+
+    return load_cell(DEMO_PART, DEMO_JOINTS, **kw)
