@@ -105,3 +105,16 @@ def test_summary_and_table():
     assert s["joints"] == 3 and s["legs"] == 2 and s["order"] == "A-C-B"
     t = r.table()
     assert [row["from"] for row in t] == ["A", "C"] and t[1]["vias"] == 3
+
+
+def test_inner_length_leaves_out_the_approaches():
+    r = box_route()
+    # four approach segments of 10 mm (A down, C up and down, B down)
+    assert r.approach_length == pytest.approx(40.0)
+    assert r.inner_length == pytest.approx(r.length - 40.0)
+    assert r.approach_flags(0) == (True, True)
+    V = r.virtual_xyz.copy()
+    V[0] = SPOTS[0]  # A declared its own virtual joint: no approach at A
+    r2 = Route(r.order, r.legs, r.joint_ids, r.joint_xyz, virtual_xyz=V)
+    assert r2.approach_flags(0) == (False, True)
+    assert r2.approach_length == pytest.approx(30.0)

@@ -167,12 +167,18 @@ def run_planning(args: argparse.Namespace, make_cell: Callable[[], Any], *, titl
     times["export"] = st.seconds
     times["total"] = time.perf_counter() - t_all
     if not args.quiet:
-        print(summary_table(route, times, outputs, title=title, report=report))
+        print(summary_table(route, times, outputs, title=title, report=report, note=note))
     return 0
 
 
 def summary_table(
-    route: Any, times: dict[str, float], outputs: dict[str, Path], *, title: str, report: Any
+    route: Any,
+    times: dict[str, float],
+    outputs: dict[str, Path],
+    *,
+    title: str,
+    report: Any,
+    note: str | None = None,
 ) -> str:
     """The table printed at the end of a run."""
     s = route.stats
@@ -188,9 +194,19 @@ def summary_table(
             + ")",
         ),
         ("sequencer", f"{s['sequence_method']}"),
-        ("route length", f"{route.length:.2f} mm"),
+        (
+            "route length",
+            f"{route.length:.2f} mm ({route.inner_length:.2f} mm between virtual joints "
+            f"+ {route.approach_length:.2f} mm of approaches to the weld spots)",
+        ),
         ("lower bound", f"{route.lower_bound:.2f} mm ({route.lower_bound_method})"),
-        ("gap", f"{100 * gap:.2f} %"),
+        (
+            "gap",
+            f"{100 * gap:.2f} % (between virtual joints "
+            f"{100 * (route.inner_length / route.lower_bound - 1):+.2f} %)"
+            if len(route.joint_ids) > 1 and route.lower_bound > 0
+            else "n/a",
+        ),
         ("order", "-".join(route.order)),
         ("verified", report.describe()),
         (
@@ -201,4 +217,6 @@ def summary_table(
     ]
     w = max(len(k) for k, _ in rows)
     lines = [title, "-" * len(title)] + [f"{k:<{w}}  {v}" for k, v in rows]
+    if note:
+        lines.append(note)
     return "\n".join(lines)

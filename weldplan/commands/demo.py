@@ -34,4 +34,10 @@ def run(args: argparse.Namespace) -> int:
 
         return demo_cell(pitch=args.pitch, clearance=args.clearance, margin=args.margin)
 
-    return run_planning(args, make_cell, title="weldplan demo (Wang et al. 2017, 15 joints)")
+    return run_planning(
+        args,
+        make_cell,
+        title="weldplan demo (Wang et al. 2017, 15 joints)",
+        note="the paper: lower bound 595.10 mm, its collision-free route 599.72 mm (+0.78 %), "
+        "measured between joints without approach segments",
+    )

@@ -15,6 +15,9 @@ def add_cell_arguments(p: argparse.ArgumentParser) -> None:
         "--units", default="mm", choices=("mm", "m"), help="units of the mesh and joints files"
     )
     p.add_argument("--scale", type=float, help="extra scale factor applied to the mesh")
+    p.add_argument(
+        "--length", type=float, help="scale the mesh so its longest side is this many mm"
+    )
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -41,6 +44,7 @@ def run(args: argparse.Namespace) -> int:
             args.joints,
             units=args.units,
             scale=args.scale,
+            length=args.length,
             pitch=args.pitch,
             clearance=args.clearance,
             margin=args.margin,

@@ -21,13 +21,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from weldplan.io.mesh import load_part
-
     from weldplan.io.export import read_route
+    from weldplan.io.mesh import load_part
     from weldplan.weld.verify import verify_route
 
     route = read_route(args.route)
-    part = load_part(args.mesh, units=args.units, scale=args.scale)
+    part = load_part(args.mesh, units=args.units, scale=args.scale, length=args.length)
     joints = None
     if args.joints:
         from weldplan.io.joints import read_joints

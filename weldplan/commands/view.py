@@ -26,7 +26,7 @@ def run(args: argparse.Namespace) -> int:
     if args.mesh:
         from weldplan.io.mesh import load_part
 
-        part = load_part(args.mesh, units=args.units, scale=args.scale)
+        part = load_part(args.mesh, units=args.units, scale=args.scale, length=args.length)
     if args.html:
         from weldplan.viz.viewer import write_html
 

@@ -18,7 +18,10 @@ planned (in parallel through the executor), their true lengths replace the estim
 sequencer runs again, until the order uses only known legs (each round plans at least one new
 pair, so this ends). With an exact sequencer the result is the optimum over the planner's path
 lengths, having planned only the blocked pairs that could matter; ``PlanConfig(pairs="all")`` plans
-every blocked pair up front instead (the dense matrix the paper builds).
+every blocked pair up front instead (the dense matrix the paper builds). When the sequencer is a
+heuristic and the cell small enough for Held-Karp (up to 16 joints), the discovery rounds run
+Held-Karp, then the configured sequencer orders the joints once more (and, in the rare case that
+its order uses a leg still unknown, the rounds go on with it).
 
 Randomness: one generator, normalised once from ``rng``; each pair gets its own seed drawn from it
 up front in a fixed order, so a route does not depend on the executor or the order in which
@@ -270,7 +273,7 @@ def plan_route(
 
     pso = PSOParams(**config.pso) if config.pso else None
 
-    def sequence(round_: int) -> Any:
+    def sequence(round_: int, method: str) -> Any:
         nonlocal t_seq
         t = time.perf_counter()
         off = ~np.eye(n, dtype=bool)
@@ -287,7 +290,7 @@ def plan_route(
             )
         report("sequence", round_, round_ + 1)
         try:
-            seq = solve_sequence(C, method=config.sequencer, polish=config.polish, rng=gen, pso=pso)
+            seq = solve_sequence(C, method=method, polish=config.polish, rng=gen, pso=pso)
         except PlanningError as exc:
             failed = [
                 f"{ids[iu[p]]}-{ids[ju[p]]}"
@@ -304,18 +307,29 @@ def plan_route(
     if config.pairs == "all":
         plan([int(p) for p in blocked])
     rounds = 0
-    while True:
-        seq = sequence(rounds)
-        rounds += 1
-        order = list(seq.order)
-        needed = [int(pair_index[a, b]) for a, b in zip(order[:-1], order[1:], strict=True)]
-        unknown = [p for p in needed if not known[p]]
-        if not unknown:
-            break
-        if rounds >= config.max_rounds:
-            log.warning("lazy planning: %d rounds, planning every blocked pair", rounds)
-            unknown = [int(p) for p in blocked]
-        plan(unknown)
+
+    def settle(method: str) -> Any:
+        """Sequence, plan the unknown legs of the order, repeat until it uses known legs only."""
+        nonlocal rounds
+        while True:
+            seq = sequence(rounds, method)
+            rounds += 1
+            order = list(seq.order)
+            needed = [int(pair_index[a, b]) for a, b in zip(order[:-1], order[1:], strict=True)]
+            unknown = [p for p in needed if not known[p]]
+            if not unknown:
+                return seq
+            if rounds >= config.max_rounds:
+                log.warning("lazy planning: %d rounds, planning every blocked pair", rounds)
+                unknown = [int(p) for p in blocked]
+            plan(unknown)
+
+    if config.sequencer != "exact" and n <= LOWER_BOUND_EXACT_MAX and not known.all():
+        # discovery rounds with Held-Karp (fast at this size) find the legs good orders use,
+        # so the configured (slower) sequencer usually runs once
+        settle("exact")
+    seq = settle(config.sequencer)
+    order = list(seq.order)
     seconds["local"] = t_local
     seconds["sequence"] = t_seq
 

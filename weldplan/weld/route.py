@@ -192,6 +192,39 @@ class Route:
         """``(len(legs),) float`` mm."""
         return np.array([leg.length for leg in self.legs], dtype=float)
 
+    def is_virtual(self, joint_id: str, p: ArrayLike, tol: float = 1e-3) -> bool:
+        """Whether point ``p`` (3,) is the virtual joint of ``joint_id`` (within ``tol`` mm)."""
+        if self.virtual_xyz is None or joint_id not in self.joint_ids:
+            return False
+        v = self.virtual_xyz[self.index_of(joint_id)]
+        return bool(np.linalg.norm(v - np.asarray(p, dtype=float)) <= tol)
+
+    def approach_flags(self, k: int) -> tuple[bool, bool]:
+        """Whether leg ``k`` starts and ends with an approach segment (spot <-> virtual joint).
+
+        A spot that is its own virtual joint (a joint in free space) has no approach.
+        """
+        leg = self.legs[k]
+        return (
+            not self.is_virtual(leg.from_id, leg.points[0]),
+            not self.is_virtual(leg.to_id, leg.points[-1]),
+        )
+
+    @property
+    def approach_length(self) -> float:
+        """mm of the route spent on approach segments (weld spot <-> its virtual joint)."""
+        total = 0.0
+        for k, leg in enumerate(self.legs):
+            start, end = self.approach_flags(k)
+            seg = np.linalg.norm(np.diff(leg.points, axis=0), axis=1)
+            total += (seg[0] if start else 0.0) + (seg[-1] if end and len(seg) > 1 else 0.0)
+        return float(total)
+
+    @property
+    def inner_length(self) -> float:
+        """mm between virtual joints: :attr:`length` less the approaches (the paper's measure)."""
+        return self.length - self.approach_length
+
     @property
     def gap(self) -> float:
         """Relative excess over the lower bound, ``length / lower_bound - 1`` (nan if unknown)."""
@@ -232,6 +265,7 @@ class Route:
             "joints": len(self.joint_ids),
             "legs": len(self.legs),
             "length_mm": round(self.length, 3),
+            "inner_length_mm": round(self.inner_length, 3),
             "lower_bound_mm": round(self.lower_bound, 3),
             "lower_bound_method": self.lower_bound_method,
             "gap_percent": round(100 * self.gap, 3) if np.isfinite(self.gap) else None,

@@ -141,14 +141,6 @@ def _collision_model(part: Any) -> CollisionModel:
     return CollisionModel(mesh)
 
 
-def _is_virtual(route: Route, joint_id: str, p: NDArray[np.float64]) -> bool:
-    """Whether weld spot ``p`` of ``joint_id`` is its own virtual joint (no approach segment)."""
-    if route.virtual_xyz is None or joint_id not in route.joint_ids:
-        return False
-    v = route.virtual_xyz[route.index_of(joint_id)]
-    return bool(np.linalg.norm(v - p) <= ENDPOINT_TOL_MM)
-
-
 def approach_pieces(
     spot: NDArray[np.float64],
     virtual: NDArray[np.float64],
@@ -279,8 +271,8 @@ def verify_route(
             continue
         # A segment is an approach when it leaves a weld spot that is not its own virtual joint
         # (a joint lying in free space is its own virtual joint and has no approach).
-        start_app = not _is_virtual(route, leg.from_id, P[0])
-        end_app = not _is_virtual(route, leg.to_id, P[-1])
+        start_app = not route.is_virtual(leg.from_id, P[0], ENDPOINT_TOL_MM)
+        end_app = not route.is_virtual(leg.to_id, P[-1], ENDPOINT_TOL_MM)
         last = len(P) - 2
         if last == 0 and start_app and end_app:
             violations.append(
