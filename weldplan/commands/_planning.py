@@ -116,7 +116,13 @@ def _outputs(args: argparse.Namespace) -> dict[str, Path]:
     return out
 
 
-def run_planning(args: argparse.Namespace, make_cell: Callable[[], Any], *, title: str) -> int:
+def run_planning(
+    args: argparse.Namespace,
+    make_cell: Callable[[], Any],
+    *,
+    title: str,
+    note: str | None = None,
+) -> int:
     """Build the cell, plan, verify, write; print the summary. Returns the exit code."""
     from weldplan.io.export import render_post, to_csv_text
     from weldplan.viz.viewer import static_html
