@@ -122,8 +122,12 @@ def run_planning(
     *,
     title: str,
     note: str | None = None,
+    show_cell: bool = False,
 ) -> int:
-    """Build the cell, plan, verify, write; print the summary. Returns the exit code."""
+    """Build the cell, plan, verify, write; print the summary. Returns the exit code.
+
+    ``show_cell`` prints the cell's summary (part, grid, virtual joints) before the route's.
+    """
     from weldplan.io.export import render_post, to_csv_text
     from weldplan.viz.viewer import static_html
     from weldplan.weld.pipeline import plan_route
@@ -173,6 +177,9 @@ def run_planning(
     times["export"] = st.seconds
     times["total"] = time.perf_counter() - t_all
     if not args.quiet:
+        if show_cell and hasattr(cell, "format_summary"):
+            print(cell.format_summary())
+            print()
         print(summary_table(route, times, outputs, title=title, report=report, note=note))
     return 0
 

@@ -40,4 +40,5 @@ def run(args: argparse.Namespace) -> int:
         title="weldplan demo (Wang et al. 2017, 15 joints)",
         note="the paper: lower bound 595.10 mm, its collision-free route 599.72 mm (+0.78 %), "
         "measured between joints without approach segments",
+        show_cell=True,
     )
