@@ -13,9 +13,9 @@ The static page needs no meshcat server: the scene commands are recorded by
 is a meshcat animation along the route at constant speed: the viewer's *Animations* panel plays,
 pauses and scrubs it (step it with the time slider).
 
-The scene is shown centred over the ground grid and scaled to about 2 viewer units (meshcat's
-camera is made for objects of a metre or two); the labels and sizes are relative to the part, so a
-door flange and a whole body both read well. Algorithms never import this module.
+The scene is shown centred on the origin (grid and axes hidden) and scaled to about 2 viewer
+units (meshcat's camera is made for objects of a metre or two); the labels and sizes are relative
+to the part, so a door flange and a whole body both read well. Algorithms never import this module.
 """
 
 from __future__ import annotations
@@ -203,13 +203,14 @@ def _translation(p: NDArray[np.float64], scale: float = 1.0) -> NDArray[np.float
 
 
 def scene_transform(points: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``(4, 4)`` mm -> viewer units: centred over the grid, bottom on it, ~:data:`SCENE_SIZE`."""
+    """``(4, 4)`` mm -> viewer units: centred on the origin (where the camera looks), about
+    :data:`SCENE_SIZE` across."""
     lo, hi = points.min(axis=0), points.max(axis=0)
     extent = float(np.max(hi - lo)) or 1.0
     s = SCENE_SIZE / extent
     T = np.eye(4) * s
     T[3, 3] = 1.0
-    centre = np.array([(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, lo[2]])
+    centre = (lo + hi) / 2
     T[:3, 3] = -s * centre
     return T
 
@@ -299,8 +300,9 @@ def build_scene(
         vis.set_animation(anim, play=True, repetitions=1000)
     if camera:
         # meshcat's camera frame is y-up: this looks down at the part from the front right
-        vis["/Cameras/default/rotated/<object>"].set_property("position", [1.3, 1.3, 1.6])
+        vis["/Cameras/default/rotated/<object>"].set_property("position", [1.3, 1.05, 1.65])
         vis["/Grid"].set_property("visible", False)
+        vis["/Axes"].set_property("visible", False)
     log.debug("scene: %d legs, %d joints", len(route.legs), len(route.joint_ids))
 
 
