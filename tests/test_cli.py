@@ -237,3 +237,26 @@ def test_demo_plans_verifies_and_exports(tmp_path, monkeypatch, capsys):
 
     route = read_route(tmp_path / "route.json")
     assert np.isclose(route.lower_bound, 595.10, atol=0.01)
+
+
+def test_progress_bars_draw_on_a_terminal_only():
+    import io
+
+    from weldplan.commands._progress import ProgressBars
+
+    class Tty(io.StringIO):
+        def isatty(self):
+            return True
+
+    tty, pipe = Tty(), io.StringIO()
+    for stream in (tty, pipe):
+        bars = ProgressBars(stream=stream)
+        for d in range(4):
+            bars("local", d, 3 if d < 4 else 3)
+        with bars.stage("verify"):
+            pass
+        bars.close()
+    assert pipe.getvalue() == ""
+    text = tty.getvalue()
+    assert "local paths" in text and "3/3" in text and "verifying" in text
+    assert ProgressBars(enabled=False, stream=tty).enabled is False
