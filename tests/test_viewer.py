@@ -148,3 +148,23 @@ def test_convergence_plots_draw(tmp_path):
     assert len(ax.patches) == 2
     ax = plot_convergence([3.0, float("inf"), 1.0], reference=0.5)
     assert len(ax.lines) == 2
+
+
+@pytest.mark.slow
+def test_live_viewer_serves_the_same_scene():
+    pytest.importorskip("zmq")
+    from weldplan.viz.viewer import view_route
+
+    vis = view_route(box_route(), box_part())
+    try:
+        assert vis.url().startswith("http://127.0.0.1:")
+        page = vis.static_html()  # the server's own snapshot of what it holds
+        assert "handle_command_bytearray" in page
+        ours = static_html(box_route(), box_part())
+        # same commands: the server's page and ours carry the same scene blobs
+        assert abs(len(page) - len(ours)) < 0.05 * len(ours)
+    finally:
+        proc = getattr(vis.window, "server_proc", None)
+        if proc is not None:
+            proc.kill()
+            proc.wait(timeout=10)
