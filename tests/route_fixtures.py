@@ -34,7 +34,7 @@ def box_route(directions: bool = False) -> Route:
         Leg("A", "C", [A, vA, vC, C], "straight"),
         Leg("C", "B", [C, vC, [0.0, 62.0, 10.0], vB, B], "exact"),
     )
-    dirs = np.tile([0.0, 0.0, -1.0], (3, 1)) if directions else None
+    dirs = np.tile([0.0, 0.0, 1.0], (3, 1)) if directions else None  # out of the floor
     return Route(
         order=("A", "C", "B"),
         legs=legs,

@@ -41,7 +41,7 @@ def test_csv_rows(tmp_path):
     assert [int(r["step"]) for r in rows] == list(range(8))
     weld = [r for r in rows if r["kind"] == "weld"]
     np.testing.assert_allclose([[float(r[k]) for k in "xyz"] for r in weld], SPOTS[[0, 2, 1]])
-    assert all(r["tool_z"] == "-1.000000" for r in weld)
+    assert all(r["tool_z"] == "1.000000" for r in weld)  # as the joints CSV gave it
     assert all(r["tool_x"] == "" and r["joint_id"] == "" for r in rows if r["kind"] == "via")
 
 
@@ -84,6 +84,9 @@ def test_rapid_post(tmp_path):
     assert [float(v) for v in targets[1][1].split(",")] == [-40.0, 0.0, 0.0]
     # tool straight down: quaternion [0, 1, 0, 0]
     assert targets[1][2] == "0.000000,1.000000,0.000000,0.000000"
+    # with approach directions out of the floor (+z) the torch points into it: the same
+    with_dirs = render_post(box_route(directions=True), "rapid")
+    assert with_dirs.count("[0.000000,1.000000,0.000000,0.000000]") == 10
     assert "-0.000" not in text
 
 

@@ -12,8 +12,10 @@ CSV layout (one row per waypoint, in travel order)::
     ...
 
 ``kind`` is ``weld`` at a weld spot and ``via`` at a waypoint between spots (virtual joints and
-local-path points); ``tool_*`` is the unit tool direction of the joint where the joints CSV gave
-one (empty otherwise, and always empty on via rows). Coordinates are mm.
+local-path points); ``tool_*`` is the joint's unit approach direction as the joints CSV gave it
+(columns ``nx, ny, nz``: from the weld spot towards the side the torch comes from), empty where
+the CSV gave none and always on via rows. Coordinates are mm. The robot posts point the tool's z
+axis (the torch axis, towards the work) against that direction, into the surface.
 
 Robot posts are pluggable: a post is a function ``render(route, **options) -> str`` registered under
 a name with :func:`register_post`. Two ship with weldplan, both documented examples rather than
@@ -247,13 +249,16 @@ def _fmt(v: float, decimals: int) -> str:
 
 
 def _row_frames(route: Route, rows: list[dict[str, Any]]) -> list[NDArray[np.float64]]:
-    """Tool frame per row: a weld row uses its joint's direction, a via the next weld's."""
+    """Tool frame per row: a weld row uses its joint's approach direction, a via the next weld's.
+
+    The tool z axis points along the torch towards the work: against the approach direction.
+    """
     frames: list[NDArray[np.float64]] = [np.eye(3)] * len(rows)
     nxt: NDArray[np.float64] | None = None
     for k in range(len(rows) - 1, -1, -1):
         if rows[k]["kind"] == "weld":
             nxt = rows[k]["tool"]
-        frames[k] = tool_frame(nxt)
+        frames[k] = tool_frame(None if nxt is None else -np.asarray(nxt, dtype=float))
     # the retreat keeps the orientation of the last weld
     if rows and rows[-1]["kind"] == "retreat" and len(rows) > 1:
         frames[-1] = frames[-2]
@@ -334,11 +339,11 @@ def render_rapid(
     as straight Cartesian segments and a joint move between them could leave the checked
     corridor. Weld spots are reached with zone ``fine`` at ``approach_speed`` and carry a
     comment naming the joint: add the process instructions (``SpotL``, ``ArcL``, a gun routine)
-    there. Via points fly by with ``zone``. Orientation: the tool z axis along the joint's
-    direction when the joints CSV gave one, else straight down; via points take the orientation
-    of the next weld. Configuration data ``[0,0,0,0]`` and external axes ``9E+09`` (unused) are
-    placeholders for the integrator. Coordinates are mm in
-    the work object ``wobj``.
+    there. Via points fly by with ``zone``. Orientation: the tool z axis against the joint's
+    approach direction (into the surface) when the joints CSV gave one, else straight down; via
+    points take the orientation of the next weld. Configuration data ``[0,0,0,0]`` and external
+    axes ``9E+09`` (unused) are placeholders for the integrator. Coordinates are mm in the work
+    object ``wobj``.
     """
     module = _name(module, "weldplan_route")
     rows = _program_rows(route)
