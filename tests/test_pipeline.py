@@ -181,3 +181,21 @@ def test_demo_starved_sequencer_does_worse(demo):
         rng=0,
     )
     assert starved.length > 1.05 * good.length
+
+
+@pytest.mark.slow
+def test_demo_verifier_catches_a_detour_cut_through_the_panel(demo):
+    from weldplan.weld.route import Leg, Route
+
+    r = plan_route(demo, config=PlanConfig(planner="exact", sequencer="exact"))
+    k = next(k for k, g in enumerate(r.legs) if g.method != "straight")
+    g = r.legs[k]
+    cut = Leg(g.from_id, g.to_id, g.points[[0, 1, -2, -1]], g.method)  # the blocked straight line
+    legs = list(r.legs)
+    legs[k] = cut
+    bad = Route(r.order, tuple(legs), r.joint_ids, r.joint_xyz, r.directions, r.virtual_xyz)
+    rep = verify_route(bad, demo.part, joints=demo.joints)
+    assert [(v.leg, v.segment) for v in rep.violations] == [(k, 1)]
+    short = Route(r.order[:-1], r.legs[:-1], r.joint_ids, r.joint_xyz, r.directions, r.virtual_xyz)
+    rep = verify_route(short, demo.part, joints=demo.joints)
+    assert [v.kind for v in rep.violations] == ["missing"]
