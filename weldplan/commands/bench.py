@@ -9,6 +9,9 @@ HELP = "reproduce a paper's table or measure a target (writes markdown and PNG)"
 
 #: benchmark name -> module with ``HELP``, ``add_arguments(parser)`` and ``run(args) -> int``
 BENCHES: dict[str, str] = {
+    "functions": "weldplan.bench.functions",
+    "mealpy": "weldplan.bench.mealpy_peer",
+    "local": "weldplan.bench.local",
     "route": "weldplan.bench.route",
 }
 

@@ -21,6 +21,7 @@ solution ever evaluated, so no optimiser has to. Schedules that depend on the it
 
 from __future__ import annotations
 
+import inspect
 import json
 import math
 import time
@@ -189,7 +190,9 @@ class Context:
         self.n_eval += k
         if k > 0:
             i = int(np.argmin(F[:k]))
-            if F[i] < self.best_f:
+            # the first evaluation sets the best even when every value is inf (all NaN), so a
+            # problem that is undefined everywhere gives an inf result rather than an error
+            if F[i] < self.best_f or self.best_x is None:
                 self.best_f = float(F[i])
                 self.best_x = X[i].copy()
         return F
@@ -219,8 +222,22 @@ class Optimizer(ABC):
         """Run one iteration of the algorithm's main loop."""
 
     def params(self) -> dict[str, Any]:
-        """The settings of this optimiser, for reports and JSON."""
-        return {k: v for k, v in vars(self).items() if not k.startswith("_") and _is_param(v)}
+        """The settings of this optimiser, for reports and JSON.
+
+        The arguments of ``__init__`` stored under the same attribute name; run state kept in
+        attributes (``best_f``, counters) is not a setting and is left out.
+        """
+        names = [
+            n
+            for n, prm in inspect.signature(type(self).__init__).parameters.items()
+            if n != "self" and prm.kind not in (prm.VAR_POSITIONAL, prm.VAR_KEYWORD)
+        ]
+        out = {}
+        for n in names:
+            v = getattr(self, n, None)
+            if hasattr(self, n) and _is_param(v):
+                out[n] = v
+        return out
 
 
 def _is_param(v: Any) -> bool:

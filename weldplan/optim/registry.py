@@ -12,7 +12,26 @@ from weldplan.errors import WeldplanError
 from weldplan.optim.core import Optimizer
 
 #: name -> "module:Class" (imported on first use so the CLI starts fast)
-ALGORITHMS: dict[str, str] = {}
+ALGORITHMS: dict[str, str] = {
+    "random": "weldplan.optim.algorithms.random_search:RandomSearch",
+    "sma": "weldplan.optim.algorithms.sma:SMA",
+    "lrsma": "weldplan.optim.algorithms.lrsma:LRSMA",
+    "isma": "weldplan.optim.algorithms.isma:ISMA",
+    "pso": "weldplan.optim.algorithms.pso:PSO",
+    "pso-w07": "weldplan.optim.algorithms.pso:PSOW07",
+    "wpso": "weldplan.optim.algorithms.wpso:WPSO",
+    "cpso": "weldplan.optim.algorithms.cpso:CPSO",
+    "mpso": "weldplan.optim.algorithms.mpso:MPSO",
+    "gwo": "weldplan.optim.algorithms.gwo:GWO",
+    "woa": "weldplan.optim.algorithms.woa:WOA",
+    "afsa": "weldplan.optim.algorithms.fish:AFSA",
+    "hafsa": "weldplan.optim.algorithms.fish:HAFSA",
+    "abc": "weldplan.optim.algorithms.bee:ABC",
+    "mabc": "weldplan.optim.algorithms.bee:MABC",
+    "parapa": "weldplan.optim.algorithms.parapa:ParaPA",
+    "lso": "weldplan.optim.algorithms.lion:LSO",
+    "ssa": "weldplan.optim.algorithms.sparrow:SSA",
+}
 
 
 def available() -> list[str]:
