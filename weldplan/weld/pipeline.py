@@ -86,6 +86,8 @@ class PlanConfig:
         2-opt / Or-opt polish after the swarm.
     local_time_budget
         Seconds per local-path search (None: no limit).
+    sequence_time_budget
+        Seconds for each run of the sequencer's polish (None: its own stopping rule).
     max_rounds
         Bound on plan-then-sequence rounds of the lazy mode; after it every blocked pair is
         planned and the sequencer runs once more.
@@ -101,6 +103,7 @@ class PlanConfig:
     pso: Mapping[str, Any] = field(default_factory=dict)
     polish: bool = True
     local_time_budget: float | None = None
+    sequence_time_budget: float | None = None
     max_rounds: int = 50
 
     def __post_init__(self) -> None:
@@ -290,7 +293,10 @@ def plan_route(
             )
         report("sequence", round_, round_ + 1)
         try:
-            seq = solve_sequence(C, method=method, polish=config.polish, rng=gen, pso=pso)
+            extra = {}
+            if config.sequence_time_budget is not None:
+                extra["time_budget"] = config.sequence_time_budget
+            seq = solve_sequence(C, method=method, polish=config.polish, rng=gen, pso=pso, **extra)
         except PlanningError as exc:
             failed = [
                 f"{ids[iu[p]]}-{ids[ju[p]]}"
