@@ -121,3 +121,47 @@ def test_cli_demo_prints_the_summary(capsys, tmp_path, monkeypatch):
     assert main(["demo", "--no-html"]) == 0
     out = capsys.readouterr().out
     assert "virtual joints" in out and "grid:" in out and "part:" in out
+
+
+def test_demo_cell_without_asset_files_is_generated_in_memory(demo, monkeypatch, tmp_path):
+    from weldplan.weld import demo_part
+
+    monkeypatch.setattr(demo_part, "DEMO_PART", tmp_path / "absent.stl")
+    cell = demo_cell()
+    assert cell.joints.source is None
+    np.testing.assert_array_equal(cell.grid.occupied, demo.grid.occupied)
+    np.testing.assert_allclose(cell.virtual_xyz, demo.virtual_xyz)
+
+
+def test_demo_detour_around_the_bracket_is_modest(demo):
+    """A path of free voxels from 3 to 7 exists near the straight line, a few per cent longer."""
+    import itertools
+
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import dijkstra
+
+    g = demo.grid
+    a, b = demo.virtual_index[2], demo.virtual_index[6]
+    lo = np.maximum(np.minimum(a, b) - 8, 0)  # the box of the two joints plus 40 mm
+    hi = np.minimum(np.maximum(a, b) + 9, g.shape)
+    free = g.free[lo[0] : hi[0], lo[1] : hi[1], lo[2] : hi[2]]
+    idx = np.argwhere(free)
+    lut = -np.ones(free.shape, dtype=np.int64)
+    lut[tuple(idx.T)] = np.arange(len(idx))
+    rows, cols, w = [], [], []
+    for off in itertools.product((-1, 0, 1), repeat=3):
+        if off <= (0, 0, 0):
+            continue
+        nb = idx + off
+        ok = np.all((nb >= 0) & (nb < free.shape), axis=1)
+        ok[ok] = free[tuple(nb[ok].T)]
+        rows.append(lut[tuple(idx[ok].T)])
+        cols.append(lut[tuple(nb[ok].T)])
+        w.append(np.full(ok.sum(), g.pitch * np.linalg.norm(off)))
+    n = len(idx)
+    graph = coo_matrix((np.concatenate(w), (np.concatenate(rows), np.concatenate(cols))), (n, n))
+    s, t = lut[tuple(a - lo)], lut[tuple(b - lo)]
+    length = dijkstra(graph.tocsr(), directed=False, indices=s)[t]
+    straight = np.linalg.norm(demo.virtual_xyz[2] - demo.virtual_xyz[6])
+    # 26-connected grid paths run up to ~8% over straight lines even in free space
+    assert np.isfinite(length) and length < 1.2 * straight

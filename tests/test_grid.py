@@ -164,3 +164,17 @@ def test_car2_region_agrees_with_brute_force_on_sampled_voxels():
     clear = np.abs(d - grid.clearance) > TIE
     got = grid.occupied[idx[:, 0], idx[:, 1], idx[:, 2]]
     np.testing.assert_array_equal(got[clear], (d < grid.clearance)[clear])
+
+
+def test_grid_pickles_bit_packed():
+    import pickle
+
+    rng = np.random.default_rng(0)
+    grid = ObstacleGrid(rng.random((40, 50, 60)) < 0.3, np.array([1.0, -2.0, 3.5]), 2.5, 4.0)
+    data = pickle.dumps(grid)
+    assert len(data) < grid.occupied.size / 8 + 1000
+    back = pickle.loads(data)
+    np.testing.assert_array_equal(back.occupied, grid.occupied)
+    np.testing.assert_array_equal(back.free, grid.free)
+    np.testing.assert_array_equal(back.origin, grid.origin)
+    assert (back.pitch, back.clearance) == (2.5, 4.0)

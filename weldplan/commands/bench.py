@@ -9,9 +9,12 @@ HELP = "reproduce a paper's table or measure a target (writes markdown and PNG)"
 
 #: benchmark name -> module with ``HELP``, ``add_arguments(parser)`` and ``run(args) -> int``
 BENCHES: dict[str, str] = {
+    "grid": "weldplan.bench.grid",
+    "collision": "weldplan.bench.collision",
     "functions": "weldplan.bench.functions",
     "mealpy": "weldplan.bench.mealpy_peer",
     "local": "weldplan.bench.local",
+    "sequence": "weldplan.bench.sequence",
     "route": "weldplan.bench.route",
 }
 

@@ -9,13 +9,27 @@ from weldplan.commands._planning import add_planning_arguments, run_planning
 HELP = "plan, verify and export the embedded demo cell (15 joints of Wang et al. 2017)"
 
 
+def positive_mm(text: str) -> float:
+    """argparse type: a positive, finite number of millimetres."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (value > 0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"must be a positive number of mm, got {text!r}")
+    return value
+
+
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--pitch", type=float, default=5.0, help="voxel side in mm (default 5)")
+    p.add_argument("--pitch", type=positive_mm, default=5.0, help="voxel side in mm (default 5)")
     p.add_argument(
-        "--clearance", type=float, default=5.0, help="torch-tip clearance in mm (default 5)"
+        "--clearance", type=positive_mm, default=5.0, help="torch-tip clearance in mm (default 5)"
     )
     p.add_argument(
-        "--margin", type=float, default=150.0, help="margin around the joints in mm (default 150)"
+        "--margin",
+        type=positive_mm,
+        default=150.0,
+        help="margin around the joints in mm (default 150)",
     )
     add_planning_arguments(p, default_output="route.csv")
     p.set_defaults(html="route.html")

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from weldplan.commands._planning import add_planning_arguments, run_planning
+from weldplan.commands.demo import positive_mm
 
 HELP = "plan the ordered collision-free torch route through the weld joints of a part"
 
@@ -24,9 +25,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("mesh", help="part mesh (STL, OBJ, PLY, OFF, GLB/GLTF)")
     p.add_argument("joints", help="weld joints CSV (id, x, y, z[, dx, dy, dz])")
     add_cell_arguments(p)
-    p.add_argument("--clearance", type=float, default=5.0, help="torch-tip radius, mm (5)")
-    p.add_argument("--pitch", type=float, default=5.0, help="voxel size of the search grid, mm (5)")
-    p.add_argument("--margin", type=float, default=150.0, help="grid margin around joints, mm")
+    p.add_argument("--clearance", type=positive_mm, default=5.0, help="torch-tip radius, mm (5)")
+    p.add_argument(
+        "--pitch", type=positive_mm, default=5.0, help="voxel size of the search grid, mm (5)"
+    )
+    p.add_argument(
+        "--margin", type=positive_mm, default=150.0, help="grid margin around joints, mm (150)"
+    )
     add_planning_arguments(p, default_output=None)
 
 

@@ -65,3 +65,18 @@ class SurfaceDistance:
             d = self._scene.compute_distance(self._o3d.core.Tensor(chunk))
             out[start : start + CHUNK] = d.numpy()
         return out
+
+    def first_hit(self, origins: ArrayLike, directions: ArrayLike) -> NDArray[np.float64]:
+        """``(n,) float``: distance (mm) along each unit ray to the first triangle it crosses.
+
+        ``origins`` and ``directions`` are ``(n, 3)``; directions must be unit vectors. Rays
+        that hit nothing give ``inf``.
+        """
+        O = np.asarray(origins, dtype=np.float64).reshape(-1, 3) - self.shift
+        D = np.asarray(directions, dtype=np.float64).reshape(-1, 3)
+        out = np.empty(len(O), dtype=np.float64)
+        for start in range(0, len(O), CHUNK):
+            rays = np.hstack([O[start : start + CHUNK], D[start : start + CHUNK]])
+            hit = self._scene.cast_rays(self._o3d.core.Tensor(rays.astype(np.float32)))
+            out[start : start + CHUNK] = hit["t_hit"].numpy()
+        return out

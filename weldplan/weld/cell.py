@@ -318,8 +318,18 @@ def load_cell(
 def demo_cell(**kw: Any) -> Cell:
     """The embedded demo cell: the 15 joints of Wang et al. 2017, Table 1, on the demo part.
 
+    Reads ``assets/demo/part.stl`` and ``assets/demo/joints.csv``; where they are not installed
+    (a wheel carries only the package), the same part and joints are generated in memory.
     ``**kw`` go to :func:`build_cell` (``pitch``, ``clearance``, ``margin``, ...).
     """
-    from weldplan.weld.demo_part import DEMO_JOINTS, DEMO_PART
+    from weldplan.weld import demo_part
 
-    return load_cell(DEMO_PART, DEMO_JOINTS, **kw)
+    if demo_part.DEMO_PART.exists() and demo_part.DEMO_JOINTS.exists():
+        return load_cell(demo_part.DEMO_PART, demo_part.DEMO_JOINTS, **kw)
+    part, directions = demo_part.demo_assets()
+    joints = Joints(
+        ids=tuple(str(k + 1) for k in range(len(demo_part.TABLE1_XYZ))),
+        xyz=demo_part.TABLE1_XYZ,
+        directions=directions,
+    )
+    return build_cell(part, joints, **kw)

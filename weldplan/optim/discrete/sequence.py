@@ -1,0 +1,289 @@
+"""The sequencer's entry point: order nodes by a cost matrix, and the :class:`Sequence` result.
+
+``solve_sequence(cost)`` orders the nodes of any ``(n, n)`` cost matrix (weld joints by their
+collision-free path lengths, 2D goals by travel cost): an open path by default (a weld sequence
+does not return), or a closed tour, optionally with a fixed first and/or last node. It knows
+nothing about welding.
+
+Methods
+-------
+``"exact"``
+    Held-Karp (:mod:`~weldplan.optim.discrete.held_karp`): the optimum, up to about 20 nodes.
+``"pso"``
+    Clerc's discrete PSO with the paper's parameters (:mod:`~weldplan.optim.discrete.tsp_pso`),
+    then, when ``polish`` is on, 2-opt + Or-opt iterated local search
+    (:mod:`~weldplan.optim.discrete.local_search`). The result reports both costs.
+``"nn"``
+    Nearest-neighbour construction (best over start nodes), then the same polish.
+``"auto"``
+    ``"exact"`` up to :data:`EXACT_MAX_NODES` nodes, else ``"pso"``.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field, replace
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from weldplan.errors import PlanningError
+from weldplan.optim.discrete.costs import (
+    Reduction,
+    check_cost,
+    order_cost,
+    penalised,
+    reduce_to_tour,
+)
+from weldplan.optim.discrete.held_karp import MAX_NODES, held_karp_tour
+from weldplan.optim.discrete.local_search import PolishParams
+from weldplan.optim.discrete.local_search import polish as polish_tour
+from weldplan.optim.discrete.tsp_pso import PSOParams, tsp_pso
+from weldplan.random import RNGLike, as_generator, seed_of
+
+log = logging.getLogger(__name__)
+
+#: ``method="auto"`` solves exactly up to this many nodes (Held-Karp takes milliseconds there).
+EXACT_MAX_NODES = 13
+
+METHODS = ("auto", "exact", "pso", "nn")
+
+
+@dataclass(frozen=True)
+class Sequence:
+    """An ordering of the nodes of a cost matrix.
+
+    Attributes
+    ----------
+    order
+        Node indices (0-based) in visiting order; all ``n`` nodes once.
+    cost
+        Cost of ``order`` under the input matrix (closing edge included when ``closed``).
+    method
+        What produced it: ``"exact"``, ``"pso"``, ``"pso+polish"``, ``"nn"``, ``"nn+polish"``.
+    closed, first, last
+        The variant solved.
+    history
+        Best cost after initialisation and after each swarm iteration (empty for other methods);
+        for convergence plots.
+    evaluations
+        Tours evaluated by the swarm (0 for other methods).
+    seconds
+        Wall time of the whole solve.
+    seed
+        The integer seed when one was given.
+    start_cost
+        Cost of the construction before polish (the PSO-alone or nearest-neighbour cost), or
+        ``None`` when there was no polish.
+    params
+        The settings used (swarm and polish parameters).
+    """
+
+    order: tuple[int, ...]
+    cost: float
+    method: str
+    closed: bool = False
+    first: int | None = None
+    last: int | None = None
+    history: tuple[float, ...] = ()
+    evaluations: int = 0
+    seconds: float = 0.0
+    seed: int | None = None
+    start_cost: float | None = None
+    params: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def order_array(self) -> NDArray[np.intp]:
+        return np.asarray(self.order, dtype=np.intp)
+
+    def to_json(self) -> str:
+        return json.dumps(asdict(self), allow_nan=True)
+
+    @classmethod
+    def from_json(cls, text: str) -> Sequence:
+        d = json.loads(text)
+        d["order"] = tuple(int(v) for v in d["order"])
+        d["history"] = tuple(float(v) for v in d["history"])
+        return cls(**d)
+
+
+def nearest_neighbour_tour(A: NDArray[np.float64], start: int, n_starts: int = 64) -> NDArray:
+    """Best nearest-neighbour closed tour over ``A`` beginning ``start -> s`` over seeds ``s``.
+
+    Every second node ``s`` (up to ``n_starts`` of them, evenly spread) seeds one greedy tour; all
+    are built at once as arrays and the cheapest is returned. ``A`` must be finite.
+    """
+    m = A.shape[0]
+    others = np.array([v for v in range(m) if v != start], dtype=np.intp)
+    if len(others) <= 1:
+        return np.concatenate([[start], others]).astype(np.intp)
+    seeds = others[np.linspace(0, len(others) - 1, min(n_starts, len(others))).astype(np.intp)]
+    R = len(seeds)
+    rows = np.arange(R)
+    visited = np.zeros((R, m), dtype=bool)
+    visited[:, start] = True
+    visited[rows, seeds] = True
+    tours = np.empty((R, m), dtype=np.intp)
+    tours[:, 0] = start
+    tours[:, 1] = seeds
+    cur = seeds
+    for k in range(2, m):
+        d = np.where(visited, np.inf, A[cur])
+        nxt = np.argmin(d, axis=1)
+        tours[:, k] = nxt
+        visited[rows, nxt] = True
+        cur = nxt
+    costs = A[tours, np.roll(tours, -1, axis=1)].sum(axis=1)
+    return tours[int(np.argmin(costs))]
+
+
+def _no_finite_order(red: Reduction, exact: bool) -> PlanningError:
+    A = red.A
+    off = ~np.eye(red.m, dtype=bool)
+    fin = np.isfinite(A) & off
+    dead_out = [int(v) for v in np.flatnonzero(~fin.any(axis=1)) if v < red.n]
+    dead_in = [int(v) for v in np.flatnonzero(~fin.any(axis=0)) if v < red.n]
+    detail = []
+    if dead_out:
+        detail.append(f"nodes with no reachable successor: {dead_out}")
+    if dead_in:
+        detail.append(f"nodes no other node reaches: {dead_in}")
+    what = "no order of finite cost exists" if exact else "found no order of finite cost"
+    kind = "closed tour" if red.closed else "open path"
+    ends = f" (first={red.first}, last={red.last})" if (red.first, red.last) != (None, None) else ""
+    msg = f"sequencing {red.n} nodes as a {kind}{ends}: {what}"
+    return PlanningError(msg + ("; " + "; ".join(detail) if detail else ""))
+
+
+def solve_sequence(
+    cost: ArrayLike,
+    *,
+    method: str = "auto",
+    closed: bool = False,
+    first: int | None = None,
+    last: int | None = None,
+    polish: bool = True,
+    rng: RNGLike = None,
+    pso: PSOParams | None = None,
+    polish_params: PolishParams | None = None,
+    callback: Callable[[int, float], bool | None] | None = None,
+    time_budget: float | None = None,
+) -> Sequence:
+    """Order the nodes of ``cost`` to minimise the total cost.
+
+    Parameters
+    ----------
+    cost
+        ``(n, n) float``: ``cost[i, j]`` of going from node ``i`` to node ``j`` (mm of path in the
+        weld pipeline). May be asymmetric; ``inf`` marks an unreachable pair; NaN is an error.
+    method
+        ``"auto"`` (exact up to :data:`EXACT_MAX_NODES` nodes, else ``"pso"``), ``"exact"``,
+        ``"pso"`` or ``"nn"``; see the module docstring.
+    closed
+        Return to the first node (a tour) instead of an open path (the default for welding).
+    first, last
+        Node indices fixed at the start and/or end of the order (``last`` of a closed tour is the
+        node visited before returning to ``first``).
+    polish
+        Run 2-opt + Or-opt iterated local search after ``"pso"`` / ``"nn"`` (ignored by
+        ``"exact"``).
+    rng
+        Seed or Generator for the swarm and the kicks.
+    pso
+        Swarm settings; :class:`PSOParams` defaults are Table 4 of Wang et al. (2017).
+    polish_params
+        Polish settings (:class:`PolishParams`).
+    callback
+        ``callback(iteration, best_cost)`` from the swarm; return ``True`` to stop it early.
+    time_budget
+        Seconds for the whole solve: the polish stops kicking when they are spent (and, unless
+        ``polish_params.kicks`` is set, kicks until then). The swarm always runs its iterations.
+        Results then depend on the machine's speed; leave it ``None`` for reproducible runs.
+
+    Returns
+    -------
+    Sequence
+
+    Raises
+    ------
+    PlanningError
+        When no order of finite cost exists (or none was found by a heuristic on an instance too
+        large to settle exactly).
+    ValueError
+        For a malformed matrix, an unknown method or bad ``first`` / ``last``.
+    """
+    t0 = time.perf_counter()
+    if method not in METHODS:
+        raise ValueError(f"unknown method {method!r}; choose one of {METHODS}")
+    C = check_cost(cost)
+    n = C.shape[0]
+    red = reduce_to_tour(C, closed, first, last)
+    gen = as_generator(rng)
+    seed = seed_of(rng)
+    pso = PSOParams() if pso is None else pso
+    pp = PolishParams() if polish_params is None else polish_params
+    if method == "auto":
+        method = "exact" if n <= EXACT_MAX_NODES else "pso"
+    if method == "exact" and red.m > MAX_NODES:
+        raise ValueError(
+            f"method='exact' handles at most {MAX_NODES - 1} nodes for an open path and "
+            f"{MAX_NODES} for a closed tour (memory grows as 8 n 2^n bytes); got {n}"
+        )
+
+    history: tuple[float, ...] = ()
+    evaluations = 0
+    start_cost: float | None = None
+    params: dict[str, Any] = {}
+    if method == "exact":
+        tour, best = held_karp_tour(red.A, red.start)
+        if not np.isfinite(best):
+            raise _no_finite_order(red, exact=True)
+        name = "exact"
+    else:
+        Ap, _ = penalised(red.A)
+        if method == "pso":
+            res = tsp_pso(Ap, red.start, pso, gen, callback)
+            tour, history, evaluations = res.tour, res.history, res.evaluations
+            params["pso"] = pso.to_dict()
+        else:
+            tour = nearest_neighbour_tour(Ap, red.start)
+        name = method
+        if polish:
+            start_cost = order_cost(C, red.to_order(tour), closed)
+            if time_budget is not None:
+                left = max(0.0, time_budget - (time.perf_counter() - t0))
+                pp = replace(pp, time_budget=left)
+            tour, _, stats = polish_tour(Ap, tour, pp, gen)
+            params["polish"] = pp.to_dict()
+            params["polish_stats"] = stats
+            name += "+polish"
+        if not np.isfinite(order_cost(red.A, tour, True)):
+            if red.m <= EXACT_MAX_NODES + 1:
+                tour, best = held_karp_tour(red.A, red.start)
+                if not np.isfinite(best):
+                    raise _no_finite_order(red, exact=True)
+                name = "exact"
+            else:
+                raise _no_finite_order(red, exact=False)
+    order = red.to_order(tour)
+    total = order_cost(C, order, closed)
+    seconds = time.perf_counter() - t0
+    log.info("sequenced %d nodes with %s: cost %.6g in %.3f s", n, name, total, seconds)
+    return Sequence(
+        order=tuple(int(v) for v in order),
+        cost=total,
+        method=name,
+        closed=closed,
+        first=first,
+        last=last,
+        history=history,
+        evaluations=evaluations,
+        seconds=seconds,
+        seed=seed,
+        start_cost=start_cost,
+        params=params,
+    )
