@@ -32,6 +32,14 @@ def files(tmp_path):
     return tmp_path, mesh, joints
 
 
+def _rc(argv) -> int:
+    """Exit code of ``weldplan argv`` (argparse errors exit through SystemExit)."""
+    try:
+        return main(argv)
+    except SystemExit as e:
+        return int(e.code)
+
+
 def _one_line_error(capsys, rc_expected=2):
     err = capsys.readouterr().err
     lines = [ln for ln in err.splitlines() if ln.strip()]
@@ -103,7 +111,7 @@ def test_user_errors_exit_2_with_one_line(files, capsys):
         "aco": (["demo", "--aco", "0", "-o", str(tmp / "r.csv")], "--aco"),
     }
     for name, (argv, needle) in cases.items():
-        assert main(argv) == 2, name
+        assert _rc(argv) == 2, name
         line = _one_line_error(capsys)
         assert needle in line, (name, line)
 

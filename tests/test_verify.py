@@ -100,7 +100,8 @@ def test_approach_cone_admits_oblique_descents_and_rejects_grazing(part):
     # a bare segment would pass, the cone (radius 2.8 mm there) does not
     Q = r.legs[1].points.copy()
     Q[-2] = [-30.0, 0.0, 110.0]
-    assert CollisionModel(part).segment_free(Q[-1], Q[-2], 0.0)
+    off_spot = Q[-1] + 0.01 * (Q[-2] - Q[-1])  # a bare segment (radius 0) clears the wall
+    assert CollisionModel(part).segment_free(off_spot, Q[-2], 0.0)
     rep = verify_route(_with_leg(r, 1, Q), part)
     assert (1, 3) in [(v.leg, v.segment) for v in rep.violations]
     assert "cone" in rep.describe()
