@@ -199,3 +199,13 @@ def test_demo_verifier_catches_a_detour_cut_through_the_panel(demo):
     short = Route(r.order[:-1], r.legs[:-1], r.joint_ids, r.joint_xyz, r.directions, r.virtual_xyz)
     rep = verify_route(short, demo.part, joints=demo.joints)
     assert [v.kind for v in rep.violations] == ["missing"]
+
+
+def test_process_pool_gives_the_serial_route(cell):
+    from concurrent.futures import ProcessPoolExecutor
+
+    cfg = PlanConfig(pairs="all", aco={"n_iterations": 3, "n_ants": 4})
+    serial = plan_route(cell, config=cfg, rng=5)
+    with ProcessPoolExecutor(2) as ex:
+        pooled = plan_route(cell, config=cfg, rng=5, executor=ex)
+    assert _legs(pooled) == _legs(serial)
