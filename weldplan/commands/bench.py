@@ -15,6 +15,7 @@ BENCHES: dict[str, str] = {
     "mealpy": "weldplan.bench.mealpy_peer",
     "local": "weldplan.bench.local",
     "sequence": "weldplan.bench.sequence",
+    "route": "weldplan.bench.route",
 }
 
 
