@@ -23,6 +23,18 @@ heuristic and the cell small enough for Held-Karp (up to 16 joints), the discove
 Held-Karp, then the configured sequencer orders the joints once more (and, in the rare case that
 its order uses a leg still unknown, the rounds go on with it).
 
+Candidate pairs (station scale)
+-------------------------------
+At hundreds of joints even the straight checks of all ``n (n - 1) / 2`` pairs are more than the
+sequencer needs. ``PlanConfig(candidates=k)`` checks up front only the candidate pairs: each
+joint with its ``k`` nearest joints by straight-line distance between the weld spots. The straight
+segment is checked first; the blocked candidates are then searched in one batch through the
+executor (the work that parallelises). Every other pair keeps its straight-polyline estimate (a
+lower bound, as above) until an order uses it; then it is checked on demand, straight first and
+searched only if blocked, and the sequencer runs again. With an exact sequencer the route is the
+same as with every pair planned. ``Route.stats`` counts the pairs checked, straight, searched
+(``pairs_checked``, ``pairs_straight``, ``pairs_planned``) and the candidates.
+
 Randomness: one generator, normalised once from ``rng``; each pair gets its own seed drawn from it
 up front in a fixed order, so a route does not depend on the executor or the order in which
 workers finish.
@@ -90,7 +102,12 @@ class PlanConfig:
         Seconds for each run of the sequencer's polish (None: its own stopping rule).
     max_rounds
         Bound on plan-then-sequence rounds of the lazy mode; after it every blocked pair is
-        planned and the sequencer runs once more.
+        planned and the sequencer runs once more (without candidates; with candidates the rounds
+        go on, each planning at least one new pair, so they end).
+    candidates
+        ``k``: check and plan up front only each joint's ``k`` nearest neighbours, the other pairs
+        on demand (module docstring); None: every pair is checked straight up front. Only with
+        ``pairs="lazy"``.
     """
 
     clearance: float = 5.0
@@ -105,6 +122,7 @@ class PlanConfig:
     local_time_budget: float | None = None
     sequence_time_budget: float | None = None
     max_rounds: int = 50
+    candidates: int | None = None
 
     def __post_init__(self) -> None:
         if self.planner not in PLANNERS:
@@ -113,6 +131,12 @@ class PlanConfig:
             raise WeldplanError(f"unknown sequencer {self.sequencer!r}; choose one of {SEQUENCERS}")
         if self.pairs not in ("lazy", "all"):
             raise WeldplanError(f"pairs must be 'lazy' or 'all', not {self.pairs!r}")
+        if self.candidates is not None:
+            if int(self.candidates) != self.candidates or self.candidates < 1:
+                raise WeldplanError(f"candidates must be a positive integer, got {self.candidates}")
+            if self.pairs == "all":
+                raise WeldplanError("candidates needs pairs='lazy' (pairs='all' plans every pair)")
+            object.__setattr__(self, "candidates", int(self.candidates))
         for name in ("clearance", "pitch"):
             v = getattr(self, name)
             if not (np.isfinite(v) and v > 0):
@@ -138,6 +162,41 @@ def _plan_pair_task(
     from weldplan.weld.local import plan_pair
 
     return plan_pair(cell, i, j, method=method, params=params, rng=seed, time_budget=budget)
+
+
+def candidate_pairs(
+    xyz: NDArray[np.float64], k: int, pair_index: NDArray[np.intp] | None = None
+) -> NDArray[np.intp]:
+    """Indices (into the upper-triangle pair list) of each joint with its ``k`` nearest joints.
+
+    Parameters
+    ----------
+    xyz
+        ``(n, 3)`` weld spots (mm); nearness is the straight-line distance between them.
+    k
+        Neighbours per joint (ties broken by joint order).
+    pair_index
+        ``(n, n)`` pair number of ``(i, j)``, as built by :func:`plan_route`; built when None.
+
+    Returns
+    -------
+    ``(m,) intp``, sorted, unique.
+    """
+    from scipy.spatial import cKDTree
+
+    n = len(xyz)
+    if pair_index is None:
+        iu, ju = np.triu_indices(n, 1)
+        pair_index = -np.ones((n, n), dtype=np.intp)
+        pair_index[iu, ju] = pair_index[ju, iu] = np.arange(len(iu))
+    k = min(int(k), n - 1)
+    if k < 1:
+        return np.zeros(0, dtype=np.intp)
+    _, nb = cKDTree(xyz).query(xyz, k=k + 1)
+    rows = np.repeat(np.arange(n), k + 1)
+    cols = nb.reshape(-1)
+    keep = rows != cols
+    return np.unique(pair_index[rows[keep], cols[keep]])
 
 
 def straight_lower_bound(xyz: NDArray[np.float64]) -> tuple[float, str]:
@@ -213,28 +272,51 @@ def plan_route(
         raise PlanningError("the cell has no weld joints")
     approach = np.linalg.norm(V - P, axis=1)
 
-    # 1. straight checks between all pairs of virtual joints (upper triangle)
+    # 1. straight checks between pairs of virtual joints (upper triangle): all, or the candidates
     t0 = time.perf_counter()
     iu, ju = np.triu_indices(n, 1)
     n_pairs = len(iu)
-    report("straight", 0, n_pairs)
-    same = np.all(V[iu] == V[ju], axis=1)
-    free = np.ones(n_pairs, dtype=bool)
-    if n_pairs:
-        free[~same] = cell.collision.segments_free(V[iu][~same], V[ju][~same], clearance)
-    report("straight", n_pairs, n_pairs)
+    pair_index = -np.ones((n, n), dtype=np.intp)
+    pair_index[iu, ju] = np.arange(n_pairs)
+    pair_index[ju, iu] = np.arange(n_pairs)
+    checked = np.zeros(n_pairs, dtype=bool)
+    free = np.zeros(n_pairs, dtype=bool)
+
+    def check(pairs: NDArray[np.intp]) -> None:
+        """Straight capsule checks of ``pairs`` (one vectorised call); sets checked / free."""
+        pairs = pairs[~checked[pairs]]
+        if not len(pairs):
+            return
+        a, b = V[iu[pairs]], V[ju[pairs]]
+        ok = np.all(a == b, axis=1)
+        if (~ok).any():
+            ok[~ok] = cell.collision.segments_free(a[~ok], b[~ok], clearance)
+        free[pairs] = ok
+        checked[pairs] = True
+
+    if config.candidates is None or config.candidates >= n - 1:
+        upfront = np.arange(n_pairs)
+    else:
+        upfront = candidate_pairs(P, config.candidates, pair_index)
+    report("straight", 0, len(upfront))
+    check(upfront)
+    report("straight", len(upfront), len(upfront))
     est = approach[iu] + np.linalg.norm(V[iu] - V[ju], axis=1) + approach[ju]
     C = np.zeros((n, n))
     C[iu, ju] = est
     C[ju, iu] = est
-    pair_index = -np.ones((n, n), dtype=np.intp)
-    pair_index[iu, ju] = np.arange(n_pairs)
-    pair_index[ju, iu] = np.arange(n_pairs)
     known = free.copy()
     pair_seeds = gen.integers(0, 2**63 - 1, size=n_pairs)
     seconds["straight"] = time.perf_counter() - t0
-    blocked = np.flatnonzero(~free)
-    log.info("%d joints, %d pairs, %d blocked at %g mm", n, n_pairs, len(blocked), clearance)
+    blocked = np.flatnonzero(checked & ~free)
+    log.info(
+        "%d joints, %d pairs, %d checked, %d blocked at %g mm",
+        n,
+        n_pairs,
+        len(upfront),
+        len(blocked),
+        clearance,
+    )
 
     paths: dict[int, Any] = {}
     t_local = 0.0
@@ -244,6 +326,10 @@ def plan_route(
     def plan(pairs: list[int]) -> None:
         nonlocal t_local, n_failed
         t = time.perf_counter()
+        fresh = np.array([p for p in pairs if not checked[p]], dtype=np.intp)
+        if len(fresh):  # on demand: the straight segment first (timed with the local stage)
+            check(fresh)
+            known[fresh] = free[fresh]
         todo = [p for p in pairs if not known[p]]
         total = len(paths) + len(todo)
         report("local", len(paths), total)
@@ -310,7 +396,7 @@ def plan_route(
         report("sequence", round_ + 1, round_ + 1)
         return seq
 
-    if config.pairs == "all":
+    if config.pairs == "all" or config.candidates is not None:
         plan([int(p) for p in blocked])
     rounds = 0
 
@@ -325,7 +411,7 @@ def plan_route(
             unknown = [p for p in needed if not known[p]]
             if not unknown:
                 return seq
-            if rounds >= config.max_rounds:
+            if rounds >= config.max_rounds and config.candidates is None:
                 log.warning("lazy planning: %d rounds, planning every blocked pair", rounds)
                 unknown = [int(p) for p in blocked]
             plan(unknown)
@@ -387,8 +473,10 @@ def plan_route(
     }
     stats = {
         "pairs": n_pairs,
+        "pairs_checked": int(checked.sum()),
+        "pairs_candidates": int(len(upfront)),
         "pairs_straight": int(free.sum()),
-        "pairs_blocked": int(len(blocked)),
+        "pairs_blocked": int((checked & ~free).sum()),
         "pairs_planned": len(paths),
         "pairs_failed": n_failed,
         "rounds": rounds,

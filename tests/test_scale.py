@@ -1,0 +1,74 @@
+"""Station scale: candidate pairs plan the all-pairs route; executors (process pool, Dask) do not
+change it. Runs on a small station of the synthetic car2 set (assets/car2, ../shared car2.obj)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import require_shared
+
+from weldplan.errors import WeldplanError
+from weldplan.io.joints import Joints, read_joints
+from weldplan.weld.pipeline import PlanConfig, candidate_pairs, plan_route
+
+ROOT = Path(__file__).resolve().parents[1]
+N_STATION = 12
+
+
+@pytest.fixture(scope="module")
+def station():
+    """The 12 joints of the 50-joint car2 set nearest its first joint, in a cell (about 4 s)."""
+    from weldplan.io.mesh import load_part
+    from weldplan.weld.cell import build_cell
+    from weldplan.weld.synthetic import CAR2_LENGTH_MM
+
+    part = load_part(require_shared("bodies", "car2.obj"), length=CAR2_LENGTH_MM)
+    j = read_joints(ROOT / "assets" / "car2" / "car2_synthetic_50.csv")
+    pick = np.sort(np.argsort(np.linalg.norm(j.xyz - j.xyz[0], axis=1))[:N_STATION])
+    joints = Joints(
+        ids=tuple(j.ids[k] for k in pick), xyz=j.xyz[pick], directions=j.directions[pick]
+    )
+    return build_cell(part, joints)
+
+
+def _legs(route):
+    return [(g.from_id, g.to_id, g.points.tobytes()) for g in route.legs]
+
+
+def test_candidate_pairs_are_the_k_nearest():
+    xyz = np.random.default_rng(0).uniform(0, 100, size=(30, 3))
+    n, k = len(xyz), 4
+    iu, ju = np.triu_indices(n, 1)
+    got = candidate_pairs(xyz, k)
+    D = np.linalg.norm(xyz[:, None] - xyz[None], axis=-1)
+    np.fill_diagonal(D, np.inf)
+    want = set()
+    for i in range(n):
+        for j in np.argsort(D[i])[:k]:
+            want.add((min(i, j), max(i, j)))
+    assert {(int(iu[p]), int(ju[p])) for p in got} == want
+    assert len(candidate_pairs(xyz, 100)) == n * (n - 1) // 2
+
+
+def test_candidates_plan_the_all_pairs_route(station):
+    """With an exact sequencer, candidate + on-demand pairs lose nothing against all pairs."""
+    full = plan_route(station, config=PlanConfig(planner="exact", sequencer="exact", pairs="all"))
+    cand = plan_route(station, config=PlanConfig(planner="exact", sequencer="exact", candidates=2))
+    assert cand.order == full.order
+    assert _legs(cand) == _legs(full)
+    assert cand.length == pytest.approx(full.length, rel=1e-12)
+    s, f = cand.stats, full.stats
+    assert f["pairs_checked"] == f["pairs"] == N_STATION * (N_STATION - 1) // 2
+    assert s["pairs_candidates"] < s["pairs_checked"] < f["pairs_checked"]  # some on demand
+    assert s["pairs_planned"] < f["pairs_planned"]
+    assert s["pairs_straight"] + s["pairs_blocked"] == s["pairs_checked"]
+
+
+def test_candidates_config_is_checked():
+    with pytest.raises(WeldplanError, match="candidates"):
+        PlanConfig(candidates=0)
+    with pytest.raises(WeldplanError, match="lazy"):
+        PlanConfig(candidates=5, pairs="all")
+    assert PlanConfig.from_dict(PlanConfig(candidates=5).to_dict()).candidates == 5
