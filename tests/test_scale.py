@@ -72,3 +72,58 @@ def test_candidates_config_is_checked():
     with pytest.raises(WeldplanError, match="lazy"):
         PlanConfig(candidates=5, pairs="all")
     assert PlanConfig.from_dict(PlanConfig(candidates=5).to_dict()).candidates == 5
+
+
+def _pool_cfg():
+    return PlanConfig(candidates=3, aco={"n_iterations": 3, "n_ants": 4})
+
+
+@pytest.fixture(scope="module")
+def serial(station):
+    return plan_route(station, config=_pool_cfg(), rng=11)
+
+
+def test_process_pool_with_the_cell_installed_gives_the_serial_route(station, serial):
+    from weldplan.weld.parallel import process_pool
+
+    assert serial.stats["pairs_planned"] > 4
+    with process_pool(station, 2) as ex:
+        pooled = plan_route(station, config=_pool_cfg(), rng=11, executor=ex)
+    assert pooled.order == serial.order
+    assert _legs(pooled) == _legs(serial)
+
+
+def test_a_plain_process_pool_gives_the_serial_route(station, serial):
+    from concurrent.futures import ProcessPoolExecutor
+
+    with ProcessPoolExecutor(2) as ex:
+        pooled = plan_route(station, config=_pool_cfg(), rng=11, executor=ex)
+    assert _legs(pooled) == _legs(serial)
+
+
+@pytest.mark.slow
+def test_dask_local_cluster_of_two_workers_gives_the_serial_route(station, serial):
+    pytest.importorskip("distributed")
+    from weldplan.weld.parallel import dask_executor
+
+    with dask_executor("local", workers=2) as ex:
+        dasked = plan_route(station, config=_pool_cfg(), rng=11, executor=ex)
+    assert dasked.order == serial.order
+    assert _legs(dasked) == _legs(serial)
+
+
+def test_cell_ref_unpickles_once_per_process(station):
+    import pickle
+
+    from weldplan.weld import parallel
+
+    ref = parallel.CellRef(station)
+    blob = pickle.dumps(ref)
+    parallel._CELLS.pop(ref.key, None)
+    a = pickle.loads(blob)
+    b = pickle.loads(blob)
+    assert a is b  # the second task reuses the first one's cell (and its collision model)
+    assert a.grid.occupied.shape == station.grid.occupied.shape
+    token_only = pickle.dumps(parallel.CellRef(station, ref.key, ship=False))
+    assert len(token_only) < 200 < len(blob)
+    assert pickle.loads(token_only) is a

@@ -164,6 +164,15 @@ def _plan_pair_task(
     return plan_pair(cell, i, j, method=method, params=params, rng=seed, time_budget=budget)
 
 
+def _plan_pairs_task(cell: Any, batch: list[tuple], budget: float | None) -> list[Any]:
+    """A batch of local paths in one worker task; ``cell`` arrives as a
+    :func:`weldplan.weld.parallel.share_cell` reference (built once per worker)."""
+    from weldplan.weld.parallel import resolve
+
+    cell = resolve(cell)
+    return [_plan_pair_task(cell, i, j, m, prm, s, budget) for i, j, m, prm, s in batch]
+
+
 def candidate_pairs(
     xyz: NDArray[np.float64], k: int, pair_index: NDArray[np.intp] | None = None
 ) -> NDArray[np.intp]:
@@ -238,7 +247,9 @@ def plan_route(
         Seed or Generator; the only source of randomness of the run.
     executor
         Where blocked pairs are planned: any ``concurrent.futures.Executor`` (a process pool, a
-        Dask ``Client.get_executor()``); serial in this process when None.
+        Dask ``Client.get_executor()``); serial in this process when None. The cell reaches each
+        worker once (:mod:`weldplan.weld.parallel`; :func:`~weldplan.weld.parallel.process_pool`
+        installs it at worker start); pairs travel in batches.
     progress
         ``progress(stage, done, total)`` for the stages ``"straight"``, ``"local"``,
         ``"sequence"``.
@@ -255,6 +266,7 @@ def plan_route(
     """
     from weldplan.optim.discrete.sequence import solve_sequence
     from weldplan.optim.discrete.tsp_pso import PSOParams
+    from weldplan.weld.parallel import batches, n_workers, share_cell
 
     config = PlanConfig() if config is None else config
     gen = as_generator(rng)
@@ -323,8 +335,10 @@ def plan_route(
     t_seq = 0.0
     n_failed = 0
 
+    shared: Any = None  # the cell as the executor's tasks carry it, made on first use
+
     def plan(pairs: list[int]) -> None:
-        nonlocal t_local, n_failed
+        nonlocal t_local, n_failed, shared
         t = time.perf_counter()
         fresh = np.array([p for p in pairs if not checked[p]], dtype=np.intp)
         if len(fresh):  # on demand: the straight segment first (timed with the local stage)
@@ -343,11 +357,13 @@ def plan_route(
                 for i, j, m, prm, s in args
             )
         else:
+            if shared is None:
+                shared = share_cell(cell, executor)
             futures = [
-                executor.submit(_plan_pair_task, cell, i, j, m, prm, s, config.local_time_budget)
-                for i, j, m, prm, s in args
+                executor.submit(_plan_pairs_task, shared, batch, config.local_time_budget)
+                for batch in batches(args, n_workers(executor))
             ]
-            results = (f.result() for f in futures)
+            results = (lp for f in futures for lp in f.result())
         for p, lp in zip(todo, results, strict=True):
             paths[int(p)] = lp
             known[p] = True
