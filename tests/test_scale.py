@@ -127,3 +127,24 @@ def test_cell_ref_unpickles_once_per_process(station):
     token_only = pickle.dumps(parallel.CellRef(station, ref.key, ship=False))
     assert len(token_only) < 200 < len(blob)
     assert pickle.loads(token_only) is a
+
+
+@pytest.mark.slow
+def test_cli_jobs_and_dask_write_the_serial_route(tmp_path, capsys):
+    """``weldplan plan --candidates K`` with ``--jobs 2`` and ``--dask local`` writes the serial
+    route, byte for byte (box scene of tests/route_fixtures)."""
+    pytest.importorskip("distributed")
+    from tests.route_fixtures import box_part
+    from weldplan.cli import main
+
+    mesh = tmp_path / "box.stl"
+    box_part().export(mesh)
+    joints = tmp_path / "joints.csv"
+    joints.write_text("id,x,y,z\nA,-40,0,0\nB,40,0,0\nC,-40,60,0\nD,40,-30,0\n")
+    base = ["plan", str(mesh), str(joints), "--margin", "40", "--candidates", "1", "--quiet"]
+    out = {}
+    for name, extra in {"serial": [], "pool": ["--jobs", "2"], "dask": ["--dask", "local"]}.items():
+        path = tmp_path / f"{name}.csv"
+        assert main([*base, "-o", str(path), *extra]) == 0
+        out[name] = path.read_bytes()
+    assert out["pool"] == out["serial"] == out["dask"]
