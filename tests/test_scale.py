@@ -148,3 +148,22 @@ def test_cli_jobs_and_dask_write_the_serial_route(tmp_path, capsys):
         assert main([*base, "-o", str(path), *extra]) == 0
         out[name] = path.read_bytes()
     assert out["pool"] == out["serial"] == out["dask"]
+
+
+def test_progress_bar_shows_counts_and_a_time_left_estimate(monkeypatch):
+    import io
+
+    from weldplan.commands import _progress
+
+    clock = iter([0.0, 0.0, 2.0, 2.0])
+    monkeypatch.setattr(_progress.time, "perf_counter", lambda: next(clock))
+
+    class Tty(io.StringIO):
+        def isatty(self):
+            return True
+
+    tty = Tty()
+    bars = _progress.ProgressBars(stream=tty)
+    bars("local", 0, 10)
+    bars("local", 4, 10)  # 4 pairs in 2 s: 6 left take 3 s
+    assert "4/10" in tty.getvalue() and "ETA    3.0 s" in tty.getvalue()
