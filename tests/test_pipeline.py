@@ -209,3 +209,20 @@ def test_process_pool_gives_the_serial_route(cell):
     with ProcessPoolExecutor(2) as ex:
         pooled = plan_route(cell, config=cfg, rng=5, executor=ex)
     assert _legs(pooled) == _legs(serial)
+
+
+def test_joints_in_separate_regions_are_named_as_groups(cell, monkeypatch):
+    blocked = SimpleNamespace(**vars(cell))
+    blocked.collision = SimpleNamespace(segments_free=lambda A, B, r: np.zeros(len(A), dtype=bool))
+    from weldplan.weld.local import LocalPath
+
+    def two_sides(cell_, i, j, *a):
+        if (i < 3) != (j < 3):  # {A, B, C} cannot reach {D, E, F}
+            return LocalPath(np.zeros((0, 3)), np.inf, np.inf, "so-aco", False, reason="walled")
+        P = np.array([XYZ[i], cell.virtual_xyz[i], cell.virtual_xyz[j], XYZ[j]])
+        L = float(np.linalg.norm(np.diff(P, axis=0), axis=1).sum())
+        return LocalPath(P, L, 0.0, "so-aco", True)
+
+    monkeypatch.setattr(pipeline, "_plan_pair_task", two_sides)
+    with pytest.raises(PlanningError, match=r"2 groups .*\{A, B, C\} \{D, E, F\}"):
+        plan_route(blocked, config=PlanConfig(pairs="all"), rng=0)

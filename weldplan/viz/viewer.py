@@ -204,7 +204,7 @@ def _translation(p: NDArray[np.float64], scale: float = 1.0) -> NDArray[np.float
 
 def scene_transform(points: NDArray[np.float64]) -> NDArray[np.float64]:
     """``(4, 4)`` mm -> viewer units: centred on the origin (where the camera looks), about
-    :data:`SCENE_SIZE` across."""
+    :data:`SCENE_SIZE` across; ``points (k, 3)`` mm are what must fit in the view."""
     lo, hi = points.min(axis=0), points.max(axis=0)
     extent = float(np.max(hi - lo)) or 1.0
     s = SCENE_SIZE / extent
@@ -236,11 +236,13 @@ def build_scene(
     mesh = _part_mesh(part)
     root = vis["weldplan"]
     root.delete()
-    pts = [route.joint_xyz]
-    if mesh is not None:
-        pts.append(np.asarray(mesh.vertices))
-    pts.extend(leg.points for leg in route.legs)
+    # frame the route (joints and legs), not the whole part: on a car body the route would
+    # otherwise be a speck; the part is drawn around it (zoom out to see all of it)
+    pts = [route.joint_xyz, *(leg.points for leg in route.legs)]
     allp = np.concatenate(pts, axis=0)
+    if len(allp) < 2 or np.ptp(allp, axis=0).max() < 1e-6:
+        if mesh is not None:
+            allp = np.concatenate([allp, np.asarray(mesh.vertices)], axis=0)
     T = scene_transform(allp)
     root.set_transform(T)
     extent = float(np.max(allp.max(axis=0) - allp.min(axis=0))) or 1.0

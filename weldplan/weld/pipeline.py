@@ -227,6 +227,39 @@ def straight_lower_bound(xyz: NDArray[np.float64]) -> tuple[float, str]:
     return float(minimum_spanning_tree(D).sum()), "mst"
 
 
+def _explain_no_order(
+    exc: Exception,
+    C: NDArray[np.float64],
+    known: NDArray[np.bool_],
+    iu: NDArray[np.intp],
+    ju: NDArray[np.intp],
+    paths: dict[int, Any],
+    ids: tuple[str, ...],
+) -> str:
+    """A message a user can act on when no order of finite cost exists.
+
+    When the joints fall into groups with no collision-free path between them (typically spots
+    on both sides of a panel, or one enclosed), name the groups; else list the failed pairs.
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    n = len(ids)
+    reach = ~known | np.isfinite(C[iu, ju])  # unknown pairs might still be reachable
+    A = coo_matrix((np.ones(int(reach.sum())), (iu[reach], ju[reach])), shape=(n, n))
+    k, label = connected_components(A, directed=False)
+    if k > 1:
+        groups = [
+            "{" + ", ".join(ids[v] for v in np.flatnonzero(label == g)) + "}" for g in range(k)
+        ]
+        return (
+            f"the joints fall into {k} groups with no collision-free path between them at this "
+            f"clearance (spots on both sides of a panel, or enclosed?): {' '.join(groups)}"
+        )
+    failed = [f"{ids[iu[p]]}-{ids[ju[p]]}" for p in paths if not np.isfinite(C[iu[p], ju[p]])]
+    return f"{exc}; local planning failed for pairs {', '.join(failed) or 'none'}"
+
+
 def plan_route(
     cell: Any,
     *,
@@ -371,7 +404,7 @@ def plan_route(
             ok = bool(getattr(lp, "success", True)) and np.isfinite(lp.length)
             if not ok:
                 n_failed += 1
-                log.warning("no local path %s -> %s: %s", ids[i], ids[j], getattr(lp, "reason", ""))
+                log.info("no local path %s -> %s: %s", ids[i], ids[j], getattr(lp, "reason", ""))
             C[i, j] = C[j, i] = lp.length if ok else np.inf
             report("local", len(paths), total)
         t_local += time.perf_counter() - t
@@ -400,14 +433,7 @@ def plan_route(
                 extra["time_budget"] = config.sequence_time_budget
             seq = solve_sequence(C, method=method, polish=config.polish, rng=gen, pso=pso, **extra)
         except PlanningError as exc:
-            failed = [
-                f"{ids[iu[p]]}-{ids[ju[p]]}"
-                for p, lp in paths.items()
-                if not np.isfinite(C[iu[p], ju[p]])
-            ]
-            raise PlanningError(
-                f"{exc}; local planning failed for pairs {', '.join(failed) or 'none'}"
-            ) from exc
+            raise PlanningError(_explain_no_order(exc, C, known, iu, ju, paths, ids)) from exc
         t_seq += time.perf_counter() - t
         report("sequence", round_ + 1, round_ + 1)
         return seq
