@@ -74,7 +74,7 @@ print(json.dumps(dict(n=len(cell.joints.ids), cell=t_cell, plan=t_plan, verify=t
 _THROUGHPUT = (
     CHILD_PRELUDE
     + """
-import logging, numpy as np
+import logging, os, numpy as np
 from weldplan.weld.cell import load_cell
 from weldplan.weld.pipeline import _plan_pairs_task, candidate_pairs
 from weldplan.weld.parallel import process_pool, share_cell, batches
@@ -87,9 +87,12 @@ cand = candidate_pairs(np.asarray(cell.joints.xyz), 6)
 free = cell.collision.segments_free(V[iu[cand]], V[ju[cand]], cell.clearance)
 todo = cand[~free][:{pairs}]
 args = [(int(iu[p]), int(ju[p]), 'so-aco', dict(n_iterations=10, n_ants=10), int(p)) for p in todo]
+c0 = resource.getrusage(resource.RUSAGE_SELF)
 t = time.perf_counter()
 serial = _plan_pairs_task(cell, args, None)
 t1 = time.perf_counter() - t
+c1 = resource.getrusage(resource.RUSAGE_SELF)
+cpu1 = c1.ru_utime - c0.ru_utime + c1.ru_stime - c0.ru_stime
 with process_pool(cell, 2) as ex:
     ex.submit(int, 0).result()  # workers started and holding the cell
     t = time.perf_counter()
@@ -97,14 +100,19 @@ with process_pool(cell, 2) as ex:
     fs = [ex.submit(_plan_pairs_task, shared, b, None) for b in batches(args, 2)]
     pooled = [lp for f in fs for lp in f.result()]
     t2 = time.perf_counter() - t
+ch = resource.getrusage(resource.RUSAGE_CHILDREN)  # the workers, after shutdown
+cpu2 = ch.ru_utime + ch.ru_stime
 same = all(np.array_equal(a.points, b.points) for a, b in zip(serial, pooled))
-print(json.dumps(dict(pairs=len(args), serial=t1, pool2=t2, same=same)))
+print(json.dumps(dict(pairs=len(args), serial=t1, pool2=t2, same=same, cpu_serial=cpu1,
+    cpu_pool=cpu2, load=os.getloadavg())))
 """
 )
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--sizes", type=int, nargs="+", default=[50, 200, 1000])
+    p.add_argument(
+        "--sizes", type=int, nargs="*", default=[50, 200, 1000], help="none: throughput only"
+    )
     p.add_argument("--candidates", type=int, default=6, help="k nearest pairs per joint (6)")
     p.add_argument("--jobs", type=int, default=2, help="workers of the end-to-end runs (2)")
     p.add_argument("--sequencer", default="auto", choices=("auto", "pso", "nn", "exact"))
@@ -173,7 +181,7 @@ def run(args: argparse.Namespace) -> int:
                 ]
             )
     thr = None
-    if 200 in sizes or args.quick:
+    if 200 in sizes or not sizes:
         code = _THROUGHPUT.format(
             mesh=mesh, joints=str(ASSETS / "car2_synthetic_200.csv"), pairs=n_pairs
         )
@@ -216,7 +224,14 @@ def run(args: argparse.Namespace) -> int:
             f"Pair-planning throughput (200-joint set, {thr['pairs']} blocked candidate pairs, "
             f"SO-ACO N = M = 10): 1 worker {thr['serial']:.2f} s, 2 workers "
             f"{thr['pool2']:.2f} s, speed-up **{thr['serial'] / thr['pool2']:.2f}x** "
-            f"(identical paths: {thr['same']}).",
+            f"(identical paths: {thr['same']}). CPU seconds: 1 worker {thr['cpu_serial']:.2f}, "
+            f"2 workers together {thr['cpu_pool']:.2f} (cell start-up in each worker included): "
+            f"CPU work of the pool / serial = {thr['cpu_pool'] / thr['cpu_serial']:.2f} (1.00 = "
+            "no pool overhead; the wall speed-up is then bound by the cores free on the machine, "
+            "not measured on idle cores here). "
+            "Load average during the measurement: "
+            + " ".join(f"{v:.2f}" for v in thr["load"])
+            + ".",
             "",
         ]
     (out / "scale.md").write_text("\n".join(md), encoding="utf-8")
