@@ -50,6 +50,8 @@ def test_candidate_pairs_are_the_k_nearest():
             want.add((min(i, j), max(i, j)))
     assert {(int(iu[p]), int(ju[p])) for p in got} == want
     assert len(candidate_pairs(xyz, 100)) == n * (n - 1) // 2
+    near = candidate_pairs(xyz, k, radius=20.0)
+    assert {(int(iu[p]), int(ju[p])) for p in near} == {(i, j) for i, j in want if D[i, j] <= 20.0}
 
 
 def test_candidates_plan_the_all_pairs_route(station):

@@ -72,6 +72,12 @@ def add_planning_arguments(p: argparse.ArgumentParser, *, default_output: str | 
         help="check and plan up front only each joint's K nearest pairs, the rest on demand "
         "(for hundreds of joints; default: every pair checked straight)",
     )
+    p.add_argument(
+        "--candidate-radius",
+        metavar="MM",
+        type=float,
+        help="with --candidates: neighbours farther than this are planned only on demand",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress bars and no summary on stdout")
 
 
@@ -96,6 +102,7 @@ def config_from_args(args: argparse.Namespace) -> Any:
         sequencer=args.sequencer,
         aco={"n_iterations": args.aco, "n_ants": args.aco},
         candidates=getattr(args, "candidates", None),
+        candidate_radius=getattr(args, "candidate_radius", None),
     )
 
 

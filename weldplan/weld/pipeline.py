@@ -108,6 +108,10 @@ class PlanConfig:
         ``k``: check and plan up front only each joint's ``k`` nearest neighbours, the other pairs
         on demand (module docstring); None: every pair is checked straight up front. Only with
         ``pairs="lazy"``.
+    candidate_radius
+        mm: with ``candidates``, a neighbour farther than this is left to on demand (on car2's
+        1000-joint set some of the 6 nearest are 476 mm away behind a panel, whose searches
+        cost minutes each); None: no limit.
     """
 
     clearance: float = 5.0
@@ -123,6 +127,7 @@ class PlanConfig:
     sequence_time_budget: float | None = None
     max_rounds: int = 50
     candidates: int | None = None
+    candidate_radius: float | None = None
 
     def __post_init__(self) -> None:
         if self.planner not in PLANNERS:
@@ -137,6 +142,8 @@ class PlanConfig:
             if self.pairs == "all":
                 raise WeldplanError("candidates needs pairs='lazy' (pairs='all' plans every pair)")
             object.__setattr__(self, "candidates", int(self.candidates))
+        if self.candidate_radius is not None and not (self.candidate_radius > 0):
+            raise WeldplanError(f"candidate_radius must be > 0 mm, got {self.candidate_radius}")
         for name in ("clearance", "pitch"):
             v = getattr(self, name)
             if not (np.isfinite(v) and v > 0):
@@ -174,7 +181,10 @@ def _plan_pairs_task(cell: Any, batch: list[tuple], budget: float | None) -> lis
 
 
 def candidate_pairs(
-    xyz: NDArray[np.float64], k: int, pair_index: NDArray[np.intp] | None = None
+    xyz: NDArray[np.float64],
+    k: int,
+    pair_index: NDArray[np.intp] | None = None,
+    radius: float | None = None,
 ) -> NDArray[np.intp]:
     """Indices (into the upper-triangle pair list) of each joint with its ``k`` nearest joints.
 
@@ -186,6 +196,8 @@ def candidate_pairs(
         Neighbours per joint (ties broken by joint order).
     pair_index
         ``(n, n)`` pair number of ``(i, j)``, as built by :func:`plan_route`; built when None.
+    radius
+        mm: a neighbour farther than this is not a candidate (None: no limit).
 
     Returns
     -------
@@ -201,10 +213,11 @@ def candidate_pairs(
     k = min(int(k), n - 1)
     if k < 1:
         return np.zeros(0, dtype=np.intp)
-    _, nb = cKDTree(xyz).query(xyz, k=k + 1)
+    bound = np.inf if radius is None else float(radius)
+    _, nb = cKDTree(xyz).query(xyz, k=k + 1, distance_upper_bound=bound)
     rows = np.repeat(np.arange(n), k + 1)
     cols = nb.reshape(-1)
-    keep = rows != cols
+    keep = (rows != cols) & (cols < n)  # cols == n: no neighbour within the radius
     return np.unique(pair_index[rows[keep], cols[keep]])
 
 
@@ -342,7 +355,7 @@ def plan_route(
     if config.candidates is None or config.candidates >= n - 1:
         upfront = np.arange(n_pairs)
     else:
-        upfront = candidate_pairs(P, config.candidates, pair_index)
+        upfront = candidate_pairs(P, config.candidates, pair_index, config.candidate_radius)
     report("straight", 0, len(upfront))
     check(upfront)
     report("straight", len(upfront), len(upfront))
