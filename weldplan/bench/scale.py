@@ -37,7 +37,8 @@ logging.disable(logging.WARNING)
 t0 = time.perf_counter()
 cell = load_cell({mesh!r}, {joints!r}, length=4500.0)
 t_cell = time.perf_counter() - t0
-cfg = PlanConfig(candidates={k}, sequencer={seq!r}, sequence_time_budget={sbud})
+cfg = PlanConfig(candidates={k}, candidate_radius={radius}, sequencer={seq!r},
+    sequence_time_budget={sbud})
 executor = None
 if {jobs} > 1:
     from weldplan.weld.parallel import process_pool
@@ -114,6 +115,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "--sizes", type=int, nargs="*", default=[50, 200, 1000], help="none: throughput only"
     )
     p.add_argument("--candidates", type=int, default=6, help="k nearest pairs per joint (6)")
+    p.add_argument(
+        "--candidate-radius", type=float, default=None, help="mm; farther neighbours on demand"
+    )
     p.add_argument("--jobs", type=int, default=2, help="workers of the end-to-end runs (2)")
     p.add_argument("--sequencer", default="auto", choices=("auto", "pso", "nn", "exact"))
     p.add_argument(
@@ -137,6 +141,7 @@ def run(args: argparse.Namespace) -> int:
             mesh=mesh,
             joints=joints,
             k=args.candidates,
+            radius=args.candidate_radius,
             seq=args.sequencer,
             sbud=args.sequence_budget,
             jobs=args.jobs,
@@ -194,7 +199,8 @@ def run(args: argparse.Namespace) -> int:
         f"Before: {before}  ",
         f"After: {after}",
         "",
-        f"Candidates k = {args.candidates}, {args.jobs} worker processes, sequencer "
+        f"Candidates k = {args.candidates} (radius {args.candidate_radius} mm), "
+        f"{args.jobs} worker processes, sequencer "
         f"{args.sequencer}, SO-ACO N = M = 10, seed 0. Seconds are wall clock; memory is the "
         "peak RSS of the run's process or of its largest worker (MiB). Pairs: checked straight "
         "/ free / searched. Length ratio: against the route with every pair checked straight "
