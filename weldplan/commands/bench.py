@@ -16,6 +16,7 @@ BENCHES: dict[str, str] = {
     "local": "weldplan.bench.local",
     "sequence": "weldplan.bench.sequence",
     "route": "weldplan.bench.route",
+    "planar": "weldplan.bench.planar",
 }
 
 
