@@ -22,6 +22,7 @@ COMMANDS: dict[str, str] = {
     "demo": "weldplan.commands.demo",
     "verify": "weldplan.commands.verify",
     "view": "weldplan.commands.view",
+    "planar": "weldplan.commands.planar",
 }
 
 

@@ -17,6 +17,7 @@ BENCHES: dict[str, str] = {
     "sequence": "weldplan.bench.sequence",
     "route": "weldplan.bench.route",
     "scale": "weldplan.bench.scale",
+    "planar": "weldplan.bench.planar",
 }
 
 

@@ -1,0 +1,109 @@
+"""Exact planar baselines against the Moving AI optimal lengths and across map formats."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tests.conftest import require_shared
+from weldplan.errors import PlanningError
+from weldplan.geometry.obstacles2d import Obstacles2D, grid_to_rectangles
+from weldplan.planar.exact import (
+    ExactPath,
+    MeshFreeSpace,
+    VisibilityGraph,
+    astar_grid,
+    octile,
+    read_movingai_map,
+    read_scen,
+    visibility_shortest_path,
+)
+
+
+def _close_to_scen(length: float, ref: float) -> bool:
+    """Scenario files print lengths with 6 significant digits (``508.764`` for
+    508.76450...): within 1e-4, or within one unit of the last printed digit."""
+    resolution = 10.0 ** (np.floor(np.log10(max(ref, 1e-12))) - 5)
+    return abs(length - ref) <= max(1e-4, resolution)
+
+
+def test_astar_on_small_grids_exact() -> None:
+    free = np.ones((5, 5), dtype=bool)
+    assert astar_grid(free, (0, 0), (4, 4)).length == pytest.approx(4 * np.sqrt(2))
+    assert astar_grid(free, (0, 0), (4, 1)).length == pytest.approx(octile(4, 1))
+    # no corner cutting: a wall with a diagonal gap is closed
+    wall = np.ones((3, 3), dtype=bool)
+    wall[1, 0] = wall[0, 1] = False
+    with pytest.raises(PlanningError):
+        astar_grid(wall, (0, 0), (2, 2))
+    wall[0, 1] = True  # now around through (0, 1) -> (1, 2)? costs 1 + sqrt2 + 1
+    r = astar_grid(wall, (0, 0), (2, 2))
+    assert r.length == pytest.approx(2 + np.sqrt(2))
+    assert ExactPath.from_json(r.to_json()) == r
+
+
+@pytest.mark.parametrize("name", ["arena", "random512-10-0", "maze512-32-9"])
+def test_astar_matches_movingai_lengths_subset(name: str) -> None:
+    folder = require_shared("movingai")
+    free = read_movingai_map(folder / f"{name}.map")
+    sc = read_scen(folder / f"{name}.map.scen")
+    # arena: every query; the 512 maps: the short buckets (the long ones are in the slow test
+    # and in `weldplan bench planar`)
+    idx = np.arange(len(sc.length)) if name == "arena" else np.nonzero(sc.bucket <= 3)[0][::4]
+    assert len(idx) > 5
+    for k in idx:
+        r = astar_grid(free, sc.start[k], sc.goal[k])
+        assert _close_to_scen(r.length, sc.length[k]), (k, r.length, sc.length[k])
+
+
+@pytest.mark.slow
+def test_astar_matches_movingai_lengths_sampled_long() -> None:
+    folder = require_shared("movingai")
+    free = read_movingai_map(folder / "random512-10-0.map")
+    sc = read_scen(folder / "random512-10-0.map.scen")
+    for k in range(0, len(sc.length), 97):
+        r = astar_grid(free, sc.start[k], sc.goal[k])
+        assert _close_to_scen(r.length, sc.length[k])
+
+
+@pytest.mark.slow
+def test_visibility_graph_on_mesh_equals_grid_and_bounds_octile() -> None:
+    """The arena as a Polyanya mesh and as a Moving AI grid: two descriptions of one free
+    space, two visibility graphs, the same any-angle lengths; never longer than the octile
+    optimum, and a path never squeezes between cells that touch at a corner."""
+    mesh = MeshFreeSpace.read(require_shared("meshmaps", "arena.mesh"))
+    free = read_movingai_map(require_shared("movingai", "arena.map"))
+    sc = read_scen(require_shared("meshmaps", "arena.mesh.scen"))
+    grid_space = Obstacles2D(rectangles=grid_to_rectangles(~free))
+    vm = VisibilityGraph(mesh)
+    vg = VisibilityGraph(grid_space)
+    Lm, Lg = [], []
+    for k in range(len(sc.length)):
+        s, g = sc.start[k] + 0.5, sc.goal[k] + 0.5
+        pm = vm.shortest_path(s, g)
+        Lm.append(pm.length)
+        Lg.append(vg.shortest_path(s, g).length)
+        P = pm.points_array
+        assert grid_space.segments_free(P[:-1], P[1:]).all()
+    Lm, Lg = np.array(Lm), np.array(Lg)
+    np.testing.assert_allclose(Lm, Lg, atol=1e-9)
+    assert np.all(Lm <= sc.length + 1e-4)
+    assert np.mean(Lm < sc.length - 1e-3) > 0.5  # any-angle is usually strictly shorter
+
+
+def test_visibility_graph_exact_on_simple_maps() -> None:
+    square = Obstacles2D(rectangles=[[1, -1, 3, 1]])
+    r = visibility_shortest_path(square, [0, 0], [4, 0])
+    assert r.length == pytest.approx(2 * np.sqrt(2) + 2)
+    # a circle: true optimum 2 sqrt(d^2 - r^2) + r * (pi - 2 acos(r / d))
+    circ = Obstacles2D(circles=[[0.0, 0.0, 1.0]])
+    d = 3.0
+    exact = 2 * np.sqrt(d * d - 1) + (np.pi - 2 * np.arccos(1 / d))
+    r = visibility_shortest_path(circ, [-d, 0], [d, 0])
+    assert exact <= r.length <= exact * (1 + 1e-3)
+    P = r.points_array
+    assert circ.segments_free(P[:-1], P[1:]).all()
+    # squeezing between two squares that touch at a corner is not allowed
+    pinch = Obstacles2D(rectangles=[[0, 0, 1, 1], [1, 1, 2, 2]])
+    r = visibility_shortest_path(pinch, [0.2, 1.8], [1.8, 0.2])
+    assert r.length > np.hypot(1.6, 1.6) + 0.1

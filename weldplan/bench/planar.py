@@ -1,0 +1,469 @@
+"""``weldplan bench planar``: the 2D papers' comparison tables, with the exact optimum beside.
+
+Protocols (``--protocols``, default all):
+
+``000``
+    Paper 000 Table 3: GWO, WOA, PSO, SMA, LRSMA on the three circle maps, population 30,
+    30 iterations, spline encoding; minimum, mean and SD of length, mean and maximum time,
+    success rate, gap of the mean to the exact optimum. The paper ran 100 runs; ``--runs``.
+``003``
+    Paper 003 Tables 1-4: ParaPA, PSO in the original frame, PSO (w = 0.7), CPSO, WPSO, MPSO,
+    ACO, ABC, MABC on the seven 20 x 20 maps, the two 50 x 50 maps and the 100 x 100 building,
+    NP = 50, 200 iterations, segment encoding; mean, SD, worst, optimum of length (over the
+    successful runs), success rate, diversity DI (eq. 18) of the final population. The paper
+    ran 1000 runs. ACO is reported only when registered (it is a graph algorithm, not a
+    continuous optimiser).
+``001``
+    Paper 001 Table 1 style: AFSA and HAFSA on the 20 x 20 and 40 x 40 grids, 50 fish,
+    100 iterations: longest, best, average length and mean time, beside the A* optimum.
+``exact``
+    The exact planners against third-party data: A* on every Moving AI query (within
+    ``--exact-seconds`` per map), and the visibility graph on the Polyanya arena mesh against
+    the same map as a grid.
+
+Runs are spread over ``--jobs`` processes. Writes ``planar.md`` and PNGs into ``--out``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import os
+import time
+from collections.abc import Iterable
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import numpy as np
+
+log = logging.getLogger(__name__)
+
+HELP = "2D planning tables of papers 000, 003 and 001 (and the exact planners' validation)"
+
+P000_ALGOS = ["gwo", "woa", "pso", "sma", "lrsma"]
+P000_MAPS = ["circles-1", "circles-2", "circles-3"]
+#: (label, registry name, frame) for paper 003's columns
+P003_ALGOS = [
+    ("ParaPA", "parapa", "rotated"),
+    ("PSO(ori)", "pso-w07", "original"),
+    ("PSO", "pso-w07", "rotated"),
+    ("CPSO", "cpso", "rotated"),
+    ("WPSO", "wpso", "rotated"),
+    ("MPSO", "mpso", "rotated"),
+    ("ACO", "aco", "rotated"),
+    ("ABC", "abc", "rotated"),
+    ("MABC", "mabc", "rotated"),
+]
+P003_MAPS = [f"map20-{k}" for k in range(1, 8)] + ["map50-1", "map50-2", "building100"]
+P001_ALGOS = ["afsa", "hafsa"]
+P001_MAPS = ["grid20", "grid40"]
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--protocols", default="000,003,001,exact", help="comma-separated")
+    parser.add_argument("--runs", type=int, default=20, help="runs per algorithm and map (000)")
+    parser.add_argument("--runs-003", type=int, default=10, help="runs per cell for 003")
+    parser.add_argument("--runs-001", type=int, default=20, help="runs per cell for 001")
+    parser.add_argument("--iters-003", type=int, default=200, help="iterations for 003")
+    parser.add_argument("--maps-003", default=",".join(P003_MAPS), help="maps for 003")
+    parser.add_argument("--jobs", type=int, default=1, help="worker processes")
+    parser.add_argument(
+        "--exact-seconds", type=float, default=120.0, help="time for A* per Moving AI map"
+    )
+    parser.add_argument("--data", default=None, help="folder of the shared data (movingai, ...)")
+
+
+# ----------------------------------------------------------------------------- running
+def _one(task: tuple) -> dict:
+    """One run in a worker: (scenario, algorithm, encoding, frame, pop, iters, seed)."""
+    from weldplan.planar.encodings import make_problem
+    from weldplan.planar.scenarios import load_scenario
+    from weldplan.planar.solve import solve
+
+    name, algo, enc, frame, pop, iters, seed = task
+    sc = load_scenario(name)
+    params = {"frame": frame} if enc == "segments" else {}
+    prob = make_problem(sc, enc, **params)
+    r = solve(
+        sc,
+        algo,
+        encoding=enc,
+        pop_size=pop,
+        max_iter=iters,
+        rng=seed,
+        problem=prob,
+        with_optimum=False,
+    )
+    return {
+        "map": name,
+        "algo": algo,
+        "frame": frame,
+        "seed": seed,
+        "length": r.length,
+        "success": r.success,
+        "seconds": r.seconds,
+        "history": list(r.history),
+        "diversity": r.diversity,
+        "points": r.points,
+        "smoothness": r.smoothness,
+    }
+
+
+def _run_all(tasks: list[tuple], jobs: int) -> list[dict]:
+    if jobs <= 1:
+        return [_one(t) for t in tasks]
+    with ProcessPoolExecutor(max_workers=jobs) as ex:
+        return list(ex.map(_one, tasks, chunksize=1))
+
+
+def _stats(rows: Iterable[dict]) -> dict:
+    rows = list(rows)
+    L = np.array([r["length"] for r in rows])
+    ok = np.array([r["success"] for r in rows])
+    T = np.array([r["seconds"] for r in rows])
+    Lok = L[ok] if ok.any() else np.array([np.nan])
+    return {
+        "n": len(rows),
+        "min": float(np.min(Lok)),
+        "mean": float(np.mean(Lok)),
+        "sd": float(np.std(Lok)),
+        "worst": float(np.max(Lok)),
+        "succ": float(np.mean(ok)),
+        "t_mean": float(np.mean(T)),
+        "t_max": float(np.max(T)),
+        "mean_all": float(np.mean(L)),
+        "di": _nanmean([r["diversity"] for r in rows]),
+    }
+
+
+def _nanmean(values: list[float]) -> float:
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    return float(np.mean(v)) if len(v) else float("nan")
+
+
+def _fmt(v: float, nd: int = 3) -> str:
+    return "-" if v is None or not np.isfinite(v) else f"{v:.{nd}f}"
+
+
+# ---------------------------------------------------------------------------- protocols
+def protocol_000(args: argparse.Namespace, out: Path) -> list[str]:
+    from weldplan.planar.scenarios import load_scenario
+    from weldplan.planar.solve import exact_optimum
+    from weldplan.viz.planar import plot_convergence, plot_paths
+
+    tasks = [
+        (m, a, "spline", "rotated", 30, 30, s)
+        for m in P000_MAPS
+        for a in P000_ALGOS
+        for s in range(args.runs)
+    ]
+    t0 = time.perf_counter()
+    rows = _run_all(tasks, args.jobs)
+    lines = [
+        "## Paper 000 Table 3: spline paths on the circle maps",
+        "",
+        f"Population 30, 30 iterations, m = 3 nodes, {args.runs} runs per cell (paper: 100). "
+        "Lengths over successful runs; gap = mean / exact - 1; time per run.",
+        "",
+        "| map | exact | algorithm | min | mean | SD | gap of mean | success | mean time s "
+        "| max time s |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for m in P000_MAPS:
+        sc = load_scenario(m)
+        ex = exact_optimum(sc, "spline")
+        best_paths, hist = {}, {}
+        for a in P000_ALGOS:
+            rr = [r for r in rows if r["map"] == m and r["algo"] == a]
+            st = _stats(rr)
+            lines.append(
+                f"| {m} | {ex.length:.3f} | {a.upper()} | {_fmt(st['min'])} | {_fmt(st['mean'])} "
+                f"| {_fmt(st['sd'])} | {100 * (st['mean'] / ex.length - 1):+.2f} % | "
+                f"{st['succ']:.2f} | {st['t_mean']:.3f} | {st['t_max']:.3f} |"
+            )
+            ok = [r for r in rr if r["success"]] or rr
+            b = min(ok, key=lambda r: r["length"])
+            best_paths[f"{a.upper()} {b['length']:.3f}"] = b["points"]
+            hist[a.upper()] = np.mean([r["history"] for r in rr], axis=0)
+        plot_paths(
+            sc,
+            best_paths,
+            out / f"p000-{m}-paths.png",
+            exact=ex.points_array,
+            title=f"{m}: best paths (exact {ex.length:.3f})",
+        )
+        plot_convergence(
+            hist,
+            out / f"p000-{m}-convergence.png",
+            title=f"{m}: mean best fitness (eq. 10)",
+            optimum=ex.length,
+        )
+    lines += [
+        "",
+        f"Wall time of the protocol: {time.perf_counter() - t0:.1f} s with "
+        f"{args.jobs} processes. PNGs: `p000-<map>-paths.png`, "
+        "`p000-<map>-convergence.png`.",
+        "",
+    ]
+    return lines
+
+
+def protocol_003(args: argparse.Namespace, out: Path) -> list[str]:
+    from weldplan.optim.registry import ALGORITHMS
+    from weldplan.planar.scenarios import load_scenario
+    from weldplan.planar.solve import exact_optimum
+    from weldplan.viz.planar import plot_convergence, plot_paths
+
+    algos = [(lab, a, f) for lab, a, f in P003_ALGOS if a in ALGORITHMS]
+    missing = [lab for lab, a, _ in P003_ALGOS if a not in ALGORITHMS]
+    maps = [m for m in args.maps_003.split(",") if m]
+    tasks = [
+        (m, a, "segments", f, 50, args.iters_003, s)
+        for m in maps
+        for _, a, f in algos
+        for s in range(args.runs_003)
+    ]
+    t0 = time.perf_counter()
+    rows = _run_all(tasks, args.jobs)
+    labels = [lab for lab, _, _ in algos]
+    lines = [
+        "## Paper 003 Tables 1-4: rotated-frame segments",
+        "",
+        f"NP = 50, {args.iters_003} iterations, {args.runs_003} runs per cell (paper: 1000). "
+        "Mean, SD, worst and optimum over successful runs; success rate; DI (eq. 18) of the "
+        "final population (mean over runs; '-' when the optimiser keeps no single population)."
+        + (f" Not run (not registered): {', '.join(missing)}." if missing else ""),
+        "",
+        "| map | exact | metric | " + " | ".join(labels) + " |",
+        "|---|---|---|" + "---|" * len(labels),
+    ]
+    for m in maps:
+        sc = load_scenario(m)
+        ex = exact_optimum(sc, "segments")
+        stats = {}
+        best_paths, hist = {}, {}
+        for lab, a, f in algos:
+            rr = [r for r in rows if r["map"] == m and r["algo"] == a and r["frame"] == f]
+            stats[lab] = _stats(rr)
+            ok = [r for r in rr if r["success"]]
+            if ok:
+                b = min(ok, key=lambda r: r["length"])
+                best_paths[f"{lab} {b['length']:.2f}"] = b["points"]
+            hist[lab] = np.mean([r["history"] for r in rr], axis=0)
+        for key, label in (
+            ("mean", "Mean"),
+            ("sd", "Std"),
+            ("worst", "Worst"),
+            ("min", "Optima"),
+            ("succ", "Success"),
+            ("di", "DI"),
+            ("t_mean", "Time s"),
+        ):
+            cells = " | ".join(_fmt(stats[lab][key]) for lab in labels)
+            lines.append(f"| {m} | {ex.length:.3f} | {label} | {cells} |")
+        plot_paths(
+            sc,
+            best_paths,
+            out / f"p003-{m}-paths.png",
+            exact=ex.points_array,
+            title=f"{m}: best paths (exact {ex.length:.3f})",
+        )
+        hl = {k: np.minimum(v, 4 * ex.length) for k, v in hist.items()}
+        plot_convergence(
+            hl,
+            out / f"p003-{m}-convergence.png",
+            optimum=ex.length,
+            title=f"{m}: mean best fitness (infeasible values capped)",
+        )
+    lines += [
+        "",
+        f"Wall time of the protocol: {time.perf_counter() - t0:.1f} s with {args.jobs} processes.",
+        "",
+    ]
+    return lines
+
+
+def protocol_001(args: argparse.Namespace, out: Path) -> list[str]:
+    from weldplan.planar.scenarios import load_scenario
+    from weldplan.planar.solve import exact_optimum
+    from weldplan.viz.planar import plot_convergence, plot_paths
+
+    tasks = [
+        (m, a, "grid", "rotated", 50, 100, s)
+        for m in P001_MAPS
+        for a in P001_ALGOS
+        for s in range(args.runs_001)
+    ]
+    t0 = time.perf_counter()
+    rows = _run_all(tasks, args.jobs)
+    lines = [
+        "## Paper 001 Table 1 style: fish swarms on occupancy grids",
+        "",
+        f"50 fish, 100 iterations, 4 waypoints, {args.runs_001} runs; lengths in cells over "
+        "successful runs; A* = the 8-connected optimum without corner cutting.",
+        "",
+        "| grid | A* | algorithm | longest | best | average | success | mean time s |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for m in P001_MAPS:
+        sc = load_scenario(m)
+        ex = exact_optimum(sc, "grid")
+        best_paths, hist = {}, {}
+        for a in P001_ALGOS:
+            rr = [r for r in rows if r["map"] == m and r["algo"] == a]
+            st = _stats(rr)
+            lines.append(
+                f"| {m} | {ex.length:.3f} | {a.upper()} | {_fmt(st['worst'])} | "
+                f"{_fmt(st['min'])} | {_fmt(st['mean'])} | {st['succ']:.2f} | "
+                f"{st['t_mean']:.3f} |"
+            )
+            ok = [r for r in rr if r["success"]] or rr
+            b = min(ok, key=lambda r: r["length"])
+            best_paths[f"{a.upper()} {b['length']:.3f}"] = b["points"]
+            hist[a.upper()] = np.mean([r["history"] for r in rr], axis=0)
+        plot_paths(
+            sc,
+            best_paths,
+            out / f"p001-{m}-paths.png",
+            exact=ex.points_array,
+            title=f"{m}: best paths (A* {ex.length:.3f})",
+        )
+        plot_convergence(
+            {k: np.minimum(v, 3 * ex.length) for k, v in hist.items()},
+            out / f"p001-{m}-convergence.png",
+            optimum=ex.length,
+            title=f"{m}: mean best fitness",
+        )
+    lines += ["", f"Wall time of the protocol: {time.perf_counter() - t0:.1f} s.", ""]
+    return lines
+
+
+def _astar_map(task: tuple) -> dict:
+    from weldplan.planar.exact import astar_grid, read_movingai_map, read_scen
+
+    folder, name, seconds = task
+    free = read_movingai_map(Path(folder) / f"{name}.map")
+    sc = read_scen(Path(folder) / f"{name}.map.scen")
+    t0 = time.perf_counter()
+    worst_abs, worst_res, done = 0.0, 0.0, 0
+    for k in range(len(sc.length)):
+        if time.perf_counter() - t0 > seconds:
+            break
+        r = astar_grid(free, sc.start[k], sc.goal[k])
+        ref = sc.length[k]
+        err = abs(r.length - ref)
+        res = 10.0 ** (np.floor(np.log10(max(ref, 1e-12))) - 5)
+        worst_abs = max(worst_abs, err)
+        worst_res = max(worst_res, err / max(1e-4, res))
+        done += 1
+    return {
+        "map": name,
+        "queries": len(sc.length),
+        "done": done,
+        "worst_abs": worst_abs,
+        "worst_units": worst_res,
+        "seconds": time.perf_counter() - t0,
+    }
+
+
+def protocol_exact(args: argparse.Namespace, out: Path) -> list[str]:
+    from weldplan.geometry.obstacles2d import Obstacles2D, grid_to_rectangles
+    from weldplan.planar.exact import MeshFreeSpace, VisibilityGraph, read_movingai_map, read_scen
+
+    data = Path(args.data) if args.data else Path(__file__).resolve().parents[3] / "shared" / "data"
+    lines = ["## Exact planners against third-party data", ""]
+    if not (data / "movingai").exists():
+        return lines + [f"Shared data not found at {data}; skipped.", ""]
+    names = ["arena", "random512-10-0", "maze512-32-9"]
+    tasks = [(str(data / "movingai"), n, args.exact_seconds) for n in names]
+    if args.jobs > 1:
+        with ProcessPoolExecutor(max_workers=min(args.jobs, 3)) as ex:
+            res = list(ex.map(_astar_map, tasks))
+    else:
+        res = [_astar_map(t) for t in tasks]
+    lines += [
+        "A* (8-connected, octile, no corner cutting) against the optimal lengths of the "
+        "Moving AI scenario files (printed to 6 significant digits, so 'error in units' is "
+        "the error over max(1e-4, one unit of the last printed digit); <= 1 means a match).",
+        "",
+        "| map | queries | checked | max abs error | max error in units | seconds |",
+        "|---|---|---|---|---|---|",
+    ]
+    for r in res:
+        lines.append(
+            f"| {r['map']} | {r['queries']} | {r['done']} | {r['worst_abs']:.2e} | "
+            f"{r['worst_units']:.2f} | {r['seconds']:.1f} |"
+        )
+    mesh_file = data / "meshmaps" / "arena.mesh"
+    if mesh_file.exists():
+        t0 = time.perf_counter()
+        mesh = MeshFreeSpace.read(mesh_file)
+        free = read_movingai_map(data / "movingai" / "arena.map")
+        sc = read_scen(data / "meshmaps" / "arena.mesh.scen")
+        vm = VisibilityGraph(mesh)
+        vg = VisibilityGraph(Obstacles2D(rectangles=grid_to_rectangles(~free)))
+        Lm = np.array(
+            [
+                vm.shortest_path(s + 0.5, g + 0.5).length
+                for s, g in zip(sc.start, sc.goal, strict=True)
+            ]
+        )
+        Lg = np.array(
+            [
+                vg.shortest_path(s + 0.5, g + 0.5).length
+                for s, g in zip(sc.start, sc.goal, strict=True)
+            ]
+        )
+        ratio = sc.length / Lm
+        lines += [
+            "",
+            "Visibility graph on the Polyanya arena mesh (v2) and on the same map as a Moving "
+            "AI grid (rectangles), start and goal at cell centres. The `.scen` lengths shipped "
+            "with the mesh are the octile grid lengths (identical to the Moving AI file), not "
+            "any-angle optima, so they bound the any-angle length from above; the two "
+            "independent free-space descriptions must agree.",
+            "",
+            f"- queries: {len(Lm)}; mesh vs grid visibility graph: max |difference| "
+            f"{np.max(np.abs(Lm - Lg)):.2e}, within 1e-3 for "
+            f"{100 * np.mean(np.abs(Lm - Lg) <= 1e-3):.1f} %",
+            f"- any-angle <= octile (+1e-4) for {100 * np.mean(Lm <= sc.length + 1e-4):.1f} %; "
+            f"octile / any-angle ratio min {ratio.min():.4f}, mean {ratio.mean():.4f}, "
+            f"max {ratio.max():.4f}",
+            f"- mesh: {len(mesh.vertices_xy)} vertices, {len(vm.nodes)} turning points; "
+            f"{time.perf_counter() - t0:.1f} s in all",
+            "- aurora.mesh (34,707 vertices) is not run: this visibility graph is quadratic in "
+            "the turning points.",
+            "",
+        ]
+    return lines
+
+
+def run(args: argparse.Namespace) -> int:
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    load = os.getloadavg() if hasattr(os, "getloadavg") else (float("nan"),) * 3
+    head = [
+        "# weldplan bench planar",
+        "",
+        f"Machine: {os.cpu_count()} CPUs, load average at start {load[0]:.2f} {load[1]:.2f} "
+        f"{load[2]:.2f}; {args.jobs} worker processes.",
+        "",
+    ]
+    protocols = {
+        "000": protocol_000,
+        "003": protocol_003,
+        "001": protocol_001,
+        "exact": protocol_exact,
+    }
+    body: list[str] = []
+    for p in [p.strip() for p in args.protocols.split(",") if p.strip()]:
+        if p not in protocols:
+            from weldplan.errors import WeldplanError
+
+            raise WeldplanError(f"unknown protocol {p!r}; choose from {', '.join(protocols)}")
+        log.info("protocol %s", p)
+        body += protocols[p](args, out)
+        (out / "planar.md").write_text("\n".join(head + body) + "\n")
+    print(f"wrote {out / 'planar.md'}")
+    return 0

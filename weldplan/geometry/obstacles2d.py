@@ -1,0 +1,564 @@
+"""Planar obstacles and the vectorised queries every 2D planner needs.
+
+One :class:`Obstacles2D` holds a map's obstacles in three array families, each queried without
+Python loops over points or segments:
+
+* circles: centres ``(C, 2)`` and radii ``(C,)``;
+* axis-aligned rectangles ``(R, 4)`` as ``(xmin, ymin, xmax, ymax)`` (occupancy grids become
+  rectangles through :func:`grid_to_rectangles`, one rectangle per run of occupied cells in a row);
+* general simple polygons (convex or concave), a list of ``(k, 2)`` vertex arrays.
+
+Queries take points ``(..., 2)`` or segments ``A, B (..., 2)`` of any leading shape, so one call
+tests ``P paths x S segments`` against all ``O`` obstacles at once:
+
+* :meth:`Obstacles2D.signed_distance`: per-obstacle signed distance ``(..., O)`` (negative inside);
+* :meth:`Obstacles2D.clearance`: distance to the nearest obstacle (negative = penetration);
+* :meth:`Obstacles2D.inside_length`: length of each segment inside obstacles (summed over
+  obstacles, so a stretch inside two overlapping obstacles counts twice);
+* :meth:`Obstacles2D.segments_hit`: whether a segment enters the interior of an obstacle (grazing
+  a boundary or a vertex is not a collision: any-angle shortest paths touch vertices), or passes
+  through a pinch point, a point where two obstacles touch (a path may not squeeze through).
+
+Units are whatever the scenario uses (the papers' maps are unitless grid units).
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+log = logging.getLogger(__name__)
+
+FloatArray = NDArray[np.float64]
+
+#: segments inside obstacles for less than this length (relative to the map size) are free:
+#: it absorbs floating-point noise where a path grazes a boundary.
+GRAZE_TOL = 1e-9
+
+
+def grid_to_rectangles(
+    occupied: ArrayLike, origin: Sequence[float] = (0.0, 0.0), cell: float = 1.0
+) -> FloatArray:
+    """Rectangles covering the occupied cells of a 2D occupancy grid.
+
+    Parameters
+    ----------
+    occupied
+        ``(nx, ny) bool``; ``occupied[i, j]`` is the cell ``[x0 + i*cell, x0 + (i+1)*cell] x
+        [y0 + j*cell, y0 + (j+1)*cell]``.
+    origin
+        ``(x0, y0)``, the lower-left corner of cell ``(0, 0)``.
+    cell
+        Cell side length.
+
+    Returns
+    -------
+    ``(R, 4) float``: one rectangle per maximal run of occupied cells along x in each row y.
+    """
+    occ = np.asarray(occupied, dtype=bool)
+    if occ.ndim != 2:
+        raise ValueError(f"occupancy grid must be 2D, got shape {occ.shape}")
+    nx, ny = occ.shape
+    pad = np.zeros((nx + 2, ny), dtype=np.int8)
+    pad[1:-1] = occ
+    d = np.diff(pad, axis=0)  # (nx + 1, ny): +1 at run start, -1 after run end
+    rows, starts_i = np.nonzero(d.T == 1)  # sorted by row j, then by i
+    _, ends_i = np.nonzero(d.T == -1)
+    x0, y0 = float(origin[0]), float(origin[1])
+    rect = np.empty((rows.size, 4))
+    rect[:, 0] = x0 + starts_i * cell
+    rect[:, 1] = y0 + rows * cell
+    rect[:, 2] = x0 + ends_i * cell
+    rect[:, 3] = y0 + (rows + 1) * cell
+    return rect
+
+
+def polygon_is_simple(vertices: ArrayLike) -> bool:
+    """Whether a closed polygon ``(k, 2)`` has no self-intersections (and k >= 3, non-zero area).
+
+    Non-adjacent edges may not touch; adjacent edges may only share their common vertex.
+    """
+    v = np.asarray(vertices, dtype=np.float64)
+    k = v.shape[0]
+    if k < 3 or abs(polygon_area(v)) <= 0.0:
+        return False
+    if np.any(np.all(v == np.roll(v, -1, axis=0), axis=1)):
+        return False
+    a = v
+    b = np.roll(v, -1, axis=0)
+    i, j = np.triu_indices(k, 1)
+    adjacent = (j == i + 1) | ((i == 0) & (j == k - 1))
+    touch = _segments_touch(a[i], b[i], a[j], b[j])
+    if np.any(touch & ~adjacent):
+        return False
+    # adjacent edges: they share one vertex; they overlap if collinear and folding back
+    ia, ja = i[adjacent], j[adjacent]
+    d1 = b[ia] - a[ia]
+    d2 = b[ja] - a[ja]
+    cross = d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]
+    dot = np.sum(d1 * d2, axis=1)
+    scale = np.linalg.norm(d1, axis=1) * np.linalg.norm(d2, axis=1)
+    folded = (np.abs(cross) <= 1e-12 * scale) & (dot < 0)
+    return not bool(np.any(folded))
+
+
+def polygon_area(vertices: ArrayLike) -> float:
+    """Signed area of a closed polygon ``(k, 2)`` (positive when counter-clockwise)."""
+    v = np.asarray(vertices, dtype=np.float64)
+    x, y = v[:, 0], v[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+
+
+def _cross2(u: FloatArray, v: FloatArray) -> FloatArray:
+    return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
+
+
+def _segments_touch(a: FloatArray, b: FloatArray, c: FloatArray, d: FloatArray) -> NDArray:
+    """Closed segments ``ab`` and ``cd`` (broadcasting ``(..., 2)``) share at least one point."""
+    o1 = np.sign(_cross2(b - a, c - a))
+    o2 = np.sign(_cross2(b - a, d - a))
+    o3 = np.sign(_cross2(d - c, a - c))
+    o4 = np.sign(_cross2(d - c, b - c))
+    proper = (o1 * o2 < 0) & (o3 * o4 < 0)
+
+    def on(p: FloatArray, q: FloatArray, r: FloatArray, o: FloatArray) -> NDArray:
+        return (
+            (o == 0)
+            & (np.minimum(p[..., 0], q[..., 0]) <= r[..., 0])
+            & (r[..., 0] <= np.maximum(p[..., 0], q[..., 0]))
+            & (np.minimum(p[..., 1], q[..., 1]) <= r[..., 1])
+            & (r[..., 1] <= np.maximum(p[..., 1], q[..., 1]))
+        )
+
+    return proper | on(a, b, c, o1) | on(a, b, d, o2) | on(c, d, a, o3) | on(c, d, b, o4)
+
+
+def _even_odd(P: FloatArray, a: FloatArray, b: FloatArray) -> NDArray[np.bool_]:
+    """Even-odd point-in-polygon of points ``(..., 2)`` for one polygon's edges ``a -> b``."""
+    py = P[..., None, 1]
+    cond = (a[:, 1] > py) != (b[:, 1] > py)
+    dy = b[:, 1] - a[:, 1]
+    xint = a[:, 0] + (py - a[:, 1]) * (b[:, 0] - a[:, 0]) / np.where(dy == 0, 1.0, dy)
+    return np.sum(cond & (P[..., None, 0] < xint), axis=-1) % 2 == 1
+
+
+def point_segment_distance(P: FloatArray, A: FloatArray, B: FloatArray) -> FloatArray:
+    """Distance from points to segments, broadcasting ``P, A, B (..., d)`` -> ``(...)``."""
+    ab = B - A
+    denom = np.sum(ab * ab, axis=-1)
+    t = np.sum((P - A) * ab, axis=-1) / np.where(denom > 0, denom, 1.0)
+    t = np.clip(t, 0.0, 1.0)
+    closest = A + t[..., None] * ab
+    return np.linalg.norm(P - closest, axis=-1)
+
+
+@dataclass(frozen=True, eq=False)
+class Obstacles2D:
+    """The obstacles of a planar map (see the module docstring).
+
+    Parameters
+    ----------
+    circles
+        ``(C, 3) float``: ``x, y, radius``.
+    rectangles
+        ``(R, 4) float``: ``xmin, ymin, xmax, ymax``.
+    polygons
+        Simple polygons, each ``(k, 2) float`` (either orientation; not closed explicitly).
+    """
+
+    circles: FloatArray = field(default_factory=lambda: np.zeros((0, 3)))
+    rectangles: FloatArray = field(default_factory=lambda: np.zeros((0, 4)))
+    polygons: tuple[FloatArray, ...] = ()
+
+    def __post_init__(self) -> None:
+        c = np.asarray(self.circles, dtype=np.float64).reshape(-1, 3)
+        r = np.asarray(self.rectangles, dtype=np.float64).reshape(-1, 4)
+        polys = tuple(np.asarray(p, dtype=np.float64).reshape(-1, 2) for p in self.polygons)
+        if np.any(c[:, 2] <= 0):
+            raise ValueError("circle radii must be positive")
+        if np.any(r[:, 2] <= r[:, 0]) or np.any(r[:, 3] <= r[:, 1]):
+            raise ValueError("rectangles need xmin < xmax and ymin < ymax")
+        for arr in (c, r, *polys):
+            arr.setflags(write=False)
+        object.__setattr__(self, "circles", c)
+        object.__setattr__(self, "rectangles", r)
+        object.__setattr__(self, "polygons", polys)
+        # all polygon edges stacked, with the polygon each belongs to
+        if polys:
+            a = np.concatenate(polys)
+            b = np.concatenate([np.roll(p, -1, axis=0) for p in polys])
+            owner = np.concatenate([np.full(len(p), i) for i, p in enumerate(polys)])
+            offsets = np.cumsum([0] + [len(p) for p in polys])[:-1]
+        else:
+            a = b = np.zeros((0, 2))
+            owner = np.zeros(0, dtype=np.int64)
+            offsets = np.zeros(0, dtype=np.int64)
+        object.__setattr__(self, "_edge_a", a)
+        object.__setattr__(self, "_edge_b", b)
+        object.__setattr__(self, "_edge_owner", owner)
+        object.__setattr__(self, "_edge_offsets", offsets)
+        object.__setattr__(self, "_pinch", None)
+
+    # ------------------------------------------------------------------ basics
+    @property
+    def n_obstacles(self) -> int:
+        return len(self.circles) + len(self.rectangles) + len(self.polygons)
+
+    @property
+    def scale(self) -> float:
+        """A length typical of the map (the diagonal of the obstacles' bounding box, or 1)."""
+        lo, hi = self.bounding_box()
+        d = float(np.hypot(*(hi - lo)))
+        return d if d > 0 else 1.0
+
+    def bounding_box(self) -> tuple[FloatArray, FloatArray]:
+        """``(lo (2,), hi (2,))`` of all obstacles (zeros when there are none)."""
+        los, his = [], []
+        if len(self.circles):
+            los.append(self.circles[:, :2] - self.circles[:, 2:3])
+            his.append(self.circles[:, :2] + self.circles[:, 2:3])
+        if len(self.rectangles):
+            los.append(self.rectangles[:, :2])
+            his.append(self.rectangles[:, 2:])
+        if self.polygons:
+            los.append(self._edge_a)
+            his.append(self._edge_a)
+        if not los:
+            return np.zeros(2), np.zeros(2)
+        return np.min(np.concatenate(los), axis=0), np.max(np.concatenate(his), axis=0)
+
+    def as_polygons(self, circle_sides: int = 64, circumscribed: bool = True) -> Obstacles2D:
+        """The same map with circles replaced by regular polygons.
+
+        ``circumscribed=True`` gives polygons that contain their circle (shortest paths around
+        them are upper bounds of the true ones); ``False`` inscribed polygons (lower bounds).
+        A circle of radius r becomes a polygon within ``r (1/cos(pi/n) - 1)`` of it.
+        """
+        if not len(self.circles):
+            return self
+        n = int(circle_sides)
+        ang = (np.arange(n) + 0.5) * 2 * np.pi / n
+        rad = 1.0 / np.cos(np.pi / n) if circumscribed else 1.0
+        unit = np.stack([np.cos(ang), np.sin(ang)], axis=1) * rad
+        polys = [c[:2] + c[2] * unit for c in self.circles]
+        return Obstacles2D(rectangles=self.rectangles, polygons=(*self.polygons, *polys))
+
+    # ------------------------------------------------------------------ points
+    def signed_distance(self, points: ArrayLike) -> FloatArray:
+        """Signed distance from points ``(..., 2)`` to each obstacle: ``(..., O)``.
+
+        Obstacles are ordered circles, rectangles, polygons. Negative inside.
+        """
+        P = np.asarray(points, dtype=np.float64)
+        lead = P.shape[:-1]
+        parts = []
+        if len(self.circles):
+            c = self.circles
+            parts.append(np.linalg.norm(P[..., None, :] - c[:, :2], axis=-1) - c[:, 2])
+        if len(self.rectangles):
+            r = self.rectangles
+            ctr = 0.5 * (r[:, :2] + r[:, 2:])
+            half = 0.5 * (r[:, 2:] - r[:, :2])
+            q = np.abs(P[..., None, :] - ctr) - half
+            outside = np.linalg.norm(np.maximum(q, 0.0), axis=-1)
+            inside = np.minimum(np.max(q, axis=-1), 0.0)
+            parts.append(outside + inside)
+        if self.polygons:
+            parts.append(self._polygon_signed_distance(P))
+        if not parts:
+            return np.zeros((*lead, 0))
+        return np.concatenate(parts, axis=-1)
+
+    def _polygon_signed_distance(self, P: FloatArray) -> FloatArray:
+        a, b = self._edge_a, self._edge_b
+        dist = point_segment_distance(P[..., None, :], a, b)  # (..., E)
+        dmin = np.minimum.reduceat(dist, self._edge_offsets, axis=-1)
+        return np.where(self._polygon_contains(P), -dmin, dmin)
+
+    def _polygon_contains(self, P: FloatArray) -> NDArray[np.bool_]:
+        """Even-odd point-in-polygon of points ``(..., 2)`` for each polygon: ``(..., n_poly)``."""
+        a, b = self._edge_a, self._edge_b
+        px = P[..., None, 0]
+        py = P[..., None, 1]
+        cond = (a[:, 1] > py) != (b[:, 1] > py)
+        dy = b[:, 1] - a[:, 1]
+        xint = a[:, 0] + (py - a[:, 1]) * (b[:, 0] - a[:, 0]) / np.where(dy == 0, 1.0, dy)
+        cross = cond & (px < xint)
+        counts = np.add.reduceat(cross.astype(np.int32), self._edge_offsets, axis=-1)
+        return (counts % 2) == 1
+
+    def clearance(self, points: ArrayLike) -> FloatArray:
+        """Distance from points ``(..., 2)`` to the nearest obstacle (negative inside): ``(...)``.
+
+        ``+inf`` when the map has no obstacles.
+        """
+        sd = self.signed_distance(points)
+        if sd.shape[-1] == 0:
+            return np.full(sd.shape[:-1], np.inf)
+        return np.min(sd, axis=-1)
+
+    def contains(self, points: ArrayLike, tol: float = 0.0) -> NDArray[np.bool_]:
+        """Whether points ``(..., 2)`` lie strictly inside an obstacle (deeper than ``tol``)."""
+        return self.clearance(points) < -tol
+
+    def penetration(self, points: ArrayLike) -> FloatArray:
+        """Penetration depth ``max(0, -signed distance)`` into each obstacle: ``(..., O)``."""
+        return np.maximum(-self.signed_distance(points), 0.0)
+
+    def total_penetration(self, points: ArrayLike) -> FloatArray:
+        """Sum over obstacles of the penetration depth of points ``(..., 2)``: ``(...)``.
+
+        The fast path of ``penetration(points).sum(-1)`` for population fitness.
+        """
+        P = np.asarray(points, dtype=np.float64)
+        total = np.zeros(P.shape[:-1])
+        x = P[..., 0, None]
+        y = P[..., 1, None]
+        if len(self.circles):
+            c = self.circles
+            # squared distances by one matrix product; square roots only where inside
+            d2 = (P @ (-2.0 * c[:, :2].T)) + np.sum(P * P, axis=-1)[..., None]
+            d2 += np.sum(c[:, :2] ** 2, axis=1)
+            inside = d2 < c[:, 2] ** 2
+            if np.any(inside):
+                depth = np.zeros_like(d2)
+                rr = np.broadcast_to(c[:, 2], d2.shape)
+                depth[inside] = rr[inside] - np.sqrt(np.maximum(d2[inside], 0.0))
+                total += np.sum(depth, axis=-1)
+        if len(self.rectangles):
+            r = self.rectangles
+            # inside a rectangle the depth is the distance to its nearest side
+            depth = np.minimum(
+                np.minimum(x - r[:, 0], r[:, 2] - x), np.minimum(y - r[:, 1], r[:, 3] - y)
+            )
+            total += np.sum(np.maximum(depth, 0.0), axis=-1)
+        if self.polygons:
+            total += np.sum(np.maximum(-self._polygon_signed_distance(P), 0.0), axis=-1)
+        return total
+
+    # ---------------------------------------------------------------- segments
+    def inside_length(
+        self, A: ArrayLike, B: ArrayLike, *, per_obstacle: bool = False, closed: bool = False
+    ) -> FloatArray:
+        """Length of segments ``A -> B (..., 2)`` inside obstacles.
+
+        Returns ``(...)`` summed over obstacles, or ``(..., O)`` with ``per_obstacle``.
+        ``closed=True`` counts stretches along a polygon's boundary as inside (for polygons that
+        tile free space, such as navigation meshes); otherwise only the interior counts.
+        Circles by the chord formula, rectangles by Liang-Barsky clipping, polygons by splitting
+        each segment at its crossings with the polygon's edges and testing the pieces' midpoints.
+        """
+        A = np.asarray(A, dtype=np.float64)
+        B = np.asarray(B, dtype=np.float64)
+        A, B = np.broadcast_arrays(A, B)
+        seglen = np.linalg.norm(B - A, axis=-1)
+        parts = []
+        if len(self.circles):
+            parts.append(self._circle_fraction(A, B) * seglen[..., None])
+        if len(self.rectangles):
+            parts.append(self._rect_fraction(A, B) * seglen[..., None])
+        if self.polygons:
+            parts.append(self._polygon_fraction(A, B, closed) * seglen[..., None])
+        out = np.concatenate(parts, axis=-1) if parts else np.zeros((*A.shape[:-1], 0))
+        return out if per_obstacle else np.sum(out, axis=-1)
+
+    def _circle_fraction(self, A: FloatArray, B: FloatArray) -> FloatArray:
+        c = self.circles
+        d = (B - A)[..., None, :]
+        f = A[..., None, :] - c[:, :2]
+        aa = np.sum(d * d, axis=-1)
+        bb = 2 * np.sum(f * d, axis=-1)
+        cc = np.sum(f * f, axis=-1) - c[:, 2] ** 2
+        disc = bb * bb - 4 * aa * cc
+        ok = (disc > 0) & (aa > 0)
+        sq = np.sqrt(np.where(ok, disc, 0.0))
+        den = np.where(aa > 0, 2 * aa, 1.0)
+        t0 = np.clip((-bb - sq) / den, 0.0, 1.0)
+        t1 = np.clip((-bb + sq) / den, 0.0, 1.0)
+        return np.where(ok, np.maximum(t1 - t0, 0.0), 0.0)
+
+    def _rect_interval(self, A: FloatArray, B: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Parameter interval ``[t0, t1]`` of segments ``(..., 2)`` strictly inside each
+        rectangle by Liang-Barsky clipping: two ``(..., R)`` arrays (``t1 <= t0`` when empty)."""
+        r = self.rectangles
+        d = (B - A)[..., None, :]
+        a = A[..., None, :]
+        lo, hi = r[:, :2], r[:, 2:]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t_lo = (lo - a) / d
+            t_hi = (hi - a) / d
+        tmin = np.minimum(t_lo, t_hi)
+        tmax = np.maximum(t_lo, t_hi)
+        # a zero direction component: inside the slab for all t (strictly), or never
+        par = d == 0
+        inslab = (a > lo) & (a < hi)
+        tmin = np.where(par, np.where(inslab, -np.inf, np.inf), tmin)
+        tmax = np.where(par, np.where(inslab, np.inf, -np.inf), tmax)
+        t0 = np.maximum(np.max(tmin, axis=-1), 0.0)
+        t1 = np.minimum(np.min(tmax, axis=-1), 1.0)
+        return t0, t1
+
+    def _rect_fraction(self, A: FloatArray, B: FloatArray) -> FloatArray:
+        t0, t1 = self._rect_interval(A, B)
+        return np.maximum(t1 - t0, 0.0)
+
+    def _polygon_fraction(self, A: FloatArray, B: FloatArray, closed: bool = False) -> FloatArray:
+        lead = A.shape[:-1]
+        A2 = A.reshape(-1, 2)
+        B2 = B.reshape(-1, 2)
+        out = np.zeros((A2.shape[0], len(self.polygons)))
+        for k, poly in enumerate(self.polygons):
+            pa = poly
+            pb = np.roll(poly, -1, axis=0)
+            d = B2 - A2  # (S, 2)
+            e = pb - pa  # (K, 2)
+            den = _cross2(d[:, None, :], e[None, :, :])  # (S, K)
+            w = pa[None, :, :] - A2[:, None, :]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                t = _cross2(w, e[None]) / den
+                u = _cross2(w, d[:, None, :]) / den
+            valid = (den != 0) & (u >= 0) & (u <= 1) & (t > 0) & (t < 1)
+            ts = np.where(valid, t, 1.0)
+            ts = np.sort(np.concatenate([np.zeros((len(A2), 1)), ts, np.ones((len(A2), 1))], 1), 1)
+            mids = 0.5 * (ts[:, 1:] + ts[:, :-1])  # (S, K+1)
+            lens = ts[:, 1:] - ts[:, :-1]
+            M = A2[:, None, :] + mids[..., None] * d[:, None, :]
+            # even-odd test of the pieces' midpoints; the distance to the boundary is needed
+            # only for the pieces it calls inside (open) or outside (closed), to sort out
+            # pieces that run along an edge
+            par = _even_odd(M, pa, pb)
+            tol = GRAZE_TOL * np.maximum(np.linalg.norm(d, axis=1), 1.0)[:, None]
+            check = (par if not closed else ~par) & (lens > 0)
+            on_edge = np.zeros_like(par)
+            if np.any(check):
+                dist = point_segment_distance(M[check][:, None, :], pa, pb).min(axis=1)
+                on_edge[check] = dist <= np.broadcast_to(tol, par.shape)[check]
+            inside = (par | on_edge) if closed else (par & ~on_edge)
+            out[:, k] = np.sum(np.where(inside & (lens > 0), lens, 0.0), axis=1)
+        return out.reshape(*lead, len(self.polygons))
+
+    def pinch_points(self) -> FloatArray:
+        """Points ``(n, 2)`` where obstacles touch so that free space is pinched to a point.
+
+        A vertex is a pinch point when the free directions around it form two or more separate
+        fans (sampled at 64 directions just off the vertex). Cached.
+        """
+        if self._pinch is not None:
+            return self._pinch
+        verts = self.vertices()
+        if len(verts) == 0:
+            pinch = np.zeros((0, 2))
+        else:
+            runs, _ = self._free_fans(verts)
+            pinch = verts[runs >= 2]
+        pinch.setflags(write=False)
+        object.__setattr__(self, "_pinch", pinch)
+        return pinch
+
+    def vertices(self) -> FloatArray:
+        """Distinct vertices ``(n, 2)`` of rectangles and polygons (circles have none)."""
+        parts = [np.zeros((0, 2))]
+        if len(self.rectangles):
+            r = self.rectangles
+            parts.append(r[:, [0, 1]])
+            parts.append(r[:, [2, 1]])
+            parts.append(r[:, [2, 3]])
+            parts.append(r[:, [0, 3]])
+        if self.polygons:
+            parts.append(self._edge_a)
+        return np.unique(np.concatenate(parts), axis=0)
+
+    def _free_fans(self, verts: FloatArray, n_dir: int = 64) -> tuple[NDArray, NDArray]:
+        """Number of separate free fans and the free fraction around each vertex ``(n, 2)``."""
+        eps = 1e-7 * self.scale
+        ang = (np.arange(n_dir) + 0.5) * 2 * np.pi / n_dir + 1e-3
+        ring = verts[:, None, :] + eps * np.stack([np.cos(ang), np.sin(ang)], axis=1)
+        free = np.ones(ring.shape[:2], dtype=bool)
+        chunk = max(1, 200_000 // (n_dir * max(self.n_obstacles, 1)))
+        for s in range(0, len(verts), chunk):
+            free[s : s + chunk] = ~self.contains(ring[s : s + chunk])
+        starts = free & ~np.roll(free, 1, axis=1)
+        runs = np.sum(starts, axis=1)
+        runs = np.where(np.all(free, axis=1), 1, runs)
+        return runs, np.mean(free, axis=1)
+
+    def segments_hit(self, A: ArrayLike, B: ArrayLike) -> NDArray[np.bool_]:
+        """Whether segments ``A -> B (..., 2)`` collide: ``(...) bool``.
+
+        A segment collides when more than ``GRAZE_TOL x map scale`` of it lies inside obstacles,
+        or when a pinch point (:meth:`pinch_points`) lies in its relative interior.
+        """
+        return self.segments_hit_length(A, B)[0]
+
+    def segments_hit_length(self, A: ArrayLike, B: ArrayLike) -> tuple[NDArray, FloatArray]:
+        """:meth:`segments_hit` and :meth:`inside_length` in one pass: ``((...), (...))``."""
+        A = np.asarray(A, dtype=np.float64)
+        B = np.asarray(B, dtype=np.float64)
+        A, B = np.broadcast_arrays(A, B)
+        tol = GRAZE_TOL * self.scale
+        inside = self.inside_length(A, B)
+        hit = inside > tol
+        hit = hit | self._along_shared_boundary(A, B, hit, tol)
+        pinch = self.pinch_points()
+        if len(pinch):
+            hit = hit | self._through_points(A, B, pinch, tol)
+        return hit, inside
+
+    def _along_shared_boundary(
+        self, A: FloatArray, B: FloatArray, hit: NDArray[np.bool_], tol: float
+    ) -> NDArray[np.bool_]:
+        """Axis-parallel segments that run along a boundary shared by two rectangles.
+
+        Two rectangles that share an edge (the row runs of an occupancy grid) block the line
+        between them although neither interior contains it. For each segment parallel to an
+        axis, the copies shifted just off both of its sides are clipped against every
+        rectangle; a stretch inside rectangles on both sides is blocked. (Polygons sharing
+        edges are not detected; the shipped maps have none.)
+        """
+        out = np.zeros(A.shape[:-1], dtype=bool)
+        if not len(self.rectangles):
+            return out
+        d = B - A
+        L = np.linalg.norm(d, axis=-1)
+        flat = (np.abs(d[..., 1]) <= 1e-12 * L) | (np.abs(d[..., 0]) <= 1e-12 * L)
+        idx = np.nonzero((flat & (L > tol) & ~hit).reshape(-1))[0]
+        if not len(idx):
+            return out
+        A2, B2 = A.reshape(-1, 2)[idx], B.reshape(-1, 2)[idx]
+        L2 = L.reshape(-1)[idx]
+        nrm = np.stack([-(B2 - A2)[:, 1], (B2 - A2)[:, 0]], 1) / L2[:, None]
+        delta = 1e-7 * self.scale
+        both = np.zeros(len(idx), dtype=bool)
+        chunk = max(1, 2_000_000 // len(self.rectangles) ** 2)
+        for s in range(0, len(idx), chunk):
+            sl = slice(s, s + chunk)
+            u0, u1 = self._rect_interval(A2[sl] + delta * nrm[sl], B2[sl] + delta * nrm[sl])
+            d0, d1 = self._rect_interval(A2[sl] - delta * nrm[sl], B2[sl] - delta * nrm[sl])
+            lo = np.maximum(u0[:, :, None], d0[:, None, :])
+            hi = np.minimum(u1[:, :, None], d1[:, None, :])
+            overlap = np.sum(np.maximum(hi - lo, 0.0), axis=(1, 2))
+            both[sl] = overlap * L2[sl] > tol
+        flat_out = out.reshape(-1)
+        flat_out[idx] = both
+        return flat_out.reshape(out.shape)
+
+    @staticmethod
+    def _through_points(A: FloatArray, B: FloatArray, pts: FloatArray, tol: float) -> NDArray:
+        d = point_segment_distance(pts, A[..., None, :], B[..., None, :])  # (..., n)
+        at_end = (np.linalg.norm(pts - A[..., None, :], axis=-1) <= tol) | (
+            np.linalg.norm(pts - B[..., None, :], axis=-1) <= tol
+        )
+        return np.any((d <= tol) & ~at_end, axis=-1)
+
+    def segments_free(self, A: ArrayLike, B: ArrayLike) -> NDArray[np.bool_]:
+        """``~segments_hit(A, B)``."""
+        return ~self.segments_hit(A, B)
+
+    def path_hits(self, paths: ArrayLike) -> NDArray[np.int64]:
+        """Number of colliding segments of polylines ``(..., n, 2)``: ``(...) int``."""
+        P = np.asarray(paths, dtype=np.float64)
+        return np.sum(self.segments_hit(P[..., :-1, :], P[..., 1:, :]), axis=-1)

@@ -1,0 +1,553 @@
+"""Exact baselines for the planar tables: any-angle shortest paths and 8-connected grid A*.
+
+* :func:`visibility_shortest_path`: the shortest path among polygonal obstacles runs through
+  obstacle vertices where free space is reflex, so Dijkstra over the visibility graph of those
+  vertices (plus start and goal) is exact. Circles are handled with a stated tolerance: their
+  candidate turning points are the vertices of a circumscribed regular ``circle_sides``-gon,
+  while visibility is judged against the true circles; the result is a feasible path at most
+  about ``(pi / n)^2 / 3`` (relative, on the arcs) longer than the true optimum
+  (2e-4 for the default n = 128). A path may not squeeze through a point where two obstacles
+  touch (:meth:`Obstacles2D.pinch_points`).
+* :func:`astar_grid`: A* on an occupancy grid, 8-connected, octile costs (1 and sqrt 2), no
+  corner cutting (a diagonal move needs both orthogonal neighbours free), the rules of the
+  Moving AI benchmarks.
+* Readers for Moving AI ``.map``/``.scen`` files and Polyanya ``.mesh`` (v2) navigation meshes,
+  and :class:`MeshFreeSpace`, the free space of a mesh with the same segment queries as
+  :class:`Obstacles2D`, so the visibility graph runs on either.
+"""
+
+from __future__ import annotations
+
+import heapq
+import json
+import logging
+import math
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import dijkstra
+
+from weldplan.errors import InputError, PlanningError
+from weldplan.geometry.obstacles2d import GRAZE_TOL, point_segment_distance
+from weldplan.geometry.pathmetrics import path_length
+
+log = logging.getLogger(__name__)
+
+SQRT2 = math.sqrt(2.0)
+#: sides of the polygon whose vertices stand in for a circle's turning points
+CIRCLE_SIDES = 128
+#: segments tested per vectorised chunk when building a visibility graph
+CHUNK = 20_000
+
+
+@dataclass(frozen=True)
+class ExactPath:
+    """A shortest path found by an exact planner.
+
+    Attributes
+    ----------
+    points
+        ``((n, 2))`` waypoints from start to goal (map units; cell centres for grids).
+    length
+        Its length.
+    method
+        ``"visibility-graph"`` or ``"astar-8"``.
+    expanded
+        Nodes of the graph (visibility graph) or cells expanded (A*).
+    """
+
+    points: tuple[tuple[float, float], ...]
+    length: float
+    method: str
+    expanded: int = 0
+
+    @property
+    def points_array(self) -> NDArray[np.float64]:
+        return np.asarray(self.points, dtype=np.float64).reshape(-1, 2)
+
+    def to_json(self) -> str:
+        return json.dumps(asdict(self))
+
+    @classmethod
+    def from_json(cls, text: str) -> ExactPath:
+        d = json.loads(text)
+        d["points"] = tuple(tuple(p) for p in d["points"])
+        return cls(**d)
+
+
+# ---------------------------------------------------------------------------- visibility graph
+def candidate_vertices(obstacles: Any, circle_sides: int = CIRCLE_SIDES) -> NDArray[np.float64]:
+    """Points where a shortest path may turn: obstacle vertices with one free fan of more
+    than 180 degrees around them (sampled at 128 directions, so reflex angles within 3 degrees
+    of straight are missed), and the vertices of circumscribed polygons of circles."""
+    if isinstance(obstacles, MeshFreeSpace):
+        return obstacles.corner_vertices()
+    verts = obstacles.vertices()
+    keep = np.zeros(0, dtype=bool)
+    if len(verts):
+        runs, frac = obstacles._free_fans(verts, n_dir=128)
+        keep = (runs == 1) & (frac > 0.5) & (frac < 1.0)
+    parts = [verts[keep]] if len(verts) else []
+    if len(obstacles.circles):
+        n = int(circle_sides)
+        ang = (np.arange(n) + 0.5) * 2 * np.pi / n
+        # 1e-7 beyond the circumscribed polygon, so that its edges clear the circle despite
+        # rounding (a tangent's chord grows like the square root of the rounding error)
+        unit = np.stack([np.cos(ang), np.sin(ang)], 1) * ((1 + 1e-7) / np.cos(np.pi / n))
+        c = obstacles.circles
+        ring = (c[:, None, :2] + c[:, None, 2:3] * unit).reshape(-1, 2)
+        ring = ring[obstacles.clearance(ring) >= -GRAZE_TOL * obstacles.scale]
+        parts.append(ring)
+    if not parts:
+        return np.zeros((0, 2))
+    return np.concatenate(parts)
+
+
+def _visible_pairs(space: Any, pts: NDArray[np.float64]) -> tuple[NDArray, NDArray]:
+    n = len(pts)
+    i, j = np.triu_indices(n, 1)
+    ok = np.zeros(len(i), dtype=bool)
+    for s in range(0, len(i), CHUNK):
+        sl = slice(s, s + CHUNK)
+        ok[sl] = space.segments_free(pts[i[sl]], pts[j[sl]])
+    return i[ok], j[ok]
+
+
+def visibility_shortest_path(
+    obstacles: Any,
+    start: ArrayLike,
+    goal: ArrayLike,
+    *,
+    bounds: ArrayLike | None = None,
+    circle_sides: int = CIRCLE_SIDES,
+) -> ExactPath:
+    """Any-angle shortest path from ``start`` to ``goal`` by the visibility graph.
+
+    Parameters
+    ----------
+    obstacles
+        :class:`Obstacles2D` (rectangles, polygons, circles) or :class:`MeshFreeSpace`.
+    start, goal
+        ``(2,)`` points in free space.
+    bounds
+        ``(xmin, ymin, xmax, ymax)``: turning points outside are dropped (the map is convex, so
+        straight segments between points inside stay inside).
+    circle_sides
+        Circles' turning points are the vertices of circumscribed regular polygons with this
+        many sides (see the module docstring for the tolerance).
+
+    Raises
+    ------
+    PlanningError
+        When the goal cannot be reached.
+    """
+    s = np.asarray(start, dtype=np.float64).reshape(2)
+    g = np.asarray(goal, dtype=np.float64).reshape(2)
+    cand = candidate_vertices(obstacles, circle_sides)
+    if bounds is not None:
+        b = np.asarray(bounds, dtype=np.float64)
+        eps = 1e-9 * max(b[2] - b[0], b[3] - b[1])
+        inside = (
+            (cand[:, 0] >= b[0] - eps)
+            & (cand[:, 0] <= b[2] + eps)
+            & (cand[:, 1] >= b[1] - eps)
+            & (cand[:, 1] <= b[3] + eps)
+        )
+        cand = cand[inside]
+    if bool(space_free(obstacles, s, g)):
+        return ExactPath(
+            points=(tuple(s), tuple(g)),
+            length=float(np.linalg.norm(g - s)),
+            method="visibility-graph",
+            expanded=2,
+        )
+    pts = np.concatenate([s[None], g[None], cand])
+    i, j = _visible_pairs(obstacles, pts)
+    w = np.linalg.norm(pts[i] - pts[j], axis=1)
+    n = len(pts)
+    graph = coo_matrix((w, (i, j)), shape=(n, n)).tocsr()
+    dist, pred = dijkstra(graph, directed=False, indices=0, return_predecessors=True)
+    if not np.isfinite(dist[1]):
+        raise PlanningError("the goal cannot be reached from the start")
+    order = [1]
+    while order[-1] != 0:
+        order.append(int(pred[order[-1]]))
+    path = pts[order[::-1]]
+    return ExactPath(
+        points=tuple((float(x), float(y)) for x, y in path),
+        length=float(path_length(path)),
+        method="visibility-graph",
+        expanded=n,
+    )
+
+
+def space_free(space: Any, a: NDArray[np.float64], b: NDArray[np.float64]) -> bool:
+    """Whether the straight segment ``a -> b`` is free in ``space``."""
+    return bool(space.segments_free(a[None], b[None])[0])
+
+
+class VisibilityGraph:
+    """A visibility graph built once and queried for many start/goal pairs.
+
+    Turning points and their mutual visibility are computed at construction; each
+    :meth:`shortest_path` adds the start and goal and runs Dijkstra.
+    """
+
+    def __init__(self, space: Any, *, circle_sides: int = CIRCLE_SIDES) -> None:
+        self.space = space
+        self.nodes = candidate_vertices(space, circle_sides)
+        i, j = _visible_pairs(space, self.nodes)
+        w = np.linalg.norm(self.nodes[i] - self.nodes[j], axis=1)
+        self._i, self._j, self._w = i, j, w
+        log.debug("visibility graph: %d nodes, %d edges", len(self.nodes), len(i))
+
+    def shortest_path(self, start: ArrayLike, goal: ArrayLike) -> ExactPath:
+        s = np.asarray(start, dtype=np.float64).reshape(2)
+        g = np.asarray(goal, dtype=np.float64).reshape(2)
+        if space_free(self.space, s, g):
+            return ExactPath(
+                points=(tuple(s), tuple(g)),
+                length=float(np.linalg.norm(g - s)),
+                method="visibility-graph",
+                expanded=2,
+            )
+        m = len(self.nodes)
+        ends = np.stack([s, g])
+        A = np.repeat(ends, m, axis=0)
+        B = np.tile(self.nodes, (2, 1))
+        vis = self.space.segments_free(A, B).reshape(2, m)
+        ii = [self._i + 2, self._j + 2]
+        src = np.nonzero(vis[0])[0]
+        dst = np.nonzero(vis[1])[0]
+        i = np.concatenate([ii[0], np.zeros(len(src), int), np.ones(len(dst), int)])
+        j = np.concatenate([ii[1], src + 2, dst + 2])
+        pts = np.concatenate([ends, self.nodes])
+        w = np.linalg.norm(pts[i] - pts[j], axis=1)
+        graph = coo_matrix((w, (i, j)), shape=(m + 2, m + 2)).tocsr()
+        dist, pred = dijkstra(graph, directed=False, indices=0, return_predecessors=True)
+        if not np.isfinite(dist[1]):
+            raise PlanningError("the goal cannot be reached from the start")
+        order = [1]
+        while order[-1] != 0:
+            order.append(int(pred[order[-1]]))
+        path = pts[order[::-1]]
+        return ExactPath(
+            points=tuple((float(x), float(y)) for x, y in path),
+            length=float(dist[1]),
+            method="visibility-graph",
+            expanded=m + 2,
+        )
+
+
+# ---------------------------------------------------------------------------------------- A*
+def astar_grid(free: ArrayLike, start: tuple[int, int], goal: tuple[int, int]) -> ExactPath:
+    """Shortest 8-connected path on a grid without corner cutting (octile costs).
+
+    Parameters
+    ----------
+    free
+        ``(nx, ny) bool``: traversable cells, indexed ``[i, j]``.
+    start, goal
+        Cell indices ``(i, j)``.
+
+    Returns
+    -------
+    :class:`ExactPath` whose points are the cells ``(i, j)`` of the path (as floats) and whose
+    length is in cells. A heap-based A* with the octile heuristic (consistent, so the first
+    time the goal is popped its cost is optimal).
+
+    Raises
+    ------
+    PlanningError
+        When start or goal is blocked or the goal is unreachable.
+    """
+    F = np.asarray(free, dtype=bool)
+    nx, ny = F.shape
+    si, sj = int(start[0]), int(start[1])
+    gi, gj = int(goal[0]), int(goal[1])
+    for name, (a, b) in (("start", (si, sj)), ("goal", (gi, gj))):
+        if not (0 <= a < nx and 0 <= b < ny) or not F[a, b]:
+            raise PlanningError(f"{name} cell {(a, b)} is blocked or outside the grid")
+    # flat indices over a padded grid so that neighbours never wrap
+    W = ny + 2
+    pad = np.zeros((nx + 2, ny + 2), dtype=bool)
+    pad[1:-1, 1:-1] = F
+    ok = pad.ravel().tolist()
+    s = (si + 1) * W + sj + 1
+    t = (gi + 1) * W + gj + 1
+    n_all = len(ok)
+    g_cost = [math.inf] * n_all
+    parent = [-1] * n_all
+    closed = bytearray(n_all)
+    g_cost[s] = 0.0
+    gx, gy = gi + 1, gj + 1
+    sq2 = SQRT2
+    k2 = SQRT2 - 2.0
+    # (offset, cost, orthogonal neighbours a diagonal move needs free)
+    moves = (
+        (W, 1.0, 0, 0),
+        (-W, 1.0, 0, 0),
+        (1, 1.0, 0, 0),
+        (-1, 1.0, 0, 0),
+        (W + 1, sq2, W, 1),
+        (W - 1, sq2, W, -1),
+        (-W + 1, sq2, -W, 1),
+        (-W - 1, sq2, -W, -1),
+    )
+
+    def h(v: int) -> float:
+        dx = abs(v // W - gx)
+        dy = abs(v % W - gy)
+        return dx + dy + k2 * (dx if dx < dy else dy)
+
+    heap = [(h(s), 0.0, s)]
+    push, pop = heapq.heappush, heapq.heappop
+    expanded = 0
+    while heap:
+        _, gc, v = pop(heap)
+        if closed[v]:
+            continue
+        if v == t:
+            break
+        closed[v] = 1
+        expanded += 1
+        for d, c, a, b in moves:
+            u = v + d
+            if not ok[u] or closed[u] or (a and not (ok[v + a] and ok[v + b])):
+                continue
+            nc = gc + c
+            if nc < g_cost[u]:
+                g_cost[u] = nc
+                parent[u] = v
+                push(heap, (nc + h(u), nc, u))
+    else:
+        raise PlanningError(f"goal cell {(gi, gj)} cannot be reached from {(si, sj)}")
+    cells = []
+    v = t
+    while v != -1:
+        cells.append((float(v // W - 1), float(v % W - 1)))
+        v = parent[v]
+    cells.reverse()
+    return ExactPath(
+        points=tuple(cells), length=float(g_cost[t]), method="astar-8", expanded=expanded
+    )
+
+
+def octile(di: ArrayLike, dj: ArrayLike) -> NDArray[np.float64]:
+    """Octile distance for cell offsets (the A* heuristic, exact on an empty grid)."""
+    a = np.abs(np.asarray(di, dtype=np.float64))
+    b = np.abs(np.asarray(dj, dtype=np.float64))
+    return a + b + (SQRT2 - 2.0) * np.minimum(a, b)
+
+
+# ------------------------------------------------------------------------- Moving AI / Polyanya
+MOVINGAI_PASSABLE = frozenset(".GS")
+
+
+def read_movingai_map(path: str | Path) -> NDArray[np.bool_]:
+    """Traversable cells of a Moving AI ``.map`` file: ``(width, height) bool`` indexed
+    ``[x, y]`` with y the row as written (``.``, ``G`` and ``S`` are traversable)."""
+    path = Path(path)
+    lines = path.read_text().splitlines()
+    try:
+        h = int(lines[1].split()[1])
+        w = int(lines[2].split()[1])
+    except (IndexError, ValueError):
+        raise InputError(
+            "expected 'height H' and 'width W' header lines", path=path, line=2
+        ) from None
+    rows = lines[4 : 4 + h]
+    if len(rows) != h or any(len(r) < w for r in rows):
+        raise InputError(f"expected {h} rows of {w} cells", path=path, line=5)
+    grid = np.array([[c in MOVINGAI_PASSABLE for c in r[:w]] for r in rows], dtype=bool)
+    return grid.T
+
+
+@dataclass(frozen=True)
+class ScenarioSet:
+    """Queries of a Moving AI ``.scen`` file: ``start, goal (n, 2) int`` as ``(x, y)``,
+    ``length (n,)`` optimal octile lengths, ``bucket (n,)``."""
+
+    start: NDArray[np.int64]
+    goal: NDArray[np.int64]
+    length: NDArray[np.float64]
+    bucket: NDArray[np.int64]
+
+
+def read_scen(path: str | Path) -> ScenarioSet:
+    """Read a Moving AI ``.scen`` file (version 1)."""
+    path = Path(path)
+    rows = []
+    for k, line in enumerate(path.read_text().splitlines(), 1):
+        if not line.strip() or line.startswith("version"):
+            continue
+        f = line.split("\t") if "\t" in line else line.split()
+        if len(f) < 9:
+            raise InputError("expected 9 fields", path=path, line=k)
+        try:
+            rows.append((int(f[0]), int(f[4]), int(f[5]), int(f[6]), int(f[7]), float(f[8])))
+        except ValueError:
+            raise InputError("bad number", path=path, line=k) from None
+    a = np.array(rows, dtype=np.float64).reshape(-1, 6)
+    return ScenarioSet(
+        start=a[:, 1:3].astype(np.int64),
+        goal=a[:, 3:5].astype(np.int64),
+        length=a[:, 5],
+        bucket=a[:, 0].astype(np.int64),
+    )
+
+
+class MeshFreeSpace:
+    """The free space of a Polyanya navigation mesh (``.mesh`` version 2).
+
+    The mesh polygons tile free space; its boundary edges (a polygon on one side, ``-1`` on
+    the other) form closed loops, so a point is free when a ray from it crosses the boundary
+    an odd number of times. A segment is free when it crosses no boundary edge, the pieces
+    between the boundary points it touches are free (or lie on the boundary: grazing), and it
+    passes through no ambiguous vertex (one with two or more obstacle wedges, where obstacles
+    touch). ``vertex_polys`` lists each vertex's neighbouring polygons in order, ``-1`` for
+    obstacle.
+
+    Vectorised over segments; the cost grows with the number of boundary edges, so meant for
+    small meshes (the Moving AI arena's has a few hundred).
+    """
+
+    def __init__(
+        self,
+        vertices: NDArray[np.float64],
+        polygons: list[NDArray[np.int64]],
+        poly_neighbours: list[NDArray[np.int64]],
+        vertex_polys: list[list[int]],
+    ) -> None:
+        self.vertices_xy = vertices
+        self.polygon_vertices = polygons
+        self.vertex_polys = vertex_polys
+        ea, eb = [], []
+        for vs, nb in zip(polygons, poly_neighbours, strict=True):
+            # Polyanya: neighbour k lies across the edge from vertex k-1 to vertex k
+            for k in range(len(vs)):
+                if nb[k] == -1:
+                    ea.append(vertices[vs[k - 1]])
+                    eb.append(vertices[vs[k]])
+        self.edge_a = np.array(ea).reshape(-1, 2)
+        self.edge_b = np.array(eb).reshape(-1, 2)
+        lo = vertices.min(axis=0)
+        hi = vertices.max(axis=0)
+        self.scale = float(np.hypot(*(hi - lo)))
+        runs = np.array([_obstacle_runs(vp) for vp in vertex_polys])
+        self.ambiguous = vertices[runs >= 2]
+
+    @classmethod
+    def read(cls, path: str | Path) -> MeshFreeSpace:
+        path = Path(path)
+        tok = path.read_text().split()
+        if len(tok) < 4 or tok[0] != "mesh" or tok[1] != "2":
+            raise InputError("not a Polyanya mesh version 2", path=path, line=1)
+        nv, npoly = int(tok[2]), int(tok[3])
+        k = 4
+        verts = np.empty((nv, 2))
+        vpolys: list[list[int]] = []
+        for v in range(nv):
+            verts[v] = float(tok[k]), float(tok[k + 1])
+            n = int(tok[k + 2])
+            vpolys.append([int(x) for x in tok[k + 3 : k + 3 + n]])
+            k += 3 + n
+        polys, neigh = [], []
+        for _ in range(npoly):
+            n = int(tok[k])
+            polys.append(np.array([int(x) for x in tok[k + 1 : k + 1 + n]], dtype=np.int64))
+            neigh.append(np.array([int(x) for x in tok[k + 1 + n : k + 1 + 2 * n]]))
+            k += 1 + 2 * n
+        return cls(verts, polys, neigh, vpolys)
+
+    def _on_boundary(self, P: NDArray[np.float64], tol: float) -> NDArray[np.bool_]:
+        d = point_segment_distance(P[..., None, :], self.edge_a, self.edge_b)
+        return np.min(d, axis=-1) <= tol
+
+    def contains_free(self, P: ArrayLike) -> NDArray[np.bool_]:
+        """Whether points ``(..., 2)`` lie in the mesh (interior or boundary)."""
+        P = np.asarray(P, dtype=np.float64)
+        a, b = self.edge_a, self.edge_b
+        py = P[..., None, 1]
+        cond = (a[:, 1] > py) != (b[:, 1] > py)
+        dy = b[:, 1] - a[:, 1]
+        xint = a[:, 0] + (py - a[:, 1]) * (b[:, 0] - a[:, 0]) / np.where(dy == 0, 1.0, dy)
+        inside = np.sum(cond & (P[..., None, 0] < xint), axis=-1) % 2 == 1
+        rest = ~inside
+        if np.any(rest):  # points on the boundary count as free (grazing)
+            inside[rest] = self._on_boundary(P[rest], 1e-9 * self.scale)
+        return inside
+
+    def segments_free(self, A: ArrayLike, B: ArrayLike) -> NDArray[np.bool_]:
+        A = np.asarray(A, dtype=np.float64)
+        B = np.asarray(B, dtype=np.float64)
+        A, B = np.broadcast_arrays(A, B)
+        lead = A.shape[:-1]
+        A2, B2 = A.reshape(-1, 2), B.reshape(-1, 2)
+        out = np.empty(len(A2), dtype=bool)
+        chunk = max(1, 4_000_000 // max(len(self.edge_a), 1) ** 2)
+        for s in range(0, len(A2), chunk):
+            out[s : s + chunk] = self._free_chunk(A2[s : s + chunk], B2[s : s + chunk])
+        return out.reshape(lead)
+
+    def _free_chunk(self, A: NDArray[np.float64], B: NDArray[np.float64]) -> NDArray[np.bool_]:
+        tol = 1e-9 * self.scale
+        a, b = self.edge_a, self.edge_b
+        d = B - A
+        e = b - a
+        den = d[:, None, 0] * e[None, :, 1] - d[:, None, 1] * e[None, :, 0]
+        w = a[None] - A[:, None]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = (w[..., 0] * e[None, :, 1] - w[..., 1] * e[None, :, 0]) / den
+            u = (w[..., 0] * d[:, None, 1] - w[..., 1] * d[:, None, 0]) / den
+        L = np.linalg.norm(d, axis=1)[:, None]
+        le = np.linalg.norm(e, axis=1)[None]
+        et, eu = tol / np.maximum(L, tol), tol / le
+        ok = den != 0
+        proper = ok & (t > et) & (t < 1 - et) & (u > eu) & (u < 1 - eu)
+        free = ~np.any(proper, axis=1)
+        # split at every touch (and at the projections of boundary vertices), test the pieces
+        touch = ok & (t >= -et) & (t <= 1 + et) & (u >= -eu) & (u <= 1 + eu)
+        ts = np.where(touch, np.clip(t, 0, 1), 1.0)
+        ts = np.sort(np.concatenate([np.zeros((len(A), 1)), ts, np.ones((len(A), 1))], 1), 1)
+        mids = 0.5 * (ts[:, 1:] + ts[:, :-1])
+        long = (ts[:, 1:] - ts[:, :-1]) * L > tol
+        M = A[:, None] + mids[..., None] * d[:, None]
+        piece_ok = self.contains_free(M) | ~long
+        free &= np.all(piece_ok, axis=1)
+        if len(self.ambiguous):
+            dd = point_segment_distance(self.ambiguous, A[:, None], B[:, None])
+            end = (np.linalg.norm(self.ambiguous - A[:, None], axis=-1) <= tol) | (
+                np.linalg.norm(self.ambiguous - B[:, None], axis=-1) <= tol
+            )
+            free &= ~np.any((dd <= tol) & ~end, axis=-1)
+        return free
+
+    def corner_vertices(self) -> NDArray[np.float64]:
+        """Vertices where free space is reflex (one obstacle wedge, free angle >= 180 deg)."""
+        angle = np.zeros(len(self.vertices_xy))
+        V = self.vertices_xy
+        for poly in self.polygon_vertices:
+            p = V[poly]
+            prev = np.roll(p, 1, axis=0) - p
+            nxt = np.roll(p, -1, axis=0) - p
+            cosang = np.sum(prev * nxt, 1) / (
+                np.linalg.norm(prev, axis=1) * np.linalg.norm(nxt, axis=1)
+            )
+            np.add.at(angle, poly, np.arccos(np.clip(cosang, -1, 1)))
+        runs = np.array([_obstacle_runs(vp) for vp in self.vertex_polys])
+        return V[(runs == 1) & (angle >= np.pi - 1e-9)]
+
+
+def _obstacle_runs(neighbours: list[int]) -> int:
+    """Number of cyclic runs of ``-1`` (obstacle) in a vertex's neighbour list."""
+    if not neighbours:
+        return 0
+    n = len(neighbours)
+    return sum(1 for k in range(n) if neighbours[k] == -1 and neighbours[k - 1] != -1) or (
+        1 if all(x == -1 for x in neighbours) else 0
+    )

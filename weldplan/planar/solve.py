@@ -1,0 +1,177 @@
+"""One planar planning run end to end: scenario -> Problem -> optimiser -> measured path.
+
+Used by ``weldplan planar`` and ``weldplan bench planar``; the optimiser sees only the Problem.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import time
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+
+from weldplan.optim.core import minimize
+from weldplan.optim.registry import get_optimizer
+from weldplan.planar.encodings import PathProblem, make_problem, population_diversity
+from weldplan.planar.exact import ExactPath, astar_grid, visibility_shortest_path
+from weldplan.planar.scenarios import Scenario
+from weldplan.random import RNGLike, seed_of
+
+log = logging.getLogger(__name__)
+
+#: the papers' budgets per encoding: (population, iterations)
+#: 000 Table 2: 30 x 30; 003 sec. 5.2: NP = 50, 200 evolutions; 001: N = 50 fish
+#: (its iteration count is not given; 100 here)
+PAPER_BUDGET: dict[str, tuple[int, int]] = {
+    "spline": (30, 30),
+    "segments": (50, 200),
+    "grid": (50, 100),
+}
+
+_EXACT_CACHE: dict[tuple[str, str, str], ExactPath] = {}
+
+
+def exact_optimum(scenario: Scenario, encoding: str | None = None) -> ExactPath:
+    """The exact baseline of a scenario: the visibility-graph any-angle shortest path, or
+    for the grid encoding the 8-connected A* path (in map units, through cell centres).
+    Cached per scenario file."""
+    enc = encoding or scenario.encoding
+    key = (str(scenario.path), scenario.name, "grid" if enc == "grid" else "any")
+    if key in _EXACT_CACHE:
+        return _EXACT_CACHE[key]
+    if enc == "grid" and scenario.grid is not None:
+        g = scenario.grid
+        s = tuple(int(v) for v in g.cell_of(scenario.start))
+        t = tuple(int(v) for v in g.cell_of(scenario.goal))
+        r = astar_grid(~g.occupied, s, t)
+        pts = g.centre(r.points_array.astype(np.int64))
+        out = ExactPath(
+            points=tuple((float(x), float(y)) for x, y in pts),
+            length=r.length * g.cell,
+            method=r.method,
+            expanded=r.expanded,
+        )
+    else:
+        out = visibility_shortest_path(
+            scenario.world, scenario.start, scenario.goal, bounds=scenario.bounds
+        )
+    _EXACT_CACHE[key] = out
+    return out
+
+
+@dataclass(frozen=True)
+class PlanarRun:
+    """The outcome of :func:`solve`.
+
+    Attributes
+    ----------
+    scenario, algorithm, encoding
+        What was run.
+    points
+        The best path's polyline.
+    length, smoothness, min_clearance
+        Its metrics (map units, radians).
+    success
+        Collision-free by the encoding's criterion (:meth:`PathProblem.success`; for splines
+        paper 000's ``f2 = 0``).
+    collisions
+        Segments of the polyline that enter an obstacle (exact check).
+    fitness
+        The Problem's fitness of the best solution.
+    optimum
+        Exact baseline length (``nan`` when not computed).
+    seconds
+        Optimiser wall time (the run itself, not the exact baseline).
+    n_eval, seed
+        Evaluations spent, integer seed if given.
+    history
+        Best fitness after initialisation and each iteration.
+    diversity
+        Paper 003 eq. 18 of the final population when the optimiser keeps one in ``X``.
+    """
+
+    scenario: str
+    algorithm: str
+    encoding: str
+    points: tuple[tuple[float, float], ...]
+    length: float
+    smoothness: float
+    min_clearance: float
+    success: bool
+    collisions: int
+    fitness: float
+    optimum: float
+    seconds: float
+    n_eval: int
+    seed: int | None
+    history: tuple[float, ...]
+    diversity: float = float("nan")
+
+    @property
+    def gap(self) -> float:
+        """Relative excess over the exact optimum (0.02 = 2 % longer)."""
+        return self.length / self.optimum - 1.0
+
+    def to_json(self) -> str:
+        return json.dumps(asdict(self), allow_nan=True)
+
+    @classmethod
+    def from_json(cls, text: str) -> PlanarRun:
+        d = json.loads(text)
+        d["points"] = tuple(tuple(p) for p in d["points"])
+        d["history"] = tuple(d["history"])
+        return cls(**d)
+
+
+def solve(
+    scenario: Scenario,
+    algorithm: str,
+    *,
+    encoding: str | None = None,
+    pop_size: int | None = None,
+    max_iter: int | None = None,
+    rng: RNGLike = None,
+    with_optimum: bool = True,
+    problem: PathProblem | None = None,
+    encoding_params: dict[str, Any] | None = None,
+    optimizer_params: dict[str, Any] | None = None,
+) -> PlanarRun:
+    """Plan a path on ``scenario`` with the registered ``algorithm``.
+
+    Budgets default to the paper's for the encoding (:data:`PAPER_BUDGET`).
+    """
+    enc = encoding or scenario.encoding
+    prob = problem or make_problem(scenario, enc, **(encoding_params or {}))
+    pop_default, iter_default = PAPER_BUDGET[enc]
+    opt = get_optimizer(algorithm, pop_size=pop_size or pop_default, **(optimizer_params or {}))
+    t0 = time.perf_counter()
+    res = minimize(prob, opt, max_iter=max_iter or iter_default, rng=rng)
+    seconds = time.perf_counter() - t0
+    m = prob.measure(res.x_array)
+    pts = prob.path(res.x_array)
+    X = getattr(opt, "X", None)
+    # multi-swarm optimisers keep (swarms, NP, n_var): DI over all their individuals
+    ok = isinstance(X, np.ndarray) and X.ndim >= 2 and X.shape[-1] == prob.n_var
+    div = population_diversity(X.reshape(-1, prob.n_var)) if ok else float("nan")
+    optimum = exact_optimum(scenario, enc).length if with_optimum else float("nan")
+    return PlanarRun(
+        scenario=scenario.name,
+        algorithm=algorithm,
+        encoding=enc,
+        points=tuple((float(x), float(y)) for x, y in pts),
+        length=m.length,
+        smoothness=m.smoothness,
+        min_clearance=m.min_clearance,
+        success=bool(prob.success(res.x_array[None])[0]),
+        collisions=m.collisions,
+        fitness=res.f,
+        optimum=optimum,
+        seconds=seconds,
+        n_eval=res.n_eval,
+        seed=seed_of(rng),
+        history=res.history,
+        diversity=div,
+    )
