@@ -8,11 +8,11 @@ leaves existing output files exactly as they were.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import logging
 import sys
 import time
 from collections.abc import Callable
-from concurrent.futures import Executor, ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -59,6 +59,25 @@ def add_planning_arguments(p: argparse.ArgumentParser, *, default_output: str | 
     )
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument("--jobs", type=int, default=1, help="processes planning local paths (default 1)")
+    p.add_argument(
+        "--dask",
+        metavar="ADDR",
+        help="plan local paths on Dask: 'local' starts a LocalCluster of --jobs workers (at least "
+        "2), 'tcp://HOST:PORT' joins a running scheduler (needs the 'dask' extra)",
+    )
+    p.add_argument(
+        "--candidates",
+        metavar="K",
+        type=int,
+        help="check and plan up front only each joint's K nearest pairs, the rest on demand "
+        "(for hundreds of joints; default: every pair checked straight)",
+    )
+    p.add_argument(
+        "--candidate-radius",
+        metavar="MM",
+        type=float,
+        help="with --candidates: neighbours farther than this are planned only on demand",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress bars and no summary on stdout")
 
 
@@ -82,6 +101,8 @@ def config_from_args(args: argparse.Namespace) -> Any:
         planner=args.planner,
         sequencer=args.sequencer,
         aco={"n_iterations": args.aco, "n_ants": args.aco},
+        candidates=getattr(args, "candidates", None),
+        candidate_radius=getattr(args, "candidate_radius", None),
     )
 
 
@@ -143,15 +164,21 @@ def run_planning(
         cell = make_cell()
     times["cell"] = st.seconds
 
-    executor: Executor | None = None
-    if args.jobs > 1:
-        executor = ProcessPoolExecutor(max_workers=args.jobs)
-    try:
-        route = plan_route(cell, config=config, rng=args.seed, executor=executor, progress=bars)
-    finally:
-        bars.close()
-        if executor is not None:
-            executor.shutdown()
+    with contextlib.ExitStack() as stack:
+        executor = None
+        dask = getattr(args, "dask", None)
+        if dask:
+            from weldplan.weld.parallel import dask_executor
+
+            executor = stack.enter_context(dask_executor(dask, workers=max(2, args.jobs)))
+        elif args.jobs > 1:
+            from weldplan.weld.parallel import process_pool
+
+            executor = stack.enter_context(process_pool(cell, args.jobs))
+        try:
+            route = plan_route(cell, config=config, rng=args.seed, executor=executor, progress=bars)
+        finally:
+            bars.close()
     for k in ("straight", "local", "sequence"):
         times[k] = route.stats["seconds"][k]
 

@@ -1,8 +1,9 @@
 """Progress bars for the command line: one line per stage on a terminal, silent otherwise.
 
 The library reports progress through callbacks (``progress(stage, done, total)``); this turns
-them into bars on stderr. It draws only when the stream is a terminal and ``--quiet`` was not
-given, so pipes, logs and CI output stay clean.
+them into bars on stderr, with counts, elapsed seconds and, once a stage has made progress, an
+estimate of the time left (from its rate since the stage began). It draws only when the
+stream is a terminal and ``--quiet`` was not given, so pipes, logs and CI output stay clean.
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ class ProgressBars:
         self._stage: str | None = None
         self._t0 = time.perf_counter()
         self._last = 0.0
+        self._done0 = 0
 
     def __call__(self, stage: str, done: int, total: int) -> None:
         if not self.enabled:
@@ -50,6 +52,7 @@ class ProgressBars:
             self.close()
             self._stage = stage
             self._t0 = now
+            self._done0 = done
         elif done < total and now - self._last < 0.05:
             return  # at most 20 redraws a second
         self._last = now
@@ -57,9 +60,13 @@ class ProgressBars:
         frac = 1.0 if total <= 0 else min(done / total, 1.0)
         fill = int(round(frac * width))
         label = LABELS.get(stage, stage)
+        elapsed = now - self._t0
+        eta = ""
+        if 0 < done < total and done > self._done0 and elapsed > 0.5:
+            eta = f"  ETA {elapsed / (done - self._done0) * (total - done):6.1f} s"
         self.stream.write(
             f"\r{label:<15} [{'#' * fill}{'.' * (width - fill)}] {done}/{total} "
-            f"{now - self._t0:6.2f} s"
+            f"{elapsed:6.2f} s{eta}  "
         )
         self.stream.flush()
 

@@ -16,6 +16,7 @@ BENCHES: dict[str, str] = {
     "local": "weldplan.bench.local",
     "sequence": "weldplan.bench.sequence",
     "route": "weldplan.bench.route",
+    "scale": "weldplan.bench.scale",
     "planar": "weldplan.bench.planar",
 }
 

@@ -23,6 +23,18 @@ heuristic and the cell small enough for Held-Karp (up to 16 joints), the discove
 Held-Karp, then the configured sequencer orders the joints once more (and, in the rare case that
 its order uses a leg still unknown, the rounds go on with it).
 
+Candidate pairs (station scale)
+-------------------------------
+At hundreds of joints even the straight checks of all ``n (n - 1) / 2`` pairs are more than the
+sequencer needs. ``PlanConfig(candidates=k)`` checks up front only the candidate pairs: each
+joint with its ``k`` nearest joints by straight-line distance between the weld spots. The straight
+segment is checked first; the blocked candidates are then searched in one batch through the
+executor (the work that parallelises). Every other pair keeps its straight-polyline estimate (a
+lower bound, as above) until an order uses it; then it is checked on demand, straight first and
+searched only if blocked, and the sequencer runs again. With an exact sequencer the route is the
+same as with every pair planned. ``Route.stats`` counts the pairs checked, straight, searched
+(``pairs_checked``, ``pairs_straight``, ``pairs_planned``) and the candidates.
+
 Randomness: one generator, normalised once from ``rng``; each pair gets its own seed drawn from it
 up front in a fixed order, so a route does not depend on the executor or the order in which
 workers finish.
@@ -90,7 +102,16 @@ class PlanConfig:
         Seconds for each run of the sequencer's polish (None: its own stopping rule).
     max_rounds
         Bound on plan-then-sequence rounds of the lazy mode; after it every blocked pair is
-        planned and the sequencer runs once more.
+        planned and the sequencer runs once more (without candidates; with candidates the rounds
+        go on, each planning at least one new pair, so they end).
+    candidates
+        ``k``: check and plan up front only each joint's ``k`` nearest neighbours, the other pairs
+        on demand (module docstring); None: every pair is checked straight up front. Only with
+        ``pairs="lazy"``.
+    candidate_radius
+        mm: with ``candidates``, a neighbour farther than this is left to on demand (on car2's
+        1000-joint set some of the 6 nearest are 476 mm away behind a panel, whose searches
+        cost minutes each); None: no limit.
     """
 
     clearance: float = 5.0
@@ -105,6 +126,8 @@ class PlanConfig:
     local_time_budget: float | None = None
     sequence_time_budget: float | None = None
     max_rounds: int = 50
+    candidates: int | None = None
+    candidate_radius: float | None = None
 
     def __post_init__(self) -> None:
         if self.planner not in PLANNERS:
@@ -113,6 +136,14 @@ class PlanConfig:
             raise WeldplanError(f"unknown sequencer {self.sequencer!r}; choose one of {SEQUENCERS}")
         if self.pairs not in ("lazy", "all"):
             raise WeldplanError(f"pairs must be 'lazy' or 'all', not {self.pairs!r}")
+        if self.candidates is not None:
+            if int(self.candidates) != self.candidates or self.candidates < 1:
+                raise WeldplanError(f"candidates must be a positive integer, got {self.candidates}")
+            if self.pairs == "all":
+                raise WeldplanError("candidates needs pairs='lazy' (pairs='all' plans every pair)")
+            object.__setattr__(self, "candidates", int(self.candidates))
+        if self.candidate_radius is not None and not (self.candidate_radius > 0):
+            raise WeldplanError(f"candidate_radius must be > 0 mm, got {self.candidate_radius}")
         for name in ("clearance", "pitch"):
             v = getattr(self, name)
             if not (np.isfinite(v) and v > 0):
@@ -138,6 +169,56 @@ def _plan_pair_task(
     from weldplan.weld.local import plan_pair
 
     return plan_pair(cell, i, j, method=method, params=params, rng=seed, time_budget=budget)
+
+
+def _plan_pairs_task(cell: Any, batch: list[tuple], budget: float | None) -> list[Any]:
+    """A batch of local paths in one worker task; ``cell`` arrives as a
+    :func:`weldplan.weld.parallel.share_cell` reference (built once per worker)."""
+    from weldplan.weld.parallel import resolve
+
+    cell = resolve(cell)
+    return [_plan_pair_task(cell, i, j, m, prm, s, budget) for i, j, m, prm, s in batch]
+
+
+def candidate_pairs(
+    xyz: NDArray[np.float64],
+    k: int,
+    pair_index: NDArray[np.intp] | None = None,
+    radius: float | None = None,
+) -> NDArray[np.intp]:
+    """Indices (into the upper-triangle pair list) of each joint with its ``k`` nearest joints.
+
+    Parameters
+    ----------
+    xyz
+        ``(n, 3)`` weld spots (mm); nearness is the straight-line distance between them.
+    k
+        Neighbours per joint (ties broken by joint order).
+    pair_index
+        ``(n, n)`` pair number of ``(i, j)``, as built by :func:`plan_route`; built when None.
+    radius
+        mm: a neighbour farther than this is not a candidate (None: no limit).
+
+    Returns
+    -------
+    ``(m,) intp``, sorted, unique.
+    """
+    from scipy.spatial import cKDTree
+
+    n = len(xyz)
+    if pair_index is None:
+        iu, ju = np.triu_indices(n, 1)
+        pair_index = -np.ones((n, n), dtype=np.intp)
+        pair_index[iu, ju] = pair_index[ju, iu] = np.arange(len(iu))
+    k = min(int(k), n - 1)
+    if k < 1:
+        return np.zeros(0, dtype=np.intp)
+    bound = np.inf if radius is None else float(radius)
+    _, nb = cKDTree(xyz).query(xyz, k=k + 1, distance_upper_bound=bound)
+    rows = np.repeat(np.arange(n), k + 1)
+    cols = nb.reshape(-1)
+    keep = (rows != cols) & (cols < n)  # cols == n: no neighbour within the radius
+    return np.unique(pair_index[rows[keep], cols[keep]])
 
 
 def straight_lower_bound(xyz: NDArray[np.float64]) -> tuple[float, str]:
@@ -212,7 +293,9 @@ def plan_route(
         Seed or Generator; the only source of randomness of the run.
     executor
         Where blocked pairs are planned: any ``concurrent.futures.Executor`` (a process pool, a
-        Dask ``Client.get_executor()``); serial in this process when None.
+        Dask ``Client.get_executor()``); serial in this process when None. The cell reaches each
+        worker once (:mod:`weldplan.weld.parallel`; :func:`~weldplan.weld.parallel.process_pool`
+        installs it at worker start); pairs travel in batches.
     progress
         ``progress(stage, done, total)`` for the stages ``"straight"``, ``"local"``,
         ``"sequence"``.
@@ -229,6 +312,7 @@ def plan_route(
     """
     from weldplan.optim.discrete.sequence import solve_sequence
     from weldplan.optim.discrete.tsp_pso import PSOParams
+    from weldplan.weld.parallel import batches, n_workers, share_cell
 
     config = PlanConfig() if config is None else config
     gen = as_generator(rng)
@@ -246,37 +330,66 @@ def plan_route(
         raise PlanningError("the cell has no weld joints")
     approach = np.linalg.norm(V - P, axis=1)
 
-    # 1. straight checks between all pairs of virtual joints (upper triangle)
+    # 1. straight checks between pairs of virtual joints (upper triangle): all, or the candidates
     t0 = time.perf_counter()
     iu, ju = np.triu_indices(n, 1)
     n_pairs = len(iu)
-    report("straight", 0, n_pairs)
-    same = np.all(V[iu] == V[ju], axis=1)
-    free = np.ones(n_pairs, dtype=bool)
-    if n_pairs:
-        free[~same] = cell.collision.segments_free(V[iu][~same], V[ju][~same], clearance)
-    report("straight", n_pairs, n_pairs)
+    pair_index = -np.ones((n, n), dtype=np.intp)
+    pair_index[iu, ju] = np.arange(n_pairs)
+    pair_index[ju, iu] = np.arange(n_pairs)
+    checked = np.zeros(n_pairs, dtype=bool)
+    free = np.zeros(n_pairs, dtype=bool)
+
+    def check(pairs: NDArray[np.intp]) -> None:
+        """Straight capsule checks of ``pairs`` (one vectorised call); sets checked / free."""
+        pairs = pairs[~checked[pairs]]
+        if not len(pairs):
+            return
+        a, b = V[iu[pairs]], V[ju[pairs]]
+        ok = np.all(a == b, axis=1)
+        if (~ok).any():
+            ok[~ok] = cell.collision.segments_free(a[~ok], b[~ok], clearance)
+        free[pairs] = ok
+        checked[pairs] = True
+
+    if config.candidates is None or config.candidates >= n - 1:
+        upfront = np.arange(n_pairs)
+    else:
+        upfront = candidate_pairs(P, config.candidates, pair_index, config.candidate_radius)
+    report("straight", 0, len(upfront))
+    check(upfront)
+    report("straight", len(upfront), len(upfront))
     est = approach[iu] + np.linalg.norm(V[iu] - V[ju], axis=1) + approach[ju]
     C = np.zeros((n, n))
     C[iu, ju] = est
     C[ju, iu] = est
-    pair_index = -np.ones((n, n), dtype=np.intp)
-    pair_index[iu, ju] = np.arange(n_pairs)
-    pair_index[ju, iu] = np.arange(n_pairs)
     known = free.copy()
     pair_seeds = gen.integers(0, 2**63 - 1, size=n_pairs)
     seconds["straight"] = time.perf_counter() - t0
-    blocked = np.flatnonzero(~free)
-    log.info("%d joints, %d pairs, %d blocked at %g mm", n, n_pairs, len(blocked), clearance)
+    blocked = np.flatnonzero(checked & ~free)
+    log.info(
+        "%d joints, %d pairs, %d checked, %d blocked at %g mm",
+        n,
+        n_pairs,
+        len(upfront),
+        len(blocked),
+        clearance,
+    )
 
     paths: dict[int, Any] = {}
     t_local = 0.0
     t_seq = 0.0
     n_failed = 0
 
+    shared: Any = None  # the cell as the executor's tasks carry it, made on first use
+
     def plan(pairs: list[int]) -> None:
-        nonlocal t_local, n_failed
+        nonlocal t_local, n_failed, shared
         t = time.perf_counter()
+        fresh = np.array([p for p in pairs if not checked[p]], dtype=np.intp)
+        if len(fresh):  # on demand: the straight segment first (timed with the local stage)
+            check(fresh)
+            known[fresh] = free[fresh]
         todo = [p for p in pairs if not known[p]]
         total = len(paths) + len(todo)
         report("local", len(paths), total)
@@ -290,11 +403,13 @@ def plan_route(
                 for i, j, m, prm, s in args
             )
         else:
+            if shared is None:
+                shared = share_cell(cell, executor)
             futures = [
-                executor.submit(_plan_pair_task, cell, i, j, m, prm, s, config.local_time_budget)
-                for i, j, m, prm, s in args
+                executor.submit(_plan_pairs_task, shared, batch, config.local_time_budget)
+                for batch in batches(args, n_workers(executor))
             ]
-            results = (f.result() for f in futures)
+            results = (lp for f in futures for lp in f.result())
         for p, lp in zip(todo, results, strict=True):
             paths[int(p)] = lp
             known[p] = True
@@ -336,7 +451,7 @@ def plan_route(
         report("sequence", round_ + 1, round_ + 1)
         return seq
 
-    if config.pairs == "all":
+    if config.pairs == "all" or config.candidates is not None:
         plan([int(p) for p in blocked])
     rounds = 0
 
@@ -351,7 +466,7 @@ def plan_route(
             unknown = [p for p in needed if not known[p]]
             if not unknown:
                 return seq
-            if rounds >= config.max_rounds:
+            if rounds >= config.max_rounds and config.candidates is None:
                 log.warning("lazy planning: %d rounds, planning every blocked pair", rounds)
                 unknown = [int(p) for p in blocked]
             plan(unknown)
@@ -413,8 +528,10 @@ def plan_route(
     }
     stats = {
         "pairs": n_pairs,
+        "pairs_checked": int(checked.sum()),
+        "pairs_candidates": int(len(upfront)),
         "pairs_straight": int(free.sum()),
-        "pairs_blocked": int(len(blocked)),
+        "pairs_blocked": int((checked & ~free).sum()),
         "pairs_planned": len(paths),
         "pairs_failed": n_failed,
         "rounds": rounds,
