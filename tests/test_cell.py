@@ -116,8 +116,9 @@ def test_cell_arrays_are_read_only(demo):
         demo.offsets[0] = 0.0
 
 
-def test_cli_demo_prints_the_summary(capsys):
-    assert main(["demo"]) == 0
+def test_cli_demo_prints_the_summary(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # the demo writes route.csv and route.html here
+    assert main(["demo", "--no-html"]) == 0
     out = capsys.readouterr().out
     assert "virtual joints" in out and "grid:" in out and "part:" in out
 

@@ -6,6 +6,8 @@ cheap)::
     import weldplan
     cell = weldplan.load_cell("body.stl", "joints.csv")
     cell = weldplan.demo_cell()
+    route = weldplan.plan_route(cell, rng=0)
+    weldplan.verify_route(route, cell.part).ok
 """
 
 from __future__ import annotations
@@ -27,6 +29,10 @@ _LAZY: dict[str, str] = {
     "ObstacleGrid": "weldplan.geometry.grid",
     "build_grid": "weldplan.geometry.grid",
     "CollisionModel": "weldplan.geometry.collision",
+    "PlanConfig": "weldplan.weld.pipeline",
+    "plan_route": "weldplan.weld.pipeline",
+    "Route": "weldplan.weld.route",
+    "verify_route": "weldplan.weld.verify",
 }
 
 __all__ = ["__version__", *_LAZY]

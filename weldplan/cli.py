@@ -11,24 +11,35 @@ import argparse
 import logging
 import sys
 from importlib import import_module
+from typing import NoReturn
 
 from weldplan.errors import WeldplanError
 
 #: command name -> module implementing it
 COMMANDS: dict[str, str] = {
     "bench": "weldplan.commands.bench",
+    "plan": "weldplan.commands.plan",
     "demo": "weldplan.commands.demo",
+    "verify": "weldplan.commands.verify",
+    "view": "weldplan.commands.view",
     "planar": "weldplan.commands.planar",
 }
 
 
+class _Parser(argparse.ArgumentParser):
+    """An ArgumentParser whose usage errors are one line (``prog: error: ...``), exit code 2."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="weldplan",
         description="Collision-free welding-torch routes through car bodies, and 2D path planning.",
     )
     parser.add_argument("-v", "--verbose", action="count", default=0, help="more log output")
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
     for name, module_name in COMMANDS.items():
         module = import_module(module_name)

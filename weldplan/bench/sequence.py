@@ -30,6 +30,7 @@ from weldplan.io.tsplib import read_best_solutions, read_tour, read_tsplib, tour
 from weldplan.optim.discrete.costs import cost_matrix
 from weldplan.optim.discrete.held_karp import held_karp_tour
 from weldplan.optim.discrete.sequence import solve_sequence
+from weldplan.weld.demo_part import TABLE1_XYZ
 
 log = logging.getLogger(__name__)
 
@@ -38,26 +39,8 @@ HELP = "weld sequencer: TSP-PSO, polish, Held-Karp vs TSPLIB optima and OR-Tools
 INSTANCES = ("eil51", "berlin52", "st70", "att48", "kroA100", "ch130", "a280", "lin318")
 DEFAULT_DATA = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "tsplib"
 
-# Wang et al. 2017, Table 1: the 15 weld joints (mm); joint id = row + 1.
-PAPER_JOINTS = np.array(
-    [
-        [1443.60, -53.20, 686.00],
-        [1399.56, -60.05, 688.49],
-        [1356.00, -66.67, 689.57],
-        [1456.36, -48.49, 669.34],
-        [1417.70, -54.51, 671.94],
-        [1379.31, -60.57, 674.61],
-        [1504.91, -126.99, 813.51],
-        [1493.74, -109.17, 801.14],
-        [1474.16, -111.25, 791.00],
-        [1442.88, -117.47, 779.19],
-        [1414.82, -122.26, 771.35],
-        [1356.71, -132.48, 759.65],
-        [1554.17, -94.37, 909.95],
-        [1539.25, -99.03, 879.83],
-        [1549.76, -8.79, 903.34],
-    ]
-)
+# Wang et al. 2017, Table 1: the 15 weld joints (mm); joint id = row + 1 (one copy, in demo_part).
+PAPER_JOINTS = TABLE1_XYZ
 PAPER_ORDER = (15, 13, 14, 7, 8, 9, 10, 11, 12, 3, 6, 2, 5, 1, 4)
 
 

@@ -15,6 +15,8 @@ BENCHES: dict[str, str] = {
     "mealpy": "weldplan.bench.mealpy_peer",
     "local": "weldplan.bench.local",
     "sequence": "weldplan.bench.sequence",
+    "route": "weldplan.bench.route",
+    "scale": "weldplan.bench.scale",
     "planar": "weldplan.bench.planar",
     "tour": "weldplan.bench.tour",
 }

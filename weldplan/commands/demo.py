@@ -1,12 +1,12 @@
-"""``weldplan demo``: the embedded demo cell (Wang et al. 2017's 15 joints on a generated part)."""
+"""``weldplan demo``: plan the embedded demo cell end to end (route.csv and route.html)."""
 
 from __future__ import annotations
 
 import argparse
-import json
-import sys
 
-HELP = "load the embedded demo cell and print its summary"
+from weldplan.commands._planning import add_planning_arguments, run_planning
+
+HELP = "plan, verify and export the embedded demo cell (15 joints of Wang et al. 2017)"
 
 
 def positive_mm(text: str) -> float:
@@ -20,30 +20,39 @@ def positive_mm(text: str) -> float:
     return value
 
 
-def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument(
-        "--pitch", type=positive_mm, default=5.0, help="voxel side in mm (default 5)"
-    )
-    parser.add_argument(
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--pitch", type=positive_mm, default=5.0, help="voxel side in mm (default 5)")
+    p.add_argument(
         "--clearance", type=positive_mm, default=5.0, help="torch-tip clearance in mm (default 5)"
     )
-    parser.add_argument(
+    p.add_argument(
         "--margin",
         type=positive_mm,
         default=150.0,
         help="margin around the joints in mm (default 150)",
     )
-    parser.add_argument("--json", action="store_true", help="print the summary as JSON")
+    add_planning_arguments(p, default_output="route.csv")
+    p.set_defaults(html="route.html")
+    p.add_argument(
+        "--no-html", dest="html", action="store_const", const=None, help="do not write route.html"
+    )
 
 
 def run(args: argparse.Namespace) -> int:
-    from weldplan.weld.cell import demo_cell
+    from weldplan.weld.pipeline import PlanConfig
 
-    cell = demo_cell(pitch=args.pitch, clearance=args.clearance, margin=args.margin)
-    if args.json:
-        json.dump(cell.summary(), sys.stdout, indent=2)
-        sys.stdout.write("\n")
-    else:
-        sys.stdout.write("weldplan demo cell (joints of Wang et al. 2017, Table 1)\n")
-        sys.stdout.write(cell.format_summary() + "\n")
-    return 0
+    PlanConfig(clearance=args.clearance, pitch=args.pitch, margin=args.margin)  # validates
+
+    def make_cell():
+        from weldplan.weld.cell import demo_cell
+
+        return demo_cell(pitch=args.pitch, clearance=args.clearance, margin=args.margin)
+
+    return run_planning(
+        args,
+        make_cell,
+        title="weldplan demo (Wang et al. 2017, 15 joints)",
+        note="the paper: lower bound 595.10 mm, its collision-free route 599.72 mm (+0.78 %), "
+        "measured between joints without approach segments",
+        show_cell=True,
+    )

@@ -1,0 +1,271 @@
+"""What ``weldplan plan`` and ``weldplan demo`` share: options, the run, the summary table.
+
+The run renders every output in memory first and writes the files only after the route passed
+the independent verification; each file is written atomically. A run that fails, at any stage,
+leaves existing output files exactly as they were.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import logging
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from weldplan.commands._progress import ProgressBars
+from weldplan.errors import WeldplanError
+
+log = logging.getLogger(__name__)
+
+
+def add_planning_arguments(p: argparse.ArgumentParser, *, default_output: str | None) -> None:
+    """Options of the planning run (outputs, planner, sequencer, seed, jobs, quiet)."""
+    if default_output is None:
+        p.add_argument("-o", "--output", required=True, help="route CSV to write")
+    else:
+        p.add_argument(
+            "-o", "--output", default=default_output, help=f"route CSV (default {default_output})"
+        )
+    p.add_argument("--json", metavar="F", help="also write the whole route as JSON")
+    p.add_argument("--html", metavar="F", help="also write a self-contained 3D page (meshcat)")
+    p.add_argument(
+        "--post",
+        choices=_post_names(),
+        help="also write a robot program next to the CSV (rapid: ABB .mod, krl: KUKA .src)",
+    )
+    p.add_argument("--post-file", metavar="F", help="where --post writes (default: CSV stem)")
+    p.add_argument(
+        "--planner",
+        default="so-aco",
+        choices=("so-aco", "aco", "exact"),
+        help="local planner for blocked pairs (default so-aco)",
+    )
+    p.add_argument(
+        "--sequencer",
+        default="auto",
+        choices=("auto", "pso", "exact", "nn"),
+        help="joint order: auto = exact up to 13 joints, else TSP-PSO + polish (default auto)",
+    )
+    p.add_argument(
+        "--aco",
+        metavar="N",
+        type=int,
+        default=10,
+        help="SO-ACO iterations N = ants M (default 10; the paper also runs 50)",
+    )
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--jobs", type=int, default=1, help="processes planning local paths (default 1)")
+    p.add_argument(
+        "--dask",
+        metavar="ADDR",
+        help="plan local paths on Dask: 'local' starts a LocalCluster of --jobs workers (at least "
+        "2), 'tcp://HOST:PORT' joins a running scheduler (needs the 'dask' extra)",
+    )
+    p.add_argument(
+        "--candidates",
+        metavar="K",
+        type=int,
+        help="check and plan up front only each joint's K nearest pairs, the rest on demand "
+        "(for hundreds of joints; default: every pair checked straight)",
+    )
+    p.add_argument(
+        "--candidate-radius",
+        metavar="MM",
+        type=float,
+        help="with --candidates: neighbours farther than this are planned only on demand",
+    )
+    p.add_argument("--quiet", action="store_true", help="no progress bars and no summary on stdout")
+
+
+def _post_names() -> list[str]:
+    from weldplan.io.export import POSTS
+
+    return sorted(POSTS)
+
+
+def config_from_args(args: argparse.Namespace) -> Any:
+    from weldplan.weld.pipeline import PlanConfig
+
+    if args.aco < 1:
+        raise WeldplanError(f"--aco must be >= 1, got {args.aco}")
+    if args.jobs < 1:
+        raise WeldplanError(f"--jobs must be >= 1, got {args.jobs}")
+    return PlanConfig(
+        clearance=getattr(args, "clearance", 5.0),
+        pitch=getattr(args, "pitch", 5.0),
+        margin=getattr(args, "margin", 150.0),
+        planner=args.planner,
+        sequencer=args.sequencer,
+        aco={"n_iterations": args.aco, "n_ants": args.aco},
+        candidates=getattr(args, "candidates", None),
+        candidate_radius=getattr(args, "candidate_radius", None),
+    )
+
+
+def _outputs(args: argparse.Namespace) -> dict[str, Path]:
+    """Every file the run will write, checked before any work is done."""
+    from weldplan.io.export import POSTS
+
+    out = {"csv": Path(args.output)}
+    if args.json:
+        out["json"] = Path(args.json)
+    if args.html:
+        out["html"] = Path(args.html)
+    if args.post:
+        out["post"] = (
+            Path(args.post_file)
+            if args.post_file
+            else out["csv"].with_suffix(POSTS[args.post].suffix)
+        )
+    elif args.post_file:
+        raise WeldplanError("--post-file needs --post rapid|krl")
+    seen: dict[Path, str] = {}
+    for kind, path in out.items():
+        folder = path.parent if str(path.parent) else Path(".")
+        if not folder.is_dir():
+            raise WeldplanError(f"{path}: folder {folder} does not exist")
+        if path.is_dir():
+            raise WeldplanError(f"{path}: is a folder, not a file")
+        key = path.resolve()
+        if key in seen:
+            raise WeldplanError(f"{path}: given for both {seen[key]} and {kind}")
+        seen[key] = kind
+    return out
+
+
+def run_planning(
+    args: argparse.Namespace,
+    make_cell: Callable[[], Any],
+    *,
+    title: str,
+    note: str | None = None,
+    show_cell: bool = False,
+) -> int:
+    """Build the cell, plan, verify, write; print the summary. Returns the exit code.
+
+    ``show_cell`` prints the cell's summary (part, grid, virtual joints) before the route's.
+    """
+    from weldplan.io.export import render_post, to_csv_text
+    from weldplan.viz.viewer import static_html
+    from weldplan.weld.pipeline import plan_route
+    from weldplan.weld.verify import verify_route
+
+    outputs = _outputs(args)
+    config = config_from_args(args)
+    bars = ProgressBars(enabled=False if args.quiet else None)
+    t_all = time.perf_counter()
+    times: dict[str, float] = {}
+
+    with bars.stage("cell") as st:
+        cell = make_cell()
+    times["cell"] = st.seconds
+
+    with contextlib.ExitStack() as stack:
+        executor = None
+        dask = getattr(args, "dask", None)
+        if dask:
+            from weldplan.weld.parallel import dask_executor
+
+            executor = stack.enter_context(dask_executor(dask, workers=max(2, args.jobs)))
+        elif args.jobs > 1:
+            from weldplan.weld.parallel import process_pool
+
+            executor = stack.enter_context(process_pool(cell, args.jobs))
+        try:
+            route = plan_route(cell, config=config, rng=args.seed, executor=executor, progress=bars)
+        finally:
+            bars.close()
+    for k in ("straight", "local", "sequence"):
+        times[k] = route.stats["seconds"][k]
+
+    with bars.stage("verify") as st:
+        report = verify_route(route, cell.part, joints=cell.joints)
+    times["verify"] = st.seconds
+    if not report.ok:
+        print(f"weldplan: {report.describe()}; nothing written", file=sys.stderr)
+        return 1
+
+    with bars.stage("export") as st:
+        texts = {"csv": to_csv_text(route)}
+        if "json" in outputs:
+            texts["json"] = route.to_json() + "\n"
+        if "html" in outputs:
+            texts["html"] = static_html(route, cell.part)
+        if "post" in outputs:
+            texts["post"] = render_post(route, args.post)
+        from weldplan.io.export import write_text_atomic
+
+        for kind, path in outputs.items():
+            write_text_atomic(path, texts[kind])
+    times["export"] = st.seconds
+    times["total"] = time.perf_counter() - t_all
+    if not args.quiet:
+        if show_cell and hasattr(cell, "format_summary"):
+            print(cell.format_summary())
+            print()
+        print(summary_table(route, times, outputs, title=title, report=report, note=note))
+    return 0
+
+
+def _gaps(route: Any) -> str:
+    """The gap to the straight-line bound, and to the tighter bounds that the reader can use."""
+    if len(route.joint_ids) < 2 or not route.lower_bound > 0:
+        return "n/a"
+    parts = [
+        f"{100 * route.gap:.2f} % over the straight-line bound",
+        f"{100 * (route.inner_length / route.lower_bound - 1):+.2f} % between virtual joints",
+    ]
+    b = route.stats.get("bound_with_approaches")
+    if b is not None and b == b and b > 0:
+        parts.append(
+            f"{100 * (route.length / b - 1):.2f} % over the bound with approaches ({b:.2f} mm)"
+        )
+    return "; ".join(parts)
+
+
+def summary_table(
+    route: Any,
+    times: dict[str, float],
+    outputs: dict[str, Path],
+    *,
+    title: str,
+    report: Any,
+    note: str | None = None,
+) -> str:
+    """The table printed at the end of a run."""
+    s = route.stats
+    rows = [
+        ("joints", f"{len(route.joint_ids)}"),
+        ("pairs", f"{s['pairs']} ({s['pairs_straight']} straight, {s['pairs_blocked']} blocked)"),
+        (
+            "pairs planned",
+            f"{s['pairs_planned']} of {s['pairs_blocked']} blocked "
+            f"({route.settings['planner']}, {s['rounds']} sequencing rounds"
+            + (f", {s['pairs_failed']} failed" if s["pairs_failed"] else "")
+            + ")",
+        ),
+        ("sequencer", f"{s['sequence_method']}"),
+        (
+            "route length",
+            f"{route.length:.2f} mm ({route.inner_length:.2f} mm between virtual joints "
+            f"+ {route.approach_length:.2f} mm of approaches to the weld spots)",
+        ),
+        ("lower bound", f"{route.lower_bound:.2f} mm ({route.lower_bound_method})"),
+        ("gap", _gaps(route)),
+        ("order", "-".join(route.order)),
+        ("verified", report.describe()),
+        (
+            "time",
+            ", ".join(f"{k} {v:.2f} s" for k, v in times.items()),
+        ),
+        ("written", ", ".join(str(p) for p in outputs.values())),
+    ]
+    w = max(len(k) for k, _ in rows)
+    lines = [title, "-" * len(title)] + [f"{k:<{w}}  {v}" for k, v in rows]
+    if note:
+        lines.append(note)
+    return "\n".join(lines)

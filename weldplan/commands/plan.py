@@ -1,0 +1,58 @@
+"""``weldplan plan MESH JOINTS -o route.csv``: the ordered, verified, collision-free route."""
+
+from __future__ import annotations
+
+import argparse
+
+from weldplan.commands._planning import add_planning_arguments, run_planning
+from weldplan.commands.demo import positive_mm
+
+HELP = "plan the ordered collision-free torch route through the weld joints of a part"
+
+
+def add_cell_arguments(p: argparse.ArgumentParser) -> None:
+    """Options for loading a part (shared by plan, verify and view)."""
+    p.add_argument(
+        "--units", default="mm", choices=("mm", "m"), help="units of the mesh and joints files"
+    )
+    p.add_argument("--scale", type=float, help="extra scale factor applied to the mesh")
+    p.add_argument(
+        "--length", type=float, help="scale the mesh so its longest side is this many mm"
+    )
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("mesh", help="part mesh (STL, OBJ, PLY, OFF, GLB/GLTF)")
+    p.add_argument("joints", help="weld joints CSV (id, x, y, z[, dx, dy, dz])")
+    add_cell_arguments(p)
+    p.add_argument("--clearance", type=positive_mm, default=5.0, help="torch-tip radius, mm (5)")
+    p.add_argument(
+        "--pitch", type=positive_mm, default=5.0, help="voxel size of the search grid, mm (5)"
+    )
+    p.add_argument(
+        "--margin", type=positive_mm, default=150.0, help="grid margin around joints, mm (150)"
+    )
+    add_planning_arguments(p, default_output=None)
+
+
+def run(args: argparse.Namespace) -> int:
+    from weldplan.weld.pipeline import PlanConfig
+
+    # validates clearance, pitch and margin before the (slow) cell is built
+    PlanConfig(clearance=args.clearance, pitch=args.pitch, margin=args.margin)
+
+    def make_cell():
+        from weldplan.weld.cell import load_cell
+
+        return load_cell(
+            args.mesh,
+            args.joints,
+            units=args.units,
+            scale=args.scale,
+            length=args.length,
+            pitch=args.pitch,
+            clearance=args.clearance,
+            margin=args.margin,
+        )
+
+    return run_planning(args, make_cell, title=f"weldplan plan {args.mesh} {args.joints}")

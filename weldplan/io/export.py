@@ -1,0 +1,424 @@
+"""Exports of a :class:`~weldplan.weld.route.Route` for offline programming: CSV, JSON, robot posts.
+
+Every writer is atomic: the text is written to a temporary file in the destination folder, flushed
+to disk, then renamed over the destination with :func:`os.replace`. A run that fails (an error
+while rendering, a full disk, an interrupt) leaves an existing file exactly as it was.
+
+CSV layout (one row per waypoint, in travel order)::
+
+    step,kind,joint_id,x,y,z,tool_x,tool_y,tool_z
+    0,weld,15,1549.76,-8.79,903.34,,,
+    1,via,,1549.76,-13.79,903.34,,,
+    ...
+
+``kind`` is ``weld`` at a weld spot and ``via`` at a waypoint between spots (virtual joints and
+local-path points); ``tool_*`` is the joint's unit approach direction as the joints CSV gave it
+(columns ``nx, ny, nz``: from the weld spot towards the side the torch comes from), empty where
+the CSV gave none and always on via rows. Coordinates are mm. The robot posts point the tool's z
+axis (the torch axis, towards the work) against that direction, into the surface.
+
+Robot posts are pluggable: a post is a function ``render(route, **options) -> str`` registered under
+a name with :func:`register_post`. Two ship with weldplan, both documented examples rather than
+cell-ready programs (tool, work object, speeds and the weld process instructions are the
+integrator's): ``rapid`` (an ABB RAPID module) and ``krl`` (a KUKA KRL ``.src``).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import logging
+import os
+import tempfile
+from collections.abc import Callable
+from dataclasses import dataclass
+from os import PathLike
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from weldplan.errors import InputError, WeldplanError
+from weldplan.weld.route import Route
+
+log = logging.getLogger(__name__)
+
+CSV_FIELDS = ("step", "kind", "joint_id", "x", "y", "z", "tool_x", "tool_y", "tool_z")
+
+#: decimals written for coordinates (mm) and unit directions
+_MM_DECIMALS = 4
+_DIR_DECIMALS = 6
+
+
+# ---------------------------------------------------------------------------- atomic writes
+def write_text_atomic(path: str | PathLike[str], text: str, *, encoding: str = "utf-8") -> Path:
+    """Write ``text`` to ``path`` whole or not at all (temp file in the same folder + rename).
+
+    Returns the path written. Raises :class:`~weldplan.errors.WeldplanError` when the folder does
+    not exist, so the CLI reports it in one line.
+    """
+    path = Path(path)
+    folder = path.parent if str(path.parent) else Path(".")
+    if not folder.is_dir():
+        raise WeldplanError(f"{path}: folder {folder} does not exist")
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
+    try:
+        with os.fdopen(fd, "w", encoding=encoding, newline="") as f:
+            f.write(text)
+            f.flush()
+            os.fsync(f.fileno())
+        if path.exists():
+            os.chmod(tmp, path.stat().st_mode & 0o777)
+        else:
+            umask = os.umask(0)
+            os.umask(umask)
+            os.chmod(tmp, 0o666 & ~umask)
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except FileNotFoundError:
+            pass
+        raise
+    log.debug("wrote %s (%d chars)", path, len(text))
+    return path
+
+
+# ---------------------------------------------------------------------------- rows
+def route_rows(route: Route) -> list[dict[str, Any]]:
+    """The route as waypoint rows (see the module docstring), in travel order.
+
+    Weld spots shared by consecutive legs appear once.
+    """
+    rows: list[dict[str, Any]] = []
+
+    def add(kind: str, joint_id: str, p: NDArray[np.float64]) -> None:
+        d = None
+        if kind == "weld" and route.directions is not None:
+            d = route.directions[route.index_of(joint_id)]
+        rows.append(
+            {
+                "step": len(rows),
+                "kind": kind,
+                "joint_id": joint_id if kind == "weld" else "",
+                "x": float(p[0]),
+                "y": float(p[1]),
+                "z": float(p[2]),
+                "tool": None if d is None or not np.all(np.isfinite(d)) else d,
+            }
+        )
+
+    if not route.legs:
+        for jid in route.order:
+            add("weld", jid, route.joint_xyz[route.index_of(jid)])
+        return rows
+    first = route.legs[0]
+    add("weld", first.from_id, first.points[0])
+    for leg in route.legs:
+        for p in leg.points[1:-1]:
+            add("via", "", p)
+        add("weld", leg.to_id, leg.points[-1])
+    return rows
+
+
+def to_csv_text(route: Route) -> str:
+    """The CSV text of :func:`write_csv`."""
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(CSV_FIELDS)
+    for r in route_rows(route):
+        tool = r["tool"]
+        tool_cells = ["", "", ""] if tool is None else [f"{v:.{_DIR_DECIMALS}f}" for v in tool]
+        w.writerow(
+            [r["step"], r["kind"], r["joint_id"]]
+            + [f"{r[k]:.{_MM_DECIMALS}f}" for k in ("x", "y", "z")]
+            + tool_cells
+        )
+    return buf.getvalue()
+
+
+def write_csv(route: Route, path: str | PathLike[str]) -> Path:
+    """Write the route's waypoints as CSV (layout in the module docstring), atomically."""
+    return write_text_atomic(path, to_csv_text(route))
+
+
+def write_json(route: Route, path: str | PathLike[str]) -> Path:
+    """Write the whole route (:meth:`Route.to_json`), atomically."""
+    return write_text_atomic(path, route.to_json() + "\n")
+
+
+def read_route(path: str | PathLike[str]) -> Route:
+    """Read a route JSON written by :func:`write_json`.
+
+    Raises
+    ------
+    InputError
+        When the file is not JSON or not a weldplan route, naming the file (and line for JSON
+        syntax errors).
+    """
+    text = Path(path).read_text(encoding="utf-8")
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise InputError(f"not valid JSON ({exc.msg})", path=path, line=exc.lineno) from None
+    if not isinstance(data, dict):
+        raise InputError("not a weldplan route (expected a JSON object)", path=path)
+    try:
+        return Route.from_dict(data)
+    except (KeyError, TypeError, ValueError) as exc:
+        msg = f"missing field {exc}" if isinstance(exc, KeyError) else str(exc)
+        raise InputError(f"not a valid weldplan route: {msg}", path=path) from None
+
+
+# ---------------------------------------------------------------------------- orientations
+def tool_frame(direction: NDArray[np.float64] | None) -> NDArray[np.float64]:
+    """``(3, 3)`` rotation whose z column is the tool axis.
+
+    With a ``direction`` (unit, (3,)) the tool's z axis points along it and its x axis is world x
+    projected onto the normal plane (world y when the tool axis is parallel to x). Without one the
+    tool points straight down (world -z), x along world x.
+    """
+    if direction is None or not np.all(np.isfinite(direction)):
+        return np.diag([1.0, -1.0, -1.0])
+    z = np.asarray(direction, dtype=float)
+    z = z / np.linalg.norm(z)
+    ref = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = ref - z * np.dot(ref, z)
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    return np.column_stack([x, y, z])
+
+
+def quaternion(R: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``(4,)`` unit quaternion ``[w, x, y, z]`` of rotation ``R (3, 3)`` (ABB's q1..q4 order)."""
+    t = np.trace(R)
+    if t > 0:
+        s = 2.0 * np.sqrt(1.0 + t)
+        q = [0.25 * s, (R[2, 1] - R[1, 2]) / s, (R[0, 2] - R[2, 0]) / s, (R[1, 0] - R[0, 1]) / s]
+    elif R[0, 0] > R[1, 1] and R[0, 0] > R[2, 2]:
+        s = 2.0 * np.sqrt(1.0 + R[0, 0] - R[1, 1] - R[2, 2])
+        q = [(R[2, 1] - R[1, 2]) / s, 0.25 * s, (R[0, 1] + R[1, 0]) / s, (R[0, 2] + R[2, 0]) / s]
+    elif R[1, 1] > R[2, 2]:
+        s = 2.0 * np.sqrt(1.0 + R[1, 1] - R[0, 0] - R[2, 2])
+        q = [(R[0, 2] - R[2, 0]) / s, (R[0, 1] + R[1, 0]) / s, 0.25 * s, (R[1, 2] + R[2, 1]) / s]
+    else:
+        s = 2.0 * np.sqrt(1.0 + R[2, 2] - R[0, 0] - R[1, 1])
+        q = [(R[1, 0] - R[0, 1]) / s, (R[0, 2] + R[2, 0]) / s, (R[1, 2] + R[2, 1]) / s, 0.25 * s]
+    q = np.asarray(q)
+    q /= np.linalg.norm(q)
+    return q if q[0] >= 0 else -q
+
+
+def euler_zyx_deg(R: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``(3,)`` KUKA A, B, C in degrees: ``R = Rz(A) @ Ry(B) @ Rx(C)``."""
+    B = np.arctan2(-R[2, 0], np.hypot(R[0, 0], R[1, 0]))
+    if np.hypot(R[0, 0], R[1, 0]) < 1e-9:  # gimbal lock: put everything in A
+        A = np.arctan2(-R[0, 1], R[1, 1])
+        C = 0.0
+    else:
+        A = np.arctan2(R[1, 0], R[0, 0])
+        C = np.arctan2(R[2, 1], R[2, 2])
+    return np.degrees([A, B, C])
+
+
+def _program_rows(route: Route) -> list[dict[str, Any]]:
+    """Rows for a robot program: the route's rows framed by an approach and a retreat.
+
+    The robot comes from anywhere, so the program first moves (joint move) to the first virtual
+    joint, the approach point of the first weld, and ends by retreating to the last virtual
+    joint; both points are already on the verified route.
+    """
+    rows = route_rows(route)
+    if not route.legs:
+        return rows
+    first, last = route.legs[0].points[1], route.legs[-1].points[-2]
+    pre = {"kind": "approach", "joint_id": "", "x": first[0], "y": first[1], "z": first[2]}
+    post = {"kind": "retreat", "joint_id": "", "x": last[0], "y": last[1], "z": last[2]}
+    out = [pre, *rows, post]
+    for k, r in enumerate(out):
+        r["step"] = k
+        r.setdefault("tool", None)
+    return out
+
+
+def _fmt(v: float, decimals: int) -> str:
+    """Fixed-point text without a negative zero."""
+    return f"{round(float(v), decimals) + 0.0:.{decimals}f}"
+
+
+def _row_frames(route: Route, rows: list[dict[str, Any]]) -> list[NDArray[np.float64]]:
+    """Tool frame per row: a weld row uses its joint's approach direction, a via the next weld's.
+
+    The tool z axis points along the torch towards the work: against the approach direction.
+    """
+    frames: list[NDArray[np.float64]] = [np.eye(3)] * len(rows)
+    nxt: NDArray[np.float64] | None = None
+    for k in range(len(rows) - 1, -1, -1):
+        if rows[k]["kind"] == "weld":
+            nxt = rows[k]["tool"]
+        frames[k] = tool_frame(None if nxt is None else -np.asarray(nxt, dtype=float))
+    # the retreat keeps the orientation of the last weld
+    if rows and rows[-1]["kind"] == "retreat" and len(rows) > 1:
+        frames[-1] = frames[-2]
+    return frames
+
+
+# ---------------------------------------------------------------------------- posts
+@dataclass(frozen=True)
+class Post:
+    """A robot-language post: ``render(route, **options) -> str`` and the file suffix it writes."""
+
+    name: str
+    suffix: str
+    render: Callable[..., str]
+    description: str = ""
+
+
+#: name -> Post; add one with :func:`register_post`
+POSTS: dict[str, Post] = {}
+
+
+def register_post(
+    name: str, suffix: str, description: str = ""
+) -> Callable[[Callable[..., str]], Callable[..., str]]:
+    """Decorator registering ``render(route, **options) -> str`` as post ``name``.
+
+    Example
+    -------
+    >>> @register_post("csv-xyz", ".txt", "bare coordinates")
+    ... def _xyz(route, **options):
+    ...     return "".join(f"{x} {y} {z}\\n" for x, y, z in route.waypoints())
+    """
+
+    def deco(render: Callable[..., str]) -> Callable[..., str]:
+        POSTS[name] = Post(name, suffix, render, description)
+        return render
+
+    return deco
+
+
+def render_post(route: Route, post: str, **options: Any) -> str:
+    """The program text of ``route`` in the language of registered post ``post``."""
+    if post not in POSTS:
+        raise WeldplanError(f"unknown post {post!r}; known posts: {', '.join(sorted(POSTS))}")
+    return POSTS[post].render(route, **options)
+
+
+def write_post(
+    route: Route, path: str | PathLike[str], post: str = "rapid", **options: Any
+) -> Path:
+    """Write ``route`` as a robot program with post ``post``, atomically."""
+    return write_text_atomic(path, render_post(route, post, **options))
+
+
+def _name(path_stem: str, default: str) -> str:
+    """A robot-language identifier: letters, digits, underscores, a letter first."""
+    s = "".join(c if (c.isascii() and c.isalnum()) else "_" for c in path_stem)
+    if not s or not s[0].isalpha():
+        s = default
+    return s[:24]
+
+
+@register_post("rapid", ".mod", "ABB RAPID module of robtargets with MoveJ/MoveL")
+def render_rapid(
+    route: Route,
+    *,
+    module: str = "weldplan_route",
+    tool: str = "tool0",
+    wobj: str = "wobj0",
+    air_speed: str = "v200",
+    approach_speed: str = "v50",
+    zone: str = "z5",
+) -> str:
+    """An ABB RAPID module: one ``CONST robtarget`` per waypoint and a ``PROC main()``.
+
+    The first move is a ``MoveJ`` to the approach point of the first weld (its virtual joint,
+    from wherever the robot is); every other move is ``MoveL``, because the route was verified
+    as straight Cartesian segments and a joint move between them could leave the checked
+    corridor. Weld spots are reached with zone ``fine`` at ``approach_speed`` and carry a
+    comment naming the joint: add the process instructions (``SpotL``, ``ArcL``, a gun routine)
+    there. Via points fly by with ``zone``. Orientation: the tool z axis against the joint's
+    approach direction (into the surface) when the joints CSV gave one, else straight down; via
+    points take the orientation of the next weld. Configuration data ``[0,0,0,0]`` and external
+    axes ``9E+09`` (unused) are placeholders for the integrator. Coordinates are mm in the work
+    object ``wobj``.
+    """
+    module = _name(module, "weldplan_route")
+    rows = _program_rows(route)
+    frames = _row_frames(route, rows)
+    out = [
+        f"MODULE {module}",
+        "    ! Generated by weldplan: an ordered, collision-checked torch route.",
+        f"    ! {len(route.joint_ids)} weld joints, {len(rows)} targets, "
+        f"length {route.length:.2f} mm, order {'-'.join(route.order)}",
+        "    ! Tool, work object, speeds, configurations and weld instructions are placeholders.",
+    ]
+    names = []
+    for r, R in zip(rows, frames, strict=True):
+        name = f"p{r['step']:04d}"
+        names.append(name)
+        q = quaternion(R)
+        xyz = ",".join(_fmt(r[k], 3) for k in ("x", "y", "z"))
+        quat = ",".join(_fmt(v, 6) for v in q)
+        tag = f" ! weld {r['joint_id']}" if r["kind"] == "weld" else ""
+        out.append(
+            f"    CONST robtarget {name}:=[[{xyz}],[{quat}],[0,0,0,0],"
+            f"[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];{tag}"
+        )
+    out += ["", "    PROC main()"]
+    for k, (r, name) in enumerate(zip(rows, names, strict=True)):
+        weld = r["kind"] == "weld"
+        speed = approach_speed if weld else air_speed
+        z = "fine" if weld else zone
+        move = "MoveJ" if k == 0 else "MoveL"
+        line = f"        {move} {name},{speed},{z},{tool}\\WObj:={wobj};"
+        if weld:
+            line += f" ! weld joint {r['joint_id']}"
+        out.append(line)
+    out += ["    ENDPROC", "ENDMODULE", ""]
+    return "\n".join(out)
+
+
+@register_post("krl", ".src", "KUKA KRL program with PTP/LIN moves")
+def render_krl(
+    route: Route,
+    *,
+    program: str = "weldplan_route",
+    tool: int = 1,
+    base: int = 1,
+    vel_cp: float = 0.2,
+) -> str:
+    """A KUKA KRL ``.src``: ``PTP`` to the first weld's approach point, then ``LIN`` moves.
+
+    Frames are ``{X, Y, Z, A, B, C}`` in mm and degrees (``A, B, C`` = Z-Y-X Euler angles of the
+    tool frame, see :func:`euler_zyx_deg`). Via points use ``C_DIS`` approximation; weld spots are
+    exact stops followed by a comment where the process instructions go. ``$TOOL``/``$BASE``
+    indices and ``$VEL.CP`` (m/s) are placeholders for the integrator.
+    """
+    program = _name(program, "weldplan_route")
+    rows = _program_rows(route)
+    frames = _row_frames(route, rows)
+    out = [
+        f"DEF {program}()",
+        "  ; Generated by weldplan: an ordered, collision-checked torch route.",
+        f"  ; {len(route.joint_ids)} weld joints, {len(rows)} points, length {route.length:.2f} mm",
+        f"  $TOOL = TOOL_DATA[{tool}]",
+        f"  $BASE = BASE_DATA[{base}]",
+        f"  $VEL.CP = {vel_cp}",
+        "  $APO.CDIS = 5",
+    ]
+    for k, (r, R) in enumerate(zip(rows, frames, strict=True)):
+        a, b, c = euler_zyx_deg(R)
+        vals = [r["x"], r["y"], r["z"], a, b, c]
+        frame = (
+            "{" + ", ".join(f"{n} {_fmt(v, 3)}" for n, v in zip("XYZABC", vals, strict=True)) + "}"
+        )
+        move = "PTP" if k == 0 else "LIN"
+        if r["kind"] == "weld":
+            out.append(f"  {move} {frame} ; weld joint {r['joint_id']}")
+        else:
+            out.append(f"  {move} {frame} C_DIS")
+    out += ["END", ""]
+    return "\n".join(out)

@@ -1,0 +1,381 @@
+"""The meshcat viewer of a route: part, labelled joints, legs coloured by leg, vias, a torch.
+
+Three ways to see the same scene (all built by :func:`build_scene`):
+
+- :func:`write_html` / :func:`static_html`: a self-contained HTML page (the meshcat viewer's
+  JavaScript and every scene command inlined) that works offline, from a file or an e-mail;
+- :func:`jupyter_view` (and ``Route.show()``): that page inline in a notebook cell;
+- :func:`view_route`: a live meshcat server (``weldplan view``), for stepping and inspecting.
+
+The static page needs no meshcat server: the scene commands are recorded by
+:class:`RecordingWindow`, which packs them exactly as meshcat's own server does for
+``Visualizer.static_html()`` (same scene tree, same msgpack blobs, same page template). The torch
+is a meshcat animation along the route at constant speed: the viewer's *Animations* panel plays,
+pauses and scrubs it (step it with the time slider).
+
+The scene is shown centred on the origin (grid and axes hidden) and scaled to about 2 viewer
+units (meshcat's camera is made for objects of a metre or two); the labels and sizes are relative
+to the part, so a door flange and a whole body both read well. Algorithms never import this module.
+"""
+
+from __future__ import annotations
+
+import base64
+import colorsys
+import logging
+import os
+from os import PathLike
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import trimesh
+from numpy.typing import NDArray
+
+from weldplan.weld.route import Route
+
+log = logging.getLogger(__name__)
+
+#: the scene spans about this many viewer units (meshcat's default camera sits ~3 units away)
+SCENE_SIZE = 2.0
+#: seconds the torch takes for the whole route in the animation
+ANIMATION_SECONDS = 20.0
+
+
+def _meshcat() -> Any:
+    try:
+        import meshcat
+        import meshcat.geometry  # noqa: F401
+    except ImportError as exc:  # pragma: no cover - meshcat is a runtime dependency
+        raise ImportError("the viewer needs meshcat: pip install meshcat") from exc
+    return meshcat
+
+
+def _part_mesh(part: Any) -> trimesh.Trimesh | None:
+    if part is None:
+        return None
+    mesh = getattr(part, "part", part)
+    if not isinstance(mesh, trimesh.Trimesh):
+        raise TypeError(f"expected a trimesh.Trimesh or a Cell, got {type(part)}")
+    return mesh
+
+
+def leg_colors(n: int) -> list[int]:
+    """``n`` distinct colours (0xRRGGBB) around the hue circle, for the legs in order."""
+    out = []
+    for k in range(n):
+        r, g, b = colorsys.hsv_to_rgb((k * 0.618033988749895) % 1.0, 0.85, 0.95)
+        out.append((int(r * 255) << 16) | (int(g * 255) << 8) | int(b * 255))
+    return out
+
+
+# ---------------------------------------------------------------------------- recording window
+class RecordingWindow:
+    """A stand-in for meshcat's ``ViewerWindow`` that records commands instead of sending them.
+
+    It keeps the scene tree the way meshcat's ZMQ server does (an object, its properties, a
+    transform and an animation per path) and renders the same static page
+    (:meth:`get_scene`), with no server process and no sockets.
+    """
+
+    def __init__(self) -> None:
+        from meshcat.servers.tree import SceneTree
+
+        self.tree = SceneTree()
+        self.web_url = None
+        self.zmq_url = None
+
+    def send(self, command: Any) -> None:
+        import umsgpack
+        from meshcat.servers.tree import SceneTree, find_node
+
+        data = command.lower()
+        cmd = data["type"]
+        path = [p for p in data["path"].split("/") if p]
+        blob = umsgpack.packb(data)
+        if cmd == "set_object":
+            node = find_node(self.tree, path)
+            node.object = blob
+            node.properties = []
+        elif cmd == "set_transform":
+            find_node(self.tree, path).transform = blob
+        elif cmd == "set_property":
+            find_node(self.tree, path).properties.append(blob)
+        elif cmd == "set_animation":
+            find_node(self.tree, path).animation = blob
+        elif cmd == "delete":
+            if path:
+                parent = find_node(self.tree, path[:-1])
+                parent.pop(path[-1], None)
+            else:
+                self.tree = SceneTree()
+        else:
+            raise ValueError(f"unsupported meshcat command {cmd!r}")
+
+    def get_scene(self, title: str = "weldplan route") -> str:
+        """The self-contained HTML page of the recorded scene."""
+        from meshcat.servers.tree import walk
+        from meshcat.servers.zmqserver import VIEWER_ROOT
+
+        blobs: list[bytes] = []
+        for node in walk(self.tree):
+            if node.object is not None:
+                blobs.append(node.object)
+            blobs.extend(node.properties)
+            if node.transform is not None:
+                blobs.append(node.transform)
+            if node.animation is not None:
+                blobs.append(node.animation)
+        js = Path(VIEWER_ROOT, "main.min.js").read_text(encoding="utf-8")
+        # Commands are applied in order (each awaits the previous), like meshcat's server does
+        # it, but as one chain so a property never arrives before its object.
+        b64 = ",\n".join(f'"{base64.b64encode(b).decode("ascii")}"' for b in blobs)
+        return _PAGE.format(title=title, mainminjs=js, blobs=b64)
+
+    def close(self) -> None:
+        pass
+
+
+_PAGE = """<!DOCTYPE html>
+<html>
+<head><meta charset="utf-8"><title>{title}</title>
+<style>
+body {{ margin: 0; }}
+#meshcat-pane {{ width: 100vw; height: 100vh; overflow: hidden; }}
+</style>
+</head>
+<body>
+<div id="meshcat-pane"></div>
+<script>
+{mainminjs}
+</script>
+<script>
+var viewer = new MeshCat.Viewer(document.getElementById("meshcat-pane"));
+var weldplanCommands = [
+{blobs}
+];
+function weldplanDecode(b64) {{
+  var s = atob(b64), a = new Uint8Array(s.length);
+  for (var i = 0; i < s.length; i++) a[i] = s.charCodeAt(i);
+  return a;
+}}
+for (var i = 0; i < weldplanCommands.length; i++) {{
+  viewer.handle_command_bytearray(weldplanDecode(weldplanCommands[i]));
+}}
+document.title = "{title} (" + weldplanCommands.length + " scene commands)";
+</script>
+</body>
+</html>
+"""
+
+
+# ---------------------------------------------------------------------------- scene
+def _text_sprite(text: str, color: str = "#111111") -> Any:
+    """A camera-facing label (three.js Sprite with meshcat's ``_text`` canvas texture)."""
+    g = _meshcat().geometry
+
+    class TextTexture(g.Texture):
+        def lower(self, object_data: Any) -> dict[str, Any]:
+            return {
+                "uuid": self.uuid,
+                "type": "_text",
+                "text": text,
+                "font_size": 96,
+                "font_face": "sans-serif",
+            }
+
+    class SpriteMaterial(g.GenericMaterial):
+        _type = "SpriteMaterial"
+
+    class Sprite(g.Object):
+        _type = "Sprite"
+
+    material = SpriteMaterial(map=TextTexture(), transparent=True)
+    material.properties = {"depthTest": False, "sizeAttenuation": True}
+    return Sprite(g.Sphere(1.0), material)
+
+
+def _translation(p: NDArray[np.float64], scale: float = 1.0) -> NDArray[np.float64]:
+    T = np.eye(4)
+    T[:3, :3] *= scale
+    T[:3, 3] = p
+    return T
+
+
+def scene_transform(points: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``(4, 4)`` mm -> viewer units: centred on the origin (where the camera looks), about
+    :data:`SCENE_SIZE` across; ``points (k, 3)`` mm are what must fit in the view."""
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    extent = float(np.max(hi - lo)) or 1.0
+    s = SCENE_SIZE / extent
+    T = np.eye(4) * s
+    T[3, 3] = 1.0
+    centre = (lo + hi) / 2
+    T[:3, 3] = -s * centre
+    return T
+
+
+def build_scene(
+    vis: Any,
+    route: Route,
+    part: Any = None,
+    *,
+    labels: bool = True,
+    animate: bool = True,
+    camera: bool = True,
+) -> None:
+    """Draw ``route`` (and ``part``, a mesh or a Cell) into meshcat visualizer ``vis``.
+
+    Paths under ``vis["weldplan"]``: ``part``, ``joints/<id>``, ``labels/<id>``,
+    ``route/leg_<k>`` (one colour per leg), ``vias/leg_<k>``, ``torch``.
+    """
+    mc = _meshcat()
+    g = mc.geometry
+    from meshcat.animation import Animation
+
+    mesh = _part_mesh(part)
+    root = vis["weldplan"]
+    root.delete()
+    # frame the route (joints and legs), not the whole part: on a car body the route would
+    # otherwise be a speck; the part is drawn around it (zoom out to see all of it)
+    pts = [route.joint_xyz, *(leg.points for leg in route.legs)]
+    allp = np.concatenate(pts, axis=0)
+    if len(allp) < 2 or np.ptp(allp, axis=0).max() < 1e-6:
+        if mesh is not None:
+            allp = np.concatenate([allp, np.asarray(mesh.vertices)], axis=0)
+    T = scene_transform(allp)
+    root.set_transform(T)
+    extent = float(np.max(allp.max(axis=0) - allp.min(axis=0))) or 1.0
+    r_joint = extent / 120.0
+    r_via = extent / 300.0
+
+    if mesh is not None:
+        root["part"].set_object(
+            g.TriangularMeshGeometry(np.asarray(mesh.vertices), np.asarray(mesh.faces)),
+            g.MeshLambertMaterial(color=0x9AA6B2, opacity=0.55, transparent=True, side=2),
+        )
+    visited = set(route.order)
+    for jid, p in zip(route.joint_ids, route.joint_xyz, strict=True):
+        color = 0xD62728 if jid in visited else 0x7F7F7F
+        root["joints"][jid].set_object(g.Sphere(r_joint), g.MeshLambertMaterial(color=color))
+        root["joints"][jid].set_transform(_translation(p))
+        if labels:
+            lab = root["labels"][jid]
+            lab.set_object(_text_sprite(jid))
+            lab.set_transform(_translation(p + [0.0, 0.0, 3.5 * r_joint], scale=14.0 * r_joint))
+
+    colors = leg_colors(len(route.legs))
+    for k, (leg, c) in enumerate(zip(route.legs, colors, strict=True)):
+        P = np.asarray(leg.points, dtype=np.float32)
+        root["route"][f"leg_{k}"].set_object(
+            g.Line(g.PointsGeometry(P.T), g.LineBasicMaterial(color=c, linewidth=3))
+        )
+        # thin tubes make the legs visible at any zoom (WebGL draws lines 1 px wide)
+        for m in range(len(P) - 1):
+            a, b = P[m].astype(float), P[m + 1].astype(float)
+            L = float(np.linalg.norm(b - a))
+            if L < 1e-9:
+                continue
+            tube = root["route"][f"leg_{k}_tube"][str(m)]
+            tube.set_object(g.Cylinder(L, r_via * 0.8), g.MeshLambertMaterial(color=c))
+            tube.set_transform(_cylinder_between(a, b))
+        for m, v in enumerate(P[1:-1].astype(float)):
+            via = root["vias"][f"leg_{k}"][str(m)]
+            via.set_object(g.Sphere(r_via * 1.8), g.MeshLambertMaterial(color=0x222222))
+            via.set_transform(_translation(v))
+
+    torch = root["torch"]
+    torch.set_object(
+        g.Cylinder(6 * r_joint, radiusTop=2.0 * r_joint, radiusBottom=0.0),
+        g.MeshLambertMaterial(color=0xFF8C00, opacity=0.9, transparent=True),
+    )
+    W = route.waypoints()
+    if len(W):
+        torch.set_transform(_torch_pose(W[0], r_joint))
+    if animate and len(W) > 1:
+        anim = Animation(default_framerate=30)
+        cum = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(W, axis=0), axis=1))])
+        frames = np.round(cum / max(cum[-1], 1e-9) * ANIMATION_SECONDS * 30).astype(int)
+        for f, p in zip(frames, W, strict=True):
+            with anim.at_frame(torch, int(f)) as frame:
+                frame.set_transform(_torch_pose(p, r_joint))
+        vis.set_animation(anim, play=True, repetitions=1000)
+    if camera:
+        # meshcat's camera frame is y-up: this looks down at the part from the front right
+        vis["/Cameras/default/rotated/<object>"].set_property("position", [1.3, 1.05, 1.65])
+        vis["/Grid"].set_property("visible", False)
+        vis["/Axes"].set_property("visible", False)
+    log.debug("scene: %d legs, %d joints", len(route.legs), len(route.joint_ids))
+
+
+def _torch_pose(p: NDArray[np.float64], r_joint: float) -> NDArray[np.float64]:
+    """The torch cone standing on point ``p`` (tip at ``p``, axis up)."""
+    T = np.eye(4)
+    # meshcat cylinders run along y; turn y to z so the cone stands over the tip
+    T[:3, :3] = [[1, 0, 0], [0, 0, -1], [0, 1, 0]]
+    T[:3, 3] = np.asarray(p, dtype=float) + [0.0, 0.0, 3 * r_joint]
+    return T
+
+
+def _cylinder_between(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Pose of a meshcat cylinder (axis y, centred) spanning segment ``a -> b``."""
+    d = b - a
+    L = float(np.linalg.norm(d))
+    y = d / L
+    ref = np.array([0.0, 0.0, 1.0]) if abs(y[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
+    x = np.cross(y, ref)
+    x /= np.linalg.norm(x)
+    z = np.cross(x, y)
+    T = np.eye(4)
+    T[:3, :3] = np.column_stack([x, y, z])
+    T[:3, 3] = (a + b) / 2
+    return T
+
+
+# ---------------------------------------------------------------------------- entry points
+def static_html(route: Route, part: Any = None, **kwargs: Any) -> str:
+    """The self-contained page (no server, works offline) of :func:`build_scene`."""
+    mc = _meshcat()
+    window = RecordingWindow()
+    vis = mc.Visualizer(window=window)
+    build_scene(vis, route, part, **kwargs)
+    return window.get_scene(title=f"weldplan route: {len(route.joint_ids)} joints")
+
+
+def write_html(route: Route, part: Any, path: str | PathLike[str], **kwargs: Any) -> Path:
+    """Write :func:`static_html` to ``path`` atomically; returns the path."""
+    from weldplan.io.export import write_text_atomic
+
+    return write_text_atomic(path, static_html(route, part, **kwargs))
+
+
+def jupyter_view(route: Route, part: Any = None, *, height: int = 480) -> Any:
+    """An IPython ``HTML`` object: the static page in an iframe (works without a server)."""
+    from html import escape
+
+    from IPython.display import HTML
+
+    page = static_html(route, part)
+    return HTML(
+        f'<div style="height: {int(height)}px; width: 100%; resize: both; overflow: hidden">'
+        f'<iframe srcdoc="{escape(page, quote=True)}" '
+        'style="width: 100%; height: 100%; border: none"></iframe></div>'
+    )
+
+
+def view_route(route: Route, part: Any = None, *, zmq_url: str | None = None) -> Any:
+    """Draw the route in a live meshcat viewer and return the ``meshcat.Visualizer``.
+
+    With ``zmq_url`` None a meshcat server is started in a subprocess; ``vis.url()`` is the page
+    to open. The scene is the one of :func:`write_html`.
+    """
+    mc = _meshcat()
+    vis = mc.Visualizer(zmq_url=zmq_url)
+    build_scene(vis, route, part)
+    return vis
+
+
+def open_in_browser(path: str | PathLike[str]) -> None:  # pragma: no cover - interactive
+    import webbrowser
+
+    webbrowser.open("file://" + os.path.abspath(path))

@@ -1,0 +1,567 @@
+"""The main job: a cell in, an ordered collision-free route out (``weldplan plan``).
+
+Data flow (../shared/DESIGN.md)::
+
+    Cell (part, joints, grid, collision model, virtual joints)
+      -> straight check of every pair of virtual joints (one vectorised FCL call)
+      -> local paths for blocked pairs (SO-ACO or exact grid search), through an Executor
+      -> cost matrix -> sequencer (Held-Karp | TSP-PSO + polish) -> Route
+
+Which pairs get planned: lazily
+-------------------------------
+A leg from joint ``i`` to joint ``j`` goes weld spot -> virtual joint -> ... -> virtual joint ->
+weld spot. Its cost is known at once when the straight segment between the two virtual joints is
+free at the clearance (one capsule check). For a blocked pair the cost is first *estimated* by that
+same straight polyline, which is a lower bound of any path through the two virtual joints. The
+sequencer orders the joints with these costs; the blocked legs the order actually uses are then
+planned (in parallel through the executor), their true lengths replace the estimates, and the
+sequencer runs again, until the order uses only known legs (each round plans at least one new
+pair, so this ends). With an exact sequencer the result is the optimum over the planner's path
+lengths, having planned only the blocked pairs that could matter; ``PlanConfig(pairs="all")`` plans
+every blocked pair up front instead (the dense matrix the paper builds). When the sequencer is a
+heuristic and the cell small enough for Held-Karp (up to 16 joints), the discovery rounds run
+Held-Karp, then the configured sequencer orders the joints once more (and, in the rare case that
+its order uses a leg still unknown, the rounds go on with it).
+
+Candidate pairs (station scale)
+-------------------------------
+At hundreds of joints even the straight checks of all ``n (n - 1) / 2`` pairs are more than the
+sequencer needs. ``PlanConfig(candidates=k)`` checks up front only the candidate pairs: each
+joint with its ``k`` nearest joints by straight-line distance between the weld spots. The straight
+segment is checked first; the blocked candidates are then searched in one batch through the
+executor (the work that parallelises). Every other pair keeps its straight-polyline estimate (a
+lower bound, as above) until an order uses it; then it is checked on demand, straight first and
+searched only if blocked, and the sequencer runs again. With an exact sequencer the route is the
+same as with every pair planned. ``Route.stats`` counts the pairs checked, straight, searched
+(``pairs_checked``, ``pairs_straight``, ``pairs_planned``) and the candidates.
+
+Randomness: one generator, normalised once from ``rng``; each pair gets its own seed drawn from it
+up front in a fixed order, so a route does not depend on the executor or the order in which
+workers finish.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable, Mapping
+from concurrent.futures import Executor
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from weldplan.errors import PlanningError, WeldplanError
+from weldplan.random import RNGLike, as_generator, seed_of
+from weldplan.weld.route import Leg, Route
+
+log = logging.getLogger(__name__)
+
+#: progress callback: ``progress(stage, done, total)``; stages "straight", "local", "sequence"
+Progress = Callable[[str, int, int], None]
+
+PLANNERS = ("so-aco", "aco", "exact")
+SEQUENCERS = ("auto", "pso", "exact", "nn")
+#: the exact straight-line lower bound (Held-Karp) is used up to this many joints, else the MST
+LOWER_BOUND_EXACT_MAX = 16
+
+#: SO-ACO settings of the demo target (N = M = 10; the paper's Table 3 also runs 50/50)
+DEFAULT_ACO: dict[str, Any] = {"n_iterations": 10, "n_ants": 10}
+
+
+@dataclass(frozen=True)
+class PlanConfig:
+    """Every setting of a planning run (recorded in the Route).
+
+    Attributes
+    ----------
+    clearance, pitch, margin
+        mm: torch-tip radius, voxel pitch and region-of-interest margin of the cell. They are used
+        when the cell is built (``weldplan plan``, :func:`weldplan.weld.cell.load_cell`);
+        :func:`plan_route` plans in the cell it is given and records the cell's own values.
+    planner
+        Local planner for blocked pairs: ``"so-aco"`` (the paper's), ``"aco"`` or ``"exact"``.
+    sequencer
+        ``"auto"`` (Held-Karp up to 13 joints, else TSP-PSO + polish), ``"pso"``, ``"exact"``,
+        ``"nn"``.
+    pairs
+        ``"lazy"`` (plan the blocked pairs the order uses, module docstring) or ``"all"``.
+    aco
+        Parameters passed to the local planner (``params=`` of ``plan_pair``); the default is
+        :data:`DEFAULT_ACO` (N = M = 10), the rest are the paper's (alpha 1, beta 11, rho 0.9,
+        Q 5, tau0 0.5, 5 mm moves).
+    pso
+        TSP-PSO parameters (``PSOParams`` fields); empty = the paper's (100 iterations, 50
+        particles, c1 = c2 = 1, w = 0.4).
+    polish
+        2-opt / Or-opt polish after the swarm.
+    local_time_budget
+        Seconds per local-path search (None: no limit).
+    sequence_time_budget
+        Seconds for each run of the sequencer's polish (None: its own stopping rule).
+    max_rounds
+        Bound on plan-then-sequence rounds of the lazy mode; after it every blocked pair is
+        planned and the sequencer runs once more (without candidates; with candidates the rounds
+        go on, each planning at least one new pair, so they end).
+    candidates
+        ``k``: check and plan up front only each joint's ``k`` nearest neighbours, the other pairs
+        on demand (module docstring); None: every pair is checked straight up front. Only with
+        ``pairs="lazy"``.
+    candidate_radius
+        mm: with ``candidates``, a neighbour farther than this is left to on demand (on car2's
+        1000-joint set some of the 6 nearest are 476 mm away behind a panel, whose searches
+        cost minutes each); None: no limit.
+    """
+
+    clearance: float = 5.0
+    pitch: float = 5.0
+    margin: float = 150.0
+    planner: str = "so-aco"
+    sequencer: str = "auto"
+    pairs: str = "lazy"
+    aco: Mapping[str, Any] = field(default_factory=lambda: dict(DEFAULT_ACO))
+    pso: Mapping[str, Any] = field(default_factory=dict)
+    polish: bool = True
+    local_time_budget: float | None = None
+    sequence_time_budget: float | None = None
+    max_rounds: int = 50
+    candidates: int | None = None
+    candidate_radius: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.planner not in PLANNERS:
+            raise WeldplanError(f"unknown planner {self.planner!r}; choose one of {PLANNERS}")
+        if self.sequencer not in SEQUENCERS:
+            raise WeldplanError(f"unknown sequencer {self.sequencer!r}; choose one of {SEQUENCERS}")
+        if self.pairs not in ("lazy", "all"):
+            raise WeldplanError(f"pairs must be 'lazy' or 'all', not {self.pairs!r}")
+        if self.candidates is not None:
+            if int(self.candidates) != self.candidates or self.candidates < 1:
+                raise WeldplanError(f"candidates must be a positive integer, got {self.candidates}")
+            if self.pairs == "all":
+                raise WeldplanError("candidates needs pairs='lazy' (pairs='all' plans every pair)")
+            object.__setattr__(self, "candidates", int(self.candidates))
+        if self.candidate_radius is not None and not (self.candidate_radius > 0):
+            raise WeldplanError(f"candidate_radius must be > 0 mm, got {self.candidate_radius}")
+        for name in ("clearance", "pitch"):
+            v = getattr(self, name)
+            if not (np.isfinite(v) and v > 0):
+                raise WeldplanError(f"{name} must be a positive number of mm, got {v}")
+        if not (np.isfinite(self.margin) and self.margin >= 0):
+            raise WeldplanError(f"margin must be >= 0 mm, got {self.margin}")
+        object.__setattr__(self, "aco", dict(self.aco))
+        object.__setattr__(self, "pso", dict(self.pso))
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> PlanConfig:
+        names = cls.__dataclass_fields__
+        return cls(**{k: v for k, v in d.items() if k in names})
+
+
+def _plan_pair_task(
+    cell: Any, i: int, j: int, method: str, params: dict, seed: int, budget: float | None
+) -> Any:
+    """One local path (module-level so process pools can pickle it)."""
+    from weldplan.weld.local import plan_pair
+
+    return plan_pair(cell, i, j, method=method, params=params, rng=seed, time_budget=budget)
+
+
+def _plan_pairs_task(cell: Any, batch: list[tuple], budget: float | None) -> list[Any]:
+    """A batch of local paths in one worker task; ``cell`` arrives as a
+    :func:`weldplan.weld.parallel.share_cell` reference (built once per worker)."""
+    from weldplan.weld.parallel import resolve
+
+    cell = resolve(cell)
+    return [_plan_pair_task(cell, i, j, m, prm, s, budget) for i, j, m, prm, s in batch]
+
+
+def candidate_pairs(
+    xyz: NDArray[np.float64],
+    k: int,
+    pair_index: NDArray[np.intp] | None = None,
+    radius: float | None = None,
+) -> NDArray[np.intp]:
+    """Indices (into the upper-triangle pair list) of each joint with its ``k`` nearest joints.
+
+    Parameters
+    ----------
+    xyz
+        ``(n, 3)`` weld spots (mm); nearness is the straight-line distance between them.
+    k
+        Neighbours per joint (ties broken by joint order).
+    pair_index
+        ``(n, n)`` pair number of ``(i, j)``, as built by :func:`plan_route`; built when None.
+    radius
+        mm: a neighbour farther than this is not a candidate (None: no limit).
+
+    Returns
+    -------
+    ``(m,) intp``, sorted, unique.
+    """
+    from scipy.spatial import cKDTree
+
+    n = len(xyz)
+    if pair_index is None:
+        iu, ju = np.triu_indices(n, 1)
+        pair_index = -np.ones((n, n), dtype=np.intp)
+        pair_index[iu, ju] = pair_index[ju, iu] = np.arange(len(iu))
+    k = min(int(k), n - 1)
+    if k < 1:
+        return np.zeros(0, dtype=np.intp)
+    bound = np.inf if radius is None else float(radius)
+    _, nb = cKDTree(xyz).query(xyz, k=k + 1, distance_upper_bound=bound)
+    rows = np.repeat(np.arange(n), k + 1)
+    cols = nb.reshape(-1)
+    keep = (rows != cols) & (cols < n)  # cols == n: no neighbour within the radius
+    return np.unique(pair_index[rows[keep], cols[keep]])
+
+
+def straight_lower_bound(xyz: NDArray[np.float64]) -> tuple[float, str]:
+    """Open-path lower bound over straight-line distances between the weld spots ``(n, 3)``.
+
+    Held-Karp's optimum up to :data:`LOWER_BOUND_EXACT_MAX` joints (``"held-karp"``), else the
+    weight of the minimum spanning tree (``"mst"``; every open path is a spanning tree).
+    """
+    n = len(xyz)
+    if n < 2:
+        return 0.0, "trivial"
+    D = np.linalg.norm(xyz[:, None, :] - xyz[None, :, :], axis=-1)
+    if n <= LOWER_BOUND_EXACT_MAX:
+        from weldplan.optim.discrete.sequence import solve_sequence
+
+        return float(solve_sequence(D, method="exact").cost), "held-karp"
+    from scipy.sparse.csgraph import minimum_spanning_tree
+
+    return float(minimum_spanning_tree(D).sum()), "mst"
+
+
+def _explain_no_order(
+    exc: Exception,
+    C: NDArray[np.float64],
+    known: NDArray[np.bool_],
+    iu: NDArray[np.intp],
+    ju: NDArray[np.intp],
+    paths: dict[int, Any],
+    ids: tuple[str, ...],
+) -> str:
+    """A message a user can act on when no order of finite cost exists.
+
+    When the joints fall into groups with no collision-free path between them (typically spots
+    on both sides of a panel, or one enclosed), name the groups; else list the failed pairs.
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    n = len(ids)
+    reach = ~known | np.isfinite(C[iu, ju])  # unknown pairs might still be reachable
+    A = coo_matrix((np.ones(int(reach.sum())), (iu[reach], ju[reach])), shape=(n, n))
+    k, label = connected_components(A, directed=False)
+    if k > 1:
+        groups = [
+            "{" + ", ".join(ids[v] for v in np.flatnonzero(label == g)) + "}" for g in range(k)
+        ]
+        return (
+            f"the joints fall into {k} groups with no collision-free path between them at this "
+            f"clearance (spots on both sides of a panel, or enclosed?): {' '.join(groups)}"
+        )
+    failed = [f"{ids[iu[p]]}-{ids[ju[p]]}" for p in paths if not np.isfinite(C[iu[p], ju[p]])]
+    return f"{exc}; local planning failed for pairs {', '.join(failed) or 'none'}"
+
+
+def plan_route(
+    cell: Any,
+    *,
+    config: PlanConfig | None = None,
+    rng: RNGLike = None,
+    executor: Executor | None = None,
+    progress: Progress | None = None,
+) -> Route:
+    """Plan the ordered, collision-free route through every joint of ``cell``.
+
+    Parameters
+    ----------
+    cell
+        A :class:`~weldplan.weld.cell.Cell` (part, joints, grid, collision model, virtual joints).
+    config
+        Planner, sequencer and their parameters (:class:`PlanConfig`).
+    rng
+        Seed or Generator; the only source of randomness of the run.
+    executor
+        Where blocked pairs are planned: any ``concurrent.futures.Executor`` (a process pool, a
+        Dask ``Client.get_executor()``); serial in this process when None. The cell reaches each
+        worker once (:mod:`weldplan.weld.parallel`; :func:`~weldplan.weld.parallel.process_pool`
+        installs it at worker start); pairs travel in batches.
+    progress
+        ``progress(stage, done, total)`` for the stages ``"straight"``, ``"local"``,
+        ``"sequence"``.
+
+    Returns
+    -------
+    Route
+        Not yet verified: call :func:`weldplan.weld.verify.verify_route` (``weldplan plan`` does).
+
+    Raises
+    ------
+    PlanningError
+        When no order of finite cost exists (e.g. a joint every local path to which failed).
+    """
+    from weldplan.optim.discrete.sequence import solve_sequence
+    from weldplan.optim.discrete.tsp_pso import PSOParams
+    from weldplan.weld.parallel import batches, n_workers, share_cell
+
+    config = PlanConfig() if config is None else config
+    gen = as_generator(rng)
+    seed = seed_of(rng)
+    report = progress or (lambda stage, done, total: None)
+    t_start = time.perf_counter()
+    seconds: dict[str, float] = {}
+
+    ids = tuple(str(i) for i in cell.joints.ids)
+    P = np.asarray(cell.joints.xyz, dtype=float).reshape(-1, 3)
+    V = np.asarray(cell.virtual_xyz, dtype=float).reshape(-1, 3)
+    n = len(ids)
+    clearance = float(cell.clearance)
+    if n == 0:
+        raise PlanningError("the cell has no weld joints")
+    approach = np.linalg.norm(V - P, axis=1)
+
+    # 1. straight checks between pairs of virtual joints (upper triangle): all, or the candidates
+    t0 = time.perf_counter()
+    iu, ju = np.triu_indices(n, 1)
+    n_pairs = len(iu)
+    pair_index = -np.ones((n, n), dtype=np.intp)
+    pair_index[iu, ju] = np.arange(n_pairs)
+    pair_index[ju, iu] = np.arange(n_pairs)
+    checked = np.zeros(n_pairs, dtype=bool)
+    free = np.zeros(n_pairs, dtype=bool)
+
+    def check(pairs: NDArray[np.intp]) -> None:
+        """Straight capsule checks of ``pairs`` (one vectorised call); sets checked / free."""
+        pairs = pairs[~checked[pairs]]
+        if not len(pairs):
+            return
+        a, b = V[iu[pairs]], V[ju[pairs]]
+        ok = np.all(a == b, axis=1)
+        if (~ok).any():
+            ok[~ok] = cell.collision.segments_free(a[~ok], b[~ok], clearance)
+        free[pairs] = ok
+        checked[pairs] = True
+
+    if config.candidates is None or config.candidates >= n - 1:
+        upfront = np.arange(n_pairs)
+    else:
+        upfront = candidate_pairs(P, config.candidates, pair_index, config.candidate_radius)
+    report("straight", 0, len(upfront))
+    check(upfront)
+    report("straight", len(upfront), len(upfront))
+    est = approach[iu] + np.linalg.norm(V[iu] - V[ju], axis=1) + approach[ju]
+    C = np.zeros((n, n))
+    C[iu, ju] = est
+    C[ju, iu] = est
+    known = free.copy()
+    pair_seeds = gen.integers(0, 2**63 - 1, size=n_pairs)
+    seconds["straight"] = time.perf_counter() - t0
+    blocked = np.flatnonzero(checked & ~free)
+    log.info(
+        "%d joints, %d pairs, %d checked, %d blocked at %g mm",
+        n,
+        n_pairs,
+        len(upfront),
+        len(blocked),
+        clearance,
+    )
+
+    paths: dict[int, Any] = {}
+    t_local = 0.0
+    t_seq = 0.0
+    n_failed = 0
+
+    shared: Any = None  # the cell as the executor's tasks carry it, made on first use
+
+    def plan(pairs: list[int]) -> None:
+        nonlocal t_local, n_failed, shared
+        t = time.perf_counter()
+        fresh = np.array([p for p in pairs if not checked[p]], dtype=np.intp)
+        if len(fresh):  # on demand: the straight segment first (timed with the local stage)
+            check(fresh)
+            known[fresh] = free[fresh]
+        todo = [p for p in pairs if not known[p]]
+        total = len(paths) + len(todo)
+        report("local", len(paths), total)
+        args = [
+            (int(iu[p]), int(ju[p]), config.planner, dict(config.aco), int(pair_seeds[p]))
+            for p in todo
+        ]
+        if executor is None:
+            results = (
+                _plan_pair_task(cell, i, j, m, prm, s, config.local_time_budget)
+                for i, j, m, prm, s in args
+            )
+        else:
+            if shared is None:
+                shared = share_cell(cell, executor)
+            futures = [
+                executor.submit(_plan_pairs_task, shared, batch, config.local_time_budget)
+                for batch in batches(args, n_workers(executor))
+            ]
+            results = (lp for f in futures for lp in f.result())
+        for p, lp in zip(todo, results, strict=True):
+            paths[int(p)] = lp
+            known[p] = True
+            i, j = iu[p], ju[p]
+            ok = bool(getattr(lp, "success", True)) and np.isfinite(lp.length)
+            if not ok:
+                n_failed += 1
+                log.info("no local path %s -> %s: %s", ids[i], ids[j], getattr(lp, "reason", ""))
+            C[i, j] = C[j, i] = lp.length if ok else np.inf
+            report("local", len(paths), total)
+        t_local += time.perf_counter() - t
+
+    pso = PSOParams(**config.pso) if config.pso else None
+
+    def sequence(round_: int, method: str) -> Any:
+        nonlocal t_seq
+        t = time.perf_counter()
+        off = ~np.eye(n, dtype=bool)
+        stranded = [ids[k] for k in range(n) if n > 1 and not np.isfinite(C[k][off[k]]).any()]
+        if stranded:
+            raise PlanningError(
+                f"no collision-free path from joint(s) {', '.join(stranded)} to any other joint "
+                f"at {clearance:g} mm clearance (planner {config.planner}); failed pairs: "
+                + ", ".join(
+                    f"{ids[iu[p]]}-{ids[ju[p]]}"
+                    for p in sorted(paths)
+                    if not np.isfinite(C[iu[p], ju[p]])
+                )
+            )
+        report("sequence", round_, round_ + 1)
+        try:
+            extra = {}
+            if config.sequence_time_budget is not None:
+                extra["time_budget"] = config.sequence_time_budget
+            seq = solve_sequence(C, method=method, polish=config.polish, rng=gen, pso=pso, **extra)
+        except PlanningError as exc:
+            raise PlanningError(_explain_no_order(exc, C, known, iu, ju, paths, ids)) from exc
+        t_seq += time.perf_counter() - t
+        report("sequence", round_ + 1, round_ + 1)
+        return seq
+
+    if config.pairs == "all" or config.candidates is not None:
+        plan([int(p) for p in blocked])
+    rounds = 0
+
+    def settle(method: str) -> Any:
+        """Sequence, plan the unknown legs of the order, repeat until it uses known legs only."""
+        nonlocal rounds
+        while True:
+            seq = sequence(rounds, method)
+            rounds += 1
+            order = list(seq.order)
+            needed = [int(pair_index[a, b]) for a, b in zip(order[:-1], order[1:], strict=True)]
+            unknown = [p for p in needed if not known[p]]
+            if not unknown:
+                return seq
+            if rounds >= config.max_rounds and config.candidates is None:
+                log.warning("lazy planning: %d rounds, planning every blocked pair", rounds)
+                unknown = [int(p) for p in blocked]
+            plan(unknown)
+
+    if config.sequencer != "exact" and n <= LOWER_BOUND_EXACT_MAX and not known.all():
+        # discovery rounds with Held-Karp (fast at this size) find the legs good orders use,
+        # so the configured (slower) sequencer usually runs once
+        settle("exact")
+    seq = settle(config.sequencer)
+    order = list(seq.order)
+    seconds["local"] = t_local
+    seconds["sequence"] = t_seq
+
+    # 2. the route
+    legs = []
+    methods = []
+    for a, b in zip(order[:-1], order[1:], strict=True):
+        p = int(pair_index[a, b])
+        if p in paths:
+            lp = paths[p]
+            pts = np.asarray(lp.points, dtype=float)
+            if a > b:
+                pts = pts[::-1]
+            leg = Leg(ids[a], ids[b], pts, str(getattr(lp, "method", config.planner)))
+        else:
+            pts = np.array([P[a], V[a], V[b], P[b]])
+            # drop repeats: a joint that is its own virtual joint, two joints sharing one
+            keep = np.r_[True, np.any(pts[1:] != pts[:-1], axis=1)]
+            leg = Leg(ids[a], ids[b], pts[keep] if keep.sum() >= 2 else pts[[0, -1]], "straight")
+        legs.append(leg)
+        methods.append(leg.method)
+    t0 = time.perf_counter()
+    lb, lb_method = straight_lower_bound(P)
+    # A tighter bound on the whole route: every leg costs at least its straight polyline
+    # spot -> virtual -> virtual -> spot (the estimates above), so the optimum over them bounds
+    # every route through these virtual joints, approaches included.
+    bound_appr = float("nan")
+    if 1 < n <= LOWER_BOUND_EXACT_MAX:
+        E = np.zeros((n, n))
+        E[iu, ju] = E[ju, iu] = est
+        bound_appr = float(solve_sequence(E, method="exact").cost)
+    seconds["lower_bound"] = time.perf_counter() - t0
+    seconds["total"] = time.perf_counter() - t_start
+
+    settings = config.to_dict()
+    settings.update(
+        clearance=clearance,
+        pitch=float(getattr(cell, "pitch", config.pitch)),
+        margin=float(getattr(cell, "margin", config.margin)),
+    )
+    local_stats = {
+        f"{ids[iu[p]]}-{ids[ju[p]]}": {
+            "length": float(lp.length),
+            "method": str(getattr(lp, "method", config.planner)),
+            "history": [float(h) for h in getattr(lp, "history", ())],
+            "seconds": float(getattr(lp, "seconds", 0.0)),
+        }
+        for p, lp in sorted(paths.items())
+    }
+    stats = {
+        "pairs": n_pairs,
+        "pairs_checked": int(checked.sum()),
+        "pairs_candidates": int(len(upfront)),
+        "pairs_straight": int(free.sum()),
+        "pairs_blocked": int((checked & ~free).sum()),
+        "pairs_planned": len(paths),
+        "pairs_failed": n_failed,
+        "rounds": rounds,
+        "legs_planned": sum(m != "straight" for m in methods),
+        "bound_with_approaches": bound_appr,
+        "sequence_method": seq.method,
+        "sequence_cost": float(seq.cost),
+        "sequence_history": [float(h) for h in seq.history],
+        "sequence_start_cost": seq.start_cost,
+        "local_paths": local_stats,
+        "seconds": {k: round(v, 6) for k, v in seconds.items()},
+    }
+    route = Route(
+        order=tuple(ids[k] for k in order),
+        legs=tuple(legs),
+        joint_ids=ids,
+        joint_xyz=P,
+        directions=getattr(cell.joints, "directions", None),
+        virtual_xyz=V,
+        lower_bound=lb,
+        lower_bound_method=lb_method,
+        settings=settings,
+        seed=seed,
+        stats=stats,
+    )
+    log.info(
+        "route %.2f mm (lower bound %.2f mm), %d pairs planned, %.2f s",
+        route.length,
+        lb,
+        len(paths),
+        seconds["total"],
+    )
+    return route

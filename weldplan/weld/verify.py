@@ -1,0 +1,334 @@
+"""The independent check of a route before it leaves weldplan.
+
+:func:`verify_route` trusts nothing the planner computed: it builds its own
+:class:`~weldplan.geometry.collision.CollisionModel` from the part mesh (python-fcl), re-checks
+every segment of every leg, and checks that the route visits every joint exactly once, starting
+and ending each leg on the joint's weld spot.
+
+How the approach segments are exempted, exactly
+-----------------------------------------------
+The torch tip is a sphere of radius ``c`` (the clearance), and a segment is free when the capsule
+it sweeps misses the part. The first and the last segment of every leg run between a weld spot
+``p``, which lies *on* the surface, and its virtual joint ``v`` (length ``L``); any sphere centred
+at ``p`` touches the part, so these two segments cannot be checked at ``c``. Nothing else is
+exempt: every other segment is checked at the full clearance.
+
+An approach segment is checked as a *cone*: at distance ``s`` from the spot the sphere has radius
+``r(s) = c * s / L``, growing linearly from 0 at the spot to ``c`` at the virtual joint. This is
+exactly what a straight descent onto a locally flat spot allows: if the surface is a plane
+through ``p`` and ``v`` is at height ``h >= c`` above it (the grid's obstacle rule), the point at
+distance ``s`` along the approach is at height ``s * h / L >= r(s)``, whatever the angle of the
+approach. The cone rejects any approach that grazes a flange, an edge or a second panel on the way
+down. It is checked with :data:`APPROACH_PIECES` capsules covering ``s`` from
+:data:`APPROACH_EXEMPT_MM` to ``L``: piece ``m`` spans ``[s_m, s_m+1]`` with radius
+``r(s_m) * (1 - APPROACH_SLACK)``, so the pieces lie inside the cone (the check never asks more
+than the cone) and touching contact at equality (e.g. a spot in a 90-degree inside corner, where
+the cone is tangent to both walls) is not reported. The first ``APPROACH_EXEMPT_MM`` mm around the
+spot, where the torch is at the weld, are the only part of the route not checked at all.
+
+A weld spot that is its own virtual joint (it lies in free space, at least ``c`` from the part)
+has no approach: the segment leaving it is checked at the full clearance like any other.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import trimesh
+from numpy.typing import NDArray
+
+from weldplan.geometry.collision import CollisionModel
+from weldplan.weld.route import Route
+
+log = logging.getLogger(__name__)
+
+#: capsules per approach segment (the cone of the module docstring, inscribed)
+APPROACH_PIECES = 8
+#: mm next to the weld spot that are not checked (the torch is at the weld there)
+APPROACH_EXEMPT_MM = 0.5
+#: relative slack on the approach-cone radius, so contact at exact equality is not a collision
+APPROACH_SLACK = 1e-3
+#: mm: how far a leg's end may be from the joint's weld spot (JSON round trips are exact; CSV
+#: and hand-edited routes are not)
+ENDPOINT_TOL_MM = 1e-3
+
+
+@dataclass(frozen=True)
+class Violation:
+    """One thing wrong with a route.
+
+    ``leg`` and ``segment`` are 0-based (``segment`` k joins ``points[k]`` and ``points[k + 1]`` of
+    the leg); both are ``None`` for route-level problems (a joint missing or visited twice).
+    """
+
+    kind: str
+    message: str
+    leg: int | None = None
+    segment: int | None = None
+    from_id: str | None = None
+    to_id: str | None = None
+
+    def __str__(self) -> str:
+        if self.leg is None:
+            return self.message
+        where = f"leg {self.leg} ({self.from_id} -> {self.to_id})"
+        if self.segment is not None:
+            where += f", segment {self.segment}"
+        return f"{where}: {self.message}"
+
+
+@dataclass(frozen=True)
+class VerifyReport:
+    """The verdict of :func:`verify_route`: ``ok`` and every violation found."""
+
+    ok: bool
+    violations: tuple[Violation, ...]
+    clearance: float
+    segments_checked: int
+    approach_segments: int
+    joints_visited: int
+    stats: dict[str, Any] = field(default_factory=dict)
+
+    def __bool__(self) -> bool:
+        return self.ok
+
+    def describe(self, limit: int = 5) -> str:
+        """One line a user can act on (the first ``limit`` violations)."""
+        if self.ok:
+            return (
+                f"route ok: {self.segments_checked} segments free at {self.clearance:g} mm "
+                f"clearance, {self.approach_segments} approaches within their cones, "
+                f"{self.joints_visited} joints visited once each"
+            )
+        shown = "; ".join(str(v) for v in self.violations[:limit])
+        more = len(self.violations) - limit
+        return f"route fails verification: {shown}" + (f" (and {more} more)" if more > 0 else "")
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "ok": self.ok,
+            "clearance": self.clearance,
+            "segments_checked": self.segments_checked,
+            "approach_segments": self.approach_segments,
+            "joints_visited": self.joints_visited,
+            "violations": [v.__dict__.copy() for v in self.violations],
+            "stats": self.stats,
+        }
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> VerifyReport:
+        return cls(
+            ok=bool(d["ok"]),
+            violations=tuple(Violation(**v) for v in d["violations"]),
+            clearance=float(d["clearance"]),
+            segments_checked=int(d["segments_checked"]),
+            approach_segments=int(d["approach_segments"]),
+            joints_visited=int(d["joints_visited"]),
+            stats=dict(d.get("stats") or {}),
+        )
+
+
+def _collision_model(part: Any) -> CollisionModel:
+    """A fresh CollisionModel from a mesh or a cell; a CollisionModel given is used as is."""
+    if isinstance(part, CollisionModel):
+        return part
+    mesh = getattr(part, "part", part)  # a Cell carries its mesh as .part
+    if not isinstance(mesh, trimesh.Trimesh):
+        raise TypeError(f"expected a trimesh.Trimesh, a Cell or a CollisionModel, got {type(part)}")
+    return CollisionModel(mesh)
+
+
+def approach_pieces(
+    spot: NDArray[np.float64],
+    virtual: NDArray[np.float64],
+    clearance: float,
+    *,
+    pieces: int = APPROACH_PIECES,
+    exempt: float = APPROACH_EXEMPT_MM,
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """The capsules that check the approach ``spot -> virtual`` (module docstring).
+
+    Returns
+    -------
+    A, B
+        ``(m, 3)`` capsule ends in mm (``m = pieces``, or 0 when the approach is shorter than
+        ``exempt``).
+    radii
+        ``(m,)`` capsule radii in mm, ``clearance * s_m / L * (1 - APPROACH_SLACK)``.
+    """
+    spot = np.asarray(spot, dtype=float)
+    virtual = np.asarray(virtual, dtype=float)
+    d = virtual - spot
+    L = float(np.linalg.norm(d))
+    if L <= exempt:
+        return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0)
+    s = np.linspace(exempt, L, pieces + 1)
+    pts = spot + np.outer(s / L, d)
+    radii = clearance * s[:-1] / L * (1.0 - APPROACH_SLACK)
+    return pts[:-1], pts[1:], radii
+
+
+def verify_route(
+    route: Route,
+    part: Any,
+    *,
+    clearance: float | None = None,
+    joints: Any = None,
+    approach_pieces_per_segment: int = APPROACH_PIECES,
+) -> VerifyReport:
+    """Re-check ``route`` against the part, independently of the planner.
+
+    Parameters
+    ----------
+    route
+        The route to check.
+    part
+        The part as a ``trimesh.Trimesh`` or a Cell (a new CollisionModel is built from its mesh,
+        so the check shares nothing with the planner but the triangles), or a ready
+        ``CollisionModel`` (used as is; saves the BVH build when the caller owns one).
+    clearance
+        mm, the radius of the torch-tip sphere. Default: the clearance in ``route.settings``,
+        else 5 mm.
+    joints
+        Optional ``Joints`` (ids, xyz) from the joints CSV: when given, the route's joint table
+        must match it (same ids, weld spots within :data:`ENDPOINT_TOL_MM`).
+    approach_pieces_per_segment
+        Capsules per approach cone.
+
+    Returns
+    -------
+    VerifyReport
+        ``ok`` is true when every middle segment is free at ``clearance``, every approach is
+        inside its cone (module docstring), every leg starts and ends on its joints' weld spots,
+        and every joint is visited exactly once.
+    """
+    if clearance is None:
+        clearance = float(route.settings.get("clearance", 5.0))
+    model = _collision_model(part)
+    violations: list[Violation] = []
+
+    # joints: each exactly once, and the table matches the joints given
+    ids = route.joint_ids
+    if joints is not None:
+        jids = tuple(str(i) for i in joints.ids)
+        jxyz = np.asarray(joints.xyz, dtype=float).reshape(-1, 3)
+        if set(jids) != set(ids):
+            missing = sorted(set(jids) - set(ids))
+            extra = sorted(set(ids) - set(jids))
+            violations.append(
+                Violation(
+                    "joints",
+                    f"the route's joints differ from the joints given "
+                    f"(missing {missing or 'none'}, unknown {extra or 'none'})",
+                )
+            )
+        else:
+            for jid, p in zip(jids, jxyz, strict=True):
+                q = route.joint_xyz[route.index_of(jid)]
+                if np.linalg.norm(q - p) > ENDPOINT_TOL_MM:
+                    violations.append(
+                        Violation(
+                            "joints",
+                            f"joint {jid} is at {q.tolist()} in the route, "
+                            f"{p.tolist()} in the joints given",
+                        )
+                    )
+    counts: dict[str, int] = {}
+    for jid in route.order:
+        counts[jid] = counts.get(jid, 0) + 1
+    for jid in ids:
+        if counts.get(jid, 0) == 0:
+            violations.append(Violation("missing", f"joint {jid} is never visited"))
+        elif counts[jid] > 1:
+            violations.append(Violation("duplicate", f"joint {jid} is visited {counts[jid]} times"))
+    for jid in counts:
+        if jid not in ids:
+            violations.append(Violation("unknown", f"joint {jid} in the order is not a joint"))
+
+    # legs: endpoints, then every segment
+    mid_a, mid_b, mid_where = [], [], []
+    app_a, app_b, app_r, app_where = [], [], [], []
+    for k, leg in enumerate(route.legs):
+        P = leg.points
+        tag = {"leg": k, "from_id": leg.from_id, "to_id": leg.to_id}
+        for end, jid, p in (("start", leg.from_id, P[0]), ("end", leg.to_id, P[-1])):
+            if jid in ids:
+                q = route.joint_xyz[route.index_of(jid)]
+                if np.linalg.norm(p - q) > ENDPOINT_TOL_MM:
+                    violations.append(
+                        Violation(
+                            "endpoint",
+                            f"the leg's {end} {np.round(p, 3).tolist()} is not the weld spot of "
+                            f"joint {jid} {np.round(q, 3).tolist()}",
+                            **tag,
+                        )
+                    )
+        if not np.all(np.isfinite(P)):
+            violations.append(Violation("points", "the leg has non-finite points", **tag))
+            continue
+        # A segment is an approach when it leaves a weld spot that is not its own virtual joint
+        # (a joint lying in free space is its own virtual joint and has no approach).
+        start_app = not route.is_virtual(leg.from_id, P[0], ENDPOINT_TOL_MM)
+        end_app = not route.is_virtual(leg.to_id, P[-1], ENDPOINT_TOL_MM)
+        last = len(P) - 2
+        if last == 0 and start_app and end_app:
+            violations.append(
+                Violation(
+                    "approach",
+                    "the leg goes from weld spot to weld spot with no virtual joint between",
+                    segment=0,
+                    **tag,
+                )
+            )
+            continue
+        for seg in range(last + 1):
+            if seg == 0 and start_app:
+                spot, virt = P[0], P[1]
+            elif seg == last and end_app:
+                spot, virt = P[-1], P[-2]
+            else:
+                mid_a.append(P[seg])
+                mid_b.append(P[seg + 1])
+                mid_where.append((k, seg))
+                continue
+            A, B, r = approach_pieces(spot, virt, clearance, pieces=approach_pieces_per_segment)
+            for a, b, rr in zip(A, B, r, strict=True):
+                app_a.append(a)
+                app_b.append(b)
+                app_r.append(rr)
+                app_where.append((k, seg))
+
+    failed: dict[tuple[int, int], str] = {}
+    if mid_a:
+        free = model.segments_free(np.array(mid_a), np.array(mid_b), clearance)
+        for (k, seg), ok in zip(mid_where, free, strict=True):
+            if not ok:
+                failed.setdefault(
+                    (k, seg), f"the segment hits the part at {clearance:g} mm clearance"
+                )
+    for a, b, r, (k, seg) in zip(app_a, app_b, app_r, app_where, strict=True):
+        if (k, seg) in failed:
+            continue
+        if not model.segment_free(a, b, float(r)):
+            failed[(k, seg)] = (
+                "the approach to the weld spot leaves its cone "
+                f"(the sphere radius grows from 0 at the spot to {clearance:g} mm)"
+            )
+    for (k, seg), msg in sorted(failed.items()):
+        leg = route.legs[k]
+        violations.append(Violation("collision", msg, k, seg, leg.from_id, leg.to_id))
+
+    n_app = len(set(app_where))
+    report = VerifyReport(
+        ok=not violations,
+        violations=tuple(violations),
+        clearance=float(clearance),
+        segments_checked=len(mid_a),
+        approach_segments=n_app,
+        joints_visited=sum(1 for jid in ids if counts.get(jid, 0) == 1),
+    )
+    log.info("%s", report.describe())
+    return report
