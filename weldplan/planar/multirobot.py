@@ -1,7 +1,10 @@
 """Several robots (paper 001, section 3): the expansion logic strategy and the scoring function.
 
-This module holds the paper's building blocks; the time-stepped simulation of three robots
-following their HAFSA paths is not written yet (see the project notes).
+:func:`simulate_robots` runs the paper's case: each robot follows its global path (HAFSA on
+the grid encoding, A* where HAFSA's best path collides) and replans locally around the others
+(goal distance first, eq. 15 score on ties). Not yet used in that choice: the collision
+probabilities of the expansion circles (:func:`collision_probability`); the paper does not say
+how they enter the local decision.
 
 Expansion logic (001 eqs. 12-14): for a polygonal obstacle with vertices ``p_i``, the vertex
 pair at the largest distance ``d_max = max d_ij`` (eq. 13) defines a range circle centred on
