@@ -18,6 +18,7 @@ BENCHES: dict[str, str] = {
     "route": "weldplan.bench.route",
     "scale": "weldplan.bench.scale",
     "planar": "weldplan.bench.planar",
+    "tour": "weldplan.bench.tour",
 }
 
 

@@ -17,7 +17,10 @@ from weldplan.errors import WeldplanError
 HELP = "plan a 2D path on a scenario with one optimiser (length, gap to optimum, time)"
 
 #: planar sub-forms: name -> module (added by later work; the plain form needs none)
-SUBCOMMANDS: dict[str, str] = {}
+SUBCOMMANDS: dict[str, str] = {
+    "tour": "weldplan.commands.planar_tour",
+    "robots": "weldplan.commands.planar_robots",
+}
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -1,0 +1,237 @@
+"""Multi-goal traversal on triangular-mesh maps (paper 002 sec. 3)."""
+
+from __future__ import annotations
+
+import itertools
+import json
+
+import numpy as np
+import pytest
+
+from weldplan.errors import InputError
+from weldplan.planar.multigoal import (
+    KEY_SCALE,
+    RandomKeyTourProblem,
+    TourResult,
+    available_tours,
+    build_tour_graph,
+    ground_truth,
+    load_tour,
+    plan_tour,
+    segments_clear,
+    tour_from_dict,
+    tour_lengths,
+    two_opt_batch,
+)
+
+
+@pytest.fixture(scope="module")
+def tour1():
+    task = load_tour("tour-1")
+    return task, build_tour_graph(task)
+
+
+def test_shipped_scenarios_load_with_increasing_size():
+    names = available_tours()
+    assert names[:3] == ["tour-1", "tour-2", "tour-3"]
+    sizes = [len(load_tour(n).goals) for n in names[:3]]
+    assert sizes == sorted(sizes) and sizes[-1] == 14  # 002 Table 3: 14 targets
+    for n in names[:3]:
+        t = load_tour(n)
+        assert t.max_edge == 10.0  # 002 sec. 2.2: M = 10 m on the 500 m maps
+        assert t.scenario.bounds.tolist() == [0, 0, 500, 500]
+
+
+def test_goal_inside_obstacle_names_the_field():
+    data = json.loads(open(load_tour("tour-1").scenario.path).read())
+    data["goals"][2] = [150.0, 150.0]  # centre of a circle
+    with pytest.raises(InputError, match="inside an obstacle"):
+        tour_from_dict(data, path="x.json")
+    data["goals"] = []
+    with pytest.raises(InputError) as exc:
+        tour_from_dict(data, path="x.json")
+    assert exc.value.field == "goals"
+
+
+def test_random_key_decoding_and_lengths():
+    rng = np.random.default_rng(0)
+    P = rng.uniform(0, 10, size=(6, 2))
+    D = np.linalg.norm(P[:, None] - P[None], axis=-1)
+    prob = RandomKeyTourProblem(D)
+    assert prob.n_var == 5
+    np.testing.assert_allclose(prob.upper, KEY_SCALE * 5)
+    X = rng.uniform(0, 50, size=(20, 5))
+    O = prob.orders(X)
+    assert all(sorted(o) == [1, 2, 3, 4, 5] for o in O.tolist())
+    f = prob.evaluate(X)
+    for o, v in zip(O, f, strict=True):
+        seq = [0, *o, 0]
+        assert v == pytest.approx(sum(D[a, b] for a, b in itertools.pairwise(seq)))
+
+
+def test_two_opt_reaches_a_local_optimum_and_never_worsens():
+    rng = np.random.default_rng(1)
+    P = rng.uniform(0, 10, size=(10, 2))
+    D = np.linalg.norm(P[:, None] - P[None], axis=-1)
+    O = np.array([rng.permutation(9) + 1 for _ in range(30)])
+    O2 = two_opt_batch(D, O)
+    assert np.all(tour_lengths(D, O2) <= tour_lengths(D, O) + 1e-12)
+    # no single reversal improves any result
+    for o in O2:
+        seq = [0, *o]
+        base = tour_lengths(D, np.array([o]))[0]
+        for i in range(1, 9):
+            for j in range(i + 1, 10):
+                s2 = seq[:i] + seq[i : j + 1][::-1] + seq[j + 1 :]
+                assert tour_lengths(D, np.array([s2[1:]]))[0] >= base - 1e-9
+
+
+def test_ground_truth_is_the_brute_force_optimum(tour1):
+    _, g = tour1
+    order, length, method = ground_truth(g)
+    perms = np.array(list(itertools.permutations(range(1, g.dist.shape[0]))))
+    assert method == "exact"
+    assert length == pytest.approx(tour_lengths(g.dist, perms).min(), rel=1e-12)
+    assert tour_lengths(g.dist, np.array([order]))[0] == pytest.approx(length, rel=1e-12)
+
+
+def test_isma_tour_visits_every_goal_once_returns_and_is_collision_free(tour1):
+    task, g = tour1
+    r = plan_tour(task, "isma", graph=g, pop_size=60, max_iter=60, rng=3)
+    assert sorted(r.order) == list(range(1, len(task.goals) + 1))
+    P = r.points_array
+    np.testing.assert_allclose(P[0], task.scenario.start)
+    np.testing.assert_allclose(P[-1], task.scenario.start)
+    # the smoothed curve passes through every goal (multiplicity-3 control points)
+    d = np.linalg.norm(P[:, None] - task.goals[None], axis=-1).min(axis=0)
+    assert np.all(d < 1e-6)
+    # and in the order chosen
+    first_hit = [int(np.argmin(np.linalg.norm(P - task.goals[k - 1], axis=1))) for k in r.order]
+    assert first_hit == sorted(first_hit)
+    assert r.smoothed and r.collision_free
+    assert segments_clear(task.scenario.world, P[:-1], P[1:]).all()
+    assert task.scenario.world.clearance(P).min() > -1e-9 * task.scenario.world.scale
+    # smoothing shortens the mesh polyline, and the tour is not shorter than the optimum
+    assert r.smooth_length < r.length
+    assert r.length >= r.optimum - 1e-9
+    assert r.gap < 0.02
+
+
+def test_same_seed_same_result_and_json_round_trip(tour1):
+    task, g = tour1
+    a = plan_tour(task, "sma", graph=g, pop_size=20, max_iter=10, rng=5, smooth=False)
+    b = plan_tour(task, "sma", graph=g, pop_size=20, max_iter=10, rng=5, smooth=False)
+    assert a.order == b.order and a.length == b.length
+    c = TourResult.from_json(a.to_json())
+    assert c == a
+
+
+@pytest.mark.slow
+def test_starved_budget_does_measurably_worse():
+    task = load_tour("tour-3")
+    g = build_tour_graph(task)
+    _, opt, _ = ground_truth(g)
+    full = [
+        plan_tour(
+            task,
+            "isma",
+            graph=g,
+            optimum=opt,
+            rng=s,
+            two_opt=True,
+            pop_size=50,
+            max_iter=50,
+            smooth=False,
+        ).gap
+        for s in range(2)
+    ]
+    starved = [
+        plan_tour(
+            task, "isma", graph=g, optimum=opt, rng=s, pop_size=4, max_iter=2, smooth=False
+        ).gap
+        for s in range(3)
+    ]
+    assert max(full) < 0.02
+    assert np.mean(starved) > max(full) + 0.05
+
+
+def test_cli_planar_tour_prints_table_and_plots(tmp_path, capsys):
+    from weldplan.cli import main
+
+    png = tmp_path / "t.png"
+    rc = main(
+        ["planar", "tour", "tour-1", "--order-by", "sma,exact", "--pop", "20", "--iters", "10",
+         "--seed", "1", "--plot", str(png)]
+    )  # fmt: skip
+    out = capsys.readouterr().out
+    assert rc == 0
+    assert "exact" in out and "sma" in out and "0.00%" in out
+    assert png.stat().st_size > 10_000
+    rc = main(["planar", "tour", "tour-1", "--order-by", "exact", "--json"])
+    rows = json.loads(capsys.readouterr().out)
+    assert rc == 0 and rows[0]["algorithm"] == "exact" and rows[0]["collision_free"]
+
+
+def test_cli_planar_tour_rejects_unknown_algorithm(capsys):
+    from weldplan.cli import main
+
+    assert main(["planar", "tour", "tour-1", "--order-by", "nope"]) == 2
+    assert "--order-by" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_bench_tour_writes_tables(tmp_path):
+    from weldplan.cli import main
+
+    rc = main(
+        ["bench", "tour", "--runs", "1", "--pop", "10", "--iters", "5", "--m-values", "50",
+         "--out", str(tmp_path)]
+    )  # fmt: skip
+    text = (tmp_path / "tour.md").read_text()
+    assert rc == 0
+    assert "Table 4" in text and "Table 3" in text and "ISMA+2opt" in text
+    assert (tmp_path / "tour-tour-3.png").exists() and (tmp_path / "tour-table3.png").exists()
+
+
+def test_navmesh_tour_on_polyanya_arena():
+    """Polyanya's arena navmesh as a real multi-goal map: the ISMA tour equals the ground
+    truth on 8 targets, and the smoothed path stays in the navmesh."""
+    from conftest import require_shared
+
+    from weldplan.planar.exact import MeshFreeSpace
+    from weldplan.planar.multigoal import navmesh_tour
+
+    space = MeshFreeSpace.read(require_shared("meshmaps", "arena.mesh"))
+    rng = np.random.default_rng(0)
+    P = rng.uniform(space.vertices_xy.min(0), space.vertices_xy.max(0), size=(200, 2))
+    P = P[space.contains_free(P)][:9]
+    task = navmesh_tour(space, P[0], P[1:], label="arena")
+    r = plan_tour(task, "isma", pop_size=100, max_iter=100, rng=0)
+    assert sorted(r.order) == list(range(1, 9))
+    assert r.gap < 0.02
+    assert r.collision_free
+    Q = r.points_array
+    assert space.contains_free(Q).all()
+    with pytest.raises(InputError):
+        navmesh_tour(space, [-100.0, -100.0], P[1:])
+
+
+def test_house_floorplan_tour():
+    """rtb-data's house.mat: 11 named places from the kitchen; ISMA (paper budget) within 2 %
+    of the ground truth, smoothed tour inside free cells, and the grid outline check agrees
+    with the cells."""
+    pytest.importorskip("rtbdata")
+    from weldplan.planar.multigoal import SampledGridWorld, house_tour
+
+    task = house_tour()
+    assert len(task.goals) == 11
+    r = plan_tour(task, "isma", rng=0)
+    assert sorted(r.order) == list(range(1, 12))
+    assert r.gap < 0.02 and r.smoothed and r.collision_free
+    w = task.world
+    assert isinstance(w, SampledGridWorld)
+    # a segment straight through a wall is caught
+    occ = task.scenario.grid.occupied
+    i, j = np.argwhere(occ)[len(np.argwhere(occ)) // 2]
+    c = task.scenario.grid.centre(np.array([i, j]))
+    assert not w.segments_free(c[None] - [0.3, 0.0], c[None] + [0.3, 0.0])[0]

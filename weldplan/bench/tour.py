@@ -1,0 +1,199 @@
+"""``weldplan bench tour``: paper 002's Tables 3 and 4 on the shipped multi-goal scenarios.
+
+``table3``
+    Paper 002 Table 3: the 14-target 500 m x 500 m map (``tour-3``) triangulated with M in
+    1, 5, 10, 20, 50 m; per M the mesh size, the time to build it (Triangle + Dijkstra from
+    every stop), ISMA's ordering time, and the smoothed tour length (mean over ``--runs``; the
+    paper ran 10), beside the mesh ground-truth tour and paper 002's rule M < gap / 4.
+``table4``
+    Paper 002 Table 4: ISMA, SMA, WOA, LSO ordering the targets of ``tour-1..3`` (population
+    and iterations 500, random keys), plus ISMA with 2-opt decoding (pop 50, 50 iterations; a
+    named deviation) and the exact sequencer; mean tour and smoothed length, mean time, mean
+    and worst gap to the ground-truth order, collision-free count.
+
+Writes ``tour.md`` and one PNG per scenario into ``--out``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import time
+from pathlib import Path
+
+import numpy as np
+
+log = logging.getLogger(__name__)
+
+HELP = "multi-goal traversal on triangular-mesh maps: paper 002 Tables 3 and 4"
+
+TABLE3_M = [1.0, 5.0, 10.0, 20.0, 50.0]
+#: paper 002 Table 3 (M/m, time/s, length/m) for reference in the report
+PAPER_TABLE3 = {1: (17.924, 2026.862), 5: (3.40, 2030.165), 10: (2.839, 2003.028),
+                20: (2.843, 2122.330), 50: (2.769, 2322.294)}  # fmt: skip
+TABLE4_ALGOS = [("ISMA", "isma", False), ("SMA", "sma", False), ("WOA", "woa", False),
+                ("LSO", "lso", False), ("ISMA+2opt", "isma", True)]  # fmt: skip
+TOURS = ["tour-1", "tour-2", "tour-3"]
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--protocols", default="table4,table3", help="comma-separated")
+    parser.add_argument("--runs", type=int, default=5, help="runs per cell (paper: 10)")
+    parser.add_argument("--pop", type=int, default=500, help="population (paper: 500)")
+    parser.add_argument("--iters", type=int, default=500, help="iterations (paper: 500)")
+    parser.add_argument("--m-values", default=",".join(f"{m:g}" for m in TABLE3_M))
+
+
+def _table4(args: argparse.Namespace, out: Path) -> list[str]:
+    from weldplan.bench.common import table
+    from weldplan.planar.multigoal import build_tour_graph, ground_truth, plan_tour
+    from weldplan.viz.tour import plot_tour
+
+    lines = ["## Paper 002 Table 4: ordering the targets (random keys) on each scenario's mesh", ""]
+    rows = []
+    for name, task in _tasks():
+        g = build_tour_graph(task)
+        t0 = time.perf_counter()
+        gt_order, opt, gt_method = ground_truth(g)
+        gt_s = time.perf_counter() - t0
+        paths = {}
+        ex = plan_tour(task, "exact", graph=g, optimum=opt)
+        paths[f"exact ({ex.smooth_length:.1f})"] = ex.points_array
+        for label, algo, two in TABLE4_ALGOS:
+            pop, iters = (50, 50) if two else (args.pop, args.iters)
+            rs = [
+                plan_tour(task, algo, graph=g, optimum=opt, rng=s, two_opt=two, pop_size=pop,
+                          max_iter=iters)
+                for s in range(args.runs)
+            ]  # fmt: skip
+            L = np.array([r.length for r in rs])
+            S = np.array([r.smooth_length for r in rs])
+            T = np.array([r.seconds for r in rs])
+            gaps = np.array([r.gap for r in rs])
+            free = sum(r.collision_free for r in rs)
+            rows.append([name, f"{label} ({pop}x{iters})", f"{L.mean():.1f}", f"{S.mean():.1f}",
+                         f"{T.mean():.3f}", f"{100 * gaps.mean():.2f} %",
+                         f"{100 * gaps.max():.2f} %", f"{free}/{len(rs)}"])  # fmt: skip
+            best = rs[int(np.argmin(L))]
+            paths[f"{label} ({best.smooth_length:.1f})"] = best.points_array
+        free1 = "1/1" if ex.collision_free else "0/1"
+        rows.append([name, f"sequencer ({gt_method})", f"{opt:.1f}", f"{ex.smooth_length:.1f}",
+                     f"{gt_s:.3f}", "0.00 %", "0.00 %", free1])  # fmt: skip
+        shown = g.mesh if g.mesh.n_nodes < 20000 else None
+        plot_tour(task, paths, out / f"tour-{name}.png", mesh=shown,
+                  title=f"{name}: {len(task.goals)} targets, ground truth {opt:.1f}")  # fmt: skip
+    lines.append(
+        table(
+            [
+                "scenario",
+                "order by",
+                "tour",
+                "smoothed",
+                "time/s",
+                "mean gap",
+                "worst gap",
+                "collision-free",
+            ],
+            rows,
+        )  # fmt: skip
+    )
+    lines += ["", f"{args.runs} runs per row (seeds 0..{args.runs - 1}); time is the ordering "
+              "only (mesh and Dijkstra are shared, see Table 3)."]  # fmt: skip
+    return lines
+
+
+def _tasks() -> list:
+    """The three shipped scenarios, then the real maps when their data is present: rtb-data's
+    house floorplan (11 places from the kitchen, M = 4) and Polyanya's arena navmesh (12 random
+    free points, seed 0, Triangle's quality mesh of the navmesh)."""
+    from weldplan.planar.multigoal import house_tour, load_tour, navmesh_tour
+
+    out = [(n, load_tour(n)) for n in TOURS]
+    try:
+        out.append(("house", house_tour()))
+    except ImportError:
+        log.warning("rtb-data not installed: no house floorplan row")
+    from weldplan.bench.common import SHARED_DATA
+
+    arena = SHARED_DATA / "meshmaps" / "arena.mesh"
+    if arena.exists():
+        from weldplan.planar.exact import MeshFreeSpace
+
+        sp = MeshFreeSpace.read(arena)
+        rng = np.random.default_rng(0)
+        P = rng.uniform(sp.vertices_xy.min(0), sp.vertices_xy.max(0), size=(400, 2))
+        P = P[sp.contains_free(P)][:13]
+        out.append(("arena", navmesh_tour(sp, P[0], P[1:], label="arena")))
+    return out
+
+
+def _table3(args: argparse.Namespace, out: Path) -> list[str]:
+    from weldplan.bench.common import table
+    from weldplan.planar.meshmap import max_edge_rule
+    from weldplan.planar.multigoal import build_tour_graph, ground_truth, load_tour, plan_tour
+    from weldplan.viz.tour import plot_tour
+
+    task = load_tour("tour-3")
+    rule = max_edge_rule(task.scenario.obstacles)
+    lines = ["## Paper 002 Table 3: mesh edge M on the 14-target map (tour-3)", "",
+             f"Rule M < smallest obstacle gap / 4 = {rule:.2f} m.", ""]  # fmt: skip
+    rows = []
+    paths = {}
+    for M in [float(v) for v in args.m_values.split(",")]:
+        g = build_tour_graph(task, M)
+        _, opt, _ = ground_truth(g)
+        rs = [plan_tour(task, "isma", graph=g, optimum=opt, rng=s, pop_size=args.pop,
+                        max_iter=args.iters) for s in range(args.runs)]  # fmt: skip
+        S = np.array([r.smooth_length for r in rs])
+        T = np.array([r.seconds + r.smooth_seconds for r in rs])
+        paper = PAPER_TABLE3.get(int(M)) if M == int(M) else None
+        rows.append([f"{M:g}", g.mesh.n_nodes, g.mesh.n_cells, f"{g.mesh.longest_edge:.2f}",
+                     f"{g.build_seconds:.2f}", f"{T.mean():.2f}", f"{opt:.1f}",
+                     f"{np.mean([r.length for r in rs]):.1f}", f"{S.mean():.1f}",
+                     "yes" if M < rule else "no",
+                     f"{paper[0]} / {paper[1]}" if paper else ""])  # fmt: skip
+        best = rs[int(np.argmin(S))]
+        paths[f"M = {M:g} ({best.smooth_length:.1f})"] = best.points_array
+    plot_tour(task, paths, out / "tour-table3.png", title="tour-3: ISMA tours for each M")
+    lines.append(
+        table(
+            [
+                "M/m",
+                "nodes",
+                "triangles",
+                "longest edge",
+                "mesh+Dijkstra/s",
+                "ISMA+smooth/s",
+                "ground truth",
+                "ISMA tour",
+                "ISMA smoothed",
+                "M < rule",
+                "paper time/s / length",
+            ],
+            rows,
+        )  # fmt: skip
+    )
+    return lines
+
+
+def run(args: argparse.Namespace) -> int:
+    from weldplan.bench.common import conditions
+
+    out = Path(getattr(args, "out", None) or ".")
+    out.mkdir(parents=True, exist_ok=True)
+    protos = [p.strip() for p in args.protocols.split(",") if p.strip()]
+    lines = ["# weldplan bench tour", "", f"Conditions: {conditions()}", ""]
+    t0 = time.perf_counter()
+    for p in protos:
+        if p == "table4":
+            lines += _table4(args, out) + [""]
+        elif p == "table3":
+            lines += _table3(args, out) + [""]
+        else:
+            from weldplan.errors import WeldplanError
+
+            raise WeldplanError(f"unknown protocol '{p}' (field --protocols)")
+    lines.append(f"Total {time.perf_counter() - t0:.1f} s; after: {conditions()}")
+    (out / "tour.md").write_text("\n".join(lines) + "\n")
+    print(f"wrote {out / 'tour.md'}")
+    return 0
