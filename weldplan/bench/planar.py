@@ -116,6 +116,14 @@ def _run_all(tasks: list[tuple], jobs: int) -> list[dict]:
         return list(ex.map(_one, tasks, chunksize=1))
 
 
+def _collect_best(rr: list[dict], algo: str, best_paths: dict, hist: dict) -> None:
+    """Add ``algo``'s shortest run (successful ones first) and its mean convergence curve."""
+    ok = [r for r in rr if r["success"]] or rr
+    b = min(ok, key=lambda r: r["length"])
+    best_paths[f"{algo.upper()} {b['length']:.3f}"] = b["points"]
+    hist[algo.upper()] = np.mean([r["history"] for r in rr], axis=0)
+
+
 def _stats(rows: Iterable[dict]) -> dict:
     rows = list(rows)
     L = np.array([r["length"] for r in rows])
@@ -182,10 +190,7 @@ def protocol_000(args: argparse.Namespace, out: Path) -> list[str]:
                 f"| {_fmt(st['sd'])} | {100 * (st['mean'] / ex.length - 1):+.2f} % | "
                 f"{st['succ']:.2f} | {st['t_mean']:.3f} | {st['t_max']:.3f} |"
             )
-            ok = [r for r in rr if r["success"]] or rr
-            b = min(ok, key=lambda r: r["length"])
-            best_paths[f"{a.upper()} {b['length']:.3f}"] = b["points"]
-            hist[a.upper()] = np.mean([r["history"] for r in rr], axis=0)
+            _collect_best(rr, a, best_paths, hist)
         plot_paths(
             sc,
             best_paths,
@@ -318,10 +323,7 @@ def protocol_001(args: argparse.Namespace, out: Path) -> list[str]:
                 f"{_fmt(st['min'])} | {_fmt(st['mean'])} | {st['succ']:.2f} | "
                 f"{st['t_mean']:.3f} |"
             )
-            ok = [r for r in rr if r["success"]] or rr
-            b = min(ok, key=lambda r: r["length"])
-            best_paths[f"{a.upper()} {b['length']:.3f}"] = b["points"]
-            hist[a.upper()] = np.mean([r["history"] for r in rr], axis=0)
+            _collect_best(rr, a, best_paths, hist)
         plot_paths(
             sc,
             best_paths,

@@ -167,8 +167,15 @@ def visibility_shortest_path(
         )
     pts = np.concatenate([s[None], g[None], cand])
     i, j = _visible_pairs(obstacles, pts)
-    w = np.linalg.norm(pts[i] - pts[j], axis=1)
+    return _graph_shortest_path(pts, i, j)
+
+
+def _graph_shortest_path(
+    pts: NDArray[np.float64], i: NDArray[np.int64], j: NDArray[np.int64]
+) -> ExactPath:
+    """Dijkstra from node 0 (start) to node 1 (goal) over the visible pairs ``(i, j)``."""
     n = len(pts)
+    w = np.linalg.norm(pts[i] - pts[j], axis=1)
     graph = coo_matrix((w, (i, j)), shape=(n, n)).tocsr()
     dist, pred = dijkstra(graph, directed=False, indices=0, return_predecessors=True)
     if not np.isfinite(dist[1]):
@@ -226,21 +233,7 @@ class VisibilityGraph:
         i = np.concatenate([ii[0], np.zeros(len(src), int), np.ones(len(dst), int)])
         j = np.concatenate([ii[1], src + 2, dst + 2])
         pts = np.concatenate([ends, self.nodes])
-        w = np.linalg.norm(pts[i] - pts[j], axis=1)
-        graph = coo_matrix((w, (i, j)), shape=(m + 2, m + 2)).tocsr()
-        dist, pred = dijkstra(graph, directed=False, indices=0, return_predecessors=True)
-        if not np.isfinite(dist[1]):
-            raise PlanningError("the goal cannot be reached from the start")
-        order = [1]
-        while order[-1] != 0:
-            order.append(int(pred[order[-1]]))
-        path = pts[order[::-1]]
-        return ExactPath(
-            points=tuple((float(x), float(y)) for x, y in path),
-            length=float(dist[1]),
-            method="visibility-graph",
-            expanded=m + 2,
-        )
+        return _graph_shortest_path(pts, i, j)
 
 
 # ---------------------------------------------------------------------------------------- A*
