@@ -18,9 +18,9 @@ a non-zero winding number around a reference point inside at least one obstacle
 (:func:`reference_points`). The winding numbers come from the angles each path sweeps around
 each reference point (:func:`swept_angles`): for paths with the same ends the difference of the
 sweeps is ``2 pi`` times the loop's winding number, so the test is exact (no tolerance beyond
-rounding a multiple of ``2 pi``). Homology is slightly coarser than homotopy (a path that winds
-around two obstacles in a commutator pattern would count as the same class); for the short
-paths a planner returns the two agree. The pairwise segment-crossing count of eq. 17 and a
+rounding a multiple of ``2 pi``). Homology is coarser than homotopy (two paths that differ by a
+commutator loop round two obstacles count as one class); it is used because it is exact and
+cheap to test for a whole population. The pairwise segment-crossing count of eq. 17 and a
 sampled Hausdorff distance are reported beside, for information.
 
 How the swarms are pushed apart
@@ -42,17 +42,23 @@ How the swarms are pushed apart
   which would pull the swarms onto one path.)
 * **Class penalty (our addition, named deviation).** Crossing counts alone cannot separate
   classes: two paths side by side in one corridor cross zero times. So for ``k >= 2`` each
-  swarm ranks by tiers (:meth:`MultimodalParaPA._scores`): collision-free paths in a class of
-  their own first, then collision-free paths in the class of the elite of a swarm of higher
-  priority (lower index), then colliding paths. Swarm 0 is free; swarm 1 must avoid swarm 0's
-  elite class, swarm 2 those of swarms 0 and 1, and so on. The tiers shift the objective by
-  the encoding's offset ``B`` (larger than any collision-free fitness), so the evaluation
-  budget and the objective are untouched; with ``k = 1`` there is no penalty.
+  swarm ranks by tiers (:meth:`MultimodalParaPA._scores`): (0) collision-free paths in a class
+  of their own, (1) colliding paths in a class of their own, (2) paths in the class of the
+  elite of a swarm of higher priority (lower index). Swarm 0 is free; swarm 1 must avoid
+  swarm 0's elite class, swarm 2 those of swarms 0 and 1, and so on. Colliding paths rank
+  above duplicates on purpose: a path moves to another class only by passing through an
+  obstacle, so the colliding paths on the way must be acceptable (with duplicates ranked
+  second, map20-1 seed 0 ended with two of its three paths in one class). Tier 2 adds a
+  multiple of the encoding's offset ``B`` that lifts it above every colliding value; the
+  evaluation budget and the objective are untouched; with ``k = 1`` there is no penalty.
+  (A colliding path's class is still defined: only a path through a reference point itself
+  has none.)
 
 The k paths are picked from the swarms' elites (each swarm's ``n_elites`` best memories):
 shortest collision-free first, then greedily every next one distinct from all picked. Fewer
-than k distinct collision-free paths leave the rest filled with the best remaining ones,
-flagged (``success``, the ``distinct`` matrix) rather than hidden.
+than k distinct collision-free paths leave the rest filled with the best remaining ones
+(repeated when the elites hold fewer than k solutions), flagged (``success``, the
+``distinct`` matrix) rather than hidden.
 
 Multi-path reverse planning (Algorithm 2)
 -----------------------------------------
@@ -104,9 +110,7 @@ PAPER_ITERATIONS = 200
 DEFAULT_SWARMS = 4
 #: 003 section 4.4: reverse planning is triggered for at most this many infeasible segments
 MAX_REPAIR_SEGMENTS = 2
-#: a path in the class of a higher-priority swarm's elite ranks this many encoding offsets
-#: ``B`` above its objective: behind every colliding path (their fitness is below ``4 B``)
-DUPLICATE_SHIFT = 5.0
+
 #: points per path for the sampled Hausdorff distance (reported, not used for decisions)
 HAUSDORFF_SAMPLES = 200
 
@@ -297,6 +301,9 @@ class MultimodalParaPA(ParaPA):
         self.refs = reference_points(problem.scenario.obstacles)
         self.repairs = 0
         self.random_respawns = 0
+        # colliding values of the encoding are B (1 + f3 + f4) + w f1 with f3, f4 <= 1 and
+        # f1 <= B: below (3 + w) B, so this shift puts tier 2 behind all of them
+        self._dup_shift = (4.0 + max(problem.w, 0.0)) * problem.offset
 
     # -- ranking -------------------------------------------------------------------------
     def initialize(self, ctx: Context) -> None:
@@ -350,9 +357,9 @@ class MultimodalParaPA(ParaPA):
         return tier
 
     def _scores(self, X: FloatArray, F: FloatArray) -> FloatArray:
-        """Tiered values: ``F`` for tiers 0 and 1 (colliding values already exceed the
-        encoding's offset ``B``) and ``F + DUPLICATE_SHIFT x B`` for tier 2, above every
-        colliding value of the encoding (which stays below ``4 B``)."""
+        """Tiered values (:meth:`_tier_of`): ``F`` for tiers 0 and 1 (colliding values already
+        exceed the encoding's offset ``B``), ``F + (4 + w) B`` for tier 2, behind every
+        colliding value."""
         if self.k < 2 or self.n_swarms < 2:
             return F
         sweep = self._sweeps(X)
@@ -361,7 +368,7 @@ class MultimodalParaPA(ParaPA):
         for s, refs in enumerate(self._elite_sweeps()):
             if refs is not None:
                 tier = self._tier_of(sweep[s], feasible[s], refs)
-                out[s] = np.where(tier == 2, F[s] + DUPLICATE_SHIFT * self.problem.offset, F[s])
+                out[s] = np.where(tier == 2, F[s] + self._dup_shift, F[s])
         return out
 
     # -- reverse planning ------------------------------------------------------------------
@@ -449,7 +456,8 @@ class MultimodalResult:
     n_swarms, pop_per_swarm, iterations
         The run's settings.
     n_eval, seconds, seed
-        Evaluations spent by the run, wall time of the run and the selection, integer seed.
+        Evaluations spent by the run (the final repairs evaluate at most ``n_swarms x
+        n_elites`` more, outside the budget), wall time of the run and the selection, seed.
     """
 
     scenario: str
