@@ -16,7 +16,12 @@ from weldplan.errors import WeldplanError
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     g = parser.add_argument_group("planar multimodal")
     g.add_argument("--k", type=int, default=3, help="multimodal: distinct paths wanted")
-    g.add_argument("--swarms", type=int, default=None, help="multimodal: swarms (default 4)")
+    g.add_argument(
+        "--swarms",
+        type=int,
+        default=None,
+        help="multimodal: swarms (default 4; --pop is per swarm, default 50)",
+    )
     g.add_argument(
         "--iterations", type=int, default=None, help="multimodal: iterations (default 200)"
     )

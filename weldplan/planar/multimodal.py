@@ -148,11 +148,10 @@ def swept_angles(paths: ArrayLike, points: ArrayLike) -> FloatArray:
     of the loop ``a`` then ``b`` reversed around the point (an integer up to rounding)."""
     P = np.asarray(paths, dtype=np.float64)
     Q = np.asarray(points, dtype=np.float64)
-    u = P[..., :-1, None, :] - Q  # (..., n - 1, O, 2)
-    v = P[..., 1:, None, :] - Q
-    cr = u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
-    dt = np.sum(u * v, axis=-1)
-    return np.sum(np.arctan2(cr, dt), axis=-2)
+    d = P[..., :, None, :] - Q  # (..., n, O, 2)
+    step = np.diff(np.arctan2(d[..., 1], d[..., 0]), axis=-2)
+    # each segment turns the vector by less than pi (unless it passes through the point)
+    return np.sum((step + np.pi) % (2.0 * np.pi) - np.pi, axis=-2)
 
 
 def class_differs(sweep_a: ArrayLike, sweep_b: ArrayLike) -> NDArray[np.bool_]:
