@@ -44,8 +44,10 @@ How the swarms are pushed apart
   classes: two paths side by side in one corridor cross zero times. So for ``k >= 2`` each
   swarm ranks by tiers (:meth:`MultimodalParaPA._scores`): (0) collision-free paths in a class
   of their own, (1) colliding paths in a class of their own, (2) paths in the class of the
-  elite of a swarm of higher priority (lower index). Swarm 0 is free; swarm 1 must avoid
-  swarm 0's elite class, swarm 2 those of swarms 0 and 1, and so on. Colliding paths rank
+  elite of a swarm of higher priority. The priority is rebuilt greedily whenever the
+  memories change: the swarm with the best elite is free, the next best must avoid its class,
+  and so on (:meth:`MultimodalParaPA._elite_sweeps`; a fixed order by swarm index left swarms
+  stuck colliding in a class another swarm held collision-free). Colliding paths rank
   above duplicates on purpose: a path moves to another class only by passing through an
   obstacle, so the colliding paths on the way must be acceptable (with duplicates ranked
   second, map20-1 seed 0 ended with two of its three paths in one class). Tier 2 adds a
@@ -65,7 +67,9 @@ Multi-path reverse planning (Algorithm 2)
 :func:`reverse_repair`. 003 section 4.4: "normally, there are one or two segments that are
 infeasible ... If the replaced nectar source only has one or two infeasible segments, the
 reverse planning strategy is triggered": (1) find the infeasible segment ``S_i``; (2) go through
-the pbest group; if a memory has ``S_i`` feasible and every segment from ``S_i`` back to the
+the pbest group (read as the personal bests of all swarms: the multimodal swarms each sit
+in their own class, so a swarm's own memories rarely hold a free prefix where its elite
+collides); if a memory has ``S_i`` feasible and every segment from ``S_i`` back to the
 start feasible, its nodes replace the corresponding nodes of the nectar; else the nectar is
 generated at random. Readings: with two infeasible segments ``S_i`` is the later one (so the
 replaced prefix covers both); "the corresponding nodes" are the nodes of ``S_1 .. S_i`` (in the
@@ -217,6 +221,7 @@ def reverse_repair(
     *,
     max_segments: int = MAX_REPAIR_SEGMENTS,
     memory_fitness: ArrayLike | None = None,
+    memory_infeasible: NDArray[np.bool_] | None = None,
 ) -> FloatArray | None:
     """003 Algorithm 2 (multi-path reverse planning) on one path; ``None`` when it does not
     apply or finds nothing (the caller then generates the nectar at random, as 003 does).
@@ -232,6 +237,9 @@ def reverse_repair(
         ``(M, n_var)`` the personal-best group.
     memory_fitness
         ``(M,)`` optional: the memories are tried in increasing order (else in their order).
+    memory_infeasible
+        ``(M, N) bool`` optional: :func:`infeasible_segments` of the memories, when the
+        caller repairs several paths from one group.
 
     Returns
     -------
@@ -244,7 +252,7 @@ def reverse_repair(
     if nbad == 0 or nbad > max_segments or len(M) == 0:
         return None
     i = int(np.flatnonzero(bad)[-1])  # S_i (0-based segment i: node i -> node i + 1)
-    mb = infeasible_segments(problem, M)  # (M, N)
+    mb = infeasible_segments(problem, M) if memory_infeasible is None else memory_infeasible
     ok = ~np.any(mb[:, : i + 1], axis=1)  # S_i and every segment back to the start feasible
     if memory_fitness is not None:
         order = np.argsort(np.asarray(memory_fitness, dtype=np.float64), kind="stable")
@@ -324,22 +332,37 @@ class MultimodalParaPA(ParaPA):
         return out
 
     def _elite_sweeps(self) -> list[FloatArray | None]:
-        """For each swarm, the sweeps ``(R, O)`` of the collision-free elites of the swarms of
-        higher priority (``None`` when there are none), found in priority order since swarm
-        s's elite is its best memory as ranked with its own penalty."""
+        """For each swarm, the sweeps ``(R, O)`` of the collision-free elites of the swarms
+        ranked before it (``None`` when there are none).
+
+        The priority is rebuilt greedily each time: the swarm whose best memory (ranked with
+        the classes taken so far) is best goes next, and its elite's class is taken when it
+        is collision-free. A swarm stuck colliding in a class that another swarm holds
+        collision-free is thus pushed out of it."""
         key = b"e" + self.P.tobytes() + self.Pf.tobytes()
         out = self._cache.get(key)
         if out is not None:
             return out
         sweep = self._sweeps(self.P)
         feasible = self.Pf < self.problem.offset
-        out, refs = [], []
-        for s in range(self.n_swarms):
-            out.append(np.stack(refs) if refs else None)
-            tier = self._tier_of(sweep[s], feasible[s], out[-1])
-            e = int(np.lexsort((self.Pf[s], tier))[0])
-            if tier[e] == 0:
+        out = [None] * self.n_swarms
+        refs: list[FloatArray] = []
+        left = list(range(self.n_swarms))
+        while left:
+            taken = np.stack(refs) if refs else None
+            best = None
+            for s in left:
+                tier = self._tier_of(sweep[s], feasible[s], taken)
+                e = int(np.lexsort((self.Pf[s], tier))[0])
+                rank = (int(tier[e]), float(self.Pf[s, e]))
+                if best is None or rank < best[0]:
+                    best = (rank, s, e)
+            assert best is not None
+            (tier_e, _), s, e = best
+            out[s] = taken
+            if tier_e <= 1:  # a class is held by one swarm, even while its elite collides
                 refs.append(sweep[s, e])
+            left.remove(s)
         self._cache[key] = out
         return out
 
@@ -372,13 +395,19 @@ class MultimodalParaPA(ParaPA):
 
     # -- reverse planning ------------------------------------------------------------------
     def _respawn(self, ctx: Context, swarms: NDArray[np.intp], hosts: FloatArray) -> FloatArray:
-        """Abandoned hosts: Algorithm 2 from the swarm's personal bests, else uniform (eq. 3)."""
+        """Abandoned hosts: Algorithm 2 from the personal bests of all swarms, else uniform
+        (eq. 3)."""
         new = random_in_bounds(ctx.rng, ctx.lower, ctx.upper, len(hosts))
         if not self.repair:
             self.random_respawns += len(hosts)
             return new
-        for j, (s, h) in enumerate(zip(swarms, hosts, strict=True)):
-            fixed = reverse_repair(self.problem, h, self.P[s], memory_fitness=self.Pf[s])
+        D = self.P.shape[-1]
+        group, group_f = self.P.reshape(-1, D), self.Pf.reshape(-1)
+        group_bad = infeasible_segments(self.problem, group)
+        for j, h in enumerate(hosts):
+            fixed = reverse_repair(
+                self.problem, h, group, memory_fitness=group_f, memory_infeasible=group_bad
+            )
             if fixed is None:
                 self.random_respawns += 1
             else:
@@ -641,9 +670,12 @@ def _pick(
     F = opt.Pf[swarm, order.reshape(-1)].copy()
     repaired = 0
     if opt.repair:
+        group, group_f = opt.P.reshape(-1, opt.P.shape[-1]), opt.Pf.reshape(-1)
+        group_bad = infeasible_segments(problem, group)
         for j in np.flatnonzero(F >= problem.offset):
-            s = swarm[j]
-            fixed = reverse_repair(problem, X[j], opt.P[s], memory_fitness=opt.Pf[s])
+            fixed = reverse_repair(
+                problem, X[j], group, memory_fitness=group_f, memory_infeasible=group_bad
+            )
             if fixed is not None:
                 X[j] = fixed
                 F[j] = problem.evaluate(fixed[None])[0]
