@@ -20,9 +20,9 @@ each reference point (:func:`swept_angles`): for paths with the same ends the di
 sweeps is ``2 pi`` times the loop's winding number, so the test is exact (no tolerance beyond
 rounding a multiple of ``2 pi``). Homology is coarser than homotopy (two paths that differ by a
 commutator loop round two obstacles count as one class); it is used because it is exact and
-cheap to test for a whole population. Distinct paths may share stretches (near the start, say), where one blockage
-stops both; the pairwise segment-crossing count of eq. 17 and a sampled Hausdorff distance are
-reported beside, for information.
+cheap to test for a whole population. Distinct paths may share stretches (near the start,
+say), where one blockage stops both; the pairwise segment-crossing count of eq. 17 and a
+sampled Hausdorff distance are reported beside, for information.
 
 How the swarms are pushed apart
 -------------------------------
