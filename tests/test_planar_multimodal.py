@@ -16,6 +16,7 @@ from weldplan.planar.multimodal import (
     MultimodalParaPA,
     MultimodalResult,
     class_differs,
+    crossing_cross,
     infeasible_segments,
     path_crossings,
     plan_multimodal,
@@ -106,6 +107,21 @@ def test_path_crossings_match_a_brute_force_count() -> None:
             assert got[i, e] == n - 2  # the pairs touching at the shared start and goal
     same = path_crossings(A[:1], A[:1])[0, 0]
     assert same >= A.shape[1] - 1  # an identical path overlaps every segment
+
+
+def test_crossing_cross_follows_the_parapa_contract() -> None:
+    """``cross(candidates (m, n), elites (E, n)) -> (m,)``, lower is better, inputs untouched:
+    a copy of an elite scores worse than a path round the other side of the box."""
+    pr = _box_problem()
+    cross = crossing_cross(pr)
+    cand = np.stack([UPPER, LOWER, 0.9 * UPPER])
+    elites = np.stack([UPPER, 0.8 * UPPER])
+    before = (cand.copy(), elites.copy())
+    c = cross(cand, elites)
+    assert c.shape == (3,) and c.dtype == np.float64
+    np.testing.assert_array_equal(cand, before[0])
+    np.testing.assert_array_equal(elites, before[1])
+    assert c[1] == 0 and c[0] > c[1]
 
 
 # ------------------------------------------------------------------------ reverse planning
