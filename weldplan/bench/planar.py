@@ -16,6 +16,9 @@ Protocols (``--protocols``, default all):
 ``001``
     Paper 001 Table 1 style: AFSA and HAFSA on the 20 x 20 and 40 x 40 grids, 50 fish,
     100 iterations: longest, best, average length and mean time, beside the A* optimum.
+``multimodal`` (not in the default list)
+    Paper 003 sections 4.3-4.4: k = 3 distinct paths from one ParaPA run on each 20 x 20 map,
+    beside the single-best ParaPA (:mod:`weldplan.bench.multimodal`).
 ``exact``
     The exact planners against third-party data: A* on every Moving AI query (within
     ``--exact-seconds`` per map), and the visibility graph on the Polyanya arena mesh against
@@ -71,6 +74,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--exact-seconds", type=float, default=120.0, help="time for A* per Moving AI map"
     )
     parser.add_argument("--data", default=None, help="folder of the shared data (movingai, ...)")
+    from weldplan.bench.multimodal import add_arguments as add_multimodal
+
+    add_multimodal(parser)
 
 
 # ----------------------------------------------------------------------------- running
@@ -441,6 +447,13 @@ def protocol_exact(args: argparse.Namespace, out: Path) -> list[str]:
     return lines
 
 
+def protocol_multimodal(args: argparse.Namespace, out: Path) -> list[str]:
+    """003 4.3-4.4: k distinct paths per run (:mod:`weldplan.bench.multimodal`)."""
+    from weldplan.bench.multimodal import protocol_multimodal as proto
+
+    return proto(args, out)
+
+
 def run(args: argparse.Namespace) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -457,6 +470,7 @@ def run(args: argparse.Namespace) -> int:
         "003": protocol_003,
         "001": protocol_001,
         "exact": protocol_exact,
+        "multimodal": protocol_multimodal,
     }
     body: list[str] = []
     for p in [p.strip() for p in args.protocols.split(",") if p.strip()]:

@@ -20,6 +20,7 @@ HELP = "plan a 2D path on a scenario with one optimiser (length, gap to optimum,
 SUBCOMMANDS: dict[str, str] = {
     "tour": "weldplan.commands.planar_tour",
     "robots": "weldplan.commands.planar_robots",
+    "multimodal": "weldplan.commands.planar_multimodal",
 }
 
 

@@ -45,6 +45,14 @@ Readings and named deviations
   replaces the particle of ``s`` with the worst memory. That particle keeps the better of its
   old memory and the incoming elite ("the replaced individuals always keep the best memories").
   All swarms draw from the pool as it was before any replacement.
+
+Hooks for subclasses
+--------------------
+Two methods are identities here and exist for the multimodal planner
+(:mod:`weldplan.planar.multimodal`): :meth:`ParaPA._scores` turns objective values into the
+values each swarm ranks by (roulette on hosts, memory and host updates, the exchange), and
+:meth:`ParaPA._respawn` places the hosts abandoned at the nectar limit (003 Algorithm 2 repairs
+them there). The arrays ``F``, ``Pf`` and ``Of`` always hold objective values.
 """
 
 from __future__ import annotations
@@ -172,7 +180,7 @@ class ParaPA(Optimizer):
         S, NP, NO, D = self.n_swarms, self._np, self._no, ctx.n_var
         lo, hi = ctx.lower, ctx.upper
         # Each particle picks a host by roulette on ABC fitness (eq. 2).
-        choice = roulette_rows(rng, abc_fitness(self.Of), NP)
+        choice = roulette_rows(rng, abc_fitness(self._scores(self.O, self.Of)), NP)
         s_idx = np.arange(S)[:, None]
         G = self.O[s_idx, choice]  # (S, NP, D): the host replaces gbest
         w = self.w_max - (self.w_max - self.w_min) * iteration_fraction(ctx)  # eq. 7
@@ -182,13 +190,15 @@ class ParaPA(Optimizer):
         self.V = np.clip(V, -self._vmax, self._vmax)
         self.X = clip_to_bounds(self.X + self.V, lo, hi)  # eq. 6
         self.F = ctx.evaluate(self.X.reshape(-1, D)).reshape(S, NP)
-        better = self.F < self.Pf
+        better = self._scores(self.X, self.F) < self._scores(self.P, self.Pf)
         self.P[better] = self.X[better]
         self.Pf[better] = self.F[better]
 
         # Host competition: the best particle on each host replaces it when better.
         gk = (s_idx * NO + choice).reshape(-1)
-        Ff = self.F.reshape(-1)
+        Fr = self.F.reshape(-1)
+        Ff = self._scores(self.X, self.F).reshape(-1)
+        Os = self._scores(self.O, self.Of).reshape(-1)
         order = np.lexsort((Ff, gk))
         first = np.ones(order.size, dtype=bool)
         first[1:] = gk[order][1:] != gk[order][:-1]
@@ -197,10 +207,10 @@ class ParaPA(Optimizer):
         Of = self.Of.reshape(-1).copy()
         Ofl = self.O.reshape(S * NO, D).copy()
         trial = self.trial.reshape(-1).copy()
-        imp = Ff[best_p] < Of[hosts]
+        imp = Ff[best_p] < Os[hosts]
         Xf = self.X.reshape(-1, D)
         Ofl[hosts[imp]] = Xf[best_p[imp]]
-        Of[hosts[imp]] = Ff[best_p[imp]]
+        Of[hosts[imp]] = Fr[best_p[imp]]
         visits = np.bincount(gk, minlength=S * NO).astype(np.float64)
         keep = np.ones(S * NO, dtype=bool)
         keep[hosts[imp]] = False
@@ -209,7 +219,7 @@ class ParaPA(Optimizer):
         # Nectar limit: abandoned hosts are re-sampled in the box (eq. 3), memory lost.
         dead = np.flatnonzero(trial > self._limit)
         if dead.size and not ctx.exhausted():
-            Ofl[dead] = random_in_bounds(rng, lo, hi, dead.size)
+            Ofl[dead] = self._respawn(ctx, dead // NO, Ofl[dead])
             Of[dead] = ctx.evaluate(Ofl[dead])
             trial[dead] = 0.0
         self.O = Ofl.reshape(S, NO, D)
@@ -218,6 +228,18 @@ class ParaPA(Optimizer):
 
         if S > 1 and (ctx.iteration + 1) % self.exchange_interval == 0:
             self._exchange()
+
+    def _scores(self, X: NDArray[np.float64], F: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The values swarms rank by, ``(S, m)``, for positions ``X (S, m, D)`` of objective
+        values ``F (S, m)``: here the objective itself (a hook for the multimodal planner)."""
+        return F
+
+    def _respawn(
+        self, ctx: Context, swarms: NDArray[np.intp], hosts: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
+        """New positions ``(n, D)`` for abandoned hosts ``hosts (n, D)`` of ``swarms (n,)``:
+        uniform in the box (eq. 3)."""
+        return random_in_bounds(ctx.rng, ctx.lower, ctx.upper, len(hosts))
 
     def _exchange(self) -> None:
         """Algorithm 1: multi-swarm elite selection through the mixing pool."""
