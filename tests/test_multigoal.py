@@ -18,6 +18,7 @@ from weldplan.planar.multigoal import (
     ground_truth,
     load_tour,
     plan_tour,
+    polish_order,
     segments_clear,
     tour_from_dict,
     tour_lengths,
@@ -86,6 +87,36 @@ def test_two_opt_reaches_a_local_optimum_and_never_worsens():
                 assert tour_lengths(D, np.array([s2[1:]]))[0] >= base - 1e-9
 
 
+def test_polish_order_never_longer_and_reaches_the_optimum(tour1):
+    _, g = tour1
+    _, opt, _ = ground_truth(g)
+    t = g.dist.shape[0] - 1
+    rng = np.random.default_rng(2)
+    for _ in range(5):
+        o = rng.permutation(t) + 1
+        before = tour_lengths(g.dist, o[None])[0]
+        new, length = polish_order(g.dist, o, rng)
+        assert sorted(new.tolist()) == list(range(1, t + 1))
+        assert length == pytest.approx(tour_lengths(g.dist, new[None])[0], rel=1e-12)
+        assert length <= before + 1e-9
+        assert length == pytest.approx(opt, rel=1e-9)  # 8 targets: the ILS finds the optimum
+
+
+def test_default_polishes_the_optimiser_order_and_keeps_both(tour1):
+    task, g = tour1
+    kw = dict(graph=g, pop_size=6, max_iter=3, rng=4, smooth=False)
+    raw = plan_tour(task, "isma", polish=False, **kw)
+    pol = plan_tour(task, "isma", **kw)
+    assert not raw.polished and raw.optimizer_length == raw.length
+    assert pol.polished and pol.params["polish"]
+    # same optimiser run (the polish comes after it), then a tour no longer than it
+    assert pol.optimizer_length == raw.length
+    assert pol.length <= raw.length + 1e-9
+    assert pol.gap == pytest.approx(0.0, abs=1e-9)
+    assert raw.gap > 0.01  # a starved ISMA as printed misses the optimum
+    assert pol.optimizer_gap == pytest.approx(raw.gap)
+
+
 def test_ground_truth_is_the_brute_force_optimum(tour1):
     _, g = tour1
     order, length, method = ground_truth(g)
@@ -139,6 +170,7 @@ def test_starved_budget_does_measurably_worse():
             optimum=opt,
             rng=s,
             two_opt=True,
+            polish=False,
             pop_size=50,
             max_iter=50,
             smooth=False,
@@ -147,7 +179,15 @@ def test_starved_budget_does_measurably_worse():
     ]
     starved = [
         plan_tour(
-            task, "isma", graph=g, optimum=opt, rng=s, pop_size=4, max_iter=2, smooth=False
+            task,
+            "isma",
+            graph=g,
+            optimum=opt,
+            rng=s,
+            pop_size=4,
+            max_iter=2,
+            smooth=False,
+            polish=False,
         ).gap
         for s in range(3)
     ]
@@ -189,7 +229,8 @@ def test_bench_tour_writes_tables(tmp_path):
     )  # fmt: skip
     text = (tmp_path / "tour.md").read_text()
     assert rc == 0
-    assert "Table 4" in text and "Table 3" in text and "ISMA+2opt" in text
+    assert "Table 4" in text and "Table 3" in text and "ISMA memetic" in text
+    assert "ISMA as printed" in text and "polish alone" in text
     assert (tmp_path / "tour-tour-3.png").exists() and (tmp_path / "tour-table3.png").exists()
 
 
