@@ -148,6 +148,22 @@ def test_isma_tour_visits_every_goal_once_returns_and_is_collision_free(tour1):
     assert r.gap < 0.02
 
 
+def test_taut_legs_are_shorter_than_the_mesh_edges_and_collision_free(tour1):
+    task, g = tour1
+    edge = plan_tour(task, "exact", graph=g, taut=False)
+    taut = plan_tour(task, "exact", graph=g)
+    assert edge.order == taut.order and edge.length == taut.length
+    assert edge.polyline_length == pytest.approx(edge.length, rel=1e-12)
+    assert taut.polyline_length < 0.97 * edge.length  # the zig-zag costs > 3 % here
+    assert taut.smooth_length < edge.smooth_length
+    assert taut.collision_free and taut.smoothed
+    P = taut.points_array
+    assert segments_clear(task.scenario.world, P[:-1], P[1:]).all()
+    # every goal is still visited, in order
+    d = np.linalg.norm(P[:, None] - task.goals[None], axis=-1).min(axis=0)
+    assert np.all(d < 1e-6)
+
+
 def test_same_seed_same_result_and_json_round_trip(tour1):
     task, g = tour1
     a = plan_tour(task, "sma", graph=g, pop_size=20, max_iter=10, rng=5, smooth=False)
@@ -230,7 +246,7 @@ def test_bench_tour_writes_tables(tmp_path):
     text = (tmp_path / "tour.md").read_text()
     assert rc == 0
     assert "Table 4" in text and "Table 3" in text and "ISMA memetic" in text
-    assert "ISMA as printed" in text and "polish alone" in text
+    assert "ISMA as printed" in text and "polish alone" in text and "String pulling" in text
     assert (tmp_path / "tour-tour-3.png").exists() and (tmp_path / "tour-table3.png").exists()
 
 

@@ -12,14 +12,18 @@ The robot leaves the start, visits every target once and returns to the start. T
    targets sorted by key (``argsort``), and the cost is the closed tour length over ``D``.
    The ground truth is :func:`weldplan.optim.discrete.sequence.solve_sequence` on the same
    ``D`` (Held-Karp up to 16 stops, else nearest neighbour + 2-opt/Or-opt polish).
-4. Join the mesh paths into the tour polyline and smooth it with a clamped cubic B-spline
-   (002 eq. 14, ``Q(u) = sum_k G_k H_{k,v}(u)``) whose control points ``G_k`` are the polyline's
-   vertices; each target is a control point of multiplicity ``v`` (the degree) so the curve
-   passes through it. The smoothed curve, sampled densely, is checked segment by segment against
-   the true obstacles; around a colliding sample the nearest control points are raised to
-   multiplicity ``v`` too (the curve is pulled onto the collision-free polyline there), for up to
-   :data:`SMOOTH_ROUNDS` rounds; if it still collides the polyline itself is returned
-   (``smoothed=False``).
+4. Pull each mesh path tight inside its triangle corridor (funnel algorithm,
+   :meth:`~weldplan.planar.meshmap.TriangleMap.funnel`: the shortest path homotopic to the
+   mesh-edge path, so the zig-zag along triangle edges is gone; ``taut=False`` keeps it, as
+   paper 002 does), join the legs into the tour polyline and smooth it with a clamped cubic
+   B-spline (002 eq. 14, ``Q(u) = sum_k G_k H_{k,v}(u)``) whose control points ``G_k`` are the
+   polyline's vertices; each target is a control point of multiplicity ``v`` (the degree) so
+   the curve passes through it. The smoothed curve, sampled densely, is checked segment by
+   segment against the true obstacles; around a colliding sample the nearest control points are
+   raised to multiplicity ``v`` too (the curve is pulled onto the collision-free polyline
+   there), for up to :data:`SMOOTH_ROUNDS` rounds; if it still collides the polyline itself is
+   returned (``smoothed=False``). A taut leg bends only at obstacle corners, where any rounding
+   cuts into the obstacle, so there the curve keeps the corner.
 
 What is the paper's and what is not. Paper 002 runs ISMA with population and iterations both
 500 (sec. 3, Table 4) and bounds the variables by ``[0, 10 x number of targets]`` (sec. 1.2,
@@ -294,19 +298,24 @@ class TourGraph:
     pred: NDArray[np.int64]
     build_seconds: float
 
-    def leg(self, a: int, b: int) -> NDArray[np.float64]:
-        """Points ``(p, 2)`` of the mesh path from stop ``a`` to stop ``b``."""
+    def leg(self, a: int, b: int, *, taut: bool = False) -> NDArray[np.float64]:
+        """Points ``(p, 2)`` of the mesh path from stop ``a`` to stop ``b``: along mesh edges,
+        or with ``taut`` pulled tight in its triangle corridor (:meth:`TriangleMap.funnel`,
+        the shortest path homotopic to the edge path)."""
         nodes = self.mesh.path_nodes(self.pred[a], int(self.mesh.terminals[b]))
-        return self.mesh.nodes[nodes]
+        return self.mesh.funnel(nodes) if taut else self.mesh.nodes[nodes]
 
-    def polyline(self, order: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    def polyline(
+        self, order: ArrayLike, *, taut: bool = False
+    ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
         """The closed tour ``0 -> order... -> 0`` as points ``(p, 2)`` and the index in it of
-        each stop visited (``(t + 2,)``: start, goals in order, start again)."""
+        each stop visited (``(t + 2,)``: start, goals in order, start again); legs along mesh
+        edges or, with ``taut``, pulled tight (:meth:`leg`)."""
         seq = [0, *[int(v) for v in order], 0]
-        pts = [self.leg(seq[0], seq[1])]
+        pts = [self.leg(seq[0], seq[1], taut=taut)]
         at = [0, len(pts[0]) - 1]
         for a, b in zip(seq[1:-1], seq[2:], strict=True):
-            leg = self.leg(a, b)
+            leg = self.leg(a, b, taut=taut)
             pts.append(leg[1:])
             at.append(at[-1] + len(leg) - 1)
         return np.concatenate(pts), np.array(at, dtype=np.int64)
@@ -583,10 +592,14 @@ class TourResult:
     optimizer_length
         Closed length of the optimiser's own order, before the final polish (``None`` for the
         sequencer); with ``polished=False`` it equals ``length``.
+    polyline_length
+        Length of the polyline that was smoothed: the mesh-edge legs, or the taut ones
+        (``taut=True``, the default), never longer than ``length``.
     polished
         Whether the final polish ran (a named deviation, see the module docstring).
     polish_seconds
-        Time of the final polish (included in ``seconds``).
+        Time of the final polish (included in ``seconds``). ``smooth_seconds`` covers the
+        string pulling, the B-spline and the collision checks.
     """
 
     scenario: str
@@ -607,6 +620,7 @@ class TourResult:
     n_eval: int = 0
     params: dict[str, Any] = field(default_factory=dict)
     optimizer_length: float | None = None
+    polyline_length: float | None = None
     polished: bool = False
     polish_seconds: float = 0.0
 
@@ -659,6 +673,7 @@ def plan_tour(
     two_opt: bool = False,
     polish: bool = True,
     polish_kicks: int | None = None,
+    taut: bool = True,
     smooth: bool = True,
     optimum: float | None = None,
     rng: RNGLike = None,
@@ -683,6 +698,10 @@ def plan_tour(
         module docstring). ``False`` gives the optimiser as printed.
     polish_kicks
         Kicks of that polish (default :data:`POLISH_KICKS_PER_STOP` per stop).
+    taut
+        Pull each leg tight in its triangle corridor before smoothing (funnel algorithm,
+        :meth:`TriangleMap.funnel`); ``False`` keeps the mesh-edge zig-zag (as paper 002,
+        whose B-spline then smooths the zig-zag).
     smooth
         B-spline smoothing with the collision fallback (else the polyline is returned).
     optimum
@@ -729,9 +748,9 @@ def plan_tour(
         name, seconds, n_eval = algorithm, res.seconds + polish_s, res.n_eval
         used = {**res.params, "pop_size": pop_size, "max_iter": max_iter, "two_opt": two_opt,
                 "polish": polish, "polish_kicks": polish_kicks}  # fmt: skip
-    poly, at = g.polyline(order)
-    world = task.world
     t1 = time.perf_counter()
+    poly, at = g.polyline(order, taut=taut)
+    world = task.world
     if smooth:
         curve, smoothed = smooth_tour(poly, at, world)
     else:
@@ -766,6 +785,7 @@ def plan_tour(
         n_eval=int(n_eval),
         params=used,
         optimizer_length=opt_length,
+        polyline_length=float(path_length(poly)),
         polished=polished,
         polish_seconds=float(polish_s),
     )
