@@ -187,3 +187,37 @@ def test_funnel_keeps_a_pinch_point():
     F, _ = _taut(tm, *tm.terminals)
     assert _length(F) == pytest.approx(2 * np.hypot(4.0, 4.0), abs=1e-9)
     assert np.min(np.linalg.norm(F - [5.0, 5.0], axis=1)) < 1e-12
+
+
+def test_navmesh_edge_index_agrees_with_all_pairs():
+    """MeshFreeSpace answers through a grid of its boundary edges; on arena the answers equal
+    the all-pairs ray casting and crossing tests."""
+    from weldplan.geometry.obstacles2d import point_segment_distance
+
+    space = MeshFreeSpace.read(require_shared("meshmaps", "arena.mesh"))
+    a, b = space.edge_a, space.edge_b
+    rng = np.random.default_rng(3)
+    lo, hi = space.vertices_xy.min(0), space.vertices_xy.max(0)
+    P = np.concatenate([rng.uniform(lo - 2, hi + 2, size=(500, 2)), 0.5 * (a + b)[:50]])
+    py = P[:, None, 1]
+    cond = (a[:, 1] > py) != (b[:, 1] > py)
+    dy = np.where(b[:, 1] == a[:, 1], 1.0, b[:, 1] - a[:, 1])
+    xint = a[:, 0] + (py - a[:, 1]) * (b[:, 0] - a[:, 0]) / dy
+    inside = (np.sum(cond & (P[:, None, 0] < xint), axis=1) % 2 == 1) | (
+        point_segment_distance(P[:, None], a, b).min(axis=1) <= 1e-9 * space.scale
+    )
+    np.testing.assert_array_equal(space.contains_free(P), inside)
+    # segments: a proper crossing of a boundary edge means not free
+    A = rng.uniform(lo, hi, size=(300, 2))
+    B = A + rng.normal(size=(300, 2)) * 8.0
+    d, e = B - A, b - a
+    den = d[:, None, 0] * e[None, :, 1] - d[:, None, 1] * e[None, :, 0]
+    w = a[None] - A[:, None]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (w[..., 0] * e[None, :, 1] - w[..., 1] * e[None, :, 0]) / den
+        u = (w[..., 0] * d[:, None, 1] - w[..., 1] * d[:, None, 0]) / den
+    crosses = np.any((den != 0) & (t > 1e-6) & (t < 1 - 1e-6) & (u > 1e-6) & (u < 1 - 1e-6), 1)
+    free = space.segments_free(A, B)
+    assert not np.any(free & crosses)
+    both_in = space.contains_free(A) & space.contains_free(B)
+    np.testing.assert_array_equal(free[~crosses], both_in[~crosses])

@@ -273,6 +273,31 @@ def test_navmesh_tour_on_polyanya_arena():
         navmesh_tour(space, [-100.0, -100.0], P[1:])
 
 
+@pytest.mark.slow
+def test_navmesh_tour_on_polyanya_aurora():
+    """The large aurora navmesh (35k boundary edges): the mesh builds, the tour reaches the
+    ground truth, and the taut, smoothed path stays in the navmesh (its exact segment check
+    runs through the edge grid instead of all-pairs arrays)."""
+    from conftest import require_shared
+
+    from weldplan.planar.exact import MeshFreeSpace
+    from weldplan.planar.multigoal import navmesh_tour
+
+    space = MeshFreeSpace.read(require_shared("meshmaps", "aurora.mesh"))
+    assert len(space.edge_a) > 30000
+    rng = np.random.default_rng(0)
+    P = rng.uniform(space.vertices_xy.min(0), space.vertices_xy.max(0), size=(100, 2))
+    P = P[space.contains_free(P)][:6]
+    task = navmesh_tour(space, P[0], P[1:], label="aurora")
+    r = plan_tour(task, "isma", pop_size=40, max_iter=40, rng=0)
+    assert sorted(r.order) == list(range(1, 6))
+    assert r.gap == pytest.approx(0.0, abs=1e-9)
+    assert r.collision_free and r.polyline_length < r.length
+    Q = r.points_array
+    assert space.contains_free(Q).all()
+    assert segments_clear(space, Q[:-1], Q[1:]).all()
+
+
 def test_house_floorplan_tour():
     """rtb-data's house.mat: 11 named places from the kitchen; ISMA (paper budget) within 2 %
     of the ground truth, smoothed tour inside free cells, and the grid outline check agrees

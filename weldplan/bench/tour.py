@@ -136,8 +136,9 @@ def _table4(args: argparse.Namespace, out: Path) -> list[str]:
 
 def _tasks() -> list:
     """The three shipped scenarios, then the real maps when their data is present: rtb-data's
-    house floorplan (11 places from the kitchen, M = 4) and Polyanya's arena navmesh (12 random
-    free points, seed 0, Triangle's quality mesh of the navmesh)."""
+    house floorplan (11 places from the kitchen, M = 4) and Polyanya's arena and aurora navmeshes
+    (12 random free points each, seed 0, Triangle's quality mesh of the navmesh; aurora's has
+    35k boundary edges and 89k mesh nodes)."""
     from weldplan.planar.multigoal import house_tour, load_tour, navmesh_tour
 
     out = [(n, load_tour(n)) for n in TOURS]
@@ -147,15 +148,18 @@ def _tasks() -> list:
         log.warning("rtb-data not installed: no house floorplan row")
     from weldplan.bench.common import SHARED_DATA
 
-    arena = SHARED_DATA / "meshmaps" / "arena.mesh"
-    if arena.exists():
+    for name in ("arena", "aurora"):
+        path = SHARED_DATA / "meshmaps" / f"{name}.mesh"
+        if not path.exists():
+            log.warning("%s not found: no %s row", path, name)
+            continue
         from weldplan.planar.exact import MeshFreeSpace
 
-        sp = MeshFreeSpace.read(arena)
+        sp = MeshFreeSpace.read(path)
         rng = np.random.default_rng(0)
         P = rng.uniform(sp.vertices_xy.min(0), sp.vertices_xy.max(0), size=(400, 2))
         P = P[sp.contains_free(P)][:13]
-        out.append(("arena", navmesh_tour(sp, P[0], P[1:], label="arena")))
+        out.append((name, navmesh_tour(sp, P[0], P[1:], label=name)))
     return out
 
 

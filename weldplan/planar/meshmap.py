@@ -740,8 +740,20 @@ def triangulate_navmesh(
     free space the triangles kept; ``max_edge`` refines it (``inf``: Triangle's quality mesh of
     the boundary alone)."""
 
-    # one seed inside each (convex) navmesh polygon marks the free regions
-    seeds = np.array([space.vertices_xy[p].mean(axis=0) for p in space.polygon_vertices])
+    # one seed inside one (convex) navmesh polygon of each connected free region marks the free
+    # triangles: Triangle floods from every seed, so a seed per polygon (35k on aurora) costs
+    # minutes where one per region costs milliseconds
+    from scipy.sparse.csgraph import connected_components
+
+    nb = space.polygon_neighbours
+    n = len(nb)
+    rows = np.repeat(np.arange(n), [len(x) for x in nb])
+    cols = np.concatenate([np.asarray(x, dtype=np.int64) for x in nb]) if n else rows
+    ok = cols >= 0
+    adj = coo_matrix((np.ones(int(ok.sum())), (rows[ok], cols[ok])), shape=(n, n))
+    _, label = connected_components(adj, directed=False)
+    _, first = np.unique(label, return_index=True)
+    seeds = np.array([space.vertices_xy[space.polygon_vertices[p]].mean(axis=0) for p in first])
     return triangulate_segments(
         space.edge_a, space.edge_b, seeds, max_edge=max_edge, points=points, min_angle=min_angle
     )
