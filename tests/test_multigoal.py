@@ -312,6 +312,11 @@ def test_house_floorplan_tour():
     assert r.gap < 0.02 and r.smoothed and r.collision_free
     w = task.world
     assert isinstance(w, SampledGridWorld)
+    # the final judge is the exact check on the 3,838 grid rectangles (it used to stall there)
+    ex = task.exact_world
+    assert len(ex.rectangles) == 3838 + 4  # and the map frame
+    P = r.points_array
+    assert segments_clear(ex, P[:-1], P[1:]).all()
     # a segment straight through a wall is caught
     occ = task.scenario.grid.occupied
     i, j = np.argwhere(occ)[len(np.argwhere(occ)) // 2]
