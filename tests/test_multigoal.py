@@ -226,6 +226,12 @@ def test_cli_planar_tour_prints_table_and_plots(tmp_path, capsys):
     rc = main(["planar", "tour", "tour-1", "--order-by", "exact", "--json"])
     rows = json.loads(capsys.readouterr().out)
     assert rc == 0 and rows[0]["algorithm"] == "exact" and rows[0]["collision_free"]
+    # as paper 002: the optimiser as printed, the B-spline over the mesh-edge legs
+    rc = main(["planar", "tour", "tour-1", "--order-by", "sma", "--pop", "6", "--iters", "3",
+               "--seed", "1", "--no-polish", "--no-funnel", "--json"])  # fmt: skip
+    (raw,) = json.loads(capsys.readouterr().out)
+    assert rc == 0 and not raw["polished"] and raw["length"] == raw["optimizer_length"]
+    assert raw["polyline_length"] == pytest.approx(raw["length"])
 
 
 def test_cli_planar_tour_rejects_unknown_algorithm(capsys):

@@ -2,7 +2,8 @@
 
 Orders the targets with each optimiser of ``--order-by`` (random keys; by default the best
 order is polished once by the sequencer's 2-opt + Or-opt search, ``--no-polish`` for the
-optimiser as printed) and with the exact sequencer, smooths the tour with a B-spline and prints
+optimiser as printed) and with the exact sequencer, pulls the legs tight in their triangle
+corridors (``--no-funnel`` keeps the mesh-edge legs), smooths the tour with a B-spline and prints
 length, smoothed length, gap to the ground-truth order and time; ``--plot`` writes a PNG of
 the map, mesh and tours.
 """
@@ -29,6 +30,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--no-polish",
         action="store_true",
         help="tour: the optimiser's order as printed (no final 2-opt/Or-opt polish)",
+    )
+    g.add_argument(
+        "--no-funnel",
+        action="store_true",
+        help="tour: keep the mesh-edge legs (paper 002) instead of pulling them tight",
     )
     g.add_argument("--no-smooth", action="store_true", help="tour: keep the mesh polyline")
 
@@ -66,6 +72,7 @@ def run(args: argparse.Namespace) -> int:
                 max_iter=args.iters or PAPER_ITER,
                 two_opt=args.two_opt,
                 polish=not args.no_polish,
+                taut=not args.no_funnel,
                 smooth=not args.no_smooth,
                 optimum=opt,
                 rng=args.seed,
