@@ -72,9 +72,19 @@ def _table4(args: argparse.Namespace, out: Path) -> list[str]:
         paths[f"exact ({ex.smooth_length:.1f})"] = ex.points_array
 
         def row(
-            label: str, L, S, T, gaps, free: int, n: int, C=(np.nan,), name: str = name
+            label: str,
+            L,
+            S,
+            T,
+            gaps,
+            free: int,
+            n: int,
+            C=(np.nan,),
+            name: str = name,
+            opt: float = opt,
         ) -> list[str]:
-            return [name, label, f"{np.mean(L):.1f}", f"{np.mean(S):.1f}", f"{np.mean(T):.3f}",
+            return [name, label, f"{opt:.1f}", f"{np.mean(L):.1f}", f"{np.mean(S):.1f}",
+                    f"{np.mean(T):.3f}",
                     f"{np.mean(C):.3f}",
                     f"{100 * np.mean(gaps):.2f} %", f"{100 * np.max(gaps):.2f} %",
                     f"{free}/{n}"]  # fmt: skip
@@ -95,7 +105,7 @@ def _table4(args: argparse.Namespace, out: Path) -> list[str]:
                                 [r.seconds - r.polish_seconds for r in rs],
                                 [r.optimizer_gap for r in rs], 0, 0,
                                 [r.optimizer_cpu_seconds for r in rs]))  # fmt: skip
-                rows[-1][3] = rows[-1][-1] = "-"
+                rows[-1][4] = rows[-1][-1] = "-"
             rows.append(row(f"{label} ({pop}x{iters})", L, S, [r.seconds for r in rs],
                             [r.gap for r in rs], free, len(rs),
                             [r.cpu_seconds for r in rs]))  # fmt: skip
@@ -112,9 +122,10 @@ def _table4(args: argparse.Namespace, out: Path) -> list[str]:
             pl.append(length)
         rows.append(row("polish alone (random order)", pl, [float("nan")], pt,
                         np.array(pl) / opt - 1.0, 0, 0, pc))  # fmt: skip
-        rows[-1][3] = rows[-1][-1] = "-"
+        rows[-1][4] = rows[-1][-1] = "-"
         free1 = "1/1" if ex.collision_free else "0/1"
-        rows.append([name, f"sequencer ({gt_method})", f"{opt:.1f}", f"{ex.smooth_length:.1f}",
+        rows.append([name, f"sequencer ({gt_method})", f"{opt:.1f}", f"{opt:.1f}",
+                     f"{ex.smooth_length:.1f}",
                      f"{gt_s:.3f}", "-", "0.00 %", "0.00 %", free1])  # fmt: skip
         shown = g.mesh if g.mesh.n_nodes < 20000 else None
         plot_tour(task, paths, out / f"tour-{name}.png", mesh=shown,
@@ -124,6 +135,7 @@ def _table4(args: argparse.Namespace, out: Path) -> list[str]:
             [
                 "scenario",
                 "order by",
+                "ground truth",
                 "tour",
                 "smoothed",
                 "time/s",
