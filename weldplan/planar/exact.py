@@ -505,9 +505,17 @@ class MeshFreeSpace:
         lead = A.shape[:-1]
         A2, B2 = A.reshape(-1, 2), B.reshape(-1, 2)
         out = np.empty(len(A2), dtype=bool)
-        chunk = self._index.chunk_points
-        for s in range(0, len(A2), chunk):
-            out[s : s + chunk] = self._free_chunk(A2[s : s + chunk], B2[s : s + chunk])
+        ix = self._index
+        # chunks of at most chunk_points segments and chunk_samples samples (long segments
+        # are sampled at steps of half a grid cell to find their candidate edges)
+        samples = np.ceil(np.linalg.norm(B2 - A2, axis=1) / (0.5 * ix.h)) + 1
+        s = 0
+        while s < len(A2):
+            e = min(s + ix.chunk_points, len(A2))
+            cut = int(np.searchsorted(np.cumsum(samples[s:e]), ix.chunk_samples, side="right"))
+            e = s + max(1, min(cut, e - s))
+            out[s:e] = self._free_chunk(A2[s:e], B2[s:e])
+            s = e
         return out.reshape(lead)
 
     def _free_chunk(self, A: NDArray[np.float64], B: NDArray[np.float64]) -> NDArray[np.bool_]:
@@ -586,6 +594,8 @@ class _EdgeIndex:
 
     #: points (or segments) per chunk of a query
     chunk_points = 4096
+    #: segment samples per chunk of a segment query (9 candidate cells each)
+    chunk_samples = 200_000
 
     def __init__(self, a: NDArray[np.float64], b: NDArray[np.float64], pad: float) -> None:
         self.a, self.b = a, b
