@@ -247,7 +247,7 @@ def test_bench_tour_writes_tables(tmp_path):
 
     rc = main(
         ["bench", "tour", "--runs", "1", "--pop", "10", "--iters", "5", "--m-values", "50",
-         "--out", str(tmp_path)]
+         "--maps", "tour-1,tour-3", "--out", str(tmp_path)]
     )  # fmt: skip
     text = (tmp_path / "tour.md").read_text()
     assert rc == 0

@@ -45,10 +45,15 @@ TABLE4_ALGOS = [("ISMA + polish (default)", "isma", False, True, None),
                 ("LSO", "lso", False, False, None),
                 ("ISMA memetic (2-opt decoding)", "isma", True, False, (50, 50))]  # fmt: skip
 TOURS = ["tour-1", "tour-2", "tour-3"]
+#: every map of the table4 and funnel protocols (the real ones when their data is present)
+MAPS = [*TOURS, "house", "arena", "aurora"]
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--protocols", default="table4,funnel,table3", help="comma-separated")
+    parser.add_argument(
+        "--maps", default=",".join(MAPS), help="comma-separated maps for table4 and funnel"
+    )
     parser.add_argument("--runs", type=int, default=5, help="runs per cell (paper: 10)")
     parser.add_argument("--pop", type=int, default=500, help="population (paper: 500)")
     parser.add_argument("--iters", type=int, default=500, help="iterations (paper: 500)")
@@ -62,7 +67,7 @@ def _table4(args: argparse.Namespace, out: Path) -> list[str]:
 
     lines = ["## Paper 002 Table 4: ordering the targets (random keys) on each scenario's mesh", ""]
     rows = []
-    for name, task in _tasks():
+    for name, task in _tasks(args.maps):
         g = build_tour_graph(task)
         t0 = time.perf_counter()
         gt_order, opt, gt_method = ground_truth(g)
@@ -155,21 +160,27 @@ def _table4(args: argparse.Namespace, out: Path) -> list[str]:
     return lines
 
 
-def _tasks() -> list:
+def _tasks(maps: str = ",".join(MAPS)) -> list:
     """The three shipped scenarios, then the real maps when their data is present: rtb-data's
     house floorplan (11 places from the kitchen, M = 4) and Polyanya's arena and aurora navmeshes
     (12 random free points each, seed 0, Triangle's quality mesh of the navmesh; aurora's has
     35k boundary edges and 89k mesh nodes)."""
+    from weldplan.errors import WeldplanError
     from weldplan.planar.multigoal import house_tour, load_tour, navmesh_tour
 
-    out = [(n, load_tour(n)) for n in TOURS]
-    try:
-        out.append(("house", house_tour()))
-    except ImportError:
-        log.warning("rtb-data not installed: no house floorplan row")
+    want = [m.strip() for m in maps.split(",") if m.strip()]
+    unknown = sorted(set(want) - set(MAPS))
+    if unknown:
+        raise WeldplanError(f"unknown map(s) {', '.join(unknown)} (field --maps): {MAPS}")
+    out = [(n, load_tour(n)) for n in TOURS if n in want]
+    if "house" in want:
+        try:
+            out.append(("house", house_tour()))
+        except ImportError:
+            log.warning("rtb-data not installed: no house floorplan row")
     from weldplan.bench.common import SHARED_DATA
 
-    for name in ("arena", "aurora"):
+    for name in [m for m in ("arena", "aurora") if m in want]:
         path = SHARED_DATA / "meshmaps" / f"{name}.mesh"
         if not path.exists():
             log.warning("%s not found: no %s row", path, name)
@@ -191,7 +202,7 @@ def _funnel(args: argparse.Namespace, out: Path) -> list[str]:
     from weldplan.planar.multigoal import build_tour_graph, plan_tour
 
     rows = []
-    for name, task in _tasks():
+    for name, task in _tasks(args.maps):
         g = build_tour_graph(task)
         r0 = plan_tour(task, "exact", graph=g, taut=False)
         r1 = plan_tour(task, "exact", graph=g, taut=True)
