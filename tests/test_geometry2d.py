@@ -156,3 +156,27 @@ def test_measure_straight_and_colliding_paths() -> None:
     assert m2.success and np.isclose(m2.smoothness, 2 * np.arctan2(2, 5))
     assert type(m2).from_json(m2.to_json()) == m2
     assert np.isclose(smoothness(around), m2.smoothness)
+
+
+def test_many_touching_grid_rectangles_sparse_equals_dense() -> None:
+    """A random occupancy grid as ~1,000 touching rectangles (the house floorplan has 3,838):
+    the sparse rectangle clipping (bounding-box pairs) sums to the dense per-rectangle one,
+    a corridor between two occupied cells that share a side is blocked, and a diagonal touch
+    is a pinch point."""
+    from weldplan.geometry.obstacles2d import grid_to_rectangles
+
+    rng = np.random.default_rng(7)
+    occ = rng.random((60, 60)) < 0.35
+    occ[10, 10] = occ[11, 11] = True  # a diagonal touch at (11, 11) ...
+    occ[10, 11] = occ[11, 10] = False  # ... with both other cells free
+    occ[20, 20] = occ[20, 21] = True  # two cells sharing the side y = 21 between them
+    obs = Obstacles2D(rectangles=grid_to_rectangles(occ, (0.0, 0.0), 1.0))
+    assert len(obs.rectangles) > 500
+    A = rng.uniform(0, 60, size=(400, 2))
+    B = A + rng.normal(size=(400, 2)) * 4.0
+    B[::2, 1] = A[::2, 1]  # axis-parallel segments, often along cell sides
+    dense = obs.inside_length(A, B, per_obstacle=True).sum(axis=-1)
+    np.testing.assert_allclose(obs.inside_length(A, B), dense, rtol=1e-12, atol=1e-12)
+    assert not obs.segments_free([[20.2, 21.0]], [[20.8, 21.0]])[0]  # along the shared side
+    assert [11.0, 11.0] in obs.pinch_points().tolist()
+    assert not obs.segments_free([[10.5, 11.5]], [[11.5, 10.5]])[0]  # through the pinch

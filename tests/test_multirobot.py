@@ -5,7 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from weldplan.planar.multirobot import collision_probability, expansion_zone, score
+from weldplan.planar.multirobot import (
+    collision_probability,
+    expansion_zone,
+    local_choice,
+    obstacle_zones,
+    score,
+)
 
 
 def test_expansion_zone_of_a_rectangle():
@@ -28,6 +34,39 @@ def test_score_eq15():
     np.testing.assert_array_equal(score([10.0, 10.0], [10.0, 20.0]), [99, 99])
     with pytest.raises(ValueError):
         score(1.0, 0.0)
+
+
+def test_local_choice_weighs_progress_by_collision_probability():
+    here, goal, start = (5, 5), (10, 5), (0, 5)
+    cells = [(6, 5), (6, 6), (5, 5)]
+    # without risk: the paper's rule, the cell closest to the goal
+    assert local_choice(here, goal, start, cells, 0.0) == 0
+    # (6, 5) in the 0.85 ring: expected 0.15 * 4 + 0.85 * 5 = 4.85 > |(10, 5) - (6, 6)| = 4.12
+    assert local_choice(here, goal, start, cells, [0.85, 0.0, 0.0]) == 1
+    # a 0.45 ring costs less: 0.55 * 4 + 0.45 * 5 = 4.45 > 4.12, still the safer cell
+    assert local_choice(here, goal, start, cells, [0.45, 0.0, 0.0]) == 1
+    # equal expected distance (4 from the goal): the higher eq. 15 score wins,
+    # 100 - ceil(10 / 6) = 98 for (6, 5) against 100 - ceil(10 / 10.77) = 99 for (10, 9)
+    assert local_choice(here, goal, start, [(6, 5), (10, 9)], 0.0) == 1
+    rng = np.random.default_rng(0)
+    for _ in range(50):  # p = 0: exactly the nearest cell to the goal
+        C = rng.integers(0, 20, size=(9, 2))
+        k = local_choice(C[0], (19, 19), (0, 0), C, 0.0)
+        d = np.linalg.norm(C - [19, 19], axis=1)
+        assert d[k] == d.min()
+
+
+def test_obstacle_zones_of_a_grid_scenario():
+    from weldplan.planar.scenarios import load_scenario
+
+    sc = load_scenario("grid20")
+    zones = obstacle_zones(sc.obstacles)
+    assert len(zones) == len(sc.obstacles.rectangles)
+    # every occupied cell centre has probability 1, and free cells next to walls are in a ring
+    ij = np.argwhere(sc.grid.occupied)
+    np.testing.assert_array_equal(collision_probability(zones, sc.grid.centre(ij)), 1.0)
+    p = collision_probability(zones, sc.grid.centre(np.argwhere(~sc.grid.occupied)))
+    assert set(np.unique(p)) <= {0.0, 0.45, 0.65, 0.85} and (p > 0).any()
 
 
 def _check_moves(sc, run):

@@ -1,8 +1,11 @@
 """``weldplan planar tour SCENARIO``: multi-goal traversal on a triangular-mesh map (paper 002).
 
-Orders the targets with each optimiser of ``--order-by`` (random keys) and with the exact
-sequencer, smooths the tour with a B-spline and prints length, smoothed length, gap to the
-ground-truth order and time; ``--plot`` writes a PNG of the map, mesh and tours.
+Orders the targets with each optimiser of ``--order-by`` (random keys; by default the best
+order is polished once by the sequencer's 2-opt + Or-opt search, ``--no-polish`` for the
+optimiser as printed) and with the exact sequencer, pulls the legs tight in their triangle
+corridors (``--no-funnel`` keeps the mesh-edge legs), smooths the tour with a B-spline and prints
+length, smoothed length, gap to the ground-truth order and time; ``--plot`` writes a PNG of
+the map, mesh and tours.
 """
 
 from __future__ import annotations
@@ -23,6 +26,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     g.add_argument("--max-edge", type=float, default=None, help="tour: mesh edge M (map units)")
     g.add_argument("--two-opt", action="store_true", help="tour: 2-opt decoding of the random keys")
+    g.add_argument(
+        "--no-polish",
+        action="store_true",
+        help="tour: the optimiser's order as printed (no final 2-opt/Or-opt polish)",
+    )
+    g.add_argument(
+        "--no-funnel",
+        action="store_true",
+        help="tour: keep the mesh-edge legs (paper 002) instead of pulling them tight",
+    )
     g.add_argument("--no-smooth", action="store_true", help="tour: keep the mesh polyline")
 
 
@@ -58,6 +71,8 @@ def run(args: argparse.Namespace) -> int:
                 pop_size=args.pop or PAPER_POP,
                 max_iter=args.iters or PAPER_ITER,
                 two_opt=args.two_opt,
+                polish=not args.no_polish,
+                taut=not args.no_funnel,
                 smooth=not args.no_smooth,
                 optimum=opt,
                 rng=args.seed,

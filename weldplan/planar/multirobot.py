@@ -1,10 +1,21 @@
 """Several robots (paper 001, section 3): the expansion logic strategy and the scoring function.
 
 :func:`simulate_robots` runs the paper's case: each robot follows its global path (HAFSA on
-the grid encoding, A* where HAFSA's best path collides) and replans locally around the others
-(goal distance first, eq. 15 score on ties). Not yet used in that choice: the collision
-probabilities of the expansion circles (:func:`collision_probability`); the paper does not say
-how they enter the local decision.
+the grid encoding, A* where HAFSA's best path collides) and replans locally around the others:
+of the safe neighbouring cells it takes the one closest to its goal, ties to the higher eq. 15
+score (001 sec. 3, after eq. 15).
+
+How the collision probabilities enter that choice (001 gives them for the three rings but does
+not say how they are used; this is our reading, named): a move into a cell with collision
+probability ``p`` (:func:`collision_probability` over the expansion zones of the map's
+obstacles and of the other robots' cells) succeeds with probability ``1 - p``; a failed move
+leaves the robot where it is. The robot takes the cell of least *expected* distance to its
+goal, ``(1 - p) |G - c| + p |G - x|`` (``x`` its cell), ties to the higher score. With
+``p = 0`` everywhere this is the paper's rule exactly; otherwise, of two cells with about the
+same progress, the one farther from obstacles wins, and a risky cell is taken only for
+proportionally more progress. ``risk=False`` gives the rule without the probabilities. (A
+sampled collision event per move would make the run stochastic for no gain in the paper's
+case; an expected-cost penalty would need a collision cost the paper does not give.)
 
 Expansion logic (001 eqs. 12-14): for a polygonal obstacle with vertices ``p_i``, the vertex
 pair at the largest distance ``d_max = max d_ij`` (eq. 13) defines a range circle centred on
@@ -93,6 +104,35 @@ def collision_probability(zones: list[ExpansionZone], points: ArrayLike) -> NDAr
         p[inside] = 1.0
         out = np.maximum(out, p)
     return out.reshape(P.shape[:-1])
+
+
+def local_choice(
+    here: ArrayLike, goal: ArrayLike, start: ArrayLike, cells: ArrayLike, p: ArrayLike
+) -> int:
+    """The local step of 001 sec. 3 with collision probabilities (module docstring): the index
+    of the cell of ``cells (c, 2)`` with the least expected distance to ``goal``,
+    ``(1 - p) |goal - cell| + p |goal - here|``, ties to the higher eq. 15 score (``dist`` the
+    start-goal distance, ``l`` the start-cell distance). With ``p = 0`` it is the paper's rule:
+    the cell closest to the goal, ties to the higher score."""
+    C = np.asarray(cells, dtype=np.float64).reshape(-1, 2)
+    g = np.asarray(goal, dtype=np.float64)
+    s0 = np.asarray(start, dtype=np.float64)
+    pc = np.broadcast_to(np.asarray(p, dtype=np.float64), (len(C),))
+    here_d = float(np.linalg.norm(g - np.asarray(here, dtype=np.float64)))
+    expect = (1.0 - pc) * np.linalg.norm(g - C, axis=1) + pc * here_d
+    d0 = float(np.linalg.norm(g - s0))
+    l = np.maximum(np.linalg.norm(C - s0, axis=1), 1e-9)  # noqa: E741 - the paper's name
+    sc = score(d0, l)
+    return min(range(len(C)), key=lambda m: (float(expect[m]), -int(sc[m])))
+
+
+def obstacle_zones(obstacles) -> list[ExpansionZone]:
+    """The expansion zones of a map's polygonal obstacles (rectangles and polygons; an
+    occupancy grid's obstacles are its rectangles)."""
+    out = [expansion_zone(p) for p in obstacles.polygons]
+    for x0, y0, x1, y1 in np.asarray(obstacles.rectangles).reshape(-1, 4):
+        out.append(expansion_zone([[x0, y0], [x1, y0], [x1, y1], [x0, y1]]))
+    return out
 
 
 def score(dist: ArrayLike, l: ArrayLike) -> NDArray[np.int64]:  # noqa: E741 - the paper's name
@@ -188,13 +228,16 @@ def simulate_robots(
     algorithm: str = "hafsa",
     safety: float = SAFETY_RADIUS,
     max_steps: int = 200,
+    risk: bool = True,
     rng=None,
 ) -> RobotsRun:
     """Robots follow their global paths; a robot whose next move would bring it within
     ``safety`` of another (at the end of the step or halfway) replans locally (001 sec. 3): of
-    the free neighbouring cells (and staying) that keep the distance, it takes the one closest to
-    its goal, ties to the higher eq. 15 score, then re-plans its global path from there with A*.
-    Robots move in index order each step (lower index has priority).
+    the free neighbouring cells (and staying) that keep the distance, it takes the one of least
+    expected distance to its goal under the expansion zones' collision probabilities (module
+    docstring; ``risk=False``: the one closest to its goal), ties to the higher eq. 15 score,
+    then re-plans its global path from there with A*. Robots move in index order each step
+    (lower index has priority).
 
     Parameters
     ----------
@@ -219,6 +262,24 @@ def simulate_robots(
         plans.append(p)
         planner.append(who)
     glob = [tuple((int(a), int(b)) for a, b in p) for p in plans]
+    grid = scenario.grid
+    zones = obstacle_zones(scenario.obstacles) if risk else []
+    p_static = np.zeros(free.shape)
+    if zones:  # collision probability of every cell centre under the obstacles' zones
+        ij = np.argwhere(np.ones(free.shape, dtype=bool))
+        p_static[ij[:, 0], ij[:, 1]] = collision_probability(zones, grid.centre(ij))
+
+    def risk_of(cells: NDArray[np.int64], others: NDArray[np.int64]) -> NDArray[np.float64]:
+        """Collision probability of moving into ``cells``: the obstacles' zones and those of
+        the other robots' cells (unit squares)."""
+        p = p_static[cells[:, 0], cells[:, 1]]
+        if not risk or not len(others):
+            return p
+        h = 0.5 * grid.cell
+        sq = np.array([[-h, -h], [h, -h], [h, h], [-h, h]])
+        rz = [expansion_zone(grid.centre(o) + sq) for o in others]
+        return np.maximum(p, collision_probability(rz, grid.centre(cells)))
+
     pos = S.copy()
     idx = [0] * n
     hist = [[tuple(int(v) for v in s)] for s in S]
@@ -251,14 +312,9 @@ def simulate_robots(
                 cand = [c for c in cand if clear(c)]
                 if not cand:  # nowhere safe: stay (checked again at the end of the step)
                     continue
-                dist0 = float(np.linalg.norm(G[k] - S[k]))
-                best = min(
-                    cand,
-                    key=lambda c, k=k, d0=dist0: (
-                        float(np.linalg.norm(G[k] - c)),
-                        -int(score(d0, max(1e-9, float(np.linalg.norm(c - S[k]))))),
-                    ),
-                )
+                C = np.array(cand)
+                pc = risk_of(C, np.delete(new, k, axis=0))
+                best = C[local_choice(pos[k], G[k], S[k], C, pc)]
                 new[k] = best
                 if not (best == pos[k]).all():
                     replans[k] += 1
