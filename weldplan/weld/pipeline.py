@@ -165,10 +165,22 @@ class PlanConfig:
 def _plan_pair_task(
     cell: Any, i: int, j: int, method: str, params: dict, seed: int, budget: float | None
 ) -> Any:
-    """One local path (module-level so process pools can pickle it)."""
-    from weldplan.weld.local import plan_pair
+    """One local path (module-level so process pools can pickle it). A pair whose search would
+    exceed the voxel cap (:class:`~weldplan.weld.local.SearchLimitError`) comes back as a failed
+    path with the reason: the sequencer then treats it as unreachable."""
+    from weldplan.weld.local import LocalPath, SearchLimitError, plan_pair
 
-    return plan_pair(cell, i, j, method=method, params=params, rng=seed, time_budget=budget)
+    try:
+        return plan_pair(cell, i, j, method=method, params=params, rng=seed, time_budget=budget)
+    except SearchLimitError as exc:
+        return LocalPath(
+            points=np.zeros((0, 3)),
+            length=np.inf,
+            inner_length=np.inf,
+            method=method,
+            success=False,
+            reason=str(exc),
+        )
 
 
 def _plan_pairs_task(cell: Any, batch: list[tuple], budget: float | None) -> list[Any]:
@@ -523,6 +535,7 @@ def plan_route(
             "method": str(getattr(lp, "method", config.planner)),
             "history": [float(h) for h in getattr(lp, "history", ())],
             "seconds": float(getattr(lp, "seconds", 0.0)),
+            "search_voxels": int(getattr(lp, "search_voxels", 0)),
         }
         for p, lp in sorted(paths.items())
     }
@@ -534,6 +547,12 @@ def plan_route(
         "pairs_blocked": int((checked & ~free).sum()),
         "pairs_planned": len(paths),
         "pairs_failed": n_failed,
+        "pairs_over_search_cap": sum(
+            "max_search_voxels" in str(getattr(lp, "reason", "")) for lp in paths.values()
+        ),
+        "search_voxels_max": max(
+            (int(getattr(lp, "search_voxels", 0)) for lp in paths.values()), default=0
+        ),
         "rounds": rounds,
         "legs_planned": sum(m != "straight" for m in methods),
         "bound_with_approaches": bound_appr,
