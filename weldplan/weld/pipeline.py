@@ -127,7 +127,14 @@ class PlanConfig:
         polish of a fresh solve makes 10 kicks per joint (40 s a round at 1000 joints, and
         the 1000-joint set takes tens of rounds). False: every round solves from scratch.
     warm_kicks
-        Double-bridge kicks of a warm round's polish; None: one per joint.
+        Double-bridge kicks of the warm polish that accepts an order; None: one per joint. The
+        rounds in between run the descent only (2-opt + Or-opt, no kicks), as long as each
+        finds legs still unknown.
+    demand_neighbours
+        Above :data:`LOWER_BOUND_EXACT_MAX` joints, when an order uses unknown legs, the unknown
+        pairs from each of their ends to its ``demand_neighbours`` nearest joints (by current
+        cost) are planned in the same round: they are the moves the polish tries next, and
+        planning them together saves rounds (each a sequencer run). 0: only the legs used.
     """
 
     clearance: float = 5.0
@@ -146,6 +153,7 @@ class PlanConfig:
     candidate_radius: float | None = None
     warm_rounds: bool = True
     warm_kicks: int | None = None
+    demand_neighbours: int = 10
 
     def __post_init__(self) -> None:
         if self.planner not in PLANNERS:
@@ -455,7 +463,7 @@ def plan_route(
 
     pso = PSOParams(**config.pso) if config.pso else None
 
-    def sequence(round_: int, method: str, initial: list[int] | None = None) -> Any:
+    def sequence(round_: int, method: str, initial: list[int] | None = None, kicks: int = 0) -> Any:
         nonlocal t_seq
         t = time.perf_counter()
         off = ~np.eye(n, dtype=bool)
@@ -476,7 +484,6 @@ def plan_route(
             if config.sequence_time_budget is not None:
                 extra["time_budget"] = config.sequence_time_budget
             if initial is not None:
-                kicks = n if config.warm_kicks is None else int(config.warm_kicks)
                 extra["initial"] = initial
                 extra["polish_params"] = PolishParams(kicks=kicks)
             seq = solve_sequence(C, method=method, polish=config.polish, rng=gen, pso=pso, **extra)
@@ -496,21 +503,39 @@ def plan_route(
         warm = (
             config.warm_rounds and config.polish and method != "exact" and n > LOWER_BOUND_EXACT_MAX
         )
+        full_kicks = n if config.warm_kicks is None else int(config.warm_kicks)
         previous = None
+        kicks = full_kicks
         while True:
-            seq = sequence(rounds, method, previous)
+            seq = sequence(rounds, method, previous, kicks)
             rounds += 1
             order = list(seq.order)
-            if warm:
-                previous = order
             needed = [int(pair_index[a, b]) for a, b in zip(order[:-1], order[1:], strict=True)]
             unknown = [p for p in needed if not known[p]]
+            if warm:
+                if not unknown and previous is not None and kicks < full_kicks:
+                    # settled with descents only: one polish with kicks before accepting it
+                    previous, kicks = order, full_kicks
+                    continue
+                previous, kicks = order, 0
             if not unknown:
                 return seq
             if rounds >= config.max_rounds and config.candidates is None:
                 log.warning("lazy planning: %d rounds, planning every blocked pair", rounds)
                 unknown = [int(p) for p in blocked]
+            elif config.demand_neighbours and n > LOWER_BOUND_EXACT_MAX:
+                unknown = sorted(set(unknown) | set(_near_unknown(unknown)))
             plan(unknown)
+
+    def _near_unknown(pairs: list[int]) -> list[int]:
+        """The unknown pairs of each end of ``pairs`` to its ``demand_neighbours`` nearest joints
+        by current cost (the moves the sequencer's polish tries next)."""
+        ends = np.unique(np.concatenate([iu[pairs], ju[pairs]]))
+        k = min(int(config.demand_neighbours), n - 1)
+        near = np.argsort(C[ends], axis=1, kind="stable")[:, : k + 1]
+        cand = pair_index[np.repeat(ends, k + 1), near.ravel()]
+        cand = cand[cand >= 0]
+        return [int(p) for p in np.unique(cand) if not known[p]]
 
     if config.sequencer != "exact" and n <= LOWER_BOUND_EXACT_MAX and not known.all():
         # discovery rounds with Held-Karp (fast at this size) find the legs good orders use,
