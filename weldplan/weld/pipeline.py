@@ -54,7 +54,7 @@ import logging
 import time
 from collections.abc import Callable, Mapping
 from concurrent.futures import Executor
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -135,6 +135,15 @@ class PlanConfig:
         pairs from each of their ends to its ``demand_neighbours`` nearest joints (by current
         cost) are planned in the same round: they are the moves the polish tries next, and
         planning them together saves rounds (each a sequencer run). 0: only the legs used.
+    known_first
+        With ``candidates``, above :data:`LOWER_BOUND_EXACT_MAX` joints and a heuristic
+        sequencer: a leg not yet known costs its estimate plus a penalty larger than any route
+        over known legs, so the sequencer orders over the known legs (the candidates) and
+        uses an unknown one only where it must (it is then planned and the round repeats), the
+        way candidate-set TSP heuristics work. Without it, every unknown leg is costed by its
+        optimistic estimate and at 1000 joints the rounds never settle (279 rounds and 5,030
+        pairs planned in 13 minutes on car2's set). Exact sequencers always use estimates
+        (their route is then the all-pairs optimum).
     """
 
     clearance: float = 5.0
@@ -154,6 +163,7 @@ class PlanConfig:
     warm_rounds: bool = True
     warm_kicks: int | None = None
     demand_neighbours: int = 10
+    known_first: bool = True
 
     def __post_init__(self) -> None:
         if self.planner not in PLANNERS:
@@ -348,6 +358,7 @@ def plan_route(
     PlanningError
         When no order of finite cost exists (e.g. a joint every local path to which failed).
     """
+    from weldplan.optim.discrete.costs import order_cost
     from weldplan.optim.discrete.local_search import PolishParams
     from weldplan.optim.discrete.sequence import solve_sequence
     from weldplan.optim.discrete.tsp_pso import PSOParams
@@ -462,6 +473,7 @@ def plan_route(
         t_local += time.perf_counter() - t
 
     pso = PSOParams(**config.pso) if config.pso else None
+    known_first = config.known_first and config.candidates is not None and n > LOWER_BOUND_EXACT_MAX
 
     def sequence(round_: int, method: str, initial: list[int] | None = None, kicks: int = 0) -> Any:
         nonlocal t_seq
@@ -486,7 +498,18 @@ def plan_route(
             if initial is not None:
                 extra["initial"] = initial
                 extra["polish_params"] = PolishParams(kicks=kicks)
-            seq = solve_sequence(C, method=method, polish=config.polish, rng=gen, pso=pso, **extra)
+            Cs = C
+            if known_first and method != "exact":
+                off = ~known
+                finite = C[iu[known], ju[known]]
+                finite = finite[np.isfinite(finite)]
+                penalty = (n - 1) * float(finite.max() if len(finite) else est.max()) + 1.0
+                Cs = C.copy()
+                Cs[iu[off], ju[off]] += penalty
+                Cs[ju[off], iu[off]] += penalty
+            seq = solve_sequence(Cs, method=method, polish=config.polish, rng=gen, pso=pso, **extra)
+            if Cs is not C:
+                seq = replace(seq, cost=float(order_cost(C, np.asarray(seq.order), False)))
         except PlanningError as exc:
             raise PlanningError(_explain_no_order(exc, C, known, iu, ju, paths, ids)) from exc
         t_seq += time.perf_counter() - t
