@@ -197,3 +197,18 @@ def test_known_first_orders_over_known_legs_and_settles_in_few_rounds():
     assert kf.length <= 1.05 * est.length
     with pytest.raises(WeldplanError, match="candidates"):
         PlanConfig(candidates=0, known_first=True)
+
+
+def test_bench_scale_options_parse():
+    import argparse
+
+    from weldplan.bench import scale
+
+    p = argparse.ArgumentParser()
+    scale.add_arguments(p)
+    a = p.parse_args(["--throughput-only", "--workers", "1,2,4", "--reference", "all"])
+    assert a.throughput_only and a.workers == [1, 2, 4] and a.reference == "all"
+    assert p.parse_args([]).workers == [1, 2]
+    for bad in ("0,2", "a"):
+        with pytest.raises(argparse.ArgumentTypeError):
+            scale._ints(bad)
