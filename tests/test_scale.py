@@ -212,3 +212,23 @@ def test_bench_scale_options_parse():
     for bad in ("0,2", "a"):
         with pytest.raises(argparse.ArgumentTypeError):
             scale._ints(bad)
+
+
+def test_bench_scale_reports_a_refused_size_as_a_row(tmp_path, monkeypatch):
+    """A size whose plan is refused (car2's 1000-joint set: 3 joints no path reaches) is a row
+    of the table, not a crash of the whole benchmark."""
+    import argparse
+
+    from weldplan.bench import scale
+
+    err = {"n": 1000, "cell": 20.0, "error": "the joints fall into 2 groups", "plan": 500.0}
+    err.update(peak_mib=900.0, child_peak_mib=800.0, load_before=[1, 2, 3], load_after=[3, 2, 1])
+    monkeypatch.setattr(scale, "run_child", lambda code: err)
+    monkeypatch.setattr(scale, "shared_path", lambda *parts: tmp_path / "car2.obj")
+    p = argparse.ArgumentParser()
+    scale.add_arguments(p)
+    args = p.parse_args(["--sizes", "1000"])
+    args.out = str(tmp_path)
+    assert scale.run(args) == 0
+    md = (tmp_path / "scale.md").read_text()
+    assert "| 1000 | 20.0 |" in md and "failed after 500.0" in md and "2 groups" in md

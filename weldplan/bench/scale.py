@@ -49,6 +49,7 @@ import logging, os, numpy as np
 from weldplan.weld.cell import load_cell
 from weldplan.weld.pipeline import PlanConfig, plan_route
 from weldplan.weld.verify import verify_route
+from weldplan.errors import PlanningError
 logging.disable(logging.WARNING)
 load0 = os.getloadavg()
 t0 = time.perf_counter()
@@ -61,7 +62,16 @@ executor = None
 if {jobs} > 1:
     executor = process_pool(cell, {jobs})
 t1 = time.perf_counter()
-route = plan_route(cell, config=cfg, rng=0, executor=executor)
+try:
+    route = plan_route(cell, config=cfg, rng=0, executor=executor)
+except PlanningError as exc:  # e.g. joints no collision-free path reaches: a row, not a crash
+    if executor is not None:
+        executor.shutdown()
+    kids = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
+    print(json.dumps(dict(n=len(cell.joints.ids), cell=t_cell, error=str(exc)[:300],
+        plan=time.perf_counter() - t1, peak_mib=peak_mib(), child_peak_mib=kids,
+        load_before=load0, load_after=os.getloadavg())))
+    raise SystemExit(0)
 t_plan = time.perf_counter() - t1
 if executor is not None:
     executor.shutdown()
@@ -228,6 +238,13 @@ def run(args: argparse.Namespace) -> int:
         )
         r = run_child(code)
         raw[n] = r
+        if "error" in r:
+            rows.append(
+                [n, f"{r['cell']:.1f}", "", "", "", "", f"failed after {r['plan']:.1f}",
+                 f"{max(r['peak_mib'], r['child_peak_mib']):.0f}", r["error"], "", "", "no",
+                 f"{_load(r['load_before'])} / {_load(r['load_after'])}"]
+            )  # fmt: skip
+            continue
         s = r["stats"]
         ratio = r["length"] / r["ref_length"] if r["ref_length"] == r["ref_length"] else None
         rows.append(
