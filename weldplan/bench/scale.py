@@ -340,7 +340,8 @@ def run(args: argparse.Namespace) -> int:
         md += [
             f"Pair-planning throughput (200-joint set, {thr['pairs']} blocked candidate pairs, "
             "SO-ACO N = M = 10; CPU seconds of the planning process or of the pool's workers, "
-            "worker start-up excluded from the wall time):",
+            "worker start-up excluded from the wall time but included in the pool's CPU "
+            "seconds: imports, cell unpickling and collision model in each worker):",
             "",
             table(
                 ["workers", "wall s", "speed-up", "CPU s", "CPU / first", "same paths", "load"],
