@@ -32,7 +32,11 @@ segment is checked first; the blocked candidates are then searched in one batch 
 executor (the work that parallelises). Every other pair keeps its straight-polyline estimate (a
 lower bound, as above) until an order uses it; then it is checked on demand, straight first and
 searched only if blocked, and the sequencer runs again. With an exact sequencer the route is the
-same as with every pair planned. ``Route.stats`` counts the pairs checked, straight, searched
+same as with every pair planned. Above :data:`LOWER_BOUND_EXACT_MAX` joints a heuristic sequencer
+orders over the known legs first (``PlanConfig.known_first``): an unknown leg costs its estimate
+plus a penalty larger than any route over known legs, so it is used, and then planned, only
+where the known legs leave no way through (optimistic estimates kept the 1000-joint rounds from
+ever settling). ``Route.stats`` counts the pairs checked, straight, searched
 (``pairs_checked``, ``pairs_straight``, ``pairs_planned``) and the candidates.
 
 Warm rounds (station scale)
