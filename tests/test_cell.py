@@ -20,11 +20,12 @@ def demo():
     return demo_cell()
 
 
-def brute_nearest_free(grid: ObstacleGrid, p: np.ndarray, direction=None) -> float:
+def brute_nearest_free(grid: ObstacleGrid, p: np.ndarray, direction=None, cone=90.0) -> float:
     free = np.argwhere(grid.free)
     c = grid.index_to_world(free)
     if direction is not None:
-        c = c[(c - p) @ direction >= 0]
+        u = direction / np.linalg.norm(direction)
+        c = c[(c - p) @ u >= np.linalg.norm(c - p, axis=1) * np.cos(np.radians(cone)) - 1e-9]
     return float(np.min(np.linalg.norm(c - p, axis=1)))
 
 
@@ -51,6 +52,58 @@ def test_virtual_joints_respect_approach_directions():
     assert off_up[0] == pytest.approx(1.1) and off_down[0] == pytest.approx(2.9)
 
 
+def _wall_grid() -> ObstacleGrid:
+    """Free only at x >= 7 (a wall face) and on a ledge at z >= 9 over x <= 6: the spot (5, 5, 5)
+    on the wall's face has its nearest free centre sideways (+x, 90 degrees off an approach
+    straight up) and the next ones up the ledge."""
+    occ = np.ones((13, 11, 13), bool)
+    occ[7:, :, :] = False
+    occ[:7, :, 9:] = False
+    return ObstacleGrid(occ, np.zeros(3), 1.0, 1.0)
+
+
+def test_virtual_joints_lie_within_the_approach_cone():
+    grid = _wall_grid()
+    p = np.array([[5.0, 5.0, 5.0]])
+    up = np.array([[0.0, 0.0, 2.0]])  # not unit: normalised
+    side, _, off_side = virtual_joints(grid, p, directions=up, approach_cone=90.0)
+    cone, xyz, off_cone = virtual_joints(grid, p, directions=up)  # 45 degrees
+    assert side[0].tolist() == [7, 5, 5] and off_side[0] == pytest.approx(2.0)
+    v = xyz[0] - p[0]
+    assert v[2] >= np.linalg.norm(v) * np.cos(np.radians(45.0)) - 1e-12
+    # the nearest free centre within 45 degrees of +z: brute force over the free voxels
+    free = grid.index_to_world(np.argwhere(grid.free))
+    d = free - p[0]
+    dist = np.linalg.norm(d, axis=1)
+    ok = d[:, 2] >= dist * np.cos(np.radians(45.0))
+    assert off_cone[0] == pytest.approx(dist[ok].min())
+    assert off_cone[0] > off_side[0]
+    with pytest.raises(PlanningError, match="within 10 degrees"):
+        virtual_joints(grid, p, directions=up, approach_cone=10.0, search_radius=3.5)
+    with pytest.raises(ValueError, match="approach_cone"):
+        virtual_joints(grid, p, directions=up, approach_cone=0.0)
+
+
+def test_virtual_joints_skip_candidates_whose_approach_is_rejected():
+    grid = _wall_grid()
+    p = np.array([[5.0, 5.0, 5.0]])
+    first, xyz0, _ = virtual_joints(grid, p, directions=[[0, 0, 1]])
+    seen = []
+
+    def reject_first(spot, centre):
+        seen.append(tuple(centre))
+        return len(seen) > 1
+
+    second, xyz1, off1 = virtual_joints(grid, p, directions=[[0, 0, 1]], approach_free=reject_first)
+    assert seen[0] == tuple(xyz0[0]) and tuple(xyz1[0]) == seen[1] != seen[0]
+    assert off1[0] >= np.linalg.norm(xyz0[0] - p[0])
+    # nothing accepted: the nearest is kept (and a warning logged)
+    kept, _, _ = virtual_joints(
+        grid, p, directions=[[0, 0, 1]], approach_free=lambda a, b: False, max_tries=3
+    )
+    assert kept[0].tolist() == first[0].tolist()
+
+
 def test_a_joint_without_free_voxels_in_reach_is_an_error_naming_it():
     solid = trimesh.creation.box(extents=(200, 200, 200))
     joints = Joints(ids=("ok", "buried"), xyz=[[0, 0, 110], [0, 0, 100]])
@@ -66,15 +119,17 @@ def test_demo_joints_sit_on_the_part(demo):
     assert np.max(demo.collision.clearance(demo.joints.xyz)) < 1e-3
 
 
-def test_demo_virtual_joints_are_free_nearest_and_on_the_torch_side(demo):
+def test_demo_virtual_joints_are_free_nearest_and_within_the_approach_cone(demo):
     g = demo.grid
     assert g.is_free(demo.virtual_index).all()
     assert np.all(demo.offsets >= demo.clearance)  # a free centre is >= clearance from the part
     assert np.all(demo.offsets < 2 * (demo.clearance + demo.pitch))
     for k in range(demo.n_joints):
         p, d = demo.joints.xyz[k], demo.joints.directions[k]
-        assert demo.offsets[k] == pytest.approx(brute_nearest_free(g, p, d))
-        assert (demo.virtual_xyz[k] - p) @ d >= 0
+        # nearest within 45 degrees of the approach (every demo approach is clear of the part)
+        assert demo.offsets[k] == pytest.approx(brute_nearest_free(g, p, d, 45.0))
+        v = demo.virtual_xyz[k] - p
+        assert v @ d >= np.linalg.norm(v) * np.linalg.norm(d) * np.cos(np.radians(45.0)) - 1e-9
 
 
 def test_demo_obstacle_blocks_3_to_7_while_neighbours_are_free(demo):

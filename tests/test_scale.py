@@ -169,3 +169,66 @@ def test_progress_bar_shows_counts_and_a_time_left_estimate(monkeypatch):
     bars("local", 0, 10)
     bars("local", 4, 10)  # 4 pairs in 2 s: 6 left take 3 s
     assert "4/10" in tty.getvalue() and "ETA    3.0 s" in tty.getvalue()
+
+
+@pytest.mark.slow
+def test_known_first_orders_over_known_legs_and_settles_in_few_rounds():
+    """Above 16 joints with candidates, unknown legs are penalised: two rows of spots on either
+    side of a wall (k = 3 keeps the candidates within each row) are joined by one planned leg."""
+    from tests.route_fixtures import box_part
+    from weldplan.weld.cell import build_cell
+    from weldplan.weld.verify import verify_route
+
+    y = np.linspace(-80.0, 80.0, 9)
+    xyz = np.concatenate(
+        [np.c_[np.full(9, -30.0), y, np.zeros(9)], np.c_[np.full(9, 30.0), y, np.zeros(9)]]
+    )
+    joints = Joints(ids=tuple(f"J{k}" for k in range(18)), xyz=xyz)
+    cell = build_cell(box_part(), joints, margin=40.0)
+    routes = {}
+    for kf in (True, False):
+        cfg = PlanConfig(planner="exact", sequencer="pso", candidates=3, known_first=kf)
+        routes[kf] = plan_route(cell, config=cfg, rng=0)
+        assert verify_route(routes[kf], cell.part, joints=joints).ok
+    kf, est = routes[True], routes[False]
+    assert kf.stats["rounds"] <= 3
+    assert kf.stats["rounds"] <= est.stats["rounds"]
+    assert kf.stats["pairs_planned"] <= est.stats["pairs_planned"]
+    assert kf.length <= 1.05 * est.length
+    with pytest.raises(WeldplanError, match="candidates"):
+        PlanConfig(candidates=0, known_first=True)
+
+
+def test_bench_scale_options_parse():
+    import argparse
+
+    from weldplan.bench import scale
+
+    p = argparse.ArgumentParser()
+    scale.add_arguments(p)
+    a = p.parse_args(["--throughput-only", "--workers", "1,2,4", "--reference", "all"])
+    assert a.throughput_only and a.workers == [1, 2, 4] and a.reference == "all"
+    assert p.parse_args([]).workers == [1, 2]
+    for bad in ("0,2", "a"):
+        with pytest.raises(argparse.ArgumentTypeError):
+            scale._ints(bad)
+
+
+def test_bench_scale_reports_a_refused_size_as_a_row(tmp_path, monkeypatch):
+    """A size whose plan is refused (car2's 1000-joint set: 3 joints no path reaches) is a row
+    of the table, not a crash of the whole benchmark."""
+    import argparse
+
+    from weldplan.bench import scale
+
+    err = {"n": 1000, "cell": 20.0, "error": "the joints fall into 2 groups", "plan": 500.0}
+    err.update(peak_mib=900.0, child_peak_mib=800.0, load_before=[1, 2, 3], load_after=[3, 2, 1])
+    monkeypatch.setattr(scale, "run_child", lambda code: err)
+    monkeypatch.setattr(scale, "shared_path", lambda *parts: tmp_path / "car2.obj")
+    p = argparse.ArgumentParser()
+    scale.add_arguments(p)
+    args = p.parse_args(["--sizes", "1000"])
+    args.out = str(tmp_path)
+    assert scale.run(args) == 0
+    md = (tmp_path / "scale.md").read_text()
+    assert "| 1000 | 20.0 |" in md and "failed after 500.0" in md and "2 groups" in md

@@ -32,6 +32,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--margin", type=positive_mm, default=150.0, help="grid margin around joints, mm (150)"
     )
+    p.add_argument(
+        "--approach-cone",
+        type=float,
+        default=45.0,
+        help="degrees: each virtual joint lies within this angle of its joint's approach "
+        "direction (45; 90 = anywhere on the torch side)",
+    )
     add_planning_arguments(p, default_output=None)
 
 
@@ -40,6 +47,12 @@ def run(args: argparse.Namespace) -> int:
 
     # validates clearance, pitch and margin before the (slow) cell is built
     PlanConfig(clearance=args.clearance, pitch=args.pitch, margin=args.margin)
+    if not 0.0 < args.approach_cone <= 90.0:
+        from weldplan.errors import WeldplanError
+
+        raise WeldplanError(
+            f"--approach-cone must lie in (0, 90] degrees, got {args.approach_cone}"
+        )
 
     def make_cell():
         from weldplan.weld.cell import load_cell
@@ -53,6 +66,7 @@ def run(args: argparse.Namespace) -> int:
             pitch=args.pitch,
             clearance=args.clearance,
             margin=args.margin,
+            approach_cone=args.approach_cone,
         )
 
     return run_planning(args, make_cell, title=f"weldplan plan {args.mesh} {args.joints}")

@@ -32,8 +32,11 @@ construction (a real joint lies on its surface) and are not checked.
 Deviations from the paper, named (each a :class:`LocalParams` field):
 
 - the FCL check of kept lattice moves and the repair search above (``max_repairs``);
-- the colony searches a box around the pair (``crop_margin``, 50 mm), the whole grid when the box
-  does not connect the pair;
+- the colony searches a box around the pair (``crop_margin``, 50 mm); when the box does not
+  connect the pair its margin grows (``crop_growth``, x2 each time) until it does, never past
+  ``max_search_voxels`` voxels (then :class:`SearchLimitError`, a :class:`PlanningError` naming
+  the pair); the exact search runs on the whole grid when the grid is within that cap, else on
+  the same growing boxes (then it is exact within the box only);
 - the exact baseline forbids corner cutting by default (``corner_cutting``);
 - the secondary optimisation stops after ``max_so_passes`` passes (a guard; it converges first).
 
@@ -66,9 +69,11 @@ from weldplan.random import RNGLike, as_generator, seed_of
 log = logging.getLogger(__name__)
 
 __all__ = [
+    "MAX_SEARCH_VOXELS",
     "METHODS",
     "LocalParams",
     "LocalPath",
+    "SearchLimitError",
     "SecondaryResult",
     "plan_local_path",
     "plan_pair",
@@ -78,6 +83,30 @@ __all__ = [
 
 #: the local planners by name
 METHODS = ("so-aco", "aco", "exact")
+
+#: default cap on the voxels one pair's search box may span (:attr:`LocalParams.max_search_voxels`):
+#: the colony holds about 250 bytes a voxel at N = M = 10 (pheromone, roulette weights and
+#: heuristic per move, tabu lists), so 2 M voxels keep one pair near 0.5 GB; a box of 2 M voxels
+#: is a cube of 126 voxels (630 mm at 5 mm)
+MAX_SEARCH_VOXELS = 2_000_000
+
+
+class SearchLimitError(PlanningError):
+    """No search box within :attr:`LocalParams.max_search_voxels` connects the pair.
+
+    Attributes
+    ----------
+    voxels
+        Voxels of the largest box tried.
+    cap
+        The cap.
+    """
+
+    def __init__(self, message: str, *, voxels: int, cap: int) -> None:
+        super().__init__(message)
+        self.voxels = int(voxels)
+        self.cap = int(cap)
+
 
 #: two route lengths closer than this (mm) are "the same" in step 8 of section 4.3
 SO_LENGTH_TOL = 1e-6
@@ -235,11 +264,22 @@ class LocalParams:
         the FCL checks for the same time.
     crop_margin
         The colony searches the box spanned by the two virtual joints grown by this margin (mm),
-        not the whole grid; when that box does not connect them, the whole grid. ``None``: always
-        the whole grid. The paper does not say how far its grid reached; a cell's region of
-        interest covers every joint (1 M voxels on the demo cell), and the colony's arrays, its
-        per-pair set-up and its ants' wanderings all grow with it. The exact search is never
-        cropped (A* touches only what it expands).
+        not the whole grid. ``None``: the whole grid while it is within ``max_search_voxels``,
+        else boxes grown from the pair's own box.
+        The paper does not say how far its grid reached; a cell's region of interest covers
+        every joint (1 M voxels on the demo cell, 74 M on car2's 1000-joint set), and the
+        colony's arrays, its per-pair set-up and its ants' wanderings all grow with it. The exact
+        search is not cropped while the grid is within ``max_search_voxels`` (A* touches only
+        what it expands, but its move table spans the grid).
+    crop_growth
+        When a box does not connect the pair (6-connected free voxels inside it), its margin is
+        multiplied by this factor and the search box built again, until it connects the pair,
+        covers the grid, or would exceed ``max_search_voxels`` (then the largest margin within
+        the cap is tried last).
+    max_search_voxels
+        Most voxels one pair's search box may span (:data:`MAX_SEARCH_VOXELS`, about 0.5 GB for
+        the colony); beyond it :func:`plan_local_path` raises :class:`SearchLimitError` naming
+        the pair. ``None``: no cap.
     """
 
     colony: AntColonyParams = field(default_factory=AntColonyParams)
@@ -249,6 +289,16 @@ class LocalParams:
     connectivity: int = 26
     corner_cutting: bool = False
     crop_margin: float | None = 50.0
+    crop_growth: float = 2.0
+    max_search_voxels: int | None = MAX_SEARCH_VOXELS
+
+    def __post_init__(self) -> None:
+        if not self.crop_growth > 1.0:
+            raise ValueError(f"crop_growth must be > 1, got {self.crop_growth}")
+        if self.max_search_voxels is not None and self.max_search_voxels < 1:
+            raise ValueError(f"max_search_voxels must be positive, got {self.max_search_voxels}")
+        if self.crop_margin is not None and not self.crop_margin >= 0:
+            raise ValueError(f"crop_margin must be >= 0 mm, got {self.crop_margin}")
 
     @classmethod
     def coerce(
@@ -326,6 +376,11 @@ class LocalPath:
     so_passes, collision_checks, repairs
         Secondary-optimisation passes, FCL segment checks, searches re-run after FCL rejected a
         lattice move.
+    search_voxels
+        Voxels of the box the search ran on (the whole grid when uncropped; 0 when no search
+        ran): what bounds the search's memory.
+    search_boxes
+        Boxes built before one connected the pair (0: the whole grid without cropping).
     history
         Best raw route length after each colony iteration (mm), for convergence plots.
     """
@@ -347,6 +402,8 @@ class LocalPath:
     so_passes: int = 0
     collision_checks: int = 0
     repairs: int = 0
+    search_voxels: int = 0
+    search_boxes: int = 0
     history: tuple[float, ...] = ()
 
     def __post_init__(self) -> None:
@@ -396,24 +453,77 @@ def _padded(grid: ObstacleGrid) -> PaddedGrid:
     return pg
 
 
-def _search_grid(
-    grid: ObstacleGrid, s: NDArray[np.int64], g: NDArray[np.int64], method: str, prm: LocalParams
-) -> tuple[PaddedGrid, NDArray[np.int64]]:
-    """The padded array a search runs on, and the grid index of its voxel (0, 0, 0)."""
-    zero = np.zeros(3, dtype=np.int64)
-    if method == "exact" or prm.crop_margin is None:
-        return _padded(grid), zero
-    m = int(math.ceil(prm.crop_margin / grid.pitch))
+def _box(
+    shape: NDArray[np.int64], s: NDArray[np.int64], g: NDArray[np.int64], m: int
+) -> tuple[NDArray[np.int64], NDArray[np.int64], int]:
     lo = np.maximum(np.minimum(s, g) - m, 0)
-    hi = np.minimum(np.maximum(s, g) + m + 1, grid.shape)
-    if np.all(lo == 0) and np.all(hi == grid.shape):
-        return _padded(grid), zero
-    sub = grid.free[lo[0] : hi[0], lo[1] : hi[1], lo[2] : hi[2]]
-    labels, _ = ndimage.label(sub, structure=ndimage.generate_binary_structure(3, 1))
-    if labels[tuple(s - lo)] != labels[tuple(g - lo)]:
-        log.debug("the crop does not connect the pair; the colony searches the whole grid")
-        return _padded(grid), zero
-    return pad_free(sub), lo
+    hi = np.minimum(np.maximum(s, g) + m + 1, shape)
+    return lo, hi, int(np.prod(hi - lo))
+
+
+def _search_grid(
+    grid: ObstacleGrid,
+    s: NDArray[np.int64],
+    g: NDArray[np.int64],
+    method: str,
+    prm: LocalParams,
+    label_conn: int,
+) -> tuple[PaddedGrid, NDArray[np.int64], int, int]:
+    """The padded array a search runs on, the grid index of its voxel (0, 0, 0), its voxels and
+    the boxes built to find it (:class:`LocalParams` ``crop_margin``, ``crop_growth``,
+    ``max_search_voxels``).
+
+    Raises
+    ------
+    SearchLimitError
+        No box within the cap connects the pair.
+    """
+    zero = np.zeros(3, dtype=np.int64)
+    shape = np.asarray(grid.shape, dtype=np.int64)
+    n_grid = int(np.prod(shape))
+    cap = prm.max_search_voxels
+    whole_ok = cap is None or n_grid <= cap
+    where = f"virtual joints {s.tolist()} -> {g.tolist()}"
+    if whole_ok and (method == "exact" or prm.crop_margin is None):
+        return _padded(grid), zero, n_grid, 0
+    structure = ndimage.generate_binary_structure(3, 1 if label_conn == 6 else 3)
+    margin = (prm.crop_margin or 0.0) / grid.pitch
+    m = int(math.ceil(margin))
+    boxes = 0
+    last_fit = -1  # the largest margin (voxels) tried within the cap
+    while True:
+        lo, hi, vox = _box(shape, s, g, m)
+        if cap is not None and vox > cap:
+            # the largest margin within the cap, if not tried yet (bisection on the margin)
+            a, b = last_fit, m
+            while b - a > 1:
+                mid = (a + b) // 2
+                if _box(shape, s, g, mid)[2] <= cap:
+                    a = mid
+                else:
+                    b = mid
+            if a <= last_fit:
+                raise SearchLimitError(
+                    f"no search box within {cap:,} voxels connects {where} (the next box spans "
+                    f"{vox:,} voxels, {boxes} tried; the pair may lie on both sides of a panel): "
+                    "raise max_search_voxels to search farther",
+                    voxels=vox,
+                    cap=cap,
+                )
+            m = a
+            lo, hi, vox = _box(shape, s, g, m)
+        boxes += 1
+        if vox == n_grid:  # the whole grid (connectivity was checked on it)
+            return _padded(grid), zero, n_grid, boxes
+        sub = grid.free[lo[0] : hi[0], lo[1] : hi[1], lo[2] : hi[2]]
+        labels, _ = ndimage.label(sub, structure=structure)
+        if labels[tuple(s - lo)] == labels[tuple(g - lo)]:
+            return pad_free(sub), lo, vox, boxes
+        del labels
+        log.debug("box %d (%d voxels) does not connect %s; growing it", boxes, vox, where)
+        last_fit = m
+        margin = max(margin, 1.0) * prm.crop_growth
+        m = max(m + 1, int(math.ceil(margin)))
 
 
 def _connected(grid: ObstacleGrid, a: NDArray[np.int64], b: NDArray[np.int64], conn: int) -> bool:
@@ -494,6 +604,9 @@ def plan_local_path(
     ------
     PlanningError
         When a virtual joint lies outside the grid or on an obstacle voxel.
+    SearchLimitError
+        A :class:`PlanningError`: no search box within ``max_search_voxels`` connects the pair
+        (:class:`LocalParams`); the pipeline records the pair as unreachable.
     ValueError
         For an unknown method or parameter.
     """
@@ -565,9 +678,11 @@ def plan_local_path(
             "regions (enclosed, or cut off by the region of interest)",
         )
 
-    pg, origin = _search_grid(grid, s, g, method, prm)
+    pg, origin, search_voxels, search_boxes = _search_grid(grid, s, g, method, prm, label_conn)
+    stats_box = {"search_voxels": search_voxels, "search_boxes": search_boxes}
     blocked: set[tuple[int, int]] = set()
     stats: dict[str, Any] = {"iterations": 0, "ants": 0, "evaluations": 0, "history": ()}
+    stats.update(stats_box)
     path_idx = None
     raw_len = math.inf
     repairs = 0
@@ -653,16 +768,21 @@ def plan_pair(
     for name, k in (("i", i), ("j", j)):
         if not 0 <= int(k) < n:
             raise IndexError(f"joint position {name}={k} out of range 0..{n - 1}")
-    return plan_local_path(
-        cell.grid,
-        cell.collision,
-        xyz[i],
-        xyz[j],
-        vidx[i],
-        vidx[j],
-        method=method,
-        params=params,
-        rng=rng,
-        time_budget=time_budget,
-        callback=callback,
-    )
+    try:
+        return plan_local_path(
+            cell.grid,
+            cell.collision,
+            xyz[i],
+            xyz[j],
+            vidx[i],
+            vidx[j],
+            method=method,
+            params=params,
+            rng=rng,
+            time_budget=time_budget,
+            callback=callback,
+        )
+    except SearchLimitError as exc:
+        ids = getattr(getattr(cell, "joints", None), "ids", None)
+        name = f"{ids[i]} -> {ids[j]}" if ids is not None else f"{i} -> {j}"
+        raise SearchLimitError(f"joints {name}: {exc}", voxels=exc.voxels, cap=exc.cap) from exc

@@ -171,6 +171,20 @@ def approach_pieces(
     return pts[:-1], pts[1:], radii
 
 
+def approach_free(
+    model: CollisionModel,
+    spot: NDArray[np.float64],
+    virtual: NDArray[np.float64],
+    clearance: float,
+    *,
+    pieces: int = APPROACH_PIECES,
+) -> bool:
+    """Whether the approach ``spot -> virtual`` stays within its cone (module docstring): the
+    check :func:`verify_route` makes, for one approach."""
+    A, B, r = approach_pieces(spot, virtual, clearance, pieces=pieces)
+    return all(model.segment_free(a, b, float(rr)) for a, b, rr in zip(A, B, r, strict=True))
+
+
 def verify_route(
     route: Route,
     part: Any,

@@ -172,6 +172,7 @@ def solve_sequence(
     polish_params: PolishParams | None = None,
     callback: Callable[[int, float], bool | None] | None = None,
     time_budget: float | None = None,
+    initial: ArrayLike | None = None,
 ) -> Sequence:
     """Order the nodes of ``cost`` to minimise the total cost.
 
@@ -203,6 +204,11 @@ def solve_sequence(
         Seconds for the whole solve: the polish stops kicking when they are spent (and, unless
         ``polish_params.kicks`` is set, kicks until then). The swarm always runs its iterations.
         Results then depend on the machine's speed; leave it ``None`` for reproducible runs.
+    initial
+        ``(n,) int`` a visiting order to start from (a warm start, e.g. the previous order after
+        a few costs changed): the swarm / nearest-neighbour construction is skipped and only the
+        polish runs from it (``method`` is then reported as ``"warm+polish"``). Ignored by
+        ``"exact"``; with ``polish=False`` the order is returned as given.
 
     Returns
     -------
@@ -245,7 +251,13 @@ def solve_sequence(
         name = "exact"
     else:
         Ap, _ = penalised(red.A)
-        if method == "pso":
+        if initial is not None:
+            init = np.asarray(initial, dtype=np.intp).reshape(-1)
+            if not np.array_equal(np.sort(init), np.arange(n)):
+                raise ValueError(f"initial must be a permutation of 0..{n - 1}")
+            tour = red.to_tour(init)
+            method = "warm"
+        elif method == "pso":
             res = tsp_pso(Ap, red.start, pso, gen, callback)
             tour, history, evaluations = res.tour, res.history, res.evaluations
             params["pso"] = pso.to_dict()
