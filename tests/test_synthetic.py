@@ -27,6 +27,11 @@ def spots(car2):
     return synthetic.generate_spots(car2, rng=0)
 
 
+@pytest.fixture(scope="module")
+def reachable(car2, spots):
+    return synthetic.keep_reachable(car2, spots)
+
+
 def test_deterministic_and_enough(car2, spots):
     again = synthetic.generate_spots(car2, rng=0)
     np.testing.assert_array_equal(spots.xyz, again.xyz)
@@ -52,7 +57,18 @@ def test_spacing_along_lines_and_on_surface(car2, spots):
     np.testing.assert_allclose(np.linalg.norm(spots.directions, axis=1), 1.0)
 
 
-def test_sets_are_nested_compact_and_match_assets(spots):
+@pytest.mark.slow
+def test_unreachable_spots_are_dropped(spots, reachable):
+    # car2 closes a few volumes: spots facing into one have no route to the rest (3 at seed 0)
+    assert 0 < len(spots) - len(reachable) <= 10
+    kept = set(map(tuple, reachable.xyz))
+    assert kept <= set(map(tuple, spots.xyz))
+    assert len(reachable) >= max(synthetic.SET_SIZES)
+
+
+@pytest.mark.slow
+def test_sets_are_nested_compact_and_match_assets(reachable):
+    spots = reachable
     j50, st50 = synthetic.select_set(spots, 50)
     j200, _ = synthetic.select_set(spots, 200)
     assert set(map(tuple, j50.xyz)) <= set(map(tuple, j200.xyz))
