@@ -11,8 +11,9 @@ Protocols (``--protocols``, default all):
     ACO, ABC, MABC on the seven 20 x 20 maps, the two 50 x 50 maps and the 100 x 100 building,
     NP = 50, 200 iterations, segment encoding; mean, SD, worst, optimum of length (over the
     successful runs), success rate, diversity DI (eq. 18) of the final population. The paper
-    ran 1000 runs. ACO is reported only when registered (it is a graph algorithm, not a
-    continuous optimiser).
+    ran 1000 runs. 003 does not say which ACO it ran; the ACO column is ACO_R (Socha &
+    Dorigo 2008, continuous ants with a solution archive, ``weldplan.optim.algorithms.acor``),
+    our choice, 50 ants per iteration like the other columns.
 ``001``
     Paper 001 Table 1 style: AFSA and HAFSA on the 20 x 20 and 40 x 40 grids, 50 fish,
     100 iterations: longest, best, average length and mean time, beside the A* optimum.
