@@ -65,6 +65,10 @@ class LRSMA(SMA):
         the inequality as 000 prints it (acceptance probability ``1 - exp(-delta/T)``, small for
         small ``delta``); ``"standard"``: the usual Metropolis rule ``rand < exp(-delta/T)``.
 
+    init
+        ``"uniform"`` (000) or ``"problem"``: the Problem's own initial population (an
+        improvement, off by default; see :class:`~weldplan.optim.algorithms.sma.SMA`).
+
     Deviations
     ----------
     - ``stepsize`` and ``beta`` are not given in 000; the values above are assumptions.
@@ -85,8 +89,9 @@ class LRSMA(SMA):
         beta: float = LRSMA_BETA,
         step_size: float = 0.01,
         metropolis: Literal["printed", "standard"] = "printed",
+        init: str = "uniform",
     ) -> None:
-        super().__init__(pop_size, z)
+        super().__init__(pop_size, z, init)
         if metropolis not in ("printed", "standard"):
             raise ValueError(f"metropolis must be 'printed' or 'standard', got {metropolis!r}")
         if not 0.0 <= p_r <= 1.0:
