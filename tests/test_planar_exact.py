@@ -13,6 +13,8 @@ from weldplan.planar.exact import (
     MeshFreeSpace,
     VisibilityGraph,
     astar_grid,
+    grid_graph,
+    grid_lengths,
     octile,
     read_movingai_map,
     read_scen,
@@ -54,6 +56,38 @@ def test_astar_matches_movingai_lengths_subset(name: str) -> None:
     for k in idx:
         r = astar_grid(free, sc.start[k], sc.goal[k])
         assert _close_to_scen(r.length, sc.length[k]), (k, r.length, sc.length[k])
+
+
+def test_compiled_grid_search_equals_astar_on_random_grids() -> None:
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        free = rng.random((12, 9)) > 0.3
+        cells = np.argwhere(free)
+        S = cells[rng.integers(0, len(cells), 6)]
+        T = cells[rng.integers(0, len(cells), 6)]
+        L = grid_lengths(free, S, T)
+        for s, t, length in zip(S, T, L, strict=True):
+            try:
+                ref = astar_grid(free, s, t).length
+            except PlanningError:
+                ref = np.inf
+            assert length == pytest.approx(ref, abs=1e-12) or (np.isinf(ref) and np.isinf(length))
+    # a limit bounds the work, never a length found within it
+    free = np.ones((6, 6), dtype=bool)
+    G = grid_graph(free)
+    assert grid_lengths(free, [[0, 0]], [[5, 5]], graph=G, limits=[100.0])[0] == pytest.approx(
+        5 * np.sqrt(2)
+    )
+    assert np.isinf(grid_lengths(free, [[0, 0]], [[5, 5]], graph=G, limits=[3.0])[0])
+
+
+def test_compiled_grid_search_matches_movingai_maze_sample() -> None:
+    folder = require_shared("movingai")
+    free = read_movingai_map(folder / "maze512-32-9.map")
+    sc = read_scen(folder / "maze512-32-9.map.scen")
+    k = np.arange(0, len(sc.length), 400)  # 21 queries over every bucket (all 8010: the bench)
+    L = grid_lengths(free, sc.start[k], sc.goal[k])
+    assert all(_close_to_scen(a, b) for a, b in zip(L, sc.length[k], strict=True))
 
 
 @pytest.mark.slow
