@@ -15,6 +15,7 @@ from weldplan.planar.exact import (
     astar_grid,
     grid_graph,
     grid_lengths,
+    mesh_shortest_path_bounded,
     octile,
     read_movingai_map,
     read_scen,
@@ -141,3 +142,41 @@ def test_visibility_graph_exact_on_simple_maps() -> None:
     pinch = Obstacles2D(rectangles=[[0, 0, 1, 1], [1, 1, 2, 2]])
     r = visibility_shortest_path(pinch, [0.2, 1.8], [1.8, 0.2])
     assert r.length > np.hypot(1.6, 1.6) + 0.1
+
+
+def test_bounded_mesh_search_equals_the_full_visibility_graph_on_arena() -> None:
+    mesh = MeshFreeSpace.read(require_shared("meshmaps", "arena.mesh"))
+    sc = read_scen(require_shared("meshmaps", "arena.mesh.scen"))
+    vm = VisibilityGraph(mesh)
+    for k in range(0, len(sc.length), 5):
+        s, g = sc.start[k] + 0.5, sc.goal[k] + 0.5
+        full = vm.shortest_path(s, g).length
+        bounded = mesh_shortest_path_bounded(mesh, s, g, sc.length[k] + 1e-3)
+        assert bounded.length == pytest.approx(full, abs=1e-9)
+        P = bounded.points_array
+        assert mesh.segments_free(P[:-1], P[1:]).all()
+    # a bound below the true length finds nothing
+    k = int(np.argmax(sc.length))
+    with pytest.raises(PlanningError):
+        mesh_shortest_path_bounded(
+            mesh,
+            sc.start[k] + 0.5,
+            sc.goal[k] + 0.5,
+            0.99 * vm.shortest_path(sc.start[k] + 0.5, sc.goal[k] + 0.5).length,
+        )
+
+
+def test_aurora_short_queries_lie_between_octile_bounds() -> None:
+    """aurora.mesh.scen holds octile grid lengths (not any-angle ones): the any-angle length
+    is at most the octile one and at least octile / sqrt(4 - 2 sqrt(2))."""
+    mesh = MeshFreeSpace.read(require_shared("meshmaps", "aurora.mesh"))
+    sc = read_scen(require_shared("meshmaps", "aurora.mesh.scen"))
+    # query 1 is an unobstructed (3, 4) offset: Polyanya's any-angle length would be 5
+    assert abs(sc.goal[1] - sc.start[1]).tolist() == [3, 4]
+    assert sc.length[1] == pytest.approx(float(octile(3, 4)), abs=1e-5)
+    ratio_max = np.sqrt(4 - 2 * np.sqrt(2))
+    for k in np.nonzero(sc.bucket <= 3)[0][::3]:
+        r = mesh_shortest_path_bounded(
+            mesh, sc.start[k] + 0.5, sc.goal[k] + 0.5, sc.length[k] + 1e-3
+        )
+        assert sc.length[k] / ratio_max - 1e-4 <= r.length <= sc.length[k] + 1e-4
