@@ -158,3 +158,30 @@ def test_gwo_leaders_are_three_best_ever() -> None:
         gwo.step(ctx)
         seen.append(gwo.F.copy())
     np.testing.assert_allclose(gwo.LF, np.sort(np.concatenate(seen))[:3])
+
+
+def test_acor_rank_weights_and_kernel_widths_match_socha_dorigo() -> None:
+    from weldplan.optim.algorithms.acor import ACOR
+
+    opt = ACOR(pop_size=3, archive_size=4, q=0.5, xi=0.85)
+    p = FunctionProblem(sphere, np.full(2, -5.0), np.full(2, 5.0))
+    ctx = ctx_for(p)
+    opt.initialize(ctx)
+    # eq. 4-5: w_l ~ exp(-(l - 1)^2 / (2 q^2 k^2)), normalised; q k = 2
+    w = np.exp(-(np.arange(4) ** 2) / 8.0)
+    np.testing.assert_allclose(opt.p, w / w.sum())
+    assert np.all(np.diff(opt.F) >= 0) and opt.X.shape == (4, 2)
+    # eq. 6: sigma_l = xi sum_e |s_e - s_l| / (k - 1); replay the step's draws
+    X0 = opt.X.copy()
+    state = ctx.rng.bit_generator.state
+    opt.step(ctx)
+    rng = np.random.default_rng()
+    rng.bit_generator.state = state
+    from weldplan.optim.operators import roulette
+
+    g = roulette(rng, opt.p, 3)
+    sigma = 0.85 * np.abs(X0[None] - X0[g][:, None]).sum(axis=1) / 3
+    Y = np.clip(X0[g] + sigma * rng.standard_normal((3, 2)), -5, 5)
+    allX = np.vstack([X0, Y])
+    allF = sphere(allX)
+    np.testing.assert_allclose(opt.X, allX[np.argsort(allF, kind="stable")[:4]])

@@ -148,6 +148,7 @@ def test_registry_names_and_errors() -> None:
         "mpso",
         "gwo",
         "woa",
+        "aco",
     ):
         assert n in names
         assert get_optimizer(n).name == n

@@ -80,6 +80,10 @@ def test_bench_planar_tiny(tmp_path: Path, local_search: str, monkeypatch) -> No
 
     monkeypatch.setattr(bench, "P000_ALGOS", [local_search])
     monkeypatch.setattr(bench, "P000_MAPS", ["circles-1"])
+    monkeypatch.setattr(bench, "P000_VARIANTS", [(f"{local_search}+x", local_search, {})])
+    import weldplan.planar.solve as solve_mod
+
+    monkeypatch.setattr(solve_mod, "spline_encoding_optimum", lambda sc: 28.889)
     monkeypatch.setattr(
         bench,
         "P003_ALGOS",
@@ -97,6 +101,7 @@ def test_bench_planar_tiny(tmp_path: Path, local_search: str, monkeypatch) -> No
         maps_003="map20-2",
         jobs=1,
         exact_seconds=1.0,
+        mesh_seconds=1.0,
         data=None,
     )
     assert bench.run(args) == 0

@@ -13,6 +13,9 @@ from weldplan.planar.exact import (
     MeshFreeSpace,
     VisibilityGraph,
     astar_grid,
+    grid_graph,
+    grid_lengths,
+    mesh_shortest_path_bounded,
     octile,
     read_movingai_map,
     read_scen,
@@ -54,6 +57,38 @@ def test_astar_matches_movingai_lengths_subset(name: str) -> None:
     for k in idx:
         r = astar_grid(free, sc.start[k], sc.goal[k])
         assert _close_to_scen(r.length, sc.length[k]), (k, r.length, sc.length[k])
+
+
+def test_compiled_grid_search_equals_astar_on_random_grids() -> None:
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        free = rng.random((12, 9)) > 0.3
+        cells = np.argwhere(free)
+        S = cells[rng.integers(0, len(cells), 6)]
+        T = cells[rng.integers(0, len(cells), 6)]
+        L = grid_lengths(free, S, T)
+        for s, t, length in zip(S, T, L, strict=True):
+            try:
+                ref = astar_grid(free, s, t).length
+            except PlanningError:
+                ref = np.inf
+            assert length == pytest.approx(ref, abs=1e-12) or (np.isinf(ref) and np.isinf(length))
+    # a limit bounds the work, never a length found within it
+    free = np.ones((6, 6), dtype=bool)
+    G = grid_graph(free)
+    assert grid_lengths(free, [[0, 0]], [[5, 5]], graph=G, limits=[100.0])[0] == pytest.approx(
+        5 * np.sqrt(2)
+    )
+    assert np.isinf(grid_lengths(free, [[0, 0]], [[5, 5]], graph=G, limits=[3.0])[0])
+
+
+def test_compiled_grid_search_matches_movingai_maze_sample() -> None:
+    folder = require_shared("movingai")
+    free = read_movingai_map(folder / "maze512-32-9.map")
+    sc = read_scen(folder / "maze512-32-9.map.scen")
+    k = np.arange(0, len(sc.length), 400)  # 21 queries over every bucket (all 8010: the bench)
+    L = grid_lengths(free, sc.start[k], sc.goal[k])
+    assert all(_close_to_scen(a, b) for a, b in zip(L, sc.length[k], strict=True))
 
 
 @pytest.mark.slow
@@ -107,3 +142,41 @@ def test_visibility_graph_exact_on_simple_maps() -> None:
     pinch = Obstacles2D(rectangles=[[0, 0, 1, 1], [1, 1, 2, 2]])
     r = visibility_shortest_path(pinch, [0.2, 1.8], [1.8, 0.2])
     assert r.length > np.hypot(1.6, 1.6) + 0.1
+
+
+def test_bounded_mesh_search_equals_the_full_visibility_graph_on_arena() -> None:
+    mesh = MeshFreeSpace.read(require_shared("meshmaps", "arena.mesh"))
+    sc = read_scen(require_shared("meshmaps", "arena.mesh.scen"))
+    vm = VisibilityGraph(mesh)
+    for k in range(0, len(sc.length), 5):
+        s, g = sc.start[k] + 0.5, sc.goal[k] + 0.5
+        full = vm.shortest_path(s, g).length
+        bounded = mesh_shortest_path_bounded(mesh, s, g, sc.length[k] + 1e-3)
+        assert bounded.length == pytest.approx(full, abs=1e-9)
+        P = bounded.points_array
+        assert mesh.segments_free(P[:-1], P[1:]).all()
+    # a bound below the true length finds nothing
+    k = int(np.argmax(sc.length))
+    with pytest.raises(PlanningError):
+        mesh_shortest_path_bounded(
+            mesh,
+            sc.start[k] + 0.5,
+            sc.goal[k] + 0.5,
+            0.99 * vm.shortest_path(sc.start[k] + 0.5, sc.goal[k] + 0.5).length,
+        )
+
+
+def test_aurora_short_queries_lie_between_octile_bounds() -> None:
+    """aurora.mesh.scen holds octile grid lengths (not any-angle ones): the any-angle length
+    is at most the octile one and at least octile / sqrt(4 - 2 sqrt(2))."""
+    mesh = MeshFreeSpace.read(require_shared("meshmaps", "aurora.mesh"))
+    sc = read_scen(require_shared("meshmaps", "aurora.mesh.scen"))
+    # query 1 is an unobstructed (3, 4) offset: Polyanya's any-angle length would be 5
+    assert abs(sc.goal[1] - sc.start[1]).tolist() == [3, 4]
+    assert sc.length[1] == pytest.approx(float(octile(3, 4)), abs=1e-5)
+    ratio_max = np.sqrt(4 - 2 * np.sqrt(2))
+    for k in np.nonzero(sc.bucket <= 3)[0][::3]:
+        r = mesh_shortest_path_bounded(
+            mesh, sc.start[k] + 0.5, sc.goal[k] + 0.5, sc.length[k] + 1e-3
+        )
+        assert sc.length[k] / ratio_max - 1e-4 <= r.length <= sc.length[k] + 1e-4

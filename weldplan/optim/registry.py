@@ -31,6 +31,7 @@ ALGORITHMS: dict[str, str] = {
     "parapa": "weldplan.optim.algorithms.parapa:ParaPA",
     "lso": "weldplan.optim.algorithms.lion:LSO",
     "ssa": "weldplan.optim.algorithms.sparrow:SSA",
+    "aco": "weldplan.optim.algorithms.acor:ACOR",
 }
 
 

@@ -42,6 +42,10 @@ SPLINE_NODES = 3
 #: deepest penetration (map units) a spline path may graze an obstacle and count as
 #: collision-free (see SplinePathProblem.success)
 GRAZE_TOL_SPLINE = 0.01
+#: roadmap seeding (an off-by-default improvement, not in paper 000): cell size of the coarse
+#: occupancy grid, in map units, and the share of the initial population seeded along its A* path
+ROADMAP_CELL = 0.25
+ROADMAP_SHARE = 1.0 / 3.0
 
 
 class PathProblem(Problem):
@@ -149,6 +153,67 @@ class SplinePathProblem(PathProblem):
     def strict_success(self, X: ArrayLike) -> NDArray[np.bool_]:
         """No segment of the sampled polyline enters an obstacle (exact)."""
         return super().success(X)
+
+    def roadmap_path(self, cell: float = ROADMAP_CELL) -> FloatArray:
+        """A coarse global path ``(n, 2)``: 8-connected A* on the map rasterised at ``cell``.
+
+        A cell is free when its whole square is clear of obstacles (clearance of its centre
+        above half its diagonal); start and goal cells are forced free. Octile lengths differ
+        from Euclidean ones by up to 8 %, so this picks a corridor (a homotopy class), not
+        the any-angle optimum; it is the cheap global planner of the ``roadmap`` seeding, not
+        the exact baseline. Cached per cell size.
+        """
+        from weldplan.planar.exact import astar_grid
+
+        cache = self.__dict__.setdefault("_roadmap", {})
+        if cell in cache:
+            return cache[cell]
+        x0, y0, x1, y1 = (float(v) for v in self.scenario.bounds)
+        nx, ny = max(int(np.ceil((x1 - x0) / cell)), 1), max(int(np.ceil((y1 - y0) / cell)), 1)
+        ii, jj = np.meshgrid(np.arange(nx), np.arange(ny), indexing="ij")
+        centres = np.stack([x0 + (ii + 0.5) * cell, y0 + (jj + 0.5) * cell], axis=-1)
+        free = self.world.clearance(centres) > 0.0
+        s, g = self.scenario.start, self.scenario.goal
+        si = tuple(int(v) for v in np.clip(((s - [x0, y0]) // cell), 0, [nx - 1, ny - 1]))
+        gi = tuple(int(v) for v in np.clip(((g - [x0, y0]) // cell), 0, [nx - 1, ny - 1]))
+        free[si] = free[gi] = True
+        cells = astar_grid(free, si, gi).points_array.astype(np.int64)
+        path = np.vstack([s, centres[cells[1:-1, 0], cells[1:-1, 1]], g])
+        cache[cell] = path
+        return path
+
+    def initial_population(
+        self, rng: np.random.Generator, n: int, share: float = ROADMAP_SHARE
+    ) -> FloatArray:
+        """``n`` starting solutions ``(n, n_var)``: ``ceil(share n)`` seeded along
+        :meth:`roadmap_path`, the rest uniform in the box.
+
+        A seeded solution puts node ``k = 1..m`` at the arc-length fraction
+        ``(k + u) / (m + 1)`` of the roadmap path, ``u ~ U(-1/2, 1/2)``, plus Gaussian noise of
+        one cell. Used by optimisers built with ``init="problem"`` (the homotopy-aware start
+        of the LRSMA improvement, see ``weldplan bench planar``); the faithful algorithms draw
+        uniformly. When no roadmap path exists every row is uniform.
+        """
+        from weldplan.errors import PlanningError
+
+        X = self.lower + rng.random((n, self.n_var)) * (self.upper - self.lower)
+        k = min(int(np.ceil(share * n)), n)
+        try:
+            path = self.roadmap_path()
+        except PlanningError:
+            log.warning("no roadmap path on %s; uniform initial population", self.scenario.name)
+            return X
+        if k == 0:
+            return X
+        seg = np.linalg.norm(np.diff(path, axis=0), axis=1)
+        cum = np.concatenate([[0.0], np.cumsum(seg)])
+        m = self.n_nodes
+        q = (np.arange(1, m + 1) + rng.uniform(-0.5, 0.5, (k, m))) / (m + 1)
+        at = q * cum[-1]
+        nodes = np.stack([np.interp(at, cum, path[:, 0]), np.interp(at, cum, path[:, 1])], -1)
+        nodes += rng.normal(0.0, ROADMAP_CELL, nodes.shape)
+        X[:k] = np.clip(nodes.reshape(k, -1), self.lower, self.upper)
+        return X
 
 
 def line_bounds(

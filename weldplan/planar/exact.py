@@ -236,6 +236,89 @@ class VisibilityGraph:
         return _graph_shortest_path(pts, i, j)
 
 
+def mesh_shortest_path_bounded(
+    mesh: MeshFreeSpace, start: ArrayLike, goal: ArrayLike, bound: float
+) -> ExactPath:
+    """Any-angle shortest path on a large mesh when it is no longer than ``bound``.
+
+    Every path of length ``<= bound`` lies in the ellipse ``|p - s| + |p - g| <= bound``, so
+    the visibility graph is built on the crop of the mesh around that ellipse's bounding box
+    (:meth:`MeshFreeSpace.crop`) with the corner vertices inside the ellipse as turning
+    points. The result is the exact visibility-graph length whenever the true shortest path is
+    at most ``bound``; otherwise :class:`PlanningError` (no path within the bound). The cost
+    grows with the ellipse: short queries are cheap, long ones on big meshes are not.
+    """
+    s = np.asarray(start, dtype=np.float64).reshape(2)
+    g = np.asarray(goal, dtype=np.float64).reshape(2)
+    bound = float(bound)
+    c = 0.5 * (s + g)
+    # the ellipse's bounding box (foci s, g; major axis bound)
+    a = 0.5 * bound
+    f = 0.5 * float(np.linalg.norm(g - s))
+    b = math.sqrt(max(a * a - f * f, 0.0))
+    u = (g - s) / (2 * f) if f > 0 else np.array([1.0, 0.0])
+    half = np.sqrt((a * u) ** 2 + (b * u[::-1]) ** 2) + 1e-9
+    sub = mesh.crop(c - half, c + half)
+    nodes = sub.corner_vertices()
+    inside = np.linalg.norm(nodes - s, axis=1) + np.linalg.norm(nodes - g, axis=1) <= bound + 1e-9
+    nodes = nodes[inside]
+    if space_free(sub, s, g):
+        return ExactPath(
+            points=(tuple(s), tuple(g)),
+            length=float(np.linalg.norm(g - s)),
+            method="visibility-graph",
+            expanded=2,
+        )
+    pts = np.concatenate([s[None], g[None], nodes])
+    return _lazy_visibility_astar(sub, pts)
+
+
+def _lazy_visibility_astar(space: Any, pts: NDArray[np.float64]) -> ExactPath:
+    """A* from ``pts[0]`` to ``pts[1]`` over the visibility graph of ``pts``, with each node's
+    visible neighbours computed only when it is expanded (one vectorised check of the
+    segments to every node). The Euclidean heuristic is consistent, so the path is the
+    visibility graph's shortest."""
+    n = len(pts)
+    goal = pts[1]
+    gcost = np.full(n, np.inf)
+    parent = np.full(n, -1, dtype=np.int64)
+    closed = np.zeros(n, dtype=bool)
+    gcost[0] = 0.0
+    heap = [(float(np.linalg.norm(goal - pts[0])), 0)]
+    expanded = 0
+    while heap:
+        _, v = heapq.heappop(heap)
+        if closed[v]:
+            continue
+        if v == 1:
+            break
+        closed[v] = True
+        expanded += 1
+        cand = np.nonzero(~closed)[0]
+        vis = space.segments_free(np.broadcast_to(pts[v], (len(cand), 2)), pts[cand])
+        cand = cand[vis]
+        nd = gcost[v] + np.linalg.norm(pts[cand] - pts[v], axis=1)
+        better = nd < gcost[cand]
+        cand, nd = cand[better], nd[better]
+        gcost[cand] = nd
+        parent[cand] = v
+        f = nd + np.linalg.norm(pts[cand] - goal, axis=1)
+        for fu, u in zip(f.tolist(), cand.tolist(), strict=True):
+            heapq.heappush(heap, (fu, u))
+    if not np.isfinite(gcost[1]):
+        raise PlanningError("the goal cannot be reached from the start")
+    order = [1]
+    while order[-1] != 0:
+        order.append(int(parent[order[-1]]))
+    path = pts[order[::-1]]
+    return ExactPath(
+        points=tuple((float(x), float(y)) for x, y in path),
+        length=float(path_length(path)),
+        method="visibility-graph",
+        expanded=expanded,
+    )
+
+
 # ---------------------------------------------------------------------------------------- A*
 def astar_grid(free: ArrayLike, start: tuple[int, int], goal: tuple[int, int]) -> ExactPath:
     """Shortest 8-connected path on a grid without corner cutting (octile costs).
@@ -328,6 +411,85 @@ def astar_grid(free: ArrayLike, start: tuple[int, int], goal: tuple[int, int]) -
     return ExactPath(
         points=tuple(cells), length=float(g_cost[t]), method="astar-8", expanded=expanded
     )
+
+
+#: the eight moves of the Moving AI grids: (di, dj)
+_MOVES8 = ((1, 0), (0, 1), (1, 1), (1, -1))
+
+
+def grid_graph(free: ArrayLike) -> Any:
+    """The 8-connected grid of :func:`astar_grid` as a sparse graph (scipy CSR, undirected).
+
+    Node ``i * ny + j`` is cell ``(i, j)``; straight moves cost 1, diagonal ones sqrt(2) and
+    need both orthogonal neighbours free (no corner cutting), exactly the moves of
+    :func:`astar_grid`. Built with numpy in one pass per direction (a 512 x 512 map: 0.2 s).
+    """
+    from scipy.sparse import csr_matrix
+
+    F = np.asarray(free, dtype=bool)
+    nx, ny = F.shape
+    I, J = np.nonzero(F)
+    rows, cols, cost = [], [], []
+    for di, dj in _MOVES8:
+        I2, J2 = I + di, J + dj
+        ok = (I2 >= 0) & (I2 < nx) & (J2 >= 0) & (J2 < ny)
+        a, b, a2, b2 = I[ok], J[ok], I2[ok], J2[ok]
+        ok = F[a2, b2]
+        if di and dj:
+            ok &= F[a + di, b] & F[a, b + dj]
+        rows.append(a[ok] * ny + b[ok])
+        cols.append(a2[ok] * ny + b2[ok])
+        cost.append(np.full(int(ok.sum()), SQRT2 if di and dj else 1.0))
+    r, c, w = np.concatenate(rows), np.concatenate(cols), np.concatenate(cost)
+    return csr_matrix((w, (r, c)), shape=(nx * ny, nx * ny))
+
+
+def grid_lengths(
+    free: ArrayLike,
+    starts: ArrayLike,
+    goals: ArrayLike,
+    *,
+    graph: Any = None,
+    limits: ArrayLike | None = None,
+) -> NDArray[np.float64]:
+    """Shortest 8-connected lengths (cells) for many queries, by scipy's compiled Dijkstra.
+
+    The same graph as :func:`astar_grid` (see :func:`grid_graph`), one single-source search
+    per query in C: about 0.05 s a query on a 512 x 512 map where the Python A* takes up to
+    0.8 s (it floods mazes whatever the heuristic). ``limits (n,)``, when given, stop each
+    search beyond that length (``inf`` is returned past it): a bound on the work, never a
+    change to a length found within it.
+
+    Parameters
+    ----------
+    free
+        ``(nx, ny) bool`` traversable cells.
+    starts, goals
+        ``(n, 2)`` cell indices.
+    graph
+        A prebuilt :func:`grid_graph` of ``free`` (built here when None).
+    limits
+        Optional ``(n,)`` search bounds.
+
+    Returns
+    -------
+    ``(n,)`` lengths in cells; ``inf`` where the goal is unreachable (or beyond its limit).
+    """
+    from scipy.sparse.csgraph import dijkstra as sp_dijkstra
+
+    F = np.asarray(free, dtype=bool)
+    ny = F.shape[1]
+    G = grid_graph(F) if graph is None else graph
+    S = np.asarray(starts, dtype=np.int64).reshape(-1, 2)
+    T = np.asarray(goals, dtype=np.int64).reshape(-1, 2)
+    out = np.full(len(S), np.inf)
+    for k in range(len(S)):
+        s = int(S[k, 0] * ny + S[k, 1])
+        t = int(T[k, 0] * ny + T[k, 1])
+        lim = np.inf if limits is None else float(np.asarray(limits)[k])
+        d = sp_dijkstra(G, directed=False, indices=s, limit=lim)
+        out[k] = d[t]
+    return out
 
 
 def octile(di: ArrayLike, dj: ArrayLike) -> NDArray[np.float64]:
@@ -562,6 +724,47 @@ class MeshFreeSpace:
                 )
                 free[c : c + step] &= ~np.any((dd <= tol) & ~end, axis=-1)
         return free
+
+    def crop(self, lo: ArrayLike, hi: ArrayLike) -> MeshFreeSpace:
+        """The sub-mesh of the polygons whose bounding boxes meet the box ``[lo, hi]``.
+
+        Polygons left out become obstacle (``-1``) for their neighbours, so the crop adds
+        walls, all outside the box: a path that stays in the box is free in the crop exactly
+        when it is free in the whole mesh. Used to make queries on large meshes local
+        (:func:`mesh_shortest_path_bounded`).
+        """
+        lo = np.asarray(lo, dtype=np.float64)
+        hi = np.asarray(hi, dtype=np.float64)
+        if "_poly_lo" not in self.__dict__:
+            self._poly_lo = np.array(
+                [self.vertices_xy[p].min(axis=0) for p in self.polygon_vertices]
+            )
+            self._poly_hi = np.array(
+                [self.vertices_xy[p].max(axis=0) for p in self.polygon_vertices]
+            )
+        keep = np.nonzero(
+            np.all(self._poly_hi >= lo, axis=1) & np.all(self._poly_lo <= hi, axis=1)
+        )[0]
+        new_id = np.full(len(self.polygon_vertices), -1, dtype=np.int64)
+        new_id[keep] = np.arange(len(keep))
+        used = (
+            np.unique(np.concatenate([self.polygon_vertices[k] for k in keep]))
+            if len(keep)
+            else np.zeros(0, dtype=np.int64)
+        )
+        vmap = np.full(len(self.vertices_xy), -1, dtype=np.int64)
+        vmap[used] = np.arange(len(used))
+        polys = [vmap[self.polygon_vertices[k]] for k in keep]
+        neigh = [
+            np.where(
+                self.polygon_neighbours[k] >= 0,
+                new_id[np.maximum(self.polygon_neighbours[k], 0)],
+                -1,
+            )
+            for k in keep
+        ]
+        vpolys = [[int(new_id[p]) if p >= 0 else -1 for p in self.vertex_polys[v]] for v in used]
+        return MeshFreeSpace(self.vertices_xy[used], polys, neigh, vpolys)
 
     def corner_vertices(self) -> NDArray[np.float64]:
         """Vertices where free space is reflex (one obstacle wedge, free angle >= 180 deg)."""
