@@ -34,7 +34,8 @@ def path_length(points: ArrayLike) -> FloatArray:
 def turning_angles(points: ArrayLike) -> FloatArray:
     """Angle (radians, in ``[0, pi]``) between consecutive segments: ``(..., n - 2)``.
 
-    Zero-length segments contribute no turn.
+    Zero-length segments contribute no turn; "zero" is below the rounding of the coordinates
+    (16 ulp of the largest one), so a segment that only rounding made non-zero turns nothing.
     """
     P = np.asarray(points, dtype=np.float64)
     d = np.diff(P, axis=-2)
@@ -42,7 +43,8 @@ def turning_angles(points: ArrayLike) -> FloatArray:
     v = d[..., 1:, :]
     nu = np.linalg.norm(u, axis=-1)
     nv = np.linalg.norm(v, axis=-1)
-    ok = (nu > 0) & (nv > 0)
+    tol = 16 * np.finfo(np.float64).eps * (np.max(np.abs(P)) if P.size else 0.0)
+    ok = (nu > tol) & (nv > tol)
     c = np.sum(u * v, axis=-1) / np.where(ok, nu * nv, 1.0)
     return np.where(ok, np.arccos(np.clip(c, -1.0, 1.0)), 0.0)
 
