@@ -72,6 +72,22 @@ def test_planar_bad_input_is_one_line(tmp_path: Path, local_search: str, capsys)
     err = capsys.readouterr().err
     assert "field 'start'" in err and "outside the bounds" in err
     assert main(["planar", "no-such-map", "--algorithm", local_search]) == 2
+    assert main(["planar", "circles-1", "--algorithm", "pso", "--init", "problem"]) == 2
+    err = capsys.readouterr().err
+    assert "--init" in err and "'pso'" in err and "Traceback" not in err
+
+
+def test_planar_init_problem_seeds_lrsma(capsys) -> None:
+    """`--init problem` reaches the optimiser: seeded LRSMA on circles-3 with a starved budget
+    lands in the optimal corridor, the uniform start with the same seed does not do better."""
+    got = {}
+    for init in ("uniform", "problem"):
+        argv = ["planar", "circles-3", "-a", "lrsma", "--seed", "1", "--iters", "5", "--json"]
+        assert main([*argv, "--init", init]) == 0
+        got[init] = PlanarRun.from_json(capsys.readouterr().out)
+    assert got["problem"].success
+    assert got["problem"].gap < 0.05
+    assert got["problem"].length <= got["uniform"].length
 
 
 @pytest.mark.slow

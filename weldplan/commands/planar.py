@@ -40,6 +40,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--iters", type=int, default=None, help="iterations (default: paper's)")
     parser.add_argument("--plot", default=None, help="write a PNG of the path here")
     parser.add_argument("--json", action="store_true", help="print the run as JSON")
+    parser.add_argument(
+        "--init",
+        choices=["uniform", "problem"],
+        default="uniform",
+        help="initial population of sma/lrsma: uniform in the box (the papers) or 'problem': "
+        "a third seeded along a coarse grid path of the map (ours, off by default)",
+    )
     for module_name in SUBCOMMANDS.values():
         import_module(module_name).add_arguments(parser)
 
@@ -58,6 +65,18 @@ def run(args: argparse.Namespace) -> int:
             f"unknown algorithm '{args.algorithm}' (field --algorithm); choose one of: "
             + (", ".join(available()) or "(none registered)")
         )
+    optimizer_params = None
+    if args.init != "uniform":
+        from weldplan.optim.registry import get_optimizer
+
+        optimizer_params = {"init": args.init}
+        try:
+            get_optimizer(args.algorithm, **optimizer_params)
+        except (TypeError, ValueError):
+            raise WeldplanError(
+                f"--init {args.init}: algorithm '{args.algorithm}' does not take this initial "
+                "population (field --init; sma and lrsma take 'problem')"
+            ) from None
     scenario = load_scenario(args.scenario)
     r = solve(
         scenario,
@@ -66,6 +85,7 @@ def run(args: argparse.Namespace) -> int:
         pop_size=args.pop,
         max_iter=args.iters,
         rng=args.seed,
+        optimizer_params=optimizer_params,
     )
     if args.json:
         sys.stdout.write(r.to_json() + "\n")

@@ -40,10 +40,15 @@ def available() -> list[str]:
     return sorted(ALGORITHMS)
 
 
-def get_optimizer(name: str, **params: Any) -> Optimizer:
-    """A new optimiser of the registered ``name`` with ``params`` overriding its defaults."""
+def optimizer_class(name: str) -> type[Optimizer]:
+    """The class registered as ``name`` (imported now)."""
     key = name.lower()
     if key not in ALGORITHMS:
         raise WeldplanError(f"unknown algorithm '{name}'; choose one of: {', '.join(available())}")
     module, cls = ALGORITHMS[key].split(":")
-    return getattr(import_module(module), cls)(**params)
+    return getattr(import_module(module), cls)
+
+
+def get_optimizer(name: str, **params: Any) -> Optimizer:
+    """A new optimiser of the registered ``name`` with ``params`` overriding its defaults."""
+    return optimizer_class(name)(**params)
