@@ -117,7 +117,14 @@ def test_lower_bound_is_held_karp_over_straight_distances():
     assert lb == pytest.approx(brute)
     many = np.random.default_rng(0).uniform(0, 100, (20, 3))
     lb20, how20 = straight_lower_bound(many)
-    assert how20 == "mst" and 0 < lb20
+    D20 = np.linalg.norm(many[:, None] - many[None], axis=-1)
+    from scipy.sparse.csgraph import minimum_spanning_tree
+
+    from weldplan.optim.discrete.sequence import solve_sequence
+
+    # the 1-tree bound: above the spanning tree, never above an actual open path
+    assert how20 == "1-tree" and minimum_spanning_tree(D20).sum() < lb20
+    assert lb20 <= solve_sequence(D20, method="exact").cost + 1e-9
     assert straight_lower_bound(XYZ[:1]) == (0.0, "trivial")
 
 

@@ -75,8 +75,11 @@ Progress = Callable[[str, int, int], None]
 
 PLANNERS = ("so-aco", "aco", "exact")
 SEQUENCERS = ("auto", "pso", "exact", "nn")
-#: the exact straight-line lower bound (Held-Karp) is used up to this many joints, else the MST
+#: the exact straight-line lower bound (Held-Karp) is used up to this many joints, else the
+#: 1-tree bound
 LOWER_BOUND_EXACT_MAX = 16
+#: wall-time cap of the 1-tree bound's subgradient ascent (s): 200 joints finish in ~3 s
+LOWER_BOUND_SECONDS = 10.0
 
 #: SO-ACO settings of the demo target (N = M = 10; the paper's Table 3 also runs 50/50)
 DEFAULT_ACO: dict[str, Any] = {"n_iterations": 10, "n_ants": 10}
@@ -276,8 +279,12 @@ def candidate_pairs(
 def straight_lower_bound(xyz: NDArray[np.float64]) -> tuple[float, str]:
     """Open-path lower bound over straight-line distances between the weld spots ``(n, 3)``.
 
-    Held-Karp's optimum up to :data:`LOWER_BOUND_EXACT_MAX` joints (``"held-karp"``), else the
-    weight of the minimum spanning tree (``"mst"``; every open path is a spanning tree).
+    Held-Karp's optimum up to :data:`LOWER_BOUND_EXACT_MAX` joints (``"held-karp"``), else
+    Held and Karp's 1-tree bound with subgradient ascent (``"1-tree"``,
+    :func:`weldplan.optim.discrete.bounds.one_tree_bound`, at most
+    :data:`LOWER_BOUND_SECONDS`), which is never below the minimum spanning tree's weight
+    (every open path is a spanning tree) and typically within 1-2 % of the optimum where the
+    spanning tree is 10 % below it.
     """
     n = len(xyz)
     if n < 2:
@@ -289,7 +296,11 @@ def straight_lower_bound(xyz: NDArray[np.float64]) -> tuple[float, str]:
         return float(solve_sequence(D, method="exact").cost), "held-karp"
     from scipy.sparse.csgraph import minimum_spanning_tree
 
-    return float(minimum_spanning_tree(D).sum()), "mst"
+    from weldplan.optim.discrete.bounds import one_tree_bound
+
+    mst = float(minimum_spanning_tree(D).sum())
+    tree = one_tree_bound(D, open_path=True, max_seconds=LOWER_BOUND_SECONDS)
+    return (tree, "1-tree") if tree > mst else (mst, "mst")
 
 
 def _explain_no_order(

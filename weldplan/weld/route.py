@@ -136,11 +136,12 @@ class Route:
     virtual_xyz
         ``(n, 3) float`` mm, the virtual joints (nearest free voxel centres), or ``None``.
     lower_bound
-        mm, the open-path optimum over straight-line distances between the weld spots (no
-        obstacles, no approach): no route through these joints can be shorter.
+        mm, a lower bound on the open path over straight-line distances between the weld spots
+        (no obstacles, no approach): no route through these joints can be shorter.
     lower_bound_method
-        ``"held-karp"`` (exact optimum) or ``"mst"`` (minimum spanning tree, a weaker bound used
-        for large cells).
+        ``"held-karp"`` (that path's exact optimum, up to 16 joints), ``"1-tree"`` (Held and
+        Karp's 1-tree bound with subgradient ascent, for larger cells: typically 1-2 % below the
+        optimum) or ``"mst"`` (minimum spanning tree, the weakest; old routes).
     settings
         The :class:`~weldplan.weld.pipeline.PlanConfig` that produced the route, as a dict.
     seed
