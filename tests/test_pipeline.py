@@ -84,6 +84,34 @@ def test_lazy_exact_pipeline_is_the_optimum_over_all_pairs(cell):
     best = solve_sequence(C, method="exact").cost
     assert lazy.length == pytest.approx(best, rel=1e-9)
     assert full.length == pytest.approx(best, rel=1e-9)
+    # the bound over the planned legs: below the all-pairs optimum, and equal to it here
+    for route in (lazy, full):
+        assert route.stats["bound_planned_method"] == "held-karp"
+        assert route.stats["bound_planned"] <= best * (1 + 1e-12)
+        assert route.stats["bound_planned"] == pytest.approx(best, rel=1e-9)
+
+
+def test_bound_of_planned_legs_on_a_larger_cell_is_a_1tree_bound_below_the_route(cell):
+    """Above 16 joints the bound over the planned legs is Held-Karp's 1-tree bound: below the
+    route and below the exact optimum over the all-pairs costs, above the spanning tree."""
+    from scipy.sparse.csgraph import minimum_spanning_tree
+
+    from weldplan.weld import pipeline
+
+    small = plan_route(cell, config=PlanConfig(planner="exact", sequencer="exact"))
+    exact = small.stats["bound_planned"]
+    try:
+        pipeline.LOWER_BOUND_EXACT_MAX, old = 2, pipeline.LOWER_BOUND_EXACT_MAX
+        r = plan_route(cell, config=PlanConfig(planner="exact", sequencer="pso"), rng=0)
+    finally:
+        pipeline.LOWER_BOUND_EXACT_MAX = old
+    assert r.stats["bound_planned_method"] == "1-tree"
+    assert r.stats["bound_planned"] <= exact * (1 + 1e-9) <= r.length * (1 + 1e-9)
+    P = np.asarray(XYZ, dtype=float)
+    assert (
+        r.stats["bound_planned"]
+        > minimum_spanning_tree(np.linalg.norm(P[:, None] - P[None], axis=-1)).sum()
+    )
 
 
 def test_same_seed_same_route_and_executor_does_not_matter(cell):

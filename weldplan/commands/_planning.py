@@ -224,6 +224,13 @@ def _gaps(route: Any) -> str:
         parts.append(
             f"{100 * (route.length / b - 1):.2f} % over the bound with approaches ({b:.2f} mm)"
         )
+    b = route.stats.get("bound_planned")
+    if b is not None and b == b and b > 0:
+        how = route.stats.get("bound_planned_method", "")
+        parts.append(
+            f"{100 * (route.length / b - 1):.2f} % over the bound of the planned legs "
+            f"({b:.2f} mm, {how})"
+        )
     return "; ".join(parts)
 
 
