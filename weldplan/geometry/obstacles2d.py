@@ -388,22 +388,7 @@ class Obstacles2D:
         """Parameter interval ``[t0, t1]`` of segments ``(..., 2)`` strictly inside each
         rectangle by Liang-Barsky clipping: two ``(..., R)`` arrays (``t1 <= t0`` when empty)."""
         r = self.rectangles
-        d = (B - A)[..., None, :]
-        a = A[..., None, :]
-        lo, hi = r[:, :2], r[:, 2:]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t_lo = (lo - a) / d
-            t_hi = (hi - a) / d
-        tmin = np.minimum(t_lo, t_hi)
-        tmax = np.maximum(t_lo, t_hi)
-        # a zero direction component: inside the slab for all t (strictly), or never
-        par = d == 0
-        inslab = (a > lo) & (a < hi)
-        tmin = np.where(par, np.where(inslab, -np.inf, np.inf), tmin)
-        tmax = np.where(par, np.where(inslab, np.inf, -np.inf), tmax)
-        t0 = np.maximum(np.max(tmin, axis=-1), 0.0)
-        t1 = np.minimum(np.min(tmax, axis=-1), 1.0)
-        return t0, t1
+        return self._slab_interval(A[..., None, :], B[..., None, :], r[:, :2], r[:, 2:])
 
     def _rect_pairs(
         self, A: FloatArray, B: FloatArray, pad: float = 0.0
@@ -432,14 +417,16 @@ class Obstacles2D:
     def _slab_interval(
         A: FloatArray, B: FloatArray, lo: FloatArray, hi: FloatArray
     ) -> tuple[FloatArray, FloatArray]:
-        """Liang-Barsky clipping of segments ``(P, 2)`` against boxes ``lo, hi (P, 2)``, one
-        each: the parameter interval ``[t0, t1]`` strictly inside (``t1 <= t0`` when empty)."""
+        """Liang-Barsky clipping of segments ``(P, 2)`` against boxes ``lo, hi (P, 2)`` (or any
+        shapes that broadcast): the parameter interval ``[t0, t1]`` strictly inside (``t1 <= t0``
+        when empty)."""
         d = B - A
         with np.errstate(divide="ignore", invalid="ignore"):
             t_lo = (lo - A) / d
             t_hi = (hi - A) / d
         tmin = np.minimum(t_lo, t_hi)
         tmax = np.maximum(t_lo, t_hi)
+        # a zero direction component: inside the slab for all t (strictly), or never
         par = d == 0
         inslab = (A > lo) & (A < hi)
         tmin = np.where(par, np.where(inslab, -np.inf, np.inf), tmin)
