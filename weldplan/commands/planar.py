@@ -40,7 +40,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         + (f"; or one of: {', '.join(SUBCOMMANDS)}" if SUBCOMMANDS else ""),
     )
     parser.add_argument("more", nargs="*", help=argparse.SUPPRESS)
-    parser.add_argument("--algorithm", "-a", default="lrsma", help="registered optimiser")
+    parser.add_argument(
+        "--algorithm", "-a", default="lrsma", help="registered optimiser (default: lrsma)"
+    )
     parser.add_argument(
         "--encoding", choices=["spline", "segments", "grid"], help="default: the scenario's"
     )

@@ -44,6 +44,9 @@ PAPER_BUDGET: dict[str, tuple[int, int]] = {
     "grid": (50, 100),
 }
 
+#: the optimiser of ``weldplan planar`` when none is named (paper 000's LRSMA)
+DEFAULT_ALGORITHM = "lrsma"
+
 #: the default pipeline's budgets: the repair and polish stages leave the optimiser only the
 #: choice of a corridor, which the seeded segment encoding finds within 30 x 60 (measured in
 #: docs/bench-planar.md); the paper's 50 x 200 costs 2-14 s a run on this machine
