@@ -82,9 +82,9 @@ def protocol_000(args: argparse.Namespace, out: Path) -> list[str]:
         "exact polyline's corners, so a gap below that of `m=3 best` is out of reach. Time per "
         "run: wall (the optimiser) and CPU (process time of the whole run: scenario, problem, "
         "optimiser, measuring). `lrsma+seed` is LRSMA with `init='problem'`, an improvement that "
-        "is not in paper 000 (off by default): a third of the initial moulds are seeded "
-        "along an 8-connected A* path on the map rasterised at 0.25 units (its time is inside "
-        "the run's)." + DEFAULT_NOTE,
+        "is not in paper 000 (the default pipeline's seeding, off as printed): a third of the "
+        "initial moulds are seeded along an 8-connected A* path on the map rasterised at "
+        "0.25 units (its time is inside the run's)." + DEFAULT_NOTE,
         "",
         "| map | exact | m=3 best | algorithm | min | mean | SD | gap of mean | success "
         "| mean wall s | max wall s | mean CPU s |",

@@ -61,7 +61,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--init",
         choices=["uniform", "problem"],
         default=None,
-        help="initial population of sma/lrsma/isma: uniform in the box (the papers; the "
+        help="initial population of sma/lrsma: uniform in the box (the papers; the "
         "default with --as-printed) or 'problem': a third seeded along a coarse grid path of "
         "the map (ours; the default pipeline's)",
     )

@@ -6,7 +6,7 @@ Two pipelines (:func:`solve`):
 
 * the default, the best we measured (``docs/bench-planar.md``, "Default pipeline"): the
   optimiser seeded along a coarse A* roadmap (``init="problem"`` for the optimisers that take
-  it: sma, lrsma, isma; an improvement not in the papers) with the budgets of
+  it: sma and lrsma; an improvement not in the papers) with the budgets of
   :data:`DEFAULT_BUDGET`, then the stages of :mod:`weldplan.planar.pipeline` (repair of
   colliding stretches, polish to a taut path), compared with the exact any-angle optimum;
 * ``as_printed=True``: the paper's algorithm alone, with the paper's budget
@@ -258,18 +258,15 @@ def solve(
     ok = isinstance(X, np.ndarray) and X.ndim >= 2 and X.shape[-1] == prob.n_var
     div = population_diversity(X.reshape(-1, prob.n_var)) if ok else float("nan")
     stages: tuple[PlanarStage, ...] = ()
-    if as_printed:
-        success = bool(prob.success(res.x_array[None])[0])
-        exact_enc = enc
-    else:
-        roadmap = _roadmap(prob)
+    exact_enc = enc
+    if not as_printed:
         t1 = time.perf_counter()
-        pts, stages = run_stages(scenario, pts, seconds, roadmap)
+        pts, stages = run_stages(scenario, pts, seconds, _roadmap(prob))
         seconds += time.perf_counter() - t1
         exact_enc = "segments"  # the final path is any-angle: the any-angle optimum
     m = measure(pts, scenario.world)
-    if not as_printed:
-        success = m.collisions == 0
+    # as printed: the encoding's own criterion (graze-tolerant for splines); default: strict
+    success = bool(prob.success(res.x_array[None])[0]) if as_printed else m.collisions == 0
     optimum, method = float("nan"), ""
     if with_optimum:
         ex = exact_optimum(scenario, exact_enc)
