@@ -119,3 +119,29 @@ def test_summary_names_the_pipeline_and_its_stages(capsys) -> None:
     assert main(argv) == 0
     out = capsys.readouterr().out
     assert "as printed" in out and "\nrepair" not in out and "\npolish" not in out
+
+
+def test_free_space_mesh_locates_points_and_outline_crossings() -> None:
+    sc = load_scenario("circles-1")
+    fs = free_space_mesh(sc)
+    centres = sc.obstacles.circles[:, :2]
+    tri = fs.locate(np.vstack([sc.start, sc.goal, centres]))
+    assert np.all(tri[:2] >= 0) and np.all(tri[2:] == -1)
+    # the straight line crosses circles; the exact path's corners only touch outlines
+    sc4 = load_scenario("map20-4")
+    fs4 = free_space_mesh(sc4)
+    assert fs4.crosses_outline(sc4.start[None], sc4.goal[None])[0]
+    ex = exact_optimum(sc4, "segments").points_array
+    assert not fs4.crosses_outline(ex[:-1], ex[1:]).any()
+
+
+def test_pinch_points_are_blocked_and_the_default_avoids_them() -> None:
+    """grid20 has cells touching only at a corner: no path may squeeze through there."""
+    sc = load_scenario("grid20")
+    fs = free_space_mesh(sc)
+    pinch = sc.world.pinch_points()
+    assert len(pinch) == fs.blocked.sum() > 0
+    assert np.allclose(np.sort(fs.mesh.nodes[fs.blocked], axis=0), np.sort(pinch, axis=0))
+    r = solve(sc, "lrsma", rng=0, with_optimum=False)
+    P = np.array(r.points)
+    assert np.min(np.linalg.norm(P[:, None] - pinch[None], axis=-1)) > 1e-6
