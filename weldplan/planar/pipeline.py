@@ -2,7 +2,7 @@
 
 The default pipeline is::
 
-    optimiser (the paper's algorithm; sma/lrsma/isma seeded along a coarse A* roadmap)
+    optimiser (the paper's algorithm; sma and lrsma seeded along a coarse A* roadmap)
       -> repair  (each colliding stretch re-routed along the free-space mesh)
       -> polish  (the path pulled taut: the shortest path inside the triangles it crosses)
 
@@ -25,8 +25,11 @@ mesh, and checked.
 Polish (ours): the shortest mesh-edge path from start to goal inside the triangles the repaired
 path meets (:meth:`FreeSpaceMesh.corridor_nodes`), pulled taut by the simple stupid funnel of
 :meth:`weldplan.planar.meshmap.TriangleMap.funnel`: the shortest path in that corridor, which is
-the taut path in the path's homotopy class when the corridor is a sleeve. Kept only if the
-check finds it collision-free and it is not longer than its input.
+the taut path in the path's homotopy class when the corridor is a sleeve. The coarse A*
+roadmap that seeded the optimiser is a second corridor, pulled taut the same way and kept only
+when strictly shorter (the note then says "roadmap's corridor": the optimiser contributed
+nothing to the final length, and the summary shows it). A taut path is kept only if the check
+finds it collision-free and it is not longer than its input.
 
 Paper 002's B-spline smoothing (eq. 14) is not applied: a smoothing of a path taut against
 obstacle corners cuts those corners, so it would collide by construction.
