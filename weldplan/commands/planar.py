@@ -113,13 +113,15 @@ def run(args: argparse.Namespace) -> int:
     if args.plot:
         from weldplan.viz.planar import plot_paths
 
-        ex = exact_optimum(scenario, r.encoding)
+        # the default pipeline's path is any-angle: its optimum is the any-angle one
+        ex = exact_optimum(scenario, r.encoding if r.pipeline == "as-printed" else "segments")
+        what = r.algorithm if r.pipeline == "as-printed" else f"{r.algorithm}+repair+polish"
         plot_paths(
             scenario,
-            {f"{r.algorithm} ({r.length:.3f})": r.points},
+            {f"{what} ({r.length:.3f})": r.points},
             args.plot,
             exact=ex.points_array,
-            title=f"{scenario.name}: {r.algorithm}, optimum {ex.length:.3f}",
+            title=f"{scenario.name}: {what}, optimum {ex.length:.3f}",
         )
     return 0
 
