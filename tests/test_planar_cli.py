@@ -92,7 +92,8 @@ def test_planar_init_problem_seeds_lrsma(capsys) -> None:
 
 @pytest.mark.slow
 def test_bench_planar_tiny(tmp_path: Path, local_search: str, monkeypatch) -> None:
-    from weldplan.bench import planar as bench
+    from weldplan.bench import planar
+    from weldplan.bench import planar_papers as bench
 
     monkeypatch.setattr(bench, "P000_ALGOS", [local_search])
     monkeypatch.setattr(bench, "P000_MAPS", ["circles-1"])
@@ -120,9 +121,29 @@ def test_bench_planar_tiny(tmp_path: Path, local_search: str, monkeypatch) -> No
         mesh_seconds=1.0,
         data=None,
     )
-    assert bench.run(args) == 0
+    assert planar.run(args) == 0
     md = (tmp_path / "planar.md").read_text()
     assert "Paper 000 Table 3" in md and "Paper 003" in md and "Paper 001" in md
     assert "| circles-1 | 28.884 |" in md
     pngs = sorted(p.name for p in tmp_path.glob("*.png"))
     assert "p000-circles-1-paths.png" in pngs and "p003-map20-2-convergence.png" in pngs
+    # the default pipeline beside the papers' algorithms: a row in 000 and 001, a column in 003
+    assert "| circles-1 | 28.884 | 28.889 | DEFAULT |" in md and "| grid20 |" in md
+    assert "| DEFAULT |" in md.split("Paper 001")[1]
+    assert "| Default |" in md.split("Paper 003")[1].splitlines()[4]
+
+
+@pytest.mark.slow
+def test_bench_planar_defaults_protocol(tmp_path: Path, monkeypatch) -> None:
+    from weldplan.bench import planar
+    from weldplan.planar import scenarios
+
+    monkeypatch.setattr(scenarios, "available_scenarios", lambda: ["map20-4"])
+    args = argparse.Namespace(out=str(tmp_path), protocols="defaults", runs_defaults=1, jobs=1)
+    assert planar.run(args) == 0
+    md = (tmp_path / "planar.md").read_text()
+    row = next(x for x in md.splitlines() if x.startswith("| map20-4 |"))
+    cells = [c.strip() for c in row.strip("|").split("|")]
+    assert cells[1] == "45.736"  # the exact any-angle optimum
+    assert cells[2] == "+0.00 %" and cells[4] == "0"  # default: optimal, no collision
+    assert cells[10] == "1"  # as printed, the segment encoding collides here

@@ -210,7 +210,9 @@ def test_k1_matches_single_best_parapa_and_a_starved_budget_does_worse() -> None
     multi, single, starved = [], [], []
     for seed in range(3):
         r = plan_multimodal(sc, 1, rng=seed, with_optimum=False, **RUN)
-        s = solve(sc, "parapa", pop_size=4 * 30, max_iter=80, rng=seed, with_optimum=False)
+        s = solve(
+            sc, "parapa", pop_size=120, max_iter=80, rng=seed, with_optimum=False, as_printed=True
+        )
         t = plan_multimodal(sc, 1, rng=seed, with_optimum=False, iterations=3, pop_per_swarm=30)
         multi.append(r.lengths[0] if r.success[0] else np.inf)
         single.append(s.length if s.success else np.inf)

@@ -71,6 +71,80 @@ class PathProblem(Problem):
         P = self.decode(np.atleast_2d(np.asarray(X, dtype=np.float64)))
         return ~np.any(self.world.segments_hit(P[:, :-1], P[:, 1:]), axis=1)
 
+    def roadmap_path(self, cell: float = ROADMAP_CELL) -> FloatArray:
+        """A coarse global path ``(n, 2)``: 8-connected A* on the map rasterised at ``cell``.
+
+        A cell is free when its whole square is clear of obstacles (clearance of its centre
+        above half its diagonal); start and goal cells are forced free. Octile lengths differ
+        from Euclidean ones by up to 8 %, so this picks a corridor (a homotopy class), not
+        the any-angle optimum; it is the cheap global planner of the ``roadmap`` seeding, not
+        the exact baseline. Cached per cell size.
+        """
+        from weldplan.planar.exact import astar_grid
+
+        cache = self.__dict__.setdefault("_roadmap", {})
+        if cell in cache:
+            return cache[cell]
+        x0, y0, x1, y1 = (float(v) for v in self.scenario.bounds)
+        nx, ny = max(int(np.ceil((x1 - x0) / cell)), 1), max(int(np.ceil((y1 - y0) / cell)), 1)
+        ii, jj = np.meshgrid(np.arange(nx), np.arange(ny), indexing="ij")
+        centres = np.stack([x0 + (ii + 0.5) * cell, y0 + (jj + 0.5) * cell], axis=-1)
+        free = self.world.clearance(centres) > 0.0
+        s, g = self.scenario.start, self.scenario.goal
+        si = tuple(int(v) for v in np.clip(((s - [x0, y0]) // cell), 0, [nx - 1, ny - 1]))
+        gi = tuple(int(v) for v in np.clip(((g - [x0, y0]) // cell), 0, [nx - 1, ny - 1]))
+        free[si] = free[gi] = True
+        cells = astar_grid(free, si, gi).points_array.astype(np.int64)
+        path = np.vstack([s, centres[cells[1:-1, 0], cells[1:-1, 1]], g])
+        cache[cell] = path
+        return path
+
+    def initial_population(
+        self, rng: np.random.Generator, n: int, share: float = ROADMAP_SHARE
+    ) -> FloatArray:
+        """``n`` starting solutions ``(n, n_var)``: ``ceil(share n)`` seeded along
+        :meth:`roadmap_path`, the rest uniform in the box.
+
+        A seeded solution puts node ``k = 1..m`` at the arc-length fraction
+        ``(k + u) / (m + 1)`` of the roadmap path, ``u ~ U(-1/2, 1/2)``, plus Gaussian noise of
+        one cell, and :meth:`encode_nodes` turns the nodes into variables. Used by optimisers
+        built with ``init="problem"`` (the homotopy-aware start of the LRSMA improvement, see
+        ``weldplan bench planar``, and of the default pipeline); the faithful algorithms draw
+        uniformly. When no roadmap path exists every row is uniform.
+        """
+        from weldplan.errors import PlanningError
+
+        X = self.lower + rng.random((n, self.n_var)) * (self.upper - self.lower)
+        k = min(int(np.ceil(share * n)), n)
+        try:
+            path = self.roadmap_path()
+        except PlanningError:
+            log.warning("no roadmap path on %s; uniform initial population", self.scenario.name)
+            return X
+        if k == 0:
+            return X
+        seg = np.linalg.norm(np.diff(path, axis=0), axis=1)
+        cum = np.concatenate([[0.0], np.cumsum(seg)])
+        m = self.n_seed_nodes
+        q = (np.arange(1, m + 1) + rng.uniform(-0.5, 0.5, (k, m))) / (m + 1)
+        at = q * cum[-1]
+        nodes = np.stack([np.interp(at, cum, path[:, 0]), np.interp(at, cum, path[:, 1])], -1)
+        nodes += rng.normal(0.0, ROADMAP_CELL, nodes.shape)
+        X[:k] = np.clip(self.encode_nodes(nodes, path, rng), self.lower, self.upper)
+        return X
+
+    @property
+    def n_seed_nodes(self) -> int:
+        """Path nodes a seeded solution places (:meth:`initial_population`)."""
+        raise NotImplementedError
+
+    def encode_nodes(
+        self, nodes: FloatArray, path: FloatArray, rng: np.random.Generator
+    ) -> FloatArray:
+        """Variables ``(k, n_var)`` of solutions through nodes ``(k, m, 2)`` placed along the
+        roadmap ``path (p, 2)`` (default: the nodes' coordinates; ``rng`` unused)."""
+        return nodes.reshape(len(nodes), -1)
+
 
 class SplinePathProblem(PathProblem):
     """Paper 000 sec. 4.4: cubic spline through m nodes, ``S = eta1 f1 + eta2 f2`` (eq. 10).
@@ -109,6 +183,10 @@ class SplinePathProblem(PathProblem):
         self.eta1 = float(eta1)
         self.eta2 = float(eta2)
         self.graze_tol = float(graze_tol)
+
+    @property
+    def n_seed_nodes(self) -> int:
+        return self.n_nodes
 
     def decode(self, X: ArrayLike) -> FloatArray:
         X = np.atleast_2d(np.asarray(X, dtype=np.float64))
@@ -153,67 +231,6 @@ class SplinePathProblem(PathProblem):
     def strict_success(self, X: ArrayLike) -> NDArray[np.bool_]:
         """No segment of the sampled polyline enters an obstacle (exact)."""
         return super().success(X)
-
-    def roadmap_path(self, cell: float = ROADMAP_CELL) -> FloatArray:
-        """A coarse global path ``(n, 2)``: 8-connected A* on the map rasterised at ``cell``.
-
-        A cell is free when its whole square is clear of obstacles (clearance of its centre
-        above half its diagonal); start and goal cells are forced free. Octile lengths differ
-        from Euclidean ones by up to 8 %, so this picks a corridor (a homotopy class), not
-        the any-angle optimum; it is the cheap global planner of the ``roadmap`` seeding, not
-        the exact baseline. Cached per cell size.
-        """
-        from weldplan.planar.exact import astar_grid
-
-        cache = self.__dict__.setdefault("_roadmap", {})
-        if cell in cache:
-            return cache[cell]
-        x0, y0, x1, y1 = (float(v) for v in self.scenario.bounds)
-        nx, ny = max(int(np.ceil((x1 - x0) / cell)), 1), max(int(np.ceil((y1 - y0) / cell)), 1)
-        ii, jj = np.meshgrid(np.arange(nx), np.arange(ny), indexing="ij")
-        centres = np.stack([x0 + (ii + 0.5) * cell, y0 + (jj + 0.5) * cell], axis=-1)
-        free = self.world.clearance(centres) > 0.0
-        s, g = self.scenario.start, self.scenario.goal
-        si = tuple(int(v) for v in np.clip(((s - [x0, y0]) // cell), 0, [nx - 1, ny - 1]))
-        gi = tuple(int(v) for v in np.clip(((g - [x0, y0]) // cell), 0, [nx - 1, ny - 1]))
-        free[si] = free[gi] = True
-        cells = astar_grid(free, si, gi).points_array.astype(np.int64)
-        path = np.vstack([s, centres[cells[1:-1, 0], cells[1:-1, 1]], g])
-        cache[cell] = path
-        return path
-
-    def initial_population(
-        self, rng: np.random.Generator, n: int, share: float = ROADMAP_SHARE
-    ) -> FloatArray:
-        """``n`` starting solutions ``(n, n_var)``: ``ceil(share n)`` seeded along
-        :meth:`roadmap_path`, the rest uniform in the box.
-
-        A seeded solution puts node ``k = 1..m`` at the arc-length fraction
-        ``(k + u) / (m + 1)`` of the roadmap path, ``u ~ U(-1/2, 1/2)``, plus Gaussian noise of
-        one cell. Used by optimisers built with ``init="problem"`` (the homotopy-aware start
-        of the LRSMA improvement, see ``weldplan bench planar``); the faithful algorithms draw
-        uniformly. When no roadmap path exists every row is uniform.
-        """
-        from weldplan.errors import PlanningError
-
-        X = self.lower + rng.random((n, self.n_var)) * (self.upper - self.lower)
-        k = min(int(np.ceil(share * n)), n)
-        try:
-            path = self.roadmap_path()
-        except PlanningError:
-            log.warning("no roadmap path on %s; uniform initial population", self.scenario.name)
-            return X
-        if k == 0:
-            return X
-        seg = np.linalg.norm(np.diff(path, axis=0), axis=1)
-        cum = np.concatenate([[0.0], np.cumsum(seg)])
-        m = self.n_nodes
-        q = (np.arange(1, m + 1) + rng.uniform(-0.5, 0.5, (k, m))) / (m + 1)
-        at = q * cum[-1]
-        nodes = np.stack([np.interp(at, cum, path[:, 0]), np.interp(at, cum, path[:, 1])], -1)
-        nodes += rng.normal(0.0, ROADMAP_CELL, nodes.shape)
-        X[:k] = np.clip(nodes.reshape(k, -1), self.lower, self.upper)
-        return X
 
 
 def line_bounds(
@@ -311,6 +328,32 @@ class SegmentPathProblem(PathProblem):
         b = scenario.bounds
         self.offset = self.n_segments * float(np.hypot(b[2] - b[0], b[3] - b[1]))
 
+    @property
+    def n_seed_nodes(self) -> int:
+        return self.n_nodes
+
+    def encode_nodes(
+        self, nodes: FloatArray, path: FloatArray, rng: np.random.Generator
+    ) -> FloatArray:
+        """Rotated frame: node i's offset is where the roadmap first crosses ``L_i``, plus
+        Gaussian noise of one roadmap cell (the arc-length nodes are not on the ``L_i``);
+        original frame: the nodes themselves."""
+        if self.frame != "rotated":
+            return nodes.reshape(len(nodes), -1)
+        s = self.scenario.start
+        xp, yp = (path - s) @ self.axis, (path - s) @ self.normal
+        c = (self.base - s) @ self.axis  # (n,) positions of the L_i on x'
+        a, b = xp[None, :-1] - c[:, None], xp[None, 1:] - c[:, None]  # (n, p - 1)
+        cross = (a * b <= 0.0) & (a != b)
+        j = np.argmax(cross, axis=1)
+        t = np.clip(
+            -a[np.arange(len(c)), j] / np.where(cross.any(1), (b - a)[np.arange(len(c)), j], 1.0),
+            0,
+            1,
+        )
+        off = np.where(cross.any(1), yp[j] + t * (yp[j + 1] - yp[j]), 0.0)
+        return off[None] + rng.normal(0.0, ROADMAP_CELL, (len(nodes), self.n_nodes))
+
     def decode(self, X: ArrayLike) -> FloatArray:
         X = np.atleast_2d(np.asarray(X, dtype=np.float64))
         P = X.shape[0]
@@ -373,6 +416,17 @@ class GridPathProblem(PathProblem):
         self.s_cell = grid.cell_of(scenario.start)
         self.g_cell = grid.cell_of(scenario.goal)
         self.penalty = float(occ.size if penalty is None else penalty)
+
+    @property
+    def n_seed_nodes(self) -> int:
+        return self.n_waypoints
+
+    def encode_nodes(
+        self, nodes: FloatArray, path: FloatArray, rng: np.random.Generator
+    ) -> FloatArray:
+        """Cell coordinates (fractional) of the nodes."""
+        ij = (nodes - np.asarray(self.grid.origin)) / self.grid.cell - 0.5
+        return ij.reshape(len(nodes), -1)
 
     def waypoints(self, X: ArrayLike) -> NDArray[np.int64]:
         """Waypoint cells ``(P, m + 2, 2)``, start and goal included."""
