@@ -1,8 +1,10 @@
 """What ``weldplan plan`` and ``weldplan demo`` share: options, the run, the summary table.
 
-The run renders every output in memory first and writes the files only after the route passed
-the independent verification; each file is written atomically. A run that fails, at any stage,
-leaves existing output files exactly as they were.
+Every output path is checked before any work (:func:`weldplan.io.outputset.check_outputs`); the
+run renders every output in memory, and writes the files only after the route passed the
+independent verification, as one set (:func:`weldplan.io.outputset.write_outputs`: temporaries,
+then renames, rolled back on failure). A run that fails, at any stage, leaves existing output files
+exactly as they were.
 """
 
 from __future__ import annotations
@@ -125,15 +127,13 @@ def _outputs(args: argparse.Namespace) -> dict[str, Path]:
         raise WeldplanError("--post-file needs --post rapid|krl")
     seen: dict[Path, str] = {}
     for kind, path in out.items():
-        folder = path.parent if str(path.parent) else Path(".")
-        if not folder.is_dir():
-            raise WeldplanError(f"{path}: folder {folder} does not exist")
-        if path.is_dir():
-            raise WeldplanError(f"{path}: is a folder, not a file")
         key = path.resolve()
         if key in seen:
             raise WeldplanError(f"{path}: given for both {seen[key]} and {kind}")
         seen[key] = kind
+    from weldplan.io.outputset import check_outputs
+
+    check_outputs(out)
     return out
 
 
@@ -197,10 +197,9 @@ def run_planning(
             texts["html"] = static_html(route, cell.part)
         if "post" in outputs:
             texts["post"] = render_post(route, args.post)
-        from weldplan.io.export import write_text_atomic
+        from weldplan.io.outputset import write_outputs
 
-        for kind, path in outputs.items():
-            write_text_atomic(path, texts[kind])
+        write_outputs({path: texts[kind] for kind, path in outputs.items()})
     times["export"] = st.seconds
     times["total"] = time.perf_counter() - t_all
     if not args.quiet:
