@@ -1,0 +1,187 @@
+"""How much memory a planning run will take, estimated before the heavy work starts.
+
+Two things grow without bound with the settings and the input:
+
+* the obstacle grid: one voxel per ``pitch`` cube of the joints' bounding box grown by ``margin``
+  on every side (:func:`weldplan.geometry.grid.grid_region`). Per voxel the run holds the
+  ``occupied`` booleans and their negation ``free`` (1 byte each, :class:`ObstacleGrid`), the
+  connected-component labels of the free voxels that the local planner computes once
+  (``scipy.ndimage.label``: int32, 4 bytes), plus the temporaries of the coarse-to-fine build;
+  :data:`GRID_BYTES_PER_VOXEL` is the measured slope of peak memory against voxels
+  (``scripts/calibrate_sizing.py``; docs/sizing.md);
+* the pair tables of :mod:`weldplan.weld.pairs`: the ``(n, n)`` pair numbers, cost matrix and its
+  copies, the upper-triangle index pairs, seeds and flags. They are ``(n, n)`` even with
+  candidate pairs; without candidates the straight check of every pair adds its segment end
+  points (``(n (n - 1) / 2, 3)`` twice, float64) at once. :data:`PAIR_BYTES` and
+  :data:`PAIR_BYTES_CANDIDATES` are bytes per ``n^2``, measured likewise.
+
+:func:`check_size` refuses, in one line that names the option to change, a run whose estimate
+exceeds the memory limit (``--memory-limit`` / ``PlanConfig.memory_limit``, GB; default
+:func:`default_memory_limit`).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from weldplan.errors import ConfigError
+
+log = logging.getLogger(__name__)
+
+#: bytes of peak memory per voxel of the region of interest (measured: docs/sizing.md)
+GRID_BYTES_PER_VOXEL = 12.0
+#: bytes of peak memory besides the grid and the pairs: interpreter, numpy/scipy/open3d/fcl, the
+#: mesh and its BVH, one local search (capped at 2 M voxels by ``LocalParams``) (measured)
+BASE_BYTES = 600 * 2**20
+#: bytes per n^2 of the pair tables when every pair is checked straight up front (measured)
+PAIR_BYTES = 120.0
+#: bytes per n^2 with candidate pairs (``--candidates``): the (n, n) tables only (measured)
+PAIR_BYTES_CANDIDATES = 80.0
+#: share of the available memory a run may take by default
+DEFAULT_MEMORY_FRACTION = 0.8
+
+
+@dataclass(frozen=True)
+class SizeEstimate:
+    """What a run will hold at its peak (bytes; ``voxels`` may be ``inf`` for absurd inputs)."""
+
+    voxels: float
+    grid_bytes: float
+    pair_bytes: float
+    base_bytes: float
+
+    @property
+    def total_bytes(self) -> float:
+        return self.grid_bytes + self.pair_bytes + self.base_bytes
+
+
+def available_memory() -> float | None:
+    """Bytes of memory available to a new process (``MemAvailable`` of /proc/meminfo, else the
+    free physical pages); None when the system does not say."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return float(line.split()[1]) * 1024.0
+    except OSError:
+        pass
+    try:
+        return float(os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
+    except (ValueError, OSError, AttributeError):  # pragma: no cover - not POSIX
+        return None
+
+
+def default_memory_limit() -> float | None:
+    """GB: :data:`DEFAULT_MEMORY_FRACTION` of :func:`available_memory` (None: unknown)."""
+    avail = available_memory()
+    return None if avail is None else DEFAULT_MEMORY_FRACTION * avail / 1e9
+
+
+def grid_voxels(points: ArrayLike, pitch: float, margin: float) -> float:
+    """Voxels of the grid over ``points``' bounding box grown by ``margin`` (mm), as
+    :func:`~weldplan.geometry.grid.grid_region` lays it out; computed in floating point, so a
+    1e300 mm coordinate gives ``inf`` instead of an overflow."""
+    P = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    if len(P) == 0:
+        return 0.0
+    with np.errstate(over="ignore", invalid="ignore"):
+        lo = P.min(axis=0) - margin
+        hi = P.max(axis=0) + margin
+        per_axis = np.floor(hi / pitch + 1e-9) - np.ceil(lo / pitch - 1e-9) + 1.0
+    if not np.all(np.isfinite(per_axis)):
+        return math.inf
+    return float(np.prod(np.maximum(per_axis, 1.0)))
+
+
+def estimate(
+    points: ArrayLike | None, pitch: float, margin: float, n_joints: int, candidates: int | None
+) -> SizeEstimate:
+    """The peak-memory estimate of a run (module docstring); ``points`` None: no grid."""
+    voxels = 0.0 if points is None else grid_voxels(points, pitch, margin)
+    per_pair = PAIR_BYTES if candidates is None else PAIR_BYTES_CANDIDATES
+    return SizeEstimate(
+        voxels=voxels,
+        grid_bytes=voxels * GRID_BYTES_PER_VOXEL,
+        pair_bytes=float(n_joints) ** 2 * per_pair,
+        base_bytes=float(BASE_BYTES),
+    )
+
+
+def _gb(b: float) -> str:
+    return "an unbounded amount" if not math.isfinite(b) else f"{b / 1e9:.1f} GB"
+
+
+def check_size(
+    points: ArrayLike | None,
+    *,
+    pitch: float,
+    margin: float,
+    n_joints: int,
+    candidates: int | None,
+    memory_limit: float | None = None,
+    cli: bool = False,
+) -> SizeEstimate:
+    """Refuse a run whose estimate exceeds ``memory_limit`` GB (None: the default limit).
+
+    Raises :class:`~weldplan.errors.ConfigError` with one line naming what to change: the
+    margin or the pitch when the grid dominates, ``candidates`` when the pair checks do and
+    candidates would fit, else the number of joints. ``cli`` spells the options as flags.
+    """
+    est = estimate(points, pitch, margin, n_joints, candidates)
+    limit = default_memory_limit() if memory_limit is None else float(memory_limit)
+    log.info(
+        "size estimate: %.3g voxels (%s), %d joints (%s), limit %s",
+        est.voxels,
+        _gb(est.grid_bytes),
+        n_joints,
+        _gb(est.pair_bytes),
+        "none" if limit is None else f"{limit:.1f} GB",
+    )
+    if limit is None or est.total_bytes <= limit * 1e9:
+        return est
+    opt = (lambda s: "--" + s.replace("_", "-")) if cli else (lambda s: s)
+    what = (
+        f"needs about {_gb(est.total_bytes)}, over the {limit:.1f} GB limit ({opt('memory_limit')})"
+    )
+    if est.grid_bytes >= est.pair_bytes:
+        vox = "inf" if not math.isfinite(est.voxels) else f"{est.voxels:,.0f}"
+        raise ConfigError(
+            f"the grid of {vox} voxels (joints' bounding box + {margin:g} mm margin at "
+            f"{pitch:g} mm pitch) {what}: use a smaller {opt('margin')} or a larger "
+            f"{opt('pitch')}",
+            field="margin",
+        )
+    with_cand = estimate(points, pitch, margin, n_joints, 6)
+    if candidates is None and with_cand.total_bytes <= limit * 1e9:
+        raise ConfigError(
+            f"checking all {n_joints * (n_joints - 1) // 2:,} pairs of {n_joints:,} joints {what}: "
+            f"use {opt('candidates')} K (each joint's K nearest pairs up front, e.g. 6)",
+            field="candidates",
+        )
+    raise ConfigError(
+        f"the pair tables of {n_joints:,} joints {what}, even with {opt('candidates')}: split "
+        "the joints into several runs",
+        field="joints",
+    )
+
+
+def check_pair_work(n_joints: int, candidates: int | None, memory_limit: float | None) -> None:
+    """The pair part of :func:`check_size` (the grid is already built when
+    :func:`~weldplan.weld.pipeline.plan_route` runs)."""
+    est = estimate(None, 1.0, 0.0, n_joints, candidates)
+    limit = default_memory_limit() if memory_limit is None else float(memory_limit)
+    if limit is not None and est.pair_bytes > limit * 1e9:
+        check_size(
+            None,
+            pitch=1.0,
+            margin=0.0,
+            n_joints=n_joints,
+            candidates=candidates,
+            memory_limit=memory_limit,
+        )
