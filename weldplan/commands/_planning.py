@@ -59,7 +59,9 @@ def add_planning_arguments(p: argparse.ArgumentParser, *, default_output: str | 
         default=10,
         help="SO-ACO iterations N = ants M (default 10; the paper also runs 50)",
     )
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument(
+        "--seed", type=seed_type, default=0, help="random seed, an integer >= 0 (default 0)"
+    )
     p.add_argument("--jobs", type=int, default=1, help="processes planning local paths (default 1)")
     p.add_argument(
         "--dask",
@@ -80,7 +82,46 @@ def add_planning_arguments(p: argparse.ArgumentParser, *, default_output: str | 
         type=float,
         help="with --candidates: neighbours farther than this are planned only on demand",
     )
+    p.add_argument(
+        "--memory-limit",
+        metavar="GB",
+        type=positive_gb,
+        help="refuse up front a run whose estimated peak memory (grid + pair tables) exceeds "
+        "this (default: 80 %% of the memory available at start)",
+    )
+    p.add_argument(
+        "--skip-unreachable",
+        action="store_true",
+        help="plan the largest group of joints that reach each other and list the others, with "
+        "the reason, in the summary and the route JSON (stats.skipped); exit code 3",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress bars and no summary on stdout")
+
+
+def seed_type(text: str) -> int:
+    """argparse type: an integer >= 0 (what numpy's ``default_rng`` takes)."""
+    from weldplan.errors import ConfigError
+    from weldplan.weld.validate import seed
+
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    try:
+        return seed(value)
+    except ConfigError as exc:
+        raise argparse.ArgumentTypeError(exc.message) from None
+
+
+def positive_gb(text: str) -> float:
+    """argparse type: a positive, finite number of GB."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (0 < value < float("inf")):
+        raise argparse.ArgumentTypeError(f"must be a positive number of GB, got {text!r}")
+    return value
 
 
 def _post_names() -> list[str]:
@@ -105,6 +146,8 @@ def config_from_args(args: argparse.Namespace) -> Any:
         aco={"n_iterations": args.aco, "n_ants": args.aco},
         candidates=getattr(args, "candidates", None),
         candidate_radius=getattr(args, "candidate_radius", None),
+        skip_unreachable=bool(getattr(args, "skip_unreachable", False)),
+        memory_limit=getattr(args, "memory_limit", None),
     )
 
 
@@ -144,10 +187,13 @@ def run_planning(
     title: str,
     note: str | None = None,
     show_cell: bool = False,
+    joint_points: Callable[[], Any] | None = None,
 ) -> int:
     """Build the cell, plan, verify, write; print the summary. Returns the exit code.
 
     ``show_cell`` prints the cell's summary (part, grid, virtual joints) before the route's.
+    ``joint_points()`` gives the joints' ``(n, 3)`` positions (mm) cheaply, before the cell is
+    built, for the size check (:mod:`weldplan.weld.sizing`).
     """
     from weldplan.io.export import render_post, to_csv_text
     from weldplan.viz.viewer import static_html
@@ -156,6 +202,19 @@ def run_planning(
 
     outputs = _outputs(args)
     config = config_from_args(args)
+    if joint_points is not None:
+        from weldplan.weld.sizing import check_size
+
+        xyz = joint_points()
+        check_size(
+            xyz,
+            pitch=config.pitch,
+            margin=config.margin,
+            n_joints=len(xyz),
+            candidates=config.candidates,
+            memory_limit=config.memory_limit,
+            cli=True,
+        )
     bars = ProgressBars(enabled=False if args.quiet else None)
     t_all = time.perf_counter()
     times: dict[str, float] = {}
@@ -207,6 +266,16 @@ def run_planning(
             print(cell.format_summary())
             print()
         print(summary_table(route, times, outputs, title=title, report=report, note=note))
+    skipped = route.stats.get("skipped") or []
+    if skipped:
+        from weldplan.errors import EXIT_PARTIAL
+
+        print(
+            f"weldplan: partial route: {len(skipped)} joint(s) skipped "
+            f"({', '.join(s['id'] for s in skipped[:10])}{', ...' if len(skipped) > 10 else ''})",
+            file=sys.stderr,
+        )
+        return EXIT_PARTIAL
     return 0
 
 
@@ -233,6 +302,16 @@ def _gaps(route: Any) -> str:
     return "; ".join(parts)
 
 
+def _skipped_rows(route: Any) -> list[tuple[str, str]]:
+    """One row per joint left out by ``--skip-unreachable``."""
+    skipped = route.stats.get("skipped") or []
+    if not skipped:
+        return []
+    rows = [("skipped", f"{len(skipped)} joint(s), not in the route (exit code 3)")]
+    rows += [(f"  {s['id']}", s["reason"]) for s in skipped]
+    return rows
+
+
 def summary_table(
     route: Any,
     times: dict[str, float],
@@ -245,7 +324,15 @@ def summary_table(
     """The table printed at the end of a run."""
     s = route.stats
     rows = [
-        ("joints", f"{len(route.joint_ids)}"),
+        (
+            "joints",
+            f"{len(route.joint_ids)}"
+            + (
+                f" ({len(route.order)} in the route)"
+                if len(route.order) < len(route.joint_ids)
+                else ""
+            ),
+        ),
         ("pairs", f"{s['pairs']} ({s['pairs_straight']} straight, {s['pairs_blocked']} blocked)"),
         (
             "pairs planned",
@@ -263,6 +350,7 @@ def summary_table(
         ("lower bound", f"{route.lower_bound:.2f} mm ({route.lower_bound_method})"),
         ("gap", _gaps(route)),
         ("order", "-".join(route.order)),
+        *_skipped_rows(route),
         ("verified", report.describe()),
         (
             "time",

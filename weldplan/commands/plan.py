@@ -69,4 +69,14 @@ def run(args: argparse.Namespace) -> int:
             approach_cone=args.approach_cone,
         )
 
-    return run_planning(args, make_cell, title=f"weldplan plan {args.mesh} {args.joints}")
+    def joint_points():
+        from weldplan.io.joints import read_joints
+
+        return read_joints(args.joints, units=args.units).xyz
+
+    return run_planning(
+        args,
+        make_cell,
+        title=f"weldplan plan {args.mesh} {args.joints}",
+        joint_points=joint_points,
+    )

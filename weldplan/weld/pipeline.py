@@ -351,15 +351,16 @@ def plan_route(
     config = PlanConfig() if config is None else config
     check_plan_arguments(cell, config, rng, executor, progress)
     check_pair_work(len(cell.joints.ids), config.candidates, config.memory_limit)
-    gen = as_generator(rng)
     seed = seed_of(rng)
     report = progress or (lambda stage, done, total: None)
     if not config.skip_unreachable:
-        return _plan(cell, config, gen, seed, executor, report)
+        return _plan(cell, config, as_generator(rng), seed, executor, report)
     subset = None
     skipped: list[dict[str, str]] = []
     while True:  # each pass leaves out at least one joint, so this ends
         try:
+            # a seed starts each pass afresh: the route is the one of the kept joints alone
+            gen = as_generator(rng)
             route = _plan(cell, config, gen, seed, executor, report, subset)
         except UnreachableJointsError as exc:
             subset, more = reachable_subset(cell, subset, exc, float(cell.clearance))
