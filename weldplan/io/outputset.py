@@ -69,31 +69,40 @@ def check_outputs(paths: Mapping[str, Path]) -> None:
     probed: set[Path] = set()
     for kind, path in paths.items():
         path = Path(path)
-        folder = _folder(path)
-        if not folder.is_dir():
-            raise InputError(f"folder {folder} does not exist", path=path, field=kind)
-        if path.is_dir():
-            raise InputError("is a folder, not a file", path=path, field=kind)
-        if path.exists() and _write_protected(path):
-            raise InputError(
-                "the file exists and is write-protected (remove it or make it writable)",
-                path=path,
-                field=kind,
-            )
-        key = folder.resolve()
-        if key in probed:
-            continue
-        if _write_protected(folder):
-            raise InputError(f"folder {folder} is not writable", path=path, field=kind)
         try:
-            fd, probe = tempfile.mkstemp(prefix=TEMP_PREFIX, suffix=".probe", dir=folder)
-        except OSError as exc:
+            _check_one(kind, path, probed)
+        except OSError as exc:  # a name too long, a path through a file, ...
             raise InputError(
-                f"folder {folder} is not writable ({exc.strerror})", path=path, field=kind
+                f"cannot be written ({exc.strerror or exc})", path=path, field=kind
             ) from exc
-        os.close(fd)
-        os.unlink(probe)
-        probed.add(key)
+
+
+def _check_one(kind: str, path: Path, probed: set[Path]) -> None:
+    folder = _folder(path)
+    if not folder.is_dir():
+        raise InputError(f"folder {folder} does not exist", path=path, field=kind)
+    if path.is_dir():
+        raise InputError("is a folder, not a file", path=path, field=kind)
+    if path.exists() and _write_protected(path):
+        raise InputError(
+            "the file exists and is write-protected (remove it or make it writable)",
+            path=path,
+            field=kind,
+        )
+    key = folder.resolve()
+    if key in probed:
+        return
+    if _write_protected(folder):
+        raise InputError(f"folder {folder} is not writable", path=path, field=kind)
+    try:
+        fd, probe = tempfile.mkstemp(prefix=TEMP_PREFIX, suffix=".probe", dir=folder)
+    except OSError as exc:
+        raise InputError(
+            f"folder {folder} is not writable ({exc.strerror})", path=path, field=kind
+        ) from exc
+    os.close(fd)
+    os.unlink(probe)
+    probed.add(key)
 
 
 def _new_mode(path: Path) -> int:
