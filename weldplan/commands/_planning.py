@@ -151,6 +151,14 @@ def config_from_args(args: argparse.Namespace) -> Any:
     )
 
 
+def _local_workers(args: argparse.Namespace) -> int:
+    """Worker processes on this machine, each holding the cell (1: planning in this process)."""
+    dask = getattr(args, "dask", None)
+    if dask:
+        return max(2, args.jobs) if dask == "local" else 1
+    return args.jobs
+
+
 def _outputs(args: argparse.Namespace) -> dict[str, Path]:
     """Every file the run will write, checked before any work is done."""
     from weldplan.io.export import POSTS
@@ -214,6 +222,7 @@ def run_planning(
             candidates=config.candidates,
             memory_limit=config.memory_limit,
             cli=True,
+            workers=_local_workers(args),
         )
     bars = ProgressBars(enabled=False if args.quiet else None)
     t_all = time.perf_counter()

@@ -70,9 +70,18 @@ def run(args: argparse.Namespace) -> int:
         )
 
     def joint_points():
+        import logging
+
         from weldplan.io.joints import read_joints
 
-        return read_joints(args.joints, units=args.units).xyz
+        # read again by load_cell: its warnings (ignored columns, ...) are said there, once
+        logger = logging.getLogger("weldplan.io.joints")
+        level = logger.level
+        logger.setLevel(logging.ERROR)
+        try:
+            return read_joints(args.joints, units=args.units).xyz
+        finally:
+            logger.setLevel(level)
 
     return run_planning(
         args,

@@ -100,16 +100,26 @@ def grid_voxels(points: ArrayLike, pitch: float, margin: float) -> float:
 
 
 def estimate(
-    points: ArrayLike | None, pitch: float, margin: float, n_joints: int, candidates: int | None
+    points: ArrayLike | None,
+    pitch: float,
+    margin: float,
+    n_joints: int,
+    candidates: int | None,
+    workers: int = 1,
 ) -> SizeEstimate:
-    """The peak-memory estimate of a run (module docstring); ``points`` None: no grid."""
+    """The peak-memory estimate of a run (module docstring); ``points`` None: no grid.
+
+    ``workers`` > 1: local worker processes (``--jobs``, ``--dask local``), each holding the
+    cell and running searches, besides this process (counted as one more holder of the grid).
+    """
     voxels = 0.0 if points is None else grid_voxels(points, pitch, margin)
     per_pair = PAIR_BYTES if candidates is None else PAIR_BYTES_CANDIDATES
+    holders = 1 if workers <= 1 else workers + 1
     return SizeEstimate(
         voxels=voxels,
-        grid_bytes=voxels * GRID_BYTES_PER_VOXEL,
+        grid_bytes=voxels * GRID_BYTES_PER_VOXEL * holders,
         pair_bytes=float(n_joints) ** 2 * per_pair,
-        base_bytes=float(BASE_BYTES),
+        base_bytes=float(BASE_BYTES) * holders,
     )
 
 
@@ -126,14 +136,16 @@ def check_size(
     candidates: int | None,
     memory_limit: float | None = None,
     cli: bool = False,
+    workers: int = 1,
 ) -> SizeEstimate:
     """Refuse a run whose estimate exceeds ``memory_limit`` GB (None: the default limit).
 
     Raises :class:`~weldplan.errors.ConfigError` with one line naming what to change: the
     margin or the pitch when the grid dominates, ``candidates`` when the pair checks do and
     candidates would fit, else the number of joints. ``cli`` spells the options as flags.
+    ``workers``: see :func:`estimate`.
     """
-    est = estimate(points, pitch, margin, n_joints, candidates)
+    est = estimate(points, pitch, margin, n_joints, candidates, workers)
     limit = default_memory_limit() if memory_limit is None else float(memory_limit)
     log.info(
         "size estimate: %.3g voxels (%s), %d joints (%s), limit %s",
@@ -151,13 +163,14 @@ def check_size(
     )
     if est.grid_bytes >= est.pair_bytes:
         vox = "inf" if not math.isfinite(est.voxels) else f"{est.voxels:,.0f}"
+        more = f" in each of {workers} worker processes" if workers > 1 else ""
         raise ConfigError(
             f"the grid of {vox} voxels (joints' bounding box + {margin:g} mm margin at "
-            f"{pitch:g} mm pitch) {what}: use a smaller {opt('margin')} or a larger "
-            f"{opt('pitch')}",
+            f"{pitch:g} mm pitch{more}) {what}: use a smaller {opt('margin')} or a larger "
+            f"{opt('pitch')}" + (f" or fewer {opt('jobs')}" if workers > 1 else ""),
             field="margin",
         )
-    with_cand = estimate(points, pitch, margin, n_joints, 6)
+    with_cand = estimate(points, pitch, margin, n_joints, 6, workers)
     if candidates is None and with_cand.total_bytes <= limit * 1e9:
         raise ConfigError(
             f"checking all {n_joints * (n_joints - 1) // 2:,} pairs of {n_joints:,} joints {what}: "
