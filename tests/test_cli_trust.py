@@ -156,6 +156,43 @@ def test_full_disk_at_the_write_layer_is_one_line_exit_1(files, capsys, monkeypa
     _unchanged(old)
 
 
+@pytest.fixture
+def tiny_disk(tmp_path):
+    """A 64 KiB tmpfs (needs root and the right to mount; skipped otherwise)."""
+    import subprocess
+
+    mnt = tmp_path / "disk"
+    mnt.mkdir()
+    r = subprocess.run(
+        ["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(mnt)], capture_output=True
+    )
+    if r.returncode != 0:
+        pytest.skip(f"cannot mount a tmpfs here: {r.stderr.decode().strip()}")
+    try:
+        yield mnt
+    finally:
+        subprocess.run(["umount", str(mnt)], check=True)
+
+
+def test_a_real_full_disk_is_one_line_exit_1(files, tiny_disk, capsys):
+    """The outputs go to a full 64 KiB tmpfs that holds the previous outputs."""
+    tmp, mesh, joints = files
+    old = _old_outputs(tiny_disk)
+    fd = os.open(tiny_disk / "filler", os.O_CREAT | os.O_WRONLY)
+    try:
+        while True:
+            os.write(fd, b"x" * 1024)
+    except OSError as exc:
+        assert exc.errno == errno.ENOSPC
+    finally:
+        os.close(fd)
+    rc = _rc(_plan_argv(mesh, joints, tiny_disk / "r.csv", "--json", str(tiny_disk / "r.json")))
+    assert rc == 1
+    line = _one_line(capsys)
+    assert "No space left on device" in line and "no output file was changed" in line
+    _unchanged(old)
+
+
 def test_a_bug_keeps_its_traceback(files, monkeypatch):
     """Only weldplan's errors, OSError and MemoryError become one line: a TypeError is a bug."""
     tmp, mesh, joints = files
