@@ -538,3 +538,35 @@ def test_run_error_is_exit_1():
     assert exit_code(UnreachableJointsError("x")) == 1
     assert exit_code(InputError("x")) == 2
     assert exit_code(ConfigError("x")) == 2
+
+
+def _closed_room() -> trimesh.Trimesh:
+    """Six 2 mm plates (each a closed box) enclosing a free 60 mm cube at the origin."""
+    plates = []
+    for axis in range(3):
+        for side in (-1.0, 1.0):
+            extents = np.full(3, 64.0)
+            extents[axis] = 2.0
+            plate = trimesh.creation.box(extents=extents)
+            centre = np.zeros(3)
+            centre[axis] = side * 31.0
+            plate.apply_translation(centre)
+            plates.append(plate)
+    return trimesh.util.concatenate(plates)
+
+
+def test_skip_unreachable_leaves_out_a_joint_inside_a_closed_room(tmp_path, capsys):
+    """E sits in the free interior of a closed room, the others outside under its floor."""
+    mesh = tmp_path / "room.stl"
+    _closed_room().export(mesh)
+    joints = tmp_path / "joints.csv"
+    joints.write_text("id,x,y,z\nA,0,0,-40\nC,20,0,-40\nE,0,0,-22\nD,-20,10,-40\n")
+    out, js = tmp_path / "r.csv", tmp_path / "r.json"
+    argv = ["plan", str(mesh), str(joints), "-o", str(out), "--json", str(js), "--margin", "30"]
+    assert _rc(argv) == 1
+    assert "no collision-free path from joint(s) E" in _one_line(capsys)
+    assert _rc([*argv, "--skip-unreachable", "--quiet"]) == 3
+    route = json.loads(js.read_text())
+    assert [s["id"] for s in route["stats"]["skipped"]] == ["E"]
+    assert sorted(route["order"]) == ["A", "C", "D"]
+    assert _rc(["verify", str(js), str(mesh), "--joints", str(joints)]) == 0
