@@ -352,7 +352,7 @@ def test_many_joints_are_refused_naming_candidates_or_a_split():
     assert "100,000 joints" in str(e.value)
     # a size where the candidates' (n, n) tables fit and all pairs do not
     n = int(np.sqrt(5e9 / sizing.PAIR_BYTES)) + 100
-    limit = (n**2 * sizing.PAIR_BYTES_CANDIDATES + sizing.BASE_BYTES) / 1e9 * 1.01
+    limit = sizing.estimate(None, 5, 0, n, 6).total_bytes / 1e9 * 1.01
     with pytest.raises(ConfigError, match="--candidates K"):
         sizing.check_size(
             None, pitch=5, margin=0, n_joints=n, candidates=None, memory_limit=limit, cli=True

@@ -6,9 +6,9 @@ Two things grow without bound with the settings and the input:
   on every side (:func:`weldplan.geometry.grid.grid_region`). Per voxel the run holds the
   ``occupied`` booleans and their negation ``free`` (1 byte each, :class:`ObstacleGrid`), the
   connected-component labels of the free voxels that the local planner computes once
-  (``scipy.ndimage.label``: int32, 4 bytes), plus the temporaries of the coarse-to-fine build;
-  :data:`GRID_BYTES_PER_VOXEL` is the measured slope of peak memory against voxels
-  (``scripts/calibrate_sizing.py``; docs/sizing.md);
+  (``scipy.ndimage.label``: int32, 4 bytes): 6 bytes, and :data:`GRID_BYTES_PER_VOXEL`, the
+  measured slope of peak memory against voxels, is 5.5-5.6 (``scripts/calibrate_sizing.py``;
+  docs/sizing.md);
 * the pair tables of :mod:`weldplan.weld.pairs`: the ``(n, n)`` pair numbers, cost matrix and its
   copies, the upper-triangle index pairs, seeds and flags. They are ``(n, n)`` even with
   candidate pairs; without candidates the straight check of every pair adds its segment end
@@ -34,15 +34,23 @@ from weldplan.errors import ConfigError
 
 log = logging.getLogger(__name__)
 
-#: bytes of peak memory per voxel of the region of interest (measured: docs/sizing.md)
-GRID_BYTES_PER_VOXEL = 12.0
-#: bytes of peak memory besides the grid and the pairs: interpreter, numpy/scipy/open3d/fcl, the
-#: mesh and its BVH, one local search (capped at 2 M voxels by ``LocalParams``) (measured)
-BASE_BYTES = 600 * 2**20
-#: bytes per n^2 of the pair tables when every pair is checked straight up front (measured)
-PAIR_BYTES = 120.0
-#: bytes per n^2 with candidate pairs (``--candidates``): the (n, n) tables only (measured)
-PAIR_BYTES_CANDIDATES = 80.0
+#: bytes of peak memory per voxel of the region of interest, planning included: the slope of
+#: peak RSS against voxels, 5.5 (car2 50-set, 1.5 M -> 16.7 M voxels) and 5.6 (demo, 0.9 M ->
+#: 7.7 M voxels), rounded up (docs/sizing.md)
+GRID_BYTES_PER_VOXEL = 6.0
+#: bytes of peak memory of a process besides the grid and the pairs: interpreter, numpy, scipy,
+#: open3d, python-fcl, the mesh and its BVH (measured intercept: 207-228 MiB; docs/sizing.md)
+BASE_BYTES = 240 * 2**20
+#: bytes of one local search at its cap (``LocalParams.max_search_voxels``, 2 M voxels): about
+#: 0.5 GB (docs/bench-scale.md; not re-measured here), counted once per process that searches
+SEARCH_BYTES = 512 * 2**20
+#: bytes per n^2 of the pair work when every pair is checked straight up front: the slope of peak
+#: RSS against n^2 over 300, 600, 1000 joints (737 B; docs/sizing.md); most of it is the
+#: vectorised straight check of all n (n - 1) / 2 segments at once
+PAIR_BYTES = 740.0
+#: bytes per n^2 with candidate pairs (``--candidates 6``): the (n, n) tables (slope over 300 and
+#: 600 joints: 108 B; docs/sizing.md)
+PAIR_BYTES_CANDIDATES = 110.0
 #: share of the available memory a run may take by default
 DEFAULT_MEMORY_FRACTION = 0.8
 
@@ -114,12 +122,13 @@ def estimate(
     """
     voxels = 0.0 if points is None else grid_voxels(points, pitch, margin)
     per_pair = PAIR_BYTES if candidates is None else PAIR_BYTES_CANDIDATES
-    holders = 1 if workers <= 1 else workers + 1
+    holders = 1 if workers <= 1 else workers + 1  # this process and each worker hold the cell
+    searchers = 1 if workers <= 1 else workers
     return SizeEstimate(
         voxels=voxels,
         grid_bytes=voxels * GRID_BYTES_PER_VOXEL * holders,
         pair_bytes=float(n_joints) ** 2 * per_pair,
-        base_bytes=float(BASE_BYTES) * holders,
+        base_bytes=float(BASE_BYTES) * holders + float(SEARCH_BYTES) * searchers,
     )
 
 
