@@ -115,9 +115,13 @@ def test_a_huge_coordinate_is_one_line(files, capsys):
     assert "weldplan plan: error:" in line
 
 
-def test_unreachable_dask_scheduler_is_one_line_exit_1(files, capsys):
+def test_unreachable_dask_scheduler_is_one_line_exit_1(files, capsys, monkeypatch):
     pytest.importorskip("distributed")
     tmp, mesh, joints = files
+    from weldplan.weld import cell as cell_mod
+
+    # the scheduler is reached before the cell is built
+    monkeypatch.setattr(cell_mod, "load_cell", lambda *a, **k: 1 / 0)
     # port 1 on this machine: nothing listens; the connection is refused or times out (5 s)
     rc = _rc(_plan_argv(mesh, joints, tmp / "r.csv", "--dask", "tcp://127.0.0.1:1"))
     assert rc == 1

@@ -228,18 +228,17 @@ def run_planning(
     t_all = time.perf_counter()
     times: dict[str, float] = {}
 
-    with bars.stage("cell") as st:
-        cell = make_cell()
-    times["cell"] = st.seconds
-
     with contextlib.ExitStack() as stack:
         executor = None
         dask = getattr(args, "dask", None)
-        if dask:
+        if dask:  # reach the scheduler first: a wrong address fails in seconds, not after the cell
             from weldplan.weld.parallel import dask_executor
 
             executor = stack.enter_context(dask_executor(dask, workers=max(2, args.jobs)))
-        elif args.jobs > 1:
+        with bars.stage("cell") as st:
+            cell = make_cell()
+        times["cell"] = st.seconds
+        if not dask and args.jobs > 1:
             from weldplan.weld.parallel import process_pool
 
             executor = stack.enter_context(process_pool(cell, args.jobs))
