@@ -47,6 +47,8 @@ _INPUT_ERRNOS = {
     errno.EEXIST,
 }
 
+log = logging.getLogger(__name__)
+
 #: command name -> module implementing it
 COMMANDS: dict[str, str] = {
     "bench": "weldplan.commands.bench",
@@ -102,10 +104,12 @@ def main(argv: list[str] | None = None) -> int:
         print(f"weldplan {args.command}: error: {_one_line(exc)}", file=sys.stderr)
         return exit_code(exc)
     except OSError as exc:
+        log.debug("the OS refused", exc_info=True)  # -vv shows where
         code = EXIT_INPUT if exc.errno in _INPUT_ERRNOS else EXIT_FAILURE
         print(f"weldplan {args.command}: error: {_describe_os_error(exc)}", file=sys.stderr)
         return code
     except MemoryError:
+        log.debug("out of memory", exc_info=True)  # -vv shows where
         print(
             f"weldplan {args.command}: error: out of memory; make the work smaller "
             "(--margin, --pitch, --candidates) or see --memory-limit",
