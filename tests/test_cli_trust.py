@@ -341,6 +341,13 @@ def test_huge_margin_is_refused_up_front_naming_the_option(files, capsys, monkey
     assert "--margin" in line and "--pitch" in line and "1.0 GB limit (--memory-limit)" in line
 
 
+@pytest.mark.parametrize("value", ["0", "-1", "nan", "inf", "lots"])
+def test_memory_limit_must_be_a_positive_number(files, capsys, value):
+    tmp, mesh, joints = files
+    assert _rc(_plan_argv(mesh, joints, tmp / "r.csv", "--memory-limit", value)) == 2
+    assert "--memory-limit" in _one_line(capsys)
+
+
 def test_memory_limit_that_fits_plans(files, capsys):
     tmp, mesh, joints = files
     assert _rc(_plan_argv(mesh, joints, tmp / "r.csv", "--memory-limit", "4")) == 0
@@ -574,3 +581,35 @@ def test_skip_unreachable_leaves_out_a_joint_inside_a_closed_room(tmp_path, caps
     assert [s["id"] for s in route["stats"]["skipped"]] == ["E"]
     assert sorted(route["order"]) == ["A", "C", "D"]
     assert _rc(["verify", str(js), str(mesh), "--joints", str(joints)]) == 0
+
+
+def test_skipped_joint_before_blocked_pairs_plans_the_right_pairs(tmp_path):
+    """E (first in the file) is shut in a closed room; A-B is blocked by the wall of the box
+    scene and must be planned as A-B in the cell (the kept joints' indices are shifted by the
+    skipped one), serially and through an executor: same route as the four joints alone."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from weldplan.weld.cell import load_cell
+    from weldplan.weld.pipeline import PlanConfig, plan_route
+    from weldplan.weld.verify import verify_route
+
+    room = _closed_room()
+    room.apply_translation([300.0, 0.0, 31.0])
+    mesh = tmp_path / "scene.stl"
+    trimesh.util.concatenate([box_part(), room]).export(mesh)
+    joints = tmp_path / "joints.csv"
+    joints.write_text("id,x,y,z\nE,300,0,9\n" + JOINTS_CSV.split("\n", 1)[1])
+    alone = tmp_path / "alone.csv"
+    alone.write_text(JOINTS_CSV)
+    cell = load_cell(mesh, joints, margin=50.0)
+    config = PlanConfig(skip_unreachable=True)
+    serial = plan_route(cell, config=config, rng=5)
+    with ThreadPoolExecutor(2) as ex:
+        pooled = plan_route(cell, config=config, rng=5, executor=ex)
+    ref = plan_route(load_cell(mesh, alone, margin=50.0), rng=5)
+    assert ref.stats["pairs_planned"] >= 1  # the wall blocks A-B: a local path is planned
+    for route in (serial, pooled):
+        assert [s["id"] for s in route.stats["skipped"]] == ["E"]
+        assert route.order == ref.order
+        assert route.length == pytest.approx(ref.length)
+        assert verify_route(route, cell.part, joints=cell.joints).ok
