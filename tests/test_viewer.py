@@ -153,9 +153,9 @@ def test_convergence_plots_draw(tmp_path):
 @pytest.mark.slow
 def test_live_viewer_serves_the_same_scene():
     pytest.importorskip("zmq")
-    from weldplan.viz.viewer import view_route
+    from weldplan.viz.viewer import live_view
 
-    vis = view_route(box_route(), box_part())
+    vis, server = live_view(box_route(), box_part())
     try:
         assert vis.url().startswith("http://127.0.0.1:")
         page = vis.static_html()  # the server's own snapshot of what it holds
@@ -164,7 +164,5 @@ def test_live_viewer_serves_the_same_scene():
         # same commands: the server's page and ours carry the same scene blobs
         assert abs(len(page) - len(ours)) < 0.05 * len(ours)
     finally:
-        proc = getattr(vis.window, "server_proc", None)
-        if proc is not None:
-            proc.kill()
-            proc.wait(timeout=10)
+        server.close()
+    assert server.proc.returncode is not None

@@ -1,8 +1,10 @@
 """What ``weldplan plan`` and ``weldplan demo`` share: options, the run, the summary table.
 
-The run renders every output in memory first and writes the files only after the route passed
-the independent verification; each file is written atomically. A run that fails, at any stage,
-leaves existing output files exactly as they were.
+Every output path is checked before any work (:func:`weldplan.io.outputset.check_outputs`); the
+run renders every output in memory, and writes the files only after the route passed the
+independent verification, as one set (:func:`weldplan.io.outputset.write_outputs`: temporaries,
+then renames, rolled back on failure). A run that fails, at any stage, leaves existing output files
+exactly as they were.
 """
 
 from __future__ import annotations
@@ -57,7 +59,9 @@ def add_planning_arguments(p: argparse.ArgumentParser, *, default_output: str | 
         default=10,
         help="SO-ACO iterations N = ants M (default 10; the paper also runs 50)",
     )
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument(
+        "--seed", type=seed_type, default=0, help="random seed, an integer >= 0 (default 0)"
+    )
     p.add_argument("--jobs", type=int, default=1, help="processes planning local paths (default 1)")
     p.add_argument(
         "--dask",
@@ -78,7 +82,46 @@ def add_planning_arguments(p: argparse.ArgumentParser, *, default_output: str | 
         type=float,
         help="with --candidates: neighbours farther than this are planned only on demand",
     )
+    p.add_argument(
+        "--memory-limit",
+        metavar="GB",
+        type=positive_gb,
+        help="refuse up front a run whose estimated peak memory (grid + pair tables) exceeds "
+        "this (default: 80 %% of the memory available at start)",
+    )
+    p.add_argument(
+        "--skip-unreachable",
+        action="store_true",
+        help="plan the largest group of joints that reach each other and list the others, with "
+        "the reason, in the summary and the route JSON (stats.skipped); exit code 3",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress bars and no summary on stdout")
+
+
+def seed_type(text: str) -> int:
+    """argparse type: an integer >= 0 (what numpy's ``default_rng`` takes)."""
+    from weldplan.errors import ConfigError
+    from weldplan.weld.validate import seed
+
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    try:
+        return seed(value)
+    except ConfigError as exc:
+        raise argparse.ArgumentTypeError(exc.message) from None
+
+
+def positive_gb(text: str) -> float:
+    """argparse type: a positive, finite number of GB."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (0 < value < float("inf")):
+        raise argparse.ArgumentTypeError(f"must be a positive number of GB, got {text!r}")
+    return value
 
 
 def _post_names() -> list[str]:
@@ -103,7 +146,17 @@ def config_from_args(args: argparse.Namespace) -> Any:
         aco={"n_iterations": args.aco, "n_ants": args.aco},
         candidates=getattr(args, "candidates", None),
         candidate_radius=getattr(args, "candidate_radius", None),
+        skip_unreachable=bool(getattr(args, "skip_unreachable", False)),
+        memory_limit=getattr(args, "memory_limit", None),
     )
+
+
+def _local_workers(args: argparse.Namespace) -> int:
+    """Worker processes on this machine, each holding the cell (1: planning in this process)."""
+    dask = getattr(args, "dask", None)
+    if dask:
+        return max(2, args.jobs) if dask == "local" else 1
+    return args.jobs
 
 
 def _outputs(args: argparse.Namespace) -> dict[str, Path]:
@@ -125,15 +178,13 @@ def _outputs(args: argparse.Namespace) -> dict[str, Path]:
         raise WeldplanError("--post-file needs --post rapid|krl")
     seen: dict[Path, str] = {}
     for kind, path in out.items():
-        folder = path.parent if str(path.parent) else Path(".")
-        if not folder.is_dir():
-            raise WeldplanError(f"{path}: folder {folder} does not exist")
-        if path.is_dir():
-            raise WeldplanError(f"{path}: is a folder, not a file")
         key = path.resolve()
         if key in seen:
             raise WeldplanError(f"{path}: given for both {seen[key]} and {kind}")
         seen[key] = kind
+    from weldplan.io.outputset import check_outputs
+
+    check_outputs(out)
     return out
 
 
@@ -144,10 +195,13 @@ def run_planning(
     title: str,
     note: str | None = None,
     show_cell: bool = False,
+    joint_points: Callable[[], Any] | None = None,
 ) -> int:
     """Build the cell, plan, verify, write; print the summary. Returns the exit code.
 
     ``show_cell`` prints the cell's summary (part, grid, virtual joints) before the route's.
+    ``joint_points()`` gives the joints' ``(n, 3)`` positions (mm) cheaply, before the cell is
+    built, for the size check (:mod:`weldplan.weld.sizing`).
     """
     from weldplan.io.export import render_post, to_csv_text
     from weldplan.viz.viewer import static_html
@@ -156,22 +210,35 @@ def run_planning(
 
     outputs = _outputs(args)
     config = config_from_args(args)
+    if joint_points is not None:
+        from weldplan.weld.sizing import check_size
+
+        xyz = joint_points()
+        check_size(
+            xyz,
+            pitch=config.pitch,
+            margin=config.margin,
+            n_joints=len(xyz),
+            candidates=config.candidates,
+            memory_limit=config.memory_limit,
+            cli=True,
+            workers=_local_workers(args),
+        )
     bars = ProgressBars(enabled=False if args.quiet else None)
     t_all = time.perf_counter()
     times: dict[str, float] = {}
 
-    with bars.stage("cell") as st:
-        cell = make_cell()
-    times["cell"] = st.seconds
-
     with contextlib.ExitStack() as stack:
         executor = None
         dask = getattr(args, "dask", None)
-        if dask:
+        if dask:  # reach the scheduler first: a wrong address fails in seconds, not after the cell
             from weldplan.weld.parallel import dask_executor
 
             executor = stack.enter_context(dask_executor(dask, workers=max(2, args.jobs)))
-        elif args.jobs > 1:
+        with bars.stage("cell") as st:
+            cell = make_cell()
+        times["cell"] = st.seconds
+        if not dask and args.jobs > 1:
             from weldplan.weld.parallel import process_pool
 
             executor = stack.enter_context(process_pool(cell, args.jobs))
@@ -197,10 +264,9 @@ def run_planning(
             texts["html"] = static_html(route, cell.part)
         if "post" in outputs:
             texts["post"] = render_post(route, args.post)
-        from weldplan.io.export import write_text_atomic
+        from weldplan.io.outputset import write_outputs
 
-        for kind, path in outputs.items():
-            write_text_atomic(path, texts[kind])
+        write_outputs({path: texts[kind] for kind, path in outputs.items()})
     times["export"] = st.seconds
     times["total"] = time.perf_counter() - t_all
     if not args.quiet:
@@ -208,6 +274,16 @@ def run_planning(
             print(cell.format_summary())
             print()
         print(summary_table(route, times, outputs, title=title, report=report, note=note))
+    skipped = route.stats.get("skipped") or []
+    if skipped:
+        from weldplan.errors import EXIT_PARTIAL
+
+        print(
+            f"weldplan: partial route: {len(skipped)} joint(s) skipped "
+            f"({', '.join(s['id'] for s in skipped[:10])}{', ...' if len(skipped) > 10 else ''})",
+            file=sys.stderr,
+        )
+        return EXIT_PARTIAL
     return 0
 
 
@@ -234,6 +310,16 @@ def _gaps(route: Any) -> str:
     return "; ".join(parts)
 
 
+def _skipped_rows(route: Any) -> list[tuple[str, str]]:
+    """One row per joint left out by ``--skip-unreachable``."""
+    skipped = route.stats.get("skipped") or []
+    if not skipped:
+        return []
+    rows = [("skipped", f"{len(skipped)} joint(s), not in the route (exit code 3)")]
+    rows += [(f"  {s['id']}", s["reason"]) for s in skipped]
+    return rows
+
+
 def summary_table(
     route: Any,
     times: dict[str, float],
@@ -246,7 +332,15 @@ def summary_table(
     """The table printed at the end of a run."""
     s = route.stats
     rows = [
-        ("joints", f"{len(route.joint_ids)}"),
+        (
+            "joints",
+            f"{len(route.joint_ids)}"
+            + (
+                f" ({len(route.order)} in the route)"
+                if len(route.order) < len(route.joint_ids)
+                else ""
+            ),
+        ),
         ("pairs", f"{s['pairs']} ({s['pairs_straight']} straight, {s['pairs_blocked']} blocked)"),
         (
             "pairs planned",
@@ -264,6 +358,7 @@ def summary_table(
         ("lower bound", f"{route.lower_bound:.2f} mm ({route.lower_bound_method})"),
         ("gap", _gaps(route)),
         ("order", "-".join(route.order)),
+        *_skipped_rows(route),
         ("verified", report.describe()),
         (
             "time",

@@ -55,4 +55,12 @@ def run(args: argparse.Namespace) -> int:
         note="the paper: lower bound 595.10 mm, its collision-free route 599.72 mm (+0.78 %), "
         "measured between joints without approach segments",
         show_cell=True,
+        joint_points=_demo_points,
     )
+
+
+def _demo_points():
+    """The demo joints' positions (mm), for the size check before the cell is built."""
+    from weldplan.weld import demo_part
+
+    return demo_part.TABLE1_XYZ

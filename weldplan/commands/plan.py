@@ -69,4 +69,23 @@ def run(args: argparse.Namespace) -> int:
             approach_cone=args.approach_cone,
         )
 
-    return run_planning(args, make_cell, title=f"weldplan plan {args.mesh} {args.joints}")
+    def joint_points():
+        import logging
+
+        from weldplan.io.joints import read_joints
+
+        # read again by load_cell: its warnings (ignored columns, ...) are said there, once
+        logger = logging.getLogger("weldplan.io.joints")
+        level = logger.level
+        logger.setLevel(logging.ERROR)
+        try:
+            return read_joints(args.joints, units=args.units).xyz
+        finally:
+            logger.setLevel(level)
+
+    return run_planning(
+        args,
+        make_cell,
+        title=f"weldplan plan {args.mesh} {args.joints}",
+        joint_points=joint_points,
+    )

@@ -3,7 +3,11 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
+import signal
+import sys
 import time
+from typing import Any
 
 from weldplan.commands.plan import add_cell_arguments
 
@@ -16,6 +20,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_cell_arguments(p)
     p.add_argument("--html", metavar="F", help="write a self-contained page instead of serving")
     p.add_argument("--no-browser", action="store_true", help="do not open a browser")
+    p.add_argument(
+        "--host",
+        default="127.0.0.1",
+        help="address the live viewer listens on (default 127.0.0.1, this machine only; "
+        "0.0.0.0 opens it to the network)",
+    )
+    p.add_argument("--port", type=int, help="web port of the live viewer (default: 7000 or next)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -33,14 +44,34 @@ def run(args: argparse.Namespace) -> int:
         write_html(route, part, args.html)
         print(f"wrote {args.html}")
         return 0
-    from weldplan.viz.viewer import view_route
+    from weldplan.viz.viewer import live_view
 
-    vis = view_route(route, part)
-    print(f"meshcat viewer at {vis.url()} (Ctrl-C to stop)")
-    if not args.no_browser:
-        vis.open()
+    vis, server = live_view(route, part, host=args.host, port=args.port)
+    return _serve(vis, server, args.no_browser)
+
+
+def _interrupt(signum: int, frame: object) -> None:
+    raise KeyboardInterrupt
+
+
+def _serve(vis: Any, server: Any, no_browser: bool) -> int:
+    """Keep the viewer up until Ctrl-C or SIGTERM (exit 0) or until its server dies (exit 1);
+    the server process is stopped on the way out in every case."""
+    previous = signal.signal(signal.SIGTERM, _interrupt)
     try:
-        while True:
-            time.sleep(1.0)
+        print(f"meshcat viewer at {server.web_url} (Ctrl-C to stop)", flush=True)
+        if not no_browser:
+            vis.open()
+        while server.proc.poll() is None:
+            time.sleep(0.2)
+        print(
+            f"weldplan view: the meshcat server stopped ({server.proc.returncode})", file=sys.stderr
+        )
+        return 1
     except KeyboardInterrupt:
         return 0
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+        with contextlib.suppress(Exception):
+            vis.window.zmq_socket.close(linger=0)
+        server.close()

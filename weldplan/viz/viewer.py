@@ -363,16 +363,55 @@ def jupyter_view(route: Route, part: Any = None, *, height: int = 480) -> Any:
     )
 
 
-def view_route(route: Route, part: Any = None, *, zmq_url: str | None = None) -> Any:
+def view_route(
+    route: Route,
+    part: Any = None,
+    *,
+    zmq_url: str | None = None,
+    host: str = "127.0.0.1",
+    port: int | None = None,
+) -> Any:
     """Draw the route in a live meshcat viewer and return the ``meshcat.Visualizer``.
 
-    With ``zmq_url`` None a meshcat server is started in a subprocess; ``vis.url()`` is the page
-    to open. The scene is the one of :func:`write_html`.
+    With ``zmq_url`` None a server is started in a subprocess (:func:`live_view`: web page on
+    ``host``, 127.0.0.1 unless told otherwise; stopped at exit, and it dies with this process).
+    ``vis.url()`` is the page to open. The scene is the one of :func:`write_html`.
     """
+    return live_view(route, part, zmq_url=zmq_url, host=host, port=port)[0]
+
+
+def live_view(
+    route: Route,
+    part: Any = None,
+    *,
+    zmq_url: str | None = None,
+    host: str = "127.0.0.1",
+    port: int | None = None,
+) -> tuple[Any, Any]:
+    """:func:`view_route`, also returning the :class:`weldplan.viz.live.MeshcatServer` it
+    started (None when ``zmq_url`` names a running one): ``(vis, server)``. Call
+    ``server.close()`` when done."""
+    import atexit
+    import contextlib
+    import io
+
+    from weldplan.viz.live import MeshcatServer
+
     mc = _meshcat()
-    vis = mc.Visualizer(zmq_url=zmq_url)
-    build_scene(vis, route, part)
-    return vis
+    server = None
+    if zmq_url is None:
+        server = MeshcatServer(host, port)
+        zmq_url = server.zmq_url
+        atexit.register(server.close)
+    try:
+        with contextlib.redirect_stdout(io.StringIO()):  # meshcat prints its URL
+            vis = mc.Visualizer(zmq_url=zmq_url)
+        build_scene(vis, route, part)
+    except BaseException:
+        if server is not None:
+            server.close()
+        raise
+    return vis, server
 
 
 def open_in_browser(path: str | PathLike[str]) -> None:  # pragma: no cover - interactive

@@ -35,6 +35,8 @@ _CELLS: dict[str, Any] = {}
 _CACHE_SIZE = 4
 #: batches per worker when splitting pair-planning tasks
 BATCHES_PER_WORKER = 4
+#: seconds to wait for a Dask scheduler before giving up (``--dask tcp://...``)
+DASK_CONNECT_TIMEOUT = 5.0
 
 
 def _remember(key: str, cell: Any) -> Any:
@@ -142,10 +144,33 @@ def batches(items: Sequence[Any], workers: int) -> list[list[Any]]:
     return [list(items[k : k + size]) for k in range(0, len(items), size)]
 
 
+def _connect(client_cls: Any, address: str, timeout: float) -> Any:
+    """A Dask client of the scheduler at ``address``; a one-line weldplan error when the address
+    is malformed (:class:`~weldplan.errors.InputError`) or nothing usable answers within
+    ``timeout`` seconds (:class:`~weldplan.errors.RunError`)."""
+    from weldplan.errors import InputError, RunError
+
+    try:
+        return client_cls(address, timeout=timeout)
+    except ValueError as exc:
+        raise InputError(f"not a Dask scheduler address ({exc})", field="--dask") from exc
+    except OSError as exc:  # refused, unreachable, timed out (TimeoutError is an OSError)
+        raise RunError(
+            f"cannot reach the Dask scheduler at {address} within {timeout:g} s ({exc})"
+        ) from exc
+    except MemoryError as exc:  # a service that is not a Dask scheduler sent a bogus length
+        raise RunError(
+            f"{address} answered, but not as a Dask scheduler (its reply made no sense)"
+        ) from exc
+
+
 @contextlib.contextmanager
-def dask_executor(address: str, *, workers: int = 2) -> Iterator[Executor]:
+def dask_executor(
+    address: str, *, workers: int = 2, timeout: float = DASK_CONNECT_TIMEOUT
+) -> Iterator[Executor]:
     """A ``concurrent.futures`` executor on Dask: ``"local"`` starts a LocalCluster of
-    ``workers`` single-threaded processes, ``"tcp://HOST:PORT"`` joins a running scheduler."""
+    ``workers`` single-threaded processes, ``"tcp://HOST:PORT"`` joins a running scheduler
+    (waiting at most ``timeout`` seconds for it)."""
     try:
         from distributed import Client, LocalCluster
     except ImportError as exc:  # pragma: no cover - optional extra
@@ -166,6 +191,6 @@ def dask_executor(address: str, *, workers: int = 2) -> Iterator[Executor]:
             )
             client = stack.enter_context(Client(cluster))
         else:
-            client = stack.enter_context(Client(address))
+            client = stack.enter_context(_connect(Client, address, timeout))
         log.info("dask: %s, %d worker threads", client, sum(client.nthreads().values()))
         yield client.get_executor()

@@ -58,15 +58,17 @@ import logging
 import time
 from collections.abc import Callable, Mapping
 from concurrent.futures import Executor
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from weldplan.errors import PlanningError, WeldplanError
+from weldplan.errors import UnreachableJointsError
 from weldplan.random import RNGLike, as_generator, seed_of
+from weldplan.weld.pairs import PairPlanning
 from weldplan.weld.route import Leg, Route
+from weldplan.weld.skip import reachable_subset, with_skipped
 
 log = logging.getLogger(__name__)
 
@@ -151,6 +153,17 @@ class PlanConfig:
         optimistic estimate and at 1000 joints the rounds never settle (279 rounds and 5,030
         pairs planned in 13 minutes on car2's set). Exact sequencers always use estimates
         (their route is then the all-pairs optimum).
+    skip_unreachable
+        Plan the largest group of mutually reachable joints and list the others, with the
+        reason, in ``route.stats["skipped"]`` (:mod:`weldplan.weld.skip`), instead of raising
+        :class:`~weldplan.errors.UnreachableJointsError`.
+    memory_limit
+        GB the run may use; the pair work is estimated up front (:mod:`weldplan.weld.sizing`)
+        and refused with a :class:`~weldplan.errors.ConfigError` when it would not fit. None:
+        :func:`~weldplan.weld.sizing.default_memory_limit` (a fraction of the available memory).
+
+    Every field is checked when the config is made (:mod:`weldplan.weld.validate`): a wrong type,
+    NaN or out-of-range value raises :class:`~weldplan.errors.ConfigError`, a ``ValueError``.
     """
 
     clearance: float = 5.0
@@ -171,30 +184,13 @@ class PlanConfig:
     warm_kicks: int | None = None
     demand_neighbours: int = 10
     known_first: bool = True
+    skip_unreachable: bool = False
+    memory_limit: float | None = None
 
     def __post_init__(self) -> None:
-        if self.planner not in PLANNERS:
-            raise WeldplanError(f"unknown planner {self.planner!r}; choose one of {PLANNERS}")
-        if self.sequencer not in SEQUENCERS:
-            raise WeldplanError(f"unknown sequencer {self.sequencer!r}; choose one of {SEQUENCERS}")
-        if self.pairs not in ("lazy", "all"):
-            raise WeldplanError(f"pairs must be 'lazy' or 'all', not {self.pairs!r}")
-        if self.candidates is not None:
-            if int(self.candidates) != self.candidates or self.candidates < 1:
-                raise WeldplanError(f"candidates must be a positive integer, got {self.candidates}")
-            if self.pairs == "all":
-                raise WeldplanError("candidates needs pairs='lazy' (pairs='all' plans every pair)")
-            object.__setattr__(self, "candidates", int(self.candidates))
-        if self.candidate_radius is not None and not (self.candidate_radius > 0):
-            raise WeldplanError(f"candidate_radius must be > 0 mm, got {self.candidate_radius}")
-        for name in ("clearance", "pitch"):
-            v = getattr(self, name)
-            if not (np.isfinite(v) and v > 0):
-                raise WeldplanError(f"{name} must be a positive number of mm, got {v}")
-        if not (np.isfinite(self.margin) and self.margin >= 0):
-            raise WeldplanError(f"margin must be >= 0 mm, got {self.margin}")
-        object.__setattr__(self, "aco", dict(self.aco))
-        object.__setattr__(self, "pso", dict(self.pso))
+        from weldplan.weld.validate import check_config
+
+        check_config(self)  # ConfigError (a ValueError) naming the field; normalises in place
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -303,39 +299,6 @@ def straight_lower_bound(xyz: NDArray[np.float64]) -> tuple[float, str]:
     return (tree, "1-tree") if tree > mst else (mst, "mst")
 
 
-def _explain_no_order(
-    exc: Exception,
-    C: NDArray[np.float64],
-    known: NDArray[np.bool_],
-    iu: NDArray[np.intp],
-    ju: NDArray[np.intp],
-    paths: dict[int, Any],
-    ids: tuple[str, ...],
-) -> str:
-    """A message a user can act on when no order of finite cost exists.
-
-    When the joints fall into groups with no collision-free path between them (typically spots
-    on both sides of a panel, or one enclosed), name the groups; else list the failed pairs.
-    """
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
-    n = len(ids)
-    reach = ~known | np.isfinite(C[iu, ju])  # unknown pairs might still be reachable
-    A = coo_matrix((np.ones(int(reach.sum())), (iu[reach], ju[reach])), shape=(n, n))
-    k, label = connected_components(A, directed=False)
-    if k > 1:
-        groups = [
-            "{" + ", ".join(ids[v] for v in np.flatnonzero(label == g)) + "}" for g in range(k)
-        ]
-        return (
-            f"the joints fall into {k} groups with no collision-free path between them at this "
-            f"clearance (spots on both sides of a panel, or enclosed?): {' '.join(groups)}"
-        )
-    failed = [f"{ids[iu[p]]}-{ids[ju[p]]}" for p in paths if not np.isfinite(C[iu[p], ju[p]])]
-    return f"{exc}; local planning failed for pairs {', '.join(failed) or 'none'}"
-
-
 def plan_route(
     cell: Any,
     *,
@@ -351,9 +314,13 @@ def plan_route(
     cell
         A :class:`~weldplan.weld.cell.Cell` (part, joints, grid, collision model, virtual joints).
     config
-        Planner, sequencer and their parameters (:class:`PlanConfig`).
+        Planner, sequencer and their parameters (:class:`PlanConfig`). With
+        ``skip_unreachable=True``, joints that have no collision-free path to the largest group
+        of joints are left out and listed in ``route.stats["skipped"]`` (``[{"id", "reason"}]``)
+        instead of failing the whole run.
     rng
-        Seed or Generator; the only source of randomness of the run.
+        Seed (an integer >= 0, as numpy takes), SeedSequence or Generator; the only source of
+        randomness of the run.
     executor
         Where blocked pairs are planned: any ``concurrent.futures.Executor`` (a process pool, a
         Dask ``Client.get_executor()``); serial in this process when None. The cell reaches each
@@ -370,242 +337,115 @@ def plan_route(
 
     Raises
     ------
+    ConfigError
+        A bad argument (wrong type, out of range, NaN), before any work; a ``ValueError``. Also
+        when the pair work of this many joints would not fit ``config.memory_limit``
+        (:mod:`weldplan.weld.sizing`).
     PlanningError
-        When no order of finite cost exists (e.g. a joint every local path to which failed).
+        When no order of finite cost exists (e.g. a joint every local path to which failed);
+        :class:`~weldplan.errors.UnreachableJointsError` names the groups of joints.
     """
-    from weldplan.optim.discrete.costs import order_cost
-    from weldplan.optim.discrete.local_search import PolishParams
-    from weldplan.optim.discrete.sequence import solve_sequence
-    from weldplan.optim.discrete.tsp_pso import PSOParams
-    from weldplan.weld.parallel import batches, n_workers, share_cell
+    from weldplan.weld.sizing import check_pair_work
+    from weldplan.weld.validate import check_plan_arguments
 
     config = PlanConfig() if config is None else config
-    gen = as_generator(rng)
+    check_plan_arguments(cell, config, rng, executor, progress)
+    check_pair_work(len(cell.joints.ids), config.candidates, config.memory_limit)
     seed = seed_of(rng)
     report = progress or (lambda stage, done, total: None)
-    t_start = time.perf_counter()
-    seconds: dict[str, float] = {}
-
-    ids = tuple(str(i) for i in cell.joints.ids)
-    P = np.asarray(cell.joints.xyz, dtype=float).reshape(-1, 3)
-    V = np.asarray(cell.virtual_xyz, dtype=float).reshape(-1, 3)
-    n = len(ids)
-    clearance = float(cell.clearance)
-    if n == 0:
-        raise PlanningError("the cell has no weld joints")
-    approach = np.linalg.norm(V - P, axis=1)
-
-    # 1. straight checks between pairs of virtual joints (upper triangle): all, or the candidates
-    t0 = time.perf_counter()
-    iu, ju = np.triu_indices(n, 1)
-    n_pairs = len(iu)
-    pair_index = -np.ones((n, n), dtype=np.intp)
-    pair_index[iu, ju] = np.arange(n_pairs)
-    pair_index[ju, iu] = np.arange(n_pairs)
-    checked = np.zeros(n_pairs, dtype=bool)
-    free = np.zeros(n_pairs, dtype=bool)
-
-    def check(pairs: NDArray[np.intp]) -> None:
-        """Straight capsule checks of ``pairs`` (one vectorised call); sets checked / free."""
-        pairs = pairs[~checked[pairs]]
-        if not len(pairs):
-            return
-        a, b = V[iu[pairs]], V[ju[pairs]]
-        ok = np.all(a == b, axis=1)
-        if (~ok).any():
-            ok[~ok] = cell.collision.segments_free(a[~ok], b[~ok], clearance)
-        free[pairs] = ok
-        checked[pairs] = True
-
-    if config.candidates is None or config.candidates >= n - 1:
-        upfront = np.arange(n_pairs)
-    else:
-        upfront = candidate_pairs(P, config.candidates, pair_index, config.candidate_radius)
-    report("straight", 0, len(upfront))
-    check(upfront)
-    report("straight", len(upfront), len(upfront))
-    est = approach[iu] + np.linalg.norm(V[iu] - V[ju], axis=1) + approach[ju]
-    C = np.zeros((n, n))
-    C[iu, ju] = est
-    C[ju, iu] = est
-    known = free.copy()
-    pair_seeds = gen.integers(0, 2**63 - 1, size=n_pairs)
-    seconds["straight"] = time.perf_counter() - t0
-    blocked = np.flatnonzero(checked & ~free)
-    log.info(
-        "%d joints, %d pairs, %d checked, %d blocked at %g mm",
-        n,
-        n_pairs,
-        len(upfront),
-        len(blocked),
-        clearance,
-    )
-
-    paths: dict[int, Any] = {}
-    t_local = 0.0
-    t_seq = 0.0
-    n_failed = 0
-
-    shared: Any = None  # the cell as the executor's tasks carry it, made on first use
-
-    def plan(pairs: list[int]) -> None:
-        nonlocal t_local, n_failed, shared
-        t = time.perf_counter()
-        fresh = np.array([p for p in pairs if not checked[p]], dtype=np.intp)
-        if len(fresh):  # on demand: the straight segment first (timed with the local stage)
-            check(fresh)
-            known[fresh] = free[fresh]
-        todo = [p for p in pairs if not known[p]]
-        total = len(paths) + len(todo)
-        report("local", len(paths), total)
-        args = [
-            (int(iu[p]), int(ju[p]), config.planner, dict(config.aco), int(pair_seeds[p]))
-            for p in todo
-        ]
-        if executor is None:
-            results = (
-                _plan_pair_task(cell, i, j, m, prm, s, config.local_time_budget)
-                for i, j, m, prm, s in args
-            )
-        else:
-            if shared is None:
-                shared = share_cell(cell, executor)
-            futures = [
-                executor.submit(_plan_pairs_task, shared, batch, config.local_time_budget)
-                for batch in batches(args, n_workers(executor))
-            ]
-            results = (lp for f in futures for lp in f.result())
-        for p, lp in zip(todo, results, strict=True):
-            paths[int(p)] = lp
-            known[p] = True
-            i, j = iu[p], ju[p]
-            ok = bool(getattr(lp, "success", True)) and np.isfinite(lp.length)
-            if not ok:
-                n_failed += 1
-                log.info("no local path %s -> %s: %s", ids[i], ids[j], getattr(lp, "reason", ""))
-            C[i, j] = C[j, i] = lp.length if ok else np.inf
-            report("local", len(paths), total)
-        t_local += time.perf_counter() - t
-
-    pso = PSOParams(**config.pso) if config.pso else None
-    known_first = config.known_first and config.candidates is not None and n > LOWER_BOUND_EXACT_MAX
-
-    def sequence(round_: int, method: str, initial: list[int] | None = None, kicks: int = 0) -> Any:
-        nonlocal t_seq
-        t = time.perf_counter()
-        off = ~np.eye(n, dtype=bool)
-        stranded = [ids[k] for k in range(n) if n > 1 and not np.isfinite(C[k][off[k]]).any()]
-        if stranded:
-            raise PlanningError(
-                f"no collision-free path from joint(s) {', '.join(stranded)} to any other joint "
-                f"at {clearance:g} mm clearance (planner {config.planner}); failed pairs: "
-                + ", ".join(
-                    f"{ids[iu[p]]}-{ids[ju[p]]}"
-                    for p in sorted(paths)
-                    if not np.isfinite(C[iu[p], ju[p]])
-                )
-            )
-        report("sequence", round_, round_ + 1)
+    if not config.skip_unreachable:
+        return _plan(cell, config, as_generator(rng), seed, executor, report)
+    subset = None
+    skipped: list[dict[str, str]] = []
+    while True:  # each pass leaves out at least one joint, so this ends
         try:
-            extra = {}
-            if config.sequence_time_budget is not None:
-                extra["time_budget"] = config.sequence_time_budget
-            if initial is not None:
-                extra["initial"] = initial
-                extra["polish_params"] = PolishParams(kicks=kicks)
-            Cs = C
-            if known_first and method != "exact":
-                off = ~known
-                finite = C[iu[known], ju[known]]
-                finite = finite[np.isfinite(finite)]
-                penalty = (n - 1) * float(finite.max() if len(finite) else est.max()) + 1.0
-                Cs = C.copy()
-                Cs[iu[off], ju[off]] += penalty
-                Cs[ju[off], iu[off]] += penalty
-            seq = solve_sequence(Cs, method=method, polish=config.polish, rng=gen, pso=pso, **extra)
-            if Cs is not C:
-                seq = replace(seq, cost=float(order_cost(C, np.asarray(seq.order), False)))
-        except PlanningError as exc:
-            raise PlanningError(_explain_no_order(exc, C, known, iu, ju, paths, ids)) from exc
-        t_seq += time.perf_counter() - t
-        report("sequence", round_ + 1, round_ + 1)
-        return seq
+            # a seed starts each pass afresh: the route is the one of the kept joints alone
+            gen = as_generator(rng)
+            route = _plan(cell, config, gen, seed, executor, report, subset)
+        except UnreachableJointsError as exc:
+            subset, more = reachable_subset(cell, subset, exc, float(cell.clearance))
+            log.warning("skipping %d unreachable joint(s): %s", len(more), exc)
+            skipped += more
+            continue
+        return with_skipped(route, cell, skipped) if skipped else route
 
-    if config.pairs == "all" or config.candidates is not None:
-        plan([int(p) for p in blocked])
-    rounds = 0
 
-    def settle(method: str) -> Any:
-        """Sequence, plan the unknown legs of the order, repeat until it uses known legs only."""
-        nonlocal rounds
-        warm = (
-            config.warm_rounds and config.polish and method != "exact" and n > LOWER_BOUND_EXACT_MAX
-        )
-        full_kicks = n if config.warm_kicks is None else int(config.warm_kicks)
-        previous = None
-        kicks = full_kicks
-        while True:
-            seq = sequence(rounds, method, previous, kicks)
-            rounds += 1
-            order = list(seq.order)
-            needed = [int(pair_index[a, b]) for a, b in zip(order[:-1], order[1:], strict=True)]
-            unknown = [p for p in needed if not known[p]]
-            if warm:
-                if not unknown and previous is not None and kicks < full_kicks:
-                    # settled with descents only: one polish with kicks before accepting it
-                    previous, kicks = order, full_kicks
-                    continue
-                previous, kicks = order, 0
-            if not unknown:
-                return seq
-            if rounds >= config.max_rounds and config.candidates is None:
-                log.warning("lazy planning: %d rounds, planning every blocked pair", rounds)
-                unknown = [int(p) for p in blocked]
-            elif config.demand_neighbours and n > LOWER_BOUND_EXACT_MAX:
-                unknown = sorted(set(unknown) | set(_near_unknown(unknown)))
-            plan(unknown)
-
-    def _near_unknown(pairs: list[int]) -> list[int]:
-        """The unknown pairs of each end of ``pairs`` to its ``demand_neighbours`` nearest joints
-        by current cost (the moves the sequencer's polish tries next)."""
-        ends = np.unique(np.concatenate([iu[pairs], ju[pairs]]))
-        k = min(int(config.demand_neighbours), n - 1)
-        near = np.argsort(C[ends], axis=1, kind="stable")[:, : k + 1]
-        cand = pair_index[np.repeat(ends, k + 1), near.ravel()]
-        cand = cand[cand >= 0]
-        return [int(p) for p in np.unique(cand) if not known[p]]
-
-    if config.sequencer != "exact" and n <= LOWER_BOUND_EXACT_MAX and not known.all():
-        # discovery rounds with Held-Karp (fast at this size) find the legs good orders use,
-        # so the configured (slower) sequencer usually runs once
-        settle("exact")
-    seq = settle(config.sequencer)
+def _plan(
+    cell: Any,
+    config: PlanConfig,
+    gen: np.random.Generator,
+    seed: int | None,
+    executor: Executor | None,
+    report: Progress,
+    subset: NDArray[np.intp] | None = None,
+) -> Route:
+    """Straight checks, lazy rounds, then the route with its bounds and figures (over the
+    joints ``subset`` of the cell, all when None)."""
+    t_start = time.perf_counter()
+    work = PairPlanning(cell, config, gen, executor, report, LOWER_BOUND_EXACT_MAX, subset)
+    seconds = {"straight": work.straight_stage()}
+    seq = work.run()
+    seconds["local"] = work.t_local
+    seconds["sequence"] = work.t_seq
     order = list(seq.order)
-    seconds["local"] = t_local
-    seconds["sequence"] = t_seq
+    legs = _legs(work, order)
+    t0 = time.perf_counter()
+    lb, lb_method = straight_lower_bound(work.P)
+    bounds = _route_bounds(work, seq)
+    seconds["lower_bound"] = time.perf_counter() - t0
+    seconds["total"] = time.perf_counter() - t_start
+    route = Route(
+        order=tuple(work.ids[k] for k in order),
+        legs=tuple(legs),
+        joint_ids=work.ids,
+        joint_xyz=work.P,
+        directions=work.directions,
+        virtual_xyz=work.V,
+        lower_bound=lb,
+        lower_bound_method=lb_method,
+        settings=_settings(cell, config, work.clearance),
+        seed=seed,
+        stats=_stats(work, seq, legs, bounds, seconds),
+    )
+    log.info(
+        "route %.2f mm (lower bound %.2f mm), %d pairs planned, %.2f s",
+        route.length,
+        lb,
+        len(work.paths),
+        seconds["total"],
+    )
+    return route
 
-    # 2. the route
+
+def _legs(work: PairPlanning, order: list[int]) -> list[Leg]:
+    """The legs of ``order``: a planned pair's local path, else the straight polyline
+    spot -> virtual joint -> virtual joint -> spot."""
+    P, V, ids = work.P, work.V, work.ids
     legs = []
-    methods = []
     for a, b in zip(order[:-1], order[1:], strict=True):
-        p = int(pair_index[a, b])
-        if p in paths:
-            lp = paths[p]
+        p = int(work.pair_index[a, b])
+        if p in work.paths:
+            lp = work.paths[p]
             pts = np.asarray(lp.points, dtype=float)
             if a > b:
                 pts = pts[::-1]
-            leg = Leg(ids[a], ids[b], pts, str(getattr(lp, "method", config.planner)))
+            leg = Leg(ids[a], ids[b], pts, str(getattr(lp, "method", work.config.planner)))
         else:
             pts = np.array([P[a], V[a], V[b], P[b]])
             # drop repeats: a joint that is its own virtual joint, two joints sharing one
             keep = np.r_[True, np.any(pts[1:] != pts[:-1], axis=1)]
             leg = Leg(ids[a], ids[b], pts[keep] if keep.sum() >= 2 else pts[[0, -1]], "straight")
         legs.append(leg)
-        methods.append(leg.method)
-    t0 = time.perf_counter()
-    lb, lb_method = straight_lower_bound(P)
+    return legs
+
+
+def _route_bounds(work: PairPlanning, seq: Any) -> dict[str, Any]:
+    """The two bounds tighter than the straight-line one (``Route.stats``)."""
+    from weldplan.optim.discrete.sequence import solve_sequence
+
+    n, iu, ju, C, est = work.n, work.iu, work.ju, work.C, work.est
     # A tighter bound on the whole route: every leg costs at least its straight polyline
-    # spot -> virtual -> virtual -> spot (the estimates above), so the optimum over them bounds
+    # spot -> virtual -> virtual -> spot (the estimates), so the optimum over them bounds
     # every route through these virtual joints, approaches included.
     bound_appr = float("nan")
     if 1 < n <= LOWER_BOUND_EXACT_MAX:
@@ -629,44 +469,60 @@ def plan_route(
             Cb, open_path=True, upper=float(seq.cost), max_seconds=LOWER_BOUND_SECONDS
         )
         bound_planned_method = "1-tree"
-    seconds["lower_bound"] = time.perf_counter() - t0
-    seconds["total"] = time.perf_counter() - t_start
+    return {
+        "bound_with_approaches": bound_appr,
+        "bound_planned": bound_planned,
+        "bound_planned_method": bound_planned_method,
+    }
 
+
+def _settings(cell: Any, config: PlanConfig, clearance: float) -> dict[str, Any]:
+    """The config as recorded in the route, with the cell's own clearance, pitch and margin."""
     settings = config.to_dict()
     settings.update(
         clearance=clearance,
         pitch=float(getattr(cell, "pitch", config.pitch)),
         margin=float(getattr(cell, "margin", config.margin)),
     )
+    return settings
+
+
+def _stats(
+    work: PairPlanning,
+    seq: Any,
+    legs: list[Leg],
+    bounds: dict[str, Any],
+    seconds: dict[str, float],
+) -> dict[str, Any]:
+    """The figures of the run (``Route.stats``)."""
+    ids, iu, ju, paths = work.ids, work.iu, work.ju, work.paths
     local_stats = {
         f"{ids[iu[p]]}-{ids[ju[p]]}": {
             "length": float(lp.length),
-            "method": str(getattr(lp, "method", config.planner)),
+            "method": str(getattr(lp, "method", work.config.planner)),
             "history": [float(h) for h in getattr(lp, "history", ())],
             "seconds": float(getattr(lp, "seconds", 0.0)),
             "search_voxels": int(getattr(lp, "search_voxels", 0)),
         }
         for p, lp in sorted(paths.items())
     }
-    stats = {
-        "pairs": n_pairs,
-        "pairs_checked": int(checked.sum()),
-        "pairs_candidates": int(len(upfront)),
-        "pairs_straight": int(free.sum()),
-        "pairs_blocked": int((checked & ~free).sum()),
+    return {
+        "pairs": work.n_pairs,
+        "pairs_checked": int(work.checked.sum()),
+        "pairs_candidates": int(len(work.upfront)),
+        "pairs_straight": int(work.free.sum()),
+        "pairs_blocked": int((work.checked & ~work.free).sum()),
         "pairs_planned": len(paths),
-        "pairs_failed": n_failed,
+        "pairs_failed": work.n_failed,
         "pairs_over_search_cap": sum(
             "max_search_voxels" in str(getattr(lp, "reason", "")) for lp in paths.values()
         ),
         "search_voxels_max": max(
             (int(getattr(lp, "search_voxels", 0)) for lp in paths.values()), default=0
         ),
-        "rounds": rounds,
-        "legs_planned": sum(m != "straight" for m in methods),
-        "bound_with_approaches": bound_appr,
-        "bound_planned": bound_planned,
-        "bound_planned_method": bound_planned_method,
+        "rounds": work.rounds,
+        "legs_planned": sum(leg.method != "straight" for leg in legs),
+        **bounds,
         "sequence_method": seq.method,
         "sequence_cost": float(seq.cost),
         "sequence_history": [float(h) for h in seq.history],
@@ -674,24 +530,3 @@ def plan_route(
         "local_paths": local_stats,
         "seconds": {k: round(v, 6) for k, v in seconds.items()},
     }
-    route = Route(
-        order=tuple(ids[k] for k in order),
-        legs=tuple(legs),
-        joint_ids=ids,
-        joint_xyz=P,
-        directions=getattr(cell.joints, "directions", None),
-        virtual_xyz=V,
-        lower_bound=lb,
-        lower_bound_method=lb_method,
-        settings=settings,
-        seed=seed,
-        stats=stats,
-    )
-    log.info(
-        "route %.2f mm (lower bound %.2f mm), %d pairs planned, %.2f s",
-        route.length,
-        lb,
-        len(paths),
-        seconds["total"],
-    )
-    return route

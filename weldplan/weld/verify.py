@@ -253,8 +253,12 @@ def verify_route(
     counts: dict[str, int] = {}
     for jid in route.order:
         counts[jid] = counts.get(jid, 0) + 1
+    skipped = {str(s["id"]) for s in route.stats.get("skipped") or ()}  # --skip-unreachable
     for jid in ids:
-        if counts.get(jid, 0) == 0:
+        if jid in skipped:
+            if counts.get(jid, 0):
+                violations.append(Violation("skipped", f"joint {jid} is skipped but visited"))
+        elif counts.get(jid, 0) == 0:
             violations.append(Violation("missing", f"joint {jid} is never visited"))
         elif counts[jid] > 1:
             violations.append(Violation("duplicate", f"joint {jid} is visited {counts[jid]} times"))
