@@ -196,7 +196,7 @@ def run_planning(
         if "html" in outputs:
             texts["html"] = static_html(route, cell.part)
         if "post" in outputs:
-            texts["post"] = render_post(route, args.post)
+            texts["post"] = render_post(route, args.post, cell)
         from weldplan.io.export import write_text_atomic
 
         for kind, path in outputs.items():
