@@ -37,6 +37,9 @@ CONE_PIECES = 16
 CONE_EXEMPT = 0.5
 #: relative slack on the cone radius (touching contact at equality is allowed)
 CONE_SLACK = 1e-3
+#: mm: route coordinates beyond this are refused: fcl's double-precision capsule tests lose
+#: their meaning far out (at 1e300 a capsule is "free" of anything); 10 km leaves them exact
+MAX_COORD = 1e7
 
 
 class Uncheckable(Exception):
@@ -172,8 +175,8 @@ def check_route(
     for k, leg in enumerate(legs):
         pts = np.asarray(leg["points"], dtype=np.float64).reshape(-1, 3)
         where = f"leg {k} ({leg['from']} -> {leg['to']})"
-        if not np.all(np.isfinite(pts)):
-            problems.append(f"{where}: non-finite coordinates")
+        if not np.all(np.isfinite(pts)) or np.max(np.abs(pts)) > MAX_COORD:
+            problems.append(f"{where}: non-finite coordinates or beyond {MAX_COORD:g} mm")
             continue
         if k < len(order) - 1 and (leg["from"], leg["to"]) != (order[k], order[k + 1]):
             problems.append(f"{where}: not the order's leg {order[k]} -> {order[k + 1]}")
@@ -220,11 +223,13 @@ def check_route_file(
     clearance: float,
     *,
     scale: float = 1.0,
+    joint_scale: float = 1.0,
 ) -> list[str]:
-    """:func:`check_route` from files (the joints CSV in the simple layout of the tests)."""
+    """:func:`check_route` from files (the joints CSV in the simple layout of the tests);
+    ``scale`` multiplies the mesh, ``joint_scale`` the joints (mm per file unit)."""
     route = json.loads(Path(route_json).read_text(encoding="utf-8"))
     return check_route(
-        route, load_triangles(mesh, scale), read_joints_plain(joints_csv, scale), clearance
+        route, load_triangles(mesh, scale), read_joints_plain(joints_csv, joint_scale), clearance
     )
 
 
