@@ -104,11 +104,15 @@ def capsule_free(tri: Triangles, a, b, radius: float) -> bool:
     return fcl.collide(obj, tri.bvh, fcl.CollisionRequest(), fcl.CollisionResult()) == 0
 
 
+#: mm: radius of the sphere that stands for a point in fcl's distance query
+_PROBE = 1e-9
+
+
 def point_distance(tri: Triangles, p) -> float:
     """Exact distance (mm) from point ``p`` to the triangles (0 when touching)."""
-    obj = fcl.CollisionObject(fcl.Sphere(1e-9), fcl.Transform(np.asarray(p, dtype=np.float64)))
+    obj = fcl.CollisionObject(fcl.Sphere(_PROBE), fcl.Transform(np.asarray(p, dtype=np.float64)))
     d = fcl.distance(obj, tri.bvh, fcl.DistanceRequest(), fcl.DistanceResult())
-    return max(float(d), 0.0)
+    return max(float(d) + _PROBE, 0.0) if d >= 0 else 0.0
 
 
 def winding_numbers(triangles: np.ndarray, points: np.ndarray) -> np.ndarray:
