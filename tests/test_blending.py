@@ -153,6 +153,8 @@ def test_posts_refuse_without_the_part_or_a_clearance():
     assert "fly by" in render_post(bare, "rapid", floor_part(), clearance=C)
     with pytest.raises(WeldplanError, match="zone must be"):
         render_post(route, "rapid", floor_part(), zone="z7")
+    with pytest.raises(WeldplanError, match="cdis must be"):
+        render_post(route, "krl", floor_part(), cdis=float("nan"))
 
 
 @pytest.mark.parametrize(

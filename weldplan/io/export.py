@@ -380,6 +380,7 @@ def render_rapid(
     module = _name(module, "weldplan_route")
     rows = _program_rows(route)
     frames = _row_frames(route, rows)
+    rapid_zone(0.0, zone)  # validates ``zone`` even where no corner blends
     radii, c = _blend_radii(route, rows, part, clearance)
     zones = [rapid_zone(float(r), zone) if r > 0 else "fine" for r in radii]
     n_via = sum(r["kind"] == "via" for r in rows)
@@ -445,6 +446,7 @@ def render_krl(
     program = _name(program, "weldplan_route")
     rows = _program_rows(route)
     frames = _row_frames(route, rows)
+    krl_cdis(0.0, cdis)  # validates ``cdis`` even where no corner blends
     radii, c = _blend_radii(route, rows, part, clearance)
     cd = [krl_cdis(float(r), cdis) for r in radii]
     n_via = sum(r["kind"] == "via" for r in rows)
