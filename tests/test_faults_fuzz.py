@@ -9,6 +9,8 @@ slow tier runs the same properties with more examples. Inputs that only another 
 
 from __future__ import annotations
 
+import atexit
+import shutil
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -52,7 +54,9 @@ def slow():
     return settings(max_examples=SLOW_EXAMPLES, deadline=None, suppress_health_check=_HC)
 
 
+#: the wall plate, written once per process (hypothesis examples cannot use tmp_path)
 _MESH_DIR = Path(tempfile.mkdtemp(prefix="weldplan-fuzz-"))
+atexit.register(shutil.rmtree, _MESH_DIR, ignore_errors=True)
 _WALL = _MESH_DIR / "wall.stl"
 wall_plate().export(str(_WALL))
 
