@@ -9,7 +9,7 @@ import re
 import numpy as np
 import pytest
 
-from tests.route_fixtures import SPOTS, box_route
+from tests.route_fixtures import SPOTS, box_part, box_route
 from weldplan.errors import InputError, WeldplanError
 from weldplan.io import export
 from weldplan.io.export import (
@@ -69,7 +69,7 @@ def test_read_route_errors_name_the_file(tmp_path):
 
 def test_rapid_post(tmp_path):
     r = box_route()
-    write_post(r, tmp_path / "r.mod", "rapid")
+    write_post(r, tmp_path / "r.mod", "rapid", box_part())
     text = (tmp_path / "r.mod").read_text()
     assert text.startswith("MODULE weldplan_route") and "ENDMODULE" in text
     targets = re.findall(r"CONST robtarget (p\d{4}):=\[\[([^\]]*)\],\[([^\]]*)\]", text)
@@ -77,21 +77,22 @@ def test_rapid_post(tmp_path):
     moves = re.findall(r"(MoveJ|MoveL) (p\d{4}),(\w+),(\w+),", text)
     assert [m[0] for m in moves] == ["MoveJ"] + ["MoveL"] * 9
     assert [m[1] for m in moves] == [t[0] for t in targets]
-    # welds stop exactly, vias fly by
-    assert sum(m[3] == "fine" for m in moves) == 3
+    # welds, the approach and the retreat stop exactly; the vias 10 mm above the floor fly by
+    # with z1, the largest standard zone within their 5 mm free margin (less round-off)
+    assert [m[3] for m in moves] == ["fine", "fine", "z1", "z1", "fine"] + ["z1"] * 3 + ["fine"] * 2
     # the first move goes to A's approach point, the second onto A
     assert [float(v) for v in targets[0][1].split(",")] == [-40.0, 0.0, 10.0]
     assert [float(v) for v in targets[1][1].split(",")] == [-40.0, 0.0, 0.0]
     # tool straight down: quaternion [0, 1, 0, 0]
     assert targets[1][2] == "0.000000,1.000000,0.000000,0.000000"
     # with approach directions out of the floor (+z) the torch points into it: the same
-    with_dirs = render_post(box_route(directions=True), "rapid")
+    with_dirs = render_post(box_route(directions=True), "rapid", box_part())
     assert with_dirs.count("[0.000000,1.000000,0.000000,0.000000]") == 10
     assert "-0.000" not in text
 
 
 def test_krl_post():
-    text = render_post(box_route(), "krl")
+    text = render_post(box_route(), "krl", box_part())
     assert text.startswith("DEF weldplan_route()") and text.rstrip().endswith("END")
     moves = re.findall(r"^  (PTP|LIN) \{X ([-\d.]+), Y ([-\d.]+), Z ([-\d.]+)", text, re.M)
     assert len(moves) == 10 and moves[0][0] == "PTP"

@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from tests.route_fixtures import SPOTS, box_route
+from tests.route_fixtures import SPOTS, box_part, box_route
 from weldplan.weld.route import Leg, Route, polyline_length
 
 
@@ -93,7 +93,7 @@ def test_wrappers_write_files(tmp_path):
     r = box_route()
     r.to_csv(tmp_path / "r.csv")
     r.save(tmp_path / "r.json")
-    r.to_post(tmp_path / "r.mod", "rapid")
+    r.to_post(tmp_path / "r.mod", "rapid", part=box_part())
     assert Route.load(tmp_path / "r.json") == r
     assert (tmp_path / "r.csv").read_text().startswith("step,kind,joint_id")
     assert "MODULE" in (tmp_path / "r.mod").read_text()

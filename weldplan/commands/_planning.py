@@ -263,7 +263,7 @@ def run_planning(
         if "html" in outputs:
             texts["html"] = static_html(route, cell.part)
         if "post" in outputs:
-            texts["post"] = render_post(route, args.post)
+            texts["post"] = render_post(route, args.post, cell)
         from weldplan.io.outputset import write_outputs
 
         write_outputs({path: texts[kind] for kind, path in outputs.items()})

@@ -21,6 +21,11 @@ Robot posts are pluggable: a post is a function ``render(route, **options) -> st
 a name with :func:`register_post`. Two ship with weldplan, both documented examples rather than
 cell-ready programs (tool, work object, speeds and the weld process instructions are the
 integrator's): ``rapid`` (an ABB RAPID module) and ``krl`` (a KUKA KRL ``.src``).
+
+Both blend corners only where the part leaves room (:mod:`weldplan.io.blending`): a via point
+flies by with the largest zone whose radius fits its free margin (exact distance to the part
+minus the clearance, and at most half of each adjacent segment), else it is an exact stop. So
+they need the part: ``render_post(route, "rapid", part=cell_or_mesh)``; without it they refuse.
 """
 
 from __future__ import annotations
@@ -41,6 +46,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from weldplan.errors import InputError, WeldplanError
+from weldplan.io.blending import allowed_radii, krl_cdis, rapid_zone, route_clearance
 from weldplan.weld.route import Route
 
 log = logging.getLogger(__name__)
@@ -268,12 +274,17 @@ def _row_frames(route: Route, rows: list[dict[str, Any]]) -> list[NDArray[np.flo
 # ---------------------------------------------------------------------------- posts
 @dataclass(frozen=True)
 class Post:
-    """A robot-language post: ``render(route, **options) -> str`` and the file suffix it writes."""
+    """A robot-language post: ``render(route, **options) -> str`` and the file suffix it writes.
+
+    ``needs_part``: the post takes the part as option ``part`` (a mesh, cell or CollisionModel),
+    for example to check its corner blends; :func:`render_post` passes it on.
+    """
 
     name: str
     suffix: str
     render: Callable[..., str]
     description: str = ""
+    needs_part: bool = False
 
 
 #: name -> Post; add one with :func:`register_post`
@@ -281,7 +292,7 @@ POSTS: dict[str, Post] = {}
 
 
 def register_post(
-    name: str, suffix: str, description: str = ""
+    name: str, suffix: str, description: str = "", *, needs_part: bool = False
 ) -> Callable[[Callable[..., str]], Callable[..., str]]:
     """Decorator registering ``render(route, **options) -> str`` as post ``name``.
 
@@ -293,24 +304,39 @@ def register_post(
     """
 
     def deco(render: Callable[..., str]) -> Callable[..., str]:
-        POSTS[name] = Post(name, suffix, render, description)
+        POSTS[name] = Post(name, suffix, render, description, needs_part)
         return render
 
     return deco
 
 
-def render_post(route: Route, post: str, **options: Any) -> str:
-    """The program text of ``route`` in the language of registered post ``post``."""
+def render_post(route: Route, post: str, part: Any = None, **options: Any) -> str:
+    """The program text of ``route`` in the language of registered post ``post``.
+
+    ``part`` (a trimesh.Trimesh, a Cell or a CollisionModel) is required by posts registered
+    with ``needs_part`` (``rapid`` and ``krl``: they check every corner blend against it) and
+    ignored by the others. A missing part is a :class:`WeldplanError`.
+    """
     if post not in POSTS:
         raise WeldplanError(f"unknown post {post!r}; known posts: {', '.join(sorted(POSTS))}")
+    if POSTS[post].needs_part:
+        options["part"] = part
     return POSTS[post].render(route, **options)
 
 
 def write_post(
-    route: Route, path: str | PathLike[str], post: str = "rapid", **options: Any
+    route: Route, path: str | PathLike[str], post: str = "rapid", part: Any = None, **options: Any
 ) -> Path:
-    """Write ``route`` as a robot program with post ``post``, atomically."""
-    return write_text_atomic(path, render_post(route, post, **options))
+    """Write ``route`` as a robot program with post ``post``, atomically (``part``: see
+    :func:`render_post`)."""
+    return write_text_atomic(path, render_post(route, post, part, **options))
+
+
+def _blend_radii(route: Route, rows: list[dict[str, Any]], part: Any, clearance: float | None):
+    """``(n,)`` allowed blend radius (mm) per program row: vias only (:mod:`.blending`)."""
+    c = route_clearance(route, clearance)
+    pts = np.array([[float(r[k]) for k in ("x", "y", "z")] for r in rows]).reshape(-1, 3)
+    return allowed_radii(pts, [r["kind"] == "via" for r in rows], part, c), c
 
 
 def _name(path_stem: str, default: str) -> str:
@@ -321,10 +347,12 @@ def _name(path_stem: str, default: str) -> str:
     return s[:24]
 
 
-@register_post("rapid", ".mod", "ABB RAPID module of robtargets with MoveJ/MoveL")
+@register_post("rapid", ".mod", "ABB RAPID module of robtargets with MoveJ/MoveL", needs_part=True)
 def render_rapid(
     route: Route,
+    part: Any = None,
     *,
+    clearance: float | None = None,
     module: str = "weldplan_route",
     tool: str = "tool0",
     wobj: str = "wobj0",
@@ -339,7 +367,11 @@ def render_rapid(
     as straight Cartesian segments and a joint move between them could leave the checked
     corridor. Weld spots are reached with zone ``fine`` at ``approach_speed`` and carry a
     comment naming the joint: add the process instructions (``SpotL``, ``ArcL``, a gun routine)
-    there. Via points fly by with ``zone``. Orientation: the tool z axis against the joint's
+    there. A via point flies by with the largest predefined zone (``z0`` 0.3 mm, ``z1``, ``z5``,
+    ``z10``, ...) not above ``zone`` whose radius fits the corner's free margin against ``part``
+    at ``clearance`` (default: the route's), else it is ``fine`` (:mod:`weldplan.io.blending`);
+    the approach and retreat points are ``fine``. The header says how the zones were chosen.
+    Orientation: the tool z axis against the joint's
     approach direction (into the surface) when the joints CSV gave one, else straight down; via
     points take the orientation of the next weld. Configuration data ``[0,0,0,0]`` and external
     axes ``9E+09`` (unused) are placeholders for the integrator. Coordinates are mm in the work
@@ -348,12 +380,20 @@ def render_rapid(
     module = _name(module, "weldplan_route")
     rows = _program_rows(route)
     frames = _row_frames(route, rows)
+    rapid_zone(0.0, zone)  # validates ``zone`` even where no corner blends
+    radii, c = _blend_radii(route, rows, part, clearance)
+    zones = [rapid_zone(float(r), zone) if r > 0 else "fine" for r in radii]
+    n_via = sum(r["kind"] == "via" for r in rows)
+    n_fly = sum(z != "fine" for z in zones)
     out = [
         f"MODULE {module}",
         "    ! Generated by weldplan: an ordered, collision-checked torch route.",
         f"    ! {len(route.joint_ids)} weld joints, {len(rows)} targets, "
         f"length {route.length:.2f} mm, order {'-'.join(route.order)}",
         "    ! Tool, work object, speeds, configurations and weld instructions are placeholders.",
+        f"    ! Zones: a via point flies by with the largest zonedata up to {zone} whose radius is",
+        f"    ! within its free margin (distance to the part - {c:g} mm clearance) and half of",
+        f"    ! each adjacent segment, else fine: {n_fly} of {n_via} via points fly by.",
     ]
     names = []
     for r, R in zip(rows, frames, strict=True):
@@ -371,7 +411,7 @@ def render_rapid(
     for k, (r, name) in enumerate(zip(rows, names, strict=True)):
         weld = r["kind"] == "weld"
         speed = approach_speed if weld else air_speed
-        z = "fine" if weld else zone
+        z = zones[k]
         move = "MoveJ" if k == 0 else "MoveL"
         line = f"        {move} {name},{speed},{z},{tool}\\WObj:={wobj};"
         if weld:
@@ -381,10 +421,13 @@ def render_rapid(
     return "\n".join(out)
 
 
-@register_post("krl", ".src", "KUKA KRL program with PTP/LIN moves")
+@register_post("krl", ".src", "KUKA KRL program with PTP/LIN moves", needs_part=True)
 def render_krl(
     route: Route,
+    part: Any = None,
     *,
+    clearance: float | None = None,
+    cdis: float = 5.0,
     program: str = "weldplan_route",
     tool: int = 1,
     base: int = 1,
@@ -393,22 +436,33 @@ def render_krl(
     """A KUKA KRL ``.src``: ``PTP`` to the first weld's approach point, then ``LIN`` moves.
 
     Frames are ``{X, Y, Z, A, B, C}`` in mm and degrees (``A, B, C`` = Z-Y-X Euler angles of the
-    tool frame, see :func:`euler_zyx_deg`). Via points use ``C_DIS`` approximation; weld spots are
-    exact stops followed by a comment where the process instructions go. ``$TOOL``/``$BASE``
-    indices and ``$VEL.CP`` (m/s) are placeholders for the integrator.
+    tool frame, see :func:`euler_zyx_deg`). A via point uses ``C_DIS`` approximation with its own
+    ``$APO.CDIS``: its allowed blend radius against ``part`` at ``clearance`` (default: the
+    route's; :mod:`weldplan.io.blending`), rounded down to 0.1 mm and capped at ``cdis`` mm; where
+    that is 0 it is an exact stop (no ``C_DIS``). Weld spots, the approach and the retreat are
+    exact stops, weld spots followed by a comment where the process instructions go.
+    ``$TOOL``/``$BASE`` indices and ``$VEL.CP`` (m/s) are placeholders for the integrator.
     """
     program = _name(program, "weldplan_route")
     rows = _program_rows(route)
     frames = _row_frames(route, rows)
+    krl_cdis(0.0, cdis)  # validates ``cdis`` even where no corner blends
+    radii, c = _blend_radii(route, rows, part, clearance)
+    cd = [krl_cdis(float(r), cdis) for r in radii]
+    n_via = sum(r["kind"] == "via" for r in rows)
     out = [
         f"DEF {program}()",
         "  ; Generated by weldplan: an ordered, collision-checked torch route.",
         f"  ; {len(route.joint_ids)} weld joints, {len(rows)} points, length {route.length:.2f} mm",
         f"  $TOOL = TOOL_DATA[{tool}]",
         f"  $BASE = BASE_DATA[{base}]",
+        f"  ; Approximation: each via point's $APO.CDIS is the largest value up to {cdis:g} mm",
+        f"  ; within its free margin (distance to the part - {c:g} mm clearance) and half of each",
+        f"  ; adjacent segment, else an exact stop: {sum(v > 0 for v in cd)} of {n_via} via "
+        "points approximated.",
         f"  $VEL.CP = {vel_cp}",
-        "  $APO.CDIS = 5",
     ]
+    current = None
     for k, (r, R) in enumerate(zip(rows, frames, strict=True)):
         a, b, c = euler_zyx_deg(R)
         vals = [r["x"], r["y"], r["z"], a, b, c]
@@ -418,7 +472,12 @@ def render_krl(
         move = "PTP" if k == 0 else "LIN"
         if r["kind"] == "weld":
             out.append(f"  {move} {frame} ; weld joint {r['joint_id']}")
-        else:
+        elif cd[k] > 0:
+            if cd[k] != current:
+                out.append(f"  $APO.CDIS = {cd[k]:g}")
+                current = cd[k]
             out.append(f"  {move} {frame} C_DIS")
+        else:
+            out.append(f"  {move} {frame}")
     out += ["END", ""]
     return "\n".join(out)
