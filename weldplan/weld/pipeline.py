@@ -686,6 +686,7 @@ def plan_route(
         settings=settings,
         seed=seed,
         stats=stats,
+        provenance=dict(getattr(cell, "provenance", None) or {}),
     )
     log.info(
         "route %.2f mm (lower bound %.2f mm), %d pairs planned, %.2f s",
