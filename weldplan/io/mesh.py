@@ -133,6 +133,9 @@ def load_part(
     raw = _as_single_mesh(_load(path, process=False), path)
     _check_finite(raw, path)
     factor *= 1.0 if scale is None else float(scale)
+    raw_max = float(np.abs(raw.vertices).max(initial=0.0))
+    if length is None:  # before trimesh's processing overflows on such coordinates
+        _check_magnitude(raw_max * factor, path, units, scale, length)
     mesh = _as_single_mesh(_load(path, process=True), path)
     mesh, repairs = clean_mesh_report(mesh)
     if len(mesh.faces) == 0:
@@ -153,7 +156,7 @@ def load_part(
                 field="length",
             )
         factor *= float(length) / extent
-    _check_magnitude(np.abs(raw.vertices).max(initial=0.0) * factor, path, units, scale, length)
+    _check_magnitude(raw_max * factor, path, units, scale, length)
     if factor != 1.0:
         mesh.apply_scale(factor)
     mesh.metadata["weldplan"] = {

@@ -485,7 +485,7 @@ def check_joint_distances(
     if len(far):
         k = int(far[np.argmax(d[far])])
         raise InputError(
-            f"{joints.where(k)} at {_fmt(joints.xyz[k])} mm is {d[k]:.1f} mm from the part's "
+            f"joint {joints.ids[k]!r} at {_fmt(joints.xyz[k])} mm is {d[k]:.1f} mm from the part's "
             f"surface ({len(far)} of {len(joints)} joints farther than {max_joint_distance:g} mm):"
             " are the mesh and the joints in the same units and scale? (check --units, --scale"
             " or --length; --max-joint-distance raises the limit)",
