@@ -56,17 +56,36 @@ class ClosedSolids:
 
     @classmethod
     def of(cls, mesh: trimesh.Trimesh) -> ClosedSolids:
-        """Split ``mesh`` into connected components (shared edges) and keep the closed ones."""
-        if len(mesh.faces) == 0:
+        """The closed connected components (faces joined by shared edges) of ``mesh``.
+
+        A component with an edge used by one of its faces (a boundary) or by three or more (not
+        a manifold) is open; only the others are cut out and checked for consistent winding. On a
+        sheet-metal body (car2: 476 components, none closed) no submesh is built at all.
+        Nothing is repaired: trimesh's ``split`` fills small holes by default, which would call
+        an open part closed.
+        """
+        faces = np.asarray(mesh.faces, dtype=np.int64).reshape(-1, 3)
+        if len(faces) == 0:
             return cls((), np.zeros((0, 2, 3)), 0)
-        # repair=False: trimesh would otherwise fill small holes and call an open part closed
-        parts = mesh.split(only_watertight=False, repair=False)
-        closed = tuple(
-            p for p in parts if len(p.faces) >= 4 and p.is_watertight and p.is_winding_consistent
+        labels = trimesh.graph.connected_component_labels(
+            mesh.face_adjacency, node_count=len(faces)
         )
-        bounds = np.array([p.bounds for p in closed], dtype=np.float64).reshape(-1, 2, 3)
-        log.debug("%d of %d connected components are closed solids", len(closed), len(parts))
-        return cls(closed, bounds, len(parts))
+        n_components = int(labels.max()) + 1
+        # edges counted within each component: boxes that touch along an edge stay closed
+        edge_face = np.asarray(mesh.edges_face)
+        keyed = np.column_stack([labels[edge_face], mesh.edges_sorted])
+        _, inverse, counts = np.unique(keyed, axis=0, return_inverse=True, return_counts=True)
+        open_faces = edge_face[counts[inverse.reshape(-1)] != 2]
+        closed = np.ones(n_components, dtype=bool)
+        closed[labels[open_faces]] = False
+        comps = []
+        for c in np.flatnonzero(closed):
+            sub = mesh.submesh([np.flatnonzero(labels == c)], append=True, repair=False)
+            if len(sub.faces) >= 4 and sub.is_watertight and sub.is_winding_consistent:
+                comps.append(sub)
+        bounds = np.array([p.bounds for p in comps], dtype=np.float64).reshape(-1, 2, 3)
+        log.debug("%d of %d connected components are closed solids", len(comps), n_components)
+        return cls(tuple(comps), bounds, n_components)
 
     def __len__(self) -> int:
         return len(self.components)
