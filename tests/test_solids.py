@@ -145,3 +145,14 @@ def test_planned_route_on_a_solid_cube_never_enters_it():
         t = np.linspace(0.0, 1.0, 41)[:, None, None]
         samples = (P[:-1][None] + t * (P[1:] - P[:-1])[None]).reshape(-1, 3)
         assert not strictly_inside_cube(samples, tol=0.5).any(), (leg.from_id, leg.to_id)
+
+
+def test_interior_without_a_distance_rule_is_tested_voxel_by_voxel():
+    """clearance 0 marks nothing by distance; the interior is still obstacle."""
+    grid = build_grid(cube(), pitch=5.0, clearance=0.0, region="all", margin=10.0)
+    centres = grid.index_to_world(np.indices(grid.shape).reshape(3, -1).T)
+    off_faces = ~np.isin(centres, [0.0, 100.0]).any(axis=1)  # centres on a face plane are ties
+    np.testing.assert_array_equal(
+        grid.occupied.reshape(-1)[off_faces], strictly_inside_cube(centres)[off_faces]
+    )
+    assert grid.n_obstacle >= 19**3

@@ -251,8 +251,10 @@ def build_grid(
     component of it is a closed volume (:class:`~weldplan.geometry.solids.ClosedSolids`), the
     centres inside it are obstacles too, however far from its surface. Only the centres the
     distance rule left free and that lie in a closed component's bounding box are inside-tested
-    (open3d ray parity, :meth:`ClosedSolids.occupancy`), so sheet-metal bodies pay nothing but
-    finding their components.
+    (open3d ray parity, :meth:`ClosedSolids.occupancy`), and one query decides each block the
+    coarse-to-fine build found free throughout (such a block does not meet the surface, so it
+    is wholly inside or wholly outside): the work stays proportional to the area. Sheet-metal
+    bodies pay nothing but finding their components.
 
     Parameters
     ----------
@@ -286,14 +288,23 @@ def build_grid(
             f"use a larger pitch or a smaller region (at most {MAX_VOXELS:,} voxels)"
         )
     occupied = np.zeros(shape, dtype=bool)
+    if interior and len(mesh.faces) and solids is None:
+        solids = ClosedSolids.of(mesh)
+    closed = interior and solids is not None and len(solids) > 0
+    free_blocks = None
     if len(mesh.faces) and clearance > 0:
         dist = distance if distance is not None else SurfaceDistance(mesh)
-        _mark_obstacles(occupied, origin, float(pitch), float(clearance), dist)
-    n_inside = 0
-    if interior and len(mesh.faces):
-        n_inside = _mark_interior(
-            occupied, origin, float(pitch), solids if solids is not None else ClosedSolids.of(mesh)
+        within = None
+        if closed:
+            within = np.stack([solids.bounds[:, 0].min(axis=0), solids.bounds[:, 1].max(axis=0)])
+        free_blocks = _mark_obstacles(
+            occupied, origin, float(pitch), float(clearance), dist, free_within=within
         )
+    n_inside = 0
+    if closed and free_blocks is not None:
+        n_inside = _mark_interior_blocks(occupied, origin, float(pitch), solids, free_blocks)
+    elif closed:  # clearance 0: no distance rule, test every free centre
+        n_inside = _mark_interior(occupied, origin, float(pitch), solids)
     log.info(
         "grid %s at %.3g mm: %d obstacle (%d inside closed solids) / %d voxels",
         shape,
@@ -311,14 +322,35 @@ def _cube_offsets(n: int, step: int) -> NDArray[np.int64]:
     return np.stack(np.meshgrid(r, r, r, indexing="ij"), axis=-1).reshape(-1, 3)
 
 
+def _fill_blocks(
+    occupied: NDArray[np.bool_], blocks: NDArray[np.int64], ext: NDArray[np.int64], size: int
+) -> None:
+    """Set every voxel of the blocks ``blocks (m, 3)`` (starts) of extents ``ext (m, 3)``."""
+    if len(blocks) == 0:
+        return
+    inner = _cube_offsets(size, 1)
+    per = max(1, _FILL_CHUNK // len(inner))
+    for lo in range(0, len(blocks), per):
+        keep = np.all(inner[None, :, :] < ext[lo : lo + per, None, :], axis=2)
+        vox = (blocks[lo : lo + per, None, :] + inner[None, :, :])[keep]
+        occupied[vox[:, 0], vox[:, 1], vox[:, 2]] = True
+
+
 def _mark_obstacles(
     occupied: NDArray[np.bool_],
     origin: NDArray[np.float64],
     pitch: float,
     clearance: float,
     dist: SurfaceDistance,
-) -> None:
-    """Set ``occupied`` True where ``dist(centre) < clearance`` (coarse-to-fine, in place)."""
+    free_within: NDArray[np.float64] | None = None,
+) -> list[tuple[NDArray[np.int64], NDArray[np.int64], int]]:
+    """Set ``occupied`` True where ``dist(centre) < clearance`` (coarse-to-fine, in place).
+
+    Returns the blocks found free throughout, ``(starts (m, 3), extents (m, 3), size)`` per
+    level, of those that meet the world box ``free_within (2, 3)`` (none when it is None):
+    no point of such a block is within the clearance of the surface, so the block lies wholly
+    inside or wholly outside each closed component.
+    """
     shape = np.asarray(occupied.shape, dtype=np.int64)
     size = _TOP_BLOCK
     while size > 1 and size // 2 >= shape.max():
@@ -327,33 +359,59 @@ def _mark_obstacles(
     blocks = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
     tol = dist.tolerance
     n_queries = 0
+    free_blocks: list[tuple[NDArray[np.int64], NDArray[np.int64], int]] = []
+
+    def keep_free(sel: NDArray[np.bool_], ext: NDArray[np.int64], size: int) -> None:
+        if free_within is None or not sel.any():
+            return
+        b, e = blocks[sel], ext[sel]
+        lo = origin + pitch * b
+        hi = origin + pitch * (b + e - 1)
+        meet = np.all((hi >= free_within[0]) & (lo <= free_within[1]), axis=1)
+        if meet.any():
+            free_blocks.append((b[meet], e[meet], size))
+
     while len(blocks):
         ext = np.minimum(size, shape - blocks)  # (m, 3) voxels per axis inside the grid
         centre = origin + pitch * (blocks + 0.5 * (ext - 1))
         d = dist(centre)
         n_queries += len(blocks)
         if size == 1:
-            hit = blocks[d < clearance]
+            near = d < clearance
+            hit = blocks[near]
             occupied[hit[:, 0], hit[:, 1], hit[:, 2]] = True
+            keep_free(~near, ext, 1)
             break
         r = 0.5 * pitch * np.linalg.norm(ext - 1, axis=1)
         full = d + r + tol < clearance
-        if full.any():
-            # every voxel of these blocks: block start + offsets inside the block's extent
-            inner = _cube_offsets(size, 1)
-            fb, fe = blocks[full], ext[full]
-            per = max(1, _FILL_CHUNK // len(inner))
-            for lo in range(0, len(fb), per):
-                keep = np.all(inner[None, :, :] < fe[lo : lo + per, None, :], axis=2)
-                vox = (fb[lo : lo + per, None, :] + inner[None, :, :])[keep]
-                occupied[vox[:, 0], vox[:, 1], vox[:, 2]] = True
+        _fill_blocks(occupied, blocks[full], ext[full], size)
         split = ~full & (d - r - tol < clearance)
+        keep_free(~full & ~split, ext, size)
         half = size // 2
         offsets = _cube_offsets(2, half)
         children = (blocks[split][:, None, :] + offsets[None, :, :]).reshape(-1, 3)
         blocks = children[np.all(children < shape, axis=1)]
         size = half
     log.debug("obstacle rule: %d distance queries for %d voxels", n_queries, int(shape.prod()))
+    return free_blocks
+
+
+def _mark_interior_blocks(
+    occupied: NDArray[np.bool_],
+    origin: NDArray[np.float64],
+    pitch: float,
+    solids: ClosedSolids,
+    free_blocks: list[tuple[NDArray[np.int64], NDArray[np.int64], int]],
+) -> int:
+    """Fill the free blocks whose centre lies inside a closed component; returns the voxels
+    filled. One occupancy query per block: a free block does not meet the surface."""
+    n_marked = 0
+    for blocks, ext, size in free_blocks:
+        centre = origin + pitch * (blocks + 0.5 * (ext - 1))
+        inside = solids.occupancy(centre)
+        _fill_blocks(occupied, blocks[inside], ext[inside], size)
+        n_marked += int(np.prod(ext[inside], axis=1).sum())
+    return n_marked
 
 
 def _mark_interior(
