@@ -164,3 +164,22 @@ def test_car2_fast_path_agrees_with_fcl():
     np.testing.assert_array_equal(
         model.segments_free(A, B, R), model.segments_free(A, B, R, method="fcl")
     )
+
+
+@pytest.mark.parametrize("method", ["auto", "fcl"])
+def test_segments_with_non_finite_ends_or_radius_are_refused(box_model, method):
+    """A NaN compares false with every distance: today such a segment comes back free."""
+    from weldplan.errors import InputError
+
+    nan = float("nan")
+    A = np.array([[0.0, 0.0, 50.0], [nan, 0.0, 50.0]])
+    B = np.array([[10.0, 0.0, 50.0], [10.0, 0.0, 50.0]])
+    with pytest.raises(InputError, match="1 segments have a NaN or infinite end"):
+        box_model.segments_free(A, B, 1.0, method=method)
+    with pytest.raises(InputError):
+        box_model.segment_free([0.0, float("inf"), 0.0], [0.0, 0.0, 0.0], 1.0)
+    with pytest.raises(InputError):
+        box_model.path_free([[0.0, 0.0, 50.0], [nan, nan, nan]], 1.0, method=method)
+    for radius in (nan, -1.0, float("inf")):
+        with pytest.raises(InputError, match="radius"):
+            box_model.segments_free(A[:1], B[:1], radius, method=method)

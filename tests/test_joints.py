@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from weldplan.errors import InputError
-from weldplan.io.joints import Joints, read_joints
+from weldplan.io.joints import Joints, coincident_joints, read_joints
 
 
 def write(tmp_path: Path, text: str, name: str = "joints.csv") -> Path:
@@ -123,3 +123,47 @@ def test_demo_joints_are_table_1():
     np.testing.assert_array_equal(j.xyz, TABLE1_XYZ)
     # Table 1's reference distance, joint 3 to joint 7 (DESIGN.md)
     assert np.linalg.norm(j.xyz[2] - j.xyz[6]) == pytest.approx(202.91, abs=0.005)
+
+
+@pytest.mark.parametrize("bad", [float("nan"), float("inf"), -float("inf")])
+def test_joints_refuse_non_finite_positions_with_weldplans_error(bad):
+    with pytest.raises(InputError, match="joint 'b'.*not finite") as info:
+        Joints(ids=("a", "b"), xyz=[[0.0, 0.0, 0.0], [1.0, bad, 2.0]], lines=(2, 3))
+    assert info.value.line == 3
+    assert isinstance(info.value, ValueError)
+
+
+def test_joints_refuse_bad_directions_absurd_positions_and_mismatched_lengths():
+    with pytest.raises(InputError, match="direction"):
+        Joints(ids=("a",), xyz=[[0.0, 0.0, 0.0]], directions=[[float("nan"), 0.0, 1.0]])
+    with pytest.raises(InputError, match="beyond"):
+        Joints(ids=("a",), xyz=[[1e300, 0.0, 0.0]])
+    with pytest.raises(InputError, match="2 ids but 1 positions"):
+        Joints(ids=("a", "b"), xyz=[[0.0, 0.0, 0.0]])
+    with pytest.raises(InputError, match="unique"):
+        Joints(ids=("a", "a"), xyz=[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+
+
+def test_a_1e300_coordinate_in_the_csv_names_its_line_and_column(tmp_path):
+    path = tmp_path / "j.csv"
+    path.write_text("id,x,y,z\n1,0,0,0\n2,0,1e300,0\n")
+    with pytest.raises(InputError, match="beyond") as info:
+        read_joints(path)
+    assert (info.value.line, info.value.field) == (3, "y")
+
+
+def test_read_joints_records_lines_and_names_joints_by_them(tmp_path):
+    path = tmp_path / "j.csv"
+    path.write_text("# comment\nid,x,y,z\n\nA,0,0,0\nB,1,0,0\n")
+    j = read_joints(path)
+    assert j.lines == (4, 5)
+    assert j.where(1) == f"joint 'B' ({path}, line 5)"
+
+
+def test_coincident_joints_are_found_within_the_tolerance():
+    j = Joints(
+        ids=("a", "b", "c", "d"),
+        xyz=[[0.0, 0.0, 0.0], [100.0, 0.0, 0.0], [0.0, 0.0, 0.005], [100.0, 0.02, 0.0]],
+    )
+    assert coincident_joints(j) == [(0, 2)]
+    assert coincident_joints(j, tol=0.05) == [(0, 2), (1, 3)]

@@ -39,6 +39,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="degrees: each virtual joint lies within this angle of its joint's approach "
         "direction (45; 90 = anywhere on the torch side)",
     )
+    p.add_argument(
+        "--max-joint-distance",
+        type=positive_mm,
+        metavar="MM",
+        help="largest distance from a joint to the part's surface, mm (default: the larger of "
+        "20 and 4 x (clearance + pitch), 40 at the defaults); a joint farther is an error",
+    )
     add_planning_arguments(p, default_output=None)
 
 
@@ -67,6 +74,7 @@ def run(args: argparse.Namespace) -> int:
             clearance=args.clearance,
             margin=args.margin,
             approach_cone=args.approach_cone,
+            max_joint_distance=args.max_joint_distance,
         )
 
     def joint_points():

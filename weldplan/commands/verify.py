@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from weldplan.commands.demo import positive_mm
 from weldplan.commands.plan import add_cell_arguments
 
 HELP = "re-check a route JSON against the part mesh (FCL, every segment; every joint once)"
@@ -15,7 +16,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("mesh", help="the part mesh the route was planned for")
     add_cell_arguments(p)
     p.add_argument(
-        "--clearance", type=float, help="torch-tip radius, mm (default: the route's own)"
+        "--clearance",
+        type=positive_mm,
+        help="torch-tip radius, mm (default: the route's own; a route that records its "
+        "provenance is refused at another)",
     )
     p.add_argument("--joints", help="joints CSV: the route must visit exactly these joints")
 

@@ -1,9 +1,15 @@
 """The collision judge: python-fcl checks of the torch tip against the part.
 
 The torch tip is a sphere of radius = clearance; moving it along a segment sweeps a capsule. A
-segment is free when that capsule does not touch the part's triangles (the part is a surface:
-a tip inside a closed solid, far from its faces, touches nothing). The grid is only a search
-space; every path that leaves weldplan has been re-checked here (DESIGN.md).
+segment is free when that capsule does not touch the part's triangles. The part is taken as a
+surface: a tip inside a closed solid, far from its faces, touches nothing here; the interior of
+closed solids is the business of :mod:`weldplan.geometry.solids` (the grid marks it obstacle,
+the verifier inside-tests every route point on its own). The grid is only a search space; every
+path that leaves weldplan has been re-checked here (DESIGN.md).
+
+Segments with a NaN or infinite end, and a NaN, infinite or negative radius, are refused with an
+:class:`~weldplan.errors.InputError` (a NaN compares false with everything, so the distance
+tests would call such a segment free).
 
 Speed: one python-fcl capsule query costs about 0.3-0.8 ms on a car body, so
 :meth:`CollisionModel.segments_free` first decides what it can exactly from cheap open3d queries
@@ -22,6 +28,7 @@ import numpy as np
 import trimesh
 from numpy.typing import ArrayLike, NDArray
 
+from weldplan.errors import InputError
 from weldplan.geometry.distance import SurfaceDistance
 
 log = logging.getLogger(__name__)
@@ -35,6 +42,17 @@ _RAY_COUNT = 6
 _RAY_OFFSET = 0.7
 #: sphere-tracing rounds before the remaining segments go to fcl
 _MAX_TRACE_STEPS = 48
+
+
+def _check_radius(radius: float) -> float:
+    """``float(radius)`` when it is a finite number >= 0 (mm), else InputError."""
+    try:
+        r = float(radius)
+    except (TypeError, ValueError):
+        r = float("nan")
+    if not (np.isfinite(r) and r >= 0):
+        raise InputError(f"radius must be a finite number of mm >= 0, got {radius!r}")
+    return r
 
 
 def _rotation_z_to(d: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -123,8 +141,15 @@ class CollisionModel:
         A = np.asarray(A, dtype=np.float64).reshape(-1, 3)
         B = np.asarray(B, dtype=np.float64).reshape(-1, 3)
         if A.shape != B.shape:
-            raise ValueError(f"A and B must have the same shape, got {A.shape} and {B.shape}")
-        radius = float(radius)
+            raise InputError(f"A and B must have the same shape, got {A.shape} and {B.shape}")
+        radius = _check_radius(radius)
+        bad = np.flatnonzero(~(np.all(np.isfinite(A), axis=1) & np.all(np.isfinite(B), axis=1)))
+        if len(bad):
+            k = int(bad[0])
+            raise InputError(
+                f"{len(bad)} segments have a NaN or infinite end (first: segment {k}, "
+                f"{A[k].tolist()} -> {B[k].tolist()}): cannot be checked"
+            )
         if method == "fcl":
             return self._fcl_segments_free(A, B, radius)
         if method != "auto":

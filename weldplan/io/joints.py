@@ -20,12 +20,13 @@ import logging
 from dataclasses import dataclass
 from os import PathLike
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from weldplan.errors import InputError
-from weldplan.io.mesh import unit_scale
+from weldplan.io.mesh import MAX_COORD_MM, unit_scale
 
 log = logging.getLogger(__name__)
 
@@ -34,6 +35,10 @@ DIRECTION_COLUMNS: tuple[str, ...] = ("nx", "ny", "nz")
 
 #: a direction shorter than this (in file units) is rejected as zero-length
 _MIN_DIRECTION_NORM = 1e-12
+
+
+#: joints closer than this (mm) are reported as lying at the same coordinates
+COINCIDENT_MM = 0.01
 
 
 @dataclass(frozen=True, eq=False)
@@ -45,40 +50,98 @@ class Joints:
     ids
         Joint names, unique, in file order.
     xyz
-        ``(n, 3) float``: joint positions in mm.
+        ``(n, 3) float``: joint positions in mm, finite, each within
+        :data:`weldplan.io.mesh.MAX_COORD_MM` of the origin.
     directions
         ``(n, 3) float`` unit torch approach directions, or ``None`` when the file gives none.
     source
         The file they were read from, if any.
+    lines
+        The 1-based line of each joint in ``source``, if known (for error messages).
+
+    Raises
+    ------
+    InputError
+        (a ValueError) on mismatched lengths, repeated ids, non-finite or absurd positions,
+        non-finite or zero directions; the message names the joint.
     """
 
     ids: tuple[str, ...]
     xyz: NDArray[np.float64]
     directions: NDArray[np.float64] | None = None
     source: Path | None = None
+    lines: tuple[int, ...] | None = None
 
     def __post_init__(self) -> None:
         ids = tuple(str(i) for i in self.ids)
-        xyz = np.array(self.xyz, dtype=np.float64).reshape(-1, 3)
+        src = self.source
+        try:
+            xyz = np.array(self.xyz, dtype=np.float64).reshape(-1, 3)
+        except (TypeError, ValueError) as exc:
+            raise InputError(f"joint positions must be (n, 3) numbers: {exc}", path=src) from None
         if len(ids) != len(xyz):
-            raise ValueError(f"{len(ids)} ids but {len(xyz)} positions")
+            raise InputError(f"{len(ids)} ids but {len(xyz)} positions", path=src)
         if len(set(ids)) != len(ids):
-            raise ValueError("joint ids must be unique")
+            raise InputError("joint ids must be unique", path=src, field="id")
+        lines = None if self.lines is None else tuple(int(n) for n in self.lines)
+        if lines is not None and len(lines) != len(ids):
+            raise InputError(f"{len(lines)} line numbers for {len(ids)} joints", path=src)
+
+        def where(k: int) -> dict[str, Any]:
+            return {"path": src, "line": None if lines is None else lines[k]}
+
+        bad = np.flatnonzero(~np.all(np.isfinite(xyz), axis=1))
+        if len(bad):
+            k = int(bad[0])
+            raise InputError(
+                f"joint {ids[k]!r}: position {xyz[k].tolist()} is not finite "
+                f"({len(bad)} joints with NaN or infinite coordinates)",
+                field="x",
+                **where(k),
+            )
+        far = np.flatnonzero(np.abs(xyz).max(axis=1, initial=0.0) > MAX_COORD_MM)
+        if len(far):
+            k = int(far[0])
+            raise InputError(
+                f"joint {ids[k]!r}: position {xyz[k].tolist()} mm is beyond the "
+                f"{MAX_COORD_MM:.0e} mm weldplan accepts: check the units",
+                field="x",
+                **where(k),
+            )
         xyz.setflags(write=False)
         object.__setattr__(self, "ids", ids)
         object.__setattr__(self, "xyz", xyz)
+        object.__setattr__(self, "lines", lines)
         if self.directions is not None:
-            d = np.array(self.directions, dtype=np.float64).reshape(-1, 3)
+            try:
+                d = np.array(self.directions, dtype=np.float64).reshape(-1, 3)
+            except (TypeError, ValueError) as exc:
+                raise InputError(f"directions must be (n, 3) numbers: {exc}", path=src) from None
             if len(d) != len(xyz):
-                raise ValueError(f"{len(d)} directions for {len(xyz)} joints")
+                raise InputError(f"{len(d)} directions for {len(xyz)} joints", path=src)
             norm = np.linalg.norm(d, axis=1, keepdims=True)
-            if np.any(norm < _MIN_DIRECTION_NORM):
-                raise ValueError("directions must be non-zero")
+            bad = np.flatnonzero(~(np.isfinite(norm[:, 0]) & (norm[:, 0] >= _MIN_DIRECTION_NORM)))
+            if len(bad):
+                k = int(bad[0])
+                raise InputError(
+                    f"joint {ids[k]!r}: direction {d[k].tolist()} must be finite and non-zero",
+                    field="nx",
+                    **where(k),
+                )
             d = d / norm
             d.setflags(write=False)
             object.__setattr__(self, "directions", d)
         if self.source is not None:
             object.__setattr__(self, "source", Path(self.source))
+
+    def where(self, k: int) -> str:
+        """``"joint 'id' (file, line n)"`` for messages about joint row ``k``."""
+        loc = []
+        if self.source is not None:
+            loc.append(str(self.source))
+        if self.lines is not None:
+            loc.append(f"line {self.lines[k]}")
+        return f"joint {self.ids[k]!r}" + (f" ({', '.join(loc)})" if loc else "")
 
     def __len__(self) -> int:
         return len(self.ids)
@@ -212,9 +275,32 @@ def read_joints(path: str | PathLike[str], *, units: str = "mm") -> Joints:
                 )
 
     xyz = values[:, :3] * factor
+    far = np.flatnonzero(np.abs(xyz).max(axis=1) > MAX_COORD_MM)
+    if len(far):
+        r = int(far[0])
+        c = int(np.argmax(np.abs(xyz[r])))
+        raise InputError(
+            f"{xyz[r, c]:.3g} mm is beyond the {MAX_COORD_MM:.0e} mm weldplan accepts: "
+            "check --units",
+            path=path,
+            line=data[r][0],
+            field="xyz"[c],
+        )
     directions = values[:, 3:6] if present_dir else None
     log.info("read %d joints from %s", len(ids), path)
-    return Joints(ids=tuple(ids), xyz=xyz, directions=directions, source=path)
+    lines = tuple(lineno for lineno, _ in data)
+    return Joints(ids=tuple(ids), xyz=xyz, directions=directions, source=path, lines=lines)
+
+
+def coincident_joints(joints: Joints, tol: float = COINCIDENT_MM) -> list[tuple[int, int]]:
+    """Pairs ``(i, j)``, ``i < j``, of joints closer than ``tol`` mm (the same weld spot twice:
+    a copy-paste slip in the CSV, or two seams that meet). Sorted."""
+    from scipy.spatial import cKDTree
+
+    if len(joints) < 2:
+        return []
+    pairs = cKDTree(joints.xyz).query_pairs(tol, output_type="ndarray")
+    return sorted((int(i), int(j)) for i, j in pairs)
 
 
 def _parse_number(raw: str, sep: str, *, path: Path, line: int, field: str) -> float:

@@ -406,6 +406,7 @@ def _plan(
         settings=_settings(cell, config, work.clearance),
         seed=seed,
         stats=_stats(work, seq, legs, bounds, seconds),
+        provenance=dict(getattr(cell, "provenance", None) or {}),
     )
     log.info(
         "route %.2f mm (lower bound %.2f mm), %d pairs planned, %.2f s",

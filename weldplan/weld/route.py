@@ -148,6 +148,12 @@ class Route:
         The integer seed when one was given, else ``None``.
     stats
         Figures of the run (pairs planned, pairs blocked, seconds per stage, sequencer history ...).
+    provenance
+        What the route was planned against (:attr:`weldplan.weld.cell.Cell.provenance`):
+        ``mesh`` (``geometry_sha256`` of the part in mm, ``file``, ``file_sha256``, ``units``,
+        ``scale``, ``repairs``), ``joints``, ``clearance`` and ``pitch``.
+        :func:`~weldplan.weld.verify.verify_route` refuses to check the route against another
+        mesh, scale or clearance. Empty in routes written before it existed.
     """
 
     order: tuple[str, ...]
@@ -161,8 +167,10 @@ class Route:
     settings: dict[str, Any] = field(default_factory=dict)
     seed: int | None = None
     stats: dict[str, Any] = field(default_factory=dict)
+    provenance: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "provenance", dict(self.provenance or {}))
         object.__setattr__(self, "order", tuple(str(i) for i in self.order))
         object.__setattr__(self, "legs", tuple(self.legs))
         object.__setattr__(self, "joint_ids", tuple(str(i) for i in self.joint_ids))
@@ -292,6 +300,7 @@ class Route:
             "settings": self.settings,
             "seed": self.seed,
             "stats": self.stats,
+            "provenance": self.provenance,
         }
 
     @classmethod
@@ -313,6 +322,7 @@ class Route:
             settings=dict(d.get("settings") or {}),
             seed=d.get("seed"),
             stats=dict(d.get("stats") or {}),
+            provenance=dict(d.get("provenance") or {}),
         )
 
     def to_json(self, indent: int | None = 1) -> str:

@@ -28,6 +28,24 @@ spot, where the torch is at the weld, are the only part of the route not checked
 
 A weld spot that is its own virtual joint (it lies in free space, at least ``c`` from the part)
 has no approach: the segment leaving it is checked at the full clearance like any other.
+
+Inside closed solids
+--------------------
+A capsule check sees triangles only: a segment deep inside a closed solid (a block, a cast
+bracket) touches none. So every point of the route but the weld spots on the surface (every
+virtual joint and via, and a spot that is its own virtual joint) is inside-tested against each
+closed component of the part (:class:`~weldplan.geometry.solids.ClosedSolids`, trimesh's ray
+parity through embree: not the open3d occupancy the grid uses). A segment whose capsule misses
+every triangle cannot cross the surface, so it lies wholly inside or wholly outside each closed
+component, and its end points decide which; an approach segment is decided by its virtual joint.
+
+Provenance
+----------
+A route planned by this version records what it was planned against
+(:attr:`weldplan.weld.route.Route.provenance`). :func:`verify_route` refuses, with an
+:class:`~weldplan.errors.InputError`, to check it against a mesh with other geometry (another
+file, or the same file at another units or scale) or at another clearance than it was planned
+for; a route without provenance (written before) is checked with a logged warning.
 """
 
 from __future__ import annotations
@@ -40,7 +58,10 @@ import numpy as np
 import trimesh
 from numpy.typing import NDArray
 
+from weldplan.errors import InputError
 from weldplan.geometry.collision import CollisionModel
+from weldplan.geometry.solids import ClosedSolids
+from weldplan.io.mesh import geometry_hash
 from weldplan.weld.route import Route
 
 log = logging.getLogger(__name__)
@@ -137,8 +158,85 @@ def _collision_model(part: Any) -> CollisionModel:
         return part
     mesh = getattr(part, "part", part)  # a Cell carries its mesh as .part
     if not isinstance(mesh, trimesh.Trimesh):
-        raise TypeError(f"expected a trimesh.Trimesh, a Cell or a CollisionModel, got {type(part)}")
+        raise InputError(
+            f"expected a trimesh.Trimesh, a Cell or a CollisionModel, got {type(part).__name__}"
+        )
     return CollisionModel(mesh)
+
+
+def check_clearance(clearance: Any, what: str = "clearance") -> float:
+    """``float(clearance)`` when it is a positive finite number of mm, else InputError (the
+    message the CLI gives)."""
+    try:
+        c = float(clearance)
+    except (TypeError, ValueError):
+        c = float("nan")
+    if not (np.isfinite(c) and c > 0):
+        raise InputError(f"{what} must be a positive number of mm, got {clearance!r}")
+    return c
+
+
+def check_provenance(route: Route, mesh: trimesh.Trimesh, clearance: float | None) -> None:
+    """InputError when ``route`` was planned against another mesh, scale or clearance.
+
+    ``clearance`` is the one the caller asked for (None: the route's own). A route without
+    provenance passes with a logged warning.
+    """
+    prov = route.provenance
+    if not prov:
+        log.warning(
+            "the route carries no provenance (written before weldplan recorded it): cannot "
+            "check that it was planned for this mesh, scale and clearance"
+        )
+        return
+    planned = prov.get("mesh") or {}
+    want = planned.get("geometry_sha256")
+    if want and geometry_hash(mesh) != want:
+        meta = mesh.metadata.get("weldplan") or {}
+        same_file = planned.get("file_sha256") and meta.get("file_sha256") == planned.get(
+            "file_sha256"
+        )
+        then = f"units {planned.get('units')!r}, scale {planned.get('scale')}"
+        if same_file:
+            now = f"units {meta.get('units')!r}, scale {meta.get('scale')}"
+            raise InputError(
+                f"the route was planned for this mesh file at {then}, it is loaded at {now}: "
+                "give the same --units/--scale/--length as when planning"
+            )
+        raise InputError(
+            f"the route was planned for another mesh ({planned.get('file') or 'in memory'}, "
+            f"{then}; geometry sha256 {str(want)[:12]}..., this one "
+            f"{geometry_hash(mesh)[:12]}...): verify it against the mesh it was planned for"
+        )
+    planned_c = prov.get("clearance")
+    if clearance is not None and planned_c is not None and float(planned_c) != clearance:
+        raise InputError(
+            f"the route was planned at clearance {float(planned_c):g} mm, not {clearance:g} mm: "
+            "verify it at its own clearance (leave --clearance out) or plan it again"
+        )
+
+
+def _inside_solids(
+    route: Route, solids: ClosedSolids, tol: float
+) -> list[tuple[int, int, NDArray[np.float64]]]:
+    """``(leg, segment, point)`` of each route point (but weld spots on the surface) that lies
+    inside a closed solid (trimesh ray parity: :meth:`ClosedSolids.contains`)."""
+    if len(solids) == 0:
+        return []
+    pts, where = [], []
+    for k, leg in enumerate(route.legs):
+        P = leg.points
+        if not np.all(np.isfinite(P)):
+            continue
+        first = 0 if route.is_virtual(leg.from_id, P[0], tol) else 1
+        last = len(P) if route.is_virtual(leg.to_id, P[-1], tol) else len(P) - 1
+        for m in range(first, last):
+            pts.append(P[m])
+            where.append((k, min(m, len(P) - 2)))  # the segment that starts at the point
+    if not pts:
+        return []
+    inside = solids.contains(np.array(pts))
+    return [(k, seg, pts[i]) for i, (k, seg) in enumerate(where) if inside[i]]
 
 
 def approach_pieces(
@@ -204,8 +302,9 @@ def verify_route(
         so the check shares nothing with the planner but the triangles), or a ready
         ``CollisionModel`` (used as is; saves the BVH build when the caller owns one).
     clearance
-        mm, the radius of the torch-tip sphere. Default: the clearance in ``route.settings``,
-        else 5 mm.
+        mm, the radius of the torch-tip sphere, positive and finite. Default: the clearance in
+        ``route.settings``, else 5 mm. A route that records its provenance is refused at any
+        other clearance than its own.
     joints
         Optional ``Joints`` (ids, xyz) from the joints CSV: when given, the route's joint table
         must match it (same ids, weld spots within :data:`ENDPOINT_TOL_MM`).
@@ -217,11 +316,22 @@ def verify_route(
     VerifyReport
         ``ok`` is true when every middle segment is free at ``clearance``, every approach is
         inside its cone (module docstring), every leg starts and ends on its joints' weld spots,
-        and every joint is visited exactly once.
+        and every joint is visited exactly once, and no point of the route lies inside a
+        closed solid of the part (module docstring).
+
+    Raises
+    ------
+    InputError
+        ``clearance`` is not a positive finite number, or the route was planned for another
+        mesh, scale or clearance (module docstring).
     """
-    if clearance is None:
-        clearance = float(route.settings.get("clearance", 5.0))
+    asked = None if clearance is None else check_clearance(clearance)
     model = _collision_model(part)
+    check_provenance(route, model.mesh, asked)
+    if asked is None:
+        clearance = check_clearance(route.settings.get("clearance", 5.0), "the route's clearance")
+    else:
+        clearance = asked
     violations: list[Violation] = []
 
     # joints: each exactly once, and the table matches the joints given
@@ -338,6 +448,13 @@ def verify_route(
     for (k, seg), msg in sorted(failed.items()):
         leg = route.legs[k]
         violations.append(Violation("collision", msg, k, seg, leg.from_id, leg.to_id))
+    for k, seg, p in _inside_solids(route, ClosedSolids.of(model.mesh), ENDPOINT_TOL_MM):
+        if (k, seg) in failed:  # already reported: the segment crosses the solid's surface
+            continue
+        failed[(k, seg)] = "inside"
+        leg = route.legs[k]
+        msg = f"the point {np.round(p, 3).tolist()} lies inside a closed solid of the part"
+        violations.append(Violation("inside", msg, k, seg, leg.from_id, leg.to_id))
 
     n_app = len(set(app_where))
     report = VerifyReport(
