@@ -185,12 +185,13 @@ def test_gun_straddles_a_flange_but_not_the_middle_of_a_wide_plate():
 
 
 def test_triangle_crossings_are_the_ends_of_the_intersection_segment():
-    from weldplan.tool.poses import triangle_crossings
+    from weldplan.tool.verify_poses import triangle_crossings
 
     a = np.array([[-10.0, -10.0, 0.0], [10.0, -10.0, 0.0], [0.0, 10.0, 0.0]])
     b = np.array([[0.0, -5.0, -1.0], [0.0, 5.0, -1.0], [0.0, 0.0, 1.0]])  # plane x = 0
-    pts = triangle_crossings(a, b)
+    P, ok = triangle_crossings(np.stack([a, a]), np.stack([b, b + [0.0, 0.0, 5.0]]))
+    pts = P[0, ok[0]]
     # b's edges from the base to the apex cross z = 0 at y = -2.5 and y = 2.5
     np.testing.assert_allclose(sorted(pts[:, 1]), [-2.5, 2.5], atol=1e-12)
     np.testing.assert_allclose(pts[:, [0, 2]], 0.0, atol=1e-12)
-    assert len(triangle_crossings(a, b + [0.0, 0.0, 5.0])) == 0
+    assert not ok[1].any()  # lifted 5 mm: b no longer reaches a's plane

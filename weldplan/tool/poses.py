@@ -39,7 +39,7 @@ from weldplan.errors import InputError
 from weldplan.tool.model import Tool, bvh
 from weldplan.tool.orient import candidate_rotations, least_rotation_choice, local_candidates
 from weldplan.tool.result import NO_FREE_POSE, OK, Miss, WeldPose, WeldPoses, quat_wxyz
-from weldplan.tool.verify_poses import PoseChecker
+from weldplan.tool.verify_poses import PoseChecker, triangle_crossings
 
 log = logging.getLogger(__name__)
 
@@ -202,36 +202,12 @@ class _Search:
                 c = res.contacts[deepest]
                 # where the hitting tool triangle crosses the part's triangle (TCP frame)
                 other = (part_tri[c.b2] - p) @ R
-                pts = triangle_crossings(self.triangles[c.b1], other)
-                pt = pts.mean(axis=0) if len(pts) else self.triangles[c.b1].mean(axis=0)
+                pts, ok = triangle_crossings(self.triangles[c.b1][None], other[None])
+                pt = pts[0, ok[0]].mean(axis=0) if ok.any() else self.triangles[c.b1].mean(axis=0)
                 best = (key[0], key[1], k, pt)
         assert best is not None
         pen, n_tri, k, pt = best
         return _miss(params[k], 0.0, pen, n_tri, pt, self.tool)
-
-
-def triangle_crossings(a: ArrayLike, b: ArrayLike) -> NDArray[np.float64]:
-    """``(k, 3)``: the points where an edge of triangle ``a (3, 3)`` crosses triangle ``b (3, 3)``
-    or an edge of ``b`` crosses ``a`` (the ends of their intersection segment; empty if none)."""
-    A = np.asarray(a, dtype=np.float64)
-    B = np.asarray(b, dtype=np.float64)
-    out = []
-    for s, t in ((A, B), (B, A)):
-        n = np.cross(t[1] - t[0], t[2] - t[0])
-        nn = float(n @ n)
-        if nn == 0:
-            continue
-        p0, p1 = s, np.roll(s, -1, axis=0)
-        d0, d1 = (p0 - t[0]) @ n, (p1 - t[0]) @ n
-        cross = (d0 * d1 <= 0) & (d0 != d1)
-        if not cross.any():
-            continue
-        u = d0[cross] / (d0[cross] - d1[cross])
-        x = p0[cross] + u[:, None] * (p1[cross] - p0[cross])
-        # inside t: the three edge functions have the sign of the normal
-        e = np.stack([np.cross(np.roll(t, -1, axis=0)[i] - t[i], x - t[i]) @ n for i in range(3)])
-        out.append(x[np.all(e >= -1e-9 * nn, axis=0)])
-    return np.concatenate(out) if out else np.zeros((0, 3))
 
 
 def _miss(par: NDArray, d: float, pen: float, n: int, pt: NDArray, tool: Tool) -> Miss:

@@ -7,8 +7,12 @@ transform from the reported quaternion and position, and checks against python-f
 here from the whole part mesh and the whole tool mesh:
 
 1. contact: ``fcl.collide`` of the **whole** tool against the whole part, with every contact
-   returned; the pose passes only if every contact point lies inside the contact zone (the
-   sphere of ``contact_radius`` about the weld spot) and FCL did not stop at its contact cap;
+   returned; for each touching pair of triangles the points where they cross are computed here
+   (:func:`triangle_crossings`; FCL's own contact position for mesh pairs can be a vertex away
+   from the contact); the pose passes only if every crossing lies inside the contact zone (the
+   sphere of ``contact_radius`` about the weld spot) and FCL did not stop at its contact cap. A
+   touching pair with no crossing (coplanar overlap) passes only if the whole tool triangle lies
+   inside the zone;
 2. clearance: ``fcl.distance`` between the tool outside the zone (recomputed here from the
    tool's raw mesh, :meth:`~weldplan.tool.model.Tool.outside_zone`) and the whole part is at
    least ``clearance`` (with ``clearance = 0``: they do not collide). This also catches a
@@ -27,7 +31,7 @@ from dataclasses import dataclass
 import fcl
 import numpy as np
 import trimesh
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from weldplan.tool.model import Tool, bvh
@@ -81,7 +85,9 @@ class PoseChecker:
         self._part = fcl.CollisionObject(
             bvh(np.asarray(part.vertices), np.asarray(part.faces)), fcl.Transform()
         )
+        self._part_tri = np.asarray(part.vertices, dtype=np.float64)[np.asarray(part.faces)]
         self._tool = fcl.CollisionObject(bvh(tool.vertices, tool.faces), fcl.Transform())
+        self._tool_tri = tool.vertices[tool.faces]
         v, f = tool.outside_zone(self.contact_radius)
         self._outside = fcl.CollisionObject(bvh(v, f), fcl.Transform())
 
@@ -100,8 +106,14 @@ class PoseChecker:
         if n >= MAX_CONTACTS:
             return PoseCheck(False, f"{n} contacts: too many to check")
         if n:
-            pos = np.array([c.pos for c in res.contacts], dtype=np.float64)
-            d = np.linalg.norm(pos - p, axis=1)
+            b1 = np.array([c.b1 for c in res.contacts])
+            b2 = np.array([c.b2 for c in res.contacts])
+            A = self._tool_tri[b1] @ R.T + p
+            B = self._part_tri[b2]
+            pts, ok = triangle_crossings(A, B)
+            d = np.where(ok, np.linalg.norm(pts - p, axis=2), 0.0).max(axis=1)
+            flat = ~ok.any(axis=1)  # coplanar touch: the whole tool triangle must be inside
+            d[flat] = np.linalg.norm(A[flat] - p, axis=2).max(axis=1)
             worst = float(d.max())
             if worst > self.contact_radius + TOLERANCE_MM:
                 return PoseCheck(
@@ -126,6 +138,45 @@ class PoseChecker:
                     f"less than the clearance {self.clearance:g} mm",
                 )
         return PoseCheck(True)
+
+
+def triangle_crossings(A: ArrayLike, B: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    """Where the edges of triangles ``A[i]`` cross triangles ``B[i]`` and vice versa.
+
+    Parameters
+    ----------
+    A, B
+        ``(k, 3, 3)``: k pairs of triangles (mm).
+
+    Returns
+    -------
+    points, valid
+        ``(k, 6, 3)`` and ``(k, 6) bool``: for each pair, the crossings of A's three edges with
+        B, then of B's three edges with A; for two triangles that intersect transversally the
+        valid points are the ends of their intersection segment. Coplanar pairs have none.
+    """
+    A = np.asarray(A, dtype=np.float64).reshape(-1, 3, 3)
+    B = np.asarray(B, dtype=np.float64).reshape(-1, 3, 3)
+    pts, valid = [], []
+    for s, t in ((A, B), (B, A)):
+        n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])  # (k, 3)
+        nn = np.einsum("ij,ij->i", n, n)
+        p0, p1 = s, np.roll(s, -1, axis=1)  # edges (k, 3, 3)
+        d0 = np.einsum("kej,kj->ke", p0 - t[:, None, 0], n)
+        d1 = np.einsum("kej,kj->ke", p1 - t[:, None, 0], n)
+        cross = (d0 * d1 <= 0) & (d0 != d1) & (nn[:, None] > 0)
+        u = np.divide(d0, d0 - d1, out=np.zeros_like(d0), where=d0 != d1)
+        x = p0 + u[..., None] * (p1 - p0)
+        t1 = np.roll(t, -1, axis=1)
+        # inside t: each edge function has the sign of the normal
+        inside = np.ones(cross.shape, dtype=bool)
+        for i in range(3):
+            edge = t1[:, i] - t[:, i]  # (k, 3)
+            w = np.cross(edge[:, None, :], x - t[:, None, i])  # (k, 3, 3)
+            inside &= np.einsum("kej,kj->ke", w, n) >= -1e-9 * nn[:, None]
+        pts.append(x)
+        valid.append(cross & inside)
+    return np.concatenate(pts, axis=1), np.concatenate(valid, axis=1)
 
 
 def verify_poses(
