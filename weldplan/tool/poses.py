@@ -267,8 +267,9 @@ def plan_weld_poses(
         raise TypeError("part_or_cell must be a trimesh.Trimesh or a Cell")
     if clearance is None:
         clearance = float(cell.clearance) if cell is not None else DEFAULT_CLEARANCE
-    if clearance < 0 or contact_radius < 0:
-        raise InputError("clearance and contact_radius must be >= 0", field="clearance")
+    for name, val in (("clearance", clearance), ("contact_radius", contact_radius)):
+        if not val >= 0:
+            raise InputError(f"must be >= 0 mm, got {val}", field=name)
     welds = _welds(route_or_joints, cell)
     if welds.directions is not None:
         axes = -np.asarray(welds.directions, dtype=np.float64)
@@ -295,31 +296,10 @@ def plan_weld_poses(
             for k in np.flatnonzero(np.isnan(dists[i])):  # a miss is measured over all candidates
                 dists[i, k] = search.distance(objs[i], p, rots[i, k])
             misses[i] = search.miss(objs[i], p, rots[i], dists[i], params)
-    poses = []
-    for i, wid in enumerate(welds.ids):
-        base = {
-            "id": wid,
-            "position": tuple(float(v) for v in welds.xyz[i]),
-            "approach": tuple(float(v) for v in axes[i]),
-            "n_collision_free": int(np.sum(dists[i] != 0)),
-        }
-        if i in choice:
-            k = choice[i]
-            poses.append(
-                WeldPose(
-                    status=OK,
-                    quaternion=tuple(float(v) for v in quats[i, k]),  # type: ignore[arg-type]
-                    spin=float(params[k, 0]),
-                    tilt=float(params[k, 1]),
-                    azimuth=float(params[k, 2]),
-                    **base,
-                )
-            )
-        else:
-            poses.append(WeldPose(status=NO_FREE_POSE, quaternion=None, miss=misses.get(i), **base))
+    poses = _assemble(welds, axes, dists, quats, params, choice, misses)
     elapsed = time.perf_counter() - t0
     result = WeldPoses(
-        poses=tuple(poses),
+        poses=poses,
         tool=f"{tool.name} [{tool.source}]",
         total_rotation=total,
         settings={
@@ -341,9 +321,39 @@ def plan_weld_poses(
     return result
 
 
-def _is_free(dist: NDArray, clearance: float) -> NDArray[np.bool_]:
-    """Free: no collision (distance > 0) and at least ``clearance`` from the part."""
-    return (dist > 0) & (dist >= clearance)
+def _assemble(
+    welds: _Welds,
+    axes: NDArray,
+    dists: NDArray,
+    quats: NDArray,
+    params: NDArray,
+    choice: dict[int, int],
+    misses: dict[int, Miss],
+) -> tuple[WeldPose, ...]:
+    """One :class:`WeldPose` per weld from the chosen candidates and the misses."""
+    poses: list[WeldPose] = []
+    for i, wid in enumerate(welds.ids):
+        base = {
+            "id": wid,
+            "position": tuple(float(v) for v in welds.xyz[i]),
+            "approach": tuple(float(v) for v in axes[i]),
+            "n_collision_free": int(np.sum(dists[i] != 0)),
+        }
+        if i in choice:
+            k = choice[i]
+            poses.append(
+                WeldPose(
+                    status=OK,
+                    quaternion=tuple(float(v) for v in quats[i, k]),  # type: ignore[arg-type]
+                    spin=float(params[k, 0]),
+                    tilt=float(params[k, 1]),
+                    azimuth=float(params[k, 2]),
+                    **base,
+                )
+            )
+        else:
+            poses.append(WeldPose(status=NO_FREE_POSE, quaternion=None, miss=misses.get(i), **base))
+    return tuple(poses)
 
 
 def _choose(
