@@ -37,7 +37,8 @@ def _cell(name: str):
 
 
 def _nominal_rotation(poses) -> float:
-    q = quat_wxyz(nominal_frames(np.array([p.approach for p in poses.poses])))
+    """Degrees turned along the ok welds (the DP's chain) by their nominal frames."""
+    q = quat_wxyz(nominal_frames(np.array([p.approach for p in poses.poses if p.ok])))
     return float(sum(rotation_angles(q[i][None], q[i + 1][None])[0, 0] for i in range(len(q) - 1)))
 
 
@@ -45,13 +46,15 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--stations", default="demo,car2_50,car2_200")
     ap.add_argument("--order", choices=("route", "file"), default="route")
+    ap.add_argument("--json", help="folder to write each station's WeldPoses JSON to")
     args = ap.parse_args()
     gun = shared_spot_gun()
     print(f"{platform.node()} ({os.cpu_count()} CPUs), load average {os.getloadavg()}")
     print(f"tool: {gun.name}, {len(gun.faces)} triangles, reach {gun.reach:.0f} mm\n")
     print(
         "| station | order | welds ok / total | pose s / weld | rotation deg (DP) "
-        "| rotation deg (nominal frames) | re-check | collide / distance queries | load |"
+        "| rotation deg (nominal frames, same welds) | re-check "
+        "| collide / distance queries | load |"
     )
     print("|---|---|---|---|---|---|---|---|---|")
     for name in args.stations.split(","):
@@ -72,9 +75,18 @@ def main() -> None:
             f"{' '.join(f'{x:.1f}' for x in os.getloadavg())} |",
             flush=True,
         )
-        misses = [p for p in poses.poses if not p.ok]
-        for p in misses[:5]:
-            print(f"<!-- {name} weld {p.id}: {p.miss.describe() if p.miss else 'no miss'} -->")
+        misses = [p.miss for p in poses.poses if not p.ok and p.miss is not None]
+        near = sum(m.contacts == 0 for m in misses)
+        ahead = sum(m.contacts > 0 and m.tool_point[2] > 0 for m in misses)
+        behind = len(misses) - near - ahead
+        print(
+            f"<!-- {name}: {len(misses)} misses: {ahead} hit ahead of the TCP (fixed electrode / "
+            f"C-arm: part behind the sheet), {behind} behind it (moving electrode, body), "
+            f"{near} only short of the clearance -->"
+        )
+        if args.json:
+            Path(args.json).mkdir(parents=True, exist_ok=True)
+            (Path(args.json) / f"{name}.json").write_text(poses.to_json())
 
 
 if __name__ == "__main__":
