@@ -59,13 +59,13 @@ def route(cell):
 @pytest.mark.parametrize(
     ("kw", "word"),
     [
-        pytest.param({"clearance": 0.0}, "clearance", marks=GEOM_10),
-        pytest.param({"clearance": -1.0}, "clearance", marks=GEOM_10),
-        pytest.param({"clearance": float("nan")}, "clearance", marks=GEOM_10),
-        pytest.param({"clearance": float("inf")}, "clearance", marks=GEOM_10),
-        pytest.param({"clearance": "5"}, "clearance", marks=GEOM_10),
-        pytest.param({"pitch": 0.0}, "pitch", marks=GEOM_10),
-        pytest.param({"margin": float("nan")}, "margin", marks=GEOM_10),
+        pytest.param({"clearance": 0.0}, "clearance"),
+        pytest.param({"clearance": -1.0}, "clearance"),
+        pytest.param({"clearance": float("nan")}, "clearance"),
+        pytest.param({"clearance": float("inf")}, "clearance"),
+        pytest.param({"clearance": "5"}, "clearance"),
+        pytest.param({"pitch": 0.0}, "pitch"),
+        pytest.param({"margin": float("nan")}, "margin"),
         pytest.param({"units": "furlong"}, "units"),
         pytest.param({"scale": float("nan")}, "scale"),
         pytest.param({"scale": 2.0, "length": 100.0}, "scale"),
@@ -81,8 +81,8 @@ def test_load_cell_rejects_bad_settings(scene, kw, word):
 @pytest.mark.parametrize(
     "args",
     [
-        pytest.param((123, "joints"), marks=GEOM_10, id="mesh-int"),
-        pytest.param(("mesh", None), marks=GEOM_10, id="joints-none"),
+        pytest.param((123, "joints"), id="mesh-int"),
+        pytest.param(("mesh", None), id="joints-none"),
         pytest.param(("missing.stl", "joints"), id="mesh-missing"),
         pytest.param(("mesh", "missing.csv"), id="joints-missing"),
     ],
@@ -103,16 +103,16 @@ def test_load_cell_rejects_wrong_arguments(scene, args):
 @pytest.mark.parametrize(
     ("kw", "word"),
     [
-        pytest.param({"xyz": [[np.nan, 0, 0], [0, 0, 0]]}, "finite", marks=GEOM_10, id="nan"),
-        pytest.param({"xyz": [[np.inf, 0, 0], [0, 0, 0]]}, "finite", marks=GEOM_10, id="inf"),
-        pytest.param({"xyz": [[1, 2], [3, 4]]}, "", marks=GEOM_10, id="shape"),
-        pytest.param({"xyz": [["x", "y", "z"], [0, 0, 0]]}, "", marks=GEOM_10, id="strings"),
-        pytest.param({"ids": ("a", "a")}, "unique", marks=GEOM_10, id="duplicate-ids"),
+        pytest.param({"xyz": [[np.nan, 0, 0], [0, 0, 0]]}, "finite", id="nan"),
+        pytest.param({"xyz": [[np.inf, 0, 0], [0, 0, 0]]}, "finite", id="inf"),
+        pytest.param({"xyz": [[1, 2], [3, 4]]}, "", id="shape"),
+        pytest.param({"xyz": [["x", "y", "z"], [0, 0, 0]]}, "", id="strings"),
+        pytest.param({"ids": ("a", "a")}, "unique", id="duplicate-ids"),
         pytest.param(
-            {"directions": [[np.nan, 0, 1], [0, 0, 1]]}, "", marks=GEOM_10, id="nan-direction"
+            {"directions": [[np.nan, 0, 1], [0, 0, 1]]}, "", id="nan-direction"
         ),
         pytest.param(
-            {"directions": [[0, 0, 0], [0, 0, 1]]}, "direction", marks=GEOM_10, id="zero-direction"
+            {"directions": [[0, 0, 0], [0, 0, 1]]}, "direction", id="zero-direction"
         ),
     ],
 )
@@ -127,9 +127,9 @@ def test_joints_reject_bad_values(kw, word):
 @pytest.mark.parametrize(
     ("what", "word"),
     [
-        pytest.param("cell-str", "cell", marks=API_10),
-        pytest.param("rng-negative", "rng", marks=API_10),
-        pytest.param("rng-str", "rng", marks=API_10),
+        pytest.param("cell-str", "cell"),
+        pytest.param("rng-negative", "rng"),
+        pytest.param("rng-str", "rng"),
         pytest.param("planner", "planner"),
         pytest.param("config-clearance", "clearance"),
     ],
@@ -152,10 +152,10 @@ def test_plan_route_rejects_bad_arguments(cell, what, word):
 @pytest.mark.parametrize(
     "clearance",
     [
-        pytest.param(0.0, marks=GEOM_4),
-        pytest.param(-1.0, marks=GEOM_4),
-        pytest.param(float("nan"), marks=GEOM_4),
-        pytest.param(float("inf"), marks=GEOM_4),
+        pytest.param(0.0),
+        pytest.param(-1.0),
+        pytest.param(float("nan")),
+        pytest.param(float("inf")),
     ],
 )
 def test_verify_route_rejects_a_meaningless_clearance(route, cell, clearance):
@@ -166,7 +166,7 @@ def test_verify_route_rejects_a_meaningless_clearance(route, cell, clearance):
 
 
 @pytest.mark.parametrize(
-    "part", [pytest.param("part.stl", marks=API_10), pytest.param(None, marks=API_10)]
+    "part", [pytest.param("part.stl"), pytest.param(None)]
 )
 def test_verify_route_rejects_a_wrong_part(route, part):
     from weldplan.weld.verify import verify_route
@@ -184,9 +184,9 @@ def test_verified_route_of_the_scene_is_ok(route, cell):
 @pytest.mark.parametrize(
     ("a", "b", "r"),
     [
-        pytest.param([np.nan, 0, 10], [0, 0, 10], 5.0, marks=GEOM_4, id="nan-start"),
-        pytest.param([-30, 0, 10], [np.nan, np.nan, np.nan], 5.0, marks=GEOM_4, id="nan-end"),
-        pytest.param([-30, 0, 10], [30, 0, 10], float("nan"), marks=GEOM_4, id="nan-radius"),
+        pytest.param([np.nan, 0, 10], [0, 0, 10], 5.0, id="nan-start"),
+        pytest.param([-30, 0, 10], [np.nan, np.nan, np.nan], 5.0, id="nan-end"),
+        pytest.param([-30, 0, 10], [30, 0, 10], float("nan"), id="nan-radius"),
         pytest.param([-30, 0, 10], [30, 0, 10], -1.0, id="negative-radius-through-wall"),
         pytest.param([-30, 0, 10], [30, 0, 10], 5.0, id="through-wall"),
     ],

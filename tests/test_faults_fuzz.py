@@ -214,9 +214,6 @@ def test_structured_joint_csvs(case):
     _plan_csv_case(case)
 
 
-@pytest.mark.xfail(
-    strict=True, reason="#14 item 8: 1e300 in a joints file, one line: branch cli-trust/geom-trust"
-)
 @fast(5, shrink=False)
 @given(joint_csvs(faults=("none",)), st.sampled_from(["1e300", "-1e300", "1.7e308"]))
 def test_structured_joint_csvs_with_a_huge_coordinate(case, huge):
@@ -299,7 +296,6 @@ def test_random_small_meshes(mesh, suffix, scale):
     _plan_mesh_case(v, f, suffix, scale)
 
 
-@pytest.mark.xfail(strict=True, reason="#14 item 1: fixed on branch geom-trust (non-finite meshes)")
 @fast(5, shrink=False)
 @given(meshes(non_finite=True), SUFFIXES)
 def test_random_meshes_with_a_non_finite_vertex(mesh, suffix):

@@ -41,8 +41,8 @@ def test_child_process_harness_sees_a_clean_run(tmp_path):
 @pytest.mark.parametrize(
     "margin",
     [
-        pytest.param("1e6", marks=_xfail(7, "cli-trust", "the refusal names --margin")),
-        pytest.param("2700", marks=_xfail(7, "cli-trust", "memory estimate before the grid")),
+        pytest.param("1e6"),
+        pytest.param("2700"),
     ],
 )
 def test_huge_margin_is_refused_in_one_line_naming_it(tmp_path, margin):
@@ -51,7 +51,6 @@ def test_huge_margin_is_refused_in_one_line_naming_it(tmp_path, margin):
     assert_one_line_error(o, BAD_INPUT, "--margin")
 
 
-@_xfail(7, "cli-trust", "memory estimate before the grid")
 def test_mm_files_read_as_metres_are_refused_before_the_grid(tmp_path):
     """A station 1000 mm from the origin read with ``--units m``: a grid kilometres wide."""
     off = np.array([1000.0, 500.0, 800.0])
@@ -62,7 +61,6 @@ def test_mm_files_read_as_metres_are_refused_before_the_grid(tmp_path):
     assert_one_line_error(o, BAD_INPUT)
 
 
-@_xfail(7, "cli-trust", "pair-work estimate before planning")
 def test_a_hundred_thousand_joints_are_refused_up_front(tmp_path):
     """100,000 joints on the plate: refused in one line naming an option, within the limit
     (today: minutes of work, then memory)."""
@@ -76,7 +74,6 @@ def test_a_hundred_thousand_joints_are_refused_up_front(tmp_path):
     assert "--" in line, line
 
 
-@_xfail(8, "cli-trust", "an unreachable scheduler is one line")
 def test_unreachable_dask_scheduler_is_one_line(tmp_path):
     sc = make_scene(tmp_path)
     o = run_weldplan(sc.plan_argv("--dask", "tcp://127.0.0.1:9"), timeout=90)
@@ -86,8 +83,8 @@ def test_unreachable_dask_scheduler_is_one_line(tmp_path):
 @pytest.mark.parametrize(
     "value",
     [
-        pytest.param("nan", marks=_xfail(4, "geom-trust", "verify --clearance validated")),
-        pytest.param("inf", marks=_xfail(4, "geom-trust", "verify --clearance validated")),
+        pytest.param("nan"),
+        pytest.param("inf"),
     ],
 )
 def test_verify_with_a_bad_clearance_prints_one_line_from_c_too(tmp_path, value):

@@ -17,9 +17,11 @@ What becomes one line on stderr instead of a traceback, and what does not:
 from __future__ import annotations
 
 import argparse
+import contextlib
 import errno
 import logging
 import sys
+from collections.abc import Iterator
 from importlib import import_module
 from typing import NoReturn
 
@@ -94,10 +96,32 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    logging.basicConfig(
-        level=logging.WARNING - 10 * min(args.verbose, 2),
-        format="%(levelname)s %(name)s: %(message)s",
-    )
+    with _log_to_stderr(logging.WARNING - 10 * min(args.verbose, 2)):
+        return _run(args)
+
+
+@contextlib.contextmanager
+def _log_to_stderr(level: int) -> Iterator[None]:
+    """weldplan's own log records (warnings: coincident joints, repaired faces, ...) go to this
+    call's stderr, whatever the root logger holds (``logging.basicConfig`` is a no-op when an
+    embedding program or a test runner configured logging first, and the warnings were lost)."""
+    logger = logging.getLogger("weldplan")
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter("%(levelname)s %(name)s: %(message)s"))
+    saved = logger.level, logger.propagate
+    logger.addHandler(handler)
+    logger.setLevel(level)
+    logger.propagate = False
+    try:
+        yield
+    finally:
+        logger.removeHandler(handler)
+        logger.setLevel(saved[0])
+        logger.propagate = saved[1]
+
+
+def _run(args: argparse.Namespace) -> int:
+    """The command, with user errors turned into one line and an exit code."""
     try:
         return int(args._run(args) or 0)
     except WeldplanError as exc:

@@ -44,7 +44,17 @@ class Outcome:
 
     @property
     def err_lines(self) -> list[str]:
-        return [ln for ln in self.stderr.splitlines() if ln.strip()]
+        """stderr's lines other than log warnings (``WARNING name: ...``): a warning said before
+        an error (a repaired face, coincident joints) is information, the error is the one line."""
+        return [ln for ln in self.stderr.splitlines() if ln.strip() and not _is_warning(ln)]
+
+    @property
+    def warnings(self) -> list[str]:
+        return [ln for ln in self.stderr.splitlines() if _is_warning(ln)]
+
+
+def _is_warning(line: str) -> bool:
+    return line.startswith("WARNING weldplan")
 
 
 def run_cli(argv: list[str]) -> Outcome:

@@ -46,6 +46,7 @@ from weldplan.geometry.grid import (
 from weldplan.geometry.solids import ClosedSolids
 from weldplan.io.joints import COINCIDENT_MM, Joints, coincident_joints, read_joints
 from weldplan.io.mesh import geometry_hash, load_part
+from weldplan.weld.validate import _is_real
 
 log = logging.getLogger(__name__)
 
@@ -496,10 +497,8 @@ def check_joint_distances(
 
 
 def _finite_mm(name: str, value: Any, *, minimum: float, text: str) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        v = float("nan")
+    # a number, not something float() happens to accept ("5", True): the API says what it takes
+    v = float(value) if _is_real(value) else float("nan")
     if not (np.isfinite(v) and v >= minimum):
         raise InputError(f"{text}, got {value}", field=name)
     return v
@@ -543,6 +542,12 @@ def load_cell(
     InputError
         Bad files, settings, or a joint too far from the part (see :func:`build_cell`).
     """
+    for name, value in (("mesh_path", mesh_path), ("joints_path", joints_path)):
+        if not isinstance(value, (str, PathLike)):
+            raise InputError(
+                f"{name} must be a file path (str or os.PathLike), got {type(value).__name__}",
+                field=name,
+            )
     part = load_part(mesh_path, units=units, scale=scale, length=length)
     joints = read_joints(joints_path, units=joint_units or units)
     return build_cell(part, joints, **kw)

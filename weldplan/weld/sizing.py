@@ -85,9 +85,44 @@ def available_memory() -> float | None:
         return None
 
 
+def _process_ceiling() -> float | None:
+    """Bytes this process may still take under its own limits: the address-space rlimit (less
+    what is mapped already) and a cgroup v2 ``memory.max`` (less ``memory.current``); None when
+    neither is set."""
+    room: list[float] = []
+    try:
+        import resource
+
+        soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+        if soft != resource.RLIM_INFINITY:
+            mapped = 0.0
+            with open("/proc/self/status", encoding="ascii") as f:
+                for line in f:
+                    if line.startswith("VmSize:"):
+                        mapped = float(line.split()[1]) * 1024.0
+            room.append(max(float(soft) - mapped, 0.0))
+    except (ImportError, OSError, ValueError):  # pragma: no cover - not POSIX
+        pass
+    try:
+        with open("/sys/fs/cgroup/memory.max", encoding="ascii") as f:
+            limit = f.read().strip()
+        if limit != "max":
+            with open("/sys/fs/cgroup/memory.current", encoding="ascii") as f:
+                used = float(f.read().strip())
+            room.append(max(float(limit) - used, 0.0))
+    except (OSError, ValueError):
+        pass
+    return min(room) if room else None
+
+
 def default_memory_limit() -> float | None:
-    """GB: :data:`DEFAULT_MEMORY_FRACTION` of :func:`available_memory` (None: unknown)."""
+    """GB: :data:`DEFAULT_MEMORY_FRACTION` of the memory this run can have: the system's
+    :func:`available_memory`, or less where the process runs under an address-space rlimit or a
+    cgroup memory limit (``ulimit -v``, a container); None: unknown."""
     avail = available_memory()
+    ceiling = _process_ceiling()
+    if ceiling is not None:
+        avail = ceiling if avail is None else min(avail, ceiling)
     return None if avail is None else DEFAULT_MEMORY_FRACTION * avail / 1e9
 
 

@@ -76,7 +76,7 @@ def seed(v: Any) -> Any:
     if _is_int(v) and v >= 0:
         return int(v)
     raise ConfigError(
-        f"seed must be an integer >= 0 (or a numpy Generator / SeedSequence), got {v!r}",
+        f"seed (rng) must be an integer >= 0 (or a numpy Generator / SeedSequence), got {v!r}",
         field="seed",
     )
 
