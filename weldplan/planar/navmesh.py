@@ -66,59 +66,57 @@ class NavMesh:
         neighbours: list[Any] | None = None,
     ) -> None:
         V = np.asarray(vertices, dtype=np.float64).reshape(-1, 2)
-        polys = [np.asarray(p, dtype=np.int64).reshape(-1) for p in polygons]
-        nbs = None if neighbours is None else [np.asarray(n, dtype=np.int64) for n in neighbours]
-        for k, p in enumerate(polys):
-            P = V[p]
-            area2 = float(np.sum(P[:, 0] * np.roll(P[:, 1], -1) - np.roll(P[:, 0], -1) * P[:, 1]))
-            if area2 < 0:  # clockwise: reverse, edge k -> edge n - 2 - k (mod n)
-                polys[k] = p[::-1].copy()
-                if nbs is not None:
-                    nbs[k] = np.roll(nbs[k][::-1], -1)
-        if nbs is None:
-            nbs = _match_edges(polys)
+        sizes = np.array([len(p) for p in polygons], dtype=np.int64)
+        ptr = np.zeros(len(sizes) + 1, dtype=np.int64)
+        np.cumsum(sizes, out=ptr[1:])
+        pv = _flat(polygons)
+        nb = None if neighbours is None else _flat(neighbours)
+        owner = np.repeat(np.arange(len(sizes)), sizes)
+        local = np.arange(len(pv)) - ptr[owner]
+        n = sizes[owner]
+        nxt = ptr[owner] + (local + 1) % np.maximum(n, 1)
+        cross = V[pv, 0] * V[pv[nxt], 1] - V[pv[nxt], 0] * V[pv, 1]
+        cw = (np.bincount(owner, weights=cross, minlength=len(sizes)) < 0)[owner]
+        if cw.any():  # clockwise polygons reversed: vertex i <- n-1-i, edge i <- n-2-i (mod n)
+            base = ptr[owner]
+            pv = np.where(cw, pv[base + n - 1 - local], pv)
+            if nb is not None:
+                nb = np.where(cw, nb[base + (n - 2 - local) % n], nb)
+        j_opp = _match_flat(pv, pv[nxt], owner, ptr)
+        if nb is None:
+            nb = np.where(j_opp >= 0, owner[np.maximum(j_opp, 0)], -1)
+        else:
+            wrong = (nb >= 0) & ((j_opp < 0) | (owner[np.maximum(j_opp, 0)] != nb))
+            if wrong.any():
+                k = int(np.nonzero(wrong)[0][0])
+                raise InputError(
+                    f"polygon {owner[k]} edge {local[k]}: neighbour {nb[k]} does not share it"
+                )
+        opp = np.where(nb >= 0, j_opp - ptr[np.maximum(nb, 0)], -1)
+        #: flat arrays: polygon p's vertices are pv[ptr[p]:ptr[p + 1]], likewise its
+        #: neighbours pnb and the index of each edge in its neighbour popp
+        self.ptr, self.pv, self.pnb, self.popp = ptr, pv, nb, opp
         self.vertices = V
-        self.polygons = [p.tolist() for p in polys]
-        self.neighbours = [n.tolist() for n in nbs]
+        cut = ptr[1:-1]
+        self.polygons = [x.tolist() for x in np.split(pv, cut)]
+        self.neighbours = [x.tolist() for x in np.split(nb, cut)]
+        self.opposite = [x.tolist() for x in np.split(opp, cut)]
         self.vx = V[:, 0].tolist()
         self.vy = V[:, 1].tolist()
         lo, hi = (V.min(axis=0), V.max(axis=0)) if len(V) else (np.zeros(2), np.ones(2))
         self.lo, self.hi = lo, hi
         self.scale = float(max(np.hypot(*(hi - lo)), 1e-300))
         self.eps = REL_EPS * self.scale
-        self.opposite = self._opposites()
-        self.corner = _turning_vertices(V, polys, nbs).tolist()
-        self.n_exits = [sum(1 for q in nb if q >= 0) for nb in self.neighbours]
+        self.corner = _turning_vertices(
+            V, pv, pv[nxt], pv[ptr[owner] + (local - 1) % np.maximum(n, 1)], nb
+        )
+        self.n_exits = np.bincount(owner[nb >= 0], minlength=len(sizes))
         self._locator = _PolygonGrid(V, self.polygons)
         log.debug("navmesh: %d vertices, %d polygons", len(V), len(self.polygons))
 
     @property
     def n_polygons(self) -> int:
         return len(self.polygons)
-
-    def _opposites(self) -> list[list[int]]:
-        """``opposite[p][k]``: index of edge ``k`` of ``p`` in its neighbour (``-1`` if none)."""
-        where: dict[tuple[int, int], tuple[int, int]] = {}
-        for p, vs in enumerate(self.polygons):
-            n = len(vs)
-            for k in range(n):
-                where[(vs[k], vs[(k + 1) % n])] = (p, k)
-        out = []
-        for p, (vs, nb) in enumerate(zip(self.polygons, self.neighbours, strict=True)):
-            n = len(vs)
-            row = []
-            for k in range(n):
-                if nb[k] < 0:
-                    row.append(-1)
-                    continue
-                q, j = where.get((vs[(k + 1) % n], vs[k]), (-1, -1))
-                if q != nb[k]:
-                    raise InputError(
-                        f"polygon {p} edge {k}: neighbour {nb[k]} does not share that edge"
-                    )
-                row.append(j)
-            out.append(row)
-        return out
 
     # ------------------------------------------------------------------------ construction
     @classmethod
@@ -264,21 +262,21 @@ class _PolygonGrid:
 
 
 def _turning_vertices(
-    V: NDArray[np.float64], polys: list[NDArray[np.int64]], nbs: list[NDArray[np.int64]]
+    V: NDArray[np.float64],
+    a: NDArray[np.int64],
+    nxt: NDArray[np.int64],
+    prev: NDArray[np.int64],
+    nb: NDArray[np.int64],
 ) -> NDArray[np.bool_]:
     """Vertices where a taut path may turn: on the boundary (an obstacle beside them) with a
     free angle (the polygons' interior angles there, summed) above 180 degrees, or beside two or
     more obstacle wedges (where obstacles touch; kept, since each wedge's own angle is not
     measured here). A shortest path turns only around reflex obstacle corners, so dropping the
     others removes successors that cannot lie on an optimal path (the paper turns at every
-    vertex beside an obstacle)."""
+    vertex beside an obstacle). ``a, nxt, prev`` are each polygon corner's vertex and its
+    polygon's next and previous vertices (flat), ``nb`` the neighbour across edge
+    ``a -> nxt``."""
     nv = len(V)
-    if not polys:
-        return np.zeros(nv, dtype=bool)
-    a = np.concatenate(polys)
-    prev = np.concatenate([np.roll(p, 1) for p in polys])
-    nxt = np.concatenate([np.roll(p, -1) for p in polys])
-    nb = np.concatenate(nbs)  # edge k: a[k] -> nxt[k]
     u = V[prev] - V[a]
     w = V[nxt] - V[a]
     ang = np.arctan2(w[:, 0] * u[:, 1] - w[:, 1] * u[:, 0], np.sum(u * w, axis=1))
@@ -289,23 +287,27 @@ def _turning_vertices(
     return (walls >= 4) | ((walls == 2) & (free > np.pi + 1e-9))
 
 
-def _match_edges(polys: list[NDArray[np.int64]]) -> list[NDArray[np.int64]]:
-    """Neighbour across each edge by matching directed edges ``(a, b)`` with ``(b, a)``."""
-    if not polys:
-        return []
-    sizes = np.array([len(p) for p in polys])
-    a = np.concatenate(polys)
-    b = np.concatenate([np.roll(p, -1) for p in polys])
-    owner = np.repeat(np.arange(len(polys)), sizes)
+def _flat(rows: list[Any]) -> NDArray[np.int64]:
+    """Concatenated integer rows."""
+    if not len(rows):
+        return np.zeros(0, dtype=np.int64)
+    return np.concatenate([np.asarray(r, dtype=np.int64).reshape(-1) for r in rows])
+
+
+def _match_flat(
+    a: NDArray[np.int64], b: NDArray[np.int64], owner: NDArray[np.int64], ptr: NDArray[np.int64]
+) -> NDArray[np.int64]:
+    """For each directed edge ``a[k] -> b[k]``, the flat index of the reversed edge
+    ``b -> a`` (``-1`` if no polygon has it)."""
+    if not len(a):
+        return np.zeros(0, dtype=np.int64)
     m = int(max(a.max(), b.max())) + 1
     key = a * m + b
     rev = b * m + a
-    order = np.argsort(key)
-    pos = np.searchsorted(key[order], rev)
-    pos = np.minimum(pos, len(key) - 1)
-    found = key[order][pos] == rev
-    nb = np.where(found, owner[order][pos], -1)
-    return np.split(nb, np.cumsum(sizes)[:-1])
+    order = np.argsort(key, kind="stable")
+    ks = key[order]
+    pos = np.minimum(np.searchsorted(ks, rev), len(ks) - 1)
+    return np.where(ks[pos] == rev, order[pos], -1)
 
 
 def grid_navmesh(free: ArrayLike) -> NavMesh:

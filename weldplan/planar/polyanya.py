@@ -44,15 +44,14 @@ adds successors but no wrong answers; tolerances are relative to the mesh size
 
 from __future__ import annotations
 
-import heapq
 import logging
 import math
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from weldplan.planar._polyanya_kernel import search
 from weldplan.planar.navmesh import NavMesh
 
 log = logging.getLogger(__name__)
@@ -82,33 +81,9 @@ class PolyanyaResult:
         return math.isfinite(self.length)
 
 
-def _h(
-    rx: float, ry: float, lx: float, ly: float, qx: float, qy: float, tx: float, ty: float
-) -> tuple[float, int]:
-    """Paper sec. 3.2: shortest ``|r x| + |x t|`` over ``x`` in the interval ``[L, R]`` (here
-    ``L = (lx, ly)``, ``R = (qx, qy)``), the goal reflected across the interval's line when on
-    the root's side. Returns ``(h, via)``: ``via`` 0 when the straight segment crosses the
-    interval, -1 through ``L``, 1 through ``R``."""
-    dx, dy = qx - lx, qy - ly
-    sr = dx * (ry - ly) - dy * (rx - lx)
-    st = dx * (ty - ly) - dy * (tx - lx)
-    if sr * st > 0.0:  # same side: reflect t across the line L R
-        d2 = dx * dx + dy * dy
-        k = 2.0 * st / d2
-        tx, ty = tx + k * dy, ty - k * dx
-    # t' in the wedge: left of (or on) the ray r->R and right of (or on) the ray r->L
-    if sr != 0.0:
-        cr = (qx - rx) * (ty - ry) - (qy - ry) * (tx - rx)
-        cl = (lx - rx) * (ty - ry) - (ly - ry) * (tx - rx)
-        if cr >= 0.0 and cl <= 0.0:
-            return math.hypot(tx - rx, ty - ry), 0
-    hl = math.hypot(lx - rx, ly - ry) + math.hypot(tx - lx, ty - ly)
-    hr = math.hypot(qx - rx, qy - ry) + math.hypot(tx - qx, ty - qy)
-    return (hl, -1) if hl <= hr else (hr, 1)
-
-
 class Polyanya:
-    """Polyanya queries on one :class:`NavMesh` (nothing is precomputed beyond the mesh).
+    """Polyanya queries on one :class:`NavMesh` (nothing is precomputed beyond the mesh's
+    flat arrays; the search loop is compiled, :mod:`weldplan.planar._polyanya_kernel`).
 
     Parameters
     ----------
@@ -121,7 +96,13 @@ class Polyanya:
 
     def __init__(self, mesh: NavMesh, *, prune: bool = True) -> None:
         self.mesh = mesh
-        self.prune = prune
+        self.prune = bool(prune)
+        self._vx = np.asarray(mesh.vx, dtype=np.float64)
+        self._vy = np.asarray(mesh.vy, dtype=np.float64)
+        self._corner = np.asarray(mesh.corner, dtype=np.bool_)
+        self._nexits = np.asarray(mesh.n_exits, dtype=np.int64)
+        sizes = np.diff(mesh.ptr)
+        self._max_sides = int(sizes.max()) if len(sizes) else 3
 
     def distance(self, start: ArrayLike, goal: ArrayLike) -> float:
         """Shortest path length, ``inf`` when none exists (or a point is off the mesh)."""
@@ -132,223 +113,32 @@ class Polyanya:
         m = self.mesh
         s = np.asarray(start, dtype=np.float64).reshape(2)
         t = np.asarray(goal, dtype=np.float64).reshape(2)
-        sx, sy, tx, ty = float(s[0]), float(s[1]), float(t[0]), float(t[1])
-        none = PolyanyaResult(math.inf, np.zeros((0, 2)))
         spolys = m.locate(s)
         tpolys = m.locate(t)
         if not spolys or not tpolys:
-            return none
-        goal_polys = set(tpolys)
-        if goal_polys.intersection(spolys):
-            return PolyanyaResult(math.hypot(tx - sx, ty - sy), np.array([s, t]), 0, 0)
-        return _Search(self, sx, sy, tx, ty, goal_polys).run(spolys) or none
-
-
-class _Search:
-    """The state of one query: open list, root records, best ``g`` per root vertex."""
-
-    def __init__(
-        self, owner: Polyanya, sx: float, sy: float, tx: float, ty: float, goal_polys: set[int]
-    ) -> None:
-        m = owner.mesh
-        self.m = m
-        self.prune = owner.prune
-        self.tx, self.ty = tx, ty
-        self.goal_polys = goal_polys
-        self.eps = m.eps
-        self.heap: list[tuple[Any, ...]] = []
-        self.tick = 0
-        # roots: (x, y, parent record) so the path can be read back
-        self.roots: list[tuple[float, float, int]] = [(sx, sy, -1)]
-        self.best_g: dict[int, float] = {}
-        self.expanded = 0
-
-    # a node is the tuple (f, tick, g, rx, ry, root_rec, root_vertex, lx, ly, qx, qy, poly, j):
-    # interval L = (lx, ly), R = (qx, qy) on the entry edge j of polygon ``poly`` (L is its vertex
-    # j, R its vertex j + 1 in poly's counter-clockwise order, up to the cuts of the projection)
-
-    def run(self, spolys: list[int]) -> PolyanyaResult | None:
-        m = self.m
-        sx, sy, _ = self.roots[0]
-        eps = self.eps
-        vx, vy = m.vx, m.vy
-        succ: list[tuple[Any, ...]] = []
-        for p in spolys:
-            vs, nb, op = m.polygons[p], m.neighbours[p], m.opposite[p]
-            n = len(vs)
-            for k in range(n):
-                a, b = vs[k], vs[(k + 1) % n]
-                ex, ey = vx[b] - vx[a], vy[b] - vy[a]
-                if ex * (sy - vy[a]) - ey * (sx - vx[a]) <= eps * math.hypot(ex, ey):
-                    continue  # the start lies on this edge's line: seen from the next polygon
-                # seen from inside p, edge k's right end is a and its left end b
-                self._push(succ, 0.0, sx, sy, 0, -1, vx[b], vy[b], vx[a], vy[a], nb[k], op[k])
-        for node in succ:
-            heapq.heappush(self.heap, node)
-        heap = self.heap
-        while heap:
-            node = heapq.heappop(heap)
-            if node[11] == -2:  # the final node
-                return self._result(node)
-            rv = node[6]
-            if rv >= 0 and self.prune and node[2] > self.best_g.get(rv, math.inf) + eps:
-                continue
-            while node is not None:
-                succ = []
-                self._expand(node, succ)
-                self.expanded += 1
-                node = None
-                if self.prune and len(succ) == 1 and succ[0][11] != -2:
-                    node = succ[0]  # intermediate pruning: expand the lone successor now
-                else:
-                    for s in succ:
-                        heapq.heappush(heap, s)
-        return None
-
-    def _push(
-        self,
-        out: list[tuple[Any, ...]],
-        g: float,
-        rx: float,
-        ry: float,
-        rec: int,
-        rv: int,
-        lx: float,
-        ly: float,
-        qx: float,
-        qy: float,
-        poly: int,
-        j: int,
-    ) -> None:
-        """Append the successor with interval ``[L, R]`` entering ``poly`` by its edge ``j``,
-        unless it is empty, leads into an obstacle or a dead end."""
-        if poly < 0:
-            return
-        if abs(lx - qx) + abs(ly - qy) <= self.eps:
-            return
-        if self.prune and self.m.n_exits[poly] <= 1 and poly not in self.goal_polys:
-            return  # dead end
-        h, _ = _h(rx, ry, lx, ly, qx, qy, self.tx, self.ty)
-        self.tick += 1
-        out.append((g + h, self.tick, g, rx, ry, rec, rv, lx, ly, qx, qy, poly, j))
-
-    def _new_root(self, g: float, v: int, rec: int) -> int:
-        """Record root vertex ``v`` reached with ``g``; ``-1`` when root-level pruning drops it."""
-        if self.prune:
-            best = self.best_g.get(v, math.inf)
-            if g > best + self.eps:
-                return -1
-            if g < best:
-                self.best_g[v] = g
-        m = self.m
-        self.roots.append((m.vx[v], m.vy[v], rec))
-        return len(self.roots) - 1
-
-    def _expand(self, node: tuple[Any, ...], out: list[tuple[Any, ...]]) -> None:
-        _, _, g, rx, ry, rec, rv, lx, ly, qx, qy, poly, j = node
-        m = self.m
-        eps = self.eps
-        vs, nb, op = m.polygons[poly], m.neighbours[poly], m.opposite[poly]
-        n = len(vs)
-        vx, vy = m.vx, m.vy
-        if poly in self.goal_polys:
-            h, via = _h(rx, ry, lx, ly, qx, qy, self.tx, self.ty)
-            turn = (lx, ly) if via == -1 else (qx, qy) if via == 1 else None
-            self.tick += 1
-            out.append((g + h, self.tick, g, rx, ry, rec, rv, turn, None, None, None, -2, -1))
-            return
-        # far boundary: ks[0] = R's vertex (j + 1) ... ks[n - 1] = L's vertex (j)
-        ks = [vs[(j + 1 + i) % n] for i in range(n)]
-        ei = [(j + 1 + i) % n for i in range(n - 1)]  # edge index of far edge i in poly
-        px = [vx[k] for k in ks]
-        py = [vy[k] for k in ks]
-        dRx, dRy = qx - rx, qy - ry
-        dLx, dLy = lx - rx, ly - ry
-        wedge = dRx * dLy - dRy * dLx  # > 0: L left of the ray r->R
-        nR = math.hypot(dRx, dRy)
-        nL = math.hypot(dLx, dLy)
-        if wedge <= eps * max(nR, nL):
-            # the root is on the interval's line, at one of the edge's ends: it sees all of poly
-            for i in range(n - 1):
-                e = ei[i]
-                self._push(
-                    out, g, rx, ry, rec, rv, px[i + 1], py[i + 1], px[i], py[i], nb[e], op[e]
-                )
-            return
-        cr = [dRx * (py[i] - ry) - dRy * (px[i] - rx) for i in range(n)]
-        cl = [dLx * (py[i] - ry) - dLy * (px[i] - rx) for i in range(n)]
-        tR = eps * nR
-        tL = eps * nL
-        # the right ray leaves poly on far edge ir, the left ray on far edge il
-        i = 1
-        while i < n - 1 and cr[i] <= tR:
-            i += 1
-        ir = i - 1
-        i = n - 2
-        while i > 0 and cl[i] >= -tL:
-            i -= 1
-        il = i
-        if il < ir:  # rounding in a needle-thin wedge
-            il = ir
-        if cr[ir] <= tR and cr[ir] >= -tR:
-            xrx, xry = px[ir], py[ir]
-        else:
-            s = cr[ir] / (cr[ir] - cr[ir + 1])
-            xrx, xry = px[ir] + s * (px[ir + 1] - px[ir]), py[ir] + s * (py[ir + 1] - py[ir])
-        if cl[il + 1] <= tL and cl[il + 1] >= -tL:
-            xlx, xly = px[il + 1], py[il + 1]
-        else:
-            s = cl[il] / (cl[il] - cl[il + 1])
-            xlx, xly = px[il] + s * (px[il + 1] - px[il]), py[il] + s * (py[il + 1] - py[il])
-        # observable successors: same root
-        for i in range(ir, il + 1):
-            ax, ay = (xrx, xry) if i == ir else (px[i], py[i])
-            bx, by = (xlx, xly) if i == il else (px[i + 1], py[i + 1])
-            e = ei[i]
-            self._push(out, g, rx, ry, rec, rv, bx, by, ax, ay, nb[e], op[e])
-        # non-observable successors: the path turns at R's (or L's) vertex when it is a corner
-        v = ks[0]
-        if m.corner[v] and abs(qx - px[0]) + abs(qy - py[0]) <= eps:
-            g2 = g + nR
-            rec2 = self._new_root(g2, v, rec)
-            if rec2 >= 0:
-                for i in range(ir + 1):
-                    bx, by = (xrx, xry) if i == ir else (px[i + 1], py[i + 1])
-                    e = ei[i]
-                    self._push(out, g2, px[0], py[0], rec2, v, bx, by, px[i], py[i], nb[e], op[e])
-        v = ks[n - 1]
-        if m.corner[v] and abs(lx - px[n - 1]) + abs(ly - py[n - 1]) <= eps:
-            g2 = g + nL
-            rec2 = self._new_root(g2, v, rec)
-            if rec2 >= 0:
-                for i in range(il, n - 1):
-                    ax, ay = (xlx, xly) if i == il else (px[i], py[i])
-                    e = ei[i]
-                    self._push(
-                        out,
-                        g2,
-                        px[n - 1],
-                        py[n - 1],
-                        rec2,
-                        v,
-                        px[i + 1],
-                        py[i + 1],
-                        ax,
-                        ay,
-                        nb[e],
-                        op[e],
-                    )
-
-    def _result(self, node: tuple[Any, ...]) -> PolyanyaResult:
-        f, _, _, rx, ry, rec, _, turn = node[:8]
-        pts = [(self.tx, self.ty)]
-        if turn is not None:
-            pts.append(turn)
-        while rec >= 0:
-            x, y, rec = self.roots[rec]
-            pts.append((x, y))
-        P = np.array(pts[::-1], dtype=np.float64)
-        return PolyanyaResult(float(f), P, self.expanded, self.tick)
+            return PolyanyaResult(math.inf, np.zeros((0, 2)))
+        if set(tpolys).intersection(spolys):  # one convex polygon: the straight segment
+            return PolyanyaResult(float(np.hypot(*(t - s))), np.array([s, t]))
+        (length, pts), expanded, generated = search(
+            self._vx,
+            self._vy,
+            m.ptr,
+            m.pv,
+            m.pnb,
+            m.popp,
+            self._corner,
+            self._nexits,
+            self._max_sides,
+            np.asarray(spolys, dtype=np.int64),
+            np.asarray(tpolys, dtype=np.int64),
+            float(s[0]),
+            float(s[1]),
+            float(t[0]),
+            float(t[1]),
+            m.eps,
+            self.prune,
+        )
+        return PolyanyaResult(float(length), pts, int(expanded), int(generated))
 
 
 def polyanya_path(mesh: NavMesh, start: ArrayLike, goal: ArrayLike) -> PolyanyaResult:
