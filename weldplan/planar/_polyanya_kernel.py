@@ -59,20 +59,15 @@ def heuristic(rx, ry, lx, ly, qx, qy, tx, ty):  # type: ignore[no-untyped-def]
 
 @njit(cache=True)
 def _push(NF, NI, nn, g, rx, ry, rec, rv, lx, ly, qx, qy, poly, j, tx, ty, eps, prune, nexits,
-          gpolys):  # type: ignore[no-untyped-def]  # fmt: skip
+          is_goal):  # type: ignore[no-untyped-def]  # fmt: skip
     """Store a successor unless it is empty or enters an obstacle or a dead end (sec. 4);
     returns the new node count."""
     if poly < 0:
         return nn
     if abs(lx - qx) + abs(ly - qy) <= eps:
         return nn
-    if prune and nexits[poly] <= 1:
-        goal = False
-        for p in gpolys:
-            if p == poly:
-                goal = True
-        if not goal:
-            return nn
+    if prune and nexits[poly] <= 1 and not is_goal[poly]:
+        return nn
     h, _ = heuristic(rx, ry, lx, ly, qx, qy, tx, ty)
     NF[nn, 0] = g + h
     NF[nn, 1] = g
@@ -90,8 +85,8 @@ def _push(NF, NI, nn, g, rx, ry, rec, rv, lx, ly, qx, qy, poly, j, tx, ty, eps, 
 
 
 @njit(cache=True)
-def _expand(k, NF, NI, nn, RT, RP, nr, best, vx, vy, ptr, pv, pnb, pop, corner, nexits, gpolys,
-            tx, ty, eps, prune):  # type: ignore[no-untyped-def]  # fmt: skip
+def _expand(k, NF, NI, nn, RT, RP, nr, best, vx, vy, ptr, pv, pnb, pop, corner, nexits, is_goal,
+            tx, ty, eps, prune, px, py):  # type: ignore[no-untyped-def]  # fmt: skip
     """Expand node ``k`` (sec. 3.1): observable successors between the rays through ``R`` and
     ``L``, non-observable ones rooted at ``R``'s or ``L``'s vertex when it is a corner, only
     the final node when the polygon holds the goal. Returns ``(node count, root count)``."""
@@ -99,26 +94,23 @@ def _expand(k, NF, NI, nn, RT, RP, nr, best, vx, vy, ptr, pv, pnb, pop, corner, 
     rx, ry = NF[k, 2], NF[k, 3]
     lx, ly, qx, qy = NF[k, 4], NF[k, 5], NF[k, 6], NF[k, 7]
     rec, rv, poly, j = NI[k, 0], NI[k, 1], NI[k, 2], NI[k, 3]
-    for p in gpolys:
-        if p == poly:  # the final node (sec. 3.3)
-            h, via = heuristic(rx, ry, lx, ly, qx, qy, tx, ty)
-            NF[nn, 0] = g + h
-            NF[nn, 1] = g
-            NF[nn, 2] = rx
-            NF[nn, 3] = ry
-            NF[nn, 4] = lx if via == -1 else qx
-            NF[nn, 5] = ly if via == -1 else qy
-            NI[nn, 0] = rec
-            NI[nn, 1] = rv
-            NI[nn, 2] = -2
-            NI[nn, 3] = via
-            return nn + 1, nr
+    if is_goal[poly]:  # the final node (sec. 3.3)
+        h, via = heuristic(rx, ry, lx, ly, qx, qy, tx, ty)
+        NF[nn, 0] = g + h
+        NF[nn, 1] = g
+        NF[nn, 2] = rx
+        NF[nn, 3] = ry
+        NF[nn, 4] = lx if via == -1 else qx
+        NF[nn, 5] = ly if via == -1 else qy
+        NI[nn, 0] = rec
+        NI[nn, 1] = rv
+        NI[nn, 2] = -2
+        NI[nn, 3] = via
+        return nn + 1, nr
     b0 = ptr[poly]
     n = ptr[poly + 1] - b0
     # far boundary: vertex i = poly's vertex j + 1 + i (i = 0: R's vertex, n - 1: L's vertex);
     # far edge i runs from far vertex i to i + 1 and is poly's edge j + 1 + i
-    px = np.empty(n)
-    py = np.empty(n)
     for i in range(n):
         v = pv[b0 + (j + 1 + i) % n]
         px[i] = vx[v]
@@ -132,7 +124,7 @@ def _expand(k, NF, NI, nn, RT, RP, nr, best, vx, vy, ptr, pv, pnb, pop, corner, 
         for i in range(n - 1):
             e = b0 + (j + 1 + i) % n
             nn = _push(NF, NI, nn, g, rx, ry, rec, rv, px[i + 1], py[i + 1], px[i], py[i],
-                       pnb[e], pop[e], tx, ty, eps, prune, nexits, gpolys)  # fmt: skip
+                       pnb[e], pop[e], tx, ty, eps, prune, nexits, is_goal)  # fmt: skip
         return nn, nr
     tR = eps * nR
     tL = eps * nL
@@ -163,7 +155,7 @@ def _expand(k, NF, NI, nn, RT, RP, nr, best, vx, vy, ptr, pv, pnb, pop, corner, 
         bx, by = (xlx, xly) if i == il else (px[i + 1], py[i + 1])
         e = b0 + (j + 1 + i) % n
         nn = _push(NF, NI, nn, g, rx, ry, rec, rv, bx, by, ax, ay, pnb[e], pop[e], tx, ty, eps,
-                   prune, nexits, gpolys)  # fmt: skip
+                   prune, nexits, is_goal)  # fmt: skip
     v = pv[b0 + (j + 1) % n]
     if corner[v] and abs(qx - px[0]) + abs(qy - py[0]) <= eps:
         g2 = g + nR
@@ -177,7 +169,7 @@ def _expand(k, NF, NI, nn, RT, RP, nr, best, vx, vy, ptr, pv, pnb, pop, corner, 
                 bx, by = (xrx, xry) if i == ir else (px[i + 1], py[i + 1])
                 e = b0 + (j + 1 + i) % n
                 nn = _push(NF, NI, nn, g2, px[0], py[0], nr - 1, v, bx, by, px[i], py[i],
-                           pnb[e], pop[e], tx, ty, eps, prune, nexits, gpolys)  # fmt: skip
+                           pnb[e], pop[e], tx, ty, eps, prune, nexits, is_goal)  # fmt: skip
     v = pv[b0 + j]
     if corner[v] and abs(lx - px[n - 1]) + abs(ly - py[n - 1]) <= eps:
         g2 = g + nL
@@ -192,7 +184,7 @@ def _expand(k, NF, NI, nn, RT, RP, nr, best, vx, vy, ptr, pv, pnb, pop, corner, 
                 e = b0 + (j + 1 + i) % n
                 nn = _push(NF, NI, nn, g2, px[n - 1], py[n - 1], nr - 1, v, px[i + 1],
                            py[i + 1], ax, ay, pnb[e], pop[e], tx, ty, eps, prune, nexits,
-                           gpolys)  # fmt: skip
+                           is_goal)  # fmt: skip
     return nn, nr
 
 
@@ -203,6 +195,11 @@ def search(vx, vy, ptr, pv, pnb, pop, corner, nexits, max_sides, spolys, gpolys,
     ``(tx, ty)`` (in ``gpolys``). Returns ``(length, path (k, 2), expanded, generated)``;
     length ``inf`` and an empty path when the goal cannot be reached."""
     best = np.full(vx.shape[0], np.inf)
+    is_goal = np.zeros(nexits.shape[0], dtype=np.bool_)
+    for p in gpolys:
+        is_goal[p] = True
+    px = np.empty(max_sides)  # the far boundary of the polygon being expanded
+    py = np.empty(max_sides)
     cap = 4096
     NF = np.empty((cap, 8))
     NI = np.empty((cap, 4), dtype=np.int64)
@@ -230,7 +227,7 @@ def search(vx, vy, ptr, pv, pnb, pop, corner, nexits, max_sides, spolys, gpolys,
             if ex * (sy - vy[a]) - ey * (sx - vx[a]) <= eps * math.hypot(ex, ey):
                 continue
             nn = _push(NF, NI, nn, 0.0, sx, sy, 0, -1, vx[b], vy[b], vx[a], vy[a], pnb[b0 + k],
-                       pop[b0 + k], tx, ty, eps, prune, nexits, gpolys)  # fmt: skip
+                       pop[b0 + k], tx, ty, eps, prune, nexits, is_goal)  # fmt: skip
     heap = [(0.0, 0)]
     heap.pop()
     for i in range(nn):
@@ -260,7 +257,7 @@ def search(vx, vy, ptr, pv, pnb, pop, corner, nexits, max_sides, spolys, gpolys,
                 RP = RP2
             first = nn
             nn, nr = _expand(k, NF, NI, nn, RT, RP, nr, best, vx, vy, ptr, pv, pnb, pop, corner,
-                             nexits, gpolys, tx, ty, eps, prune)  # fmt: skip
+                             nexits, is_goal, tx, ty, eps, prune, px, py)  # fmt: skip
             expanded += 1
             if prune and nn - first == 1 and NI[first, 2] != -2:
                 k = first  # intermediate pruning: expand the lone successor at once

@@ -138,6 +138,10 @@ class Polyanya:
             m.eps,
             self.prune,
         )
+        if len(pts) > 2:  # a turn at an interval end that is also the root: listed once
+            keep = np.ones(len(pts), dtype=bool)
+            keep[1:] = np.abs(np.diff(pts, axis=0)).max(axis=1) > m.eps
+            pts = pts[keep]
         return PolyanyaResult(float(length), pts, int(expanded), int(generated))
 
 
