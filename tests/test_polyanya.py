@@ -231,3 +231,39 @@ def test_clockwise_polygons_and_file_neighbours_agree_with_matched_edges():
     cw = NavMesh(V, [[5, 4, 1, 0], [4, 3, 2, 1]], [[-1, 1, -1, -1], [-1, -1, -1, 0]])
     assert cw.neighbours == TWO.neighbours and cw.polygons == TWO.polygons
     assert Polyanya(cw).distance([0.1, 0.1], [1.9, 0.9]) == pytest.approx(math.hypot(1.8, 0.8))
+
+
+# ------------------------------------------------------------------------ planar scenarios
+#: bundled scenarios whose visibility graph (128-gon circles, many obstacles) takes seconds
+_HEAVY = {"circles-2", "circles-3", "map20-3"}
+
+
+def _scenario_case(name: str) -> None:
+    from weldplan.planar.scenarios import load_scenario
+    from weldplan.planar.solve import exact_optimum
+
+    sc = load_scenario(name)
+    ours = exact_optimum(sc, "segments")
+    assert ours.method == "polyanya"
+    vg = visibility_shortest_path(sc.world, sc.start, sc.goal, bounds=sc.bounds)
+    assert ours.length == pytest.approx(vg.length, rel=1e-9), name
+    P = ours.points_array
+    np.testing.assert_allclose(P[[0, -1]], [sc.start, sc.goal])
+    assert np.all(sc.world.segments_free(P[:-1], P[1:])), name
+
+
+def _bundled() -> list[str]:
+    from weldplan.planar.scenarios import available_scenarios
+
+    return available_scenarios()
+
+
+@pytest.mark.parametrize("name", [n for n in _bundled() if n not in _HEAVY])
+def test_exact_optimum_is_polyanya_and_equals_the_visibility_graph(name):
+    _scenario_case(name)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", sorted(_HEAVY))
+def test_exact_optimum_equals_the_visibility_graph_on_heavy_scenarios(name):
+    _scenario_case(name)
