@@ -15,7 +15,6 @@ straight, through ``R``. Root records ``(x, y, parent)`` give the path back.
 
 from __future__ import annotations
 
-import heapq
 import math
 from typing import Any
 
@@ -189,6 +188,47 @@ def _expand(k, NF, NI, nn, RT, RP, nr, best, vx, vy, ptr, pv, pnb, pop, corner, 
 
 
 @njit(cache=True)
+def _heap_push(hf, hi, size, f, k):  # type: ignore[no-untyped-def]
+    """Binary min-heap on arrays (keys ``hf``, node indices ``hi``): add ``(f, k)``."""
+    i = size
+    while i > 0:
+        p = (i - 1) >> 1
+        if hf[p] <= f:
+            break
+        hf[i] = hf[p]
+        hi[i] = hi[p]
+        i = p
+    hf[i] = f
+    hi[i] = k
+    return size + 1
+
+
+@njit(cache=True)
+def _heap_pop(hf, hi, size):  # type: ignore[no-untyped-def]
+    """Remove the smallest key; returns ``(its node index, new size)``."""
+    k = hi[0]
+    size -= 1
+    f = hf[size]
+    x = hi[size]
+    i = 0
+    while True:
+        c = 2 * i + 1
+        if c >= size:
+            break
+        if c + 1 < size and hf[c + 1] < hf[c]:
+            c += 1
+        if hf[c] >= f:
+            break
+        hf[i] = hf[c]
+        hi[i] = hi[c]
+        i = c
+    if size > 0:
+        hf[i] = f
+        hi[i] = x
+    return k, size
+
+
+@njit(cache=True)
 def search(vx, vy, ptr, pv, pnb, pop, corner, nexits, max_sides, spolys, gpolys, sx, sy, tx, ty,
            eps, prune):  # type: ignore[no-untyped-def]  # fmt: skip
     """A* over Polyanya search nodes from ``(sx, sy)`` (in the polygons ``spolys``) to
@@ -228,13 +268,14 @@ def search(vx, vy, ptr, pv, pnb, pop, corner, nexits, max_sides, spolys, gpolys,
                 continue
             nn = _push(NF, NI, nn, 0.0, sx, sy, 0, -1, vx[b], vy[b], vx[a], vy[a], pnb[b0 + k],
                        pop[b0 + k], tx, ty, eps, prune, nexits, is_goal)  # fmt: skip
-    heap = [(0.0, 0)]
-    heap.pop()
+    hf = np.empty(cap)
+    hi = np.empty(cap, dtype=np.int64)
+    hs = 0
     for i in range(nn):
-        heapq.heappush(heap, (NF[i, 0], i))
+        hs = _heap_push(hf, hi, hs, NF[i, 0], i)
     expanded = 0
-    while len(heap) > 0:
-        _, k = heapq.heappop(heap)
+    while hs > 0:
+        k, hs = _heap_pop(hf, hi, hs)
         if NI[k, 2] == -2:
             return _result(k, NF, NI, RT, RP, tx, ty), expanded, nn
         rv = NI[k, 1]
@@ -255,6 +296,12 @@ def search(vx, vy, ptr, pv, pnb, pop, corner, nexits, max_sides, spolys, gpolys,
                 RP2 = np.empty(cap, dtype=np.int64)
                 RP2[:nr] = RP[:nr]
                 RP = RP2
+                hf2 = np.empty(cap)
+                hf2[:hs] = hf[:hs]
+                hf = hf2
+                hi2 = np.empty(cap, dtype=np.int64)
+                hi2[:hs] = hi[:hs]
+                hi = hi2
             first = nn
             nn, nr = _expand(k, NF, NI, nn, RT, RP, nr, best, vx, vy, ptr, pv, pnb, pop, corner,
                              nexits, is_goal, tx, ty, eps, prune, px, py)  # fmt: skip
@@ -263,7 +310,7 @@ def search(vx, vy, ptr, pv, pnb, pop, corner, nexits, max_sides, spolys, gpolys,
                 k = first  # intermediate pruning: expand the lone successor at once
                 continue
             for i in range(first, nn):
-                heapq.heappush(heap, (NF[i, 0], i))
+                hs = _heap_push(hf, hi, hs, NF[i, 0], i)
             break
     length = np.inf
     return (length, np.empty((0, 2))), expanded, nn
