@@ -32,10 +32,11 @@ except ImportError:  # pragma: no cover
 
 @njit(cache=True)
 def heuristic(rx, ry, lx, ly, qx, qy, tx, ty):  # type: ignore[no-untyped-def]
-    """Paper sec. 3.2: the shortest ``|r x| + |x t|`` for ``x`` in the interval ``[L, R]``, the
-    goal reflected across the interval's line when it is on the root's side. Returns
-    ``(h, via)``: ``via`` 0 when the straight segment crosses the interval, -1 through ``L``,
-    1 through ``R``. A root on the interval's line gets the nearer endpoint's detour."""
+    """The paper's h-value ("Evaluating Search Nodes"): the shortest ``|r x| + |x t|`` for
+    ``x`` in the interval ``[L, R]``, the goal reflected across the interval's line when it is
+    on the root's side. Returns ``(h, via)``: ``via`` 0 when the straight segment crosses the
+    interval, -1 through ``L``, 1 through ``R``. A root on the interval's line gets the nearer
+    endpoint's detour."""
     dx = qx - lx
     dy = qy - ly
     sr = dx * (ry - ly) - dy * (rx - lx)
@@ -59,8 +60,8 @@ def heuristic(rx, ry, lx, ly, qx, qy, tx, ty):  # type: ignore[no-untyped-def]
 @njit(cache=True)
 def _push(NF, NI, nn, g, rx, ry, rec, rv, lx, ly, qx, qy, poly, j, tx, ty, eps, prune, nexits,
           is_goal):  # type: ignore[no-untyped-def]  # fmt: skip
-    """Store a successor unless it is empty or enters an obstacle or a dead end (sec. 4);
-    returns the new node count."""
+    """Store a successor unless it is empty or enters an obstacle or a cul-de-sac (the paper's
+    pruning); returns the new node count."""
     if poly < 0:
         return nn
     if abs(lx - qx) + abs(ly - qy) <= eps:
@@ -86,14 +87,15 @@ def _push(NF, NI, nn, g, rx, ry, rec, rv, lx, ly, qx, qy, poly, j, tx, ty, eps, 
 @njit(cache=True)
 def _expand(k, NF, NI, nn, RT, RP, nr, best, vx, vy, ptr, pv, pnb, pop, corner, nexits, is_goal,
             tx, ty, eps, prune, px, py):  # type: ignore[no-untyped-def]  # fmt: skip
-    """Expand node ``k`` (sec. 3.1): observable successors between the rays through ``R`` and
-    ``L``, non-observable ones rooted at ``R``'s or ``L``'s vertex when it is a corner, only
-    the final node when the polygon holds the goal. Returns ``(node count, root count)``."""
+    """Expand node ``k`` (the paper's "Successors", Fig. 3): observable successors between the
+    rays through ``R`` and ``L``, non-observable ones rooted at ``R``'s or ``L``'s vertex when
+    it is a corner, only the final node when the polygon holds the goal. Returns
+    ``(node count, root count)``."""
     g = NF[k, 1]
     rx, ry = NF[k, 2], NF[k, 3]
     lx, ly, qx, qy = NF[k, 4], NF[k, 5], NF[k, 6], NF[k, 7]
     rec, rv, poly, j = NI[k, 0], NI[k, 1], NI[k, 2], NI[k, 3]
-    if is_goal[poly]:  # the final node (sec. 3.3)
+    if is_goal[poly]:  # the final node
         h, via = heuristic(rx, ry, lx, ly, qx, qy, tx, ty)
         NF[nn, 0] = g + h
         NF[nn, 1] = g

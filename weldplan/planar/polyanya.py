@@ -1,45 +1,52 @@
 """Polyanya: exact any-angle shortest paths on a navigation mesh, online, without preprocessing.
 
 Cui, Harabor and Grastien, "Compromise-free pathfinding on a navigation mesh", IJCAI 2017.
-The search is A* over *search nodes* ``(I, r)`` (sec. 3): a root ``r`` (the start or a mesh
-vertex where the path last turned) and an interval ``I = [L, R]``, a contiguous part of one
-polygon edge every point of which ``r`` sees. ``g`` is the length of the path to ``r``;
-``f = g + h`` with ``h`` the length of the shortest path from ``r`` through ``I`` to the goal
-(sec. 3.2: the goal is reflected across the line of ``I`` when it is on the root's side, then
-``h = |r t'|`` when the segment ``r t'`` crosses ``I`` and ``|r p| + |p t'|`` through the
-nearer endpoint ``p`` otherwise). ``h`` never overestimates and ``f`` never decreases along a
-search path, so the first goal node popped is optimal (Theorem 1).
+The search is A* over *search nodes* ``(I, r)`` (the paper's "Search Nodes"): a root ``r``
+(the start or a mesh vertex where the path last turned) and an interval ``I = [L, R]``, a
+contiguous part of one polygon edge every point of which ``r`` sees. ``g`` is the length of the
+path to ``r``; ``f = g + h`` with ``h`` the length of the shortest path from ``r`` through
+``I`` to the goal (the paper's "Evaluating Search Nodes": the goal is reflected across the line
+of ``I`` when it is on the root's side, then ``h = |r t'|`` when the segment ``r t'`` crosses
+``I`` and ``|r p| + |p t'|`` through the nearer endpoint ``p`` otherwise). ``h`` never
+overestimates and ``f`` never decreases along a search path, so the first final node popped is
+optimal (the paper's optimality argument).
 
-Successors (sec. 3.1, Figs. 2-3): the rays from ``r`` through ``L`` and ``R`` are projected
-through the polygon ``P`` beyond ``I``. The part of ``P``'s far boundary between the rays gives
-*observable* successors (same root, split at ``P``'s vertices so each interval lies on one
-edge). When ``R`` (or ``L``) is the end of the edge and a *corner* (a vertex beside an
-obstacle), the far boundary beyond the ray gives *non-observable* successors rooted at that
-vertex, with ``g' = g + |r R|``. A successor whose root lies on the line of its interval (a
-root at one of the edge's ends: the path turned at that vertex and enters the next polygon
-directly) sees the whole next polygon; its expansion makes every far edge observable.
+Successors (the paper's "Successors" and its Fig. 3): the rays from ``r`` through ``L`` and
+``R`` are projected through the polygon ``P`` beyond ``I``. The part of ``P``'s far boundary
+between the rays gives *observable* successors (same root, split at ``P``'s vertices so each
+interval lies on one edge). When ``R`` (or ``L``) is the end of the edge and a corner, the far
+boundary beyond the ray gives *non-observable* successors rooted at that vertex, with
+``g' = g + |r R|``. A successor whose root lies on the line of its interval (a root at one of
+the edge's ends: the path turned at that vertex and enters the next polygon directly) sees the
+whole next polygon; its expansion makes every far edge observable.
 
-Pruning (sec. 4), each exact and each switchable (``prune=False`` gives the same lengths; tests
-check it):
+Pruning (the paper's cul-de-sac and intermediate pruning, and its root-level closed list), each
+exact and each switchable (``prune=False`` gives the same lengths; the tests check it):
 
-* dead ends: a successor whose polygon has no exit but the edge it enters by, and holds no
+* cul-de-sacs: a successor whose polygon has no exit but the edge it enters by, and holds no
   goal, is dropped;
 * intermediate polygons: a node with exactly one successor has it expanded at once instead of
   going through the open list;
-* root-level pruning (the paper's closed list): the best ``g`` seen for each root vertex is
-  kept; a node whose root was reached more cheaply is dropped at generation and when popped.
+* root level: the best ``g`` seen for each root vertex is kept; a node whose root was reached
+  more cheaply is dropped at generation and when popped.
 
-The goal (sec. 3.3): when the polygon beyond an interval holds the goal, the only successor is
-the final node, ``f = g + h`` (``P`` is convex, so the goal is seen from the interval's optimal
-point). Start and goal in one polygon: the straight segment. Points on an edge or a vertex
-belong to every polygon around them; the start is expanded in each (its edges through the start
-skipped). A point outside every polygon has no path.
+The goal (the paper's final node): when the polygon beyond an interval holds the goal, the only
+successor is the final node, ``f = g + h`` (``P`` is convex, so the goal is seen from the
+interval's best point). Start and goal in one polygon: the straight segment. Points on an edge
+or a vertex belong to every polygon around them; the start is expanded in each (its edges
+through the start skipped). A point outside every polygon has no path (length ``inf``).
 
-Deviations from the paper, named: ``h`` through an interval whose root lies on its line is the
-nearer endpoint's detour (exact there, the paper does not spell it out); turning is allowed at
-every vertex with an obstacle beside it (the paper's corner rule), not only at reflex ones, which
-adds successors but no wrong answers; tolerances are relative to the mesh size
-(:data:`weldplan.planar.navmesh.REL_EPS`) where the authors' code uses an absolute ``1e-8``.
+Deviations from the paper, named:
+
+* corners: a path turns only at vertices beside an obstacle with more than 180 degrees of free
+  space around them, or where obstacles touch (:attr:`NavMesh.corner`); the paper turns at any
+  vertex beside an obstacle. A shortest path bends only around reflex obstacle corners, so the
+  successors dropped cannot lie on one.
+* ``h`` through an interval whose root lies on its line is the nearer endpoint's detour (exact
+  there; the paper does not spell the case out).
+* the root-level check is also made when a node is popped (a cheaper route to its root found
+  after it was pushed), which only drops nodes the generation-time check would have dropped.
+* tolerances are relative to the mesh's size (:data:`weldplan.planar.navmesh.REL_EPS`).
 """
 
 from __future__ import annotations
@@ -90,7 +97,7 @@ class Polyanya:
     mesh
         The navigation mesh.
     prune
-        The paper's pruning (sec. 4; see the module docstring). ``False`` is the starved
+        The paper's pruning (see the module docstring). ``False`` is the starved
         variant used by the tests: slower, same lengths.
     """
 
