@@ -156,6 +156,17 @@ def test_random_grids_made_meshes_match_the_visibility_graph(seed, pts):
 
 
 # ------------------------------------------------------------------------------ corner cases
+def test_overlapping_outlines_on_the_frame_are_triangulated():
+    """Collinear overlapping outlines (two rectangles on the frame, found by hypothesis) made
+    Triangle fail; they are cut into shared pieces first."""
+    R = np.array([[2.6e-125, 1.0, 1.0, 2.0], [1.9e-242, 1.5, 1.0, 2.5]])
+    bounds = (0.0, 0.0, 10.0, 10.0)
+    pa = Polyanya(scenario_navmesh(Obstacles2D(rectangles=R), bounds))
+    want = _vg_length(_framed(R, bounds), np.array([0.5, 0.5]), np.array([0.5, 3.0]), bounds)
+    assert pa.distance([0.5, 0.5], [0.5, 3.0]) == pytest.approx(want, rel=1e-12)
+    assert want == pytest.approx(1.5 + math.sqrt(2))
+
+
 def test_same_polygon_same_point_and_shared_edge():
     pa = Polyanya(TWO)
     r = pa.query([0.2, 0.2], [0.8, 0.9])

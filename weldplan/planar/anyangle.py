@@ -61,8 +61,7 @@ def scenario_navmesh(
     x0, y0, x1, y1 = (float(v) for v in np.asarray(bounds, dtype=np.float64).reshape(4))
     rings = [np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])]
     rings += obstacle_rings(obstacles, circle_sides)
-    A = np.concatenate(rings)
-    B = np.concatenate([np.roll(r, -1, axis=0) for r in rings])
+    A, B = split_overlaps(np.concatenate(rings), np.concatenate([np.roll(r, -1, 0) for r in rings]))
     solid = Obstacles2D(polygons=tuple(rings[1:]))
     eps = 1e-9 * max(x1 - x0, y1 - y0)
 
@@ -75,6 +74,42 @@ def scenario_navmesh(
 
     tmap = triangulate_segments(A, B, keep, max_edge=math.inf, min_angle=0.0)
     return NavMesh.from_triangles(tmap.nodes, tmap.cells)
+
+
+def split_overlaps(
+    A: NDArray[np.float64], B: NDArray[np.float64], *, chunk: int = 2_000_000
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Segments ``A -> B (s, 2)`` cut at every segment end lying inside another segment, with
+    duplicates (either direction) removed: touching or overlapping obstacle outlines give
+    collinear overlapping segments, which Triangle rejects; after the cut they are identical
+    pieces, kept once. Ends closer than ``1e-9`` of the map's size are merged first."""
+    P = np.concatenate([A, B])
+    scale = float(np.ptp(P, axis=0).max()) or 1.0
+    tol = 1e-9 * scale
+    key = np.round(P / tol).astype(np.int64)
+    _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    U = P[first]
+    ia, ib = inv.reshape(-1)[: len(A)], inv.reshape(-1)[len(A) :]
+    keep = ia != ib
+    ia, ib = ia[keep], ib[keep]
+    pieces_a, pieces_b = [], []
+    step = max(1, chunk // max(1, len(U)))
+    for s0 in range(0, len(ia), step):
+        a, b = U[ia[s0 : s0 + step]], U[ib[s0 : s0 + step]]
+        d = b - a
+        L2 = np.sum(d * d, axis=1)
+        w = U[None, :, :] - a[:, None, :]
+        t = np.sum(w * d[:, None, :], axis=2) / L2[:, None]
+        perp = np.abs(w[..., 0] * d[:, None, 1] - w[..., 1] * d[:, None, 0]) / np.sqrt(L2)[:, None]
+        inner = (perp <= tol) & (t > 0) & (t < 1)
+        for k in range(len(a)):
+            cut = np.nonzero(inner[k])[0]
+            ids = np.concatenate([[ia[s0 + k]], cut[np.argsort(t[k, cut])], [ib[s0 + k]]])
+            pieces_a.append(ids[:-1])
+            pieces_b.append(ids[1:])
+    pa, pb = np.concatenate(pieces_a), np.concatenate(pieces_b)
+    pairs = np.unique(np.sort(np.stack([pa, pb], axis=1), axis=1), axis=0)
+    return U[pairs[:, 0]], U[pairs[:, 1]]
 
 
 def polyanya_shortest_path(
