@@ -19,6 +19,7 @@ BENCHES: dict[str, str] = {
     "scale": "weldplan.bench.scale",
     "planar": "weldplan.bench.planar",
     "tour": "weldplan.bench.tour",
+    "queries": "weldplan.bench.queries",
 }
 
 

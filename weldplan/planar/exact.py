@@ -1,5 +1,9 @@
 """Exact baselines for the planar tables: any-angle shortest paths and 8-connected grid A*.
 
+The production any-angle planner is Polyanya (:mod:`weldplan.planar.polyanya`, used by
+``exact_optimum`` and ``weldplan bench queries``); the visibility graph here is the
+independent cross-check its tests compare against.
+
 * :func:`visibility_shortest_path`: the shortest path among polygonal obstacles runs through
   obstacle vertices where free space is reflex, so Dijkstra over the visibility graph of those
   vertices (plus start and goal) is exact. Circles are handled with a stated tolerance: their

@@ -28,7 +28,7 @@ from weldplan.geometry.pathmetrics import measure
 from weldplan.optim.core import minimize
 from weldplan.optim.registry import get_optimizer
 from weldplan.planar.encodings import PathProblem, make_problem, population_diversity
-from weldplan.planar.exact import ExactPath, astar_grid, visibility_shortest_path
+from weldplan.planar.exact import ExactPath, astar_grid
 from weldplan.planar.pipeline import PlanarStage, run_stages
 from weldplan.planar.scenarios import Scenario
 from weldplan.random import RNGLike, seed_of
@@ -60,9 +60,11 @@ _EXACT_CACHE: dict[tuple[str, str, str], ExactPath] = {}
 
 
 def exact_optimum(scenario: Scenario, encoding: str | None = None) -> ExactPath:
-    """The exact baseline of a scenario: the visibility-graph any-angle shortest path, or
-    for the grid encoding the 8-connected A* path (in map units, through cell centres).
-    Cached per scenario file."""
+    """The exact baseline of a scenario: the any-angle shortest path by Polyanya on the
+    scenario's navigation mesh (:mod:`weldplan.planar.anyangle`: circles as the visibility
+    graph's circumscribed ``CIRCLE_SIDES``-gons, so the lengths equal the visibility graph's,
+    which the tests check on every bundled scenario), or for the grid encoding the 8-connected
+    A* path (in map units, through cell centres). Cached per scenario file."""
     enc = encoding or scenario.encoding
     key = (str(scenario.path), scenario.name, "grid" if enc == "grid" else "any")
     if key in _EXACT_CACHE:
@@ -80,9 +82,10 @@ def exact_optimum(scenario: Scenario, encoding: str | None = None) -> ExactPath:
             expanded=r.expanded,
         )
     else:
-        out = visibility_shortest_path(
-            scenario.world, scenario.start, scenario.goal, bounds=scenario.bounds
-        )
+        from weldplan.planar.anyangle import polyanya_shortest_path, scenario_navmesh
+
+        mesh = scenario_navmesh(scenario.obstacles, scenario.bounds)
+        out = polyanya_shortest_path(mesh, scenario.start, scenario.goal)
     _EXACT_CACHE[key] = out
     return out
 
