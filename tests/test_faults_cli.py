@@ -270,14 +270,7 @@ def _edit_route(sc: Scene, name: str, edit) -> str:
     [
         float("nan"),
         float("inf"),
-        pytest.param(
-            1e300,
-            marks=pytest.mark.xfail(
-                strict=True,
-                reason="#14 items 4/8: a route point at x = 1e300 is 'route ok' today (fcl "
-                "capsules that long have no precision left); on no branch's list yet",
-            ),
-        ),
+        1e300,
     ],
 )
 def test_verify_rejects_non_finite_or_absurd_route_points(planned, value):

@@ -61,7 +61,7 @@ from numpy.typing import NDArray
 from weldplan.errors import InputError
 from weldplan.geometry.collision import CollisionModel
 from weldplan.geometry.solids import ClosedSolids
-from weldplan.io.mesh import geometry_hash
+from weldplan.io.mesh import MAX_COORD_MM, geometry_hash
 from weldplan.weld.route import Route
 
 log = logging.getLogger(__name__)
@@ -226,7 +226,7 @@ def _inside_solids(
     pts, where = [], []
     for k, leg in enumerate(route.legs):
         P = leg.points
-        if not np.all(np.isfinite(P)):
+        if not (np.all(np.isfinite(P)) and np.abs(P).max() <= MAX_COORD_MM):
             continue
         first = 0 if route.is_virtual(leg.from_id, P[0], tol) else 1
         last = len(P) if route.is_virtual(leg.to_id, P[-1], tol) else len(P) - 1
@@ -396,6 +396,16 @@ def verify_route(
                     )
         if not np.all(np.isfinite(P)):
             violations.append(Violation("points", "the leg has non-finite points", **tag))
+            continue
+        if not np.abs(P).max() <= MAX_COORD_MM:
+            # FCL's capsule of a segment 1e300 mm long has no precision left: nothing to verify
+            violations.append(
+                Violation(
+                    "points",
+                    f"the leg has points beyond {MAX_COORD_MM:.0e} mm, which cannot be checked",
+                    **tag,
+                )
+            )
             continue
         # A segment is an approach when it leaves a weld spot that is not its own virtual joint
         # (a joint lying in free space is its own virtual joint and has no approach).
