@@ -74,7 +74,7 @@ log = logging.getLogger(__name__)
 Progress = Callable[[str, int, int], None]
 
 PLANNERS = ("so-aco", "aco", "exact")
-SEQUENCERS = ("auto", "pso", "exact", "nn")
+SEQUENCERS = ("auto", "fast-tsp", "pso", "exact", "nn")
 #: the exact straight-line lower bound (Held-Karp) is used up to this many joints, else the
 #: 1-tree bound
 LOWER_BOUND_EXACT_MAX = 16
@@ -98,8 +98,8 @@ class PlanConfig:
     planner
         Local planner for blocked pairs: ``"so-aco"`` (the paper's), ``"aco"`` or ``"exact"``.
     sequencer
-        ``"auto"`` (Held-Karp up to 13 joints, else TSP-PSO + polish), ``"pso"``, ``"exact"``,
-        ``"nn"``.
+        ``"auto"`` (Held-Karp up to 13 joints, else fast-tsp), ``"fast-tsp"``, ``"pso"`` (the
+        paper's TSP-PSO + polish), ``"exact"``, ``"nn"``.
     pairs
         ``"lazy"`` (plan the blocked pairs the order uses, module docstring) or ``"all"``.
     aco
@@ -151,6 +151,14 @@ class PlanConfig:
         optimistic estimate and at 1000 joints the rounds never settle (279 rounds and 5,030
         pairs planned in 13 minutes on car2's set). Exact sequencers always use estimates
         (their route is then the all-pairs optimum).
+    gap_target
+        With the fast-tsp sequencer above :data:`LOWER_BOUND_EXACT_MAX` joints in the lazy mode:
+        after the known-first rounds, plan the legs that optimistic orders (over planned
+        lengths and lower-bound estimates) use until the route is within this relative gap of
+        such an order (:func:`weldplan.weld.converge.close_gap`); the proved bound and gap are
+        reported in ``Route.stats`` (``bound_planned``, ``gap_planned``). None: off.
+    gap_rounds
+        Bound on those rounds.
     """
 
     clearance: float = 5.0
@@ -171,6 +179,8 @@ class PlanConfig:
     warm_kicks: int | None = None
     demand_neighbours: int = 10
     known_first: bool = True
+    gap_target: float | None = 0.01
+    gap_rounds: int = 30
 
     def __post_init__(self) -> None:
         if self.planner not in PLANNERS:
@@ -203,6 +213,11 @@ class PlanConfig:
     def from_dict(cls, d: Mapping[str, Any]) -> PlanConfig:
         names = cls.__dataclass_fields__
         return cls(**{k: v for k, v in d.items() if k in names})
+
+
+def _budget(config: PlanConfig) -> dict[str, Any]:
+    t = config.sequence_time_budget
+    return {} if t is None else {"time_budget": t}
 
 
 def _plan_pair_task(
@@ -375,7 +390,7 @@ def plan_route(
     """
     from weldplan.optim.discrete.costs import order_cost
     from weldplan.optim.discrete.local_search import PolishParams
-    from weldplan.optim.discrete.sequence import solve_sequence
+    from weldplan.optim.discrete.sequence import resolve_method, solve_sequence
     from weldplan.optim.discrete.tsp_pso import PSOParams
     from weldplan.weld.parallel import batches, n_workers, share_cell
 
@@ -514,7 +529,9 @@ def plan_route(
                 extra["initial"] = initial
                 extra["polish_params"] = PolishParams(kicks=kicks)
             Cs = C
-            if known_first and method != "exact":
+            if known_first and method == "fast-tsp":
+                extra["avoid"] = ~known[pair_index] & (pair_index >= 0)
+            elif known_first and method != "exact":
                 off = ~known
                 finite = C[iu[known], ju[known]]
                 finite = finite[np.isfinite(finite)]
@@ -538,8 +555,12 @@ def plan_route(
     def settle(method: str) -> Any:
         """Sequence, plan the unknown legs of the order, repeat until it uses known legs only."""
         nonlocal rounds
+        method = resolve_method(method, n)
         warm = (
-            config.warm_rounds and config.polish and method != "exact" and n > LOWER_BOUND_EXACT_MAX
+            config.warm_rounds
+            and config.polish
+            and method not in ("exact", "fast-tsp")  # fast-tsp has no warm start
+            and n > LOWER_BOUND_EXACT_MAX
         )
         full_kicks = n if config.warm_kicks is None else int(config.warm_kicks)
         previous = None
@@ -580,6 +601,27 @@ def plan_route(
         # so the configured (slower) sequencer usually runs once
         settle("exact")
     seq = settle(config.sequencer)
+    gap_rounds = None
+    if (
+        config.gap_target is not None
+        and resolve_method(config.sequencer, n) == "fast-tsp"
+        and config.pairs == "lazy"
+        and n > LOWER_BOUND_EXACT_MAX
+    ):
+        from weldplan.weld.converge import close_gap
+
+        seq, gap_rounds = close_gap(
+            seq,
+            C,
+            known,
+            pair_index,
+            optimistic=lambda Cb: solve_sequence(Cb, method="fast-tsp", **_budget(config)),
+            plan=plan,
+            resequence=lambda: settle(config.sequencer),
+            near=_near_unknown,
+            target=config.gap_target,
+            max_rounds=config.gap_rounds,
+        )
     order = list(seq.order)
     seconds["local"] = t_local
     seconds["sequence"] = t_seq
@@ -667,6 +709,8 @@ def plan_route(
         "bound_with_approaches": bound_appr,
         "bound_planned": bound_planned,
         "bound_planned_method": bound_planned_method,
+        "gap_planned": float(seq.cost / bound_planned - 1.0) if bound_planned > 0 else float("nan"),
+        "gap_rounds": None if gap_rounds is None else gap_rounds.to_dict(),
         "sequence_method": seq.method,
         "sequence_cost": float(seq.cost),
         "sequence_history": [float(h) for h in seq.history],

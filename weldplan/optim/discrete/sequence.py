@@ -116,6 +116,13 @@ class Sequence:
         return cls(**d)
 
 
+def resolve_method(method: str, n: int) -> str:
+    """The method ``"auto"`` runs for ``n`` nodes (others unchanged)."""
+    if method == "auto":
+        return "exact" if n <= EXACT_MAX_NODES else "fast-tsp"
+    return method
+
+
 def nearest_neighbour_tour(A: NDArray[np.float64], start: int, n_starts: int = 64) -> NDArray:
     """Best nearest-neighbour closed tour over ``A`` beginning ``start -> s`` over seeds ``s``.
 
@@ -247,8 +254,7 @@ def solve_sequence(
     seed = seed_of(rng)
     pso = PSOParams() if pso is None else pso
     pp = PolishParams() if polish_params is None else polish_params
-    if method == "auto":
-        method = "exact" if n <= EXACT_MAX_NODES else "fast-tsp"
+    method = resolve_method(method, n)
     av = _reduced_avoid(avoid, n, red.m)
     if method == "exact" and red.m > MAX_NODES:
         raise ValueError(
