@@ -47,6 +47,13 @@ the legs planned in between changed cost; ``PlanConfig.warm_rounds``, ``warm_kic
 solving from scratch: a fresh polish at 1000 joints makes 10,000 kicks (about 40 s), and the
 1000-joint car2 set needed tens of rounds.
 
+With the default sequencer (fast-tsp above 13 joints) there are no warm rounds (it has no warm
+start; a solve at 1000 joints takes about a second), legs not yet known are *avoided* rather
+than penalised, and the rounds go on past the first route: :func:`weldplan.weld.converge.close_gap`
+plans the legs that optimistic orders (over planned lengths and lower-bound estimates) use
+until the route is within ``PlanConfig.gap_target`` of one; ``Route.stats["gap_planned"]`` is
+then the route's gap to the proved bound over the same costs (``bound_planned``).
+
 Randomness: one generator, normalised once from ``rng``; each pair gets its own seed drawn from it
 up front in a fixed order, so a route does not depend on the executor or the order in which
 workers finish.
