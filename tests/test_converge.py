@@ -99,3 +99,41 @@ def test_target_stops_early_and_the_route_uses_known_legs() -> None:
     assert info.rounds == 1 and info.pairs_planned == 0
     assert info.reason in ("within target of the optimistic order", "optimistic order is known")
     assert seq.cost <= 11.0 * info.optimistic_cost
+
+
+@pytest.mark.slow
+def test_pipeline_closes_the_gap_on_a_car2_station() -> None:
+    """17 car2 joints (above Held-Karp's discovery size): the default sequencer (fast-tsp) with
+    candidates ends within its target of the optimistic order, never below the proved bound,
+    and no worse than the all-pairs route by more than the target."""
+    from pathlib import Path
+
+    from conftest import require_shared
+
+    from weldplan.io.joints import Joints, read_joints
+    from weldplan.io.mesh import load_part
+    from weldplan.weld.cell import build_cell
+    from weldplan.weld.pipeline import PlanConfig, plan_route
+    from weldplan.weld.synthetic import CAR2_LENGTH_MM
+
+    part = load_part(require_shared("bodies", "car2.obj"), length=CAR2_LENGTH_MM)
+    root = Path(__file__).resolve().parents[1]
+    j = read_joints(root / "assets" / "car2" / "car2_synthetic_50.csv")
+    pick = np.sort(np.argsort(np.linalg.norm(j.xyz - j.xyz[0], axis=1))[:17])
+    joints = Joints(
+        ids=tuple(j.ids[k] for k in pick), xyz=j.xyz[pick], directions=j.directions[pick]
+    )
+    cell = build_cell(part, joints)
+    cfg = PlanConfig(planner="exact", candidates=2)
+    route = plan_route(cell, config=cfg, rng=0)
+    s = route.stats
+    assert s["sequence_method"] == "fast-tsp"
+    g = s["gap_rounds"]
+    assert g is not None and g["rounds"] >= 1
+    assert s["bound_planned"] <= route.length + 1e-6
+    assert s["gap_planned"] == pytest.approx(s["sequence_cost"] / s["bound_planned"] - 1.0)
+    slack = s["sequence_engine"]["optimality_loss_bound"]
+    assert s["sequence_cost"] <= (1.0 + cfg.gap_target) * g["optimistic_cost"] + slack + 1e-6
+    full = plan_route(cell, config=PlanConfig(planner="exact", pairs="all"), rng=0)
+    assert full.stats["gap_rounds"] is None  # all pairs known: nothing to close
+    assert route.length <= (1.0 + cfg.gap_target) * full.length + 2 * slack

@@ -722,6 +722,7 @@ def plan_route(
         "sequence_cost": float(seq.cost),
         "sequence_history": [float(h) for h in seq.history],
         "sequence_start_cost": seq.start_cost,
+        "sequence_engine": seq.params.get("engine"),
         "local_paths": local_stats,
         "seconds": {k: round(v, 6) for k, v in seconds.items()},
     }
