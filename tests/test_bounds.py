@@ -51,3 +51,15 @@ def test_tsplib_bound_within_a_few_percent_of_the_known_optimum(name: str):
 def test_bad_shape():
     with pytest.raises(ValueError, match="square"):
         one_tree_bound(np.zeros((3, 2)))
+
+
+def test_dense_mst_matches_scipy() -> None:
+    from weldplan.optim.discrete.bounds import dense_mst
+
+    rng = np.random.default_rng(3)
+    P = rng.uniform(0, 100, size=(60, 3))
+    W = np.linalg.norm(P[:, None] - P[None], axis=2)
+    total, parent = dense_mst(W)
+    assert total == pytest.approx(float(minimum_spanning_tree(W).sum()), rel=1e-12)
+    assert parent[0] == -1 and (parent[1:] >= 0).all()
+    assert total == pytest.approx(float(W[np.arange(1, 60), parent[1:]].sum()), rel=1e-12)

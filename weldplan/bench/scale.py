@@ -35,6 +35,7 @@ import time
 from pathlib import Path
 
 from weldplan.bench.common import CHILD_PRELUDE, conditions, run_child, shared_path, table
+from weldplan.weld.pipeline import SEQUENCERS
 
 REFERENCES = ("lazy", "all", "none")
 
@@ -183,7 +184,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "--candidate-radius", type=float, default=None, help="mm; farther neighbours on demand"
     )
     p.add_argument("--jobs", type=int, default=2, help="workers of the end-to-end runs (2)")
-    p.add_argument("--sequencer", default="auto", choices=("auto", "pso", "nn", "exact"))
+    p.add_argument("--sequencer", default="auto", choices=SEQUENCERS)
     p.add_argument(
         "--sequence-budget", type=float, default=None, help="seconds per sequencer polish run"
     )

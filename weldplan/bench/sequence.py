@@ -1,7 +1,12 @@
 """``weldplan bench sequence``: the sequencer against TSPLIB optima, OR-Tools and the paper.
 
-Three tables, one run, written as markdown to ``OUT/sequence.md``:
+Four tables, one run, written as markdown to ``OUT/sequence.md``:
 
+0. Engines at equal budgets (issue #18): ours (the default, fast-tsp through the engine wrapper),
+   the paper's PSO + polish, fast-tsp called directly, LKH-3 (elkai, if installed) and OR-Tools
+   at each of ``--budgets`` seconds on the shared TSPLIB set up to u2152
+   (:mod:`weldplan.bench.tsp_peers`); budgets above 10 s only on ``--long-instances``. Lengths
+   recomputed from the returned tours.
 1. TSPLIB (closed tours, TSPLIB integer distances): gap to the known optimum and wall time of
    the paper's TSP-PSO alone (Table 4 parameters), PSO + polish and nearest neighbour + polish
    within ``--budget`` seconds each, OR-Tools (its default first solution plus
@@ -37,6 +42,10 @@ log = logging.getLogger(__name__)
 HELP = "weld sequencer: TSP-PSO, polish, Held-Karp vs TSPLIB optima and OR-Tools"
 
 INSTANCES = ("eil51", "berlin52", "st70", "att48", "kroA100", "ch130", "a280", "lin318")
+#: every shared TSPLIB instance with a known optimum, up to u2152 (../shared/data/tsplib)
+ENGINE_INSTANCES = INSTANCES + ("rat783", "u1060", "d1291", "u2152")
+#: issue #18's target: every shared instance within this gap of its optimum at 10 s
+TARGET_GAP = 0.001
 DEFAULT_DATA = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "tsplib"
 
 # Wang et al. 2017, Table 1: the 15 weld joints (mm); joint id = row + 1 (one copy, in demo_part).
@@ -52,7 +61,23 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--ortools-time", type=float, default=1.0, help="OR-Tools GLS seconds")
     p.add_argument("--paper-seeds", type=int, default=20, help="seeds for the paper check")
     p.add_argument("--hk-sizes", default="11,13,15,17,19", help="Held-Karp node counts")
-    p.add_argument("--skip", default="", help="comma list of parts to skip: tsplib,paper,hk")
+    p.add_argument(
+        "--skip", default="", help="comma list of parts to skip: engines,tsplib,paper,hk"
+    )
+    p.add_argument(
+        "--engine-instances", default=",".join(ENGINE_INSTANCES), help="engines table instances"
+    )
+    p.add_argument(
+        "--solvers",
+        default="ours,pso+polish,fast-tsp,lkh3,ortools",
+        help="engines table solvers (ours, pso+polish, fast-tsp, lkh3, ortools)",
+    )
+    p.add_argument("--budgets", default="1,10,60", help="engines table budgets (s)")
+    p.add_argument(
+        "--long-instances",
+        default="u2152",
+        help="instances that also run the budgets above 10 s (the CPU is shared)",
+    )
 
 
 def _load() -> str:
@@ -165,6 +190,59 @@ def tsplib_table(args: argparse.Namespace) -> list[str]:
     return rows
 
 
+def engines_table(args: argparse.Namespace) -> list[str]:
+    """Gap to the optimum / wall seconds of each solver at each budget (module docstring)."""
+    from weldplan.bench.tsp_peers import SOLVERS, available, checked_length
+
+    best = read_best_solutions(args.data / "bestSolutions.txt")
+    budgets = [float(b) for b in args.budgets.split(",") if b]
+    long = set(args.long_instances.split(","))
+    names = [s for s in args.solvers.split(",") if s]
+    missing = [s for s in names if not available(s)]
+    run = [s for s in names if s not in missing]
+    cols = [(s, b) for b in budgets for s in run]
+    rows = [
+        "## TSPLIB: engines at equal budgets (closed tours)",
+        "",
+        "Cells: gap to the optimum (length recomputed from the returned tour) / wall seconds / "
+        "CPU seconds of this process (the budgets are wall time: on a loaded machine a solver "
+        "gets a fraction of a core; OR-Tools' and LKH-3's threads are counted, fast-tsp runs "
+        "one thread). "
+        f"Budgets above 10 s only on {', '.join(sorted(long))}. LKH-3 (elkai): RUNS = 1 and "
+        "TIME_LIMIT = budget (its preprocessing is outside the limit; see the seconds). "
+        f"Target (issue #18): ours within {100 * TARGET_GAP:g} % of every optimum at 10 s.",
+        "",
+    ]
+    if missing:
+        rows += [f"Not importable here, skipped: {', '.join(missing)}.", ""]
+    rows += [
+        "| instance | n | optimum | " + " | ".join(f"{s} {b:g} s" for s, b in cols) + " |",
+        "|---|---|---|" + "---|" * len(cols),
+    ]
+    worst_10 = 0.0
+    for name in [s for s in args.engine_instances.split(",") if s]:
+        D = read_tsplib(args.data / f"{name}.tsp").matrix()
+        opt = best[name]
+        cells = [name, str(D.shape[0]), f"{opt:.0f}"]
+        for solver, b in cols:
+            if b > 10 and name not in long:
+                cells.append("-")
+                continue
+            cpu0 = time.process_time()
+            tour, sec = SOLVERS[solver][0](D, b)
+            cpu = time.process_time() - cpu0
+            gap = checked_length(D, tour) / opt - 1.0
+            if solver == "ours" and b == 10:
+                worst_10 = max(worst_10, gap)
+            cells.append(f"{100 * gap:.3f}% / {sec:.1f} / {cpu:.1f}")
+            log.info("%s %s %g s: %.3f %% in %.1f s", name, solver, b, 100 * gap, sec)
+        rows.append("| " + " | ".join(cells) + " |")
+    if "ours" in run and 10.0 in budgets:
+        met = "MET" if worst_10 <= TARGET_GAP else "NOT met"
+        rows += ["", f"Ours at 10 s: worst gap {100 * worst_10:.3f} % ({met})."]
+    return rows
+
+
 def paper_table(args: argparse.Namespace) -> list[str]:
     C = cost_matrix(PAPER_JOINTS)
     exact = solve_sequence(C, method="exact")
@@ -257,6 +335,8 @@ def run(args: argparse.Namespace) -> int:
     skip = set(args.skip.split(","))
     lines = ["# weldplan bench sequence", "", f"Before: {_load()}.", ""]
     t0 = time.perf_counter()
+    if "engines" not in skip:
+        lines += engines_table(args) + [f"({_load()})", ""]
     if "tsplib" not in skip:
         lines += tsplib_table(args) + [""]
     if "paper" not in skip:

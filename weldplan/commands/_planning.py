@@ -49,8 +49,9 @@ def add_planning_arguments(p: argparse.ArgumentParser, *, default_output: str | 
     p.add_argument(
         "--sequencer",
         default="auto",
-        choices=("auto", "pso", "exact", "nn"),
-        help="joint order: auto = exact up to 13 joints, else TSP-PSO + polish (default auto)",
+        choices=("auto", "fast-tsp", "pso", "exact", "nn"),
+        help="joint order: auto = exact (Held-Karp) up to 13 joints, else fast-tsp; pso = the "
+        "paper's TSP-PSO + polish (default auto)",
     )
     p.add_argument(
         "--aco",

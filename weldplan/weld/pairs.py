@@ -89,6 +89,7 @@ class PairPlanning:
         self.t_seq = 0.0
         self.n_failed = 0
         self.rounds = 0
+        self.gap_rounds: Any = None  # converge.GapRounds when close_gap ran
         self._shared: Any = None  # the cell as the executor's tasks carry it, made on first use
         self.pso: Any = None
         self.known_first = False
@@ -228,8 +229,8 @@ class PairPlanning:
     def _sequencing_costs(self, method: str) -> NDArray[np.float64]:
         """The cost matrix the sequencer sees: with ``known_first``, an unknown leg costs its
         estimate plus a penalty larger than any route over known legs."""
-        if not (self.known_first and method != "exact"):
-            return self.C
+        if not (self.known_first and method not in ("exact", "fast-tsp")):
+            return self.C  # fast-tsp avoids unknown legs instead (``sequence``)
         iu, ju, n = self.iu, self.ju, self.n
         off = ~self.known
         finite = self.C[iu[self.known], ju[self.known]]
@@ -259,6 +260,8 @@ class PairPlanning:
             if initial is not None:
                 extra["initial"] = initial
                 extra["polish_params"] = PolishParams(kicks=kicks)
+            if self.known_first and method == "fast-tsp":
+                extra["avoid"] = ~self.known[self.pair_index] & (self.pair_index >= 0)
             Cs = self._sequencing_costs(method)
             seq = solve_sequence(
                 Cs, method=method, polish=config.polish, rng=self.gen, pso=self.pso, **extra
@@ -275,8 +278,16 @@ class PairPlanning:
 
     def settle(self, method: str) -> Any:
         """Sequence, plan the unknown legs of the order, repeat until it uses known legs only."""
+        from weldplan.optim.discrete.sequence import resolve_method
+
         config, n = self.config, self.n
-        warm = config.warm_rounds and config.polish and method != "exact" and n > self.exact_max
+        method = resolve_method(method, n)
+        warm = (
+            config.warm_rounds
+            and config.polish
+            and method not in ("exact", "fast-tsp")  # fast-tsp has no warm start
+            and n > self.exact_max
+        )
         full_kicks = n if config.warm_kicks is None else int(config.warm_kicks)
         previous = None
         kicks = full_kicks
@@ -331,7 +342,40 @@ class PairPlanning:
             # discovery rounds with Held-Karp (fast at this size) find the legs good orders use,
             # so the configured (slower) sequencer usually runs once
             self.settle("exact")
-        return self.settle(config.sequencer)
+        seq = self.settle(config.sequencer)
+        return self.close_gap(seq)
+
+    def close_gap(self, seq: Any) -> Any:
+        """With fast-tsp above Held-Karp size in the lazy mode: plan the legs that optimistic
+        orders use until the route is within ``config.gap_target`` of one
+        (:func:`weldplan.weld.converge.close_gap`); ``self.gap_rounds`` records the rounds."""
+        from weldplan.optim.discrete.sequence import resolve_method, solve_sequence
+        from weldplan.weld.converge import close_gap
+
+        config = self.config
+        if (
+            config.gap_target is None
+            or resolve_method(config.sequencer, self.n) != "fast-tsp"
+            or config.pairs != "lazy"
+            or self.n <= self.exact_max
+        ):
+            return seq
+        budget = {} if config.sequence_time_budget is None else {
+            "time_budget": config.sequence_time_budget
+        }
+        seq, self.gap_rounds = close_gap(
+            seq,
+            self.C,
+            self.known,
+            self.pair_index,
+            optimistic=lambda Cb: solve_sequence(Cb, method="fast-tsp", **budget),
+            plan=self.plan,
+            resequence=lambda: self.settle(config.sequencer),
+            near=self.near_unknown,
+            target=config.gap_target,
+            max_rounds=config.gap_rounds,
+        )
+        return seq
 
 
 def explain_no_order(

@@ -47,6 +47,13 @@ the legs planned in between changed cost; ``PlanConfig.warm_rounds``, ``warm_kic
 solving from scratch: a fresh polish at 1000 joints makes 10,000 kicks (about 40 s), and the
 1000-joint car2 set needed tens of rounds.
 
+With the default sequencer (fast-tsp above 13 joints) there are no warm rounds (it has no warm
+start; a solve at 1000 joints takes about a second), legs not yet known are *avoided* rather
+than penalised, and the rounds go on past the first route: :func:`weldplan.weld.converge.close_gap`
+plans the legs that optimistic orders (over planned lengths and lower-bound estimates) use
+until the route is within ``PlanConfig.gap_target`` of one; ``Route.stats["gap_planned"]`` is
+then the route's gap to the proved bound over the same costs (``bound_planned``).
+
 Randomness: one generator, normalised once from ``rng``; each pair gets its own seed drawn from it
 up front in a fixed order, so a route does not depend on the executor or the order in which
 workers finish.
@@ -76,7 +83,7 @@ log = logging.getLogger(__name__)
 Progress = Callable[[str, int, int], None]
 
 PLANNERS = ("so-aco", "aco", "exact")
-SEQUENCERS = ("auto", "pso", "exact", "nn")
+SEQUENCERS = ("auto", "fast-tsp", "pso", "exact", "nn")
 #: the exact straight-line lower bound (Held-Karp) is used up to this many joints, else the
 #: 1-tree bound
 LOWER_BOUND_EXACT_MAX = 16
@@ -100,8 +107,8 @@ class PlanConfig:
     planner
         Local planner for blocked pairs: ``"so-aco"`` (the paper's), ``"aco"`` or ``"exact"``.
     sequencer
-        ``"auto"`` (Held-Karp up to 13 joints, else TSP-PSO + polish), ``"pso"``, ``"exact"``,
-        ``"nn"``.
+        ``"auto"`` (Held-Karp up to 13 joints, else fast-tsp), ``"fast-tsp"``, ``"pso"`` (the
+        paper's TSP-PSO + polish), ``"exact"``, ``"nn"``.
     pairs
         ``"lazy"`` (plan the blocked pairs the order uses, module docstring) or ``"all"``.
     aco
@@ -164,6 +171,14 @@ class PlanConfig:
 
     Every field is checked when the config is made (:mod:`weldplan.weld.validate`): a wrong type,
     NaN or out-of-range value raises :class:`~weldplan.errors.ConfigError`, a ``ValueError``.
+    gap_target
+        With the fast-tsp sequencer above :data:`LOWER_BOUND_EXACT_MAX` joints in the lazy mode:
+        after the known-first rounds, plan the legs that optimistic orders (over planned
+        lengths and lower-bound estimates) use until the route is within this relative gap of
+        such an order (:func:`weldplan.weld.converge.close_gap`); the proved bound and gap are
+        reported in ``Route.stats`` (``bound_planned``, ``gap_planned``). None: off.
+    gap_rounds
+        Bound on those rounds.
     """
 
     clearance: float = 5.0
@@ -186,6 +201,8 @@ class PlanConfig:
     known_first: bool = True
     skip_unreachable: bool = False
     memory_limit: float | None = None
+    gap_target: float | None = 0.01
+    gap_rounds: int = 30
 
     def __post_init__(self) -> None:
         from weldplan.weld.validate import check_config
@@ -524,10 +541,17 @@ def _stats(
         "rounds": work.rounds,
         "legs_planned": sum(leg.method != "straight" for leg in legs),
         **bounds,
+        "gap_planned": (
+            float(seq.cost / bounds["bound_planned"] - 1.0)
+            if bounds.get("bound_planned", 0) > 0
+            else float("nan")
+        ),
+        "gap_rounds": None if work.gap_rounds is None else work.gap_rounds.to_dict(),
         "sequence_method": seq.method,
         "sequence_cost": float(seq.cost),
         "sequence_history": [float(h) for h in seq.history],
         "sequence_start_cost": seq.start_cost,
+        "sequence_engine": seq.params.get("engine"),
         "local_paths": local_stats,
         "seconds": {k: round(v, 6) for k, v in seconds.items()},
     }

@@ -109,6 +109,8 @@ def check_config(c: Any) -> None:
     for name in ("local_time_budget", "sequence_time_budget"):
         put(c, name, optional_positive(name, getattr(c, name), "seconds"))
     put(c, "memory_limit", optional_positive("memory_limit", c.memory_limit, "GB"))
+    put(c, "gap_target", optional_positive("gap_target", c.gap_target, "(relative gap)"))
+    put(c, "gap_rounds", integer("gap_rounds", c.gap_rounds, 1))
     put(c, "max_rounds", integer("max_rounds", c.max_rounds, 1))
     put(c, "warm_kicks", integer("warm_kicks", c.warm_kicks, 0, optional=True))
     put(c, "demand_neighbours", integer("demand_neighbours", c.demand_neighbours, 0))

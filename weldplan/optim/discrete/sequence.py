@@ -15,8 +15,13 @@ Methods
     (:mod:`~weldplan.optim.discrete.local_search`). The result reports both costs.
 ``"nn"``
     Nearest-neighbour construction (best over start nodes), then the same polish.
+``"fast-tsp"``
+    fast-tsp's Lin-Kernighan-style local search (MIT; :mod:`~weldplan.optim.discrete.tsp_engine`
+    wraps it: integer scaling with a reported rounding bound, the ATSP transform, ``inf`` pairs).
+    Measured at LKH-3's level on TSPLIB up to 2,152 cities (docs/bench-sequence.md). It has no
+    seed: runs are not bit-reproducible (use ``"pso"`` or ``"nn"`` for that).
 ``"auto"``
-    ``"exact"`` up to :data:`EXACT_MAX_NODES` nodes, else ``"pso"``.
+    ``"exact"`` up to :data:`EXACT_MAX_NODES` nodes, else ``"fast-tsp"``.
 """
 
 from __future__ import annotations
@@ -50,7 +55,7 @@ log = logging.getLogger(__name__)
 #: ``method="auto"`` solves exactly up to this many nodes (Held-Karp takes milliseconds there).
 EXACT_MAX_NODES = 13
 
-METHODS = ("auto", "exact", "pso", "nn")
+METHODS = ("auto", "exact", "fast-tsp", "pso", "nn")
 
 
 @dataclass(frozen=True)
@@ -109,6 +114,13 @@ class Sequence:
         d["order"] = tuple(int(v) for v in d["order"])
         d["history"] = tuple(float(v) for v in d["history"])
         return cls(**d)
+
+
+def resolve_method(method: str, n: int) -> str:
+    """The method ``"auto"`` runs for ``n`` nodes (others unchanged)."""
+    if method == "auto":
+        return "exact" if n <= EXACT_MAX_NODES else "fast-tsp"
+    return method
 
 
 def nearest_neighbour_tour(A: NDArray[np.float64], start: int, n_starts: int = 64) -> NDArray:
@@ -173,6 +185,7 @@ def solve_sequence(
     callback: Callable[[int, float], bool | None] | None = None,
     time_budget: float | None = None,
     initial: ArrayLike | None = None,
+    avoid: ArrayLike | None = None,
 ) -> Sequence:
     """Order the nodes of ``cost`` to minimise the total cost.
 
@@ -182,8 +195,8 @@ def solve_sequence(
         ``(n, n) float``: ``cost[i, j]`` of going from node ``i`` to node ``j`` (mm of path in the
         weld pipeline). May be asymmetric; ``inf`` marks an unreachable pair; NaN is an error.
     method
-        ``"auto"`` (exact up to :data:`EXACT_MAX_NODES` nodes, else ``"pso"``), ``"exact"``,
-        ``"pso"`` or ``"nn"``; see the module docstring.
+        ``"auto"`` (exact up to :data:`EXACT_MAX_NODES` nodes, else ``"fast-tsp"``),
+        ``"exact"``, ``"fast-tsp"``, ``"pso"`` or ``"nn"``; see the module docstring.
     closed
         Return to the first node (a tour) instead of an open path (the default for welding).
     first, last
@@ -204,11 +217,20 @@ def solve_sequence(
         Seconds for the whole solve: the polish stops kicking when they are spent (and, unless
         ``polish_params.kicks`` is set, kicks until then). The swarm always runs its iterations.
         Results then depend on the machine's speed; leave it ``None`` for reproducible runs.
+        For ``"fast-tsp"`` it is the solver's budget (default
+        :func:`~weldplan.optim.discrete.tsp_engine.default_seconds`: 1 ms a node).
     initial
         ``(n,) int`` a visiting order to start from (a warm start, e.g. the previous order after
         a few costs changed): the swarm / nearest-neighbour construction is skipped and only the
         polish runs from it (``method`` is then reported as ``"warm+polish"``). Ignored by
-        ``"exact"``; with ``polish=False`` the order is returned as given.
+        ``"exact"``; with ``polish=False`` the order is returned as given. ``"fast-tsp"`` has
+        no warm start and ignores it (and ``polish``: its own search is the polish).
+    avoid
+        ``(n, n) bool``: pairs to use only where no order does without them (the pipeline's legs
+        not planned yet). ``"fast-tsp"`` prices them above every other finite cost; ``"pso"`` /
+        ``"nn"`` add a penalty larger than any order over the other pairs. The returned ``cost``
+        is over ``cost`` itself; ``params["avoided_edges"]`` counts those the order uses.
+        Ignored by ``"exact"``.
 
     Returns
     -------
@@ -232,8 +254,8 @@ def solve_sequence(
     seed = seed_of(rng)
     pso = PSOParams() if pso is None else pso
     pp = PolishParams() if polish_params is None else polish_params
-    if method == "auto":
-        method = "exact" if n <= EXACT_MAX_NODES else "pso"
+    method = resolve_method(method, n)
+    av = _reduced_avoid(avoid, n, red.m)
     if method == "exact" and red.m > MAX_NODES:
         raise ValueError(
             f"method='exact' handles at most {MAX_NODES - 1} nodes for an open path and "
@@ -249,8 +271,13 @@ def solve_sequence(
         if not np.isfinite(best):
             raise _no_finite_order(red, exact=True)
         name = "exact"
+    elif method == "fast-tsp":
+        tour, params = _fast_tsp(red, time_budget, av, pp, gen)
+        name = "fast-tsp"
     else:
         Ap, _ = penalised(red.A)
+        if av is not None:
+            Ap = Ap + np.where(av, _avoid_penalty(Ap, av), 0.0)
         if initial is not None:
             init = np.asarray(initial, dtype=np.intp).reshape(-1)
             if not np.array_equal(np.sort(init), np.arange(n)):
@@ -273,16 +300,18 @@ def solve_sequence(
             params["polish"] = pp.to_dict()
             params["polish_stats"] = stats
             name += "+polish"
-        if not np.isfinite(order_cost(red.A, tour, True)):
-            if red.m <= EXACT_MAX_NODES + 1:
-                tour, best = held_karp_tour(red.A, red.start)
-                if not np.isfinite(best):
-                    raise _no_finite_order(red, exact=True)
-                name = "exact"
-            else:
-                raise _no_finite_order(red, exact=False)
+    if name != "exact" and not np.isfinite(order_cost(red.A, tour, True)):
+        if red.m <= EXACT_MAX_NODES + 1:
+            tour, best = held_karp_tour(red.A, red.start)
+            if not np.isfinite(best):
+                raise _no_finite_order(red, exact=True)
+            name = "exact"
+        else:
+            raise _no_finite_order(red, exact=False)
     order = red.to_order(tour)
     total = order_cost(C, order, closed)
+    if av is not None:
+        params["avoided_edges"] = int(av[tour, np.roll(tour, -1)].sum())
     seconds = time.perf_counter() - t0
     log.info("sequenced %d nodes with %s: cost %.6g in %.3f s", n, name, total, seconds)
     return Sequence(
@@ -299,3 +328,64 @@ def solve_sequence(
         start_cost=start_cost,
         params=params,
     )
+
+
+def _reduced_avoid(avoid: ArrayLike | None, n: int, m: int) -> NDArray[np.bool_] | None:
+    """The ``avoid`` mask on the reduced ``(m, m)`` matrix (dummy-node edges never avoided)."""
+    if avoid is None:
+        return None
+    a = np.asarray(avoid, dtype=bool)
+    if a.shape != (n, n):
+        raise ValueError(f"avoid must be ({n}, {n}), got shape {a.shape}")
+    out = np.zeros((m, m), dtype=bool)
+    out[:n, :n] = a
+    np.fill_diagonal(out, False)
+    return out if out.any() else None
+
+
+def _avoid_penalty(Ap: NDArray[np.float64], avoid: NDArray[np.bool_]) -> float:
+    """A penalty above any tour over the pairs not avoided (``m`` edges each at most the max)."""
+    other = Ap[~avoid]
+    return Ap.shape[0] * float(other.max() if len(other) else 1.0) + 1.0
+
+
+def _fast_tsp(
+    red: Reduction,
+    seconds: float | None,
+    avoid: NDArray[np.bool_] | None,
+    pp: PolishParams,
+    gen: np.random.Generator,
+) -> tuple[NDArray[np.intp], dict[str, Any]]:
+    """fast-tsp on the reduction; an order it returns through an ``inf`` pair (or an ATSP tour
+    that does not alternate) is handed to the 2-opt / Or-opt polish over the penalised matrix
+    before :func:`solve_sequence` gives up on it."""
+    from weldplan.optim.discrete.tsp_engine import solve_fast_tsp
+
+    res = solve_fast_tsp(red.A, red.start, seconds=seconds, avoid=avoid)
+    params: dict[str, Any] = {
+        "engine": {
+            "solver": "fast-tsp",
+            "transform": res.transform,
+            "scale": res.scale,
+            "cap": res.cap,
+            "rounding_bound": res.rounding_bound,
+            "optimality_loss_bound": res.optimality_loss_bound,
+            "clipped_edges": res.clipped_edges,
+            "penalty_edges": res.penalty_edges,
+            "feasible": res.feasible,
+            "seconds": res.seconds,
+        }
+    }
+    tour = res.tour
+    if res.penalty_edges or not res.feasible:
+        log.warning(
+            "fast-tsp returned an order through %d unreachable pairs%s; polishing it",
+            res.penalty_edges,
+            "" if res.feasible else " (ATSP tour not alternating)",
+        )
+        Ap, _ = penalised(red.A)
+        if avoid is not None:
+            Ap = Ap + np.where(avoid, _avoid_penalty(Ap, avoid), 0.0)
+        tour, _, stats = polish_tour(Ap, tour, replace(pp, kicks=pp.kicks or 0), gen)
+        params["engine"]["repaired_by_polish"] = True
+    return tour, params

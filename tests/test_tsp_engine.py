@@ -1,0 +1,134 @@
+"""The fast-tsp engine: exact answers (Held-Karp, TSPLIB optima) for every variant the weld
+sequencer needs, the rounding bound, clipping, the ATSP transform, infinite and avoided pairs."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import require_shared
+
+from weldplan.errors import PlanningError
+from weldplan.optim.discrete.costs import cost_matrix, order_cost, reduce_to_tour
+from weldplan.optim.discrete.sequence import solve_sequence
+from weldplan.optim.discrete.tsp_engine import (
+    FINITE_MAX,
+    choose_scale,
+    fast_tsp_tour,
+    solve_fast_tsp,
+)
+
+pytest.importorskip("fast_tsp")
+
+
+def _points(n: int, seed: int) -> np.ndarray:
+    return np.random.default_rng(seed).uniform(0.0, 1000.0, size=(n, 3))
+
+
+@pytest.mark.parametrize("n", [5, 12, 17])
+@pytest.mark.parametrize(("first", "last"), [(None, None), (2, None), (None, 3), (1, 4)])
+def test_open_paths_match_held_karp(n: int, first: int | None, last: int | None) -> None:
+    C = cost_matrix(_points(n, n))
+    exact = solve_sequence(C, method="exact", first=first, last=last)
+    got = solve_sequence(C, method="fast-tsp", first=first, last=last, time_budget=0.3)
+    eng = got.params["engine"]
+    assert sorted(got.order) == list(range(n))
+    if first is not None:
+        assert got.order[0] == first
+    if last is not None:
+        assert got.order[-1] == last
+    # float cost recomputed from the order, and no worse than the integer model allows
+    assert got.cost == pytest.approx(order_cost(C, np.asarray(got.order), False), abs=1e-9)
+    assert exact.cost <= got.cost <= exact.cost + eng["optimality_loss_bound"] + 1e-9
+    assert eng["rounding_bound"] > 0  # float costs: scaled, bound reported
+    assert eng["transform"] == ("symmetric" if (first, last) == (None, None) else "atsp-2n")
+
+
+@pytest.mark.parametrize("closed", [False, True])
+def test_asymmetric_costs_match_held_karp(closed: bool) -> None:
+    rng = np.random.default_rng(7)
+    C = cost_matrix(_points(11, 3)) + rng.uniform(0.0, 300.0, size=(11, 11))
+    exact = solve_sequence(C, method="exact", closed=closed)
+    got = solve_sequence(C, method="fast-tsp", closed=closed, time_budget=0.3)
+    assert got.params["engine"]["transform"] == "atsp-2n"
+    assert got.params["engine"]["feasible"]
+    assert exact.cost <= got.cost <= exact.cost + got.params["engine"]["optimality_loss_bound"]
+
+
+def test_integral_costs_are_exact_and_unscaled() -> None:
+    C = np.rint(cost_matrix(_points(15, 1)))
+    got = solve_sequence(C, method="fast-tsp", closed=True)
+    eng = got.params["engine"]
+    assert eng["scale"] == 1.0 and eng["rounding_bound"] == 0.0
+    assert got.cost == solve_sequence(C, method="exact", closed=True).cost
+
+
+@pytest.mark.parametrize(("name", "optimum"), [("att48", 10628), ("berlin52", 7542)])
+def test_tsplib_optimum(name: str, optimum: int) -> None:
+    from weldplan.io.tsplib import read_tsplib
+
+    D = read_tsplib(require_shared("tsplib", f"{name}.tsp")).matrix()
+    got = solve_sequence(D, method="fast-tsp", closed=True, time_budget=0.5)
+    assert got.cost == optimum
+    assert got.params["engine"]["rounding_bound"] == 0.0
+
+
+def test_rounding_bound_is_the_edge_count_over_twice_the_scale() -> None:
+    C = cost_matrix(_points(30, 5))
+    red = reduce_to_tour(C, False, None, None)
+    res = fast_tsp_tour(red.A, red.start, seconds=0.1)
+    assert res.rounding_bound == pytest.approx(red.m / (2.0 * res.scale))
+    # the integer length of the returned tour is within the bound of its float length
+    a, b = res.tour, np.roll(res.tour, -1)
+    ints = np.minimum(np.rint(red.A[a, b] * res.scale), FINITE_MAX)
+    assert abs(ints.sum() / res.scale - res.cost) <= res.rounding_bound
+
+
+def test_clipping_only_where_no_tour_needs_it() -> None:
+    # two clusters 100 km apart: the clusters' own edges set the scale, the two long edges of any
+    # tour are clipped, so the first solve uses clipped edges and the wrapper re-solves unclipped
+    P = np.vstack([_points(15, 2), _points(15, 3) + 1e5])
+    C = cost_matrix(P)
+    red = reduce_to_tour(C, True, None, None)
+    s, cap = choose_scale(red.A, ~np.eye(red.m, dtype=bool), None)
+    assert np.isfinite(cap) and cap < C.max()
+    first = fast_tsp_tour(red.A, red.start, seconds=0.2)
+    assert first.clipped_edges == 2
+    res = solve_fast_tsp(red.A, red.start, seconds=0.2)
+    assert res.clipped_edges == 0 and not np.isfinite(res.cap)
+    assert res.cost <= first.cost + first.rounding_bound + res.rounding_bound
+
+
+def test_infinite_pairs_are_avoided_or_reported() -> None:
+    n = 12
+    C = cost_matrix(_points(n, 9))
+    C[0, 1:6] = C[1:6, 0] = np.inf  # node 0 reaches only 6..11
+    got = solve_sequence(C, method="fast-tsp", time_budget=0.2)
+    exact = solve_sequence(C, method="exact")
+    assert np.isfinite(got.cost)
+    assert got.cost <= exact.cost + got.params["engine"]["optimality_loss_bound"]
+    assert got.params["engine"]["penalty_edges"] == 0
+    C[0, 1:] = C[1:, 0] = np.inf  # node 0 reaches nothing
+    with pytest.raises(PlanningError, match="no order of finite cost"):
+        solve_sequence(C, method="fast-tsp", time_budget=0.2)
+
+
+def test_avoided_pairs_used_only_where_needed() -> None:
+    n = 40
+    C = cost_matrix(_points(n, 4))
+    avoid = np.zeros((n, n), dtype=bool)
+    avoid[:20, :20] = True  # the first 20 nodes may not follow one another...
+    np.fill_diagonal(avoid, False)
+    got = solve_sequence(C, method="fast-tsp", avoid=avoid, time_budget=0.3)
+    assert got.params["avoided_edges"] == 0  # ... and need not: alternate with the other 20
+    o = np.asarray(got.order)
+    assert not avoid[o[:-1], o[1:]].any()
+    avoid[:] = True  # everything avoided: the order is the plain optimum again
+    np.fill_diagonal(avoid, False)
+    plain = solve_sequence(C, method="fast-tsp", avoid=avoid, time_budget=0.3)
+    assert plain.params["avoided_edges"] == n - 1
+
+
+def test_auto_uses_the_engine_above_held_karp_size() -> None:
+    C = cost_matrix(_points(30, 6))
+    assert solve_sequence(C).method == "fast-tsp"
+    assert solve_sequence(C[:13, :13]).method == "exact"
