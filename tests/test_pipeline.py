@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from weldplan.errors import PlanningError, WeldplanError
-from weldplan.weld import pipeline
+from weldplan.weld import pairtasks, pipeline
 from weldplan.weld.pipeline import PlanConfig, plan_route, straight_lower_bound
 from weldplan.weld.verify import verify_route
 
@@ -96,7 +96,6 @@ def test_bound_of_planned_legs_on_a_larger_cell_is_a_1tree_bound_below_the_route
     route and below the exact optimum over the all-pairs costs, above the spanning tree."""
     from scipy.sparse.csgraph import minimum_spanning_tree
 
-    from weldplan.weld import pipeline
 
     small = plan_route(cell, config=PlanConfig(planner="exact", sequencer="exact"))
     exact = small.stats["bound_planned"]
@@ -170,7 +169,7 @@ def test_failed_local_paths_give_a_planning_error_naming_pairs(cell, monkeypatch
             P, float(np.linalg.norm(np.diff(P, axis=0), axis=1).sum()), 0.0, "so-aco", True
         )
 
-    monkeypatch.setattr(pipeline, "_plan_pair_task", fail_for_A)
+    monkeypatch.setattr(pairtasks, "_plan_pair_task", fail_for_A)
     with pytest.raises(PlanningError, match="A-B"):
         plan_route(blocked, config=PlanConfig(pairs="all"), rng=0)
 
@@ -258,6 +257,6 @@ def test_joints_in_separate_regions_are_named_as_groups(cell, monkeypatch):
         L = float(np.linalg.norm(np.diff(P, axis=0), axis=1).sum())
         return LocalPath(P, L, 0.0, "so-aco", True)
 
-    monkeypatch.setattr(pipeline, "_plan_pair_task", two_sides)
+    monkeypatch.setattr(pairtasks, "_plan_pair_task", two_sides)
     with pytest.raises(PlanningError, match=r"2 groups .*\{A, B, C\} \{D, E, F\}"):
         plan_route(blocked, config=PlanConfig(pairs="all"), rng=0)

@@ -88,43 +88,6 @@ def _load() -> str:
         return "load average unavailable"
 
 
-def ortools_tour(D: np.ndarray, seconds: float) -> tuple[np.ndarray, float] | None:
-    """OR-Tools' default first solution + guided local search for ``seconds``; ``None`` when
-    ``ortools`` is not importable. Returns the closed tour and the wall time (model included)."""
-    try:
-        from ortools.constraint_solver import pywrapcp, routing_enums_pb2
-    except ImportError:
-        return None
-    t0 = time.perf_counter()
-    n = D.shape[0]
-    manager = pywrapcp.RoutingIndexManager(n, 1, 0)
-    routing = pywrapcp.RoutingModel(manager)
-    M = np.rint(D).astype(np.int64).tolist()
-    if hasattr(routing, "RegisterTransitMatrix"):
-        cb = routing.RegisterTransitMatrix(M)
-    else:  # pragma: no cover - older OR-Tools
-
-        def dist(i: int, j: int) -> int:
-            return M[manager.IndexToNode(i)][manager.IndexToNode(j)]
-
-        cb = routing.RegisterTransitCallback(dist)
-    routing.SetArcCostEvaluatorOfAllVehicles(cb)
-    params = pywrapcp.DefaultRoutingSearchParameters()
-    params.local_search_metaheuristic = (
-        routing_enums_pb2.LocalSearchMetaheuristic.GUIDED_LOCAL_SEARCH
-    )
-    params.time_limit.FromMilliseconds(int(seconds * 1000))
-    sol = routing.SolveWithParameters(params)
-    if sol is None:
-        return None
-    idx = routing.Start(0)
-    tour = []
-    while not routing.IsEnd(idx):
-        tour.append(manager.IndexToNode(idx))
-        idx = sol.Value(routing.NextVar(idx))
-    return np.asarray(tour, dtype=np.intp), time.perf_counter() - t0
-
-
 def _gap(cost: float, opt: float) -> str:
     return f"{100.0 * (cost / opt - 1.0):.2f}%"
 
@@ -172,6 +135,8 @@ def tsplib_table(args: argparse.Namespace) -> list[str]:
             f"{_gap(nn.cost, opt)} / {nn.seconds:.2f}",
         ]
         if has_ortools:
+            from weldplan.bench.tsp_peers import ortools_tour
+
             res = ortools_tour(D, args.ortools_time)
             assert res is not None
             ot, osec = res

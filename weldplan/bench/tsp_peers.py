@@ -83,7 +83,6 @@ def lkh3(D: NDArray[np.float64], seconds: float) -> tuple[NDArray[np.intp], floa
 
 
 def ortools(D: NDArray[np.float64], seconds: float) -> tuple[NDArray[np.intp], float]:
-    from weldplan.bench.sequence import ortools_tour
 
     res = ortools_tour(D, seconds)
     if res is None:  # pragma: no cover - no solution within the limit
@@ -110,3 +109,40 @@ def available(name: str) -> bool:
     except ImportError:
         return False
     return True
+
+
+def ortools_tour(D: np.ndarray, seconds: float) -> tuple[np.ndarray, float] | None:
+    """OR-Tools' default first solution + guided local search for ``seconds``; ``None`` when
+    ``ortools`` is not importable. Returns the closed tour and the wall time (model included)."""
+    try:
+        from ortools.constraint_solver import pywrapcp, routing_enums_pb2
+    except ImportError:
+        return None
+    t0 = time.perf_counter()
+    n = D.shape[0]
+    manager = pywrapcp.RoutingIndexManager(n, 1, 0)
+    routing = pywrapcp.RoutingModel(manager)
+    M = np.rint(D).astype(np.int64).tolist()
+    if hasattr(routing, "RegisterTransitMatrix"):
+        cb = routing.RegisterTransitMatrix(M)
+    else:  # pragma: no cover - older OR-Tools
+
+        def dist(i: int, j: int) -> int:
+            return M[manager.IndexToNode(i)][manager.IndexToNode(j)]
+
+        cb = routing.RegisterTransitCallback(dist)
+    routing.SetArcCostEvaluatorOfAllVehicles(cb)
+    params = pywrapcp.DefaultRoutingSearchParameters()
+    params.local_search_metaheuristic = (
+        routing_enums_pb2.LocalSearchMetaheuristic.GUIDED_LOCAL_SEARCH
+    )
+    params.time_limit.FromMilliseconds(int(seconds * 1000))
+    sol = routing.SolveWithParameters(params)
+    if sol is None:
+        return None
+    idx = routing.Start(0)
+    tour = []
+    while not routing.IsEnd(idx):
+        tour.append(manager.IndexToNode(idx))
+        idx = sol.Value(routing.NextVar(idx))
+    return np.asarray(tour, dtype=np.intp), time.perf_counter() - t0

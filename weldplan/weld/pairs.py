@@ -111,14 +111,14 @@ class PairPlanning:
         """Check the up-front pairs (all, or the candidates), cost every pair by its estimate
         (the straight polyline spot -> virtual -> virtual -> spot, a lower bound of any leg),
         draw one seed per pair. Returns the seconds taken."""
-        from weldplan.weld.pipeline import candidate_pairs
+        from weldplan.weld import pairtasks
 
         t0 = time.perf_counter()
         config, n, iu, ju = self.config, self.n, self.iu, self.ju
         if config.candidates is None or config.candidates >= n - 1:
             self.upfront = np.arange(self.n_pairs)
         else:
-            self.upfront = candidate_pairs(
+            self.upfront = pairtasks.candidate_pairs(
                 self.P, config.candidates, self.pair_index, config.candidate_radius
             )
         self.report("straight", 0, len(self.upfront))
@@ -146,7 +146,7 @@ class PairPlanning:
     def plan(self, pairs: list[int]) -> None:
         """Make ``pairs`` known: the straight check first where not done, then a local path
         for each blocked one (through the executor); the costs follow."""
-        from weldplan.weld.pipeline import _plan_pair_task
+        from weldplan.weld import pairtasks
 
         t = time.perf_counter()
         config, iu, ju = self.config, self.iu, self.ju
@@ -170,7 +170,7 @@ class PairPlanning:
         ]
         if self.executor is None:
             results: Any = (
-                _plan_pair_task(self.cell, i, j, m, prm, s, config.local_time_budget)
+                pairtasks._plan_pair_task(self.cell, i, j, m, prm, s, config.local_time_budget)
                 for i, j, m, prm, s in args
             )
         else:
@@ -182,14 +182,14 @@ class PairPlanning:
 
     def _submit(self, args: list[tuple]) -> Any:
         """The local paths of ``args`` from the executor, in order (batches of pairs)."""
+        from weldplan.weld import pairtasks
         from weldplan.weld.parallel import batches, n_workers, share_cell
-        from weldplan.weld.pipeline import _plan_pairs_task
 
         if self._shared is None:
             self._shared = share_cell(self.cell, self.executor)
         budget = self.config.local_time_budget
         futures = [
-            self.executor.submit(_plan_pairs_task, self._shared, batch, budget)  # type: ignore[union-attr]
+            self.executor.submit(pairtasks._plan_pairs_task, self._shared, batch, budget)  # type: ignore[union-attr]
             for batch in batches(args, n_workers(self.executor))
         ]
         return (lp for f in futures for lp in f.result())

@@ -71,19 +71,23 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from weldplan.errors import UnreachableJointsError
+from weldplan.errors import ConfigError, UnreachableJointsError
 from weldplan.random import RNGLike, as_generator, seed_of
 from weldplan.weld.pairs import PairPlanning
+from weldplan.weld.pairtasks import (  # noqa: F401 - public here as before
+    _plan_pair_task,
+    _plan_pairs_task,
+    candidate_pairs,
+)
 from weldplan.weld.route import Leg, Route
 from weldplan.weld.skip import reachable_subset, with_skipped
+from weldplan.weld.validate import PLANNERS, SEQUENCERS  # noqa: F401 - public here as before
 
 log = logging.getLogger(__name__)
 
 #: progress callback: ``progress(stage, done, total)``; stages "straight", "local", "sequence"
 Progress = Callable[[str, int, int], None]
 
-PLANNERS = ("so-aco", "aco", "exact")
-SEQUENCERS = ("auto", "fast-tsp", "pso", "exact", "nn")
 #: the exact straight-line lower bound (Held-Karp) is used up to this many joints, else the
 #: 1-tree bound
 LOWER_BOUND_EXACT_MAX = 16
@@ -218,77 +222,6 @@ class PlanConfig:
         return cls(**{k: v for k, v in d.items() if k in names})
 
 
-def _plan_pair_task(
-    cell: Any, i: int, j: int, method: str, params: dict, seed: int, budget: float | None
-) -> Any:
-    """One local path (module-level so process pools can pickle it). A pair whose search would
-    exceed the voxel cap (:class:`~weldplan.weld.local.SearchLimitError`) comes back as a failed
-    path with the reason: the sequencer then treats it as unreachable."""
-    from weldplan.weld.local import LocalPath, SearchLimitError, plan_pair
-
-    try:
-        return plan_pair(cell, i, j, method=method, params=params, rng=seed, time_budget=budget)
-    except SearchLimitError as exc:
-        return LocalPath(
-            points=np.zeros((0, 3)),
-            length=np.inf,
-            inner_length=np.inf,
-            method=method,
-            success=False,
-            reason=str(exc),
-        )
-
-
-def _plan_pairs_task(cell: Any, batch: list[tuple], budget: float | None) -> list[Any]:
-    """A batch of local paths in one worker task; ``cell`` arrives as a
-    :func:`weldplan.weld.parallel.share_cell` reference (built once per worker)."""
-    from weldplan.weld.parallel import resolve
-
-    cell = resolve(cell)
-    return [_plan_pair_task(cell, i, j, m, prm, s, budget) for i, j, m, prm, s in batch]
-
-
-def candidate_pairs(
-    xyz: NDArray[np.float64],
-    k: int,
-    pair_index: NDArray[np.intp] | None = None,
-    radius: float | None = None,
-) -> NDArray[np.intp]:
-    """Indices (into the upper-triangle pair list) of each joint with its ``k`` nearest joints.
-
-    Parameters
-    ----------
-    xyz
-        ``(n, 3)`` weld spots (mm); nearness is the straight-line distance between them.
-    k
-        Neighbours per joint (ties broken by joint order).
-    pair_index
-        ``(n, n)`` pair number of ``(i, j)``, as built by :func:`plan_route`; built when None.
-    radius
-        mm: a neighbour farther than this is not a candidate (None: no limit).
-
-    Returns
-    -------
-    ``(m,) intp``, sorted, unique.
-    """
-    from scipy.spatial import cKDTree
-
-    n = len(xyz)
-    if pair_index is None:
-        iu, ju = np.triu_indices(n, 1)
-        pair_index = -np.ones((n, n), dtype=np.intp)
-        pair_index[iu, ju] = pair_index[ju, iu] = np.arange(len(iu))
-    k = min(int(k), n - 1)
-    if k < 1:
-        return np.zeros(0, dtype=np.intp)
-    bound = np.inf if radius is None else float(radius)
-    _, nb = cKDTree(xyz).query(xyz, k=k + 1, distance_upper_bound=bound)
-    rows = np.repeat(np.arange(n), k + 1)
-    cols = nb.reshape(-1)
-    keep = (rows != cols) & (cols < n)  # cols == n: no neighbour within the radius
-    return np.unique(pair_index[rows[keep], cols[keep]])
-
-
 def straight_lower_bound(xyz: NDArray[np.float64]) -> tuple[float, str]:
     """Open-path lower bound over straight-line distances between the weld spots ``(n, 3)``.
 
@@ -366,7 +299,11 @@ def plan_route(
     from weldplan.weld.validate import check_plan_arguments
 
     config = PlanConfig() if config is None else config
-    check_plan_arguments(cell, config, rng, executor, progress)
+    if not isinstance(config, PlanConfig):
+        raise ConfigError(
+            f"config must be a PlanConfig, got {type(config).__name__}", field="config"
+        )
+    check_plan_arguments(cell, rng, executor, progress)
     check_pair_work(len(cell.joints.ids), config.candidates, config.memory_limit)
     seed = seed_of(rng)
     report = progress or (lambda stage, done, total: None)

@@ -18,6 +18,11 @@ import numpy as np
 
 from weldplan.errors import ConfigError
 
+#: local planners for blocked pairs (:class:`~weldplan.weld.pipeline.PlanConfig` ``planner``)
+PLANNERS = ("so-aco", "aco", "exact")
+#: sequencers (``PlanConfig.sequencer``): auto = Held-Karp up to 13 joints, else fast-tsp
+SEQUENCERS = ("auto", "fast-tsp", "pso", "exact", "nn")
+
 
 def _is_real(v: Any) -> bool:
     return isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_))
@@ -83,8 +88,6 @@ def seed(v: Any) -> Any:
 
 def check_config(c: Any) -> None:
     """Every field of a :class:`~weldplan.weld.pipeline.PlanConfig` (normalised in place)."""
-    from weldplan.weld.pipeline import PLANNERS, SEQUENCERS
-
     put = object.__setattr__
     choice("planner", c.planner, PLANNERS)
     choice("sequencer", c.sequencer, SEQUENCERS)
@@ -155,14 +158,9 @@ def _pso(v: Any) -> dict[str, Any]:
     return pso
 
 
-def check_plan_arguments(cell: Any, config: Any, rng: Any, executor: Any, progress: Any) -> None:
-    """The arguments of :func:`~weldplan.weld.pipeline.plan_route`, before any work."""
-    from weldplan.weld.pipeline import PlanConfig
-
-    if not isinstance(config, PlanConfig):
-        raise ConfigError(
-            f"config must be a PlanConfig, got {type(config).__name__}", field="config"
-        )
+def check_plan_arguments(cell: Any, rng: Any, executor: Any, progress: Any) -> None:
+    """The arguments of :func:`~weldplan.weld.pipeline.plan_route` but its config (which
+    :class:`~weldplan.weld.pipeline.PlanConfig` checks), before any work."""
     missing = [
         a for a in ("joints", "virtual_xyz", "collision", "clearance") if not hasattr(cell, a)
     ]
