@@ -258,6 +258,14 @@ def test_bench_tour_writes_tables(tmp_path):
     assert "Table 4" in text and "Table 3" in text and "ISMA memetic" in text
     assert "ISMA as printed" in text and "polish alone" in text and "String pulling" in text
     assert (tmp_path / "tour-tour-3.png").exists() and (tmp_path / "tour-table3.png").exists()
+    # the default pipeline beside paper 002 as printed, gaps to the exact any-angle tour
+    assert "Any-angle leg costs" in text
+    rows = [r.split("|")[1:-1] for r in text.splitlines() if r.startswith("| tour-")]
+    aa = {(c[0].strip(), c[2].strip()): c for c in rows if len(c) == 12}
+    gap = {k: float(c[5].strip(" %")) for k, c in aa.items()}
+    for m in ("tour-1", "tour-3"):
+        assert gap[(m, "default")] < gap[(m, "as printed (002)")]
+        assert aa[(m, "default")][9].strip() == aa[(m, "default")][10].strip() == "1/1"
 
 
 def test_navmesh_tour_on_polyanya_arena():
