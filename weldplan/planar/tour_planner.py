@@ -46,11 +46,10 @@ from weldplan.planar.multigoal import (
     TourScenario,
     build_tour_graph,
     polish_order,
-    segments_clear,
-    smooth_tour,
     tour_lengths,
 )
 from weldplan.planar.tour_anyangle import AnyAngleTourGraph, build_anyangle_graph
+from weldplan.planar.tour_smooth import segments_clear, smooth_tour
 from weldplan.random import RNGLike, as_generator, seed_of
 
 log = logging.getLogger(__name__)
