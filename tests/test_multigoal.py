@@ -294,8 +294,8 @@ def test_navmesh_tour_on_polyanya_arena():
 @pytest.mark.slow
 def test_navmesh_tour_on_polyanya_aurora():
     """The large aurora navmesh (35k boundary edges): the mesh builds, the tour reaches the
-    ground truth, and the Polyanya legs and the smoothed path stay in the navmesh (its exact segment check
-    runs through the edge grid instead of all-pairs arrays)."""
+    ground truth, and the Polyanya legs and the smoothed path stay in the navmesh (its exact
+    segment check runs through the edge grid instead of all-pairs arrays)."""
     from conftest import require_shared
 
     from weldplan.planar.exact import MeshFreeSpace
