@@ -1,11 +1,14 @@
-"""``weldplan planar tour SCENARIO``: multi-goal traversal on a triangular-mesh map (paper 002).
+"""``weldplan planar tour SCENARIO``: multi-goal traversal on a planar map (paper 002).
 
-Orders the targets with each optimiser of ``--order-by`` (random keys; by default the best
-order is polished once by the sequencer's 2-opt + Or-opt search, ``--no-polish`` for the
-optimiser as printed) and with the exact sequencer, pulls the legs tight in their triangle
-corridors (``--no-funnel`` keeps the mesh-edge legs), smooths the tour with a B-spline and prints
-length, smoothed length, gap to the ground-truth order and time; ``--plot`` writes a PNG of
-the map, mesh and tours.
+Default pipeline: the stops are ordered over exact any-angle leg lengths (Polyanya between
+every pair of stops) by each optimiser of ``--order-by`` (random keys), the best order is
+polished once by the sequencer's 2-opt + Or-opt search (``--no-polish``: the optimiser's order),
+the legs are Polyanya's shortest paths, and the tour is smoothed by a B-spline.
+``--as-printed`` is paper 002 exactly: Dijkstra along the triangle mesh's edges, the optimiser's
+order, the B-spline over the mesh-edge legs; ``--metric mesh`` keeps the mesh-edge costs with the
+polish and the funnel (``--no-funnel``: mesh-edge legs). The summary names the pipeline, shows
+the optimiser's own order beside what each stage changed, and the exact optimal tour (Held-Karp
+over the any-angle distances) with every answer's gap to it; ``--plot`` writes a PNG.
 """
 
 from __future__ import annotations
@@ -25,6 +28,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="tour: comma-separated optimisers ordering the targets, 'exact' for the sequencer",
     )
     g.add_argument("--max-edge", type=float, default=None, help="tour: mesh edge M (map units)")
+    g.add_argument(
+        "--metric",
+        choices=["any-angle", "mesh"],
+        default=None,
+        help="tour: leg costs: exact any-angle (Polyanya; default) or mesh-edge Dijkstra "
+        "(paper 002; the default with --as-printed or --no-funnel)",
+    )
     g.add_argument("--two-opt", action="store_true", help="tour: 2-opt decoding of the random keys")
     g.add_argument(
         "--no-polish",
@@ -34,21 +44,60 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--no-funnel",
         action="store_true",
-        help="tour: keep the mesh-edge legs (paper 002) instead of pulling them tight",
+        help="tour: mesh-edge legs (paper 002) instead of taut ones (implies --metric mesh)",
     )
     g.add_argument("--no-smooth", action="store_true", help="tour: keep the mesh polyline")
 
 
+def _summary(task, results, exact_len: float, exact_method: str, anyangle) -> str:
+    r0 = results[0]
+    head = f"scenario   {task.name}: {len(task.goals)} targets\n"
+    if r0.pipeline == "as-printed":
+        head += (
+            "pipeline   as printed (paper 002): mesh-edge Dijkstra costs -> optimiser's order "
+            "-> B-spline over the mesh-edge legs\n"
+        )
+    elif r0.pipeline == "default":
+        head += (
+            "pipeline   default: any-angle costs (Polyanya) -> optimiser -> polish -> "
+            "Polyanya legs -> B-spline (--as-printed: paper 002 alone)\n"
+        )
+    else:
+        taut = r0.metric == "any-angle" or any(s[0] == "funnel" for s in r0.stages)
+        head += (
+            f"pipeline   custom: {r0.metric} costs, polish {'on' if r0.polished else 'off'}, "
+            f"{'taut' if taut else 'mesh-edge'} legs\n"
+        )
+    head += (
+        f"exact optimum {exact_len:.3f} (Held-Karp over the any-angle distances, {exact_method}; "
+        f"{anyangle.n_queries} Polyanya legs in {anyangle.build_seconds:.2f} s)\n"
+    )
+    lines = [head]
+    for r in results:
+        lines.append(
+            f"\n{r.algorithm}: order {' '.join(map(str, r.order))}\n"
+            "stage        length      gap  seconds  change\n"
+        )
+        prev = None
+        for name, length, secs, note in r.stages:
+            gap = 100 * (length / exact_len - 1.0)
+            change = "" if prev is None else f"{100 * (length / prev - 1.0):+.2f} % "
+            lines.append(f"{name:<9s} {length:10.3f} {gap:+7.2f} % {secs:8.3f}  {change}{note}\n")
+            prev = length
+        free = "yes" if r.collision_free else "NO"
+        lines.append(
+            f"returned  {r.smooth_length:10.3f} {100 * r.exact_gap:+7.2f} %  collision-free {free}"
+            f"{'' if r.smoothed else ' (polyline)'}, ordering {r.seconds:.3f} s "
+            f"(CPU {r.cpu_seconds:.3f} s)\n"
+        )
+    return "".join(lines)
+
+
 def run(args: argparse.Namespace) -> int:
     from weldplan.optim.registry import ALGORITHMS
-    from weldplan.planar.multigoal import (
-        PAPER_ITER,
-        PAPER_POP,
-        build_tour_graph,
-        ground_truth,
-        load_tour,
-        plan_tour,
-    )
+    from weldplan.planar.multigoal import PAPER_ITER, PAPER_POP, build_tour_graph, load_tour
+    from weldplan.planar.tour_anyangle import build_anyangle_graph
+    from weldplan.planar.tour_planner import ground_truth, plan_tour
 
     if len(args.more) != 1:
         raise WeldplanError("usage: weldplan planar tour SCENARIO [options]")
@@ -58,9 +107,13 @@ def run(args: argparse.Namespace) -> int:
             raise WeldplanError(f"unknown algorithm '{a}' (field --order-by)")
     if args.max_edge is not None and args.max_edge <= 0:
         raise WeldplanError("--max-edge must be positive")
+    as_printed = bool(getattr(args, "as_printed", False))
     task = load_tour(args.more[0])
-    graph = build_tour_graph(task, args.max_edge)
-    _, opt, _ = ground_truth(graph)
+    anyangle = build_anyangle_graph(task)
+    ex_order, ex_len, ex_method = ground_truth(anyangle)
+    metric = args.metric
+    uses_mesh = as_printed or metric == "mesh" or (metric is None and args.no_funnel)
+    graph = build_tour_graph(task, args.max_edge) if uses_mesh else None
     results = []
     for a in algos:
         results.append(
@@ -68,31 +121,23 @@ def run(args: argparse.Namespace) -> int:
                 task,
                 a,
                 graph=graph,
+                anyangle=anyangle,
+                metric=metric,
+                as_printed=as_printed,
                 pop_size=args.pop or PAPER_POP,
                 max_iter=args.iters or PAPER_ITER,
                 two_opt=args.two_opt,
                 polish=not args.no_polish,
                 taut=not args.no_funnel,
                 smooth=not args.no_smooth,
-                optimum=opt,
+                exact=(ex_order, ex_len),
                 rng=args.seed,
             )
         )
     if args.json:
         sys.stdout.write(json.dumps([json.loads(r.to_json()) for r in results]) + "\n")
     else:
-        m = graph.mesh
-        sys.stdout.write(
-            f"scenario {task.name}: {len(task.goals)} targets, mesh M = {m.max_edge:g} "
-            f"({m.n_nodes} nodes, {m.n_cells} triangles, built in {graph.build_seconds:.2f} s)\n"
-            f"{'order by':<12}{'tour':>12}{'smoothed':>12}{'gap':>9}{'time/s':>9}  free\n"
-        )
-        for r in results:
-            sys.stdout.write(
-                f"{r.algorithm:<12}{r.length:>12.3f}{r.smooth_length:>12.3f}"
-                f"{100 * r.gap:>8.2f}%{r.seconds:>9.3f}  "
-                f"{'yes' if r.collision_free else 'NO'}{'' if r.smoothed else ' (polyline)'}\n"
-            )
+        sys.stdout.write(_summary(task, results, ex_len, ex_method, anyangle))
     if args.plot:
         from weldplan.viz.tour import plot_tour
 
@@ -100,7 +145,7 @@ def run(args: argparse.Namespace) -> int:
             task,
             {f"{r.algorithm} ({r.smooth_length:.1f})": r.points_array for r in results},
             args.plot,
-            mesh=graph.mesh,
-            title=f"{task.name}: ground-truth tour {opt:.1f}",
+            mesh=graph.mesh if graph is not None else None,
+            title=f"{task.name}: exact optimal tour {ex_len:.1f}",
         )
     return 0

@@ -1,4 +1,10 @@
-"""Multi-goal traversal on triangular-mesh maps (paper 002, section 3).
+"""Multi-goal traversal on triangular-mesh maps (paper 002, section 3): scenarios, the mesh-edge
+distances, the random-key encoding, the order polish and the B-spline smoothing.
+
+The planner itself (:func:`~weldplan.planar.tour_planner.plan_tour`, still importable from
+here) lives in :mod:`weldplan.planar.tour_planner`; its **default** orders the stops over exact
+any-angle leg lengths (Polyanya, :mod:`weldplan.planar.tour_anyangle`) and joins Polyanya's
+paths, a named deviation from the mesh-edge pipeline below, which is ``as_printed=True``.
 
 The robot leaves the start, visits every target once and returns to the start. The pipeline:
 
@@ -53,7 +59,7 @@ from __future__ import annotations
 import json
 import logging
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -62,15 +68,19 @@ from numpy.typing import ArrayLike, NDArray
 
 from weldplan.errors import InputError
 from weldplan.geometry.obstacles2d import Obstacles2D
-from weldplan.geometry.pathmetrics import path_length
-from weldplan.optim.core import Problem, minimize
+from weldplan.optim.core import Problem
 from weldplan.optim.discrete.local_search import PolishParams
 from weldplan.optim.discrete.local_search import polish as polish_tour
-from weldplan.optim.discrete.sequence import solve_sequence
-from weldplan.optim.registry import get_optimizer
 from weldplan.planar.meshmap import TriangleMap, triangulate_map, triangulate_navmesh
 from weldplan.planar.scenarios import SCENARIO_DIR, Scenario, scenario_from_dict
-from weldplan.random import RNGLike, as_generator, seed_of
+from weldplan.planar.tour_smooth import (  # noqa: F401 - re-exported
+    SAMPLES_PER_CONTROL,
+    SMOOTH_ROUNDS,
+    SPLINE_DEGREE,
+    segments_clear,
+    smooth_tour,
+)
+from weldplan.random import RNGLike, as_generator
 
 log = logging.getLogger(__name__)
 
@@ -81,11 +91,6 @@ KEY_SCALE = 10.0
 #: paper 002 sec. 3: population and iterations are both 500
 PAPER_POP = 500
 PAPER_ITER = 500
-#: B-spline degree (cubic) and samples per control point when smoothing
-SPLINE_DEGREE = 3
-SAMPLES_PER_CONTROL = 8
-#: rounds of pulling the B-spline onto the polyline where it collides
-SMOOTH_ROUNDS = 50
 #: ground truth by Held-Karp up to this many stops (start included)
 EXACT_STOPS = 16
 #: kicks of the final iterated local search per stop (start included), ``plan_tour(polish=True)``;
@@ -460,354 +465,6 @@ class RandomKeyTourProblem(Problem):
 
 
 # ------------------------------------------------------------------------------ smoothing
-def segments_clear(world: Any, A: ArrayLike, B: ArrayLike, depth_tol: float | None = None) -> Any:
-    """Collision check of path segments ``A -> B (s, 2)`` that tolerates grazing noise.
-
-    A segment passes when ``world.segments_free`` says so, or when none of five points along it
-    is deeper than ``depth_tol`` inside an obstacle (default ``GRAZE_TOL`` x map scale, the
-    planar core's grazing tolerance; on a navigation mesh: when the five points are in the mesh,
-    its boundary included): a B-spline that runs along an obstacle side, as mesh paths
-    do, sits on it up to rounding (1e-14 inside), which an exact check would call a collision.
-    """
-    from weldplan.geometry.obstacles2d import GRAZE_TOL
-
-    A = np.asarray(A, dtype=np.float64)
-    B = np.asarray(B, dtype=np.float64)
-    ok = np.asarray(world.segments_free(A, B), dtype=bool)
-    if ok.all():
-        return ok
-    a, b = A[~ok], B[~ok]
-    t = np.linspace(0.0, 1.0, 5)[:, None, None]
-    Q = a + t * (b - a)
-    if hasattr(world, "clearance"):
-        tol = GRAZE_TOL * float(world.scale) if depth_tol is None else float(depth_tol)
-        ok[~ok] = np.max(-np.asarray(world.clearance(Q)), axis=0) <= tol
-    elif hasattr(world, "contains_free"):  # a navigation mesh: boundary points count as free
-        ok[~ok] = np.all(world.contains_free(Q), axis=0)
-    return ok
-
-
-def _clamped_bspline(
-    ctrl: NDArray[np.float64], mult: NDArray[np.int64], n: int, degree: int
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Clamped uniform B-spline of ``ctrl (k, 2)`` (as :func:`bspline_path`) sampled at ``n``
-    uniform parameters plus the knots where it passes through a control point repeated
-    ``degree`` times (so the sampled polyline keeps those corners exactly).
-
-    Returns the points ``(q, 2)`` and their parameters ``(q,)``.
-    """
-    from scipy.interpolate import BSpline
-
-    k = len(ctrl)
-    p = min(int(degree), k - 1)
-    inner = np.linspace(0.0, 1.0, k - p + 1)
-    knots = np.concatenate([np.zeros(p), inner, np.ones(p)])
-    starts = np.cumsum(mult) - mult  # first copy of each polyline vertex in ctrl
-    through = inner[np.clip(starts[mult >= p], 0, k - p)]
-    u = np.unique(np.concatenate([np.linspace(0.0, 1.0, int(n)), through]))
-    pts = BSpline(knots, ctrl, p, axis=0)(u)
-    pts[0], pts[-1] = ctrl[0], ctrl[-1]
-    return pts, u
-
-
-def smooth_tour(
-    points: ArrayLike,
-    stops_at: ArrayLike,
-    world: Any,
-    *,
-    degree: int = SPLINE_DEGREE,
-    samples_per_control: int = SAMPLES_PER_CONTROL,
-    rounds: int = SMOOTH_ROUNDS,
-) -> tuple[NDArray[np.float64], bool]:
-    """B-spline smoothing of a tour polyline (002 eq. 14) with a collision check and fallback.
-
-    Parameters
-    ----------
-    points
-        ``(p, 2)``: the polyline (its vertices become the control points).
-    stops_at
-        Indices into ``points`` of the stops; they get multiplicity ``degree`` so the curve
-        passes through them.
-    world
-        Anything with ``segments_free(A, B)`` (an :class:`Obstacles2D` with the map frame);
-        judged by :func:`segments_clear`.
-
-    Returns
-    -------
-    curve
-        ``(q, 2)``: the smoothed path, or ``points`` when no collision-free smoothing was found.
-    smoothed
-        Whether ``curve`` is the B-spline.
-    """
-    P = np.asarray(points, dtype=np.float64)
-    mult = np.ones(len(P), dtype=np.int64)
-    mult[np.asarray(stops_at, dtype=np.int64)] = degree
-    rounds_used = 0
-    while rounds_used <= rounds:
-        ctrl = np.repeat(P, mult, axis=0)
-        owner = np.repeat(np.arange(len(P)), mult)
-        n = max(2, samples_per_control * len(ctrl))
-        curve, u = _clamped_bspline(ctrl, mult, n, degree)
-        bad = ~segments_clear(world, curve[:-1], curve[1:])
-        if not bad.any():
-            return curve, True
-        # parameter of a bad sample -> nearest control point(s) of the clamped uniform spline
-        ub = 0.5 * (u[:-1] + u[1:])[bad]
-        k = len(ctrl) - 1
-        centre = np.clip(np.round(ub * k).astype(np.int64), 0, k)
-        hit = np.unique(
-            np.concatenate([owner[np.clip(centre + s, 0, k)] for s in range(-degree, degree + 1)])
-        )
-        if np.all(mult[hit] >= degree):
-            break
-        mult[hit] = degree
-        rounds_used += 1
-    log.info("B-spline smoothing collides after %d rounds; keeping the polyline", rounds)
-    return P, False
-
-
-# ------------------------------------------------------------------------------ the planner
-@dataclass(frozen=True)
-class TourResult:
-    """A planned multi-goal traversal.
-
-    Attributes
-    ----------
-    scenario, algorithm
-        What was solved, by what (``"exact"``/``"nn+polish"`` for the ground-truth sequencer).
-    order
-        Goal numbers (1..t) in visiting order; the tour starts and ends at the start (0).
-    length
-        Closed tour length over the mesh shortest paths.
-    optimum
-        The ground-truth (sequencer) tour length on the same distances.
-    smooth_length
-        Length of the returned (smoothed or fallback) path.
-    smoothed
-        Whether the B-spline was collision-free (else the polyline is returned).
-    collision_free
-        The final independent check of the returned path (exact: :attr:`TourScenario.exact_world`).
-    points
-        ``((q, 2))``: the returned path.
-    seconds
-        Ordering time (optimiser plus final polish); ``build_seconds`` the mesh + Dijkstra
-        time, ``smooth_seconds`` the smoothing time.
-    max_edge, mesh_nodes
-        The mesh used.
-    seed, n_eval, params
-        Reproduction details.
-    optimizer_length
-        Closed length of the optimiser's own order, before the final polish (``None`` for the
-        sequencer); with ``polished=False`` it equals ``length``.
-    polyline_length
-        Length of the polyline that was smoothed: the mesh-edge legs, or the taut ones
-        (``taut=True``, the default), never longer than ``length``.
-    polished
-        Whether the final polish ran (a named deviation, see the module docstring).
-    polish_seconds
-        Time of the final polish (included in ``seconds``); ``cpu_seconds`` the process CPU
-        time of the ordering (optimiser and polish), which a busy machine inflates less than
-        the wall time; ``optimizer_cpu_seconds`` that of the optimiser alone.
-        ``smooth_seconds`` covers the string pulling, the B-spline and the collision checks.
-    """
-
-    scenario: str
-    algorithm: str
-    order: tuple[int, ...]
-    length: float
-    optimum: float
-    smooth_length: float
-    smoothed: bool
-    collision_free: bool
-    points: tuple[tuple[float, float], ...]
-    seconds: float
-    build_seconds: float
-    smooth_seconds: float
-    max_edge: float
-    mesh_nodes: int
-    seed: int | None = None
-    n_eval: int = 0
-    params: dict[str, Any] = field(default_factory=dict)
-    optimizer_length: float | None = None
-    polyline_length: float | None = None
-    polished: bool = False
-    polish_seconds: float = 0.0
-    cpu_seconds: float = 0.0
-    optimizer_cpu_seconds: float = 0.0
-
-    @property
-    def gap(self) -> float:
-        """Relative gap of the order to the ground-truth order (0.01 = 1 %)."""
-        return self.length / self.optimum - 1.0
-
-    @property
-    def optimizer_gap(self) -> float:
-        """Relative gap of the optimiser's own order (before the polish) to the ground truth."""
-        L = self.length if self.optimizer_length is None else self.optimizer_length
-        return L / self.optimum - 1.0
-
-    @property
-    def points_array(self) -> NDArray[np.float64]:
-        return np.asarray(self.points, dtype=np.float64)
-
-    def to_json(self) -> str:
-        return json.dumps(asdict(self))
-
-    @classmethod
-    def from_json(cls, text: str) -> TourResult:
-        d = json.loads(text)
-        d["order"] = tuple(d["order"])
-        d["points"] = tuple(tuple(p) for p in d["points"])
-        return cls(**d)
-
-
-def ground_truth(graph: TourGraph, rng: RNGLike = 0) -> tuple[tuple[int, ...], float, str]:
-    """The sequencer's closed tour from the start: ``(goal order, length, method)``."""
-    n = graph.dist.shape[0]
-    method = "exact" if n <= EXACT_STOPS else "nn"
-    seq = solve_sequence(graph.dist, method=method, closed=True, first=0, rng=rng)
-    order = list(seq.order)
-    k = order.index(0)
-    order = order[k:] + order[:k]
-    return tuple(order[1:]), float(seq.cost), seq.method
-
-
-def plan_tour(
-    task: TourScenario,
-    algorithm: str = "isma",
-    *,
-    graph: TourGraph | None = None,
-    pop_size: int = PAPER_POP,
-    max_iter: int = PAPER_ITER,
-    max_evals: int | None = None,
-    time_budget: float | None = None,
-    two_opt: bool = False,
-    polish: bool = True,
-    polish_kicks: int | None = None,
-    taut: bool = True,
-    smooth: bool = True,
-    optimum: float | None = None,
-    rng: RNGLike = None,
-    **params: Any,
-) -> TourResult:
-    """Plan a closed multi-goal tour on ``task``'s triangular-mesh map (module docstring).
-
-    Parameters
-    ----------
-    algorithm
-        A registered optimiser name (``isma``, ``sma``, ``woa``, ``lso``, ...) for the random-key
-        order, or ``"exact"`` for the ground-truth sequencer.
-    graph
-        A prebuilt :class:`TourGraph` (to share one mesh between algorithms).
-    pop_size, max_iter, max_evals, time_budget
-        Optimiser budget; paper 002 uses 500 and 500.
-    two_opt
-        2-opt decoding of every key (memetic; named deviation, see the module docstring).
-    polish
-        Polish the optimiser's best order once with the sequencer's 2-opt + Or-opt iterated
-        local search (default on: the best tour within the time; a named deviation, see the
-        module docstring). ``False`` gives the optimiser as printed.
-    polish_kicks
-        Kicks of that polish (default :data:`POLISH_KICKS_PER_STOP` per stop).
-    taut
-        Pull each leg tight in its triangle corridor before smoothing (funnel algorithm,
-        :meth:`TriangleMap.funnel`); ``False`` keeps the mesh-edge zig-zag (as paper 002,
-        whose B-spline then smooths the zig-zag).
-    smooth
-        B-spline smoothing with the collision fallback (else the polyline is returned).
-    optimum
-        The ground-truth length when already known (else it is computed).
-    rng
-        Seed or Generator.
-    params
-        Optimiser parameters.
-    """
-    gen = as_generator(rng)
-    seed = seed_of(rng)
-    g = build_tour_graph(task) if graph is None else graph
-    if not np.all(np.isfinite(g.dist)):
-        from weldplan.errors import PlanningError
-
-        raise PlanningError(f"{task.name}: some goals cannot be reached on the mesh")
-    if optimum is None or algorithm == "exact":
-        t0 = time.perf_counter()
-        gt_order, gt_len, gt_method = ground_truth(g, rng=gen)
-        gt_seconds = time.perf_counter() - t0
-        optimum = gt_len
-    n_eval = 0
-    opt_length: float | None = None
-    polish_s = cpu_s = cpu_opt = 0.0
-    polished = False
-    if algorithm == "exact":
-        order, length, name, seconds = gt_order, gt_len, gt_method, gt_seconds
-        used: dict[str, Any] = {}
-    else:
-        cpu0 = time.process_time()
-        problem = RandomKeyTourProblem(g.dist, two_opt=two_opt, name=task.name)
-        opt = get_optimizer(algorithm, pop_size=pop_size, **params)
-        res = minimize(
-            problem, opt, max_iter=max_iter, max_evals=max_evals, time_budget=time_budget, rng=gen
-        )
-        best = problem.orders(res.x_array)[0]
-        opt_length = float(tour_lengths(g.dist, best[None])[0])
-        cpu_opt = time.process_time() - cpu0
-        length = opt_length
-        if polish:
-            tp = time.perf_counter()
-            best, length = polish_order(g.dist, best, gen, kicks=polish_kicks)
-            polish_s = time.perf_counter() - tp
-            polished = True
-        order = tuple(int(v) for v in best)
-        cpu_s = time.process_time() - cpu0
-        name, seconds, n_eval = algorithm, res.seconds + polish_s, res.n_eval
-        used = {**res.params, "pop_size": pop_size, "max_iter": max_iter, "two_opt": two_opt,
-                "polish": polish, "polish_kicks": polish_kicks}  # fmt: skip
-    t1 = time.perf_counter()
-    poly, at = g.polyline(order, taut=taut)
-    world = task.world
-    if smooth:
-        curve, smoothed = smooth_tour(poly, at, world)
-    else:
-        curve, smoothed = poly, False
-    smooth_seconds = time.perf_counter() - t1
-    # the independent final check is exact, also where the loop sampled (grid maps)
-    free = bool(segments_clear(task.exact_world, curve[:-1], curve[1:]).all())
-    log.info(
-        "%s %s: tour %.6g (optimum %.6g), smoothed %.6g in %.3f s",
-        task.name,
-        name,
-        length,
-        optimum,
-        float(path_length(curve)),
-        seconds,
-    )
-    return TourResult(
-        scenario=task.name,
-        algorithm=name,
-        order=tuple(order),
-        length=length,
-        optimum=float(optimum),
-        smooth_length=float(path_length(curve)),
-        smoothed=bool(smoothed),
-        collision_free=free,
-        points=tuple((float(x), float(y)) for x, y in curve),
-        seconds=float(seconds),
-        build_seconds=float(g.build_seconds),
-        smooth_seconds=float(smooth_seconds),
-        max_edge=float(g.mesh.max_edge),
-        mesh_nodes=g.mesh.n_nodes,
-        seed=seed,
-        n_eval=int(n_eval),
-        params=used,
-        optimizer_length=opt_length,
-        polyline_length=float(path_length(poly)),
-        polished=polished,
-        polish_seconds=float(polish_s),
-        cpu_seconds=float(cpu_s),
-        optimizer_cpu_seconds=float(cpu_opt),
-    )
-
-
 # ------------------------------------------------------------------------------ real maps
 #: the named places of rtb-data's house floorplan, in the order they are read
 HOUSE_START = "kitchen"
@@ -853,3 +510,13 @@ def house_tour(max_edge: float = 4.0, start: str = HOUSE_START) -> TourScenario:
         "obstacles": [{"type": "grid", "origin": [-0.5, -0.5], "cell": 1.0, "rows": rows}],
     }
     return tour_from_dict(data, path=path)
+
+
+def __getattr__(name: str) -> Any:
+    """The planner moved to :mod:`weldplan.planar.tour_planner` (this module was past 850 lines);
+    its names stay importable from here."""
+    if name in ("TourResult", "ground_truth", "plan_tour"):
+        from weldplan.planar import tour_planner
+
+        return getattr(tour_planner, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
