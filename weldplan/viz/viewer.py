@@ -223,11 +223,15 @@ def build_scene(
     labels: bool = True,
     animate: bool = True,
     camera: bool = True,
+    tool: Any = None,
 ) -> None:
     """Draw ``route`` (and ``part``, a mesh or a Cell) into meshcat visualizer ``vis``.
 
     Paths under ``vis["weldplan"]``: ``part``, ``joints/<id>``, ``labels/<id>``,
-    ``route/leg_<k>`` (one colour per leg), ``vias/leg_<k>``, ``torch``.
+    ``route/leg_<k>`` (one colour per leg), ``vias/leg_<k>``, ``torch``. A route that carries
+    weld poses (``weldplan plan --tool``) also gets ``tool/...``: the ``tool``
+    (:class:`~weldplan.tool.model.Tool`) at its weld poses and the welds without a pose in red
+    (:func:`weldplan.viz.tool_scene.draw_tool`).
     """
     mc = _meshcat()
     g = mc.geometry
@@ -283,6 +287,11 @@ def build_scene(
             via = root["vias"][f"leg_{k}"][str(m)]
             via.set_object(g.Sphere(r_via * 1.8), g.MeshLambertMaterial(color=0x222222))
             via.set_transform(_translation(v))
+
+    if route.tool:
+        from weldplan.viz.tool_scene import draw_tool
+
+        draw_tool(root, route, tool, r_joint)
 
     torch = root["torch"]
     torch.set_object(
