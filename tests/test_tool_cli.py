@@ -252,3 +252,45 @@ def test_the_shared_gun_urdf_is_read_with_its_stl_and_recorded():
     # the same URDF with another mesh unit is another tool: verify would refuse it
     with pytest.raises(InputError, match="units"):
         load_tool(d / "spot_welding_gun.urdf", mesh=d / "spot_welding_gun.stl", units="mm")
+
+
+def test_view_html_with_the_tool_and_another_tool_refused(planned, capsys):
+    tmp, _ = planned
+    page = tmp / "view.html"
+    base = ["view", str(tmp / "r.json"), str(tmp / "box.stl"), "--html", str(page)]
+    assert _rc(base + ["--tool", str(tmp / "torch.stl"), "--tcp", "0,0,0,0,0,0"]) == 0
+    assert page.stat().st_size > 0
+    capsys.readouterr()
+    assert _rc(base + ["--tool", str(tmp / "torch.stl"), "--tcp", "0,0,2,0,0,0"]) == 2
+    assert "another tool" in _one_line_error(capsys)
+
+
+@pytest.mark.slow
+def test_headless_chromium_draws_the_tool_copies(planned, tmp_path):
+    pytest.importorskip("PIL")
+    from PIL import Image
+
+    from tests.test_viewer import _chromium, _run_chromium
+    from weldplan.io.export import read_route
+    from weldplan.viz.viewer import write_html
+
+    assert _chromium()
+    tmp, _ = planned
+    route = read_route(tmp / "r.json")
+    tool, _ = load_tool(tmp / "torch.stl", tcp="0,0,0,0,0,0")
+    without = dataclasses.replace(route, tool={})
+    shots = {}
+    for name, r, t in (("tool", route, tool), ("plain", without, None)):
+        page = write_html(r, box_part(), tmp_path / f"{name}.html", tool=t)
+        png = tmp_path / f"{name}.png"
+        shot = _run_chromium(tmp_path, f"--screenshot={png}", page.resolve().as_uri())
+        assert shot.returncode == 0 and png.exists(), shot.stderr[-2000:]
+        shots[name] = np.asarray(Image.open(png).convert("RGB"), dtype=float)
+
+    def red(img):  # the point-tip page draws visited joints red; with poses only E stays red
+        r, g, b = (img[..., k] for k in range(3))
+        return int(((r > g + 50) & (r > b + 30)).sum())
+
+    # the see-through tool copies change a good share of the view
+    assert (np.abs(shots["tool"] - shots["plain"]).max(axis=-1) > 30).mean() > 0.2
+    assert red(shots["plain"]) >= 30 and red(shots["tool"]) < red(shots["plain"]) / 3

@@ -29,6 +29,8 @@ DISPLAY_TRIANGLES = 3000
 #: colour of welds without a free pose, and of those with one when a tool is drawn
 MISS_COLOR = 0xE00000
 OK_COLOR = 0x2CA02C
+#: the tool copies, see-through so that the welds and the route stay visible
+TOOL_COLOR = 0x4A6FA5
 
 
 def display_mesh(tool: Any) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
@@ -85,7 +87,7 @@ def draw_tool(root: Any, route: Route, tool: Any, r_joint: float) -> None:
             T[:3, 3] = p.position
             node["tool"][p.id].set_object(
                 g.TriangularMeshGeometry(V, F),
-                g.MeshLambertMaterial(color=0x4A6FA5, opacity=0.8, transparent=True),
+                g.MeshLambertMaterial(color=TOOL_COLOR, opacity=0.3, transparent=True),
             )
             node["tool"][p.id].set_transform(T)
     for p in poses.poses:
@@ -95,7 +97,7 @@ def draw_tool(root: Any, route: Route, tool: Any, r_joint: float) -> None:
         if not p.ok:
             halo = node["tool_miss"][jid]
             halo.set_object(
-                g.Sphere(2.5 * r_joint),
+                g.Sphere(4.0 * r_joint),
                 g.MeshLambertMaterial(color=MISS_COLOR, opacity=0.45, transparent=True),
             )
             T = np.eye(4)

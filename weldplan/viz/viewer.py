@@ -379,6 +379,7 @@ def view_route(
     zmq_url: str | None = None,
     host: str = "127.0.0.1",
     port: int | None = None,
+    tool: Any = None,
 ) -> Any:
     """Draw the route in a live meshcat viewer and return the ``meshcat.Visualizer``.
 
@@ -386,7 +387,7 @@ def view_route(
     ``host``, 127.0.0.1 unless told otherwise; stopped at exit, and it dies with this process).
     ``vis.url()`` is the page to open. The scene is the one of :func:`write_html`.
     """
-    return live_view(route, part, zmq_url=zmq_url, host=host, port=port)[0]
+    return live_view(route, part, zmq_url=zmq_url, host=host, port=port, tool=tool)[0]
 
 
 def live_view(
@@ -396,6 +397,7 @@ def live_view(
     zmq_url: str | None = None,
     host: str = "127.0.0.1",
     port: int | None = None,
+    tool: Any = None,
 ) -> tuple[Any, Any]:
     """:func:`view_route`, also returning the :class:`weldplan.viz.live.MeshcatServer` it
     started (None when ``zmq_url`` names a running one): ``(vis, server)``. Call
@@ -415,7 +417,7 @@ def live_view(
     try:
         with contextlib.redirect_stdout(io.StringIO()):  # meshcat prints its URL
             vis = mc.Visualizer(zmq_url=zmq_url)
-        build_scene(vis, route, part)
+        build_scene(vis, route, part, tool=tool)
     except BaseException:
         if server is not None:
             server.close()
