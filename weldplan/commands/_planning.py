@@ -297,31 +297,33 @@ def run_planning(
                 route, times, outputs, title=title, report=report, note=note, extra=extra_rows
             )
         )
-    skipped = route.stats.get("skipped") or []
-    if skipped:
-        from weldplan.errors import EXIT_PARTIAL
+    return _partial_code(route)
 
+
+def _partial_code(route: Any) -> int:
+    """0, or EXIT_PARTIAL with one stderr line per cause: joints skipped, welds without a pose."""
+    from weldplan.errors import EXIT_OK, EXIT_PARTIAL
+
+    def listed(ids: list[str]) -> str:
+        return ", ".join(ids[:10]) + (", ..." if len(ids) > 10 else "")
+
+    code = EXIT_OK
+    skipped = [s["id"] for s in route.stats.get("skipped") or []]
+    if skipped:
         print(
-            f"weldplan: partial route: {len(skipped)} joint(s) skipped "
-            f"({', '.join(s['id'] for s in skipped[:10])}{', ...' if len(skipped) > 10 else ''})",
+            f"weldplan: partial route: {len(skipped)} joint(s) skipped ({listed(skipped)})",
             file=sys.stderr,
         )
-        return EXIT_PARTIAL
-    if tool is not None:
-        from weldplan.tool.result import WeldPoses
-
-        poses = WeldPoses.from_dict(route.tool["poses"])
-        if poses.n_ok < len(poses.poses):
-            from weldplan.errors import EXIT_PARTIAL
-
-            missed = [p.id for p in poses.poses if not p.ok]
+        code = EXIT_PARTIAL
+    if route.tool.get("poses"):
+        missed = [str(p["id"]) for p in route.tool["poses"]["poses"] if p["status"] != "ok"]
+        if missed:
             print(
-                f"weldplan: {len(missed)} weld(s) without a free tool pose "
-                f"({', '.join(missed[:10])}{', ...' if len(missed) > 10 else ''})",
+                f"weldplan: {len(missed)} weld(s) without a free tool pose ({listed(missed)})",
                 file=sys.stderr,
             )
-            return EXIT_PARTIAL
-    return 0
+            code = EXIT_PARTIAL
+    return code
 
 
 def _gaps(route: Any) -> str:
