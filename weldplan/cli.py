@@ -33,8 +33,8 @@ EPILOG = """exit codes:
   1  the run failed: no route exists, verification refused it, or the environment failed
      (disk full, Dask scheduler unreachable, out of memory)
   2  bad input or settings: the message names the file, line and field or the option
-  3  partial route (--skip-unreachable): some joints were left out, listed in the summary
-     and the route JSON
+  3  partial route: --skip-unreachable left joints out, or --tool found welds without a free
+     tool pose; listed in the summary and the route JSON
   130  interrupted (Ctrl-C)"""
 
 #: OSError numbers that mean the user's input or paths are wrong (exit 2); any other OSError is

@@ -97,6 +97,9 @@ def add_planning_arguments(p: argparse.ArgumentParser, *, default_output: str | 
         "the reason, in the summary and the route JSON (stats.skipped); exit code 3",
     )
     p.add_argument("--quiet", action="store_true", help="no progress bars and no summary on stdout")
+    from weldplan.commands._tool import add_tool_arguments
+
+    add_tool_arguments(p)
 
 
 def seed_type(text: str) -> int:
@@ -204,6 +207,7 @@ def run_planning(
     ``joint_points()`` gives the joints' ``(n, 3)`` positions (mm) cheaply, before the cell is
     built, for the size check (:mod:`weldplan.weld.sizing`).
     """
+    from weldplan.commands._tool import plan_poses, pose_rows, tool_from_args
     from weldplan.io.export import render_post, to_csv_text
     from weldplan.viz.viewer import static_html
     from weldplan.weld.pipeline import plan_route
@@ -211,6 +215,7 @@ def run_planning(
 
     outputs = _outputs(args)
     config = config_from_args(args)
+    tool = tool_from_args(args)  # a bad --tool fails before the (slow) cell is built
     if joint_points is not None:
         from weldplan.weld.sizing import check_size
 
@@ -256,13 +261,26 @@ def run_planning(
     if not report.ok:
         print(f"weldplan: {report.describe()}; nothing written", file=sys.stderr)
         return 1
+    extra_rows: list[tuple[str, str]] = []
+    if tool is not None:
+        with bars.stage("poses") as st:
+            route, check = plan_poses(args, cell, route, *tool)
+        times["poses"] = st.seconds
+        if not check.ok:
+            print(
+                f"weldplan: weld poses failed the independent re-check: "
+                f"{'; '.join(f'{i}: {r}' for i, r in check.failures[:5])}; nothing written",
+                file=sys.stderr,
+            )
+            return 1
+        extra_rows = pose_rows(route, check)
 
     with bars.stage("export") as st:
         texts = {"csv": to_csv_text(route)}
         if "json" in outputs:
             texts["json"] = route.to_json() + "\n"
         if "html" in outputs:
-            texts["html"] = static_html(route, cell.part)
+            texts["html"] = static_html(route, cell.part, tool=None if tool is None else tool[0])
         if "post" in outputs:
             texts["post"] = render_post(route, args.post, cell)
         from weldplan.io.outputset import write_outputs
@@ -274,18 +292,38 @@ def run_planning(
         if show_cell and hasattr(cell, "format_summary"):
             print(cell.format_summary())
             print()
-        print(summary_table(route, times, outputs, title=title, report=report, note=note))
-    skipped = route.stats.get("skipped") or []
-    if skipped:
-        from weldplan.errors import EXIT_PARTIAL
-
         print(
-            f"weldplan: partial route: {len(skipped)} joint(s) skipped "
-            f"({', '.join(s['id'] for s in skipped[:10])}{', ...' if len(skipped) > 10 else ''})",
+            summary_table(
+                route, times, outputs, title=title, report=report, note=note, extra=extra_rows
+            )
+        )
+    return _partial_code(route)
+
+
+def _partial_code(route: Any) -> int:
+    """0, or EXIT_PARTIAL with one stderr line per cause: joints skipped, welds without a pose."""
+    from weldplan.errors import EXIT_OK, EXIT_PARTIAL
+
+    def listed(ids: list[str]) -> str:
+        return ", ".join(ids[:10]) + (", ..." if len(ids) > 10 else "")
+
+    code = EXIT_OK
+    skipped = [s["id"] for s in route.stats.get("skipped") or []]
+    if skipped:
+        print(
+            f"weldplan: partial route: {len(skipped)} joint(s) skipped ({listed(skipped)})",
             file=sys.stderr,
         )
-        return EXIT_PARTIAL
-    return 0
+        code = EXIT_PARTIAL
+    if route.tool.get("poses"):
+        missed = [str(p["id"]) for p in route.tool["poses"]["poses"] if p["status"] != "ok"]
+        if missed:
+            print(
+                f"weldplan: {len(missed)} weld(s) without a free tool pose ({listed(missed)})",
+                file=sys.stderr,
+            )
+            code = EXIT_PARTIAL
+    return code
 
 
 def _gaps(route: Any) -> str:
@@ -329,8 +367,9 @@ def summary_table(
     title: str,
     report: Any,
     note: str | None = None,
+    extra: list[tuple[str, str]] | None = None,
 ) -> str:
-    """The table printed at the end of a run."""
+    """The table printed at the end of a run (``extra``: rows after ``verified``)."""
     s = route.stats
     rows = [
         (
@@ -361,6 +400,7 @@ def summary_table(
         ("order", "-".join(route.order)),
         *_skipped_rows(route),
         ("verified", report.describe()),
+        *(extra or []),
         (
             "time",
             ", ".join(f"{k} {v:.2f} s" for k, v in times.items()),

@@ -8,7 +8,10 @@ import sys
 from weldplan.commands.demo import positive_mm
 from weldplan.commands.plan import add_cell_arguments
 
-HELP = "re-check a route JSON against the part mesh (FCL, every segment; every joint once)"
+HELP = (
+    "re-check a route JSON against the part mesh (FCL, every segment; every joint once; with "
+    "--tool the weld poses of the whole tool)"
+)
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -22,11 +25,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "provenance is refused at another)",
     )
     p.add_argument("--joints", help="joints CSV: the route must visit exactly these joints")
+    from weldplan.commands._tool import add_tool_arguments
+
+    add_tool_arguments(p, search=False)
 
 
 def run(args: argparse.Namespace) -> int:
+    from weldplan.commands._tool import tool_from_args
     from weldplan.io.export import read_route
     from weldplan.io.mesh import load_part
+    from weldplan.tool.check_route import check_tool_provenance, verify_route_poses
     from weldplan.weld.verify import verify_route
 
     route = read_route(args.route)
@@ -36,9 +44,25 @@ def run(args: argparse.Namespace) -> int:
         from weldplan.io.joints import read_joints
 
         joints = read_joints(args.joints, units=args.units)
+    tool = tool_from_args(args)  # a bad --tool fails before any check
+    if tool is not None:
+        check_tool_provenance(route, tool[1], args.route)
     report = verify_route(route, part, clearance=args.clearance, joints=joints)
-    if report.ok:
-        print(report.describe())
+    if not report.ok:
+        print(f"weldplan verify: {report.describe(limit=20)}", file=sys.stderr)
+        return 1
+    print(report.describe())
+    if tool is None:
+        if route.tool:
+            print("the route carries tool poses: pass --tool to re-check them")
         return 0
-    print(f"weldplan verify: {report.describe(limit=20)}", file=sys.stderr)
-    return 1
+    check = verify_route_poses(route, part, tool[0])
+    if not check.ok:
+        print(f"weldplan verify: tool poses: {check.describe()}", file=sys.stderr)
+        return 1
+    print(f"tool poses ok: {check.describe()}")
+    if check.missing:
+        from weldplan.errors import EXIT_PARTIAL
+
+        return EXIT_PARTIAL
+    return 0

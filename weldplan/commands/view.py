@@ -27,12 +27,21 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "0.0.0.0 opens it to the network)",
     )
     p.add_argument("--port", type=int, help="web port of the live viewer (default: 7000 or next)")
+    from weldplan.commands._tool import add_tool_arguments
+
+    add_tool_arguments(p, search=False)
 
 
 def run(args: argparse.Namespace) -> int:
+    from weldplan.commands._tool import tool_from_args
     from weldplan.io.export import read_route
 
     route = read_route(args.route)
+    tool = tool_from_args(args)
+    if tool is not None:  # draw the route's poses only with the tool they were planned for
+        from weldplan.tool.check_route import check_tool_provenance
+
+        check_tool_provenance(route, tool[1], args.route)
     part = None
     if args.mesh:
         from weldplan.io.mesh import load_part
@@ -41,12 +50,14 @@ def run(args: argparse.Namespace) -> int:
     if args.html:
         from weldplan.viz.viewer import write_html
 
-        write_html(route, part, args.html)
+        write_html(route, part, args.html, tool=None if tool is None else tool[0])
         print(f"wrote {args.html}")
         return 0
     from weldplan.viz.viewer import live_view
 
-    vis, server = live_view(route, part, host=args.host, port=args.port)
+    vis, server = live_view(
+        route, part, host=args.host, port=args.port, tool=None if tool is None else tool[0]
+    )
     return _serve(vis, server, args.no_browser)
 
 

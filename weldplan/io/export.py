@@ -14,8 +14,12 @@ CSV layout (one row per waypoint, in travel order)::
 ``kind`` is ``weld`` at a weld spot and ``via`` at a waypoint between spots (virtual joints and
 local-path points); ``tool_*`` is the joint's unit approach direction as the joints CSV gave it
 (columns ``nx, ny, nz``: from the weld spot towards the side the torch comes from), empty where
-the CSV gave none and always on via rows. Coordinates are mm. The robot posts point the tool's z
-axis (the torch axis, towards the work) against that direction, into the surface.
+the CSV gave none and always on via rows. Coordinates are mm. A route planned with a tool
+(``weldplan plan --tool``) has five more columns, ``qw,qx,qy,qz,status``: the TCP orientation
+(scalar-first quaternion of the TCP frame in the part frame) at every waypoint, slerped by arc
+length between the welds' poses, and the weld's pose status on weld rows (docs/tool.md). The
+robot posts point the tool's z axis (the torch axis, towards the work) against that direction,
+into the surface; they do not use the tool poses yet.
 
 Robot posts are pluggable: a post is a function ``render(route, **options) -> str`` registered under
 a name with :func:`register_post`. Two ship with weldplan, both documented examples rather than
@@ -52,6 +56,8 @@ from weldplan.weld.route import Route
 log = logging.getLogger(__name__)
 
 CSV_FIELDS = ("step", "kind", "joint_id", "x", "y", "z", "tool_x", "tool_y", "tool_z")
+#: columns added for a route planned with a tool: TCP orientation in the part frame, weld status
+POSE_FIELDS = ("qw", "qx", "qy", "qz", "status")
 
 #: decimals written for coordinates (mm) and unit directions
 _MM_DECIMALS = 4
@@ -130,18 +136,40 @@ def route_rows(route: Route) -> list[dict[str, Any]]:
 
 
 def to_csv_text(route: Route) -> str:
-    """The CSV text of :func:`write_csv`."""
+    """The CSV text of :func:`write_csv`.
+
+    A route that carries weld poses (``route.tool``, ``weldplan plan --tool``) gains the columns
+    :data:`POSE_FIELDS`: the TCP orientation at every waypoint
+    (:func:`weldplan.tool.route_frames.waypoint_quaternions`; empty at a weld without a pose)
+    and, on weld rows, the weld's status (``ok`` or ``no free pose``).
+    """
+    rows = route_rows(route)
+    quats, status = None, None
+    if route.tool.get("poses"):
+        from weldplan.tool.route_frames import route_poses, waypoint_quaternions, weld_rows
+
+        poses = route_poses(route)
+        assert poses is not None
+        quats = waypoint_quaternions(route, poses)
+        status = [""] * len(rows)
+        for i, r in enumerate(weld_rows(route)):
+            status[int(r)] = poses.poses[i].status
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
-    w.writerow(CSV_FIELDS)
-    for r in route_rows(route):
+    w.writerow(CSV_FIELDS if quats is None else CSV_FIELDS + POSE_FIELDS)
+    for k, r in enumerate(rows):
         tool = r["tool"]
         tool_cells = ["", "", ""] if tool is None else [f"{v:.{_DIR_DECIMALS}f}" for v in tool]
-        w.writerow(
+        cells = (
             [r["step"], r["kind"], r["joint_id"]]
-            + [f"{r[k]:.{_MM_DECIMALS}f}" for k in ("x", "y", "z")]
+            + [f"{r[c]:.{_MM_DECIMALS}f}" for c in ("x", "y", "z")]
             + tool_cells
         )
+        if quats is not None and status is not None:
+            q = quats[k]
+            cells += ["", "", "", ""] if np.isnan(q[0]) else [_fmt(v, _DIR_DECIMALS) for v in q]
+            cells.append(status[k])
+        w.writerow(cells)
     return buf.getvalue()
 
 

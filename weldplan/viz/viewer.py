@@ -223,11 +223,15 @@ def build_scene(
     labels: bool = True,
     animate: bool = True,
     camera: bool = True,
+    tool: Any = None,
 ) -> None:
     """Draw ``route`` (and ``part``, a mesh or a Cell) into meshcat visualizer ``vis``.
 
     Paths under ``vis["weldplan"]``: ``part``, ``joints/<id>``, ``labels/<id>``,
-    ``route/leg_<k>`` (one colour per leg), ``vias/leg_<k>``, ``torch``.
+    ``route/leg_<k>`` (one colour per leg), ``vias/leg_<k>``, ``torch``. A route that carries
+    weld poses (``weldplan plan --tool``) also gets ``tool/...``: the ``tool``
+    (:class:`~weldplan.tool.model.Tool`) at its weld poses and the welds without a pose in red
+    (:func:`weldplan.viz.tool_scene.draw_tool`).
     """
     mc = _meshcat()
     g = mc.geometry
@@ -283,6 +287,11 @@ def build_scene(
             via = root["vias"][f"leg_{k}"][str(m)]
             via.set_object(g.Sphere(r_via * 1.8), g.MeshLambertMaterial(color=0x222222))
             via.set_transform(_translation(v))
+
+    if route.tool:
+        from weldplan.viz.tool_scene import draw_tool
+
+        draw_tool(root, route, tool, r_joint)
 
     torch = root["torch"]
     torch.set_object(
@@ -370,6 +379,7 @@ def view_route(
     zmq_url: str | None = None,
     host: str = "127.0.0.1",
     port: int | None = None,
+    tool: Any = None,
 ) -> Any:
     """Draw the route in a live meshcat viewer and return the ``meshcat.Visualizer``.
 
@@ -377,7 +387,7 @@ def view_route(
     ``host``, 127.0.0.1 unless told otherwise; stopped at exit, and it dies with this process).
     ``vis.url()`` is the page to open. The scene is the one of :func:`write_html`.
     """
-    return live_view(route, part, zmq_url=zmq_url, host=host, port=port)[0]
+    return live_view(route, part, zmq_url=zmq_url, host=host, port=port, tool=tool)[0]
 
 
 def live_view(
@@ -387,6 +397,7 @@ def live_view(
     zmq_url: str | None = None,
     host: str = "127.0.0.1",
     port: int | None = None,
+    tool: Any = None,
 ) -> tuple[Any, Any]:
     """:func:`view_route`, also returning the :class:`weldplan.viz.live.MeshcatServer` it
     started (None when ``zmq_url`` names a running one): ``(vis, server)``. Call
@@ -406,7 +417,7 @@ def live_view(
     try:
         with contextlib.redirect_stdout(io.StringIO()):  # meshcat prints its URL
             vis = mc.Visualizer(zmq_url=zmq_url)
-        build_scene(vis, route, part)
+        build_scene(vis, route, part, tool=tool)
     except BaseException:
         if server is not None:
             server.close()

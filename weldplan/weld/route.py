@@ -154,6 +154,11 @@ class Route:
         ``scale``, ``repairs``), ``joints``, ``clearance`` and ``pitch``.
         :func:`~weldplan.weld.verify.verify_route` refuses to check the route against another
         mesh, scale or clearance. Empty in routes written before it existed.
+    tool
+        Empty for the point-tip route; with a tool (``weldplan plan --tool``): ``provenance``
+        (:func:`weldplan.tool.load.load_tool`: files, sha256, TCP, units) and ``poses``
+        (:meth:`weldplan.tool.result.WeldPoses.to_dict`: a pose or the closest miss per weld, in
+        route order). Written to the JSON only when not empty.
     """
 
     order: tuple[str, ...]
@@ -168,9 +173,11 @@ class Route:
     seed: int | None = None
     stats: dict[str, Any] = field(default_factory=dict)
     provenance: dict[str, Any] = field(default_factory=dict)
+    tool: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "provenance", dict(self.provenance or {}))
+        object.__setattr__(self, "tool", dict(self.tool or {}))
         object.__setattr__(self, "order", tuple(str(i) for i in self.order))
         object.__setattr__(self, "legs", tuple(self.legs))
         object.__setattr__(self, "joint_ids", tuple(str(i) for i in self.joint_ids))
@@ -283,7 +290,7 @@ class Route:
 
     # ------------------------------------------------------------------ JSON
     def to_dict(self) -> dict[str, Any]:
-        return {
+        d: dict[str, Any] = {
             "format": ROUTE_FORMAT,
             "units": "mm",
             "order": list(self.order),
@@ -302,6 +309,9 @@ class Route:
             "stats": self.stats,
             "provenance": self.provenance,
         }
+        if self.tool:
+            d["tool"] = self.tool
+        return d
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> Route:
@@ -323,6 +333,7 @@ class Route:
             seed=d.get("seed"),
             stats=dict(d.get("stats") or {}),
             provenance=dict(d.get("provenance") or {}),
+            tool=dict(d.get("tool") or {}),
         )
 
     def to_json(self, indent: int | None = 1) -> str:

@@ -1,0 +1,296 @@
+"""The tool in the product: plan --tool, route CSV/JSON with TCP orientations, verify --tool,
+the viewer's tool copies, one-line errors for bad tool input (issue 16)."""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import hashlib
+import json
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from tests.conftest import require_shared
+from tests.route_fixtures import box_part, box_route
+from weldplan.cli import main
+from weldplan.errors import EXIT_PARTIAL, InputError
+from weldplan.io.export import CSV_FIELDS, POSE_FIELDS, to_csv_text
+from weldplan.tool import WeldPose, WeldPoses, arc_torch
+from weldplan.tool.load import load_tool, parse_tcp
+from weldplan.tool.route_frames import waypoint_quaternions, weld_rows
+
+#: the box scene with a fifth joint E 2 mm beside the wall, where the torch cannot stand
+JOINTS_CSV = "id,x,y,z\nA,-40,0,0\nB,40,0,0\nC,-40,60,0\nD,40,-30,0\nE,-3,0,5\n"
+
+
+def _rc(argv) -> int:
+    try:
+        return main(argv)
+    except SystemExit as e:
+        return int(e.code)
+
+
+def _one_line_error(capsys) -> str:
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert len(lines) == 1, err
+    return lines[0]
+
+
+@pytest.fixture(scope="module")
+def planned(tmp_path_factory):
+    """``weldplan plan box joints --tool torch.stl --tcp 0,0,0,0,0,0`` once for the module."""
+    tmp = tmp_path_factory.mktemp("toolcli")
+    box_part().export(tmp / "box.stl")
+    (tmp / "joints.csv").write_text(JOINTS_CSV)
+    arc_torch(stickout=3).mesh.export(tmp / "torch.stl")  # TCP within 5 mm of the mesh
+    argv = [
+        "plan", str(tmp / "box.stl"), str(tmp / "joints.csv"), "--margin", "50", "--quiet",
+        "-o", str(tmp / "r.csv"), "--json", str(tmp / "r.json"), "--html", str(tmp / "r.html"),
+        "--tool", str(tmp / "torch.stl"), "--tcp", "0,0,0,0,0,0",
+    ]  # fmt: skip
+    rc = _rc(argv)
+    return tmp, rc
+
+
+def test_plan_with_tool_reports_the_weld_without_a_pose_and_exits_partial(planned):
+    tmp, rc = planned
+    assert rc == EXIT_PARTIAL
+    d = json.loads((tmp / "r.json").read_text())
+    prov = d["tool"]["provenance"]
+    assert prov["file_sha256"] == hashlib.sha256((tmp / "torch.stl").read_bytes()).hexdigest()
+    assert prov["tcp"] == "0,0,0,0,0,0" and prov["units"] == "mm"
+    poses = WeldPoses.from_dict(d["tool"]["poses"])
+    assert poses.order == tuple(d["order"])
+    status = {p.id: p.status for p in poses.poses}
+    assert status == {"A": "ok", "B": "ok", "C": "ok", "D": "ok", "E": "no free pose"}
+    miss = poses["E"].miss
+    assert miss is not None and (miss.contacts > 0 or miss.distance < 5.0)
+    assert poses["E"].quaternion is None
+
+
+def test_plan_with_tool_csv_has_orientations_at_every_waypoint(planned):
+    tmp, _ = planned
+    rows = list(csv.DictReader((tmp / "r.csv").open()))
+    assert tuple(rows[0]) == CSV_FIELDS + POSE_FIELDS
+    d = json.loads((tmp / "r.json").read_text())
+    poses = WeldPoses.from_dict(d["tool"]["poses"])
+    for r in rows:
+        if r["kind"] == "weld":
+            p = poses[r["joint_id"]]
+            assert r["status"] == p.status
+            if p.ok:
+                q = [float(r[k]) for k in ("qw", "qx", "qy", "qz")]
+                np.testing.assert_allclose(q, p.quaternion, atol=1e-6)
+            else:
+                assert [r[k] for k in ("qw", "qx", "qy", "qz")] == ["", "", "", ""]
+        else:
+            assert r["status"] == ""
+            q = np.array([float(r[k]) for k in ("qw", "qx", "qy", "qz")])
+            assert abs(np.linalg.norm(q) - 1) < 1e-5 and q[0] >= 0
+
+
+def test_verify_with_the_same_tool_rechecks_the_poses(planned, capsys):
+    tmp, _ = planned
+    capsys.readouterr()
+    rc = _rc(["verify", str(tmp / "r.json"), str(tmp / "box.stl"),
+              "--tool", str(tmp / "torch.stl"), "--tcp", "0,0,0,0,0,0"])  # fmt: skip
+    out = capsys.readouterr().out
+    assert rc == EXIT_PARTIAL, out
+    assert "4 / 5 welds with a free pose" in out and "E" in out.splitlines()[-1]
+
+
+def test_verify_refuses_a_route_planned_with_another_tool(planned, capsys):
+    tmp, _ = planned
+    capsys.readouterr()
+    rc = _rc(["verify", str(tmp / "r.json"), str(tmp / "box.stl"),
+              "--tool", str(tmp / "torch.stl"), "--tcp", "0,0,1,0,0,0"])  # fmt: skip
+    assert rc == 2
+    line = _one_line_error(capsys)
+    assert "planned with another tool" in line and "tcp" in line
+
+
+def test_verify_catches_a_tampered_pose(planned, capsys):
+    tmp, _ = planned
+    d = json.loads((tmp / "r.json").read_text())
+    for p in d["tool"]["poses"]["poses"]:
+        if p["id"] == "A":
+            # TCP +z along part +x: the torch lies along the floor, through it beyond the zone
+            p["quaternion"] = [0.5**0.5, 0.0, 0.5**0.5, 0.0]
+    bad = tmp / "tampered.json"
+    bad.write_text(json.dumps(d))
+    capsys.readouterr()
+    rc = _rc(["verify", str(bad), str(tmp / "box.stl"),
+              "--tool", str(tmp / "torch.stl"), "--tcp", "0,0,0,0,0,0"])  # fmt: skip
+    assert rc == 1
+    err = capsys.readouterr().err
+    assert "tool poses" in err and "weld A" in err
+
+
+def test_viewer_draws_the_tool_and_the_weld_without_a_pose(planned):
+    import meshcat
+    from meshcat.servers.tree import find_node
+
+    from weldplan.io.export import read_route
+    from weldplan.viz.viewer import RecordingWindow, build_scene
+
+    tmp, _ = planned
+    route = read_route(tmp / "r.json")
+    tool, _ = load_tool(tmp / "torch.stl", tcp="0,0,0,0,0,0")
+    window = RecordingWindow()
+    build_scene(meshcat.Visualizer(window=window), route, box_part(), tool=tool)
+
+    def node(path):
+        return find_node(window.tree, [p for p in path.split("/") if p])
+
+    root = "meshcat/weldplan/tool"
+    assert sorted(node(f"{root}/tool")) == ["A", "B", "C", "D"]
+    assert list(node(f"{root}/tool_miss")) == ["E"]
+    import umsgpack
+
+    matrix = umsgpack.unpackb(node(f"{root}/tool/A").transform)["matrix"]
+    T = np.array(matrix).reshape(4, 4).T  # meshcat sends column-major float32
+    np.testing.assert_allclose(T[:3, 3], [-40.0, 0.0, 0.0], atol=1e-4)
+    np.testing.assert_allclose(T[:3, :3], route_pose(route, "A").rotation(), atol=1e-6)
+    assert (tmp / "r.html").stat().st_size > 0
+
+
+def route_pose(route, jid) -> WeldPose:
+    return WeldPoses.from_dict(route.tool["poses"])[jid]
+
+
+def test_slerp_along_the_route_follows_arc_length():
+    route = box_route()  # A -> C -> B
+    qa = Rotation.from_euler("x", 180, degrees=True)
+    qc = Rotation.from_euler("xy", [180, 40], degrees=True)
+    qb = Rotation.from_euler("xz", [180, 90], degrees=True)
+
+    def wxyz(r):
+        return tuple(np.roll(r.as_quat(), 1))
+
+    poses = WeldPoses(
+        poses=tuple(
+            WeldPose(j, "ok", tuple(route.joint_xyz[route.index_of(j)]), (0, 0, -1), wxyz(r))
+            for j, r in zip(("A", "C", "B"), (qa, qc, qb), strict=True)
+        ),
+        tool="t",
+        total_rotation=0.0,
+    )
+    q = waypoint_quaternions(route, poses)
+    W = route.waypoints()
+    s = np.concatenate([[0], np.cumsum(np.linalg.norm(np.diff(W, axis=0), axis=1))])
+    rows = weld_rows(route)
+    assert rows.tolist() == [0, 3, 7]
+    for (a, b), (ra, rb) in zip(((0, 3), (3, 7)), ((qa, qc), (qc, qb)), strict=True):
+        total = (ra.inv() * rb).magnitude()
+        for k in range(a, b + 1):
+            rk = Rotation.from_quat(np.roll(q[k], -1))
+            frac = (s[k] - s[a]) / (s[b] - s[a])
+            assert (ra.inv() * rk).magnitude() == pytest.approx(frac * total, abs=1e-9)
+            assert (rk.inv() * rb).magnitude() == pytest.approx((1 - frac) * total, abs=1e-9)
+    # the CSV carries them, and a route without poses keeps its columns and JSON
+    with_poses = dataclasses.replace(route, tool={"provenance": {}, "poses": poses.to_dict()})
+    text = to_csv_text(with_poses)
+    assert text.splitlines()[0] == ",".join(CSV_FIELDS + POSE_FIELDS)
+    assert to_csv_text(route).splitlines()[0] == ",".join(CSV_FIELDS)
+    assert "tool" not in json.loads(route.to_json())
+    assert type(route).from_json(with_poses.to_json()) == with_poses
+
+
+def test_parse_tcp_errors_name_the_field():
+    assert parse_tcp("1,2,3,0,90,0") == [1.0, 2.0, 3.0, 0.0, 90.0, 0.0]
+    for bad in ("1,2,3", "1,2,3,4,5,6,7", "1,2,3,a,5,6", "1,2,nan,0,0,0", "1,2,3,inf,0,0"):
+        with pytest.raises(InputError) as e:
+            parse_tcp(bad)
+        assert e.value.field == "--tcp"
+
+
+@pytest.mark.parametrize(
+    "extra, words",
+    [
+        (["--tool", "{tmp}/missing.urdf"], "no such tool file"),
+        (["--tool", "{tmp}/torch.stl"], "needs --tcp"),
+        (["--tool", "{tmp}/torch.stl", "--tcp", "1,2,3"], "six comma-separated"),
+        (["--tool", "{tmp}/torch.stl", "--tcp", "0,0,nan,0,0,0"], "finite"),
+        (["--tool", "{tmp}/torch.stl", "--tcp", "0,0,0,0,0,0", "--tool-units", "m"], "units"),
+        (["--tool", "{tmp}/torch.stl", "--tcp", "0,0,900,0,0,0"], "outside"),
+        (["--tool", "{tmp}/nofixed.urdf"], "no fixed joint"),
+        (["--tool", "{tmp}/cad.urdf"], "--tool-mesh"),
+        (["--tcp", "0,0,0,0,0,0"], "--tcp needs --tool"),
+        (["--tool", "{tmp}/torch.stl", "--tcp", "0,0,0,0,0,0", "--tool-cone", "120"], "90"),
+    ],
+)
+def test_bad_tool_input_is_one_line_before_any_planning(tmp_path, capsys, extra, words):
+    box_part().export(tmp_path / "box.stl")
+    (tmp_path / "joints.csv").write_text(JOINTS_CSV)
+    arc_torch(stickout=3).mesh.export(tmp_path / "torch.stl")
+    (tmp_path / "nofixed.urdf").write_text('<robot name="r"><link name="a"/></robot>')
+    (tmp_path / "cad.urdf").write_text(
+        '<robot name="r"><link name="root"><visual><geometry><mesh filename="gone.stl"/>'
+        '</geometry></visual></link><link name="tip"/><joint name="tip" type="fixed">'
+        '<origin xyz="0 0 0" rpy="0 0 0"/><parent link="root"/><child link="tip"/></joint>'
+        "</robot>"
+    )
+    argv = ["plan", str(tmp_path / "box.stl"), str(tmp_path / "joints.csv"), "--quiet",
+            "-o", str(tmp_path / "r.csv")]  # fmt: skip
+    rc = _rc(argv + [a.format(tmp=tmp_path) for a in extra])
+    assert rc == 2
+    assert words in _one_line_error(capsys)
+    assert not (tmp_path / "r.csv").exists()
+
+
+def test_the_shared_gun_urdf_is_read_with_its_stl_and_recorded():
+    d = require_shared("tools", "spot_welding_gun")
+    tool, prov = load_tool(d / "spot_welding_gun.urdf")
+    assert prov["mesh"].endswith("spot_welding_gun.stl") and prov["units"] == "m"
+    stl = (d / "spot_welding_gun.stl").read_bytes()
+    assert prov["mesh_sha256"] == hashlib.sha256(stl).hexdigest()
+    np.testing.assert_allclose(tool.extent.max(), 827.1, atol=0.5)  # the gun in mm, not m
+    # the same URDF with another mesh unit is another tool: verify would refuse it
+    with pytest.raises(InputError, match="units"):
+        load_tool(d / "spot_welding_gun.urdf", mesh=d / "spot_welding_gun.stl", units="mm")
+
+
+def test_view_html_with_the_tool_and_another_tool_refused(planned, capsys):
+    tmp, _ = planned
+    page = tmp / "view.html"
+    base = ["view", str(tmp / "r.json"), str(tmp / "box.stl"), "--html", str(page)]
+    assert _rc(base + ["--tool", str(tmp / "torch.stl"), "--tcp", "0,0,0,0,0,0"]) == 0
+    assert page.stat().st_size > 0
+    capsys.readouterr()
+    assert _rc(base + ["--tool", str(tmp / "torch.stl"), "--tcp", "0,0,2,0,0,0"]) == 2
+    assert "another tool" in _one_line_error(capsys)
+
+
+@pytest.mark.slow
+def test_headless_chromium_draws_the_tool_copies(planned, tmp_path):
+    pytest.importorskip("PIL")
+    from PIL import Image
+
+    from tests.test_viewer import _chromium, _run_chromium
+    from weldplan.io.export import read_route
+    from weldplan.viz.viewer import write_html
+
+    assert _chromium()
+    tmp, _ = planned
+    route = read_route(tmp / "r.json")
+    tool, _ = load_tool(tmp / "torch.stl", tcp="0,0,0,0,0,0")
+    without = dataclasses.replace(route, tool={})
+    shots = {}
+    for name, r, t in (("tool", route, tool), ("plain", without, None)):
+        page = write_html(r, box_part(), tmp_path / f"{name}.html", tool=t)
+        png = tmp_path / f"{name}.png"
+        shot = _run_chromium(tmp_path, f"--screenshot={png}", page.resolve().as_uri())
+        assert shot.returncode == 0 and png.exists(), shot.stderr[-2000:]
+        shots[name] = np.asarray(Image.open(png).convert("RGB"), dtype=float)
+
+    def red(img):  # the point-tip page draws visited joints red; with poses only E stays red
+        r, g, b = (img[..., k] for k in range(3))
+        return int(((r > g + 50) & (r > b + 30)).sum())
+
+    # the see-through tool copies change a good share of the view
+    assert (np.abs(shots["tool"] - shots["plain"]).max(axis=-1) > 30).mean() > 0.2
+    assert red(shots["plain"]) >= 30 and red(shots["tool"]) < red(shots["plain"]) / 3
