@@ -332,148 +332,194 @@ def verify_route(
         clearance = check_clearance(route.settings.get("clearance", 5.0), "the route's clearance")
     else:
         clearance = asked
-    violations: list[Violation] = []
+    violations = _joint_table(route, joints)
+    counts, visit_violations = _visits(route)
+    violations += visit_violations
+    pieces = _LegPieces()
+    for k, leg in enumerate(route.legs):
+        violations += pieces.add(route, k, leg, clearance, approach_pieces_per_segment)
+    failed = _collisions(model, pieces, clearance)
+    violations += _collision_violations(route, failed)
+    violations += _inside_violations(route, model, failed)
+    report = VerifyReport(
+        ok=not violations,
+        violations=tuple(violations),
+        clearance=float(clearance),
+        segments_checked=len(pieces.mid_a),
+        approach_segments=len(set(pieces.app_where)),
+        joints_visited=sum(1 for jid in route.joint_ids if counts.get(jid, 0) == 1),
+    )
+    log.info("%s", report.describe())
+    return report
 
-    # joints: each exactly once, and the table matches the joints given
+
+def _joint_table(route: Route, joints: Any) -> list[Violation]:
+    """The route's joint table against the joints given (same ids, spots within tolerance)."""
+    if joints is None:
+        return []
     ids = route.joint_ids
-    if joints is not None:
-        jids = tuple(str(i) for i in joints.ids)
-        jxyz = np.asarray(joints.xyz, dtype=float).reshape(-1, 3)
-        if set(jids) != set(ids):
-            missing = sorted(set(jids) - set(ids))
-            extra = sorted(set(ids) - set(jids))
-            violations.append(
+    jids = tuple(str(i) for i in joints.ids)
+    jxyz = np.asarray(joints.xyz, dtype=float).reshape(-1, 3)
+    if set(jids) != set(ids):
+        missing = sorted(set(jids) - set(ids))
+        extra = sorted(set(ids) - set(jids))
+        return [
+            Violation(
+                "joints",
+                f"the route's joints differ from the joints given "
+                f"(missing {missing or 'none'}, unknown {extra or 'none'})",
+            )
+        ]
+    out = []
+    for jid, p in zip(jids, jxyz, strict=True):
+        q = route.joint_xyz[route.index_of(jid)]
+        if np.linalg.norm(q - p) > ENDPOINT_TOL_MM:
+            out.append(
                 Violation(
                     "joints",
-                    f"the route's joints differ from the joints given "
-                    f"(missing {missing or 'none'}, unknown {extra or 'none'})",
+                    f"joint {jid} is at {q.tolist()} in the route, "
+                    f"{p.tolist()} in the joints given",
                 )
             )
-        else:
-            for jid, p in zip(jids, jxyz, strict=True):
-                q = route.joint_xyz[route.index_of(jid)]
-                if np.linalg.norm(q - p) > ENDPOINT_TOL_MM:
-                    violations.append(
-                        Violation(
-                            "joints",
-                            f"joint {jid} is at {q.tolist()} in the route, "
-                            f"{p.tolist()} in the joints given",
-                        )
-                    )
+    return out
+
+
+def _visits(route: Route) -> tuple[dict[str, int], list[Violation]]:
+    """How often the order visits each joint, and what is wrong with that: each joint exactly
+    once, but the joints ``--skip-unreachable`` listed in ``stats.skipped``, which never."""
+    ids = route.joint_ids
     counts: dict[str, int] = {}
     for jid in route.order:
         counts[jid] = counts.get(jid, 0) + 1
-    skipped = {str(s["id"]) for s in route.stats.get("skipped") or ()}  # --skip-unreachable
+    skipped = {str(s["id"]) for s in route.stats.get("skipped") or ()}
+    out = []
     for jid in ids:
         if jid in skipped:
             if counts.get(jid, 0):
-                violations.append(Violation("skipped", f"joint {jid} is skipped but visited"))
+                out.append(Violation("skipped", f"joint {jid} is skipped but visited"))
         elif counts.get(jid, 0) == 0:
-            violations.append(Violation("missing", f"joint {jid} is never visited"))
+            out.append(Violation("missing", f"joint {jid} is never visited"))
         elif counts[jid] > 1:
-            violations.append(Violation("duplicate", f"joint {jid} is visited {counts[jid]} times"))
+            out.append(Violation("duplicate", f"joint {jid} is visited {counts[jid]} times"))
     for jid in counts:
         if jid not in ids:
-            violations.append(Violation("unknown", f"joint {jid} in the order is not a joint"))
+            out.append(Violation("unknown", f"joint {jid} in the order is not a joint"))
+    return counts, out
 
-    # legs: endpoints, then every segment
-    mid_a, mid_b, mid_where = [], [], []
-    app_a, app_b, app_r, app_where = [], [], [], []
-    for k, leg in enumerate(route.legs):
+
+class _LegPieces:
+    """The capsules to check, gathered leg by leg: middle segments at the full clearance, and
+    the approach cones as :func:`approach_pieces` (module docstring)."""
+
+    def __init__(self) -> None:
+        self.mid_a: list[NDArray] = []
+        self.mid_b: list[NDArray] = []
+        self.mid_where: list[tuple[int, int]] = []
+        self.app_a: list[NDArray] = []
+        self.app_b: list[NDArray] = []
+        self.app_r: list[float] = []
+        self.app_where: list[tuple[int, int]] = []
+
+    def add(self, route: Route, k: int, leg: Any, clearance: float, n_pieces: int) -> list:
+        """Gather leg ``k``'s pieces; returns the leg's violations found without geometry
+        (endpoints off their weld spots, points that cannot be checked, spot to spot)."""
         P = leg.points
         tag = {"leg": k, "from_id": leg.from_id, "to_id": leg.to_id}
-        for end, jid, p in (("start", leg.from_id, P[0]), ("end", leg.to_id, P[-1])):
-            if jid in ids:
-                q = route.joint_xyz[route.index_of(jid)]
-                if np.linalg.norm(p - q) > ENDPOINT_TOL_MM:
-                    violations.append(
-                        Violation(
-                            "endpoint",
-                            f"the leg's {end} {np.round(p, 3).tolist()} is not the weld spot of "
-                            f"joint {jid} {np.round(q, 3).tolist()}",
-                            **tag,
-                        )
-                    )
+        out = _endpoint_violations(route, leg, tag)
         if not np.all(np.isfinite(P)):
-            violations.append(Violation("points", "the leg has non-finite points", **tag))
-            continue
+            return out + [Violation("points", "the leg has non-finite points", **tag)]
         if not np.abs(P).max() <= MAX_COORD_MM:
             # FCL's capsule of a segment 1e300 mm long has no precision left: nothing to verify
-            violations.append(
-                Violation(
-                    "points",
-                    f"the leg has points beyond {MAX_COORD_MM:.0e} mm, which cannot be checked",
-                    **tag,
-                )
-            )
-            continue
+            msg = f"the leg has points beyond {MAX_COORD_MM:.0e} mm, which cannot be checked"
+            return out + [Violation("points", msg, **tag)]
         # A segment is an approach when it leaves a weld spot that is not its own virtual joint
         # (a joint lying in free space is its own virtual joint and has no approach).
         start_app = not route.is_virtual(leg.from_id, P[0], ENDPOINT_TOL_MM)
         end_app = not route.is_virtual(leg.to_id, P[-1], ENDPOINT_TOL_MM)
         last = len(P) - 2
         if last == 0 and start_app and end_app:
-            violations.append(
-                Violation(
-                    "approach",
-                    "the leg goes from weld spot to weld spot with no virtual joint between",
-                    segment=0,
-                    **tag,
-                )
-            )
-            continue
+            msg = "the leg goes from weld spot to weld spot with no virtual joint between"
+            return out + [Violation("approach", msg, segment=0, **tag)]
         for seg in range(last + 1):
             if seg == 0 and start_app:
                 spot, virt = P[0], P[1]
             elif seg == last and end_app:
                 spot, virt = P[-1], P[-2]
             else:
-                mid_a.append(P[seg])
-                mid_b.append(P[seg + 1])
-                mid_where.append((k, seg))
+                self.mid_a.append(P[seg])
+                self.mid_b.append(P[seg + 1])
+                self.mid_where.append((k, seg))
                 continue
-            A, B, r = approach_pieces(spot, virt, clearance, pieces=approach_pieces_per_segment)
-            for a, b, rr in zip(A, B, r, strict=True):
-                app_a.append(a)
-                app_b.append(b)
-                app_r.append(rr)
-                app_where.append((k, seg))
+            A, B, r = approach_pieces(spot, virt, clearance, pieces=n_pieces)
+            self.app_a += list(A)
+            self.app_b += list(B)
+            self.app_r += [float(x) for x in r]
+            self.app_where += [(k, seg)] * len(r)
+        return out
 
-    failed: dict[tuple[int, int], str] = {}
-    if mid_a:
-        free = model.segments_free(np.array(mid_a), np.array(mid_b), clearance)
-        for (k, seg), ok in zip(mid_where, free, strict=True):
-            if not ok:
-                failed.setdefault(
-                    (k, seg), f"the segment hits the part at {clearance:g} mm clearance"
+
+def _endpoint_violations(route: Route, leg: Any, tag: dict[str, Any]) -> list[Violation]:
+    """A leg must start and end on its joints' weld spots."""
+    out = []
+    P = leg.points
+    for end, jid, p in (("start", leg.from_id, P[0]), ("end", leg.to_id, P[-1])):
+        if jid in route.joint_ids:
+            q = route.joint_xyz[route.index_of(jid)]
+            if np.linalg.norm(p - q) > ENDPOINT_TOL_MM:
+                out.append(
+                    Violation(
+                        "endpoint",
+                        f"the leg's {end} {np.round(p, 3).tolist()} is not the weld spot of "
+                        f"joint {jid} {np.round(q, 3).tolist()}",
+                        **tag,
+                    )
                 )
-    for a, b, r, (k, seg) in zip(app_a, app_b, app_r, app_where, strict=True):
-        if (k, seg) in failed:
+    return out
+
+
+def _collisions(
+    model: CollisionModel, pieces: _LegPieces, clearance: float
+) -> dict[tuple[int, int], str]:
+    """``(leg, segment) -> reason`` of every middle segment that hits the part at ``clearance``
+    and every approach that leaves its cone."""
+    failed: dict[tuple[int, int], str] = {}
+    if pieces.mid_a:
+        free = model.segments_free(np.array(pieces.mid_a), np.array(pieces.mid_b), clearance)
+        for where, ok in zip(pieces.mid_where, free, strict=True):
+            if not ok:
+                failed.setdefault(where, f"the segment hits the part at {clearance:g} mm clearance")
+    for a, b, r, where in zip(
+        pieces.app_a, pieces.app_b, pieces.app_r, pieces.app_where, strict=True
+    ):
+        if where in failed:
             continue
         if not model.segment_free(a, b, float(r)):
-            failed[(k, seg)] = (
+            failed[where] = (
                 "the approach to the weld spot leaves its cone "
                 f"(the sphere radius grows from 0 at the spot to {clearance:g} mm)"
             )
+    return failed
+
+
+def _collision_violations(route: Route, failed: dict[tuple[int, int], str]) -> list[Violation]:
+    out = []
     for (k, seg), msg in sorted(failed.items()):
         leg = route.legs[k]
-        violations.append(Violation("collision", msg, k, seg, leg.from_id, leg.to_id))
+        out.append(Violation("collision", msg, k, seg, leg.from_id, leg.to_id))
+    return out
+
+
+def _inside_violations(
+    route: Route, model: CollisionModel, failed: dict[tuple[int, int], str]
+) -> list[Violation]:
+    """Route points inside a closed solid of the part, on segments not already reported
+    (a segment that crosses the solid's surface is a collision)."""
+    out = []
     for k, seg, p in _inside_solids(route, ClosedSolids.of(model.mesh), ENDPOINT_TOL_MM):
-        if (k, seg) in failed:  # already reported: the segment crosses the solid's surface
+        if (k, seg) in failed:
             continue
         failed[(k, seg)] = "inside"
         leg = route.legs[k]
         msg = f"the point {np.round(p, 3).tolist()} lies inside a closed solid of the part"
-        violations.append(Violation("inside", msg, k, seg, leg.from_id, leg.to_id))
-
-    n_app = len(set(app_where))
-    report = VerifyReport(
-        ok=not violations,
-        violations=tuple(violations),
-        clearance=float(clearance),
-        segments_checked=len(mid_a),
-        approach_segments=n_app,
-        joints_visited=sum(1 for jid in ids if counts.get(jid, 0) == 1),
-    )
-    log.info("%s", report.describe())
-    return report
+        out.append(Violation("inside", msg, k, seg, leg.from_id, leg.to_id))
+    return out
