@@ -208,52 +208,17 @@ def run_planning(
     built, for the size check (:mod:`weldplan.weld.sizing`).
     """
     from weldplan.commands._tool import plan_poses, pose_rows, tool_from_args
-    from weldplan.io.export import render_post, to_csv_text
-    from weldplan.viz.viewer import static_html
-    from weldplan.weld.pipeline import plan_route
     from weldplan.weld.verify import verify_route
 
     outputs = _outputs(args)
     config = config_from_args(args)
     tool = tool_from_args(args)  # a bad --tool fails before the (slow) cell is built
     if joint_points is not None:
-        from weldplan.weld.sizing import check_size
-
-        xyz = joint_points()
-        check_size(
-            xyz,
-            pitch=config.pitch,
-            margin=config.margin,
-            n_joints=len(xyz),
-            candidates=config.candidates,
-            memory_limit=config.memory_limit,
-            cli=True,
-            workers=_local_workers(args),
-        )
+        _check_size(args, config, joint_points())
     bars = ProgressBars(enabled=False if args.quiet else None)
     t_all = time.perf_counter()
     times: dict[str, float] = {}
-
-    with contextlib.ExitStack() as stack:
-        executor = None
-        dask = getattr(args, "dask", None)
-        if dask:  # reach the scheduler first: a wrong address fails in seconds, not after the cell
-            from weldplan.weld.parallel import dask_executor
-
-            executor = stack.enter_context(dask_executor(dask, workers=max(2, args.jobs)))
-        with bars.stage("cell") as st:
-            cell = make_cell()
-        times["cell"] = st.seconds
-        if not dask and args.jobs > 1:
-            from weldplan.weld.parallel import process_pool
-
-            executor = stack.enter_context(process_pool(cell, args.jobs))
-        try:
-            route = plan_route(cell, config=config, rng=args.seed, executor=executor, progress=bars)
-        finally:
-            bars.close()
-    for k in ("straight", "local", "sequence"):
-        times[k] = route.stats["seconds"][k]
+    cell, route = _plan(args, config, make_cell, bars, times)
 
     with bars.stage("verify") as st:
         report = verify_route(route, cell.part, joints=cell.joints)
@@ -276,16 +241,7 @@ def run_planning(
         extra_rows = pose_rows(route, check)
 
     with bars.stage("export") as st:
-        texts = {"csv": to_csv_text(route)}
-        if "json" in outputs:
-            texts["json"] = route.to_json() + "\n"
-        if "html" in outputs:
-            texts["html"] = static_html(route, cell.part, tool=None if tool is None else tool[0])
-        if "post" in outputs:
-            texts["post"] = render_post(route, args.post, cell)
-        from weldplan.io.outputset import write_outputs
-
-        write_outputs({path: texts[kind] for kind, path in outputs.items()})
+        _write(args, outputs, route, cell, None if tool is None else tool[0])
     times["export"] = st.seconds
     times["total"] = time.perf_counter() - t_all
     if not args.quiet:
@@ -298,6 +254,73 @@ def run_planning(
             )
         )
     return _partial_code(route)
+
+
+def _check_size(args: argparse.Namespace, config: Any, xyz: Any) -> None:
+    """Refuse up front a run whose grid or pair work would not fit (:mod:`weldplan.weld.sizing`)."""
+    from weldplan.weld.sizing import check_size
+
+    check_size(
+        xyz,
+        pitch=config.pitch,
+        margin=config.margin,
+        n_joints=len(xyz),
+        candidates=config.candidates,
+        memory_limit=config.memory_limit,
+        cli=True,
+        workers=_local_workers(args),
+    )
+
+
+def _plan(
+    args: argparse.Namespace,
+    config: Any,
+    make_cell: Callable[[], Any],
+    bars: ProgressBars,
+    times: dict[str, float],
+) -> tuple[Any, Any]:
+    """The cell and the route, with the executor the options ask for (``times`` filled)."""
+    from weldplan.weld.pipeline import plan_route
+
+    with contextlib.ExitStack() as stack:
+        executor = None
+        dask = getattr(args, "dask", None)
+        if dask:  # reach the scheduler first: a wrong address fails in seconds, not after the cell
+            from weldplan.weld.parallel import dask_executor
+
+            executor = stack.enter_context(dask_executor(dask, workers=max(2, args.jobs)))
+        with bars.stage("cell") as st:
+            cell = make_cell()
+        times["cell"] = st.seconds
+        if not dask and args.jobs > 1:
+            from weldplan.weld.parallel import process_pool
+
+            executor = stack.enter_context(process_pool(cell, args.jobs))
+        try:
+            route = plan_route(cell, config=config, rng=args.seed, executor=executor, progress=bars)
+        finally:
+            bars.close()
+    for k in ("straight", "local", "sequence"):
+        times[k] = route.stats["seconds"][k]
+    return cell, route
+
+
+def _write(
+    args: argparse.Namespace, outputs: dict[str, Path], route: Any, cell: Any, tool: Any
+) -> None:
+    """Render every output in memory, then write them as one set (:mod:`weldplan.io.outputset`)."""
+    from weldplan.io.export import render_post, to_csv_text
+    from weldplan.io.outputset import write_outputs
+    from weldplan.viz.viewer import static_html
+
+    texts = {"csv": to_csv_text(route)}
+    if "json" in outputs:
+        texts["json"] = route.to_json() + "\n"
+    if "html" in outputs:
+        texts["html"] = static_html(route, cell.part, tool=tool)
+    if "post" in outputs:
+        texts["post"] = render_post(route, args.post, cell)
+    write_outputs({path: texts[kind] for kind, path in outputs.items()})
 
 
 def _partial_code(route: Any) -> int:
