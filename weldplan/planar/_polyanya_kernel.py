@@ -238,8 +238,8 @@ def _search(vx, vy, ptr, pv, pnb, pop, corner, nexits, max_sides, spolys, gpolys
                 py[i] = vy[v]
             dRx, dRy = qx - rx, qy - ry
             dLx, dLy = lx - rx, ly - ry
-            nR = math.hypot(dRx, dRy)
-            nL = math.hypot(dLx, dLy)
+            nR = _norm(dRx, dRy)  # tolerances; a new root's g takes math.hypot
+            nL = _norm(dLx, dLy)
             if dRx * dLy - dRy * dLx <= eps * max(nR, nL):
                 # the root is on the interval's line, at an end of the edge: it sees all of poly
                 for i in range(n - 1):
@@ -281,35 +281,35 @@ def _search(vx, vy, ptr, pv, pnb, pop, corner, nexits, max_sides, spolys, gpolys
                 # non-observable, rooted at R's vertex (kind 1) and at L's (kind 2) when it is
                 # a corner the node's root reached no more cheaply before (root-level pruning)
                 v = pv[b0 + (j + 1) % n]
-                gR = g + nR
-                if (corner[v] and abs(qx - px[0]) + abs(qy - py[0]) <= eps
-                        and not (prune and gR > best[v] + eps)):  # fmt: skip
-                    if gR < best[v]:
-                        best[v] = gR
-                    RT[nr, 0], RT[nr, 1] = px[0], py[0]
-                    RP[nr] = rec
-                    recR, rvR = nr, v
-                    nr += 1
-                    for i in range(ir + 1):
-                        SC[ns, 0], SC[ns, 1] = (xrx, xry) if i == ir else (px[i + 1], py[i + 1])
-                        SC[ns, 2], SC[ns, 3] = px[i], py[i]
-                        SE[ns, 0], SE[ns, 1] = b0 + (j + 1 + i) % n, 1
-                        ns += 1
+                if corner[v] and abs(qx - px[0]) + abs(qy - py[0]) <= eps:
+                    gR = g + math.hypot(dRx, dRy)
+                    if not (prune and gR > best[v] + eps):
+                        if gR < best[v]:
+                            best[v] = gR
+                        RT[nr, 0], RT[nr, 1] = px[0], py[0]
+                        RP[nr] = rec
+                        recR, rvR = nr, v
+                        nr += 1
+                        for i in range(ir + 1):
+                            SC[ns, 0], SC[ns, 1] = (xrx, xry) if i == ir else (px[i + 1], py[i + 1])
+                            SC[ns, 2], SC[ns, 3] = px[i], py[i]
+                            SE[ns, 0], SE[ns, 1] = b0 + (j + 1 + i) % n, 1
+                            ns += 1
                 v = pv[b0 + j]
-                gL = g + nL
-                if (corner[v] and abs(lx - px[n - 1]) + abs(ly - py[n - 1]) <= eps
-                        and not (prune and gL > best[v] + eps)):  # fmt: skip
-                    if gL < best[v]:
-                        best[v] = gL
-                    RT[nr, 0], RT[nr, 1] = px[n - 1], py[n - 1]
-                    RP[nr] = rec
-                    recL, rvL = nr, v
-                    nr += 1
-                    for i in range(il, n - 1):
-                        SC[ns, 0], SC[ns, 1] = px[i + 1], py[i + 1]
-                        SC[ns, 2], SC[ns, 3] = (xlx, xly) if i == il else (px[i], py[i])
-                        SE[ns, 0], SE[ns, 1] = b0 + (j + 1 + i) % n, 2
-                        ns += 1
+                if corner[v] and abs(lx - px[n - 1]) + abs(ly - py[n - 1]) <= eps:
+                    gL = g + math.hypot(dLx, dLy)
+                    if not (prune and gL > best[v] + eps):
+                        if gL < best[v]:
+                            best[v] = gL
+                        RT[nr, 0], RT[nr, 1] = px[n - 1], py[n - 1]
+                        RP[nr] = rec
+                        recL, rvL = nr, v
+                        nr += 1
+                        for i in range(il, n - 1):
+                            SC[ns, 0], SC[ns, 1] = px[i + 1], py[i + 1]
+                            SC[ns, 2], SC[ns, 3] = (xlx, xly) if i == il else (px[i], py[i])
+                            SE[ns, 0], SE[ns, 1] = b0 + (j + 1 + i) % n, 2
+                            ns += 1
         # store the listed successors, dropping empty intervals, obstacles and cul-de-sacs
         for s in range(ns):
             e = SE[s, 0]
