@@ -40,7 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.sparse import coo_matrix, csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from weldplan.errors import PlanningError
+from weldplan.errors import InputError, PlanningError
 from weldplan.geometry.obstacles2d import Obstacles2D
 
 log = logging.getLogger(__name__)
@@ -577,7 +577,13 @@ def triangulate_segments(
         pslg["regions"] = np.concatenate(
             [seeds, np.ones((len(seeds), 1)), np.zeros((len(seeds), 1))], axis=1
         )
-    out = tr.triangulate(pslg, opts)
+    try:
+        out = tr.triangulate(pslg, opts)
+    except RuntimeError as exc:  # Triangle's own check: crossing or near-coincident input
+        raise InputError(
+            f"the map's outline cannot be triangulated ({exc}): obstacles or bounds that nearly "
+            "touch (closer than floating point resolves) or overlap in a degenerate way"
+        ) from exc
     nodes = np.asarray(out["vertices"], dtype=np.float64)
     tris = np.asarray(out["triangles"], dtype=np.int64)
     if seeds is not None:
