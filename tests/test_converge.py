@@ -137,3 +137,14 @@ def test_pipeline_closes_the_gap_on_a_car2_station() -> None:
     full = plan_route(cell, config=PlanConfig(planner="exact", pairs="all"), rng=0)
     assert full.stats["gap_rounds"] is None  # all pairs known: nothing to close
     assert route.length <= (1.0 + cfg.gap_target) * full.length + 2 * slack
+
+
+def test_the_summary_names_the_gap_rounds() -> None:
+    """The CLI's sequencer row says what the converging rounds did (nothing when none ran)."""
+    from weldplan.commands._planning import _gap_rounds
+
+    g = {"rounds": 3, "pairs_planned": 368, "reason": "within target of the optimistic order"}
+    assert _gap_rounds(g) == (
+        "; 3 gap round(s) planned 368 more pair(s) (within target of the optimistic order)"
+    )
+    assert _gap_rounds(None) == ""

@@ -17,7 +17,8 @@ EXIT_OK = 0
 EXIT_FAILURE = 1
 #: bad input or settings (a usage error, a bad file, an impossible option)
 EXIT_INPUT = 2
-#: a partial route was written: ``--skip-unreachable`` left joints out (listed in the summary)
+#: a partial result was written: ``--skip-unreachable`` left joints out, or ``--tool`` found no
+#: free pose for some welds (both listed in the summary)
 EXIT_PARTIAL = 3
 
 

@@ -349,6 +349,16 @@ def _partial_code(route: Any) -> int:
     return code
 
 
+def _gap_rounds(g: Any) -> str:
+    """The converging rounds of the lazy costs (:func:`weldplan.weld.converge.close_gap`)."""
+    if not g:
+        return ""
+    return (
+        f"; {g['rounds']} gap round(s) planned {g['pairs_planned']} more pair(s) "
+        f"({g['reason']})"
+    )
+
+
 def _gaps(route: Any) -> str:
     """The gap to the straight-line bound, and to the tighter bounds that the reader can use."""
     if len(route.joint_ids) < 2 or not route.lower_bound > 0:
@@ -412,7 +422,7 @@ def summary_table(
             + (f", {s['pairs_failed']} failed" if s["pairs_failed"] else "")
             + ")",
         ),
-        ("sequencer", f"{s['sequence_method']}"),
+        ("sequencer", f"{s['sequence_method']}" + _gap_rounds(s.get("gap_rounds"))),
         (
             "route length",
             f"{route.length:.2f} mm ({route.inner_length:.2f} mm between virtual joints "
