@@ -48,3 +48,20 @@ def box_route(directions: bool = False) -> Route:
         seed=7,
         stats={"pairs_blocked": 1},
     )
+
+
+#: four joints on the box part of :func:`box_part`, the CLI tests' station
+BOX_JOINTS_CSV = "id,x,y,z\nA,-40,0,0\nB,40,0,0\nC,-40,60,0\nD,40,-30,0\n"
+
+
+def write_box_station(folder):
+    """``box.stl`` and ``joints.csv`` (:data:`BOX_JOINTS_CSV`) in ``folder``.
+
+    Returns ``(folder, mesh, joints)``.
+    """
+    mesh = folder / "box.stl"
+    box_part().export(mesh)
+    joints = folder / "joints.csv"
+    joints.write_text(BOX_JOINTS_CSV)
+    return folder, mesh, joints
+

@@ -9,13 +9,13 @@ import json
 import numpy as np
 import pytest
 
-from tests.route_fixtures import box_part
+from tests.route_fixtures import BOX_JOINTS_CSV, write_box_station
 from weldplan.cli import main
 from weldplan.weld import verify as verify_mod
 from weldplan.weld.verify import VerifyReport, Violation
 
 #: the box scene of tests/route_fixtures with joints on the floor on both sides of the wall
-JOINTS_CSV = "id,x,y,z\nA,-40,0,0\nB,40,0,0\nC,-40,60,0\nD,40,-30,0\n"
+JOINTS_CSV = BOX_JOINTS_CSV
 
 
 def _needs_planner():
@@ -25,11 +25,7 @@ def _needs_planner():
 
 @pytest.fixture
 def files(tmp_path):
-    mesh = tmp_path / "box.stl"
-    box_part().export(mesh)
-    joints = tmp_path / "joints.csv"
-    joints.write_text(JOINTS_CSV)
-    return tmp_path, mesh, joints
+    return write_box_station(tmp_path)
 
 
 def _rc(argv) -> int:

@@ -13,13 +13,13 @@ import numpy as np
 import pytest
 import trimesh
 
-from tests.route_fixtures import box_part
+from tests.route_fixtures import BOX_JOINTS_CSV, box_part, write_box_station
 from weldplan.cli import main
 from weldplan.errors import ConfigError, InputError, RunError, UnreachableJointsError
 from weldplan.io import outputset
 
 #: the box scene of tests/route_fixtures (floor and a wall with free ends)
-JOINTS_CSV = "id,x,y,z\nA,-40,0,0\nB,40,0,0\nC,-40,60,0\nD,40,-30,0\n"
+JOINTS_CSV = BOX_JOINTS_CSV
 #: beside a panel (2 x 2000 x 2000 mm at the origin) that spans any region of interest near
 #: it: A, C, D on one side, B alone on the other
 PANEL_JOINTS_CSV = "id,x,y,z\nA,-8,0,0\nB,8,0,0\nC,-8,40,0\nD,-8,-30,0\n"
@@ -42,11 +42,7 @@ def _one_line(capsys) -> str:
 
 @pytest.fixture
 def files(tmp_path):
-    mesh = tmp_path / "box.stl"
-    box_part().export(mesh)
-    joints = tmp_path / "joints.csv"
-    joints.write_text(JOINTS_CSV)
-    return tmp_path, mesh, joints
+    return write_box_station(tmp_path)
 
 
 @pytest.fixture
