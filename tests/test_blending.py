@@ -136,7 +136,7 @@ def test_part_can_be_a_cell_like_object_or_a_collision_model(tmp_path):
     assert render_post(route, "rapid", CollisionModel(mesh)) == expected
     write_post(route, tmp_path / "r.src", "krl", part=mesh)
     assert "C_DIS" in (tmp_path / "r.src").read_text()
-    route.to_post(tmp_path / "r.mod", "rapid", part=mesh)
+    write_post(route, tmp_path / "r.mod", "rapid", part=mesh)
     assert (tmp_path / "r.mod").read_text() == expected
 
 

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from tests.route_fixtures import SPOTS, box_part, box_route
+from weldplan.io.export import read_route, write_csv, write_json, write_post
 from weldplan.weld.route import Leg, Route, polyline_length
 
 
@@ -89,12 +90,12 @@ def test_wrong_format_is_refused():
         Route.from_dict(d)
 
 
-def test_wrappers_write_files(tmp_path):
+def test_export_functions_write_files(tmp_path):
     r = box_route()
-    r.to_csv(tmp_path / "r.csv")
-    r.save(tmp_path / "r.json")
-    r.to_post(tmp_path / "r.mod", "rapid", part=box_part())
-    assert Route.load(tmp_path / "r.json") == r
+    write_csv(r, tmp_path / "r.csv")
+    write_json(r, tmp_path / "r.json")
+    write_post(r, tmp_path / "r.mod", "rapid", part=box_part())
+    assert read_route(tmp_path / "r.json") == r
     assert (tmp_path / "r.csv").read_text().startswith("step,kind,joint_id")
     assert "MODULE" in (tmp_path / "r.mod").read_text()
 

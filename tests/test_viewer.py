@@ -54,6 +54,20 @@ def test_static_page_is_self_contained(tmp_path):
     assert p.read_text() == page or p.stat().st_size > 100_000
 
 
+def test_notebook_view_is_the_static_page_in_an_iframe():
+    pytest.importorskip("IPython")
+    from html import unescape
+
+    import weldplan.viz
+
+    view = weldplan.viz.show(box_route(), box_part(), height=300)
+    assert "height: 300px" in view.data and "<iframe srcdoc=" in view.data
+    srcdoc = view.data.split('srcdoc="', 1)[1].split('" style=', 1)[0]
+    page = unescape(srcdoc)
+    assert page.startswith("<!DOCTYPE html>") and "MeshCat.Viewer" in page
+    assert "<script src" not in page  # the same self-contained page as static_html
+
+
 def test_view_without_part_draws_the_route_only():
     window = RecordingWindow()
     import meshcat

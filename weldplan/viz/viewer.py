@@ -4,7 +4,7 @@ Three ways to see the same scene (all built by :func:`build_scene`):
 
 - :func:`write_html` / :func:`static_html`: a self-contained HTML page (the meshcat viewer's
   JavaScript and every scene command inlined) that works offline, from a file or an e-mail;
-- :func:`jupyter_view` (and ``Route.show()``): that page inline in a notebook cell;
+- :func:`jupyter_view` (and :func:`weldplan.viz.show`): that page inline in a notebook cell;
 - :func:`view_route`: a live meshcat server (``weldplan view``), for stepping and inspecting.
 
 The static page needs no meshcat server: the scene commands are recorded by

@@ -5,6 +5,14 @@ verifier (:mod:`weldplan.weld.verify`), the exports (:mod:`weldplan.io.export`),
 (:mod:`weldplan.viz.viewer`). It is a frozen dataclass with a JSON round trip, so a route can be
 saved, re-verified and exported later without the cell that produced it.
 
+Data flows one way (model -> planning -> route -> export/view): this module imports neither the
+exports nor the viewer. Write and show a route with their functions::
+
+    from weldplan.io.export import read_route, write_csv, write_json, write_post
+    write_csv(route, "route.csv"); write_json(route, "route.json")
+    write_post(route, "route.mod", "rapid", part=cell)
+    weldplan.viz.show(route, cell)          # inline 3D view in Jupyter
+
 Leg convention
 --------------
 Each :class:`Leg` runs from real joint ``from_id`` to real joint ``to_id`` through waypoints::
@@ -23,7 +31,6 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass, field
-from os import PathLike
 from typing import Any
 
 import numpy as np
@@ -350,38 +357,6 @@ class Route:
         return self.to_json() == other.to_json()
 
     __hash__ = None  # type: ignore[assignment]
-
-    # ------------------------------------------------------------------ thin wrappers
-    def to_csv(self, path: str | PathLike[str]) -> None:
-        """Write the route as CSV (:func:`weldplan.io.export.write_csv`)."""
-        from weldplan.io.export import write_csv
-
-        write_csv(self, path)
-
-    def save(self, path: str | PathLike[str]) -> None:
-        """Write the route as JSON (:func:`weldplan.io.export.write_json`)."""
-        from weldplan.io.export import write_json
-
-        write_json(self, path)
-
-    @classmethod
-    def load(cls, path: str | PathLike[str]) -> Route:
-        """Read a route written by :meth:`save` (:func:`weldplan.io.export.read_route`)."""
-        from weldplan.io.export import read_route
-
-        return read_route(path)
-
-    def to_post(self, path: str | PathLike[str], post: str = "rapid", **kwargs: Any) -> None:
-        """Write a robot program with a registered post (:func:`weldplan.io.export.write_post`)."""
-        from weldplan.io.export import write_post
-
-        write_post(self, path, post, **kwargs)
-
-    def show(self, part: Any = None, *, height: int = 480) -> Any:
-        """An inline, self-contained 3D view for Jupyter (needs the part mesh or the cell)."""
-        from weldplan.viz.viewer import jupyter_view
-
-        return jupyter_view(self, part, height=height)
 
 
 def _jsonable(x: Any) -> Any:
