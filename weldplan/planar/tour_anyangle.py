@@ -1,7 +1,7 @@
 """Any-angle leg costs of multi-goal tours: Polyanya between every pair of stops.
 
 Paper 002 orders the targets over shortest paths along the edges of a triangular mesh
-(:class:`~weldplan.planar.multigoal.TourGraph`); those lengths overestimate the true shortest
+(:class:`~weldplan.planar.tour_order.TourGraph`); those lengths overestimate the true shortest
 paths by the mesh's zig-zag, so the order that is optimal over them need not be the shortest
 tour. :func:`build_anyangle_graph` instead asks Polyanya (Cui, Harabor & Grastien, IJCAI 2017,
 :class:`~weldplan.planar.polyanya.Polyanya`) for the exact any-angle shortest path between
@@ -14,7 +14,7 @@ public API answers one start-goal pair per query), on the navigation mesh of the
 * a map that is only an occupancy grid filling its bounds (the house floorplan):
   :func:`~weldplan.planar.navmesh.grid_navmesh` in cell units, stops mapped into it and the
   lengths scaled back by the cell size;
-* a Polyanya ``.mesh`` task (:func:`~weldplan.planar.multigoal.navmesh_tour`): the mesh itself.
+* a Polyanya ``.mesh`` task (:func:`~weldplan.planar.tour_scenarios.navmesh_tour`): the mesh itself.
 
 Held-Karp over the resulting ``dist`` is then the exact optimal tour through the stops (any
 angle), which is what every tour's gap is measured against.
@@ -76,7 +76,7 @@ class AnyAngleTourGraph:
 
     def leg(self, a: int, b: int, *, taut: bool = True) -> NDArray[np.float64]:
         """Points ``(p, 2)`` of the exact shortest path from stop ``a`` to stop ``b`` (``taut``
-        is accepted for :class:`~weldplan.planar.multigoal.TourGraph`'s signature: the path
+        is accepted for :class:`~weldplan.planar.tour_order.TourGraph`'s signature: the path
         is already taut)."""
         if a == b:
             raise ValueError("a leg joins two different stops")
@@ -88,7 +88,7 @@ class AnyAngleTourGraph:
     ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
         """The closed tour ``0 -> order... -> 0`` as points ``(p, 2)`` and the index in it of
         each stop visited (``(t + 2,)``), as :meth:`TourGraph.polyline
-        <weldplan.planar.multigoal.TourGraph.polyline>`."""
+        <weldplan.planar.tour_order.TourGraph.polyline>`."""
         seq = [0, *[int(v) for v in order], 0]
         pts = [self.leg(seq[0], seq[1])]
         at = [0, len(pts[0]) - 1]

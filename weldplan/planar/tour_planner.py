@@ -37,18 +37,18 @@ from weldplan.geometry.pathmetrics import path_length
 from weldplan.optim.core import minimize
 from weldplan.optim.discrete.sequence import solve_sequence
 from weldplan.optim.registry import get_optimizer
-from weldplan.planar.multigoal import (
+from weldplan.planar.tour_anyangle import AnyAngleTourGraph, build_anyangle_graph
+from weldplan.planar.tour_order import (
     EXACT_STOPS,
     PAPER_ITER,
     PAPER_POP,
     RandomKeyTourProblem,
     TourGraph,
-    TourScenario,
     build_tour_graph,
     polish_order,
     tour_lengths,
 )
-from weldplan.planar.tour_anyangle import AnyAngleTourGraph, build_anyangle_graph
+from weldplan.planar.tour_scenarios import TourScenario
 from weldplan.planar.tour_smooth import segments_clear, smooth_tour
 from weldplan.random import RNGLike, as_generator, seed_of
 
@@ -306,7 +306,7 @@ def plan_tour(
         Polish the optimiser's best order once with the sequencer's 2-opt + Or-opt iterated
         local search (default on; a named deviation). ``False`` gives the optimiser as printed.
     polish_kicks
-        Kicks of that polish (default :data:`~weldplan.planar.multigoal.POLISH_KICKS_PER_STOP`
+        Kicks of that polish (default :data:`~weldplan.planar.tour_order.POLISH_KICKS_PER_STOP`
         per stop).
     taut
         With the mesh metric: pull each mesh-edge leg tight in its triangle corridor (funnel)
