@@ -1,0 +1,98 @@
+"""weldplan's modules import each other without cycles (data flows one way: model -> planning ->
+route -> export/view).
+
+The graph is read from the source (ast), so it holds every import: module level, inside
+functions (the lazy ones), under ``TYPE_CHECKING``. An import of ``weldplan.a.b`` is an edge to
+``weldplan.a.b`` and to the packages above it (``weldplan.a``: Python runs its ``__init__``),
+except a module's own packages. ``from weldplan.a import b`` is an edge to ``weldplan.a.b`` when
+``b`` is a module, else to ``weldplan.a``.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import networkx as nx
+
+PACKAGE = Path(__file__).resolve().parents[1] / "weldplan"
+
+
+def _modules(root: Path) -> dict[str, tuple[Path, bool]]:
+    """Dotted module name -> (file, is a package) for every ``.py`` under ``root``."""
+    mods = {}
+    for p in sorted(root.rglob("*.py")):
+        parts = list(p.relative_to(root.parent).with_suffix("").parts)
+        is_pkg = parts[-1] == "__init__"
+        mods[".".join(parts[:-1] if is_pkg else parts)] = (p, is_pkg)
+    return mods
+
+
+def _targets(node: ast.AST, package: str, mods: dict) -> list[str]:
+    """The weldplan modules one import statement names."""
+    if isinstance(node, ast.Import):
+        names = [a.name for a in node.names]
+    elif isinstance(node, ast.ImportFrom):
+        if node.level:
+            base = package.split(".")[: len(package.split(".")) - node.level + 1]
+            mod = ".".join(base + ([node.module] if node.module else []))
+        else:
+            mod = node.module or ""
+        names = [f"{mod}.{a.name}" if f"{mod}.{a.name}" in mods else mod for a in node.names]
+    else:
+        return []
+    out = []
+    for name in names:
+        while name and name not in mods:
+            name = name.rpartition(".")[0]
+        if name:
+            out.append(name)
+    return out
+
+
+def import_graph(root: Path = PACKAGE) -> nx.DiGraph:
+    """Directed graph of the imports between the modules under ``root`` (edge attribute
+    ``line``: where the importing module names the target)."""
+    mods = _modules(root)
+    g = nx.DiGraph()
+    g.add_nodes_from(mods)
+    for m, (path, is_pkg) in mods.items():
+        package = m if is_pkg else m.rpartition(".")[0]
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            for t in _targets(node, package, mods):
+                # the target and the packages above it that are not the importer's own
+                while t:
+                    if t in mods and t != m and not m.startswith(t + "."):
+                        g.add_edge(m, t, line=node.lineno)
+                    t = t.rpartition(".")[0]
+    return g
+
+
+def _describe(g: nx.DiGraph, comp: set[str]) -> str:
+    edges = sorted((a, b, g.edges[a, b]["line"]) for a, b in g.subgraph(comp).edges)
+    return "\n".join(f"  {a}:{line} -> {b}" for a, b, line in edges)
+
+
+def test_weldplan_has_no_import_cycle():
+    g = import_graph()
+    cycles = [c for c in nx.strongly_connected_components(g) if len(c) > 1]
+    report = "\n".join(_describe(g, c) for c in cycles)
+    assert not cycles, f"import cycles (module:line -> module):\n{report}"
+
+
+def test_the_graph_sees_lazy_and_relative_imports(tmp_path):
+    pkg = tmp_path / "demo"
+    (pkg / "sub").mkdir(parents=True)
+    (pkg / "__init__.py").write_text("")
+    (pkg / "sub" / "__init__.py").write_text("from . import b\n")
+    (pkg / "a.py").write_text("def f():\n    from demo.sub.b import g\n    return g\n")
+    (pkg / "sub" / "b.py").write_text("from ..a import f\n\ndef g():\n    return f\n")
+    g = import_graph(pkg)
+    assert set(g.edges) == {
+        ("demo.a", "demo.sub.b"),
+        ("demo.a", "demo.sub"),
+        ("demo.sub", "demo.sub.b"),
+        ("demo.sub.b", "demo.a"),
+    }
+    cycles = [c for c in nx.strongly_connected_components(g) if len(c) > 1]
+    assert cycles == [{"demo.a", "demo.sub.b", "demo.sub"}]
