@@ -11,7 +11,8 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from weldplan.geometry.obstacles2d import Obstacles2D, _segments_touch
+from weldplan.geometry.obstacles2d import Obstacles2D
+from weldplan.geometry.primitives2d import segments_touch
 from weldplan.optim.algorithms.parapa import CrossFunction
 from weldplan.planar.encodings import SegmentPathProblem
 
@@ -76,7 +77,7 @@ def path_crossings(A: ArrayLike, B: ArrayLike) -> NDArray[np.int64]:
     B = np.asarray(B, dtype=np.float64)
     a0, a1 = A[:, None, :-1, None, :], A[:, None, 1:, None, :]
     b0, b1 = B[None, :, None, :-1, :], B[None, :, None, 1:, :]
-    touch = _segments_touch(a0, a1, b0, b1)  # (m, E, n - 1, p - 1)
+    touch = segments_touch(a0, a1, b0, b1)  # (m, E, n - 1, p - 1)
     count = touch.sum(axis=(2, 3)).astype(np.int64)
     same_start = np.all(A[:, None, 0] == B[None, :, 0], axis=-1)
     same_goal = np.all(A[:, None, -1] == B[None, :, -1], axis=-1)
