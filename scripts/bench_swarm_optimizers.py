@@ -1,4 +1,5 @@
-"""Figures for issue 6 part B: the fish, bee, ParaPA, lion and sparrow optimisers.
+"""The fish, bee, ParaPA, lion and sparrow optimisers on benchmark functions, and ABC/SSA beside
+mealpy (figures first made for issue 6 part B).
 
 Part ``own``: every algorithm with its paper defaults on the 10-d Sphere and the 30-d Rastrigin
 at one evaluation budget (15,000 = 002's population 30 x 500 iterations), median final value and
@@ -12,8 +13,8 @@ onlookers like mealpy's ``OriginalABC(pop_size=P)``.
 
 Usage::
 
-    python scripts/bench_issue6b.py own [--seeds 5]
-    python scripts/bench_issue6b.py mealpy [--seeds 10] [--iters 500] [--pop 30]
+    python scripts/bench_swarm_optimizers.py own [--seeds 5]
+    python scripts/bench_swarm_optimizers.py mealpy [--seeds 10] [--iters 500] [--pop 30]
 """
 
 from __future__ import annotations
@@ -38,7 +39,8 @@ def load() -> str:
 
 
 def own(seeds: int, budget: int) -> None:
-    print(f"# 6b algorithms, paper defaults, {budget} evaluations, seeds 0..{seeds - 1}")
+    print(f"# fish, bee, ParaPA, lion, sparrow: paper defaults, {budget} evaluations")
+    print(f"# seeds 0..{seeds - 1}")
     print(f"# {load()}")
     print(
         "| algorithm | Sphere 10-d median | Rastrigin 30-d median"
