@@ -137,18 +137,18 @@ class Scenario:
         )
 
 
-def scenario_path(name_or_path: str | Path) -> Path:
-    """The file of a shipped scenario name (``circles-1``) or the path itself."""
+def scenario_path(name_or_path: str | Path, folder: Path = SCENARIO_DIR) -> Path:
+    """The file of a scenario shipped in ``folder`` by name (``circles-1``) or the path itself."""
     p = Path(name_or_path)
     if p.exists() or p.suffix:
         return p
-    cand = SCENARIO_DIR / f"{name_or_path}.json"
+    cand = folder / f"{name_or_path}.json"
     return cand if cand.exists() else p
 
 
-def available_scenarios() -> list[str]:
-    """Names of the scenarios shipped under ``assets/scenarios``."""
-    return sorted(p.stem for p in SCENARIO_DIR.glob("*.json"))
+def available_scenarios(folder: Path = SCENARIO_DIR) -> list[str]:
+    """Names of the scenarios shipped in ``folder`` (default ``assets/scenarios``)."""
+    return sorted(p.stem for p in folder.glob("*.json"))
 
 
 def load_scenario(name_or_path: str | Path) -> Scenario:

@@ -18,7 +18,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from weldplan.errors import InputError
-from weldplan.planar.scenarios import SCENARIO_DIR, Scenario, scenario_from_dict
+from weldplan.planar.scenarios import (
+    SCENARIO_DIR,
+    Scenario,
+    available_scenarios,
+    scenario_from_dict,
+    scenario_path,
+)
 
 #: folder of the shipped multi-goal scenarios
 TOUR_DIR = SCENARIO_DIR / "tours"
@@ -158,16 +164,13 @@ class SampledGridWorld:
 
 
 def tour_path(name_or_path: str | Path) -> Path:
-    p = Path(name_or_path)
-    if p.exists() or p.suffix:
-        return p
-    cand = TOUR_DIR / f"{name_or_path}.json"
-    return cand if cand.exists() else p
+    """The file of a shipped multi-goal scenario by name (``tour-1``) or the path itself."""
+    return scenario_path(name_or_path, TOUR_DIR)
 
 
 def available_tours() -> list[str]:
     """Names of the multi-goal scenarios shipped under ``assets/scenarios/tours``."""
-    return sorted(p.stem for p in TOUR_DIR.glob("*.json"))
+    return available_scenarios(TOUR_DIR)
 
 
 def load_tour(name_or_path: str | Path) -> TourScenario:

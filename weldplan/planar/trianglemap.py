@@ -366,31 +366,27 @@ def _funnel(P: NDArray[np.float64], L: list[int], R: list[int]) -> tuple[list[in
     i, n = 1, len(L)
     while i < n:
         lft, rgt = L[i], R[i]
+        corner = None
         if area2(apex, right, rgt) <= 0.0:  # the right side tightens
             if apex == right or area2(apex, left, rgt) > 0.0:
                 right, ir = rgt, i
             else:  # it crosses the left side: the left end is a corner of the path
-                apex, ia = left, il
-                if out[-1] != apex:
-                    out.append(apex)
-                    where.append(ia)
-                left = right = apex
-                il = ir = ia
-                i = ia + 1
-                continue
-        if area2(apex, left, lft) >= 0.0:  # the left side tightens
+                corner = left, il
+        if corner is None and area2(apex, left, lft) >= 0.0:  # the left side tightens
             if apex == left or area2(apex, right, lft) < 0.0:
                 left, il = lft, i
-            else:
-                apex, ia = right, ir
-                if out[-1] != apex:
-                    out.append(apex)
-                    where.append(ia)
-                left = right = apex
-                il = ir = ia
-                i = ia + 1
-                continue
-        i += 1
+            else:  # it crosses the right side: the right end is a corner
+                corner = right, ir
+        if corner is None:
+            i += 1
+            continue
+        apex, ia = corner  # restart the funnel from the corner
+        if out[-1] != apex:
+            out.append(apex)
+            where.append(ia)
+        left = right = apex
+        il = ir = ia
+        i = ia + 1
     if out[-1] != L[-1]:
         out.append(L[-1])
         where.append(n - 1)

@@ -135,17 +135,30 @@ def _graph_shortest_path(
     w = np.linalg.norm(pts[i] - pts[j], axis=1)
     graph = coo_matrix((w, (i, j)), shape=(n, n)).tocsr()
     dist, pred = dijkstra(graph, directed=False, indices=0, return_predecessors=True)
-    if not np.isfinite(dist[1]):
+    return _traced_path(pts, dist, pred, expanded=n)
+
+
+def _traced_path(
+    pts: NDArray[np.float64], cost: NDArray[np.float64], parent: NDArray, *, expanded: int
+) -> ExactPath:
+    """The path from node 0 (start) to node 1 (goal) traced back through ``parent``.
+
+    Raises
+    ------
+    PlanningError
+        When the goal's ``cost`` is infinite (not reached).
+    """
+    if not np.isfinite(cost[1]):
         raise PlanningError("the goal cannot be reached from the start")
     order = [1]
     while order[-1] != 0:
-        order.append(int(pred[order[-1]]))
+        order.append(int(parent[order[-1]]))
     path = pts[order[::-1]]
     return ExactPath(
         points=tuple((float(x), float(y)) for x, y in path),
         length=float(path_length(path)),
         method="visibility-graph",
-        expanded=n,
+        expanded=expanded,
     )
 
 
@@ -262,15 +275,4 @@ def _lazy_visibility_astar(space: Any, pts: NDArray[np.float64]) -> ExactPath:
         f = nd + np.linalg.norm(pts[cand] - goal, axis=1)
         for fu, u in zip(f.tolist(), cand.tolist(), strict=True):
             heapq.heappush(heap, (fu, u))
-    if not np.isfinite(gcost[1]):
-        raise PlanningError("the goal cannot be reached from the start")
-    order = [1]
-    while order[-1] != 0:
-        order.append(int(parent[order[-1]]))
-    path = pts[order[::-1]]
-    return ExactPath(
-        points=tuple((float(x), float(y)) for x, y in path),
-        length=float(path_length(path)),
-        method="visibility-graph",
-        expanded=expanded,
-    )
+    return _traced_path(pts, gcost, parent, expanded=expanded)
