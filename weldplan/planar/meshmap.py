@@ -192,18 +192,8 @@ def triangulate_segments(
         raise ImportError("triangular-mesh maps need the 'triangle' package") from exc
     A = np.asarray(seg_a, dtype=np.float64).reshape(-1, 2)
     B = np.asarray(seg_b, dtype=np.float64).reshape(-1, 2)
-    V, S = _split_segments(A, B, max_edge)
     extra = np.zeros((0, 2)) if points is None else np.asarray(points, dtype=np.float64)
-    extra = extra.reshape(-1, 2)
-    verts = np.concatenate([extra, V])
-    # merge duplicate vertices (shared polygon corners) so Triangle sees clean input
-    scale = float(np.ptp(verts, axis=0).max()) or 1.0
-    key = np.round(verts / (1e-9 * scale)).astype(np.int64)
-    _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
-    inv = inv.reshape(-1)
-    verts_u = verts[first]
-    segs = inv[len(extra) + S]
-    segs = segs[segs[:, 0] != segs[:, 1]]
+    verts_u, segs, term_old = _planar_graph(A, B, extra.reshape(-1, 2), max_edge)
     opts = "pzQ"
     seeds = None if callable(keep) else np.asarray(keep, dtype=np.float64).reshape(-1, 2)
     if seeds is not None:
@@ -235,10 +225,43 @@ def triangulate_segments(
             [np.asarray(keep(cen[s : s + step]), dtype=bool) for s in range(0, len(cen), step)]
         )
         tris = tris[kept]
-    # drop nodes no kept triangle uses, renumber
+    return _triangle_map(nodes, tris, term_old, max_edge)
+
+
+def _planar_graph(
+    A: NDArray[np.float64], B: NDArray[np.float64], extra: NDArray[np.float64], max_edge: float
+) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:
+    """Triangle's input: the segments ``A -> B (s, 2)`` split to at most ``max_edge`` and the
+    ``extra (t, 2)`` points, duplicate vertices (shared polygon corners) merged so Triangle
+    sees clean input. Returns the vertices ``(v, 2)``, the segments ``(s', 2)`` as vertex
+    pairs, and the vertex of each extra point ``(t,)``."""
+    V, S = _split_segments(A, B, max_edge)
+    verts = np.concatenate([extra, V])
+    scale = float(np.ptp(verts, axis=0).max()) or 1.0
+    key = np.round(verts / (1e-9 * scale)).astype(np.int64)
+    _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    inv = inv.reshape(-1)
+    segs = inv[len(extra) + S]
+    return verts[first], segs[segs[:, 0] != segs[:, 1]], inv[: len(extra)]
+
+
+def _triangle_map(
+    nodes: NDArray[np.float64],
+    tris: NDArray[np.int64],
+    term_old: NDArray[np.int64],
+    max_edge: float,
+) -> TriangleMap:
+    """The :class:`TriangleMap` of the kept triangles ``tris (k, 3)`` over ``nodes (m, 2)``:
+    nodes no kept triangle uses are dropped and the rest renumbered; ``term_old`` are the
+    terminals' node numbers before.
+
+    Raises
+    ------
+    PlanningError
+        When a terminal is in no kept triangle (not in free space).
+    """
     used = np.zeros(len(nodes), dtype=bool)
     used[tris.reshape(-1)] = True
-    term_old = inv[: len(extra)]
     if not np.all(used[term_old]):
         bad = np.nonzero(~used[term_old])[0]
         raise PlanningError(f"points {bad.tolist()} are not in the free space of the mesh")

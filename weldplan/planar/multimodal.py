@@ -286,15 +286,7 @@ def plan_multimodal(
     seconds = time.perf_counter() - t0
     paths = [problem.path(x) for _, x in picked]
     ok = [bool(v) for v in problem.success(np.array([x for _, x in picked]))]
-    sweeps = swept_angles(np.stack(paths), reference_points(scenario.obstacles))
-    n = len(paths)
-    distinct = [
-        [bool(i != j and class_differs(sweeps[i], sweeps[j])) for j in range(n)] for i in range(n)
-    ]
-    cross = path_crossings(np.stack(paths), np.stack(paths))
-    for i in range(n):
-        cross[i, i] = 0
-    haus = [[0.0 if i == j else hausdorff(paths[i], paths[j]) for j in range(n)] for i in range(n)]
+    distinct, cross, haus = pairwise_measures(paths, scenario.obstacles)
     optimum = float("nan")
     if with_optimum:
         from weldplan.planar.solve import exact_optimum
@@ -315,9 +307,9 @@ def plan_multimodal(
         lengths=tuple(float(np.sum(np.linalg.norm(np.diff(p, axis=0), axis=1))) for p in paths),
         success=tuple(ok),
         swarm=tuple(int(s) for s, _ in picked),
-        distinct=tuple(tuple(r) for r in distinct),
-        crossings=tuple(tuple(int(v) for v in r) for r in cross),
-        hausdorff=tuple(tuple(r) for r in haus),
+        distinct=distinct,
+        crossings=cross,
+        hausdorff=haus,
         optimum=optimum,
         repairs=opt.repairs,
         final_repairs=final_repairs,
@@ -327,6 +319,27 @@ def plan_multimodal(
         n_eval=res.n_eval,
         seconds=seconds,
         seed=seed_of(rng),
+    )
+
+
+def pairwise_measures(paths: list[FloatArray], obstacles: Any) -> tuple[Any, Any, Any]:
+    """How the paths ``(n_i, 2)`` (same ends) differ, pair by pair, as :class:`MultimodalResult`
+    keeps it: ``distinct`` (different homology classes round ``obstacles``,
+    :func:`class_differs`), eq. 17's segment ``crossings`` (zero on the diagonal) and the
+    sampled ``hausdorff`` distance; each ``(n, n)`` as nested tuples of bool, int, float."""
+    sweeps = swept_angles(np.stack(paths), reference_points(obstacles))
+    n = len(paths)
+    distinct = [
+        [bool(i != j and class_differs(sweeps[i], sweeps[j])) for j in range(n)] for i in range(n)
+    ]
+    cross = path_crossings(np.stack(paths), np.stack(paths))
+    for i in range(n):
+        cross[i, i] = 0
+    haus = [[0.0 if i == j else hausdorff(paths[i], paths[j]) for j in range(n)] for i in range(n)]
+    return (
+        tuple(tuple(r) for r in distinct),
+        tuple(tuple(int(v) for v in r) for r in cross),
+        tuple(tuple(r) for r in haus),
     )
 
 

@@ -259,6 +259,65 @@ def _resolve(
     return metric, polish, taut, "default" if metric == "any-angle" and polish else "custom"
 
 
+def _graphs(
+    task: TourScenario,
+    metric: str,
+    graph: TourGraph | None,
+    anyangle: AnyAngleTourGraph | None,
+    exact: tuple[tuple[int, ...], float] | None,
+) -> tuple[TourGraph | AnyAngleTourGraph, tuple[tuple[int, ...], float]]:
+    """The graph whose distances order the stops (any-angle or mesh-edge, built unless given)
+    and the exact any-angle optimal tour ``(order, length)`` (computed unless given).
+
+    Raises
+    ------
+    PlanningError
+        When some stop cannot be reached.
+    """
+    if exact is None or metric == "any-angle":
+        anyangle = build_anyangle_graph(task) if anyangle is None else anyangle
+    if exact is None:
+        ex_order, ex_len, _ = ground_truth(anyangle)
+        exact = (ex_order, ex_len)
+    if metric == "any-angle":
+        g: TourGraph | AnyAngleTourGraph = anyangle
+    else:
+        g = build_tour_graph(task) if graph is None else graph
+    if not np.all(np.isfinite(g.dist)):
+        raise PlanningError(f"{task.name}: some goals cannot be reached on the mesh")
+    return g, exact
+
+
+def _join_and_smooth(
+    task: TourScenario,
+    g: TourGraph | AnyAngleTourGraph,
+    order: Any,
+    metric: str,
+    taut: bool,
+    smooth: bool,
+    stages: list[tuple[str, float, float, str]],
+) -> tuple[NDArray[np.float64], bool, NDArray[np.float64], bool]:
+    """Join the legs of ``order`` into the closed polyline (pulled taut with the mesh metric
+    and ``taut``) and smooth it (eq. 14 B-spline with the collision fallback) when ``smooth``;
+    appends the ``funnel`` and ``spline`` stages. Returns ``(polyline (p, 2), its legs are
+    free by the exact check, curve (q, 2), smoothed)``."""
+    t1 = time.perf_counter()
+    poly, at = g.polyline(order, taut=taut)
+    legs_free = bool(segments_clear(task.exact_world, poly[:-1], poly[1:]).all())
+    if metric == "mesh" and taut:
+        stages.append(("funnel", float(path_length(poly)), time.perf_counter() - t1,
+                       "legs pulled taut in their triangle corridors"))  # fmt: skip
+    t2 = time.perf_counter()
+    if smooth:
+        curve, smoothed = smooth_tour(poly, at, task.world)
+    else:
+        curve, smoothed = poly, False
+    if smooth:
+        note = "B-spline (eq. 14)" if smoothed else "spline collided: polyline kept"
+        stages.append(("spline", float(path_length(curve)), time.perf_counter() - t2, note))
+    return poly, legs_free, curve, smoothed
+
+
 def plan_tour(
     task: TourScenario,
     algorithm: str = "isma",
@@ -333,17 +392,7 @@ def plan_tour(
     metric, polish, taut, pipeline = _resolve(metric, as_printed, polish, taut)
     gen = as_generator(rng)
     seed = seed_of(rng)
-    if exact is None or metric == "any-angle":
-        anyangle = build_anyangle_graph(task) if anyangle is None else anyangle
-    if exact is None:
-        ex_order, ex_len, _ = ground_truth(anyangle)
-        exact = (ex_order, ex_len)
-    if metric == "any-angle":
-        g: TourGraph | AnyAngleTourGraph = anyangle
-    else:
-        g = build_tour_graph(task) if graph is None else graph
-    if not np.all(np.isfinite(g.dist)):
-        raise PlanningError(f"{task.name}: some goals cannot be reached on the mesh")
+    g, exact = _graphs(task, metric, graph, anyangle, exact)
     if optimum is None or algorithm == "exact":
         t0 = time.perf_counter()
         gt_order, gt_len, gt_method = ground_truth(g, rng=gen)
@@ -369,19 +418,8 @@ def plan_tour(
         if polish:
             stages.append(("polish", length, o["polish_seconds"], "2-opt/Or-opt ILS"))
     t1 = time.perf_counter()
-    poly, at = g.polyline(order, taut=taut)
-    legs_free = bool(segments_clear(task.exact_world, poly[:-1], poly[1:]).all())
-    if metric == "mesh" and taut:
-        stages.append(("funnel", float(path_length(poly)), time.perf_counter() - t1,
-                       "legs pulled taut in their triangle corridors"))  # fmt: skip
-    t2 = time.perf_counter()
-    if smooth:
-        curve, smoothed = smooth_tour(poly, at, task.world)
-    else:
-        curve, smoothed = poly, False
-    if smooth:
-        note = "B-spline (eq. 14)" if smoothed else "spline collided: polyline kept"
-        stages.append(("spline", float(path_length(curve)), time.perf_counter() - t2, note))
+    joined = _join_and_smooth(task, g, order, metric, taut, smooth, stages)
+    poly, legs_free, curve, smoothed = joined
     smooth_seconds = time.perf_counter() - t1
     # the independent final check is exact, also where the loop sampled (grid maps)
     free = bool(segments_clear(task.exact_world, curve[:-1], curve[1:]).all())
