@@ -81,9 +81,6 @@ def _astar_map(task: tuple) -> dict:
 
 
 def protocol_exact(args: argparse.Namespace, out: Path) -> list[str]:
-    from weldplan.geometry.obstacles2d import Obstacles2D, grid_to_rectangles
-    from weldplan.planar.exact import MeshFreeSpace, VisibilityGraph, read_movingai_map, read_scen
-
     data = Path(args.data) if args.data else Path(__file__).resolve().parents[3] / "shared" / "data"
     lines = ["## Exact planners against third-party data", ""]
     if not (data / "movingai").exists():
@@ -120,52 +117,56 @@ def protocol_exact(args: argparse.Namespace, out: Path) -> list[str]:
             f"{r['d_worst_units']:.2f} | {r['d_cpu_per_query']:.4f} | "
             f"{r['seconds']:.0f}, {r['d_seconds']:.0f} |"
         )
-    mesh_file = data / "meshmaps" / "arena.mesh"
-    if mesh_file.exists():
-        t0 = time.perf_counter()
-        mesh = MeshFreeSpace.read(mesh_file)
-        free = read_movingai_map(data / "movingai" / "arena.map")
-        sc = read_scen(data / "meshmaps" / "arena.mesh.scen")
-        vm = VisibilityGraph(mesh)
-        vg = VisibilityGraph(Obstacles2D(rectangles=grid_to_rectangles(~free)))
-        Lm = np.array(
-            [
-                vm.shortest_path(s + 0.5, g + 0.5).length
-                for s, g in zip(sc.start, sc.goal, strict=True)
-            ]
-        )
-        Lg = np.array(
-            [
-                vg.shortest_path(s + 0.5, g + 0.5).length
-                for s, g in zip(sc.start, sc.goal, strict=True)
-            ]
-        )
-        ratio = sc.length / Lm
-        low = sc.length / OCTILE_OVER_EUCLID
-        lines += [
-            "",
-            "Visibility graph on the Polyanya arena mesh (v2) and on the same map as a Moving "
-            "AI grid (rectangles), start and goal at cell centres. The `.scen` lengths shipped "
-            "with the mesh are the octile grid lengths (identical to the Moving AI file), not "
-            "any-angle optima, so they bound the any-angle length from above; the two "
-            "independent free-space descriptions must agree.",
-            "",
-            f"- queries: {len(Lm)}; mesh vs grid visibility graph: max |difference| "
-            f"{np.max(np.abs(Lm - Lg)):.2e}, within 1e-3 for "
-            f"{100 * np.mean(np.abs(Lm - Lg) <= 1e-3):.1f} %",
-            f"- any-angle <= octile (+1e-4) for {100 * np.mean(Lm <= sc.length + 1e-4):.1f} %; "
-            f"octile / any-angle ratio min {ratio.min():.4f}, mean {ratio.mean():.4f}, "
-            f"max {ratio.max():.4f}",
-            f"- any-angle >= octile / 1.0824 (octile is at most 8.24 % above Euclidean) for "
-            f"{100 * np.mean(Lm >= low - 1e-4):.1f} %",
-            f"- mesh: {len(mesh.vertices_xy)} vertices, {len(vm.nodes)} turning points; "
-            f"{time.perf_counter() - t0:.1f} s in all",
-            "",
-        ]
+    lines += _arena_lines(data)
     aurora = data / "meshmaps" / "aurora.mesh"
     if aurora.exists():
         lines += _aurora_lines(aurora, args.mesh_seconds)
     return lines
+
+
+def _arena_lines(data: Path) -> list[str]:
+    """The visibility graph on the Polyanya arena mesh against the same map as a Moving AI
+    grid (the section's report lines; none without the mesh file)."""
+    from weldplan.geometry.obstacles2d import Obstacles2D, grid_to_rectangles
+    from weldplan.planar.exact import MeshFreeSpace, VisibilityGraph, read_movingai_map, read_scen
+
+    mesh_file = data / "meshmaps" / "arena.mesh"
+    if not mesh_file.exists():
+        return []
+    t0 = time.perf_counter()
+    mesh = MeshFreeSpace.read(mesh_file)
+    free = read_movingai_map(data / "movingai" / "arena.map")
+    sc = read_scen(data / "meshmaps" / "arena.mesh.scen")
+    vm = VisibilityGraph(mesh)
+    vg = VisibilityGraph(Obstacles2D(rectangles=grid_to_rectangles(~free)))
+    Lm = np.array(
+        [vm.shortest_path(s + 0.5, g + 0.5).length for s, g in zip(sc.start, sc.goal, strict=True)]
+    )
+    Lg = np.array(
+        [vg.shortest_path(s + 0.5, g + 0.5).length for s, g in zip(sc.start, sc.goal, strict=True)]
+    )
+    ratio = sc.length / Lm
+    low = sc.length / OCTILE_OVER_EUCLID
+    return [
+        "",
+        "Visibility graph on the Polyanya arena mesh (v2) and on the same map as a Moving "
+        "AI grid (rectangles), start and goal at cell centres. The `.scen` lengths shipped "
+        "with the mesh are the octile grid lengths (identical to the Moving AI file), not "
+        "any-angle optima, so they bound the any-angle length from above; the two "
+        "independent free-space descriptions must agree.",
+        "",
+        f"- queries: {len(Lm)}; mesh vs grid visibility graph: max |difference| "
+        f"{np.max(np.abs(Lm - Lg)):.2e}, within 1e-3 for "
+        f"{100 * np.mean(np.abs(Lm - Lg) <= 1e-3):.1f} %",
+        f"- any-angle <= octile (+1e-4) for {100 * np.mean(Lm <= sc.length + 1e-4):.1f} %; "
+        f"octile / any-angle ratio min {ratio.min():.4f}, mean {ratio.mean():.4f}, "
+        f"max {ratio.max():.4f}",
+        f"- any-angle >= octile / 1.0824 (octile is at most 8.24 % above Euclidean) for "
+        f"{100 * np.mean(Lm >= low - 1e-4):.1f} %",
+        f"- mesh: {len(mesh.vertices_xy)} vertices, {len(vm.nodes)} turning points; "
+        f"{time.perf_counter() - t0:.1f} s in all",
+        "",
+    ]
 
 
 #: the largest ratio of the octile distance to the Euclidean one, sqrt(4 - 2 sqrt(2))
