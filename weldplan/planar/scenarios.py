@@ -205,23 +205,17 @@ def _grid_from(obj: dict[str, Any], where: str, path: Any) -> GridMap:
     return GridMap(occupied=occ, origin=(float(origin[0]), float(origin[1])), cell=cell)
 
 
-def scenario_from_dict(data: Any, *, path: Any = None) -> Scenario:
-    """Validate a scenario given as a parsed JSON object (see the module docstring)."""
-    if not isinstance(data, dict):
-        raise InputError("a scenario must be a JSON object", path=path)
-    for key in ("bounds", "start", "goal"):
-        if key not in data:
-            raise InputError("missing required field", path=path, field=key)
-    bounds = _num_array(data["bounds"], (4,), "bounds", path)
-    if bounds[2] <= bounds[0] or bounds[3] <= bounds[1]:
-        raise InputError(
-            "bounds must be [xmin, ymin, xmax, ymax] with min < max", path=path, field="bounds"
-        )
-    start = _num_array(data["start"], (2,), "start", path)
-    goal = _num_array(data["goal"], (2,), "goal", path)
+def _obstacles_from(obstacles: Any, path: Any) -> tuple[Obstacles2D, GridMap | None]:
+    """The scenario's ``obstacles`` list (module docstring) validated: the obstacles (a grid's
+    occupied cells as rectangles) and the grid itself when there is one (at most one).
+
+    Raises
+    ------
+    InputError
+        Naming the obstacle's field, for a malformed or unknown obstacle.
+    """
     circles, rects, polys = [], [], []
     grid: GridMap | None = None
-    obstacles = data.get("obstacles", [])
     if not isinstance(obstacles, list):
         raise InputError("expected a list of obstacles", path=path, field="obstacles")
     for k, ob in enumerate(obstacles):
@@ -266,11 +260,28 @@ def scenario_from_dict(data: Any, *, path: Any = None) -> Scenario:
                 path=path,
                 field=f"{where}.type",
             )
-    obs = Obstacles2D(
+    return Obstacles2D(
         circles=np.array(circles).reshape(-1, 3),
         rectangles=np.array(rects).reshape(-1, 4),
         polygons=tuple(polys),
-    )
+    ), grid
+
+
+def scenario_from_dict(data: Any, *, path: Any = None) -> Scenario:
+    """Validate a scenario given as a parsed JSON object (see the module docstring)."""
+    if not isinstance(data, dict):
+        raise InputError("a scenario must be a JSON object", path=path)
+    for key in ("bounds", "start", "goal"):
+        if key not in data:
+            raise InputError("missing required field", path=path, field=key)
+    bounds = _num_array(data["bounds"], (4,), "bounds", path)
+    if bounds[2] <= bounds[0] or bounds[3] <= bounds[1]:
+        raise InputError(
+            "bounds must be [xmin, ymin, xmax, ymax] with min < max", path=path, field="bounds"
+        )
+    start = _num_array(data["start"], (2,), "start", path)
+    goal = _num_array(data["goal"], (2,), "goal", path)
+    obs, grid = _obstacles_from(data.get("obstacles", []), path)
     for key, p in (("start", start), ("goal", goal)):
         if p[0] < bounds[0] or p[0] > bounds[2] or p[1] < bounds[1] or p[1] > bounds[3]:
             raise InputError(
