@@ -44,11 +44,7 @@ def astar_grid(free: ArrayLike, start: tuple[int, int], goal: tuple[int, int]) -
     """
     F = np.asarray(free, dtype=bool)
     nx, ny = F.shape
-    si, sj = int(start[0]), int(start[1])
-    gi, gj = int(goal[0]), int(goal[1])
-    for name, (a, b) in (("start", (si, sj)), ("goal", (gi, gj))):
-        if not (0 <= a < nx and 0 <= b < ny) or not F[a, b]:
-            raise PlanningError(f"{name} cell {(a, b)} is blocked or outside the grid")
+    (si, sj), (gi, gj) = _free_cell(F, start, "start"), _free_cell(F, goal, "goal")
     # flat indices over a padded grid so that neighbours never wrap
     W = ny + 2
     pad = np.zeros((nx + 2, ny + 2), dtype=bool)
@@ -103,15 +99,36 @@ def astar_grid(free: ArrayLike, start: tuple[int, int], goal: tuple[int, int]) -
                 push(heap, (nc + h(u), nc, u))
     else:
         raise PlanningError(f"goal cell {(gi, gj)} cannot be reached from {(si, sj)}")
+    return ExactPath(
+        points=_cells_back(parent, t, W), length=float(g_cost[t]), method="astar-8",
+        expanded=expanded,
+    )  # fmt: skip
+
+
+def _free_cell(F: NDArray[np.bool_], cell: tuple[int, int], name: str) -> tuple[int, int]:
+    """``cell`` as ints, checked to be a free cell of ``F``.
+
+    Raises
+    ------
+    PlanningError
+        When the cell is blocked or outside the grid.
+    """
+    a, b = int(cell[0]), int(cell[1])
+    if not (0 <= a < F.shape[0] and 0 <= b < F.shape[1]) or not F[a, b]:
+        raise PlanningError(f"{name} cell {(a, b)} is blocked or outside the grid")
+    return a, b
+
+
+def _cells_back(parent: list[int], t: int, W: int) -> tuple[tuple[float, float], ...]:
+    """The cells ``(i, j)`` from the start to flat node ``t`` of the padded grid (row width
+    ``W``), traced back through ``parent`` (-1 at the start)."""
     cells = []
     v = t
     while v != -1:
         cells.append((float(v // W - 1), float(v % W - 1)))
         v = parent[v]
     cells.reverse()
-    return ExactPath(
-        points=tuple(cells), length=float(g_cost[t]), method="astar-8", expanded=expanded
-    )
+    return tuple(cells)
 
 
 #: the eight moves of the Moving AI grids: (di, dj)
