@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 
@@ -195,3 +196,27 @@ def test_triangle_crossings_are_the_ends_of_the_intersection_segment():
     np.testing.assert_allclose(sorted(pts[:, 1]), [-2.5, 2.5], atol=1e-12)
     np.testing.assert_allclose(pts[:, [0, 2]], 0.0, atol=1e-12)
     assert not ok[1].any()  # lifted 5 mm: b no longer reaches a's plane
+
+
+def test_arc_torch_may_not_pass_through_a_sheet_near_the_spot():
+    # a 1 mm shelf 17 mm above the spot, from x = 6 mm on: a straight nozzle (radius 12.5 mm,
+    # mouth 15 mm above the spot) standing on the spot passes through it, 20-22 mm from the spot
+    part = trimesh.util.concatenate(
+        [_box((600, 600, 2), (0, 0, -1)), _box((200, 600, 1), (106, 0, 17.5))]
+    )
+    torch = arc_torch(bend_angle=0.0)
+    joints = _up(("s", (0, 0, 0)))
+    kw = {"cone": 0.0, "spin_step": 90.0, "contact_radius": 25.0, "clearance": 2.0}
+    # with the whole sphere exempt (a C-gun's contact zone) the nozzle through the shelf passes
+    as_gun = dataclasses.replace(torch, tip_cone=None, _cache={})
+    through = plan_weld_poses(part, joints, as_gun, **kw)
+    assert through.poses[0].ok
+    # the torch's own zone is its tip cone: the nozzle wall is 35-40 deg off its axis
+    poses = plan_weld_poses(part, joints, torch, **kw)
+    p = poses.poses[0]
+    assert not p.ok and p.miss is not None and p.miss.contacts > 0
+    assert 15.0 < p.miss.tool_point[2] * -1 < 25.0  # the nozzle's mouth, behind the TCP
+    # and the independent re-check of the torch refuses the pose the sphere let through
+    out = verify_poses(through, part, torch)
+    assert not out.ok and "tip cone" in out.failures[0][1]
+
