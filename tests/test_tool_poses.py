@@ -220,3 +220,24 @@ def test_arc_torch_may_not_pass_through_a_sheet_near_the_spot():
     out = verify_poses(through, part, torch)
     assert not out.ok and "tip cone" in out.failures[0][1]
 
+
+def test_gun_turns_over_when_the_approach_side_is_blocked():
+    gun = shared_spot_gun(require_shared("tools", "spot_welding_gun"))
+    flange = _box((400, 2, 30), (0, 1, 15))  # face at y = 0, edge at z = 30
+    spot = (0.0, 0.0, 20.0)
+    j = Joints(ids=["f"], xyz=[spot], directions=[[0.0, -1.0, 0.0]])  # torch on the -y side
+    free = plan_weld_poses(flange, j, gun)
+    assert free.poses[0].ok and not free.poses[0].flipped  # the approach side first
+    # a wall 150 mm behind the TCP on the approach side blocks the gun's body there
+    wall = _box((1200, 10, 1200), (0, -150, 0))
+    part = trimesh.util.concatenate([flange, wall])
+    one = plan_weld_poses(part, j, gun, both_sides=False)
+    assert not one.poses[0].ok and one.poses[0].miss is not None
+    both = plan_weld_poses(part, j, gun)
+    p = both.poses[0]
+    assert p.ok and p.flipped
+    np.testing.assert_allclose(p.approach, [0.0, -1.0, 0.0], atol=1e-12)  # axis reversed
+    assert p.rotation()[1, 2] < -math.cos(math.radians(15.01))  # TCP +z towards -y
+    assert verify_poses(both, part, gun).ok
+    # an arc torch does not straddle the sheet: it never turns over by default
+    assert plan_weld_poses(part, j, arc_torch()).settings["both_sides"] is False
