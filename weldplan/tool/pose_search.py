@@ -13,11 +13,11 @@ which outweighs it; ``weldplan bench tool --whole-part`` measures it again.
 A closest miss (a weld with no free candidate) is the candidate whose deepest triangle-pair
 penetration is least (ties: fewest tool triangles touching). Measuring that needs every contact
 of a candidate, which cost about 4 ms a candidate on car2 (thousands of contacts turned into
-Python objects). So the candidates are first ranked by a probe, ``collide`` with at most
-:data:`MISS_PROBE_CONTACTS` contacts and no contact data (the fewer triangle pairs touch, the
-closer to free), and only the :data:`MISS_SHORTLIST` best of them are measured fully. The miss is
-therefore the closest among the shortlist, not necessarily among all candidates: a report of how
-and where the tool hits, not an optimum.
+Python objects). So the candidates are ranked by the count every ``collide`` of the search
+already returns (at most :data:`MISS_PROBE_CONTACTS` contacts, no contact data: the fewer
+triangle pairs touch, the closer to free), and only the :data:`MISS_SHORTLIST` best of them are
+measured fully. The miss is therefore the closest among the shortlist, not necessarily among
+all candidates: a report of how and where the tool hits, not an optimum.
 """
 
 from __future__ import annotations
@@ -41,6 +41,9 @@ MISS_CONTACTS = 10_000
 MISS_PROBE_CONTACTS = 8
 #: candidates of a missed weld measured fully (the probe's best)
 MISS_SHORTLIST = 4
+#: welds within this distance (mm) of the spot a crop was made for share that crop (made that
+#: much larger), so that a line of spots 40-60 mm apart builds a BVH every few welds
+CROP_SHARE_MM = 100.0
 
 
 class PoseSearch:
@@ -80,37 +83,57 @@ class PoseSearch:
         self.lo, self.hi = tri.min(axis=1), tri.max(axis=1)
         self.reach = tool.reach + clearance
         self._whole: fcl.CollisionObject | None = None
+        self._last: tuple[NDArray, fcl.CollisionObject | None, NDArray[np.int64]] | None = None
+        #: crops built so far (``crop=True``)
+        self.crops_built = 0
 
-    def near_faces(self, p: NDArray) -> NDArray[np.int64]:
+    def near_faces(self, p: NDArray, margin: float = 0.0) -> NDArray[np.int64]:
         """``(k,)``: indices of the part's triangles whose bounding boxes come within the tool's
-        reach of ``p`` (no other triangle can touch the tool with its TCP at ``p``)."""
+        reach (plus ``margin`` mm) of ``p`` (no other triangle can touch the tool with its TCP
+        within ``margin`` of ``p``)."""
         gap = np.maximum(self.lo - p, 0) + np.maximum(p - self.hi, 0)
-        return np.flatnonzero(np.einsum("ij,ij->i", gap, gap) <= self.reach**2)
+        return np.flatnonzero(np.einsum("ij,ij->i", gap, gap) <= (self.reach + margin) ** 2)
 
     def part_near(self, p: NDArray) -> tuple[fcl.CollisionObject | None, NDArray[np.int64]]:
         """The part object to check the tool against with its TCP at ``p``, and the part
-        triangle index of each of its BVH's triangles. ``None`` when no triangle is in reach."""
-        near = self.near_faces(p)
-        if len(near) == 0:
-            return None, near
+        triangle index of each of its BVH's triangles. ``None`` when no triangle is in reach.
+
+        With ``crop``, the last crop is reused while ``p`` lies within :data:`CROP_SHARE_MM` of
+        the spot it was made for (it holds every triangle within the reach plus that margin).
+        """
         if not self.crop:
+            if len(self.near_faces(p)) == 0:
+                return None, np.zeros(0, dtype=np.int64)
             if self._whole is None:
                 faces = np.asarray(self.part.faces)
                 self._whole = fcl.CollisionObject(bvh(self.part.vertices, faces), fcl.Transform())
             return self._whole, np.arange(len(self.part.faces))
-        faces = np.asarray(self.part.faces)[near]
-        return fcl.CollisionObject(bvh(self.part.vertices, faces), fcl.Transform()), near
+        if self._last is not None and np.linalg.norm(p - self._last[0]) <= CROP_SHARE_MM:
+            return self._last[1], self._last[2]
+        near = self.near_faces(p, CROP_SHARE_MM)
+        obj = None
+        if len(near):
+            faces = np.asarray(self.part.faces)[near]
+            obj = fcl.CollisionObject(bvh(self.part.vertices, faces), fcl.Transform())
+            self.crops_built += 1
+        self._last = (np.asarray(p, dtype=np.float64).copy(), obj, near)
+        return obj, near
 
-    def collides(self, part_obj: fcl.CollisionObject | None, p: NDArray, Rs: NDArray) -> NDArray:
-        """``(c,) bool``: whether the tool outside the zone collides at each rotation ``(c, 3, 3)``
-        with the TCP at ``p`` (one python-fcl ``collide`` each, the tool's BVH moved)."""
-        out = np.zeros(len(Rs), dtype=bool)
+    def collides(
+        self, part_obj: fcl.CollisionObject | None, p: NDArray, Rs: NDArray
+    ) -> NDArray[np.int64]:
+        """``(c,) int``: how many triangle pairs (up to :data:`MISS_PROBE_CONTACTS`) of the tool
+        outside the zone and the part touch at each rotation ``(c, 3, 3)`` with the TCP at
+        ``p``; 0 where they do not collide. One python-fcl ``collide`` each, the tool's BVH
+        moved; the count, which costs little beyond the yes/no answer, ranks the candidates of
+        a weld none of whose candidates is free (:meth:`miss`)."""
+        out = np.zeros(len(Rs), dtype=np.int64)
         if part_obj is None:
             return out
-        req = fcl.CollisionRequest()
+        req = fcl.CollisionRequest(num_max_contacts=MISS_PROBE_CONTACTS, enable_contact=False)
         for k, R in enumerate(Rs):
             self.tool_obj.setTransform(fcl.Transform(R, p))
-            out[k] = fcl.collide(self.tool_obj, part_obj, req, fcl.CollisionResult()) > 0
+            out[k] = fcl.collide(self.tool_obj, part_obj, req, fcl.CollisionResult())
         return out
 
     def distance(self, part_obj: fcl.CollisionObject | None, p: NDArray, R: NDArray) -> float:
@@ -129,13 +152,15 @@ class PoseSearch:
         p: NDArray,
         Rs: NDArray,
         dist: NDArray,
+        touching: NDArray,
         params: NDArray,
     ) -> Miss:
         """The closest miss among candidates none of which is free (module docstring).
 
         ``index`` maps the part object's triangles to the part's (:meth:`part_near`); ``dist
-        (c,)`` holds each candidate's distance (0 where it collides); ``params (c, 4)`` its spin,
-        tilt, azimuth (deg) and whether it is turned over (1.0).
+        (c,)`` holds each candidate's distance (0 where it collides), ``touching (c,)`` the
+        counts of :meth:`collides`; ``params (c, 4)`` each candidate's spin, tilt, azimuth (deg)
+        and whether it is turned over (1.0).
         """
         if np.any(dist > 0):  # clearance shortfalls: the largest distance
             k = int(np.argmax(dist))
@@ -145,11 +170,6 @@ class PoseSearch:
             d = fcl.distance(self.tool_obj, part_obj, req_d, res)
             pt = (np.asarray(res.nearest_points[0]) - p) @ Rs[k]  # world -> TCP frame
             return _miss(params[k], float(d), 0.0, 0, pt, self.tool)
-        probe = fcl.CollisionRequest(num_max_contacts=MISS_PROBE_CONTACTS, enable_contact=False)
-        touching = np.empty(len(Rs), dtype=np.int64)
-        for k, R in enumerate(Rs):
-            self.tool_obj.setTransform(fcl.Transform(R, p))
-            touching[k] = fcl.collide(self.tool_obj, part_obj, probe, fcl.CollisionResult())
         shortlist = np.argsort(touching, kind="stable")[:MISS_SHORTLIST]
         verts = np.asarray(self.part.vertices)
         faces = np.asarray(self.part.faces)

@@ -212,12 +212,14 @@ def plan_weld_poses(
     t_collide = time.perf_counter()
     # distance per candidate: 0 collides, NaN not measured yet, inf nothing near
     dists = np.full((n, c), np.nan)
+    touching = np.zeros((n, c), dtype=np.int64)  # triangle pairs touching, capped (misses)
     # the candidates turned over are tried only for welds without a free one on the approach side
     over = params[:, 3] == 1.0
     allowed = np.tile(~over, (n, 1))
 
     def check(i: int, which: NDArray[np.bool_]) -> None:
-        hit = search.collides(objs[i], welds.xyz[i], rots[i, which])
+        touching[i, which] = search.collides(objs[i], welds.xyz[i], rots[i, which])
+        hit = touching[i, which] > 0
         d = np.where(hit, 0.0, np.inf if objs[i] is None or clearance == 0 else np.nan)
         dists[i, which] = d
         allowed[i, which] = True
@@ -243,7 +245,13 @@ def plan_weld_poses(
             for k in mine[np.isnan(dists[i, mine])]:  # a miss is measured over all candidates
                 dists[i, k] = search.distance(objs[i], p, rots[i, k])
             misses[i] = search.miss(
-                objs[i], near[i][1], p, rots[i, mine], dists[i, mine], params[mine]
+                objs[i],
+                near[i][1],
+                p,
+                rots[i, mine],
+                dists[i, mine],
+                touching[i, mine],
+                params[mine],
             )
     dists[~allowed] = 0.0  # not tried: counted as not free below
     poses = _assemble(welds, axes, dists, quats, params, choice, misses)
@@ -267,7 +275,8 @@ def plan_weld_poses(
             "collision_queries": int(allowed.sum()),
             "turned_over_tried": int(allowed[:, over].any(axis=1).sum()),
             **state.counts,
-            "setup_s": round(t_collide - t0, 3),
+            "crops_built": search.crops_built,
+            "setup_s": round(t_near - t0, 3),
             "broad_phase_s": round(t_collide - t_near, 3),
             "collide_s": round(t_choose - t_collide, 3),
             "choose_s": round(t_miss - t_choose, 3),
