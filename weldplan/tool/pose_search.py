@@ -13,11 +13,14 @@ which outweighs it; ``weldplan bench tool --whole-part`` measures it again.
 A closest miss (a weld with no free candidate) is the candidate whose deepest triangle-pair
 penetration is least (ties: fewest tool triangles touching). Measuring that needs every contact
 of a candidate, which cost about 4 ms a candidate on car2 (thousands of contacts turned into
-Python objects). So the candidates are ranked by the count every ``collide`` of the search
-already returns (at most :data:`MISS_PROBE_CONTACTS` contacts, no contact data: the fewer
-triangle pairs touch, the closer to free), and only the :data:`MISS_SHORTLIST` best of them are
-measured fully. The miss is therefore the closest among the shortlist, not necessarily among
-all candidates: a report of how and where the tool hits, not an optimum.
+Python objects). So the candidates are first ranked by a probe, ``collide`` with at most
+:data:`MISS_PROBE_CONTACTS` contacts and no contact data (the fewer triangle pairs touch, the
+closer to free), on at most :data:`MISS_PROBES` candidates spread evenly over the list (a cap of
+8 makes a ``collide`` 2-3x as dear as the search's yes/no one, so the probe is not folded into
+the search), and only
+the :data:`MISS_SHORTLIST` best of them are measured fully. The miss is therefore the closest
+among the shortlist, not necessarily among all candidates: a report of how and where the tool
+hits, not an optimum.
 """
 
 from __future__ import annotations
@@ -39,6 +42,8 @@ log = logging.getLogger(__name__)
 MISS_CONTACTS = 10_000
 #: contact cap of the probe that ranks a missed weld's candidates
 MISS_PROBE_CONTACTS = 8
+#: the probe looks at up to this many candidates of a missed weld, evenly spread over its list
+MISS_PROBES = 200
 #: candidates of a missed weld measured fully (the probe's best)
 MISS_SHORTLIST = 4
 #: welds within this distance (mm) of the spot a crop was made for share that crop (made that
@@ -119,18 +124,19 @@ class PoseSearch:
         self._last = (np.asarray(p, dtype=np.float64).copy(), obj, near)
         return obj, near
 
-    def collides(
-        self, part_obj: fcl.CollisionObject | None, p: NDArray, Rs: NDArray
+    def collides(self, part_obj: fcl.CollisionObject | None, p: NDArray, Rs: NDArray) -> NDArray:
+        """``(c,) bool``: whether the tool outside the zone collides at each rotation ``(c, 3, 3)``
+        with the TCP at ``p`` (one python-fcl ``collide`` each, the tool's BVH moved)."""
+        return self._touching(part_obj, p, Rs, 1) > 0
+
+    def _touching(
+        self, part_obj: fcl.CollisionObject | None, p: NDArray, Rs: NDArray, cap: int
     ) -> NDArray[np.int64]:
-        """``(c,) int``: how many triangle pairs (up to :data:`MISS_PROBE_CONTACTS`) of the tool
-        outside the zone and the part touch at each rotation ``(c, 3, 3)`` with the TCP at
-        ``p``; 0 where they do not collide. One python-fcl ``collide`` each, the tool's BVH
-        moved; the count, which costs little beyond the yes/no answer, ranks the candidates of
-        a weld none of whose candidates is free (:meth:`miss`)."""
+        """``(c,) int``: triangle pairs touching at each rotation, counted up to ``cap``."""
         out = np.zeros(len(Rs), dtype=np.int64)
         if part_obj is None:
             return out
-        req = fcl.CollisionRequest(num_max_contacts=MISS_PROBE_CONTACTS, enable_contact=False)
+        req = fcl.CollisionRequest(num_max_contacts=cap, enable_contact=False)
         for k, R in enumerate(Rs):
             self.tool_obj.setTransform(fcl.Transform(R, p))
             out[k] = fcl.collide(self.tool_obj, part_obj, req, fcl.CollisionResult())
@@ -152,15 +158,13 @@ class PoseSearch:
         p: NDArray,
         Rs: NDArray,
         dist: NDArray,
-        touching: NDArray,
         params: NDArray,
     ) -> Miss:
         """The closest miss among candidates none of which is free (module docstring).
 
         ``index`` maps the part object's triangles to the part's (:meth:`part_near`); ``dist
-        (c,)`` holds each candidate's distance (0 where it collides), ``touching (c,)`` the
-        counts of :meth:`collides`; ``params (c, 4)`` each candidate's spin, tilt, azimuth (deg)
-        and whether it is turned over (1.0).
+        (c,)`` holds each candidate's distance (0 where it collides); ``params (c, 4)`` each
+        candidate's spin, tilt, azimuth (deg) and whether it is turned over (1.0).
         """
         if np.any(dist > 0):  # clearance shortfalls: the largest distance
             k = int(np.argmax(dist))
@@ -170,7 +174,9 @@ class PoseSearch:
             d = fcl.distance(self.tool_obj, part_obj, req_d, res)
             pt = (np.asarray(res.nearest_points[0]) - p) @ Rs[k]  # world -> TCP frame
             return _miss(params[k], float(d), 0.0, 0, pt, self.tool)
-        shortlist = np.argsort(touching, kind="stable")[:MISS_SHORTLIST]
+        probed = np.unique(np.linspace(0, len(Rs) - 1, min(len(Rs), MISS_PROBES)).astype(int))
+        touching = self._touching(part_obj, p, Rs[probed], MISS_PROBE_CONTACTS)
+        shortlist = probed[np.argsort(touching, kind="stable")[:MISS_SHORTLIST]]
         verts = np.asarray(self.part.vertices)
         faces = np.asarray(self.part.faces)
         best: tuple[float, int, int, NDArray] | None = None

@@ -212,14 +212,12 @@ def plan_weld_poses(
     t_collide = time.perf_counter()
     # distance per candidate: 0 collides, NaN not measured yet, inf nothing near
     dists = np.full((n, c), np.nan)
-    touching = np.zeros((n, c), dtype=np.int64)  # triangle pairs touching, capped (misses)
     # the candidates turned over are tried only for welds without a free one on the approach side
     over = params[:, 3] == 1.0
     allowed = np.tile(~over, (n, 1))
 
     def check(i: int, which: NDArray[np.bool_]) -> None:
-        touching[i, which] = search.collides(objs[i], welds.xyz[i], rots[i, which])
-        hit = touching[i, which] > 0
+        hit = search.collides(objs[i], welds.xyz[i], rots[i, which])
         d = np.where(hit, 0.0, np.inf if objs[i] is None or clearance == 0 else np.nan)
         dists[i, which] = d
         allowed[i, which] = True
@@ -250,7 +248,6 @@ def plan_weld_poses(
                 p,
                 rots[i, mine],
                 dists[i, mine],
-                touching[i, mine],
                 params[mine],
             )
     dists[~allowed] = 0.0  # not tried: counted as not free below
