@@ -241,3 +241,26 @@ def test_gun_turns_over_when_the_approach_side_is_blocked():
     assert verify_poses(both, part, gun).ok
     # an arc torch does not straddle the sheet: it never turns over by default
     assert plan_weld_poses(part, j, arc_torch()).settings["both_sides"] is False
+
+
+def test_shared_crops_and_the_whole_part_give_the_same_poses():
+    # a long plate, a wall beside the second weld, a post far beyond the torch's reach
+    part = trimesh.util.concatenate(
+        [
+            _box((2000, 400, 2), (500, 0, -1)),
+            _box((200, 4, 120), (60, 30, 60)),
+            _box((20, 20, 300), (1400, 0, 150)),
+        ]
+    )
+    joints = _up(("a", (0, 0, 0)), ("b", (60, 0, 0)), ("c", (120, 0, 0)), ("d", (1300, 0, 0)))
+    torch = arc_torch()
+    cropped = plan_weld_poses(part, joints, torch, spin_step=30.0)
+    whole = plan_weld_poses(part, joints, torch, spin_step=30.0, crop=False)
+    # a, b share the crop made at a; c (120 mm from a) and d need their own
+    assert cropped.stats["crops_built"] == 3 and whole.stats["crops_built"] == 0
+    assert [p.status for p in cropped.poses] == [p.status for p in whole.poses]
+    for p, q in zip(cropped.poses, whole.poses, strict=True):
+        assert p.quaternion == q.quaternion and p.n_collision_free == q.n_collision_free
+    assert cropped.total_rotation == whole.total_rotation
+    # the wall blocks some of b's candidates: the crops held it
+    assert 0 < cropped.poses[1].n_collision_free < cropped.stats["candidates_per_weld"]
