@@ -210,46 +210,21 @@ def plan_weld_poses(
     near = [search.part_near(p) for p in welds.xyz]
     objs = [o for o, _ in near]
     t_collide = time.perf_counter()
-    # distance per candidate: 0 collides, NaN not measured yet, inf nothing near
-    dists = np.full((n, c), np.nan)
-    # the candidates turned over are tried only for welds without a free one on the approach side
-    over = params[:, 3] == 1.0
-    allowed = np.tile(~over, (n, 1))
-
-    def check(i: int, which: NDArray[np.bool_]) -> None:
-        hit = search.collides(objs[i], welds.xyz[i], rots[i, which])
-        d = np.where(hit, 0.0, np.inf if objs[i] is None or clearance == 0 else np.nan)
-        dists[i, which] = d
-        allowed[i, which] = True
-
+    table = _Table(search, objs, welds.xyz, rots, params[:, 3] == 1.0)
     for i in range(n):
-        check(i, ~over)
-        if both_sides and np.all(dists[i, ~over] == 0):
-            check(i, over)
+        table.check(i, both_sides)
+    dists, allowed, over = table.dists, table.allowed, table.over
     t_choose = time.perf_counter()
     checker = PoseChecker(part, tool, contact_radius, clearance)
     state = _ChoiceState(dists.shape)
     choice, total = _choose(welds, dists, allowed, rots, quats, search, objs, checker, state)
     turn = [i for i in range(n) if both_sides and i not in choice and not allowed[i, over].any()]
     for i in turn:  # free of collision on the approach side, but short of the clearance
-        check(i, over)
+        table.turn_over(i)
     if turn:
         choice, total = _choose(welds, dists, allowed, rots, quats, search, objs, checker, state)
     t_miss = time.perf_counter()
-    misses: dict[int, Miss] = {}
-    for i, p in enumerate(welds.xyz):
-        if i not in choice:
-            mine = np.flatnonzero(allowed[i])
-            for k in mine[np.isnan(dists[i, mine])]:  # a miss is measured over all candidates
-                dists[i, k] = search.distance(objs[i], p, rots[i, k])
-            misses[i] = search.miss(
-                objs[i],
-                near[i][1],
-                p,
-                rots[i, mine],
-                dists[i, mine],
-                params[mine],
-            )
+    misses = {i: table.miss(i, near[i][1], params) for i in range(n) if i not in choice}
     dists[~allowed] = 0.0  # not tried: counted as not free below
     poses = _assemble(welds, axes, dists, quats, params, choice, misses)
     elapsed = time.perf_counter() - t0
@@ -283,6 +258,53 @@ def plan_weld_poses(
     )
     log.info("%s (%.1f s)", result.summary().splitlines()[0], elapsed)
     return result
+
+
+class _Table:
+    """Every weld's candidates and what is known of them.
+
+    ``dists (n, c)``: 0 where a candidate collides, NaN where its clearance is not measured yet,
+    ``inf`` where nothing of the part is near; ``allowed (n, c)``: the candidates tried (the
+    approach side, and the turned-over ones, ``over (c,)``, of welds that needed them).
+    """
+
+    def __init__(
+        self,
+        search: PoseSearch,
+        objs: list[fcl.CollisionObject | None],
+        xyz: NDArray[np.float64],
+        rots: NDArray[np.float64],
+        over: NDArray[np.bool_],
+    ) -> None:
+        self.search, self.objs, self.xyz, self.rots, self.over = search, objs, xyz, rots, over
+        self.dists = np.full(rots.shape[:2], np.nan)
+        self.allowed = np.tile(~over, (len(xyz), 1))
+
+    def _collide(self, i: int, which: NDArray[np.bool_]) -> None:
+        hit = self.search.collides(self.objs[i], self.xyz[i], self.rots[i, which])
+        far = self.objs[i] is None or self.search.clearance == 0
+        self.dists[i, which] = np.where(hit, 0.0, np.inf if far else np.nan)
+        self.allowed[i, which] = True
+
+    def check(self, i: int, both_sides: bool) -> None:
+        """Collide weld ``i``'s approach-side candidates, and its turned-over ones too when
+        ``both_sides`` and every one on the approach side collides."""
+        self._collide(i, ~self.over)
+        if both_sides and np.all(self.dists[i, ~self.over] == 0):
+            self._collide(i, self.over)
+
+    def turn_over(self, i: int) -> None:
+        """Try weld ``i``'s turned-over candidates as well."""
+        self._collide(i, self.over)
+
+    def miss(self, i: int, index: NDArray[np.int64], params: NDArray[np.float64]) -> Miss:
+        """Weld ``i``'s closest miss over its tried candidates, their clearances measured."""
+        mine = np.flatnonzero(self.allowed[i])
+        for k in mine[np.isnan(self.dists[i, mine])]:
+            self.dists[i, k] = self.search.distance(self.objs[i], self.xyz[i], self.rots[i, k])
+        return self.search.miss(
+            self.objs[i], index, self.xyz[i], self.rots[i, mine], self.dists[i, mine], params[mine]
+        )
 
 
 def _assemble(
