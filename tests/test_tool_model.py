@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -116,20 +117,29 @@ def test_tcp_outside_the_tool_is_a_one_line_error(tmp_path):
     _one_line(exc, "far.urdf", "joint 'nozzle_tip' origin")
 
 
-def test_outside_zone_covers_the_tool_outside_the_sphere_and_little_inside():
-    tool = arc_torch()
+@pytest.mark.parametrize("cone", [None, 15.0])
+def test_outside_zone_covers_the_tool_outside_the_zone_and_little_inside(cone):
+    tool = dataclasses.replace(arc_torch(), tip_cone=cone, _cache={})
     r = 30.0
     v, f = tool.outside_zone(r)
     kept = trimesh.Trimesh(v, f, process=False)
-    # nothing of what is kept reaches more than ZONE_EDGE_MM into the sphere
-    assert np.linalg.norm(v, axis=1).min() >= r - ZONE_EDGE_MM - 1e-9
-    # every sampled point of the tool outside the sphere lies on what is kept
+    # a kept triangle with a corner in the zone is finer than ZONE_EDGE_MM: it reaches at most
+    # that far into the zone
+    tri = v[f]
+    touches = tool.in_zone(tri, r).any(axis=1)
+    assert not tool.in_zone(tri, r).all(axis=1).any()
+    edges = np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2).max(axis=1)
+    assert touches.any() and edges[touches].max() <= ZONE_EDGE_MM
+    # every sampled point of the tool outside the zone lies on what is kept
     pts, _ = trimesh.sample.sample_surface(tool.mesh, 4000, seed=0)
-    pts = pts[np.linalg.norm(pts, axis=1) > r]
+    pts = pts[~tool.in_zone(pts, r)]
     _, dist, _ = trimesh.proximity.closest_point(kept, pts)
     assert dist.max() < 1e-6
-    # and the part of the torch inside the sphere (nozzle mouth at 15 mm) is gone
-    assert len(f) and np.linalg.norm(tool.vertices, axis=1).min() < r - ZONE_EDGE_MM
+    nearest = np.linalg.norm(v, axis=1).min()
+    if cone is None:  # the nozzle mouth (15 mm from the TCP) is gone with the sphere
+        assert nearest >= r - ZONE_EDGE_MM - 1e-9
+    else:  # only the tip cone is exempt: the nozzle's rim (40 deg off the axis) is kept
+        assert nearest < 20.0
 
 
 def test_arc_torch_straight_and_bent():

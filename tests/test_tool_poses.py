@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 
@@ -195,3 +196,71 @@ def test_triangle_crossings_are_the_ends_of_the_intersection_segment():
     np.testing.assert_allclose(sorted(pts[:, 1]), [-2.5, 2.5], atol=1e-12)
     np.testing.assert_allclose(pts[:, [0, 2]], 0.0, atol=1e-12)
     assert not ok[1].any()  # lifted 5 mm: b no longer reaches a's plane
+
+
+def test_arc_torch_may_not_pass_through_a_sheet_near_the_spot():
+    # a 1 mm shelf 17 mm above the spot, from x = 6 mm on: a straight nozzle (radius 12.5 mm,
+    # mouth 15 mm above the spot) standing on the spot passes through it, 20-22 mm from the spot
+    part = trimesh.util.concatenate(
+        [_box((600, 600, 2), (0, 0, -1)), _box((200, 600, 1), (106, 0, 17.5))]
+    )
+    torch = arc_torch(bend_angle=0.0)
+    joints = _up(("s", (0, 0, 0)))
+    kw = {"cone": 0.0, "spin_step": 90.0, "contact_radius": 25.0, "clearance": 2.0}
+    # with the whole sphere exempt (a C-gun's contact zone) the nozzle through the shelf passes
+    as_gun = dataclasses.replace(torch, tip_cone=None, _cache={})
+    through = plan_weld_poses(part, joints, as_gun, **kw)
+    assert through.poses[0].ok
+    # the torch's own zone is its tip cone: the nozzle wall is 35-40 deg off its axis
+    poses = plan_weld_poses(part, joints, torch, **kw)
+    p = poses.poses[0]
+    assert not p.ok and p.miss is not None and p.miss.contacts > 0
+    assert 15.0 < p.miss.tool_point[2] * -1 < 25.0  # the nozzle's mouth, behind the TCP
+    # and the independent re-check of the torch refuses the pose the sphere let through
+    out = verify_poses(through, part, torch)
+    assert not out.ok and "tip cone" in out.failures[0][1]
+
+
+def test_gun_turns_over_when_the_approach_side_is_blocked():
+    gun = shared_spot_gun(require_shared("tools", "spot_welding_gun"))
+    flange = _box((400, 2, 30), (0, 1, 15))  # face at y = 0, edge at z = 30
+    spot = (0.0, 0.0, 20.0)
+    j = Joints(ids=["f"], xyz=[spot], directions=[[0.0, -1.0, 0.0]])  # torch on the -y side
+    free = plan_weld_poses(flange, j, gun)
+    assert free.poses[0].ok and not free.poses[0].flipped  # the approach side first
+    # a wall 150 mm behind the TCP on the approach side blocks the gun's body there
+    wall = _box((1200, 10, 1200), (0, -150, 0))
+    part = trimesh.util.concatenate([flange, wall])
+    one = plan_weld_poses(part, j, gun, both_sides=False)
+    assert not one.poses[0].ok and one.poses[0].miss is not None
+    both = plan_weld_poses(part, j, gun)
+    p = both.poses[0]
+    assert p.ok and p.flipped
+    np.testing.assert_allclose(p.approach, [0.0, -1.0, 0.0], atol=1e-12)  # axis reversed
+    assert p.rotation()[1, 2] < -math.cos(math.radians(15.01))  # TCP +z towards -y
+    assert verify_poses(both, part, gun).ok
+    # an arc torch does not straddle the sheet: it never turns over by default
+    assert plan_weld_poses(part, j, arc_torch()).settings["both_sides"] is False
+
+
+def test_shared_crops_and_the_whole_part_give_the_same_poses():
+    # a long plate, a wall beside the second weld, a post far beyond the torch's reach
+    part = trimesh.util.concatenate(
+        [
+            _box((2000, 400, 2), (500, 0, -1)),
+            _box((200, 4, 120), (60, 30, 60)),
+            _box((20, 20, 300), (1400, 0, 150)),
+        ]
+    )
+    joints = _up(("a", (0, 0, 0)), ("b", (60, 0, 0)), ("c", (120, 0, 0)), ("d", (1300, 0, 0)))
+    torch = arc_torch()
+    cropped = plan_weld_poses(part, joints, torch, spin_step=30.0)
+    whole = plan_weld_poses(part, joints, torch, spin_step=30.0, crop=False)
+    # a, b share the crop made at a; c (120 mm from a) and d need their own
+    assert cropped.stats["crops_built"] == 3 and whole.stats["crops_built"] == 0
+    assert [p.status for p in cropped.poses] == [p.status for p in whole.poses]
+    for p, q in zip(cropped.poses, whole.poses, strict=True):
+        assert p.quaternion == q.quaternion and p.n_collision_free == q.n_collision_free
+    assert cropped.total_rotation == whole.total_rotation
+    # the wall blocks some of b's candidates: the crops held it
+    assert 0 < cropped.poses[1].n_collision_free < cropped.stats["candidates_per_weld"]

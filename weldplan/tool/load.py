@@ -13,6 +13,7 @@ an error that asks for ``--tool-mesh``: no guess.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 from os import PathLike
@@ -112,6 +113,8 @@ def load_tool(
                 exc.message = exc.message.replace("pass the mesh explicitly", "pass --tool-mesh")
             raise
         prov_units = mesh_units if mesh_path is not None else "urdf"
+        if sha in KNOWN_URDF_MESHES and mesh is None:  # the shared C-gun: welds from either side
+            tool = dataclasses.replace(tool, straddles=True, _cache={})
     else:
         if mesh is not None:
             raise InputError("--tool-mesh goes with a URDF --tool", path=path, field="--tool-mesh")

@@ -18,7 +18,7 @@ from __future__ import annotations
 import logging
 import math
 import xml.etree.ElementTree as ET
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
@@ -46,6 +46,9 @@ TCP_BOX_MARGIN_MM = 5.0
 #: triangles crossing the contact-zone sphere are subdivided until their longest edge is below
 #: this (mm), so at most this much of the tool inside the sphere is still checked (conservative)
 ZONE_EDGE_MM = 1.0
+#: half-angle (deg) of an arc torch's tip cone: only the tool inside this cone about its own axis
+#: (apex at the TCP, opening back along -z) and inside the contact sphere may touch the part
+TORCH_TIP_CONE = 15.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -62,12 +65,23 @@ class Tool:
         ``(m, 3) int`` triangles.
     source
         The file(s) it was read from, or a description of the parametric model.
+    tip_cone
+        Degrees, or ``None``. The tool's contact zone is the sphere of the contact radius about
+        the TCP (the weld spot); with ``tip_cone`` it is only the part of that sphere within
+        ``tip_cone`` degrees of the tool's axis behind the TCP (-z): an arc torch's wire and
+        contact tip, so that its nozzle may never pass through a sheet near the spot. ``None``
+        (a spot-welding C-gun, whose electrodes and arms close over the sheet): the whole sphere.
+    straddles
+        The tool clamps the sheet from both sides (a C-gun): the pose search also tries the
+        tool turned over, approaching from the other side of the sheet.
     """
 
     name: str
     vertices: NDArray[np.float64]
     faces: NDArray[np.int64]
     source: str = ""
+    tip_cone: float | None = None
+    straddles: bool = False
     _cache: dict[Any, Any] = field(default_factory=dict, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -77,6 +91,8 @@ class Tool:
             raise ValueError("a tool needs at least one triangle")
         if f.min() < 0 or f.max() >= len(v):
             raise ValueError("tool faces index missing vertices")
+        if self.tip_cone is not None and not 0 < self.tip_cone <= 90:
+            raise ValueError(f"tip_cone must be in (0, 90] degrees, got {self.tip_cone}")
         v.setflags(write=False)
         f.setflags(write=False)
         object.__setattr__(self, "vertices", v)
@@ -100,27 +116,39 @@ class Tool:
         """``(3,) float`` mm: the bounding-box size in the TCP frame."""
         return np.ptp(self.vertices, axis=0)
 
-    def outside_zone(self, radius: float) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
-        """The tool minus its part inside the contact zone, a sphere of ``radius`` mm about the TCP.
+    def in_zone(self, points: ArrayLike, radius: float) -> NDArray[np.bool_]:
+        """``(...) bool``: whether points ``(..., 3)`` mm of the TCP frame lie in the contact
+        zone: the sphere of ``radius`` about the TCP, cut to :attr:`tip_cone` when set."""
+        P = np.asarray(points, dtype=np.float64)
+        r = np.linalg.norm(P, axis=-1)
+        inside = r < radius
+        if self.tip_cone is not None:
+            inside &= -P[..., 2] >= r * math.cos(math.radians(self.tip_cone))
+        return inside
 
-        Triangles wholly inside the sphere are dropped; triangles crossing its surface are
-        subdivided (midpoint subdivision, trimesh) until their longest edge is below
-        :data:`ZONE_EDGE_MM`, then those wholly inside are dropped. What remains covers every
-        point of the tool outside the sphere, and reaches at most ``ZONE_EDGE_MM`` into it: a
-        check of this mesh against the whole part is the check of the whole tool against the
-        part, except contact inside the sphere (conservative by at most ``ZONE_EDGE_MM``).
+    def outside_zone(self, radius: float) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+        """The tool minus its part inside the contact zone (:meth:`in_zone`, radius in mm).
+
+        Triangles wholly inside the zone are dropped (the zone is convex: a sphere, or a sphere
+        cut to a cone of at most 90 deg, so a triangle whose corners are inside is inside);
+        triangles crossing its surface are subdivided (midpoint subdivision, trimesh) until their
+        longest edge is below :data:`ZONE_EDGE_MM`, then those wholly inside are dropped. What
+        remains covers every point of the tool outside the zone, and reaches at most
+        ``ZONE_EDGE_MM`` into it: a check of this mesh against the whole part is the check of
+        the whole tool against the part, except contact inside the zone (conservative by at most
+        ``ZONE_EDGE_MM``).
 
         Returns
         -------
         vertices, faces
             ``(k, 3) float`` mm (TCP frame) and ``(j, 3) int``; a fresh computation (not cached).
         """
-        return tool_outside_sphere(self.vertices, self.faces, float(radius))
+        return tool_outside_zone(self.vertices, self.faces, lambda v: self.in_zone(v, radius))
 
     def fcl_model(self, radius: float) -> tuple[fcl.BVHModel, NDArray[np.float64]]:
-        """A python-fcl BVH of :meth:`outside_zone` (cached per radius) and its ``(j, 3, 3)``
-        triangles (mm, TCP frame), to name the tool region an FCL answer points to."""
-        key = ("fcl", float(radius))
+        """A python-fcl BVH of :meth:`outside_zone` (cached per radius and zone) and its
+        ``(j, 3, 3)`` triangles (mm, TCP frame), to name the tool region an FCL answer points to."""
+        key = ("fcl", float(radius), self.tip_cone)
         if key not in self._cache:
             v, f = self.outside_zone(radius)
             self._cache[key] = (bvh(v, f), v[f])
@@ -153,16 +181,17 @@ def bvh(vertices: ArrayLike, faces: ArrayLike) -> fcl.BVHModel:
     return model
 
 
-def tool_outside_sphere(
-    vertices: NDArray[np.float64], faces: NDArray[np.int64], radius: float
+def tool_outside_zone(
+    vertices: NDArray[np.float64],
+    faces: NDArray[np.int64],
+    in_zone: Callable[[NDArray[np.float64]], NDArray[np.bool_]],
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
-    """See :meth:`Tool.outside_zone`: a mesh minus its triangles inside a sphere about 0."""
+    """See :meth:`Tool.outside_zone`: a mesh minus its triangles inside a convex zone given by
+    ``in_zone ((k, 3) mm) -> (k,) bool``."""
     v = np.asarray(vertices, dtype=np.float64)
     f = np.asarray(faces, dtype=np.int64)
-    if radius <= 0:
-        return v.copy(), f.copy()
     for _ in range(64):
-        inside = np.linalg.norm(v, axis=1) < radius
+        inside = in_zone(v)
         tri_in = inside[f]
         keep = ~tri_in.all(axis=1)
         f = f[keep]

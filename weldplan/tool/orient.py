@@ -10,6 +10,7 @@ candidates of all welds come from one ``einsum``.
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -84,7 +85,10 @@ def rotation_angles(qa: ArrayLike, qb: ArrayLike) -> NDArray[np.float64]:
     return np.degrees(2.0 * np.arccos(np.clip(dot, 0.0, 1.0)))
 
 
-def least_rotation_choice(quats: list[NDArray[np.float64]]) -> tuple[list[int], float]:
+def least_rotation_choice(
+    quats: list[NDArray[np.float64]],
+    angles: Callable[[int], NDArray[np.float64]] | None = None,
+) -> tuple[list[int], float]:
     """Pick one orientation per stage so that the summed rotation between stages is least.
 
     Dynamic programming over the stages (a shortest path through a layered graph whose edge
@@ -96,6 +100,9 @@ def least_rotation_choice(quats: list[NDArray[np.float64]]) -> tuple[list[int], 
     ----------
     quats
         One ``(c_k, 4)`` array of unit quaternions per stage, ``c_k >= 1``, in route order.
+    angles
+        ``angles(k) -> (c_{k-1}, c_k)``: the :func:`rotation_angles` between stages ``k - 1``
+        and ``k``, when the caller has them cached; default computed here.
 
     Returns
     -------
@@ -111,7 +118,8 @@ def least_rotation_choice(quats: list[NDArray[np.float64]]) -> tuple[list[int], 
     cost = np.zeros(len(quats[0]))
     back: list[NDArray[np.int64]] = []
     for k in range(1, len(quats)):
-        step = cost[:, None] + rotation_angles(quats[k - 1], quats[k])
+        ang = rotation_angles(quats[k - 1], quats[k]) if angles is None else angles(k)
+        step = cost[:, None] + ang
         arg = np.argmin(step, axis=0)
         back.append(arg)
         cost = step[arg, np.arange(step.shape[1])]

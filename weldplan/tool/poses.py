@@ -6,13 +6,17 @@ the part's surface normal at the closest point, on the free side). Candidates sp
 axis (every ``spin_step`` degrees) and tilt off it inside a cone (rings every ``tilt_step`` up
 to ``cone`` degrees, ``azimuths`` directions per ring), :mod:`weldplan.tool.orient`.
 
+A tool that straddles the sheet (a C-gun, :attr:`~weldplan.tool.model.Tool.straddles`) may also
+weld a spot **turned over**, the approach axis reversed: the electrodes clamp the sheet, so
+either side is a legitimate approach. The turned-over candidates are tried only for a weld with
+no free candidate on the approach side (the joints CSV's side stays the first choice, and the
+choice among welds free on that side is what it was without turning over).
+
 A candidate is free when the tool **minus its part inside the contact zone** (the sphere of
-``contact_radius`` mm about the TCP, i.e. about the weld spot, where the electrodes or the wire
-touch the sheet; :meth:`~weldplan.tool.model.Tool.outside_zone`) does not collide with the part
-and is at least ``clearance`` mm from it (python-fcl ``collide``, then ``distance`` for those
-that do not collide). The part is cropped to the triangles whose bounding boxes come within the
-tool's reach of the spot (exact: no other triangle can touch the tool) and built into one BVH per
-weld; the tool's BVH is built once and moved by ``setTransform`` through all candidates.
+``contact_radius`` mm about the TCP, i.e. about the weld spot, cut to the tool's tip cone for an
+arc torch; :meth:`~weldplan.tool.model.Tool.outside_zone`) does not collide with the part and is
+at least ``clearance`` mm from it (python-fcl ``collide``, then ``distance``, measured lazily:
+only where the choice needs it). The FCL queries are in :mod:`weldplan.tool.pose_search`.
 
 Among the free candidates, the pose of each weld is chosen by dynamic programming along the route
 order so that the summed rotation between consecutive welds is least
@@ -36,10 +40,16 @@ import trimesh
 from numpy.typing import ArrayLike, NDArray
 
 from weldplan.errors import InputError
-from weldplan.tool.model import Tool, bvh
-from weldplan.tool.orient import candidate_rotations, least_rotation_choice, local_candidates
+from weldplan.tool.model import Tool
+from weldplan.tool.orient import (
+    candidate_rotations,
+    least_rotation_choice,
+    local_candidates,
+    rotation_angles,
+)
+from weldplan.tool.pose_search import PoseSearch
 from weldplan.tool.result import NO_FREE_POSE, OK, Miss, WeldPose, WeldPoses, quat_wxyz
-from weldplan.tool.verify_poses import PoseChecker, triangle_crossings
+from weldplan.tool.verify_poses import PoseChecker
 
 log = logging.getLogger(__name__)
 
@@ -55,10 +65,6 @@ DEFAULT_AZIMUTHS = 8
 DEFAULT_CONTACT_RADIUS = 20.0
 #: default clearance (mm) when neither the call nor a cell gives one: the cell's torch-tip default
 DEFAULT_CLEARANCE = 5.0
-#: contacts asked of FCL per candidate when measuring a closest miss
-_MISS_CONTACTS = 10_000
-#: rounds of the lazy choice before giving up (each round settles a weld or rejects a pose)
-_MAX_ROUNDS = 1000
 
 
 @dataclass(frozen=True)
@@ -125,104 +131,6 @@ def surface_approach(
     return -(n * sign[:, None])
 
 
-class _Search:
-    """The cached FCL objects of one pose search (never shared with the re-check)."""
-
-    def __init__(self, part: trimesh.Trimesh, tool: Tool, radius: float, clearance: float) -> None:
-        self.part = part
-        self.tool = tool
-        self.clearance = clearance
-        model, self.triangles = tool.fcl_model(radius)
-        self.tool_obj = fcl.CollisionObject(model, fcl.Transform())
-        tri = np.asarray(part.triangles)
-        self.lo, self.hi = tri.min(axis=1), tri.max(axis=1)
-        self.reach = tool.reach + clearance
-
-    def near_faces(self, p: NDArray) -> NDArray[np.int64]:
-        """``(k, 3)``: the part's triangles whose bounding boxes come within the tool's reach of
-        ``p`` (no other triangle can touch the tool with its TCP at ``p``)."""
-        gap = np.maximum(self.lo - p, 0) + np.maximum(p - self.hi, 0)
-        near = np.flatnonzero(np.einsum("ij,ij->i", gap, gap) <= self.reach**2)
-        return np.asarray(self.part.faces)[near]
-
-    def part_near(self, p: NDArray) -> fcl.CollisionObject | None:
-        """A BVH of :meth:`near_faces`, or ``None`` when there are none."""
-        faces = self.near_faces(p)
-        if len(faces) == 0:
-            return None
-        return fcl.CollisionObject(bvh(self.part.vertices, faces), fcl.Transform())
-
-    def collides(self, part_obj: fcl.CollisionObject | None, p: NDArray, Rs: NDArray) -> NDArray:
-        """``(c,) bool``: whether the tool outside the zone collides at each rotation ``(c, 3, 3)``
-        with the TCP at ``p`` (one python-fcl ``collide`` each, the tool's BVH moved)."""
-        out = np.zeros(len(Rs), dtype=bool)
-        if part_obj is None:
-            return out
-        req = fcl.CollisionRequest()
-        for k, R in enumerate(Rs):
-            self.tool_obj.setTransform(fcl.Transform(R, p))
-            out[k] = fcl.collide(self.tool_obj, part_obj, req, fcl.CollisionResult()) > 0
-        return out
-
-    def distance(self, part_obj: fcl.CollisionObject | None, p: NDArray, R: NDArray) -> float:
-        """mm: FCL distance from the tool outside the zone to the part (``inf``: none near)."""
-        if part_obj is None:
-            return float("inf")
-        self.tool_obj.setTransform(fcl.Transform(R, p))
-        return float(
-            fcl.distance(self.tool_obj, part_obj, fcl.DistanceRequest(), fcl.DistanceResult())
-        )
-
-    def miss(
-        self, part_obj: fcl.CollisionObject, p: NDArray, Rs: NDArray, dist: NDArray, params: NDArray
-    ) -> Miss:
-        """The closest miss among candidates none of which is free."""
-        if np.any(dist > 0):  # clearance shortfalls: the largest distance
-            k = int(np.argmax(dist))
-            self.tool_obj.setTransform(fcl.Transform(Rs[k], p))
-            res = fcl.DistanceResult()
-            req_d = fcl.DistanceRequest(enable_nearest_points=True)
-            d = fcl.distance(self.tool_obj, part_obj, req_d, res)
-            pt = (np.asarray(res.nearest_points[0]) - p) @ Rs[k]  # world -> TCP frame
-            return _miss(params[k], float(d), 0.0, 0, pt, self.tool)
-        part_tri = np.asarray(self.part.vertices)[self.near_faces(p)]
-        best: tuple[float, int, int, NDArray] | None = None
-        req = fcl.CollisionRequest(num_max_contacts=_MISS_CONTACTS, enable_contact=True)
-        for k, R in enumerate(Rs):
-            self.tool_obj.setTransform(fcl.Transform(R, p))
-            res = fcl.CollisionResult()
-            fcl.collide(self.tool_obj, part_obj, req, res)
-            if not res.contacts:
-                continue
-            depth = np.array([c.penetration_depth for c in res.contacts])
-            deepest = int(np.argmax(depth))
-            n_tri = len({c.b1 for c in res.contacts})
-            key = (float(depth[deepest]), n_tri)
-            if best is None or key < best[:2]:
-                c = res.contacts[deepest]
-                # where the hitting tool triangle crosses the part's triangle (TCP frame)
-                other = (part_tri[c.b2] - p) @ R
-                pts, ok = triangle_crossings(self.triangles[c.b1][None], other[None])
-                pt = pts[0, ok[0]].mean(axis=0) if ok.any() else self.triangles[c.b1].mean(axis=0)
-                best = (key[0], key[1], k, pt)
-        assert best is not None
-        pen, n_tri, k, pt = best
-        return _miss(params[k], 0.0, pen, n_tri, pt, self.tool)
-
-
-def _miss(par: NDArray, d: float, pen: float, n: int, pt: NDArray, tool: Tool) -> Miss:
-    return Miss(
-        spin=float(par[0]),
-        tilt=float(par[1]),
-        azimuth=float(par[2]),
-        distance=d,
-        penetration=pen,
-        contacts=n,
-        tool_point=tuple(float(v) for v in pt),  # type: ignore[arg-type]
-        region=tool.region(pt),
-    )
-
-
 def plan_weld_poses(
     part_or_cell: Any,
     route_or_joints: Any,
@@ -234,6 +142,8 @@ def plan_weld_poses(
     azimuths: int = DEFAULT_AZIMUTHS,
     contact_radius: float = DEFAULT_CONTACT_RADIUS,
     clearance: float | None = None,
+    both_sides: bool | None = None,
+    crop: bool = True,
 ) -> WeldPoses:
     """A verified collision-free tool pose for every weld, or its closest miss (module docstring).
 
@@ -254,6 +164,15 @@ def plan_weld_poses(
     clearance
         mm: least distance between the tool outside the zone and the part; default the cell's
         clearance, else :data:`DEFAULT_CLEARANCE`.
+    both_sides
+        Also try every candidate turned over (the approach axis reversed: the tool on the other
+        side of the sheet), after the candidates on the approach side, so that ties keep the
+        approach side. Default: the tool's :attr:`~weldplan.tool.model.Tool.straddles` (a C-gun
+        clamps the sheet and welds it from either side; an arc torch does not).
+    crop
+        Check against a BVH per weld of the part cropped to the tool's reach (default), or
+        against one BVH of the whole part (:class:`~weldplan.tool.pose_search.PoseSearch`; the
+        same answers).
 
     Returns
     -------
@@ -276,26 +195,37 @@ def plan_weld_poses(
         axes /= np.linalg.norm(axes, axis=1, keepdims=True)
     else:
         axes = surface_approach(part, welds.xyz, welds.free_points)
+    if both_sides is None:
+        both_sides = tool.straddles
     local, params = local_candidates(cone, tilt_step, spin_step, azimuths)
+    params = np.column_stack([params, np.zeros(len(params))])  # spin, tilt, azimuth, flipped
     rots = candidate_rotations(axes, local)  # (n, c, 3, 3)
-    quats = quat_wxyz(rots.reshape(-1, 3, 3)).reshape(len(welds.ids), len(local), 4)
-    search = _Search(part, tool, contact_radius, clearance)
-    objs = [search.part_near(p) for p in welds.xyz]
-    # distance per candidate: 0 collides, NaN not measured yet, inf nothing near
-    dists = np.full((len(welds.ids), len(local)), np.nan)
-    for i, p in enumerate(welds.xyz):
-        hit = search.collides(objs[i], p, rots[i])
-        dists[i, hit] = 0.0
-        if objs[i] is None or clearance == 0:
-            dists[i, ~hit] = np.inf
+    if both_sides:
+        rots = np.concatenate([rots, candidate_rotations(-axes, local)], axis=1)
+        params = np.concatenate([params, params + [0.0, 0.0, 0.0, 1.0]])
+    n, c = len(welds.ids), len(params)
+    quats = quat_wxyz(rots.reshape(-1, 3, 3)).reshape(n, c, 4)
+    search = PoseSearch(part, tool, contact_radius, clearance, crop=crop)
+    t_near = time.perf_counter()
+    near = [search.part_near(p) for p in welds.xyz]
+    objs = [o for o, _ in near]
+    t_collide = time.perf_counter()
+    table = _Table(search, objs, welds.xyz, rots, params[:, 3] == 1.0)
+    for i in range(n):
+        table.check(i, both_sides)
+    dists, allowed, over = table.dists, table.allowed, table.over
+    t_choose = time.perf_counter()
     checker = PoseChecker(part, tool, contact_radius, clearance)
-    choice, total, counts = _choose(welds, dists, rots, quats, search, objs, clearance, checker)
-    misses: dict[int, Miss] = {}
-    for i, p in enumerate(welds.xyz):
-        if i not in choice:
-            for k in np.flatnonzero(np.isnan(dists[i])):  # a miss is measured over all candidates
-                dists[i, k] = search.distance(objs[i], p, rots[i, k])
-            misses[i] = search.miss(objs[i], p, rots[i], dists[i], params)
+    state = _ChoiceState(dists.shape)
+    choice, total = _choose(welds, dists, allowed, rots, quats, search, objs, checker, state)
+    turn = [i for i in range(n) if both_sides and i not in choice and not allowed[i, over].any()]
+    for i in turn:  # free of collision on the approach side, but short of the clearance
+        table.turn_over(i)
+    if turn:
+        choice, total = _choose(welds, dists, allowed, rots, quats, search, objs, checker, state)
+    t_miss = time.perf_counter()
+    misses = {i: table.miss(i, near[i][1], params) for i in range(n) if i not in choice}
+    dists[~allowed] = 0.0  # not tried: counted as not free below
     poses = _assemble(welds, axes, dists, quats, params, choice, misses)
     elapsed = time.perf_counter() - t0
     result = WeldPoses(
@@ -309,16 +239,72 @@ def plan_weld_poses(
             "azimuths": azimuths,
             "contact_radius": contact_radius,
             "clearance": clearance,
+            "tip_cone": tool.tip_cone,
+            "both_sides": bool(both_sides),
         },
         stats={
-            "candidates_per_weld": len(local),
-            "collision_queries": int(dists.size),
-            **counts,
+            "candidates_per_weld": c,
+            "collision_queries": int(allowed.sum()),
+            "turned_over_tried": int(allowed[:, over].any(axis=1).sum()),
+            **state.counts,
+            "crops_built": search.crops_built,
+            "setup_s": round(t_near - t0, 3),
+            "broad_phase_s": round(t_collide - t_near, 3),
+            "collide_s": round(t_choose - t_collide, 3),
+            "choose_s": round(t_miss - t_choose, 3),
+            "miss_s": round(time.perf_counter() - t_miss, 3),
             "total_s": round(elapsed, 3),
         },
     )
     log.info("%s (%.1f s)", result.summary().splitlines()[0], elapsed)
     return result
+
+
+class _Table:
+    """Every weld's candidates and what is known of them.
+
+    ``dists (n, c)``: 0 where a candidate collides, NaN where its clearance is not measured yet,
+    ``inf`` where nothing of the part is near; ``allowed (n, c)``: the candidates tried (the
+    approach side, and the turned-over ones, ``over (c,)``, of welds that needed them).
+    """
+
+    def __init__(
+        self,
+        search: PoseSearch,
+        objs: list[fcl.CollisionObject | None],
+        xyz: NDArray[np.float64],
+        rots: NDArray[np.float64],
+        over: NDArray[np.bool_],
+    ) -> None:
+        self.search, self.objs, self.xyz, self.rots, self.over = search, objs, xyz, rots, over
+        self.dists = np.full(rots.shape[:2], np.nan)
+        self.allowed = np.tile(~over, (len(xyz), 1))
+
+    def _collide(self, i: int, which: NDArray[np.bool_]) -> None:
+        hit = self.search.collides(self.objs[i], self.xyz[i], self.rots[i, which])
+        far = self.objs[i] is None or self.search.clearance == 0
+        self.dists[i, which] = np.where(hit, 0.0, np.inf if far else np.nan)
+        self.allowed[i, which] = True
+
+    def check(self, i: int, both_sides: bool) -> None:
+        """Collide weld ``i``'s approach-side candidates, and its turned-over ones too when
+        ``both_sides`` and every one on the approach side collides."""
+        self._collide(i, ~self.over)
+        if both_sides and np.all(self.dists[i, ~self.over] == 0):
+            self._collide(i, self.over)
+
+    def turn_over(self, i: int) -> None:
+        """Try weld ``i``'s turned-over candidates as well."""
+        self._collide(i, self.over)
+
+    def miss(self, i: int, index: NDArray[np.int64], params: NDArray[np.float64]) -> Miss:
+        """Weld ``i``'s closest miss over its tried candidates, their clearances measured."""
+        mine = np.flatnonzero(self.allowed[i])
+        for k in mine[np.isnan(self.dists[i, mine])]:
+            self.dists[i, k] = self.search.distance(self.objs[i], self.xyz[i], self.rots[i, k])
+        return self.search.miss(
+            self.objs[i], index, self.xyz[i], self.rots[i, mine], self.dists[i, mine], params[mine]
+        )
 
 
 def _assemble(
@@ -336,58 +322,124 @@ def _assemble(
         base = {
             "id": wid,
             "position": tuple(float(v) for v in welds.xyz[i]),
-            "approach": tuple(float(v) for v in axes[i]),
             "n_collision_free": int(np.sum(dists[i] != 0)),
         }
         if i in choice:
             k = choice[i]
+            flipped = bool(params[k, 3])
             poses.append(
                 WeldPose(
                     status=OK,
+                    approach=tuple(float(v) for v in (-axes[i] if flipped else axes[i])),
                     quaternion=tuple(float(v) for v in quats[i, k]),  # type: ignore[arg-type]
                     spin=float(params[k, 0]),
                     tilt=float(params[k, 1]),
                     azimuth=float(params[k, 2]),
+                    flipped=flipped,
                     **base,
                 )
             )
         else:
-            poses.append(WeldPose(status=NO_FREE_POSE, quaternion=None, miss=misses.get(i), **base))
+            poses.append(
+                WeldPose(
+                    status=NO_FREE_POSE,
+                    approach=tuple(float(v) for v in axes[i]),
+                    quaternion=None,
+                    miss=misses.get(i),
+                    **base,
+                )
+            )
     return tuple(poses)
+
+
+def _first_free(
+    i: int,
+    ref: NDArray[np.float64],
+    dists: NDArray[np.float64],
+    allowed: NDArray[np.bool_],
+    rots: NDArray[np.float64],
+    quats: NDArray[np.float64],
+    search: PoseSearch,
+    obj: fcl.CollisionObject | None,
+    p: NDArray[np.float64],
+) -> int:
+    """Measure weld ``i``'s unmeasured candidates in order of their summed rotation to ``ref
+    (r, 4)`` (the neighbours' current picks) until one keeps the clearance; returns the count.
+
+    The order only decides which measurements come first: the DP that runs next still sees every
+    candidate not known to fail, so the final choice is the same optimum (see :func:`_choose`).
+    """
+    todo = np.flatnonzero(np.isnan(dists[i]) & allowed[i])
+    cost = rotation_angles(quats[i, todo], ref).sum(axis=1)
+    for n, k in enumerate(todo[np.argsort(cost, kind="stable")], start=1):
+        dists[i, k] = search.distance(obj, p, rots[i, k])
+        if dists[i, k] >= search.clearance:
+            return n
+    return len(todo)
+
+
+class _ChoiceState:
+    """What :func:`_choose` learns that stays true across calls: poses the re-check rejected or
+    passed, and counts."""
+
+    def __init__(self, shape: tuple[int, int]) -> None:
+        self.rejected = np.zeros(shape, dtype=bool)
+        self.passed: set[tuple[int, int]] = set()
+        self.counts = {"distance_queries": 0, "recheck_rejected": 0, "choice_rounds": 0}
+        self._angles: dict[tuple[int, int], tuple[NDArray, NDArray, NDArray]] = {}
+
+    def angles(
+        self, quats: NDArray, i: int, ci: NDArray[np.int64], j: int, cj: NDArray[np.int64]
+    ) -> NDArray[np.float64]:
+        """``(len(ci), len(cj))`` degrees between candidates ``ci`` of weld ``i`` and ``cj`` of
+        weld ``j``, cut from a matrix cached per pair of welds (the DP's rounds shrink the
+        candidate sets; the angles do not change)."""
+        hit = self._angles.get((i, j))
+        if hit is None or not (np.isin(ci, hit[0]).all() and np.isin(cj, hit[1]).all()):
+            hit = (ci, cj, rotation_angles(quats[i, ci], quats[j, cj]))
+            self._angles[(i, j)] = hit
+        a, b, m = hit
+        return m[np.ix_(np.searchsorted(a, ci), np.searchsorted(b, cj))]
 
 
 def _choose(
     welds: _Welds,
     dists: NDArray[np.float64],
+    allowed: NDArray[np.bool_],
     rots: NDArray[np.float64],
     quats: NDArray[np.float64],
-    search: _Search,
+    search: PoseSearch,
     objs: list[fcl.CollisionObject | None],
-    clearance: float,
     checker: PoseChecker,
-) -> tuple[dict[int, int], float, dict[str, int]]:
+    state: _ChoiceState,
+) -> tuple[dict[int, int], float]:
     """The least-rotation choice over the free candidates, measuring clearances lazily.
 
     ``dists (n, c)`` holds 0 for colliding candidates and NaN where the clearance is not measured
-    yet; it is filled in place. The DP runs over every candidate not known to fail; each chosen
-    candidate whose clearance is unknown is measured, and a weld whose choice falls short has all
-    its candidates measured before the DP runs again. When every chosen candidate is known to be
-    free, each passes the independent re-check or is dropped and the DP runs again. The answer is
-    the DP's optimum over the truly free candidates: every candidate it picks has been measured,
-    and the candidates it passed over can only make the optimum over a superset no worse.
+    yet; it is filled in place. Only ``allowed (n, c)`` candidates take part. The DP runs over
+    every candidate not known to fail; each chosen candidate whose clearance is unknown is
+    measured, and a weld whose choice falls short has its other candidates measured, least
+    rotation from its neighbours' picks first, up to the first that keeps the clearance
+    (:func:`_first_free`), before the DP runs again. When every chosen candidate is known to be
+    free, each passes the independent re-check or is dropped and the DP runs again. The answer
+    is the DP's optimum over the truly free candidates: every candidate it picks has been
+    measured, and the candidates it passed over can only make the optimum over a superset no
+    worse. Every round that does not return measures or rejects at least one candidate, so the
+    rounds are at most twice the candidates.
 
-    Returns the chosen candidate per weld index (welds with none free are absent), the summed
-    rotation (deg) and counts (distance queries, candidates the re-check rejected).
+    Returns the chosen candidate per weld index (welds with none free are absent) and the summed
+    rotation (deg); counts (distance queries, candidates the re-check rejected) go to ``state``.
     """
-    rejected = np.zeros(dists.shape, dtype=bool)
-    passed: set[tuple[int, int]] = set()
-    counts = {"distance_queries": 0, "recheck_rejected": 0}
-    for _ in range(_MAX_ROUNDS):
-        ok = ~rejected & ~(dists == 0) & ~(dists < clearance)  # NaN compares False: kept
+    clearance = search.clearance
+    counts = state.counts
+    for _ in range(2 * dists.size + 1):
+        counts["choice_rounds"] += 1
+        ok = allowed & ~state.rejected & ~(dists == 0) & ~(dists < clearance)  # NaN: kept
         welds_ok = [i for i in range(len(dists)) if ok[i].any()]
         cand = [np.flatnonzero(ok[i]) for i in welds_ok]
         pick, total = least_rotation_choice(
-            [quats[i, c] for i, c in zip(welds_ok, cand, strict=True)]
+            [quats[i, c] for i, c in zip(welds_ok, cand, strict=True)],
+            lambda k, w=welds_ok, c=cand: state.angles(quats, w[k - 1], c[k - 1], w[k], c[k]),
         )
         choice = {i: int(c[j]) for i, c, j in zip(welds_ok, cand, pick, strict=True)}
         short = []
@@ -397,24 +449,27 @@ def _choose(
                 counts["distance_queries"] += 1
                 if dists[i, k] < clearance:
                     short.append(i)
-        for i in short:  # measure the whole weld at once: bounds the rounds by the welds
-            todo = np.flatnonzero(np.isnan(dists[i]))
-            for k in todo:
-                dists[i, k] = search.distance(objs[i], welds.xyz[i], rots[i, k])
-            counts["distance_queries"] += len(todo)
         if short:
+            chain = list(choice)  # the welds with a pick, in route order
+            for i in short:
+                j = chain.index(i)
+                nbrs = [chain[m] for m in (j - 1, j + 1) if 0 <= m < len(chain)]
+                ref = quats[nbrs, [choice[m] for m in nbrs]] if nbrs else quats[i, [choice[i]]]
+                counts["distance_queries"] += _first_free(
+                    i, ref, dists, allowed, rots, quats, search, objs[i], welds.xyz[i]
+                )
             continue
         bad = False
         for i, k in choice.items():
-            if (i, k) in passed:
+            if (i, k) in state.passed:
                 continue
             out = checker.check(welds.xyz[i], quats[i, k])
             if out.ok:
-                passed.add((i, k))
+                state.passed.add((i, k))
             else:
                 log.warning("weld %s: the re-check rejected a pose: %s", welds.ids[i], out.reason)
-                rejected[i, k] = bad = True
+                state.rejected[i, k] = bad = True
                 counts["recheck_rejected"] += 1
         if not bad:
-            return choice, total, counts
+            return choice, total
     raise RuntimeError("the pose choice did not settle: the re-check keeps rejecting poses (a bug)")

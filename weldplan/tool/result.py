@@ -46,6 +46,9 @@ class Miss:
         contact, the one nearest the part).
     region
         That place on the tool in words (:meth:`weldplan.tool.model.Tool.region`).
+    flipped
+        The candidate is the tool turned over, approaching from the other side of the sheet
+        (tools that straddle the sheet, :attr:`weldplan.tool.model.Tool.straddles`).
     """
 
     spin: float
@@ -56,6 +59,7 @@ class Miss:
     contacts: int
     tool_point: tuple[float, float, float]
     region: str
+    flipped: bool = False
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -67,6 +71,7 @@ class Miss:
             "contacts": self.contacts,
             "tool_point": list(self.tool_point),
             "region": self.region,
+            "flipped": self.flipped,
         }
 
     @classmethod
@@ -80,6 +85,7 @@ class Miss:
             contacts=int(d["contacts"]),
             tool_point=tuple(float(v) for v in d["tool_point"]),  # type: ignore[arg-type]
             region=str(d["region"]),
+            flipped=bool(d.get("flipped", False)),
         )
 
     def describe(self) -> str:
@@ -87,7 +93,11 @@ class Miss:
             how = f"hits by up to {self.penetration:.1f} mm ({self.contacts} tool triangles)"
         else:
             how = f"clears the part by only {self.distance:.1f} mm"
-        return f"closest miss (spin {self.spin:g}, tilt {self.tilt:g} deg): {how} at {self.region}"
+        side = ", turned over" if self.flipped else ""
+        return (
+            f"closest miss (spin {self.spin:g}, tilt {self.tilt:g} deg{side}): {how} "
+            f"at {self.region}"
+        )
 
 
 @dataclass(frozen=True)
@@ -104,7 +114,8 @@ class WeldPose:
     position
         ``(3,)`` mm: the weld spot, where the TCP is placed.
     approach
-        ``(3,)`` unit vector: the nominal tool axis (TCP +z, into the part) before tilt.
+        ``(3,)`` unit vector: the nominal tool axis (TCP +z, into the part) before tilt; for a
+        pose turned over (``flipped``) the joint's approach axis reversed.
     quaternion
         ``(qw, qx, qy, qz)`` of the TCP frame in the part frame, or ``None`` when no pose is free.
     spin, tilt, azimuth
@@ -115,6 +126,9 @@ class WeldPose:
         only where the choice needed it, see :func:`weldplan.tool.poses.plan_weld_poses`).
     miss
         The closest miss when no pose is free, else ``None``.
+    flipped
+        The pose is the tool turned over, approaching from the other side of the sheet (a tool
+        that straddles the sheet, :attr:`weldplan.tool.model.Tool.straddles`).
     """
 
     id: str
@@ -127,6 +141,7 @@ class WeldPose:
     azimuth: float = float("nan")
     n_collision_free: int = 0
     miss: Miss | None = None
+    flipped: bool = False
 
     @property
     def ok(self) -> bool:
@@ -150,6 +165,7 @@ class WeldPose:
             "azimuth": _num(self.azimuth),
             "n_collision_free": self.n_collision_free,
             "miss": None if self.miss is None else self.miss.to_dict(),
+            "flipped": self.flipped,
         }
 
     @classmethod
@@ -166,6 +182,7 @@ class WeldPose:
             azimuth=_float(d.get("azimuth")),
             n_collision_free=int(d.get("n_collision_free", 0)),
             miss=None if d.get("miss") is None else Miss.from_dict(d["miss"]),
+            flipped=bool(d.get("flipped", False)),
         )
 
 

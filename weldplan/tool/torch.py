@@ -8,13 +8,14 @@ with the dimensions a user gives, not a vendor's CAD.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 from pathlib import Path
 
 import numpy as np
 import trimesh
 
-from weldplan.tool.model import Tool, load_tool_urdf
+from weldplan.tool.model import TORCH_TIP_CONE, Tool, load_tool_urdf
 
 log = logging.getLogger(__name__)
 
@@ -82,6 +83,7 @@ def arc_torch(
         name=f"arc torch ({kind})",
         vertices=mesh.vertices,
         faces=mesh.faces,
+        tip_cone=TORCH_TIP_CONE,
         source=(
             f"arc_torch(neck_length={neck_length}, diameter={diameter}, bend_angle={bend_angle}, "
             f"stickout={stickout}, nozzle_length={nozzle_length}, body_length={body_length}, "
@@ -95,12 +97,14 @@ def shared_spot_gun(directory: str | Path | None = None) -> Tool:
 
     Its STL is in metres and already in the URDF's root frame; the URDF's own mesh reference
     (origin and scale of the original CAD file) does not apply to it, so the STL is passed
-    explicitly. TCP: xyz (0.67936, 0, 0.00043) m, rpy (0, pi/2, 0) from the root.
+    explicitly. TCP: xyz (0.67936, 0, 0.00043) m, rpy (0, pi/2, 0) from the root. It is a C-gun
+    (``straddles``): it clamps the sheet, so it may weld from either side of it.
     """
     d = Path(directory) if directory is not None else SHARED_GUN_DIR
-    return load_tool_urdf(
+    gun = load_tool_urdf(
         d / "spot_welding_gun.urdf",
         tcp="nozzle_tip",
         mesh=d / "spot_welding_gun.stl",
         mesh_units="m",
     )
+    return dataclasses.replace(gun, straddles=True, _cache={})

@@ -10,7 +10,8 @@ here from the whole part mesh and the whole tool mesh:
    returned; for each touching pair of triangles the points where they cross are computed here
    (:func:`triangle_crossings`; FCL's own contact position for mesh pairs can be a vertex away
    from the contact); the pose passes only if every crossing lies inside the contact zone (the
-   sphere of ``contact_radius`` about the weld spot) and FCL did not stop at its contact cap. A
+   sphere of ``contact_radius`` about the weld spot, and for a tool with a ``tip_cone``, within
+   that angle of the tool's axis behind the spot) and FCL did not stop at its contact cap. A
    touching pair with no crossing (coplanar overlap) passes only if the whole tool triangle lies
    inside the zone;
 2. clearance: ``fcl.distance`` between the tool outside the zone (recomputed here from the
@@ -82,6 +83,7 @@ class PoseChecker:
     ) -> None:
         self.contact_radius = float(contact_radius)
         self.clearance = float(clearance)
+        self.tip_cone = tool.tip_cone
         self._part = fcl.CollisionObject(
             bvh(np.asarray(part.vertices), np.asarray(part.faces)), fcl.Transform()
         )
@@ -111,16 +113,30 @@ class PoseChecker:
             A = self._tool_tri[b1] @ R.T + p
             B = self._part_tri[b2]
             pts, ok = triangle_crossings(A, B)
-            d = np.where(ok, np.linalg.norm(pts - p, axis=2), 0.0).max(axis=1)
             flat = ~ok.any(axis=1)  # coplanar touch: the whole tool triangle must be inside
-            d[flat] = np.linalg.norm(A[flat] - p, axis=2).max(axis=1)
-            worst = float(d.max())
-            if worst > self.contact_radius + TOLERANCE_MM:
+            X = np.concatenate([pts[ok], A[flat].reshape(-1, 3)])  # every touching point
+            d = np.linalg.norm(X - p, axis=1)
+            worst = int(np.argmax(d))
+            if d[worst] > self.contact_radius + TOLERANCE_MM:
                 return PoseCheck(
                     False,
-                    f"tool touches the part {worst:.1f} mm from the weld spot, outside the "
+                    f"tool touches the part {d[worst]:.1f} mm from the weld spot, outside the "
                     f"{self.contact_radius:g} mm contact zone",
                 )
+            if self.tip_cone is not None:
+                # the angle at the spot between the tool's axis backwards (-R[:, 2]) and each
+                # touching point: in the part frame, not the tool's zone test
+                back = np.degrees(
+                    np.arccos(np.clip(-(X - p) @ R[:, 2] / np.maximum(d, 1e-12), -1, 1))
+                )
+                off = int(np.argmax(np.where(d > TOLERANCE_MM, back, 0.0)))
+                if d[off] > TOLERANCE_MM and back[off] > self.tip_cone + 1e-6:
+                    return PoseCheck(
+                        False,
+                        f"tool touches the part {d[off]:.1f} mm from the weld spot, "
+                        f"{back[off]:.0f} deg off its axis, outside the {self.tip_cone:g} deg "
+                        "tip cone of its contact zone",
+                    )
         self._outside.setTransform(tf)
         if self.clearance <= 0:
             if fcl.collide(

@@ -1,0 +1,162 @@
+"""``weldplan bench tool``: the gun's planning time against the point tip's, and its reach.
+
+Target (issue 16): a 200-joint car2 station planned with the gun in at most 2 x the point-tip
+planning time on 2 cores. For each station, from one run:
+
+- point tip: building the cell and planning the verified point-tip route (``plan_route``);
+- gun: the same plus the pose search (:func:`~weldplan.tool.poses.plan_weld_poses`, which
+  re-checks every chosen pose) and the independent re-check of all poses
+  (:func:`~weldplan.tool.verify_poses.verify_poses`), what ``weldplan plan --tool`` runs;
+- the ratio of the two, welds with a verified pose / total (and how many of those are turned
+  over), the total orientation change along the route, the stages of the pose search.
+
+car2 is ``../shared/data/bodies/car2.obj`` scaled to 4500 mm with the committed synthetic
+stations ``assets/car2/car2_synthetic_{50,200}.csv`` (docs/bench-scale.md). Writes ``tool.md``
+into ``--out`` (and each station's poses as JSON with ``--json``). Timings are wall clock on
+whatever machine runs it; the load average is recorded beside them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import time
+from pathlib import Path
+from typing import Any
+
+HELP = "gun pose search vs point-tip planning time (target <= 2x on car2 200), reach per station"
+
+ROOT = Path(__file__).resolve().parents[2]
+#: the car2 body in the shared data (../shared/data relative to the repository root)
+CAR2 = ROOT.parent / "shared" / "data" / "bodies" / "car2.obj"
+#: car2's length in the stations (mm), as docs/bench-scale.md
+CAR2_LENGTH_MM = 4500.0
+#: the target of issue 16: gun time / point-tip time on a 200-joint station
+TARGET_RATIO = 2.0
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--stations", default="demo,car2_50,car2_200", help="comma list: demo, car2_50, car2_200"
+    )
+    p.add_argument(
+        "--one-side",
+        action="store_true",
+        help="do not try the gun turned over (the reach before issue 16's second round)",
+    )
+    p.add_argument(
+        "--whole-part",
+        action="store_true",
+        help="check against one BVH of the whole part instead of a crop per weld",
+    )
+    p.add_argument("--json", action="store_true", help="also write each station's poses JSON")
+
+
+def _load() -> str:
+    try:
+        return " ".join(f"{v:.1f}" for v in os.getloadavg())
+    except OSError:  # pragma: no cover
+        return "n/a"
+
+
+def _cell(name: str) -> Any:
+    import weldplan
+
+    if name == "demo":
+        return weldplan.demo_cell()
+    size = name.split("_", 1)[1]
+    joints = ROOT / "assets" / "car2" / f"car2_synthetic_{size}.csv"
+    if not CAR2.is_file():
+        raise SystemExit(f"weldplan bench tool: {CAR2} not found (the shared data)")
+    return weldplan.load_cell(CAR2, joints, length=CAR2_LENGTH_MM)
+
+
+def _station(name: str, gun: Any, args: argparse.Namespace) -> dict[str, Any]:
+    import weldplan
+    from weldplan.tool import plan_weld_poses, verify_poses
+
+    load0 = _load()
+    t0 = time.perf_counter()
+    cell = _cell(name)
+    route = weldplan.plan_route(cell, rng=0)
+    t_point = time.perf_counter() - t0
+    t1 = time.perf_counter()
+    poses = plan_weld_poses(
+        cell, route, gun, both_sides=not args.one_side, crop=not args.whole_part
+    )
+    t_poses = time.perf_counter() - t1
+    t2 = time.perf_counter()
+    ver = verify_poses(poses, cell.part, gun)
+    t_verify = time.perf_counter() - t2
+    gun_s = t_point + t_poses + t_verify
+    misses = [p.miss for p in poses.poses if not p.ok and p.miss is not None]
+    if args.json:
+        out = Path(args.out)
+        (out / f"tool-{name}.json").write_text(poses.to_json(), encoding="utf-8")
+    return {
+        "name": name,
+        "n": len(poses.poses),
+        "ok": poses.n_ok,
+        "flipped": sum(p.ok and p.flipped for p in poses.poses),
+        "misses_ahead": sum(m.contacts > 0 and m.tool_point[2] > 0 for m in misses),
+        "misses_short": sum(m.contacts == 0 for m in misses),
+        "no_miss": sum(not p.ok and p.miss is None for p in poses.poses),
+        "rotation": poses.total_rotation,
+        "verified": f"{'ok' if ver.ok else 'FAILED'} ({ver.checked})",
+        "point_s": t_point,
+        "poses_s": t_poses,
+        "verify_s": t_verify,
+        "gun_s": gun_s,
+        "ratio": gun_s / t_point,
+        "stats": poses.stats,
+        "load": f"{load0} / {_load()}",
+    }
+
+
+def run(args: argparse.Namespace) -> int:
+    from weldplan.tool import shared_spot_gun
+
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    gun = shared_spot_gun()
+    side = "one side" if args.one_side else "both sides (turned over where needed)"
+    part = "whole-part BVH" if args.whole_part else "part cropped per weld"
+    lines = [
+        "# weldplan bench tool",
+        "",
+        f"{platform.node()} ({os.cpu_count()} CPUs); tool {gun.name}, {len(gun.faces)} "
+        f"triangles, reach {gun.reach:.0f} mm; {side}; {part}.",
+        f"Target: gun / point tip <= {TARGET_RATIO:g} on car2_200 (issue 16).",
+        "",
+        "| station | welds ok / total (turned over) | point tip s | gun s (poses + re-check) "
+        "| ratio | rotation deg | re-check | pose stages s: setup, crop, collide, choose, miss "
+        "| load before / after |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    print("\n".join(lines), flush=True)
+    notes = []
+    for name in args.stations.split(","):
+        r = _station(name.strip(), gun, args)
+        s = r["stats"]
+        stages = ", ".join(
+            f"{s.get(k, float('nan')):.1f}"
+            for k in ("setup_s", "broad_phase_s", "collide_s", "choose_s", "miss_s")
+        )
+        row = (
+            f"| {r['name']} | {r['ok']} / {r['n']} ({r['flipped']}) | {r['point_s']:.1f} "
+            f"| {r['gun_s']:.1f} ({r['poses_s']:.1f} + {r['verify_s']:.1f}) | {r['ratio']:.2f} "
+            f"| {r['rotation']:.1f} | {r['verified']} | {stages} | {r['load']} |"
+        )
+        lines.append(row)
+        print(row, flush=True)
+        notes.append(
+            f"- {r['name']}: {r['n'] - r['ok']} misses: {r['misses_ahead']} hit ahead of the TCP "
+            f"(fixed electrode / lower arm: structure behind the sheet), {r['misses_short']} only "
+            f"short of the clearance, {r['no_miss']} without a miss (must be 0); "
+            f"{s['collision_queries']} collide, {s['distance_queries']} distance queries"
+        )
+    lines += [""] + notes
+    print("\n".join(notes))
+    (out / "tool.md").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return 0

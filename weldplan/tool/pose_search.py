@@ -1,0 +1,219 @@
+"""The FCL queries of the weld-pose search: candidate collisions, clearances and closest misses.
+
+:class:`PoseSearch` holds the python-fcl objects of one search (never shared with the
+independent re-check, :mod:`weldplan.tool.verify_poses`): the tool minus its contact zone as one
+BVH moved by ``setTransform`` through all candidates, and the part: a BVH per weld of the
+triangles whose bounding boxes come within the tool's reach of the spot (``crop=True``, the
+default), or one BVH of the whole mesh built once (``crop=False``). Both give the same answers:
+no triangle outside the reach can touch the tool. Measured on 20 welds of car2 (18,394 triangles,
+one-off profiles at load 1-5 on 2 cores): a crop costs about 50-80 ms a weld to build,
+but against the whole part a ``distance`` cost about 6x and a ``collide`` about 1.7x as much,
+which outweighs it; ``weldplan bench tool --whole-part`` measures it again.
+
+A closest miss (a weld with no free candidate) is the candidate whose deepest triangle-pair
+penetration is least (ties: fewest tool triangles touching). Measuring that needs every contact
+of a candidate, which cost about 4 ms a candidate on car2 (thousands of contacts turned into
+Python objects). So the candidates are first ranked by a probe, ``collide`` with at most
+:data:`MISS_PROBE_CONTACTS` contacts and no contact data (the fewer triangle pairs touch, the
+closer to free), on at most :data:`MISS_PROBES` candidates spread evenly over the list (a cap of
+8 makes a ``collide`` 2-3x as dear as the search's yes/no one, so the probe is not folded into
+the search), and only
+the :data:`MISS_SHORTLIST` best of them are measured fully. The miss is therefore the closest
+among the shortlist, not necessarily among all candidates: a report of how and where the tool
+hits, not an optimum.
+"""
+
+from __future__ import annotations
+
+import logging
+
+import fcl
+import numpy as np
+import trimesh
+from numpy.typing import NDArray
+
+from weldplan.tool.model import Tool, bvh
+from weldplan.tool.result import Miss
+from weldplan.tool.verify_poses import triangle_crossings
+
+log = logging.getLogger(__name__)
+
+#: contacts asked of FCL per shortlisted candidate when measuring a closest miss
+MISS_CONTACTS = 10_000
+#: contact cap of the probe that ranks a missed weld's candidates
+MISS_PROBE_CONTACTS = 8
+#: the probe looks at up to this many candidates of a missed weld, evenly spread over its list
+MISS_PROBES = 200
+#: candidates of a missed weld measured fully (the probe's best)
+MISS_SHORTLIST = 4
+#: welds within this distance (mm) of the spot a crop was made for share that crop (made that
+#: much larger), so that a line of spots 40-60 mm apart builds a BVH every few welds
+CROP_SHARE_MM = 100.0
+
+
+class PoseSearch:
+    """The cached FCL objects of one pose search.
+
+    Parameters
+    ----------
+    part
+        The part (mm).
+    tool
+        The tool (mm, TCP frame); its contact zone is :meth:`~weldplan.tool.model.Tool.in_zone`.
+    radius
+        mm: the contact-zone radius.
+    clearance
+        mm: the least distance between the tool outside the zone and the part.
+    crop
+        Build a BVH per weld of the part near it instead of one of the whole part (module
+        docstring).
+    """
+
+    def __init__(
+        self,
+        part: trimesh.Trimesh,
+        tool: Tool,
+        radius: float,
+        clearance: float,
+        *,
+        crop: bool = True,
+    ) -> None:
+        self.part = part
+        self.tool = tool
+        self.clearance = clearance
+        self.crop = crop
+        model, self.triangles = tool.fcl_model(radius)
+        self.tool_obj = fcl.CollisionObject(model, fcl.Transform())
+        tri = np.asarray(part.triangles)
+        self.lo, self.hi = tri.min(axis=1), tri.max(axis=1)
+        self.reach = tool.reach + clearance
+        self._whole: fcl.CollisionObject | None = None
+        self._last: tuple[NDArray, fcl.CollisionObject | None, NDArray[np.int64]] | None = None
+        #: crops built so far (``crop=True``)
+        self.crops_built = 0
+
+    def near_faces(self, p: NDArray, margin: float = 0.0) -> NDArray[np.int64]:
+        """``(k,)``: indices of the part's triangles whose bounding boxes come within the tool's
+        reach (plus ``margin`` mm) of ``p`` (no other triangle can touch the tool with its TCP
+        within ``margin`` of ``p``)."""
+        gap = np.maximum(self.lo - p, 0) + np.maximum(p - self.hi, 0)
+        return np.flatnonzero(np.einsum("ij,ij->i", gap, gap) <= (self.reach + margin) ** 2)
+
+    def part_near(self, p: NDArray) -> tuple[fcl.CollisionObject | None, NDArray[np.int64]]:
+        """The part object to check the tool against with its TCP at ``p``, and the part
+        triangle index of each of its BVH's triangles. ``None`` when no triangle is in reach.
+
+        With ``crop``, the last crop is reused while ``p`` lies within :data:`CROP_SHARE_MM` of
+        the spot it was made for (it holds every triangle within the reach plus that margin).
+        """
+        if not self.crop:
+            if len(self.near_faces(p)) == 0:
+                return None, np.zeros(0, dtype=np.int64)
+            if self._whole is None:
+                faces = np.asarray(self.part.faces)
+                self._whole = fcl.CollisionObject(bvh(self.part.vertices, faces), fcl.Transform())
+            return self._whole, np.arange(len(self.part.faces))
+        if self._last is not None and np.linalg.norm(p - self._last[0]) <= CROP_SHARE_MM:
+            return self._last[1], self._last[2]
+        near = self.near_faces(p, CROP_SHARE_MM)
+        obj = None
+        if len(near):
+            faces = np.asarray(self.part.faces)[near]
+            obj = fcl.CollisionObject(bvh(self.part.vertices, faces), fcl.Transform())
+            self.crops_built += 1
+        self._last = (np.asarray(p, dtype=np.float64).copy(), obj, near)
+        return obj, near
+
+    def collides(self, part_obj: fcl.CollisionObject | None, p: NDArray, Rs: NDArray) -> NDArray:
+        """``(c,) bool``: whether the tool outside the zone collides at each rotation ``(c, 3, 3)``
+        with the TCP at ``p`` (one python-fcl ``collide`` each, the tool's BVH moved)."""
+        return self._touching(part_obj, p, Rs, 1) > 0
+
+    def _touching(
+        self, part_obj: fcl.CollisionObject | None, p: NDArray, Rs: NDArray, cap: int
+    ) -> NDArray[np.int64]:
+        """``(c,) int``: triangle pairs touching at each rotation, counted up to ``cap``."""
+        out = np.zeros(len(Rs), dtype=np.int64)
+        if part_obj is None:
+            return out
+        req = fcl.CollisionRequest(num_max_contacts=cap, enable_contact=False)
+        for k, R in enumerate(Rs):
+            self.tool_obj.setTransform(fcl.Transform(R, p))
+            out[k] = fcl.collide(self.tool_obj, part_obj, req, fcl.CollisionResult())
+        return out
+
+    def distance(self, part_obj: fcl.CollisionObject | None, p: NDArray, R: NDArray) -> float:
+        """mm: FCL distance from the tool outside the zone to the part (``inf``: none near)."""
+        if part_obj is None:
+            return float("inf")
+        self.tool_obj.setTransform(fcl.Transform(R, p))
+        return float(
+            fcl.distance(self.tool_obj, part_obj, fcl.DistanceRequest(), fcl.DistanceResult())
+        )
+
+    def miss(
+        self,
+        part_obj: fcl.CollisionObject,
+        index: NDArray[np.int64],
+        p: NDArray,
+        Rs: NDArray,
+        dist: NDArray,
+        params: NDArray,
+    ) -> Miss:
+        """The closest miss among candidates none of which is free (module docstring).
+
+        ``index`` maps the part object's triangles to the part's (:meth:`part_near`); ``dist
+        (c,)`` holds each candidate's distance (0 where it collides); ``params (c, 4)`` each
+        candidate's spin, tilt, azimuth (deg) and whether it is turned over (1.0).
+        """
+        if np.any(dist > 0):  # clearance shortfalls: the largest distance
+            k = int(np.argmax(dist))
+            self.tool_obj.setTransform(fcl.Transform(Rs[k], p))
+            res = fcl.DistanceResult()
+            req_d = fcl.DistanceRequest(enable_nearest_points=True)
+            d = fcl.distance(self.tool_obj, part_obj, req_d, res)
+            pt = (np.asarray(res.nearest_points[0]) - p) @ Rs[k]  # world -> TCP frame
+            return _miss(params[k], float(d), 0.0, 0, pt, self.tool)
+        probed = np.unique(np.linspace(0, len(Rs) - 1, min(len(Rs), MISS_PROBES)).astype(int))
+        touching = self._touching(part_obj, p, Rs[probed], MISS_PROBE_CONTACTS)
+        shortlist = probed[np.argsort(touching, kind="stable")[:MISS_SHORTLIST]]
+        verts = np.asarray(self.part.vertices)
+        faces = np.asarray(self.part.faces)
+        best: tuple[float, int, int, NDArray] | None = None
+        req = fcl.CollisionRequest(num_max_contacts=MISS_CONTACTS, enable_contact=True)
+        for k in shortlist:
+            R = Rs[k]
+            self.tool_obj.setTransform(fcl.Transform(R, p))
+            res = fcl.CollisionResult()
+            fcl.collide(self.tool_obj, part_obj, req, res)
+            if not res.contacts:
+                continue
+            depth = np.array([c.penetration_depth for c in res.contacts])
+            deepest = int(np.argmax(depth))
+            n_tri = len({c.b1 for c in res.contacts})
+            key = (float(depth[deepest]), n_tri)
+            if best is None or key < best[:2]:
+                c = res.contacts[deepest]
+                # where the hitting tool triangle crosses the part's triangle (TCP frame)
+                other = (verts[faces[index[c.b2]]] - p) @ R
+                pts, ok = triangle_crossings(self.triangles[c.b1][None], other[None])
+                pt = pts[0, ok[0]].mean(axis=0) if ok.any() else self.triangles[c.b1].mean(axis=0)
+                best = (key[0], key[1], int(k), pt)
+        if best is None:
+            raise RuntimeError("a missed weld's candidates reported no contacts (a bug)")
+        pen, n_tri, k, pt = best
+        return _miss(params[k], 0.0, pen, n_tri, pt, self.tool)
+
+
+def _miss(par: NDArray, d: float, pen: float, n: int, pt: NDArray, tool: Tool) -> Miss:
+    return Miss(
+        spin=float(par[0]),
+        tilt=float(par[1]),
+        azimuth=float(par[2]),
+        distance=d,
+        penetration=pen,
+        contacts=n,
+        tool_point=tuple(float(v) for v in pt),  # type: ignore[arg-type]
+        region=tool.region(pt),
+        flipped=bool(par[3]),
+    )
