@@ -72,3 +72,15 @@ def test_refine_must_be_a_flag() -> None:
 
     with pytest.raises(ConfigError):
         PlanConfig(refine="yes")  # type: ignore[arg-type]
+
+
+def test_refine_local_path_matches_the_planner_stage(cell: BoxCell) -> None:
+    from weldplan.weld.refine import refine_local_path
+
+    plain = plan(cell, "exact")
+    inline = plan(cell, "exact", refine=True)
+    apart = refine_local_path(cell, plain)
+    assert apart.refined and apart.so_length == pytest.approx(plain.inner_length)
+    assert apart.inner_length == pytest.approx(inline.inner_length, abs=1e-9)
+    assert np.allclose(apart.points, inline.points)
+    assert refine_local_path(cell, apart) is apart

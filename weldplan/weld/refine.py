@@ -462,3 +462,34 @@ def refine_path(
     if polyline_length(Q) > L0:
         return result(P, Ls, sweeps, False, "refinement did not shorten the path: input kept")
     return result(Q, Ls, sweeps, True, f"{L0:.3f} -> {polyline_length(Q):.3f} (shortcut {Ls:.3f})")
+
+
+def refine_local_path(cell: Any, lp: Any) -> Any:
+    """A :class:`~weldplan.weld.localpath.LocalPath` of ``cell`` with its path between the virtual
+    joints refined (python-fcl checks at the cell's clearance); ``lp`` itself when it failed, is
+    a fast path or was refined already. For benches that plan first and refine apart (``cell``:
+    anything with ``.collision``, ``.clearance`` or ``.grid.clearance``)."""
+    import dataclasses
+
+    if not lp.success or lp.fast_path or lp.refined or len(lp.points) < 3:
+        return lp
+    clearance = float(getattr(cell, "clearance", None) or cell.grid.clearance)
+    col = cell.collision
+    # the legs to the real joints are the first and last segments unless a joint is its own
+    # virtual joint; the inner path is what has inner_length
+    P = np.asarray(lp.points)
+    a, b = 0, len(P)
+    for lo in (0, 1):
+        for hi in (len(P), len(P) - 1):
+            if abs(polyline_length(P[lo:hi]) - lp.inner_length) < 1e-6 * (1 + lp.inner_length):
+                a, b = lo, hi
+    fcl = lambda A, B, r: col.segments_free(A, B, r, method="fcl")  # noqa: E731
+    rp = refine_path(P[a:b], col, clearance, check=fcl, final_check=fcl)
+    if not rp.refined:
+        return lp
+    pts = np.concatenate([P[:a], rp.points, P[b:]])
+    return dataclasses.replace(
+        lp, points=pts, length=polyline_length(pts), inner_length=rp.length,
+        so_length=lp.inner_length, refined=True, seconds=lp.seconds + rp.seconds,
+        collision_checks=lp.collision_checks + rp.checks,
+    )  # fmt: skip
