@@ -47,6 +47,12 @@ def add_planning_arguments(p: argparse.ArgumentParser, *, default_output: str | 
         help="local planner for blocked pairs (default so-aco)",
     )
     p.add_argument(
+        "--no-refine",
+        action="store_true",
+        help="skip the continuous refinement after the grid planner (the paper's SO-ACO as "
+        "printed; default: refine, shortcuts anywhere on the path re-checked by FCL)",
+    )
+    p.add_argument(
         "--sequencer",
         default="auto",
         choices=("auto", "fast-tsp", "pso", "exact", "nn"),
@@ -148,6 +154,7 @@ def config_from_args(args: argparse.Namespace) -> Any:
         planner=args.planner,
         sequencer=args.sequencer,
         aco={"n_iterations": args.aco, "n_ants": args.aco},
+        refine=not getattr(args, "no_refine", False),
         candidates=getattr(args, "candidates", None),
         candidate_radius=getattr(args, "candidate_radius", None),
         skip_unreachable=bool(getattr(args, "skip_unreachable", False)),

@@ -113,3 +113,31 @@ def interp_spline_path(nodes: ArrayLike, n_points: int = N_INTERP, degree: int =
     out[..., 0, :] = N[..., 0, :]
     out[..., -1, :] = N[..., -1, :]
     return out
+
+
+def interpolating_bspline(points: ArrayLike, *, alpha: float = 0.5) -> BSpline:
+    """The C2 cubic B-spline through the points ``(k, d)``, ``k >= 2``, with natural ends.
+
+    The parameter of point ``i`` is the sum of ``|P[j + 1] - P[j]| ** alpha`` before it, scaled
+    to ``[0, 1]``: ``alpha = 0.5`` is the centripetal parameterisation (it does not overshoot
+    or loop at sharp turns the way the uniform one does), 1 the chord length. Fewer than four
+    points give the straight polyline (degree 1) or a natural cubic through three.
+
+    Returns
+    -------
+    scipy.interpolate.BSpline
+        ``s(u)`` for ``u`` in ``[0, 1]``, ``s(0) = P[0]``, ``s(1) = P[-1]``; ``s(u_i) = P[i]``.
+    """
+    from scipy.interpolate import make_interp_spline
+
+    P = np.asarray(points, dtype=np.float64)
+    if P.ndim != 2 or len(P) < 2:
+        raise ValueError(f"points must be (k >= 2, d), got {P.shape}")
+    step = np.linalg.norm(np.diff(P, axis=0), axis=1) ** float(alpha)
+    if np.any(step <= 0):
+        raise ValueError("consecutive points must differ")
+    u = np.concatenate([[0.0], np.cumsum(step)])
+    u /= u[-1]
+    if len(P) == 2:
+        return make_interp_spline(u, P, k=1)
+    return make_interp_spline(u, P, k=3, bc_type="natural")

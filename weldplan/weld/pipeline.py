@@ -183,6 +183,12 @@ class PlanConfig:
         reported in ``Route.stats`` (``bound_planned``, ``gap_planned``). None: off.
     gap_rounds
         Bound on those rounds.
+    refine
+        Run the continuous refinement after the grid planner (:mod:`weldplan.weld.refine`:
+        shortcuts anywhere on the path, vertices slid to the clearance, re-checked by FCL): on
+        by default, the best pipeline; False (``weldplan plan --no-refine``) plans the paper's
+        SO-ACO as printed. It is passed to the planner as ``aco["refine"]`` (an explicit
+        ``aco["refine"]`` wins).
     """
 
     clearance: float = 5.0
@@ -207,6 +213,7 @@ class PlanConfig:
     memory_limit: float | None = None
     gap_target: float | None = 0.01
     gap_rounds: int = 30
+    refine: bool = True
 
     def __post_init__(self) -> None:
         from weldplan.weld.validate import check_config

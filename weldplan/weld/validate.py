@@ -107,7 +107,7 @@ def check_config(c: Any) -> None:
         "candidate_radius",
         optional_positive("candidate_radius", c.candidate_radius, "mm", allow_inf=True),
     )
-    for name in ("polish", "warm_rounds", "known_first", "skip_unreachable"):
+    for name in ("polish", "warm_rounds", "known_first", "skip_unreachable", "refine"):
         put(c, name, flag(name, getattr(c, name)))
     for name in ("local_time_budget", "sequence_time_budget"):
         put(c, name, optional_positive(name, getattr(c, name), "seconds"))
@@ -117,7 +117,9 @@ def check_config(c: Any) -> None:
     put(c, "max_rounds", integer("max_rounds", c.max_rounds, 1))
     put(c, "warm_kicks", integer("warm_kicks", c.warm_kicks, 0, optional=True))
     put(c, "demand_neighbours", integer("demand_neighbours", c.demand_neighbours, 0))
-    put(c, "aco", _aco(c.aco))
+    aco = _aco(c.aco)
+    aco.setdefault("refine", c.refine)  # the local planner reads it from its params
+    put(c, "aco", aco)
     put(c, "pso", _pso(c.pso))
 
 
