@@ -356,33 +356,37 @@ def run(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     cells = build_cells(args.cells, args.station_size)
     cols = planners(budgets, ompl)
-    records = _measure(cells, args.pairs, cols, args.seed)
     names = list(cols)
     ref = f"OMPL BIT* {max(budgets):g} s" if "bitstar" in ompl else None
     fast = f"OMPL BIT* {min(budgets):g} s" if "bitstar" in ompl else None
-    summary = {"all cells": summarise(records, names, ref)}
-    for cname, _ in cells:
-        summary[cname] = summarise([r for r in records if r["cell"] == cname], names, ref)
-    load = os.getloadavg()
-    meta = {
-        "cells": [c for c, _ in cells],
-        "pairs_limit": args.pairs,
-        "seed": args.seed,
-        "budgets": budgets,
-        "ompl_planners": ompl,
-        "before": before,
-        "load_after": f"{load[0]:.2f} {load[1]:.2f} {load[2]:.2f}",
-        "wall_s": time.perf_counter() - t0,
-        "refine_note": (
-            "Ours + refine: weldplan.weld.refine.refine_path applied to the SO-ACO path."
-            if "SO-ACO + refine" in cols
-            else "Ours + refine: not measured (weldplan.weld.refine.refine_path is not in this "
-            "build; the column appears when it is)."
-        ),
-    }
-    (out / "local-peers.md").write_text(markdown(records, summary, ref, fast, meta))
-    (out / "local-peers.json").write_text(
-        json.dumps({"meta": meta, "summary": summary, "records": records}, indent=1)
-    )
+    records: list[dict[str, Any]] = []
+    for k, cell in enumerate(cells):
+        records += _measure([cell], args.pairs, cols, args.seed + len(records))
+        # written after every cell, so a long run that is stopped keeps what it measured
+        done = cells[: k + 1]
+        summary = {"all cells": summarise(records, names, ref)}
+        for cname, _ in done:
+            summary[cname] = summarise([r for r in records if r["cell"] == cname], names, ref)
+        load = os.getloadavg()
+        meta = {
+            "cells": [c for c, _ in done],
+            "pairs_limit": args.pairs,
+            "seed": args.seed,
+            "budgets": budgets,
+            "ompl_planners": ompl,
+            "before": before,
+            "load_after": f"{load[0]:.2f} {load[1]:.2f} {load[2]:.2f}",
+            "wall_s": time.perf_counter() - t0,
+            "refine_note": (
+                "Ours + refine: weldplan.weld.refine.refine_path applied to the SO-ACO path."
+                if "SO-ACO + refine" in cols
+                else "Ours + refine: not measured (weldplan.weld.refine.refine_path is not in "
+                "this build; the column appears when it is)."
+            ),
+        }
+        (out / "local-peers.md").write_text(markdown(records, summary, ref, fast, meta))
+        (out / "local-peers.json").write_text(
+            json.dumps({"meta": meta, "summary": summary, "records": records}, indent=1)
+        )
     print(f"wrote {out / 'local-peers.md'}, {out / 'local-peers.json'}")
     return 0
