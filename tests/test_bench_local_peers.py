@@ -81,12 +81,21 @@ def test_bench_local_peers_end_to_end(box_cell, tmp_path: Path, monkeypatch) -> 
     rc = main([*argv, "--ompl-planners", "bitstar", "--out", str(tmp_path)])
     assert rc == 0
     data = json.loads((tmp_path / "local-peers.json").read_text())
-    cols = ["SO-ACO (default)", "exact (A* + SO)", "OMPL BIT* 0.05 s", "OMPL BIT* 0.2 s"]
+    cols = [
+        "SO-ACO (default)",
+        "exact (A* + SO)",
+        "SO-ACO + refine",
+        "OMPL BIT* 0.05 s",
+        "OMPL BIT* 0.2 s",
+    ]
     assert [r["pair"] for r in data["records"]] == [["A", "B"], ["C", "D"]]
     for r in data["records"]:
-        assert list(r["runs"])[: len(cols)] == cols
+        assert list(r["runs"]) == cols
         ok = [v["length"] for v in r["runs"].values() if v["success"]]
         assert r["best"] == min(ok)
+        # the refinement starts from the same seeded SO-ACO path and is never longer
+        runs = r["runs"]
+        assert runs["SO-ACO + refine"]["length"] <= runs["SO-ACO (default)"]["length"] + 1e-9
     md = (tmp_path / "local-peers.md").read_text()
     assert "| SO-ACO (default) | 2/2 |" in md and "Reference: OMPL BIT* 0.2 s" in md
     assert "## Targets" in md and "load average" in md

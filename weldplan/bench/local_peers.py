@@ -33,6 +33,7 @@ import math
 import os
 import time
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -164,12 +165,47 @@ def blocked_pairs(cell: Any, limit: int | None) -> list[tuple[int, int]]:
 
 
 def _refine_hook() -> Callable[[Any, Any], Any] | None:
-    """``refine(cell, local_path) -> LocalPath`` from weldplan.weld.refine, when it exists."""
+    """``refine(cell, local_path) -> LocalPath``: :func:`weldplan.weld.refine.refine_path` on
+    the inner path (between the virtual joints), checks and final check by python-fcl, as the
+    pipeline's refinement does; ``None`` when this build has no refinement stage."""
     try:
-        from weldplan.weld.refine import refine_path  # type: ignore[import-not-found]
+        from weldplan.weld.refine import refine_path
     except ImportError:
         return None
-    return refine_path  # type: ignore[no-any-return]
+
+    def refine(cell: Any, lp: Any) -> Any:
+        if not lp.success or lp.fast_path:
+            return lp
+        c0 = time.process_time()
+        P = np.asarray(lp.points)
+        # the legs to the real joints are not refined: strip them (absent when a joint is its
+        # own virtual joint, as LocalPath assembles them)
+        i0 = 1 if np.linalg.norm(P[0] - _virtual_of(cell, P[0])) > 1e-9 else 0
+        i1 = len(P) - 1 if np.linalg.norm(P[-1] - _virtual_of(cell, P[-1])) > 1e-9 else len(P)
+        inner = P[i0:i1]
+
+        def fcl(A: Any, B: Any, rad: float) -> Any:
+            return cell.collision.segments_free(A, B, rad, method="fcl")
+
+        rp = refine_path(inner, cell.collision, cell.clearance, check=fcl, final_check=fcl)
+        pts = np.concatenate([P[:i0], np.asarray(rp.points), P[i1:]])
+        return replace(
+            lp,
+            points=pts,
+            length=float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum()),
+            inner_length=float(rp.length),
+            seconds=lp.seconds + rp.seconds,
+            cpu_seconds=lp.cpu_seconds + time.process_time() - c0,
+        )
+
+    return refine
+
+
+def _virtual_of(cell: Any, p: Any) -> Any:
+    """The virtual joint of the real joint at ``p`` (itself when ``p`` is no real joint)."""
+    d = np.linalg.norm(np.asarray(cell.joints.xyz) - p, axis=1)
+    k = int(np.argmin(d))
+    return np.asarray(cell.virtual_xyz[k]) if d[k] <= 1e-9 else np.asarray(p)
 
 
 def planners(budgets: list[float], ompl: list[str]) -> dict[str, Callable[..., Any]]:
