@@ -94,7 +94,7 @@ def test_free_pair_takes_the_straight_segment(cell):
 
 
 def test_planner_ompl_routes_verify(cell):
-    route = plan_route(cell, config=PlanConfig(planner="ompl", local_time_budget=0.3), rng=0)
+    route = plan_route(cell, config=PlanConfig(planner="ompl", local_time_budget=1.0), rng=0)
     assert "ompl" in {leg.method for leg in route.legs}
     assert verify_route(route, cell.part).ok
     assert route.settings["planner"] == "ompl"
