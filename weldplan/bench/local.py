@@ -5,6 +5,9 @@ figures are the same runs' colony routes before the secondary optimisation, with
 the colony finished (the paper's SO-ACO time is likewise its ACO time plus the SO). The exact
 26-connected baseline (A* + the same secondary optimisation) and the straight-line lower bound are
 extra columns. Writes ``local.md``, ``local.json`` and ``local-convergence.png`` into ``--out``.
+
+``--peers`` runs the other comparison instead (:mod:`weldplan.bench.local_peers`): our planners
+beside OMPL BIT* and RRT* on every blocked pair of the demo and the car2 stations.
 """
 
 from __future__ import annotations
@@ -46,6 +49,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=int, default=0, help="seed of the first run")
     parser.add_argument("--from", dest="src", default="3", help="start joint id (3)")
     parser.add_argument("--to", dest="dst", default="7", help="goal joint id (7)")
+    from weldplan.bench import local_peers
+
+    local_peers.add_arguments(parser)
 
 
 def _cell() -> tuple[Any, str]:
@@ -75,6 +81,10 @@ def _stats(x: list[float]) -> dict[str, float]:
 
 
 def run(args: argparse.Namespace) -> int:
+    if getattr(args, "peers", False):  # issue 15: beside OMPL on every blocked pair
+        from weldplan.bench import local_peers
+
+        return local_peers.run(args)
     from weldplan.weld.local import plan_pair
 
     out = Path(args.out)

@@ -43,8 +43,9 @@ def add_planning_arguments(p: argparse.ArgumentParser, *, default_output: str | 
     p.add_argument(
         "--planner",
         default="so-aco",
-        choices=("so-aco", "aco", "exact"),
-        help="local planner for blocked pairs (default so-aco)",
+        choices=("so-aco", "aco", "exact", "ompl"),
+        help="local planner for blocked pairs (default so-aco; ompl: OMPL's BIT*, 1 s a pair, on "
+        "the same FCL checks; needs the ompl extra)",
     )
     p.add_argument(
         "--no-refine",

@@ -17,11 +17,16 @@ from numpy.typing import NDArray
 def _plan_pair_task(
     cell: Any, i: int, j: int, method: str, params: dict, seed: int, budget: float | None
 ) -> Any:
-    """One local path (module-level so process pools can pickle it). A pair whose search would
+    """One local path (module-level so process pools can pickle it); ``method="ompl"`` runs
+    OMPL's BIT* for ``budget`` seconds (1 s without one). A pair whose search would
     exceed the voxel cap (:class:`~weldplan.weld.local.SearchLimitError`) comes back as a failed
     path with the reason: the sequencer then treats it as unreachable."""
     from weldplan.weld.local import LocalPath, SearchLimitError, plan_pair
 
+    if method == "ompl":  # OMPL's BIT* on the same FCL checks (weldplan.motion.local)
+        from weldplan.motion.local import DEFAULT_TIME_S, plan_pair_ompl
+
+        return plan_pair_ompl(cell, i, j, rng=seed, time_s=budget or DEFAULT_TIME_S)
     try:
         return plan_pair(cell, i, j, method=method, params=params, rng=seed, time_budget=budget)
     except SearchLimitError as exc:

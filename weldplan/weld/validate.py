@@ -18,8 +18,9 @@ import numpy as np
 
 from weldplan.errors import ConfigError
 
-#: local planners for blocked pairs (:class:`~weldplan.weld.pipeline.PlanConfig` ``planner``)
-PLANNERS = ("so-aco", "aco", "exact")
+#: local planners for blocked pairs (:class:`~weldplan.weld.pipeline.PlanConfig` ``planner``);
+#: ``ompl`` (OMPL's BIT* on weldplan's FCL checks, :mod:`weldplan.motion.local`) needs the extra
+PLANNERS = ("so-aco", "aco", "exact", "ompl")
 #: sequencers (``PlanConfig.sequencer``): auto = Held-Karp up to 13 joints, else fast-tsp
 SEQUENCERS = ("auto", "fast-tsp", "pso", "exact", "nn")
 
@@ -90,6 +91,14 @@ def check_config(c: Any) -> None:
     """Every field of a :class:`~weldplan.weld.pipeline.PlanConfig` (normalised in place)."""
     put = object.__setattr__
     choice("planner", c.planner, PLANNERS)
+    if c.planner == "ompl":
+        from weldplan.motion.sampling import ompl_available
+
+        if not ompl_available():
+            raise ConfigError(
+                "planner 'ompl' needs OMPL's Python bindings: pip install 'weldplan[ompl]'",
+                field="planner",
+            )
     choice("sequencer", c.sequencer, SEQUENCERS)
     choice("pairs", c.pairs, ("lazy", "all"))
     put(c, "clearance", positive_mm("clearance", c.clearance))

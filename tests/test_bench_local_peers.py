@@ -1,0 +1,101 @@
+"""``weldplan bench local --peers``: the blocked pairs, the car2 stations, the summary arithmetic
+and a run end to end on the box station."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("ompl")
+
+from route_fixtures import box_part  # noqa: E402
+
+from weldplan.bench import local_peers  # noqa: E402
+from weldplan.cli import main  # noqa: E402
+from weldplan.io.joints import Joints, read_joints  # noqa: E402
+from weldplan.weld.cell import build_cell  # noqa: E402
+
+# A (-40, 0), B (40, 0), C (-40, 60), D (40, -30) about the wall x = 0, |y| <= 50: every pair
+# that crosses x = 0 within the wall is blocked (A-B, A-D, B-C, C-D); A-C and B-D stay on a side
+BLOCKED = [(0, 1), (0, 3), (1, 2), (2, 3)]
+
+
+@pytest.fixture(scope="module")
+def box_cell():
+    xyz = np.array([[-40.0, 0, 0], [40.0, 0, 0], [-40.0, 60, 0], [40.0, -30, 0]])
+    return build_cell(box_part(), Joints(ids=("A", "B", "C", "D"), xyz=xyz, directions=None))
+
+
+def test_blocked_pairs_are_those_behind_the_wall(box_cell):
+    assert local_peers.blocked_pairs(box_cell, None) == BLOCKED
+    assert local_peers.blocked_pairs(box_cell, 2) == [BLOCKED[0], BLOCKED[-1]]
+
+
+def test_car2_stations_are_the_joints_nearest_each_station_centroid():
+    stations = local_peers.car2_stations(12)
+    j = read_joints(local_peers.CAR2_SET)
+    prefix = np.array([i.rsplit("-", 1)[0] for i in j.ids])
+    names, counts = np.unique(prefix, return_counts=True)
+    assert sorted(stations) == sorted(n for n, c in zip(names, counts, strict=True) if c >= 12)
+    for name, joints in stations.items():
+        assert len(joints) == 12 and all(i.startswith(name + "-") for i in joints.ids)
+        mine = prefix == name
+        c = j.xyz[mine].mean(axis=0)
+        picked = np.isin(np.asarray(j.ids), joints.ids)
+        d = np.linalg.norm(j.xyz - c, axis=1)
+        assert d[picked].max() <= d[mine & ~picked].min()
+
+
+def _rec(cell, lengths, times):
+    runs = {
+        k: {"length": v, "success": v is not None, "wall_s": t, "cpu_s": t / 2, "reason": ""}
+        for (k, v), t in zip(lengths.items(), times, strict=True)
+    }
+    done = [v for v in lengths.values() if v is not None]
+    return {"cell": cell, "pair": ["a", "b"], "runs": runs, "best": min(done)}
+
+
+def test_summary_ratios_against_best_and_reference():
+    recs = [
+        _rec("x", {"ours": 101.0, "ref": 100.0}, [0.5, 1.0]),
+        _rec("x", {"ours": 200.0, "ref": 202.0}, [0.1, 1.0]),
+        _rec("x", {"ours": None, "ref": 50.0}, [0.3, 1.0]),
+    ]
+    s = local_peers.summarise(recs, ["ours", "ref"], "ref")
+    assert s["ours"]["solved"] == 2 and s["ours"]["pairs"] == 3
+    assert s["ours"]["best_mean"] == pytest.approx((1.01 + 1.0) / 2)
+    assert s["ours"]["best_max"] == pytest.approx(1.01)
+    assert s["ours"]["within_1pct"] == 2
+    assert s["ours"]["ref_mean"] == pytest.approx((1.01 + 200 / 202) / 2)
+    assert s["ours"]["wall_median"] == pytest.approx(0.3)
+    assert s["ref"]["best_mean"] == pytest.approx((1.0 + 1.01 + 1.0) / 3)
+    assert s["ref"]["ref_max"] == pytest.approx(1.0)
+
+
+def test_bench_local_peers_end_to_end(box_cell, tmp_path: Path, monkeypatch) -> None:
+    monkeypatch.setattr(local_peers, "build_cells", lambda spec, size: [("box", box_cell)])
+    argv = ["bench", "local", "--peers", "--pairs", "2", "--budgets", "0.05,0.2"]
+    rc = main([*argv, "--ompl-planners", "bitstar", "--out", str(tmp_path)])
+    assert rc == 0
+    data = json.loads((tmp_path / "local-peers.json").read_text())
+    cols = [
+        "SO-ACO (default)",
+        "exact (A* + SO)",
+        "SO-ACO + refine",
+        "OMPL BIT* 0.05 s",
+        "OMPL BIT* 0.2 s",
+    ]
+    assert [r["pair"] for r in data["records"]] == [["A", "B"], ["C", "D"]]
+    for r in data["records"]:
+        assert list(r["runs"]) == cols
+        ok = [v["length"] for v in r["runs"].values() if v["success"]]
+        assert r["best"] == min(ok)
+        # the refinement starts from the same seeded SO-ACO path and is never longer
+        runs = r["runs"]
+        assert runs["SO-ACO + refine"]["length"] <= runs["SO-ACO (default)"]["length"] + 1e-9
+    md = (tmp_path / "local-peers.md").read_text()
+    assert "| SO-ACO (default) | 2/2 |" in md and "Reference: OMPL BIT* 0.2 s" in md
+    assert "## Targets" in md and "load average" in md

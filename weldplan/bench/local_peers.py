@@ -1,0 +1,403 @@
+"""``weldplan bench local --peers``: weldplan's local planners beside OMPL on every blocked pair.
+
+Issue 15 item 5. On each cell, every pair of joints whose straight segment between the virtual
+joints is blocked (the FCL capsule at the clearance) is planned by
+
+- ours: SO-ACO (the default, ``plan_pair(method="so-aco")``) and exact (26-connected A* + the
+  secondary optimisation, ``method="exact"``);
+- OMPL (:mod:`weldplan.motion.local`): BIT* and RRT* for each of ``--budgets`` seconds, then
+  OMPL's simplifier, with weldplan's own FCL checks as the validity checker (the sphere at the
+  clearance + closed-solid test for states, the ``method="fcl"`` capsule for motions);
+- "ours + refine" when :mod:`weldplan.weld.refine` provides ``refine_path`` (the continuous
+  refinement of issue 15 items 1-2); absent, the column is left out and the report says so.
+
+Every length is the inner length between the two virtual joints (the same for every planner).
+Per pair, the best known length is the shortest successful path any planner found; the issue's
+reference, BIT* at the largest budget + simplify, is reported beside it. Times are wall seconds
+of the whole call (OMPL: planning + simplification) and CPU seconds of this process. OMPL's
+budgets are wall-clock, so on a loaded machine it gets fewer samples in its budget: the load
+average is in the report.
+
+Cells: the demo (:func:`weldplan.weld.cell.demo_cell`) and the car2 stations the repo generates
+(``assets/car2/car2_synthetic_1000.csv``, stations by joint id prefix ``Z{zone}{L|R}``): for each
+station with at least ``--station-size`` joints, the ``--station-size`` joints nearest its
+centroid (as :func:`weldplan.weld.synthetic.select_set` picks a set around the home station),
+on car2 scaled to 4500 mm (../shared/data).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import time
+from collections.abc import Callable
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+#: the OMPL planners of the comparison (names of :data:`weldplan.motion.sampling.PLANNERS`)
+OMPL_PLANNERS = ("bitstar", "rrtstar")
+#: OMPL budgets, s (the issue's 0.1 / 1 / 10)
+BUDGETS = (0.1, 1.0, 10.0)
+#: joints per car2 station
+STATION_SIZE = 12
+#: the synthetic car2 joint set whose stations are the car2 cells
+CAR2_SET = Path(__file__).resolve().parents[2] / "assets" / "car2" / "car2_synthetic_1000.csv"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options of the peers mode (added to ``weldplan bench local``)."""
+    parser.add_argument(
+        "--peers",
+        action="store_true",
+        help="issue 15: our planners beside OMPL BIT*/RRT* on every blocked pair of the demo "
+        "and the car2 stations (writes local-peers.md/json)",
+    )
+    parser.add_argument(
+        "--budgets",
+        default=",".join(f"{b:g}" for b in BUDGETS),
+        help="--peers: OMPL time budgets in s, comma-separated (0.1,1,10)",
+    )
+    parser.add_argument(
+        "--pairs", type=int, default=None, help="--peers: at most this many blocked pairs a cell"
+    )
+    parser.add_argument(
+        "--cells",
+        default="demo,car2",
+        help="--peers: demo, car2 (every car2 station) or car2:STATION, comma-separated",
+    )
+    parser.add_argument(
+        "--station-size", type=int, default=STATION_SIZE, help="--peers: joints a car2 station"
+    )
+    parser.add_argument(
+        "--ompl-planners",
+        default=",".join(OMPL_PLANNERS),
+        help="--peers: OMPL planners, comma-separated (bitstar,rrtstar)",
+    )
+
+
+def _floats(text: str, name: str) -> list[float]:
+    from weldplan.errors import ConfigError
+
+    try:
+        vals = [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        vals = []
+    if not vals or not all(math.isfinite(v) and v > 0 for v in vals):
+        raise ConfigError(f"{name} must be positive numbers, comma-separated; got {text!r}")
+    return sorted(set(vals))
+
+
+# --------------------------------------------------------------------------- cells and pairs
+
+
+def car2_stations(size: int) -> dict[str, Any]:
+    """Station name -> Joints: the ``size`` joints of each car2 station nearest its centroid."""
+    from weldplan.io.joints import Joints, read_joints
+
+    j = read_joints(CAR2_SET)
+    station = np.array([str(i).rsplit("-", 1)[0] for i in j.ids])
+    out = {}
+    for name in sorted(set(station)):
+        sel = np.flatnonzero(station == name)
+        if len(sel) < size:
+            continue
+        c = j.xyz[sel].mean(axis=0)
+        pick = np.sort(
+            sel[np.argsort(np.linalg.norm(j.xyz[sel] - c, axis=1), kind="stable")[:size]]
+        )
+        dirs = None if j.directions is None else j.directions[pick]
+        out[name] = Joints(ids=tuple(j.ids[k] for k in pick), xyz=j.xyz[pick], directions=dirs)
+    return out
+
+
+def build_cells(spec: str, size: int) -> list[tuple[str, Any]]:
+    """``(name, Cell)`` for each entry of ``--cells``."""
+    from weldplan.bench.common import shared_path
+    from weldplan.errors import ConfigError
+    from weldplan.weld.cell import build_cell, demo_cell
+
+    cells: list[tuple[str, Any]] = []
+    part = stations = None
+    for item in (s.strip() for s in spec.split(",") if s.strip()):
+        if item == "demo":
+            cells.append(("demo", demo_cell()))
+            continue
+        if not (item == "car2" or item.startswith("car2:")):
+            raise ConfigError(f"unknown cell {item!r}: demo, car2 or car2:STATION", field="cells")
+        if part is None:
+            from weldplan.io.mesh import load_part
+            from weldplan.weld.synthetic import CAR2_LENGTH_MM
+
+            part = load_part(shared_path("bodies", "car2.obj"), length=CAR2_LENGTH_MM)
+            stations = car2_stations(size)
+        assert stations is not None
+        names = list(stations) if item == "car2" else [item.split(":", 1)[1]]
+        for name in names:
+            if name not in stations:
+                raise ConfigError(
+                    f"no car2 station {name!r} with {size} joints; have {', '.join(stations)}",
+                    field="cells",
+                )
+            cells.append((f"car2 {name}", build_cell(part, stations[name])))
+    return cells
+
+
+def blocked_pairs(cell: Any, limit: int | None) -> list[tuple[int, int]]:
+    """Pairs ``(i, j)``, ``i < j``, whose straight segment between virtual joints collides (the
+    FCL capsule at the clearance); ``limit`` of them spread evenly over the list when given."""
+    n = cell.n_joints
+    iu, ju = np.triu_indices(n, 1)
+    V = np.asarray(cell.virtual_xyz)
+    free = cell.collision.segments_free(V[iu], V[ju], cell.clearance, method="fcl")
+    pairs = [(int(a), int(b)) for a, b in zip(iu[~free], ju[~free], strict=True)]
+    if limit is not None and len(pairs) > limit:
+        keep = np.unique(np.linspace(0, len(pairs) - 1, limit).round().astype(int))
+        pairs = [pairs[k] for k in keep]
+    return pairs
+
+
+# --------------------------------------------------------------------------- planners
+
+
+def _refine_hook() -> Callable[[Any, Any], Any] | None:
+    """``refine(cell, local_path) -> LocalPath``: the pipeline's own continuous refinement
+    (:func:`weldplan.weld.refine.refine_local_path`, python-fcl checks) applied to a planned
+    pair, with its CPU time added; ``None`` when this build has no refinement stage."""
+    try:
+        from weldplan.weld.refine import refine_local_path
+    except ImportError:
+        return None
+
+    def refine(cell: Any, lp: Any) -> Any:
+        c0 = time.process_time()
+        out = refine_local_path(cell, lp)
+        if out is lp:
+            return lp
+        return replace(out, cpu_seconds=lp.cpu_seconds + time.process_time() - c0)
+
+    return refine
+
+
+def planners(budgets: list[float], ompl: list[str]) -> dict[str, Callable[..., Any]]:
+    """Column name -> ``f(cell, i, j, seed, checks) -> LocalPath``."""
+    from weldplan.motion.local import plan_pair_ompl
+    from weldplan.weld.local import plan_pair
+
+    cols: dict[str, Callable[..., Any]] = {
+        "SO-ACO (default)": lambda c, i, j, s, ch: plan_pair(c, i, j, method="so-aco", rng=s),
+        "exact (A* + SO)": lambda c, i, j, s, ch: plan_pair(c, i, j, method="exact"),
+    }
+    refine = _refine_hook()
+    if refine is not None:
+        cols["SO-ACO + refine"] = lambda c, i, j, s, ch: refine(
+            c, plan_pair(c, i, j, method="so-aco", rng=s)
+        )
+    label = {"bitstar": "BIT*", "rrtstar": "RRT*"}
+    for name in ompl:
+        for b in budgets:
+            cols[f"OMPL {label.get(name, name)} {b:g} s"] = lambda c, i, j, s, ch, name=name, b=b: (
+                plan_pair_ompl(c, i, j, planner=name, time_s=b, rng=s, checks=ch)
+            )
+    return cols
+
+
+def _measure(
+    cells: list[tuple[str, Any]],
+    limit: int | None,
+    cols: dict[str, Callable[..., Any]],
+    seed: int,
+) -> list[dict[str, Any]]:
+    """One record per (cell, pair): every column's length, success, wall and CPU seconds."""
+    from weldplan.motion.local import TorchChecks
+
+    records = []
+    for cname, cell in cells:
+        pairs = blocked_pairs(cell, limit)
+        ids = [str(v) for v in cell.joints.ids]
+        checks = TorchChecks(cell)
+        print(f"{cname}: {cell.n_joints} joints, {len(pairs)} blocked pairs measured")
+        for k, (i, j) in enumerate(pairs):
+            rec: dict[str, Any] = {"cell": cname, "pair": [ids[i], ids[j]], "runs": {}}
+            for col, fn in cols.items():
+                try:
+                    lp = fn(cell, i, j, seed + k, checks)
+                    ok = bool(lp.success)
+                    run = {
+                        "length": float(lp.inner_length) if ok else None,
+                        "success": ok,
+                        "wall_s": float(lp.seconds),
+                        "cpu_s": float(lp.cpu_seconds),
+                        "reason": "" if ok else str(lp.reason),
+                    }
+                except Exception as exc:  # a planner error is a failed pair in the table
+                    run = {"length": None, "success": False, "wall_s": math.nan,
+                           "cpu_s": math.nan, "reason": f"{type(exc).__name__}: {exc}"}  # fmt: skip
+                rec["runs"][col] = run
+            done = [v["length"] for v in rec["runs"].values() if v["success"]]
+            rec["best"] = min(done) if done else None
+            records.append(rec)
+            short = " ".join(
+                f"{v['length']:.1f}" if v["success"] else "FAIL" for v in rec["runs"].values()
+            )
+            print(f"  {ids[i]} -> {ids[j]}: {short}")
+    return records
+
+
+# --------------------------------------------------------------------------- summary
+
+
+def summarise(records: list[dict[str, Any]], cols: list[str], ref: str | None) -> dict[str, Any]:
+    """Per column: success, length / best known (mean, max, within 1 %), length / ``ref``
+    (mean, max, over pairs both solved), wall and CPU seconds (median, mean)."""
+    out: dict[str, Any] = {}
+    for col in cols:
+        runs = [(r["runs"][col], r["best"], r["runs"].get(ref) if ref else None) for r in records]
+        ok = [(v, b, rf) for v, b, rf in runs if v["success"] and b]
+        rb = np.array([v["length"] / b for v, b, _ in ok]) if ok else np.zeros(0)
+        rr = np.array([v["length"] / rf["length"] for v, _, rf in ok if rf and rf["success"]])
+        wall = np.array([v["wall_s"] for v, _, _ in runs if math.isfinite(v["wall_s"])])
+        cpu = np.array([v["cpu_s"] for v, _, _ in runs if math.isfinite(v["cpu_s"])])
+        out[col] = {
+            "pairs": len(runs),
+            "solved": len(ok),
+            "best_mean": float(rb.mean()) if len(rb) else None,
+            "best_max": float(rb.max()) if len(rb) else None,
+            "within_1pct": int((rb <= 1.01).sum()),
+            "ref_mean": float(rr.mean()) if len(rr) else None,
+            "ref_max": float(rr.max()) if len(rr) else None,
+            "ref_pairs": len(rr),
+            "wall_median": float(np.median(wall)) if len(wall) else None,
+            "wall_mean": float(wall.mean()) if len(wall) else None,
+            "cpu_median": float(np.median(cpu)) if len(cpu) else None,
+        }
+    return out
+
+
+def _f(x: float | None, fmt: str = ".4f") -> str:
+    return "-" if x is None else format(x, fmt)
+
+
+def markdown(
+    records: list[dict[str, Any]],
+    summary: dict[str, dict[str, dict[str, Any]]],
+    ref: str | None,
+    fast: str | None,
+    meta: dict[str, Any],
+) -> str:
+    """The report: one table per cell and one over all cells, then the issue's targets."""
+    lines = [
+        "# Local planners beside OMPL on every blocked pair (issue 15 item 5)",
+        "",
+        f"Cells: {', '.join(meta['cells'])}; {len(records)} blocked pairs"
+        + (f" (at most {meta['pairs_limit']} a cell)" if meta["pairs_limit"] else "")
+        + f"; seeds from {meta['seed']} (one a pair).",
+        f"Machine: {meta['before']} before; load {meta['load_after']} after; "
+        f"{meta['wall_s']:.0f} s in all.",
+        "Length: between the virtual joints (mm), the same end points for every planner. "
+        "Best known: the shortest successful path any column found for that pair. "
+        f"Reference: {ref or '(none)'} (the issue's BIT* 10 s + simplify when 10 is a budget).",
+        "OMPL: weldplan's FCL checks as its validity checker (sphere + closed solids per state, "
+        "FCL capsule per motion); budgets are wall-clock; time includes OMPL's simplifier.",
+        meta["refine_note"],
+        "",
+    ]
+    header = (
+        "| planner | solved | length / best: mean | max | within 1 % | length / reference: "
+        "mean | max | median wall s | mean wall s | median CPU s |"
+    )
+    for scope, table in summary.items():
+        lines += [f"## {scope}", "", header, "|---|---|---|---|---|---|---|---|---|---|"]
+        for col, s in table.items():
+            lines.append(
+                f"| {col} | {s['solved']}/{s['pairs']} | {_f(s['best_mean'])} | "
+                f"{_f(s['best_max'])} | {s['within_1pct']}/{s['solved']} | {_f(s['ref_mean'])} | "
+                f"{_f(s['ref_max'])} | {_f(s['wall_median'], '.3f')} | "
+                f"{_f(s['wall_mean'], '.3f')} | {_f(s['cpu_median'], '.3f')} |"
+            )
+        lines.append("")
+    allc = summary["all cells"]
+    ours = allc.get("SO-ACO (default)")
+    lines += ["## Targets (issue 15, SO-ACO default vs OMPL)", ""]
+    if ours:
+        lines.append(
+            f"- Every blocked pair solved: {ours['solved']}/{ours['pairs']} "
+            f"({'met' if ours['solved'] == ours['pairs'] else 'NOT met'})."
+        )
+        if ref and ours["ref_mean"] is not None:
+            mean_ok = ours["ref_mean"] <= 1.002
+            max_ok = ours["ref_max"] <= 1.01
+            lines.append(
+                f"- Mean length <= 1.002 x {ref}: {ours['ref_mean']:.4f} "
+                f"({'met' if mean_ok else 'NOT met'}); max <= 1.01: {ours['ref_max']:.4f} "
+                f"({'met' if max_ok else 'NOT met'}), over {ours['ref_pairs']} pairs both solved."
+            )
+        if fast and allc[fast]["wall_median"] is not None:
+            t, tf = ours["wall_median"], allc[fast]["wall_median"]
+            lines.append(
+                f"- Median time a pair <= {fast}: {t:.3f} s vs {tf:.3f} s "
+                f"({'met' if t <= tf else 'NOT met'})."
+            )
+    lines.append("")
+    return "\n".join(lines)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Measure, print a line a pair, write ``local-peers.md`` and ``local-peers.json``."""
+    from weldplan.bench.common import conditions
+    from weldplan.errors import ConfigError
+    from weldplan.motion.sampling import PLANNERS, ompl_available
+
+    if not ompl_available():
+        raise ConfigError("bench local --peers needs OMPL: pip install 'weldplan[ompl]'")
+    budgets = _floats(args.budgets, "--budgets")
+    ompl = [p.strip() for p in args.ompl_planners.split(",") if p.strip()]
+    bad = [p for p in ompl if p not in PLANNERS]
+    if bad:
+        raise ConfigError(f"unknown OMPL planner(s) {bad}; choose from {', '.join(PLANNERS)}")
+    if args.pairs is not None and args.pairs < 1:
+        raise ConfigError(f"--pairs must be a positive integer, got {args.pairs}")
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    before = conditions()
+    t0 = time.perf_counter()
+    cells = build_cells(args.cells, args.station_size)
+    cols = planners(budgets, ompl)
+    names = list(cols)
+    ref = f"OMPL BIT* {max(budgets):g} s" if "bitstar" in ompl else None
+    fast = f"OMPL BIT* {min(budgets):g} s" if "bitstar" in ompl else None
+    records: list[dict[str, Any]] = []
+    for k, cell in enumerate(cells):
+        records += _measure([cell], args.pairs, cols, args.seed + len(records))
+        # written after every cell, so a long run that is stopped keeps what it measured
+        done = cells[: k + 1]
+        summary = {"all cells": summarise(records, names, ref)}
+        for cname, _ in done:
+            summary[cname] = summarise([r for r in records if r["cell"] == cname], names, ref)
+        load = os.getloadavg()
+        meta = {
+            "cells": [c for c, _ in done],
+            "pairs_limit": args.pairs,
+            "seed": args.seed,
+            "budgets": budgets,
+            "ompl_planners": ompl,
+            "before": before,
+            "load_after": f"{load[0]:.2f} {load[1]:.2f} {load[2]:.2f}",
+            "wall_s": time.perf_counter() - t0,
+            "refine_note": (
+                "Ours + refine: weldplan.weld.refine.refine_path applied to the SO-ACO path."
+                if "SO-ACO + refine" in cols
+                else "Ours + refine: not measured (weldplan.weld.refine.refine_path is not in "
+                "this build; the column appears when it is)."
+            ),
+        }
+        (out / "local-peers.md").write_text(markdown(records, summary, ref, fast, meta))
+        (out / "local-peers.json").write_text(
+            json.dumps({"meta": meta, "summary": summary, "records": records}, indent=1)
+        )
+    print(f"wrote {out / 'local-peers.md'}, {out / 'local-peers.json'}")
+    return 0
