@@ -1,0 +1,1 @@
+"""The robot that carries the tool: model, IK branches, reach, configurations, timing."""
