@@ -14,9 +14,10 @@ The geometric path of a segment
 -------------------------------
 TOPP-RA needs a twice-differentiable path. A cubic spline straight through the waypoints
 would round every corner by an amount the route never checked, so the path is the cubic spline
-(``toppra.SplineInterpolator``, not-a-knot) through the waypoints *and* ``k - 1`` points
-inserted on each joint-space segment between them: it reproduces straight segments exactly and
-keeps every corner within ``segment / k``. ``k`` doubles from 1 until the largest per-joint
+(``toppra.SplineInterpolator``, not-a-knot) through the waypoints *and* knots inserted on the
+joint-space segments between them, at most ``h`` apart: it reproduces straight segments exactly
+and rounds every corner only within a fraction of ``h``. ``h`` halves, from the longest interval,
+until the largest per-joint
 deviation of the spline from the waypoints' joint-space polyline, at the same path parameter
 (``s`` = joint-space arc length, a bound on the geometric deviation), is at most
 ``tolerance`` rad (:data:`DEFAULT_TOLERANCE_RAD`). The deviation reached is reported per
@@ -52,7 +53,7 @@ DEFAULT_TOLERANCE_RAD = 5e-4
 #: sampling period (s) of :attr:`TimedTrajectory.t`: 100 Hz, finer than a KUKA KRC's 12 ms
 #: interpolation cycle; every waypoint arrival is a sample as well
 DEFAULT_DT = 0.01
-#: the most times the insertion count ``k`` doubles (``k`` <= 2**10) before giving up
+#: the most times the knot spacing ``h`` halves before giving up
 MAX_DOUBLINGS = 10
 #: grid points of TOPP-RA per inserted piece of the spline (at least :data:`MIN_GRID` in all)
 GRID_PER_PIECE = 2
@@ -75,7 +76,7 @@ class Segment:
     deviation
         rad: largest per-joint distance of the timed path from the joint polyline.
     inserted
-        Points inserted per waypoint interval to reach the tolerance (``k - 1``).
+        Knots inserted between the waypoints to reach the tolerance.
     """
 
     start: int
@@ -178,22 +179,28 @@ def _spline_path(q: NDArray[np.float64], tolerance: float):
 
     seg = np.linalg.norm(np.diff(q, axis=0), axis=1)
     s_way = np.concatenate([[0.0], np.cumsum(seg)])
-    for doubling in range(MAX_DOUBLINGS + 1):
-        k = 2**doubling
-        frac = np.arange(k) / k  # (k,) positions inside each interval
-        s_knots = np.concatenate([(s_way[:-1, None] + frac * seg[:, None]).ravel(), s_way[-1:]])
+    if len(q) == 2:  # a straight segment: the spline through two points is the line itself
+        return ta.SplineInterpolator(s_way, q), s_way, 0.0, 0
+    h = float(seg.max())
+    for _ in range(MAX_DOUBLINGS + 1):
+        # every interval cut into pieces of at most h (rad of joint-space arc length)
+        pieces = np.maximum(np.ceil(seg / h - 1e-9), 1).astype(np.int64)
+        frac = np.concatenate([np.arange(p) / p for p in pieces])
+        start = np.repeat(s_way[:-1], pieces) + frac * np.repeat(seg, pieces)
+        s_knots = np.concatenate([start, s_way[-1:]])
         knots = np.column_stack([np.interp(s_knots, s_way, q[:, j]) for j in range(q.shape[1])])
         path = ta.SplineInterpolator(s_knots, knots)
-        if len(q) == 2:  # a straight segment: the spline is the line itself
-            return path, s_way, 0.0, 0
-        s_chk = np.linspace(0.0, s_way[-1], 16 * k * (len(q) - 1) + 1)
+        s_chk = np.concatenate(
+            [np.linspace(a, b, 9)[:-1] for a, b in zip(s_knots[:-1], s_knots[1:], strict=True)]
+        )
         lin = np.column_stack([np.interp(s_chk, s_way, q[:, j]) for j in range(q.shape[1])])
         dev = float(np.max(np.abs(path(s_chk) - lin)))
         if dev <= tolerance:
-            return path, s_way, dev, k - 1
+            return path, s_way, dev, int(len(s_knots) - len(q))
+        h /= 2.0
     raise PlanningError(
-        f"the joint spline stays {dev:.2g} rad off its polyline after {k - 1} inserted points "
-        f"per interval (tolerance {tolerance:g} rad)"
+        f"the joint spline stays {dev:.2g} rad off its polyline with knots every {2 * h:.2g} rad "
+        f"(tolerance {tolerance:g} rad)"
     )
 
 
@@ -206,7 +213,7 @@ def _time_segment(
     import toppra.constraint as constraint
 
     path, s_way, dev, inserted = _spline_path(q, tolerance)
-    pieces = max(MIN_GRID, GRID_PER_PIECE * (inserted + 1) * (len(q) - 1))
+    pieces = max(MIN_GRID, GRID_PER_PIECE * (inserted + len(q) - 1))
     grid = np.unique(np.concatenate([np.linspace(0.0, s_way[-1], pieces + 1), s_way]))
     cons = [
         constraint.JointVelocityConstraint(velocity),
