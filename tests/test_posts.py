@@ -159,3 +159,47 @@ def test_user_weld_template(build):
     mod = parse_rapid(text)
     assert [w for _, w in mod.welds][0].startswith("SpotL p0001,vmax,gun1,tWeldplan")
     assert "PROC weld_spot" not in text
+
+
+def test_joint_moves_stop_everywhere_and_a_replanned_via_is_a_joint_move(build):
+    from tests.route_fixtures import box_route
+    from weldplan.robot.program import robot_program
+
+    robot, Tft, Q, _ = build
+    # a joint-space via between route rows 2 and 3, as a re-planned leg would have it
+    mid = 0.5 * (Q[2] + Q[3])
+    Qv = np.vstack([Q[:3], mid, Q[3:]])
+    row = np.array([0, 1, 2, 2, 3, 4, 5, 6, 7])
+    exact = np.array([True, True, True, False, True, True, True, True, True])
+    common = dict(part=box_part(), tool_mass=2.0, tool_cog=np.zeros(3), weld_time=0.5)
+    lin = robot_program(box_route(directions=True), Qv, robot, Tft, row=row, exact=exact, **common)
+    via = [t for t in lin.program.targets if t.kind == "via" and not np.allclose(t.q, Q[t.row])]
+    assert len(via) == 1 and via[0].move == "joint" and via[0].blend == 0.0
+    mod = parse_rapid(render_rapid(lin.program))
+    for (_, name, _, _), t in zip(mod.moves, lin.program.targets, strict=True):
+        _check_fk(robot, t.q, mod.wobj @ mod.targets[name][0], mod.tool)
+    jnt = robot_program(
+        box_route(directions=True), Qv, robot, Tft, row=row, exact=exact, moves="joint", **common
+    )
+    assert {t.move for t in jnt.program.targets} == {"joint"}
+    assert all(t.blend == 0.0 for t in jnt.program.targets)
+    assert np.all(jnt.timing.stops) and jnt.timing.total > lin.timing.total
+
+
+def test_trajectory_csv_replays_the_timing(build):
+    import csv
+    import io
+
+    from weldplan.io.trajectory import trajectory_csv_text
+
+    robot, _, Q, b = build
+    rows = list(csv.reader(io.StringIO(trajectory_csv_text(b.timing))))
+    assert rows[0] == ["t", "step", *robot.joint_names]
+    data = np.array([[float(v) for v in r] for r in rows[1:]])
+    assert np.all(np.diff(data[:, 0]) >= 0) and data[-1, 0] == pytest.approx(
+        b.timing.total, abs=1e-4
+    )
+    for r, t in enumerate(b.timing.row_times):  # every waypoint is a row of the CSV
+        k = int(np.argmin(np.abs(data[:, 0] - t) + np.abs(data[:, 2:] - Q[r]).sum(axis=1)))
+        np.testing.assert_allclose(data[k, 2:], Q[r], atol=1e-7)
+        assert data[k, 1] == r

@@ -14,12 +14,20 @@
    the peak TCP speed of the timed trajectory on that move (FK of the samples), so the program
    asks for the speeds the cycle time assumed;
 4. frames the route by a joint move to the first virtual joint (from wherever the robot is) and
-   a retreat to the last one, both rows of the verified route; every other move is linear (the
-   route was verified as straight Cartesian segments and its blends for linear moves).
+   a retreat to the last one, both rows of the verified route.
 
-Named deviation: the timing model moves in joint space between waypoints (a spline within
-``tolerance`` rad of the joint polyline), the program's linear moves follow the Cartesian lines;
-:attr:`ProgramBuild.tcp_deviation` is how far the timed TCP strays from those lines (mm).
+Moves (``moves``): the joint route (:class:`~weldplan.robot.configs.RobotRoute`) has rows on the
+route (``exact``: FK puts the TCP on the route's pose) and, on legs re-planned in joint space,
+rows that are not. A target that is not exact is always a joint move with an exact stop (only
+its joint path was checked). Between exact rows:
+
+* ``"linear"`` (default): ``MoveL`` / ``LIN``, the Cartesian segments the point-tip route was
+  verified on, blended where the free margin allows (the blend argument of
+  :mod:`weldplan.io.blending` is for linear moves). Named deviation: the robot check and the
+  timing move in joint space between rows; :attr:`ProgramBuild.tcp_deviation` is how far that
+  joint path's TCP strays from the Cartesian lines (mm).
+* ``"joint"``: ``MoveJ`` / ``PTP`` everywhere, every target an exact stop (no joint-space blend
+  is verified): exactly the joint path the robot check verified, and the timing of it.
 """
 
 from __future__ import annotations
@@ -31,7 +39,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from weldplan.errors import PlanningError
+from weldplan.errors import ConfigError, PlanningError
 from weldplan.io.blending import RAPID_ZONES, allowed_radii, route_clearance
 from weldplan.io.posts.config import arm_flags
 from weldplan.io.posts.program import RobotProgram, Target
@@ -84,6 +92,19 @@ def _segment_distance(P: NDArray, A: NDArray, B: NDArray) -> NDArray:
     return np.linalg.norm(P - (A + t[:, None] * ab), axis=1)
 
 
+def _exact_index(row: NDArray[np.int64], exact: NDArray[np.bool_], n: int) -> NDArray[np.int64]:
+    """``(n,)``: for every route row the first joint-route row on it that is exact."""
+    idx = np.full(n, -1, dtype=np.int64)
+    for i in range(len(row) - 1, -1, -1):
+        if exact[i]:
+            idx[row[i]] = i
+    if np.any(idx < 0):
+        raise PlanningError(
+            f"the joint route has no exact row for route row {int(np.flatnonzero(idx < 0)[0])}"
+        )
+    return idx
+
+
 def robot_program(
     route: Any,
     q: ArrayLike,
@@ -93,18 +114,23 @@ def robot_program(
     part: Any,
     tool_mass: float,
     tool_cog: ArrayLike,
+    row: ArrayLike | None = None,
+    exact: ArrayLike | None = None,
+    moves: str = "linear",
     weld_time: float = 0.0,
     clearance: float | None = None,
     tolerance: float = DEFAULT_TOLERANCE_RAD,
     tcp_speed: float = DEFAULT_TCP_SPEED,
     name: str = "weldplan_route",
 ) -> ProgramBuild:
-    """Build the program of ``route`` driven by joint vectors ``q (n, 6)`` rad (module docstring).
+    """Build the program of ``route`` driven by the joint route ``q`` (module docstring).
 
     Parameters
     ----------
     route
         The verified :class:`~weldplan.weld.route.Route` (``n`` waypoint rows).
+    q
+        ``(k, 6)`` rad: the joint route, ``k >= n``.
     robot
         :class:`~weldplan.robot.model.Robot` placed in the part frame (its velocity and
         acceleration limits already scaled as the run asks).
@@ -114,115 +140,150 @@ def robot_program(
         Mesh, Cell or CollisionModel for the blend radii.
     tool_mass, tool_cog
         kg and ``(3,)`` mm in the flange frame.
+    row, exact
+        ``(k,)``: the route row each joint row belongs to and whether it is on the route
+        (:class:`~weldplan.robot.configs.RobotRoute`); default ``arange(n)`` and all true.
+    moves
+        ``"linear"`` or ``"joint"`` between exact rows (module docstring).
+
+    Raises
+    ------
+    PlanningError
+        An exact row whose FK is off its route waypoint by more than :data:`ROW_TOLERANCE_MM`,
+        a route row without an exact joint row.
     """
     from weldplan.io.export import route_rows
 
+    if moves not in ("linear", "joint"):
+        raise ConfigError(f"moves must be 'linear' or 'joint', got {moves!r}", field="moves")
     rows = route_rows(route)
-    Q = np.asarray(q, dtype=np.float64).reshape(-1, 6)
     n = len(rows)
-    if len(Q) != n:
-        raise PlanningError(f"{len(Q)} joint vectors for a route of {n} waypoints")
+    Q = np.asarray(q, dtype=np.float64).reshape(-1, 6)
+    k = len(Q)
+    R = np.arange(k, dtype=np.int64) if row is None else np.asarray(row, dtype=np.int64)
+    X = np.ones(k, dtype=bool) if exact is None else np.asarray(exact, dtype=bool)
+    if len(R) != k or len(X) != k or (k and (R.min() < 0 or R.max() >= n)):
+        raise PlanningError(f"{k} joint rows do not map onto a route of {n} waypoints")
+    at = _exact_index(R, X, n)  # route row -> joint row
     Tft = np.asarray(T_flange_tcp, dtype=np.float64).reshape(4, 4)
-    poses = robot.fk(Q) @ Tft  # (n, 4, 4) TCP in the part frame
+    poses = robot.fk(Q) @ Tft  # (k, 4, 4) TCP in the part frame
     pts = np.array([[r["x"], r["y"], r["z"]] for r in rows], dtype=np.float64)
-    err = np.linalg.norm(poses[:, :3, 3] - pts, axis=1)
-    if err.max() > ROW_TOLERANCE_MM:
-        k = int(np.argmax(err))
+    err = np.linalg.norm(poses[at, :3, 3] - pts, axis=1)
+    if n and err.max() > ROW_TOLERANCE_MM:
+        j = int(np.argmax(err))
         raise PlanningError(
-            f"forward kinematics puts the TCP {err[k]:.3g} mm from route row {k} "
+            f"forward kinematics puts the TCP {err[j]:.3g} mm from route row {j} "
             f"(tolerance {ROW_TOLERANCE_MM} mm): the joint route is not the verified route"
         )
-    welds = np.array([k for k, r in enumerate(rows) if r["kind"] == "weld"], dtype=np.int64)
-    # program order: approach (row 1), every row, retreat (row n - 2)
-    order = [1, *range(n), n - 2] if n >= 3 else list(range(n))
-    kinds = (
-        (["approach"] + [r["kind"] for r in rows] + ["retreat"])
-        if n >= 3
-        else [r["kind"] for r in rows]
-    )
+    kind_of = [rows[int(r)]["kind"] if X[i] and at[R[i]] == i else "via" for i, r in enumerate(R)]
+    # program order: approach (route row 1), every joint row, retreat (route row n - 2)
+    framed = n >= 3
+    order = [int(at[1]), *range(k), int(at[n - 2])] if framed else list(range(k))
+    kinds = ["approach", *kind_of, "retreat"] if framed else list(kind_of)
+    linear = np.array([moves == "linear" and bool(X[i]) for i in order])
+    linear[0] = False  # from wherever the robot is
+    if framed:  # into the first weld and out to the retreat: the route's approach segments
+        linear[1] = linear[-1] = moves == "linear"
     c = route_clearance(route, clearance)
-    radii = allowed_radii(pts[order], [k == "via" for k in kinds], part, c)
-    stop_rows = np.ones(n, dtype=bool)
-    off = 1 if n >= 3 else 0
-    stop_rows[:] = radii[off : off + n] < RAPID_ZONES["z0"]
+    cand = [kd == "via" and lin for kd, lin in zip(kinds, linear, strict=True)]
+    radii = allowed_radii(poses[order, :3, 3], cand, part, c)
+    off = 1 if framed else 0
+    stops = radii[off : off + k] < RAPID_ZONES["z0"]
+    welds = at[[j for j, r in enumerate(rows) if r["kind"] == "weld"]]
 
     timing = time_route(
         Q,
         robot.velocity,
         robot.acceleration,
         weld_rows=welds,
-        stops=stop_rows,
+        stops=stops,
         weld_time=weld_time,
         tolerance=tolerance,
         joint_names=tuple(robot.joint_names),
     )
-    speed, dev = _tcp_speeds(robot, Tft, timing, pts, n)
+    speed, dev = _tcp_speeds(poses[:, :3, 3], robot, Tft, timing, X)
     flags = arm_flags(robot, Q)
     targets = []
-    for i, (row, kind) in enumerate(zip(order, kinds, strict=True)):
+    for i, (j, kind) in enumerate(zip(order, kinds, strict=True)):
         if kind == "approach":
-            v, move = APPROACH_SPEED, "joint"
-        elif i == off:  # the first weld, reached from the approach point: row 1 -> 0 reversed
-            v, move = speed[min(1, n - 1)], "linear"
+            v = APPROACH_SPEED
+        elif framed and i == 1:  # the first weld, from the approach point: row 1 -> 0 reversed
+            v = speed[min(int(at[1]), k - 1)]
         elif kind == "retreat":
-            v, move = speed[n - 1], "linear"
+            v = speed[k - 1]
         else:
-            v, move = speed[row], "linear"
-        if not n >= 3 and i == 0:
-            move = "joint"
+            v = speed[j]
         targets.append(
             Target(
                 kind=kind,
-                row=int(row),
-                joint_id=str(rows[row]["joint_id"]) if kind == "weld" else "",
-                pose=poses[row],
-                q=Q[row],
-                flags=flags[row],
-                move=move,
+                row=int(R[j]),
+                joint_id=str(rows[int(R[j])]["joint_id"]) if kind == "weld" else "",
+                pose=poses[j],
+                q=Q[j],
+                flags=flags[j],
+                move="linear" if linear[i] else "joint",
                 blend=float(radii[i]),
                 speed=float(max(v, 1.0)),
             )
         )
     cst = constant_speed_time(pts, len(welds), speed=tcp_speed, weld_time=timing.weld_time)
-    notes = (
-        f"{len(route.joint_ids)} weld joints, {len(targets)} targets, route length "
-        f"{route.length:.2f} mm, order {'-'.join(route.order)}.",
-        f"Cycle time {timing.total:.2f} s (toppra, URDF velocity and the run's acceleration "
-        f"limits, {timing.weld_time:g} s a weld; first weld to the end of the last, without the "
-        f"approach and retreat); at a constant {tcp_speed:g} mm/s TCP speed: {cst:.2f} s.",
-        "Speeds: the peak TCP speed of each move in the timed trajectory. Zones: a via flies by "
-        f"within its free margin (distance to the part - {c:g} mm clearance), else fine.",
-        "Configurations: of the planned joint values (IK branch), kept by the controller.",
-    )
-    mass = float(tool_mass)
     program = RobotProgram(
         name=name,
         robot=robot.name,
         joint_names=tuple(robot.joint_names),
         targets=tuple(targets),
         tool_frame=Tft,
-        tool_mass=mass,
+        tool_mass=float(tool_mass),
         tool_cog=np.asarray(tool_cog, dtype=np.float64).reshape(3),
         part_frame=np.linalg.inv(robot.base),
         weld_time=timing.weld_time,
-        notes=notes,
+        notes=_notes(route, len(targets), timing, cst, tcp_speed, c, moves),
     )
     return ProgramBuild(program, timing, cst, float(tcp_speed), dev)
 
 
+def _notes(
+    route: Any,
+    n_targets: int,
+    timing: TimedTrajectory,
+    cst: float,
+    tcp_speed: float,
+    c: float,
+    moves: str,
+) -> tuple[str, ...]:
+    """The header comment lines of the program."""
+    return (
+        f"{len(route.joint_ids)} weld joints, {n_targets} targets, route length "
+        f"{route.length:.2f} mm, order {'-'.join(route.order)}.",
+        f"Cycle time {timing.total:.2f} s (toppra, URDF velocity and the run's acceleration "
+        f"limits, {timing.weld_time:g} s a weld; first weld to the end of the last, without the "
+        f"approach and retreat); at a constant {tcp_speed:g} mm/s TCP speed: {cst:.2f} s.",
+        f"Moves between route rows: {moves}. Speeds: the peak TCP speed of each move in the "
+        "timed trajectory.",
+        f"Zones: a linear move's via flies by within its free margin (distance to the part - "
+        f"{c:g} mm clearance), else fine; joint moves stop.",
+        "Configurations: of the planned joint values (IK branch), kept by the controller.",
+    )
+
+
 def _tcp_speeds(
-    robot: Any, Tft: NDArray, timing: TimedTrajectory, pts: NDArray, n: int
+    P_rows: NDArray, robot: Any, Tft: NDArray, timing: TimedTrajectory, exact: NDArray
 ) -> tuple[NDArray[np.float64], float]:
-    """``(n,)`` peak TCP speed (mm/s) of the move into each row, and the largest TCP distance
-    (mm) of the timed samples from their Cartesian segment."""
+    """``(k,)`` peak TCP speed (mm/s) of the move into each joint row, and the largest TCP
+    distance (mm) of the timed samples from the Cartesian segment between two exact rows."""
+    k = len(P_rows)
     P = (robot.fk(timing.q) @ Tft)[:, :3, 3]
     dt = np.diff(timing.t)
     moving = dt > 1e-12
     v = np.zeros(len(dt))
     v[moving] = np.linalg.norm(np.diff(P, axis=0)[moving], axis=1) / dt[moving]
-    step = timing.step[1:]
-    speed = np.zeros(n)
-    np.maximum.at(speed, step, v)
-    s = np.clip(timing.step, 1, n - 1)
-    dev = _segment_distance(P, pts[s - 1], pts[s]) if n > 1 else np.zeros(1)
+    speed = np.zeros(k)
+    np.maximum.at(speed, timing.step[1:], v)
+    if k < 2:
+        return speed, 0.0
+    s = np.clip(timing.step, 1, k - 1)
+    both = exact[s - 1] & exact[s]
+    if not np.any(both):
+        return speed, 0.0
+    dev = _segment_distance(P[both], P_rows[s - 1][both], P_rows[s][both])
     return speed, float(dev.max())
