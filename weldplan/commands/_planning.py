@@ -184,8 +184,9 @@ def _outputs(args: argparse.Namespace) -> dict[str, Path]:
         raise WeldplanError("--post-file needs --post rapid|krl")
     if getattr(args, "robot", None) and args.post == "krl":  # KRL's data list beside the .src
         out["post_dat"] = out["post"].with_suffix(".dat")
-    if getattr(args, "trajectory", None):
-        out["trajectory"] = Path(args.trajectory)
+    for kind in ("trajectory", "robot_html"):
+        if getattr(args, kind, None):
+            out[kind] = Path(getattr(args, kind))
     seen: dict[Path, str] = {}
     for kind, path in out.items():
         key = path.resolve()

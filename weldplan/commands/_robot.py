@@ -13,8 +13,8 @@ planning run, after the route and the weld poses were verified, runs :func:`robo
    re-solved by forward kinematics of the URDF chain (<= 0.01 mm, 0.01 deg), so what is written
    is what was planned;
 4. the texts: ``--post rapid`` (``.mod``), ``--post krl`` (``.src`` + ``.dat`` beside it) and
-   ``--trajectory F`` (:mod:`weldplan.io.trajectory`), written with the run's other outputs as
-   one set.
+   ``--trajectory F`` (:mod:`weldplan.io.trajectory`) and ``--robot-html F``
+   (:mod:`weldplan.viz.robot_scene`), written with the run's other outputs as one set.
 """
 
 from __future__ import annotations
@@ -124,13 +124,18 @@ def add_robot_arguments(p: argparse.ArgumentParser) -> None:
         help="tool mass for the programs (default: the tool URDF's <inertial> masses)",
     )
     g.add_argument("--trajectory", metavar="F", help="write the timed joint trajectory as CSV")
+    g.add_argument(
+        "--robot-html",
+        metavar="F",
+        help="write a 3D page of the robot, tool and part animated along the timed trajectory",
+    )
 
 
 def robot_from_args(args: argparse.Namespace) -> Any:
     """The robot (placed at ``--robot-base`` when given), ``None`` without ``--robot``; options
     that need it, or a tool, fail here, before any planning."""
     if not getattr(args, "robot", None):
-        for opt in ("opw", "robot_base", "trajectory", "tool_mass"):
+        for opt in ("opw", "robot_base", "trajectory", "tool_mass", "robot_html"):
             if getattr(args, opt, None) is not None:
                 raise WeldplanError(f"--{opt.replace('_', '-')} needs --robot")
         return None
@@ -203,6 +208,13 @@ def robot_stage(
         name=stem,
     )
     texts = _texts(args, build, rr, rb, outputs)
+    if "robot_html" in outputs:
+        from weldplan.viz.robot_scene import robot_html
+
+        texts["robot_html"] = robot_html(
+            rb, build.timing, rr.flange_tcp, part=cell.part, tool=tool,
+            route_points=route.waypoints(),
+        )  # fmt: skip
     return RobotStage(rr, build, texts, _rows(rr, build))
 
 
