@@ -72,15 +72,27 @@ def test_samples_respect_limits_stay_on_the_polyline_and_hit_every_waypoint():
     assert tt.leg_times().sum() == pytest.approx(tt.total - 0.25, rel=1e-12)
 
 
-def test_an_exact_stop_costs_time_and_a_tighter_tolerance_inserts_more():
-    q = _route(1)
+def test_exact_stops_on_a_straight_sweep_cost_what_the_closed_form_says():
+    # nine rows on one joint-space line: flying through is one trapezoid, stopping at rows 3
+    # and 5 is three (the path is the same line either way)
+    d = np.array([1.5, -0.8, 0.6, 2.0, 1.0, -2.5])
+    q = np.linspace(0.0, 1.0, 9)[:, None] * d
     free = time_route(q, V, A, weld_rows=[0, 8])
     stopped = time_route(q, V, A, weld_rows=[0, 8], stops=np.isin(np.arange(9), [3, 5]))
     assert len(stopped.segments) == 3 and len(free.segments) == 1
-    assert stopped.total > free.total
+    assert free.total == pytest.approx(float(pair_time(d, V, A)), rel=2e-3)
+    parts = [3 / 8, 2 / 8, 3 / 8]
+    exact = sum(float(pair_time(f * d, V, A)) for f in parts)
+    assert stopped.total == pytest.approx(exact, rel=2e-3)
+    assert stopped.total > free.total * 1.2
+
+
+def test_a_tighter_tolerance_inserts_more_knots():
+    q = _route(1)
+    free = time_route(q, V, A, weld_rows=[0, 8])
     tight = time_route(q, V, A, weld_rows=[0, 8], tolerance=DEFAULT_TOLERANCE_RAD / 8)
     assert tight.segments[0].inserted > free.segments[0].inserted
-    assert tight.deviation <= DEFAULT_TOLERANCE_RAD / 8
+    assert tight.deviation <= DEFAULT_TOLERANCE_RAD / 8 < free.deviation
 
 
 def test_slower_limits_take_longer():

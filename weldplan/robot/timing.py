@@ -16,8 +16,9 @@ TOPP-RA needs a twice-differentiable path. A cubic spline straight through the w
 would round every corner by an amount the route never checked, so the path is the cubic spline
 (``toppra.SplineInterpolator``, not-a-knot) through the waypoints *and* knots inserted on the
 joint-space segments between them, at most ``h`` apart: it reproduces straight segments exactly
-and rounds every corner only within a fraction of ``h``. ``h`` halves, from the longest interval,
-until the largest per-joint
+and rounds every corner only within a fraction of ``h``. ``h`` shrinks (by the ratio of the
+tolerance to the deviation, at least by half), from the longest interval, until the largest
+per-joint
 deviation of the spline from the waypoints' joint-space polyline, at the same path parameter
 (``s`` = joint-space arc length, a bound on the geometric deviation), is at most
 ``tolerance`` rad (:data:`DEFAULT_TOLERANCE_RAD`). The deviation reached is reported per
@@ -27,7 +28,11 @@ Deviations from the paper, named: the parameterisation is TOPP-RA's with toppra'
 acceleration parametriser (``ParametrizeConstAccel``) on a grid that contains every waypoint,
 so the arrival time at each waypoint is exact on that grid; constraints hold at the grid points
 (TOPP-RA's interpolation discretisation), not in between, so a sampled velocity can exceed its
-limit by the discretisation error (tests bound it).
+limit by the discretisation error (tests bound it). The grid follows toppra's own refinement rule
+(:data:`GRID_ERROR_RAD`); its error makes the time conservative: on a random joint walk with a
+sharp corner at every row (tests' route, seed 1) 3.54 s at the default against 3.49 s with a
+grid ten times finer; on a 1000-row, 200-weld walk 307.1 s against 301.8 s (+1.8 %), for
+15 s instead of 24 s of computing on a loaded 2-core machine.
 
 Constant TCP speed (the comparison the issue asks for): :func:`constant_speed_time` is the same
 route's Cartesian polyline length divided by one TCP speed, plus the same weld dwell: what a
@@ -39,6 +44,7 @@ from __future__ import annotations
 import logging
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -53,10 +59,13 @@ DEFAULT_TOLERANCE_RAD = 5e-4
 #: sampling period (s) of :attr:`TimedTrajectory.t`: 100 Hz, finer than a KUKA KRC's 12 ms
 #: interpolation cycle; every waypoint arrival is a sample as well
 DEFAULT_DT = 0.01
-#: the most times the knot spacing ``h`` halves before giving up
+#: the most times the knot spacing ``h`` shrinks (at least halving) before giving up
 MAX_DOUBLINGS = 10
-#: grid points of TOPP-RA per inserted piece of the spline (at least :data:`MIN_GRID` in all)
-GRID_PER_PIECE = 2
+#: TOPP-RA's grid: toppra's own refinement rule (``propose_gridpoints``), an interval is split
+#: while ``0.5 max|q''(s)| ds^2`` exceeds GRID_ERROR_RAD or ds exceeds GRID_MAX_DS (rad of
+#: joint-space arc length); at least MIN_GRID points
+GRID_ERROR_RAD = 1e-4
+GRID_MAX_DS = 0.05
 MIN_GRID = 100
 #: constant TCP speed (mm/s) of the comparison when none is given: a typical air-move speed of a
 #: spot-welding program
@@ -190,31 +199,47 @@ def _spline_path(q: NDArray[np.float64], tolerance: float):
         s_knots = np.concatenate([start, s_way[-1:]])
         knots = np.column_stack([np.interp(s_knots, s_way, q[:, j]) for j in range(q.shape[1])])
         path = ta.SplineInterpolator(s_knots, knots)
-        s_chk = np.concatenate(
-            [np.linspace(a, b, 9)[:-1] for a, b in zip(s_knots[:-1], s_knots[1:], strict=True)]
-        )
+        s_chk = (s_knots[:-1, None] + np.diff(s_knots)[:, None] * (np.arange(8) / 8.0)).ravel()
         lin = np.column_stack([np.interp(s_chk, s_way, q[:, j]) for j in range(q.shape[1])])
         dev = float(np.max(np.abs(path(s_chk) - lin)))
         if dev <= tolerance:
             return path, s_way, dev, int(len(s_knots) - len(q))
-        h /= 2.0
+        # the corner error shrinks about linearly with h: aim a little below the tolerance
+        h *= min(0.5, max(0.05, 0.8 * tolerance / dev))
     raise PlanningError(
         f"the joint spline stays {dev:.2g} rad off its polyline with knots every {2 * h:.2g} rad "
         f"(tolerance {tolerance:g} rad)"
     )
 
 
+def _gridpoints(path: Any, s_way: NDArray[np.float64]) -> NDArray[np.float64]:
+    """TOPP-RA grid over ``[0, s_way[-1]]`` containing every waypoint: toppra's
+    ``propose_gridpoints`` rule (:data:`GRID_ERROR_RAD`, :data:`GRID_MAX_DS`), vectorised per
+    spline piece (``q''`` is linear on a cubic piece, so its largest value is at an end)."""
+    knots = np.asarray(path.ss_waypoints, dtype=np.float64)
+    dd = np.abs(np.asarray(path(knots, 2), dtype=np.float64)).max(axis=1)  # (m,)
+    curv = np.maximum(dd[:-1], dd[1:])
+    ds = np.diff(knots)
+    n = np.ceil(np.maximum(ds * np.sqrt(0.5 * curv / GRID_ERROR_RAD), ds / GRID_MAX_DS) - 1e-9)
+    n = np.maximum(n, 1).astype(np.int64)
+    if n.sum() < MIN_GRID:
+        n = np.maximum(n, int(np.ceil(MIN_GRID / len(n))))
+    frac = np.concatenate([np.arange(k) / k for k in n])
+    grid = np.repeat(knots[:-1], n) + frac * np.repeat(ds, n)
+    return np.unique(np.concatenate([grid, knots[-1:], s_way]))
+
+
 def _time_segment(
     q: NDArray[np.float64], velocity: NDArray, acceleration: NDArray, tolerance: float
 ):
-    """Rest-to-rest TOPP-RA over ``q (k, d)``: ``(trajectory, arrival times (k,), deviation,
-    inserted)``; ``trajectory(t) -> (m, d)``."""
+    """Rest-to-rest TOPP-RA over ``q (k, d)``: ``(at, arrival times (k,), deviation,
+    inserted)``; ``at(t (m,)) -> (m, d)`` joint values at times ``t`` s."""
     import toppra.algorithm as algo
     import toppra.constraint as constraint
+    from toppra.algorithm.algorithm import ParameterizationReturnCode
 
     path, s_way, dev, inserted = _spline_path(q, tolerance)
-    pieces = max(MIN_GRID, GRID_PER_PIECE * (inserted + len(q) - 1))
-    grid = np.unique(np.concatenate([np.linspace(0.0, s_way[-1], pieces + 1), s_way]))
+    grid = _gridpoints(path, s_way)
     cons = [
         constraint.JointVelocityConstraint(velocity),
         constraint.JointAccelerationConstraint(
@@ -223,16 +248,26 @@ def _time_segment(
         ),
     ]
     inst = algo.TOPPRA(cons, path, gridpoints=grid, parametrizer="ParametrizeConstAccel")
-    traj = inst.compute_trajectory(0.0, 0.0)
-    if traj is None:
-        raise PlanningError(f"toppra could not time a segment ({inst.problem_data.return_code})")
-    sd = np.asarray(inst.problem_data.sd_vec, dtype=np.float64)
-    # ParametrizeConstAccel's law: t_{i+1} = t_i + 2 (s_{i+1} - s_i) / (sd_i + sd_{i+1})
+    inst.compute_parameterization(0.0, 0.0)
+    data = inst.problem_data
+    if data.return_code != ParameterizationReturnCode.Ok or data.sd_vec is None:
+        raise PlanningError(f"toppra could not time a segment ({data.return_code})")
+    sd = np.asarray(data.sd_vec, dtype=np.float64)
+    # ParametrizeConstAccel's law, vectorised: constant path acceleration u_i on each grid
+    # interval, t_{i+1} = t_i + 2 (s_{i+1} - s_i) / (sd_i + sd_{i+1})
+    ds = np.diff(grid)
     with np.errstate(divide="ignore"):
-        dt = 2.0 * np.diff(grid) / (sd[:-1] + sd[1:])
-    t_grid = np.concatenate([[0.0], np.cumsum(dt)])
+        t_grid = np.concatenate([[0.0], np.cumsum(2.0 * ds / (sd[:-1] + sd[1:]))])
+    u = (sd[1:] ** 2 - sd[:-1] ** 2) / (2.0 * ds)
+
+    def at(times: NDArray[np.float64]) -> NDArray[np.float64]:
+        i = np.clip(np.searchsorted(t_grid, times, side="right") - 1, 0, len(ds) - 1)
+        dt = times - t_grid[i]
+        s = grid[i] + sd[i] * dt + 0.5 * u[i] * dt * dt
+        return np.asarray(path(np.clip(s, 0.0, grid[-1])), dtype=np.float64)
+
     arrive = t_grid[np.searchsorted(grid, s_way)]
-    return traj, arrive, dev, inserted
+    return at, arrive, dev, inserted
 
 
 def time_route(
@@ -308,7 +343,7 @@ def time_route(
             segments.append(Segment(int(a), int(b), 0.0, 0.0, 0))
             continue
         keep = np.concatenate([[True], np.any(np.diff(seg_q, axis=0) != 0, axis=1)])
-        traj, arrive, dev, inserted = _time_segment(seg_q[keep], vel, acc, tolerance)
+        at, arrive, dev, inserted = _time_segment(seg_q[keep], vel, acc, tolerance)
         rows_kept = np.arange(a, b + 1)[keep]
         rows = np.arange(a + 1, b + 1)  # a row equal to the one before it arrives with it
         row_t[a + 1 : b + 1] = now + arrive[np.searchsorted(rows_kept, rows, side="right") - 1]
@@ -317,7 +352,7 @@ def time_route(
         grid_t = grid_t[grid_t > 0]
         ts.append(now + grid_t)
         steps.append(rows_kept[np.searchsorted(arrive, grid_t - 1e-12)])
-        qs.append(np.asarray(traj(grid_t), dtype=np.float64).reshape(-1, d))
+        qs.append(at(grid_t).reshape(-1, d))
         qs[-1][-1] = q[b]  # the stop itself, exactly
         now += dur
         segments.append(Segment(int(a), int(b), dur, dev, inserted))
