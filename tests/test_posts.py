@@ -203,3 +203,44 @@ def test_trajectory_csv_replays_the_timing(build):
         k = int(np.argmin(np.abs(data[:, 0] - t) + np.abs(data[:, 2:] - Q[r]).sum(axis=1)))
         np.testing.assert_allclose(data[k, 2:], Q[r], atol=1e-7)
         assert data[k, 1] == r
+
+
+def test_a_weld_the_robot_cannot_serve_is_passed_without_welding(build):
+    from tests.route_fixtures import box_route
+    from weldplan.robot.program import robot_program
+
+    robot, Tft, Q, _ = build
+    Qs = Q.copy()
+    Qs[3] = 0.5 * (Q[2] + Q[4])  # weld C interpolated across, as the robot route does it
+    exact = np.ones(len(Q), bool)
+    exact[3] = False
+    b = robot_program(
+        box_route(directions=True), Qs, robot, Tft, exact=exact, part=box_part(),
+        tool_mass=2.0, tool_cog=np.zeros(3), weld_time=0.5,
+    )  # fmt: skip
+    assert b.skipped == ("C",)
+    assert [t.joint_id for t in b.program.targets if t.kind == "weld"] == ["A", "B"]
+    moves = {t.row: t.move for t in b.program.targets[1:-1]}
+    assert moves[3] == "joint" and moves[4] == "joint"  # into and out of the passed row
+    assert b.timing.total == pytest.approx(b.timing.motion_time + 2 * 0.5)
+    text = render_rapid(b.program)
+    assert "Not welded" in text and "C." in text
+    mod = parse_rapid(text)
+    assert len(mod.welds) == 2
+    for (_, name, _, _), t in zip(mod.moves, b.program.targets, strict=True):
+        _check_fk(robot, t.q, mod.wobj @ mod.targets[name][0], mod.tool)
+
+
+def test_joint_line_deviation_is_the_sagitta_of_an_axis_1_turn(build):
+    from weldplan.robot.program import joint_line_deviation
+
+    robot, Tft, Q, _ = build
+    qa = Q[0].copy()
+    qb = qa.copy()
+    qb[0] += np.radians(20.0)
+    p = (robot.fk(qa)[0] @ Tft)[:3, 3]
+    axis_xy = robot.base[:2, 3]  # A1 turns about the base's vertical axis
+    r = float(np.linalg.norm(p[:2] - axis_xy))
+    got = joint_line_deviation(robot, Tft, qa[None], qb[None])[0]
+    assert got == pytest.approx(r * (1 - np.cos(np.radians(10.0))), rel=1e-9)
+    assert joint_line_deviation(robot, Tft, qa[None], qa[None])[0] == 0.0

@@ -237,6 +237,7 @@ def run_planning(
         return 1
     extra_rows: list[tuple[str, str]] = []
     texts: dict[str, str] = {}
+    robot_partial = False
     if tool is not None:
         staged = _pose_stage(args, cell, route, tool, bars, times)
         if staged is None:
@@ -250,6 +251,7 @@ def run_planning(
         times["robot"] = st.seconds
         extra_rows += stage.rows
         texts = stage.texts
+        robot_partial = bool(stage.skipped)
 
     with bars.stage("export") as st:
         _write(args, outputs, route, cell, None if tool is None else tool[0], texts)
@@ -264,7 +266,13 @@ def run_planning(
                 route, times, outputs, title=title, report=report, note=note, extra=extra_rows
             )
         )
-    return _partial_code(route)
+    code = _partial_code(route)
+    if robot_partial and code == 0:
+        from weldplan.errors import EXIT_PARTIAL
+
+        print(f"weldplan: {len(stage.skipped)} weld(s) not in the robot program", file=sys.stderr)
+        code = EXIT_PARTIAL
+    return code
 
 
 def _pose_stage(

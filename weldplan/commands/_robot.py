@@ -5,7 +5,9 @@ planning run, after the route and the weld poses were verified, runs :func:`robo
 
 1. the joint route (:func:`weldplan.robot.plan.plan_robot_route`: base given by
    ``--robot-base`` or searched, one continuous IK branch, robot + tool collision check,
-   blocked legs re-planned in joint space); any weld it cannot serve is an error naming it;
+   blocked legs re-planned in joint space). A path that still collides is an error; a weld the
+   robot cannot serve (no pose, out of reach, joint limit, singular) is passed without welding,
+   listed with its reason, and the run exits with :data:`~weldplan.errors.EXIT_PARTIAL`;
 2. the program and its cycle time (:func:`weldplan.robot.program.robot_program`: toppra under the
    URDF velocities x ``--vel-scale`` and the robot's accelerations x ``--acc-scale``,
    ``--weld-time`` a spot; the same route at ``--tcp-speed`` beside it);
@@ -51,22 +53,6 @@ def _number(kind: str, lo: float, hi: float, lo_open: bool = False):
         return v
 
     return parse
-
-
-def parse_base(text: str) -> np.ndarray:
-    """``"x,y,z,yaw"`` (mm, degrees about +z) -> ``(4, 4)`` base pose in the part frame."""
-    parts = text.split(",")
-    try:
-        vals = [float(p) for p in parts]
-    except ValueError:
-        vals = []
-    if len(vals) != 4 or not all(math.isfinite(v) for v in vals):
-        raise InputError(
-            f"need four finite numbers x,y,z,yaw (mm, deg), got {text!r}", field="--robot-base"
-        )
-    x, y, z, yaw = vals
-    c, s = math.cos(math.radians(yaw)), math.sin(math.radians(yaw))
-    return np.array([[c, -s, 0, x], [s, c, 0, y], [0, 0, 1, z], [0, 0, 0, 1.0]])
 
 
 def add_robot_arguments(p: argparse.ArgumentParser) -> None:
@@ -145,6 +131,7 @@ def robot_from_args(args: argparse.Namespace) -> Any:
             field="--tool",
         )
     from weldplan.robot import load_robot
+    from weldplan.robot.reach import parse_base
 
     base = parse_base(args.robot_base) if args.robot_base else None
     return load_robot(args.robot, args.opw, base=base)
@@ -158,6 +145,7 @@ class RobotStage:
     build: Any
     texts: dict[str, str]
     rows: list[tuple[str, str]]
+    skipped: tuple[str, ...] = ()
 
 
 def robot_stage(
@@ -167,6 +155,7 @@ def robot_stage(
     served or the emitted program does not close its FK round trip."""
     from weldplan.robot.plan import plan_robot_route, tool_flange_tcp
     from weldplan.robot.program import robot_program
+    from weldplan.robot.reach import BaseSearch
     from weldplan.tool.route_frames import route_poses
 
     poses = route_poses(route)
@@ -179,12 +168,15 @@ def robot_stage(
         part=cell.part,
         tool=tool,
         base=None if args.robot_base is None else robot.base,
+        search=BaseSearch() if args.robot_base is None else None,
         rng=args.seed,
     )
-    bad = [(w, s) for w, s in zip(rr.weld_ids, rr.status, strict=True) if s != "ok"]
-    if bad:
-        listed = ", ".join(f"{w} ({s})" for w, s in bad[:8]) + (", ..." if len(bad) > 8 else "")
-        raise PlanningError(f"the robot cannot serve {len(bad)} weld(s): {listed}")
+    if rr.stats.get("collision_free") is False:
+        hits = rr.stats.get("hits") or []
+        raise PlanningError(
+            f"the robot route still collides after re-planning ({len(hits)} hit(s), first: "
+            f"{hits[0] if hits else '?'}); nothing written"
+        )
     rb = dataclasses.replace(
         robot.with_base(rr.base),
         velocity=robot.velocity * args.vel_scale,
@@ -207,6 +199,8 @@ def robot_stage(
         tcp_speed=args.tcp_speed,
         name=stem,
     )
+    if len(build.skipped) == len(rr.weld_ids):
+        raise PlanningError(f"the robot serves none of the welds ({', '.join(rr.status)})")
     texts = _texts(args, build, rr, rb, outputs)
     if "robot_html" in outputs:
         from weldplan.viz.robot_scene import robot_html
@@ -215,7 +209,7 @@ def robot_stage(
             rb, build.timing, rr.flange_tcp, part=cell.part, tool=tool,
             route_points=route.waypoints(),
         )  # fmt: skip
-    return RobotStage(rr, build, texts, _rows(rr, build))
+    return RobotStage(rr, build, texts, _rows(rr, build), tuple(build.skipped))
 
 
 def _tool_load(args: argparse.Namespace, robot: Any) -> tuple[float, np.ndarray]:
@@ -285,14 +279,21 @@ def _rows(rr: Any, build: Any) -> list[tuple[str, str]]:
     tt = build.timing
     x, y, z, yaw = rr.stats.get("placement", {}).get("base_xyz_yaw", [math.nan] * 4)
     legs = tt.leg_times()
+    miss = [
+        (f"  weld {w}", f"not welded: {s.replace('_', ' ')}")
+        for w, s in zip(rr.weld_ids, rr.status, strict=True)
+        if s != "ok"
+    ]
     return [
         ("robot", f"{rr.robot}, base ({x:.0f}, {y:.0f}, {z:.0f}) mm yaw {yaw:.1f} deg"),
         (
             "robot route",
             f"{rr.n_ok} / {len(rr.status)} welds, {len(rr.flips)} branch flip(s), "
             f"{len(rr.replanned)} leg(s) re-planned in joint space, collision-free "
-            f"{rr.stats.get('collision_free', 'not checked')}",
+            f"{rr.stats.get('collision_free', 'not checked')}"
+            + (f"; {len(miss)} weld(s) not in the program (exit code 3)" if miss else ""),
         ),
+        *miss,
         (
             "cycle time",
             f"{tt.total:.2f} s ({tt.motion_time:.2f} s moving, {tt.weld_time:g} s a weld; legs "
@@ -300,8 +301,11 @@ def _rows(rr: Any, build: Any) -> list[tuple[str, str]]:
             f"at a constant {build.tcp_speed:g} mm/s TCP: {build.constant_speed_time:.2f} s",
         ),
         (
-            "timed path",
-            f"within {tt.deviation:.1e} rad of the joint path; TCP up to "
-            f"{build.tcp_deviation:.2f} mm off the Cartesian lines",
+            "program",
+            f"{sum(t.move == 'linear' for t in build.program.targets)} linear and "
+            f"{sum(t.move == 'joint' for t in build.program.targets)} joint moves, "
+            f"{sum(t.blend >= 0.3 for t in build.program.targets)} fly-by points; the timed path "
+            f"within {tt.deviation:.1e} rad of the joint path, its TCP up to "
+            f"{build.tcp_deviation:.2f} mm off the linear moves' lines",
         ),
     ]

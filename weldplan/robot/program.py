@@ -25,7 +25,8 @@ its joint path was checked). Between exact rows:
   verified on, blended where the free margin allows (the blend argument of
   :mod:`weldplan.io.blending` is for linear moves). Named deviation: the robot check and the
   timing move in joint space between rows; :attr:`ProgramBuild.tcp_deviation` is how far that
-  joint path's TCP strays from the Cartesian lines (mm).
+  joint path's TCP strays from the Cartesian lines (mm). A move whose joint path strays more
+  than ``line_tolerance`` (a wrist turn, a branch change between two rows) is a joint move.
 * ``"joint"``: ``MoveJ`` / ``PTP`` everywhere, every target an exact stop (no joint-space blend
   is verified): exactly the joint path the robot check verified, and the timing of it.
 """
@@ -55,6 +56,10 @@ log = logging.getLogger(__name__)
 
 #: FK of a row's joint vector must put the TCP this close (mm) to the route's waypoint
 ROW_TOLERANCE_MM = 0.01
+#: mm: a linear move only where the joint path's TCP stays this close to the Cartesian line
+LINE_TOLERANCE_MM = 1.0
+#: samples per move for :func:`joint_line_deviation`
+LINE_SAMPLES = 16
 #: speed (mm/s) of the joint move to the approach point, from wherever the robot is
 APPROACH_SPEED = 250.0
 
@@ -75,6 +80,8 @@ class ProgramBuild:
         mm/s of that comparison.
     tcp_deviation
         mm: largest distance of the timed TCP (FK of the samples) from its Cartesian segment.
+    skipped
+        Welds the joint route does not serve (no exact row): passed without welding.
     """
 
     program: RobotProgram
@@ -82,6 +89,7 @@ class ProgramBuild:
     constant_speed_time: float
     tcp_speed: float
     tcp_deviation: float
+    skipped: tuple[str, ...] = ()
 
 
 def _segment_distance(P: NDArray, A: NDArray, B: NDArray) -> NDArray:
@@ -92,17 +100,38 @@ def _segment_distance(P: NDArray, A: NDArray, B: NDArray) -> NDArray:
     return np.linalg.norm(P - (A + t[:, None] * ab), axis=1)
 
 
+def joint_line_deviation(
+    robot: Any, Tft: NDArray[np.float64], qa: ArrayLike, qb: ArrayLike
+) -> NDArray[np.float64]:
+    """``(m,)`` mm: the largest distance of the TCP on the joint-space line ``qa -> qb``
+    (``(m, 6)`` each, :data:`LINE_SAMPLES` samples, FK of the URDF chain) from the Cartesian
+    segment between its ends: how far the checked joint path strays from a linear move."""
+    A = np.asarray(qa, dtype=np.float64).reshape(-1, 6)
+    B = np.asarray(qb, dtype=np.float64).reshape(-1, 6)
+    if len(A) == 0:
+        return np.zeros(0)
+    f = np.linspace(0.0, 1.0, LINE_SAMPLES + 1)
+    S = A[:, None, :] + f[None, :, None] * (B - A)[:, None, :]  # (m, s, 6)
+    P = (robot.fk(S.reshape(-1, 6)) @ Tft)[:, :3, 3].reshape(len(A), len(f), 3)
+    a = np.repeat(P[:, :1], len(f), axis=1).reshape(-1, 3)
+    b = np.repeat(P[:, -1:], len(f), axis=1).reshape(-1, 3)
+    d = _segment_distance(P.reshape(-1, 3), a, b).reshape(len(A), len(f))
+    return d.max(axis=1)
+
+
 def _exact_index(row: NDArray[np.int64], exact: NDArray[np.bool_], n: int) -> NDArray[np.int64]:
-    """``(n,)``: for every route row the first joint-route row on it that is exact."""
+    """``(n,)``: for every route row the first joint-route row on it that is exact, -1 where none
+    is (a weld the robot cannot serve: the joint route interpolates across it)."""
     idx = np.full(n, -1, dtype=np.int64)
     for i in range(len(row) - 1, -1, -1):
         if exact[i]:
             idx[row[i]] = i
-    if np.any(idx < 0):
-        raise PlanningError(
-            f"the joint route has no exact row for route row {int(np.flatnonzero(idx < 0)[0])}"
-        )
     return idx
+
+
+def _first_on(row: NDArray[np.int64], at: NDArray[np.int64], r: int) -> int:
+    """The joint row standing for route row ``r``: its exact one, else the first on it."""
+    return int(at[r]) if at[r] >= 0 else int(np.flatnonzero(row == r)[0])
 
 
 def robot_program(
@@ -117,6 +146,7 @@ def robot_program(
     row: ArrayLike | None = None,
     exact: ArrayLike | None = None,
     moves: str = "linear",
+    line_tolerance: float = LINE_TOLERANCE_MM,
     weld_time: float = 0.0,
     clearance: float | None = None,
     tolerance: float = DEFAULT_TOLERANCE_RAD,
@@ -145,12 +175,20 @@ def robot_program(
         (:class:`~weldplan.robot.configs.RobotRoute`); default ``arange(n)`` and all true.
     moves
         ``"linear"`` or ``"joint"`` between exact rows (module docstring).
+    line_tolerance
+        mm: with ``"linear"``, a move between two exact rows is linear only where the checked
+        joint path's TCP stays this close to the Cartesian segment
+        (:func:`joint_line_deviation`); else it is a joint move.
+
+    A route row without an exact joint row (a weld the robot cannot serve, which the robot route
+    interpolates across in joint space) is passed by joint moves without welding and listed in
+    :attr:`ProgramBuild.skipped` and the program's header.
 
     Raises
     ------
     PlanningError
         An exact row whose FK is off its route waypoint by more than :data:`ROW_TOLERANCE_MM`,
-        a route row without an exact joint row.
+        a route row with no joint row at all.
     """
     from weldplan.io.export import route_rows
 
@@ -164,11 +202,17 @@ def robot_program(
     X = np.ones(k, dtype=bool) if exact is None else np.asarray(exact, dtype=bool)
     if len(R) != k or len(X) != k or (k and (R.min() < 0 or R.max() >= n)):
         raise PlanningError(f"{k} joint rows do not map onto a route of {n} waypoints")
-    at = _exact_index(R, X, n)  # route row -> joint row
+    if len(np.unique(R)) != n:
+        raise PlanningError(
+            f"the joint route leaves out route rows (it covers {len(np.unique(R))} of {n})"
+        )
+    at = _exact_index(R, X, n)  # route row -> joint row (-1: not served)
     Tft = np.asarray(T_flange_tcp, dtype=np.float64).reshape(4, 4)
     poses = robot.fk(Q) @ Tft  # (k, 4, 4) TCP in the part frame
     pts = np.array([[r["x"], r["y"], r["z"]] for r in rows], dtype=np.float64)
-    err = np.linalg.norm(poses[at, :3, 3] - pts, axis=1)
+    served = at >= 0
+    err = np.zeros(n)
+    err[served] = np.linalg.norm(poses[at[served], :3, 3] - pts[served], axis=1)
     if n and err.max() > ROW_TOLERANCE_MM:
         j = int(np.argmax(err))
         raise PlanningError(
@@ -178,18 +222,25 @@ def robot_program(
     kind_of = [rows[int(r)]["kind"] if X[i] and at[R[i]] == i else "via" for i, r in enumerate(R)]
     # program order: approach (route row 1), every joint row, retreat (route row n - 2)
     framed = n >= 3
-    order = [int(at[1]), *range(k), int(at[n - 2])] if framed else list(range(k))
+    order = [_first_on(R, at, 1), *range(k), _first_on(R, at, n - 2)] if framed else list(range(k))
     kinds = ["approach", *kind_of, "retreat"] if framed else list(kind_of)
-    linear = np.array([moves == "linear" and bool(X[i]) for i in order])
-    linear[0] = False  # from wherever the robot is
-    if framed:  # into the first weld and out to the retreat: the route's approach segments
-        linear[1] = linear[-1] = moves == "linear"
+    # a move is linear only between two exact rows (a Cartesian segment of the verified route);
+    # the first comes from wherever the robot is
+    ex = X[order]
+    off_line = joint_line_deviation(robot, Tft, Q[order[:-1]], Q[order[1:]])
+    linear = np.concatenate(
+        [[False], (moves == "linear") & ex[1:] & ex[:-1] & (off_line <= line_tolerance)]
+    )
     c = route_clearance(route, clearance)
-    cand = [kd == "via" and lin for kd, lin in zip(kinds, linear, strict=True)]
+    # a via may fly by only between two linear moves (the blend argument is for lines)
+    nxt = np.concatenate([linear[1:], [False]])
+    cand = [kd == "via" and a and b for kd, a, b in zip(kinds, linear, nxt, strict=True)]
     radii = allowed_radii(poses[order, :3, 3], cand, part, c)
     off = 1 if framed else 0
     stops = radii[off : off + k] < RAPID_ZONES["z0"]
-    welds = at[[j for j, r in enumerate(rows) if r["kind"] == "weld"]]
+    weld_rows = [j for j, r in enumerate(rows) if r["kind"] == "weld"]
+    welds = at[[j for j in weld_rows if at[j] >= 0]]
+    skipped = [str(rows[j]["joint_id"]) for j in weld_rows if at[j] < 0]
 
     timing = time_route(
         Q,
@@ -201,14 +252,14 @@ def robot_program(
         tolerance=tolerance,
         joint_names=tuple(robot.joint_names),
     )
-    speed, dev = _tcp_speeds(poses[:, :3, 3], robot, Tft, timing, X)
+    speed, dev = _tcp_speeds(poses[:, :3, 3], robot, Tft, timing, linear[off : off + k])
     flags = arm_flags(robot, Q)
     targets = []
     for i, (j, kind) in enumerate(zip(order, kinds, strict=True)):
         if kind == "approach":
             v = APPROACH_SPEED
         elif framed and i == 1:  # the first weld, from the approach point: row 1 -> 0 reversed
-            v = speed[min(int(at[1]), k - 1)]
+            v = speed[min(_first_on(R, at, 1), k - 1)]
         elif kind == "retreat":
             v = speed[k - 1]
         else:
@@ -227,6 +278,8 @@ def robot_program(
             )
         )
     cst = constant_speed_time(pts, len(welds), speed=tcp_speed, weld_time=timing.weld_time)
+    if skipped:
+        log.warning("the program passes %d weld(s) without welding: %s", len(skipped), skipped)
     program = RobotProgram(
         name=name,
         robot=robot.name,
@@ -237,9 +290,9 @@ def robot_program(
         tool_cog=np.asarray(tool_cog, dtype=np.float64).reshape(3),
         part_frame=np.linalg.inv(robot.base),
         weld_time=timing.weld_time,
-        notes=_notes(route, len(targets), timing, cst, tcp_speed, c, moves),
+        notes=_notes(route, len(targets), timing, cst, tcp_speed, c, moves, skipped),
     )
-    return ProgramBuild(program, timing, cst, float(tcp_speed), dev)
+    return ProgramBuild(program, timing, cst, float(tcp_speed), dev, tuple(skipped))
 
 
 def _notes(
@@ -250,9 +303,15 @@ def _notes(
     tcp_speed: float,
     c: float,
     moves: str,
+    skipped: list[str],
 ) -> tuple[str, ...]:
     """The header comment lines of the program."""
-    return (
+    miss = (
+        (f"Not welded (the robot cannot serve them; passed in joint space): {', '.join(skipped)}.",)
+        if skipped
+        else ()
+    )
+    return miss + (
         f"{len(route.joint_ids)} weld joints, {n_targets} targets, route length "
         f"{route.length:.2f} mm, order {'-'.join(route.order)}.",
         f"Cycle time {timing.total:.2f} s (toppra, URDF velocity and the run's acceleration "
@@ -267,10 +326,11 @@ def _notes(
 
 
 def _tcp_speeds(
-    P_rows: NDArray, robot: Any, Tft: NDArray, timing: TimedTrajectory, exact: NDArray
+    P_rows: NDArray, robot: Any, Tft: NDArray, timing: TimedTrajectory, linear: NDArray
 ) -> tuple[NDArray[np.float64], float]:
     """``(k,)`` peak TCP speed (mm/s) of the move into each joint row, and the largest TCP
-    distance (mm) of the timed samples from the Cartesian segment between two exact rows."""
+    distance (mm) of the timed samples from the Cartesian segment of a linear move
+    (``linear (k,)``: the move into that joint row is linear)."""
     k = len(P_rows)
     P = (robot.fk(timing.q) @ Tft)[:, :3, 3]
     dt = np.diff(timing.t)
@@ -282,7 +342,7 @@ def _tcp_speeds(
     if k < 2:
         return speed, 0.0
     s = np.clip(timing.step, 1, k - 1)
-    both = exact[s - 1] & exact[s]
+    both = linear[s] & (timing.step > 0)
     if not np.any(both):
         return speed, 0.0
     dev = _segment_distance(P[both], P_rows[s - 1][both], P_rows[s][both])
