@@ -129,9 +129,16 @@ def _exact_index(row: NDArray[np.int64], exact: NDArray[np.bool_], n: int) -> ND
     return idx
 
 
-def _first_on(row: NDArray[np.int64], at: NDArray[np.int64], r: int) -> int:
-    """The joint row standing for route row ``r``: its exact one, else the first on it."""
-    return int(at[r]) if at[r] >= 0 else int(np.flatnonzero(row == r)[0])
+def _first_on(row: NDArray[np.int64], at: NDArray[np.int64], r: int, after: bool) -> int:
+    """The joint row standing for route row ``r``: its exact one, else the first on it, else
+    (a via of a leg re-planned in joint space, which has no row of its own) the first joint row
+    after it (``after``) or the last before it."""
+    if at[r] >= 0:
+        return int(at[r])
+    on = np.flatnonzero(row == r)
+    if len(on):
+        return int(on[0])
+    return int(np.flatnonzero(row > r)[0]) if after else int(np.flatnonzero(row < r)[-1])
 
 
 def robot_program(
@@ -188,7 +195,7 @@ def robot_program(
     ------
     PlanningError
         An exact row whose FK is off its route waypoint by more than :data:`ROW_TOLERANCE_MM`,
-        a route row with no joint row at all.
+        a weld row with no joint row at all.
     """
     from weldplan.io.export import route_rows
 
@@ -202,10 +209,6 @@ def robot_program(
     X = np.ones(k, dtype=bool) if exact is None else np.asarray(exact, dtype=bool)
     if len(R) != k or len(X) != k or (k and (R.min() < 0 or R.max() >= n)):
         raise PlanningError(f"{k} joint rows do not map onto a route of {n} waypoints")
-    if len(np.unique(R)) != n:
-        raise PlanningError(
-            f"the joint route leaves out route rows (it covers {len(np.unique(R))} of {n})"
-        )
     at = _exact_index(R, X, n)  # route row -> joint row (-1: not served)
     Tft = np.asarray(T_flange_tcp, dtype=np.float64).reshape(4, 4)
     poses = robot.fk(Q) @ Tft  # (k, 4, 4) TCP in the part frame
@@ -222,7 +225,11 @@ def robot_program(
     kind_of = [rows[int(r)]["kind"] if X[i] and at[R[i]] == i else "via" for i, r in enumerate(R)]
     # program order: approach (route row 1), every joint row, retreat (route row n - 2)
     framed = n >= 3
-    order = [_first_on(R, at, 1), *range(k), _first_on(R, at, n - 2)] if framed else list(range(k))
+    order = (
+        [_first_on(R, at, 1, True), *range(k), _first_on(R, at, n - 2, False)]
+        if framed
+        else list(range(k))
+    )
     kinds = ["approach", *kind_of, "retreat"] if framed else list(kind_of)
     # a move is linear only between two exact rows (a Cartesian segment of the verified route);
     # the first comes from wherever the robot is
@@ -239,6 +246,9 @@ def robot_program(
     off = 1 if framed else 0
     stops = radii[off : off + k] < RAPID_ZONES["z0"]
     weld_rows = [j for j, r in enumerate(rows) if r["kind"] == "weld"]
+    missing = [j for j in weld_rows if not np.any(R == j)]
+    if missing:
+        raise PlanningError(f"the joint route has no row for the weld at route row {missing[0]}")
     welds = at[[j for j in weld_rows if at[j] >= 0]]
     skipped = [str(rows[j]["joint_id"]) for j in weld_rows if at[j] < 0]
 
@@ -259,7 +269,7 @@ def robot_program(
         if kind == "approach":
             v = APPROACH_SPEED
         elif framed and i == 1:  # the first weld, from the approach point: row 1 -> 0 reversed
-            v = speed[min(_first_on(R, at, 1), k - 1)]
+            v = speed[min(_first_on(R, at, 1, True), k - 1)]
         elif kind == "retreat":
             v = speed[k - 1]
         else:
