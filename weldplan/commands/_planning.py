@@ -104,9 +104,11 @@ def add_planning_arguments(p: argparse.ArgumentParser, *, default_output: str | 
         "the reason, in the summary and the route JSON (stats.skipped); exit code 3",
     )
     p.add_argument("--quiet", action="store_true", help="no progress bars and no summary on stdout")
+    from weldplan.commands._robot import add_robot_arguments
     from weldplan.commands._tool import add_tool_arguments
 
     add_tool_arguments(p)
+    add_robot_arguments(p)
 
 
 def seed_type(text: str) -> int:
@@ -188,6 +190,11 @@ def _outputs(args: argparse.Namespace) -> dict[str, Path]:
         )
     elif args.post_file:
         raise WeldplanError("--post-file needs --post rapid|krl")
+    if getattr(args, "robot", None) and args.post == "krl":  # KRL's data list beside the .src
+        out["post_dat"] = out["post"].with_suffix(".dat")
+    for kind in ("trajectory", "robot_html"):
+        if getattr(args, kind, None):
+            out[kind] = Path(getattr(args, kind))
     seen: dict[Path, str] = {}
     for kind, path in out.items():
         key = path.resolve()
@@ -215,12 +222,14 @@ def run_planning(
     ``joint_points()`` gives the joints' ``(n, 3)`` positions (mm) cheaply, before the cell is
     built, for the size check (:mod:`weldplan.weld.sizing`).
     """
-    from weldplan.commands._tool import plan_poses, pose_rows, tool_from_args
+    from weldplan.commands._robot import robot_from_args
+    from weldplan.commands._tool import tool_from_args
     from weldplan.weld.verify import verify_route
 
     outputs = _outputs(args)
     config = config_from_args(args)
     tool = tool_from_args(args)  # a bad --tool fails before the (slow) cell is built
+    robot = robot_from_args(args)  # so does a bad --robot
     if joint_points is not None:
         _check_size(args, config, joint_points())
     bars = ProgressBars(enabled=False if args.quiet else None)
@@ -235,21 +244,25 @@ def run_planning(
         print(f"weldplan: {report.describe()}; nothing written", file=sys.stderr)
         return 1
     extra_rows: list[tuple[str, str]] = []
+    texts: dict[str, str] = {}
+    robot_partial = False
     if tool is not None:
-        with bars.stage("poses") as st:
-            route, check = plan_poses(args, cell, route, *tool)
-        times["poses"] = st.seconds
-        if not check.ok:
-            print(
-                f"weldplan: weld poses failed the independent re-check: "
-                f"{'; '.join(f'{i}: {r}' for i, r in check.failures[:5])}; nothing written",
-                file=sys.stderr,
-            )
+        staged = _pose_stage(args, cell, route, tool, bars, times)
+        if staged is None:
             return 1
-        extra_rows = pose_rows(route, check)
+        route, extra_rows = staged
+    if robot is not None:
+        from weldplan.commands._robot import robot_stage
+
+        with bars.stage("robot") as st:
+            stage = robot_stage(args, cell, route, tool[0], robot, outputs)  # type: ignore[index]
+        times["robot"] = st.seconds
+        extra_rows += stage.rows
+        texts = stage.texts
+        robot_partial = bool(stage.skipped)
 
     with bars.stage("export") as st:
-        _write(args, outputs, route, cell, None if tool is None else tool[0])
+        _write(args, outputs, route, cell, None if tool is None else tool[0], texts)
     times["export"] = st.seconds
     times["total"] = time.perf_counter() - t_all
     if not args.quiet:
@@ -261,7 +274,38 @@ def run_planning(
                 route, times, outputs, title=title, report=report, note=note, extra=extra_rows
             )
         )
-    return _partial_code(route)
+    code = _partial_code(route)
+    if robot_partial and code == 0:
+        from weldplan.errors import EXIT_PARTIAL
+
+        print(f"weldplan: {len(stage.skipped)} weld(s) not in the robot program", file=sys.stderr)
+        code = EXIT_PARTIAL
+    return code
+
+
+def _pose_stage(
+    args: argparse.Namespace,
+    cell: Any,
+    route: Any,
+    tool: tuple[Any, dict[str, Any]],
+    bars: ProgressBars,
+    times: dict[str, float],
+) -> tuple[Any, list[tuple[str, str]]] | None:
+    """The weld poses and their independent re-check; ``None`` (said on stderr) when the re-check
+    fails, else the route carrying the poses and the summary rows."""
+    from weldplan.commands._tool import plan_poses, pose_rows
+
+    with bars.stage("poses") as st:
+        route, check = plan_poses(args, cell, route, *tool)
+    times["poses"] = st.seconds
+    if not check.ok:
+        print(
+            f"weldplan: weld poses failed the independent re-check: "
+            f"{'; '.join(f'{i}: {r}' for i, r in check.failures[:5])}; nothing written",
+            file=sys.stderr,
+        )
+        return None
+    return route, pose_rows(route, check)
 
 
 def _check_size(args: argparse.Namespace, config: Any, xyz: Any) -> None:
@@ -314,9 +358,17 @@ def _plan(
 
 
 def _write(
-    args: argparse.Namespace, outputs: dict[str, Path], route: Any, cell: Any, tool: Any
+    args: argparse.Namespace,
+    outputs: dict[str, Path],
+    route: Any,
+    cell: Any,
+    tool: Any,
+    staged: dict[str, str] | None = None,
 ) -> None:
-    """Render every output in memory, then write them as one set (:mod:`weldplan.io.outputset`)."""
+    """Render every output in memory, then write them as one set (:mod:`weldplan.io.outputset`).
+
+    ``staged``: texts a stage already rendered (the robot stage's programs and trajectory); they
+    replace the point-tip post."""
     from weldplan.io.export import render_post, to_csv_text
     from weldplan.io.outputset import write_outputs
     from weldplan.viz.viewer import static_html
@@ -326,8 +378,9 @@ def _write(
         texts["json"] = route.to_json() + "\n"
     if "html" in outputs:
         texts["html"] = static_html(route, cell.part, tool=tool)
-    if "post" in outputs:
+    if "post" in outputs and "post" not in (staged or {}):
         texts["post"] = render_post(route, args.post, cell)
+    texts.update(staged or {})
     write_outputs({path: texts[kind] for kind, path in outputs.items()})
 
 
@@ -361,10 +414,7 @@ def _gap_rounds(g: Any) -> str:
     """The converging rounds of the lazy costs (:func:`weldplan.weld.converge.close_gap`)."""
     if not g:
         return ""
-    return (
-        f"; {g['rounds']} gap round(s) planned {g['pairs_planned']} more pair(s) "
-        f"({g['reason']})"
-    )
+    return f"; {g['rounds']} gap round(s) planned {g['pairs_planned']} more pair(s) ({g['reason']})"
 
 
 def _gaps(route: Any) -> str:

@@ -1,0 +1,123 @@
+"""Benchmark: cycle time of the demo cell (and car2 stations) with the shared KUKA and spot gun.
+
+Usage (from the repository root)::
+
+    python scripts/bench_cycle_time.py [--stations demo,car2_50] [--robot-base X,Y,Z,YAW]
+                                       [--weld-time 0.5] [--tcp-speed 1000]
+
+For each station: the route, the weld poses, the robot route (base searched unless given,
+:func:`weldplan.robot.plan.plan_robot_route`), then the program and its timing
+(:func:`weldplan.robot.program.robot_program`) with linear and with joint moves. Prints a
+markdown table: welds served, whether the robot route is collision-free, the cycle time (toppra)
+beside the same route at a constant TCP speed, the moving time, the TCP's largest distance from
+the Cartesian lines, the emitted programs' FK round trip (RAPID and KRL parsed back), seconds of
+each stage, and the load average. A robot route that is not collision-free is timed all the same
+and said so: its figures are not those of a program weldplan would write.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+
+import weldplan
+from weldplan.commands._robot import check_program
+from weldplan.io.posts.krl import render_krl
+from weldplan.io.posts.rapid import render_rapid
+from weldplan.robot import load_robot
+from weldplan.robot.payload import urdf_payload
+from weldplan.robot.plan import plan_robot_route, tool_flange_tcp
+from weldplan.robot.program import robot_program
+from weldplan.robot.reach import BaseSearch, parse_base
+from weldplan.tool import plan_weld_poses, verify_poses
+from weldplan.tool.load import load_tool
+from weldplan.weld.verify import verify_route
+
+ROOT = Path(__file__).resolve().parents[1]
+SHARED = ROOT.parent / "shared" / "data"
+CAR2 = SHARED / "bodies" / "car2.obj"
+GUN = SHARED / "tools" / "spot_welding_gun" / "spot_welding_gun.urdf"
+KUKA = SHARED / "robots" / "kuka_kr150r3100_2" / "kr150r3100_2.urdf"
+
+
+def _cell(name: str):
+    if name == "demo":
+        return weldplan.demo_cell()
+    joints = ROOT / "assets" / "car2" / f"car2_synthetic_{name.split('_')[1]}.csv"
+    return weldplan.load_cell(CAR2, joints, length=4500)
+
+
+def run(name: str, base: str | None, weld_time: float, tcp_speed: float) -> list[str]:
+    t0 = time.perf_counter()
+    cell = _cell(name)
+    route = weldplan.plan_route(cell, rng=0)
+    assert verify_route(route, cell.part, joints=cell.joints).ok
+    tool, prov = load_tool(GUN)
+    poses = plan_weld_poses(cell, route, tool)
+    assert verify_poses(poses, cell.part, tool).ok
+    route = dataclasses.replace(route, tool={"provenance": prov, "poses": poses.to_dict()})
+    t_route = time.perf_counter() - t0
+    robot = load_robot(KUKA)
+    Tft = tool_flange_tcp(robot, GUN)
+    t1 = time.perf_counter()
+    rr = plan_robot_route(
+        route, poses, robot, flange_tcp=Tft, part=cell.part, tool=tool,
+        base=None if base is None else parse_base(base),
+        search=BaseSearch() if base is None else None, rng=0,
+    )  # fmt: skip
+    t_robot = time.perf_counter() - t1
+    rb = robot.with_base(rr.base)
+    mass, cog = urdf_payload(GUN)
+    cog_f = (robot.mount @ np.r_[cog, 1.0])[:3]
+    rows = []
+    for moves in ("linear", "joint"):
+        t2 = time.perf_counter()
+        b = robot_program(
+            route, rr.q, rb, rr.flange_tcp, part=cell, tool_mass=mass, tool_cog=cog_f,
+            row=rr.row, exact=rr.exact, moves=moves, weld_time=weld_time, tcp_speed=tcp_speed,
+        )  # fmt: skip
+        t_prog = time.perf_counter() - t2
+        src, dat = render_krl(b.program)
+        err = max(
+            check_program("rapid", {"post": render_rapid(b.program)}, b.program, rb),
+            check_program("krl", {"post": src, "post_dat": dat}, b.program, rb),
+        )
+        tt = b.timing
+        x, y, z, yaw = rr.stats["placement"]["base_xyz_yaw"]
+        rows.append(
+            f"| {name} | {moves} ({sum(t.move == 'linear' for t in b.program.targets)} lin) | "
+            f"{rr.n_ok}/{len(rr.status)} | "
+            f"{rr.stats.get('collision_free')} ({len(rr.stats.get('hits', []))} hits) | "
+            f"{tt.total:.2f} | {b.constant_speed_time:.2f} | {tt.motion_time:.2f} | "
+            f"{b.tcp_deviation:.2f} | {err:.1e} | ({x:.0f}, {y:.0f}, {z:.0f}, {yaw:.0f}) | "
+            f"{t_route:.1f} / {t_robot:.1f} / {t_prog:.1f} |"
+        )
+    return rows
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--stations", default="demo")
+    ap.add_argument("--robot-base", default=None)
+    ap.add_argument("--weld-time", type=float, default=0.5)
+    ap.add_argument("--tcp-speed", type=float, default=1000.0)
+    a = ap.parse_args()
+    print(
+        "| station | moves | welds served | collision-free | cycle s | at constant "
+        f"{a.tcp_speed:g} mm/s s | moving s | TCP off lines mm | post FK error mm | base x,y,z,yaw "
+        "| s: route+poses / robot / program |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    for name in a.stations.split(","):
+        for row in run(name, a.robot_base, a.weld_time, a.tcp_speed):
+            print(row, flush=True)
+    print(f"\nweld time {a.weld_time} s a spot; load average {os.getloadavg()}")
+
+
+if __name__ == "__main__":
+    main()

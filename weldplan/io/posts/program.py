@@ -1,0 +1,120 @@
+"""What a robot post writes: targets with pose, joints, move type, blend and speed; tool; frames.
+
+A :class:`RobotProgram` is language-neutral; :mod:`.rapid` and :mod:`.krl` only format it.
+Building one from a planned route is :func:`weldplan.robot.program.robot_program`.
+
+Frames (mm, radians inside, degrees in the programs):
+
+* ``part_frame``: the part (work object, KUKA BASE) in the robot's base frame (ABB world =
+  robot base, KUKA ``$ROBROOT``; the program sets no other world);
+* ``tool_frame``: the TCP in the controller's flange frame (ABB ``tool0``, KUKA ``$FLANGE``,
+  the URDF's ``tool0``: z out of the flange);
+* a target's ``pose``: the TCP in the part frame. Forward kinematics closes the loop:
+  ``part_frame @ pose == fk_tool0(q) @ tool_frame`` (tests check it through the parsers).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+#: move types a target may have
+MOVES = ("joint", "linear")
+#: target kinds (``approach`` and ``retreat`` frame the route: the first and last virtual joints)
+KINDS = ("approach", "weld", "via", "retreat")
+
+
+@dataclass(frozen=True, eq=False)
+class Target:
+    """One programmed point.
+
+    Attributes
+    ----------
+    kind
+        One of :data:`KINDS`.
+    row
+        The route row (:func:`weldplan.io.export.route_rows`) it stands for.
+    joint_id
+        The weld joint's id on weld targets, else ``""``.
+    pose
+        ``(4, 4)`` TCP pose in the part frame, mm.
+    q
+        ``(6,)`` joint values, rad (URDF convention).
+    flags
+        ``(3,) bool`` arm flags (:func:`weldplan.io.posts.config.arm_flags`).
+    move
+        How the robot gets here: ``"joint"`` or ``"linear"`` (:data:`MOVES`).
+    blend
+        Allowed blend radius at this point, mm (0: exact stop; :mod:`weldplan.io.blending`).
+    speed
+        TCP speed of the move to this target, mm/s.
+    """
+
+    kind: str
+    row: int
+    joint_id: str
+    pose: NDArray[np.float64]
+    q: NDArray[np.float64]
+    flags: NDArray[np.bool_]
+    move: str
+    blend: float
+    speed: float
+
+    def __post_init__(self) -> None:
+        if self.kind not in KINDS or self.move not in MOVES:
+            raise ValueError(f"bad target kind {self.kind!r} or move {self.move!r}")
+
+
+@dataclass(frozen=True, eq=False)
+class RobotProgram:
+    """Everything a post writes (module docstring for the frames).
+
+    Attributes
+    ----------
+    name
+        Program / module name (sanitised by the posts).
+    robot
+        The robot's name (URDF).
+    joint_names
+        ``(6,)`` URDF joint names.
+    targets
+        In program order.
+    tool_frame
+        ``(4, 4)`` TCP in the flange frame, mm.
+    tool_mass
+        kg.
+    tool_cog
+        ``(3,)`` centre of gravity of the tool in the flange frame, mm.
+    part_frame
+        ``(4, 4)`` part frame in the robot base frame, mm.
+    weld_time
+        s per spot (the default weld instruction waits that long).
+    notes
+        Header comment lines (how zones, speeds and the cycle time were obtained).
+    """
+
+    name: str
+    robot: str
+    joint_names: tuple[str, ...]
+    targets: tuple[Target, ...]
+    tool_frame: NDArray[np.float64]
+    tool_mass: float
+    tool_cog: NDArray[np.float64]
+    part_frame: NDArray[np.float64]
+    weld_time: float = 0.0
+    notes: tuple[str, ...] = field(default_factory=tuple)
+
+
+def identifier(text: str, default: str) -> str:
+    """A robot-language identifier: letters, digits, underscores, a letter first, <= 24 chars."""
+    s = "".join(c if (c.isascii() and c.isalnum()) else "_" for c in text)
+    if not s or not s[0].isalpha():
+        s = default
+    return s[:24]
+
+
+def fmt(v: float, decimals: int) -> str:
+    """Fixed-point text without a negative zero."""
+    return f"{round(float(v), decimals) + 0.0:.{decimals}f}"

@@ -1,0 +1,49 @@
+"""The timed joint trajectory as CSV, for any simulator: ``--trajectory F``.
+
+Layout (one row per sample, time increasing)::
+
+    t,step,joint_a1,joint_a2,joint_a3,joint_a4,joint_a5,joint_a6
+    0.0000,0,0.00000000,-1.49051235,1.63902105,...
+    0.0100,1,...
+
+``t`` in s from the arrival at the first weld; ``step`` the route row (the ``step`` column of the
+route CSV) the robot is moving to or resting at (:class:`~weldplan.robot.timing.TimedTrajectory`;
+joint-space vias of a re-planned leg belong to the row the leg leaves from); one column per robot
+joint, named as in the URDF, in radians. Samples are :data:`~weldplan.robot.timing.DEFAULT_DT`
+apart plus one at every waypoint arrival and at both ends of every weld dwell, so a replay
+that interpolates linearly between rows stays within the timing's tolerance of the path. The CLI
+writes it with the other outputs as one set (:mod:`weldplan.io.outputset`): whole or not at all.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import logging
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+log = logging.getLogger(__name__)
+
+#: decimals of ``t`` (s) and of the joint values (rad)
+T_DECIMALS = 4
+Q_DECIMALS = 8
+
+
+def trajectory_csv_text(timing: Any, row: ArrayLike | None = None) -> str:
+    """The CSV text of a :class:`~weldplan.robot.timing.TimedTrajectory` (module docstring).
+
+    ``row`` ``(k,) int`` maps the timing's joint rows to route rows (a
+    :class:`~weldplan.robot.configs.RobotRoute`'s ``row``); default: the identity.
+    """
+    step = np.asarray(timing.step, dtype=np.int64)
+    if row is not None:
+        step = np.asarray(row, dtype=np.int64)[step]
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["t", "step", *timing.joint_names])
+    for t, s, q in zip(timing.t, step, timing.q, strict=True):
+        w.writerow([f"{t:.{T_DECIMALS}f}", int(s), *(f"{v:.{Q_DECIMALS}f}" for v in q)])
+    return buf.getvalue()

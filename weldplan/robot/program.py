@@ -1,0 +1,359 @@
+"""From a robot's route to a :class:`~weldplan.io.posts.program.RobotProgram` (and its timing).
+
+:func:`robot_program` takes the point-tip route (its waypoint rows,
+:func:`weldplan.io.export.route_rows`), the joint vector the robot has at every row, the tool
+(flange -> TCP, mass, centre of gravity) and the part, and
+
+1. checks that forward kinematics of every joint vector puts the TCP on its route row
+   (:data:`ROW_TOLERANCE_MM`): a joint route that is not the verified route is an error, not a
+   program;
+2. chooses the blend radius of every via point from its free margin
+   (:func:`weldplan.io.blending.allowed_radii`); where no RAPID zone fits (``< z0``, 0.3 mm) the
+   point is an exact stop, and the cycle-time model stops there too;
+3. times the route (:func:`weldplan.robot.timing.time_route`) and takes each move's TCP speed as
+   the peak TCP speed of the timed trajectory on that move (FK of the samples), so the program
+   asks for the speeds the cycle time assumed;
+4. frames the route by a joint move to the first virtual joint (from wherever the robot is) and
+   a retreat to the last one, both rows of the verified route.
+
+Moves (``moves``): the joint route (:class:`~weldplan.robot.configs.RobotRoute`) has rows on the
+route (``exact``: FK puts the TCP on the route's pose) and, on legs re-planned in joint space,
+rows that are not. A target that is not exact is always a joint move with an exact stop (only
+its joint path was checked). Between exact rows:
+
+* ``"linear"`` (default): ``MoveL`` / ``LIN``, the Cartesian segments the point-tip route was
+  verified on, blended where the free margin allows (the blend argument of
+  :mod:`weldplan.io.blending` is for linear moves). Named deviation: the robot check and the
+  timing move in joint space between rows; :attr:`ProgramBuild.tcp_deviation` is how far that
+  joint path's TCP strays from the Cartesian lines (mm). A move whose joint path strays more
+  than ``line_tolerance`` (a wrist turn, a branch change between two rows) is a joint move.
+* ``"joint"``: ``MoveJ`` / ``PTP`` everywhere, every target an exact stop (no joint-space blend
+  is verified): exactly the joint path the robot check verified, and the timing of it.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from weldplan.errors import ConfigError, PlanningError
+from weldplan.io.blending import RAPID_ZONES, allowed_radii, route_clearance
+from weldplan.io.posts.config import arm_flags
+from weldplan.io.posts.program import RobotProgram, Target
+from weldplan.robot.timing import (
+    DEFAULT_TCP_SPEED,
+    DEFAULT_TOLERANCE_RAD,
+    TimedTrajectory,
+    constant_speed_time,
+    time_route,
+)
+
+log = logging.getLogger(__name__)
+
+#: FK of a row's joint vector must put the TCP this close (mm) to the route's waypoint
+ROW_TOLERANCE_MM = 0.01
+#: mm: a linear move only where the joint path's TCP stays this close to the Cartesian line
+LINE_TOLERANCE_MM = 1.0
+#: samples per move for :func:`joint_line_deviation`
+LINE_SAMPLES = 16
+#: speed (mm/s) of the joint move to the approach point, from wherever the robot is
+APPROACH_SPEED = 250.0
+
+
+@dataclass(frozen=True, eq=False)
+class ProgramBuild:
+    """The program, its timing and the numbers a summary reports.
+
+    Attributes
+    ----------
+    program
+        What the posts write.
+    timing
+        The timed trajectory over the route's rows.
+    constant_speed_time
+        s: the same route at one constant TCP speed (:attr:`tcp_speed`) plus the same dwell.
+    tcp_speed
+        mm/s of that comparison.
+    tcp_deviation
+        mm: largest distance of the timed TCP (FK of the samples) from its Cartesian segment.
+    skipped
+        Welds the joint route does not serve (no exact row): passed without welding.
+    """
+
+    program: RobotProgram
+    timing: TimedTrajectory
+    constant_speed_time: float
+    tcp_speed: float
+    tcp_deviation: float
+    skipped: tuple[str, ...] = ()
+
+
+def _segment_distance(P: NDArray, A: NDArray, B: NDArray) -> NDArray:
+    """``(m,)`` distance of points ``P (m, 3)`` to segments ``A -> B`` (each ``(m, 3)``)."""
+    ab = B - A
+    den = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
+    t = np.clip(np.einsum("ij,ij->i", P - A, ab) / den, 0.0, 1.0)
+    return np.linalg.norm(P - (A + t[:, None] * ab), axis=1)
+
+
+def joint_line_deviation(
+    robot: Any, Tft: NDArray[np.float64], qa: ArrayLike, qb: ArrayLike
+) -> NDArray[np.float64]:
+    """``(m,)`` mm: the largest distance of the TCP on the joint-space line ``qa -> qb``
+    (``(m, 6)`` each, :data:`LINE_SAMPLES` samples, FK of the URDF chain) from the Cartesian
+    segment between its ends: how far the checked joint path strays from a linear move."""
+    A = np.asarray(qa, dtype=np.float64).reshape(-1, 6)
+    B = np.asarray(qb, dtype=np.float64).reshape(-1, 6)
+    if len(A) == 0:
+        return np.zeros(0)
+    f = np.linspace(0.0, 1.0, LINE_SAMPLES + 1)
+    S = A[:, None, :] + f[None, :, None] * (B - A)[:, None, :]  # (m, s, 6)
+    P = (robot.fk(S.reshape(-1, 6)) @ Tft)[:, :3, 3].reshape(len(A), len(f), 3)
+    a = np.repeat(P[:, :1], len(f), axis=1).reshape(-1, 3)
+    b = np.repeat(P[:, -1:], len(f), axis=1).reshape(-1, 3)
+    d = _segment_distance(P.reshape(-1, 3), a, b).reshape(len(A), len(f))
+    return d.max(axis=1)
+
+
+def _exact_index(row: NDArray[np.int64], exact: NDArray[np.bool_], n: int) -> NDArray[np.int64]:
+    """``(n,)``: for every route row the first joint-route row on it that is exact, -1 where none
+    is (a weld the robot cannot serve: the joint route interpolates across it)."""
+    idx = np.full(n, -1, dtype=np.int64)
+    for i in range(len(row) - 1, -1, -1):
+        if exact[i]:
+            idx[row[i]] = i
+    return idx
+
+
+def _first_on(row: NDArray[np.int64], at: NDArray[np.int64], r: int, after: bool) -> int:
+    """The joint row standing for route row ``r``: its exact one, else the first on it, else
+    (a via of a leg re-planned in joint space, which has no row of its own) the first joint row
+    after it (``after``) or the last before it."""
+    if at[r] >= 0:
+        return int(at[r])
+    on = np.flatnonzero(row == r)
+    if len(on):
+        return int(on[0])
+    return int(np.flatnonzero(row > r)[0]) if after else int(np.flatnonzero(row < r)[-1])
+
+
+def robot_program(
+    route: Any,
+    q: ArrayLike,
+    robot: Any,
+    T_flange_tcp: ArrayLike,
+    *,
+    part: Any,
+    tool_mass: float,
+    tool_cog: ArrayLike,
+    row: ArrayLike | None = None,
+    exact: ArrayLike | None = None,
+    moves: str = "linear",
+    line_tolerance: float = LINE_TOLERANCE_MM,
+    weld_time: float = 0.0,
+    clearance: float | None = None,
+    tolerance: float = DEFAULT_TOLERANCE_RAD,
+    tcp_speed: float = DEFAULT_TCP_SPEED,
+    name: str = "weldplan_route",
+) -> ProgramBuild:
+    """Build the program of ``route`` driven by the joint route ``q`` (module docstring).
+
+    Parameters
+    ----------
+    route
+        The verified :class:`~weldplan.weld.route.Route` (``n`` waypoint rows).
+    q
+        ``(k, 6)`` rad: the joint route, ``k >= n``.
+    robot
+        :class:`~weldplan.robot.model.Robot` placed in the part frame (its velocity and
+        acceleration limits already scaled as the run asks).
+    T_flange_tcp
+        ``(4, 4)`` mm: the TCP in the flange frame.
+    part
+        Mesh, Cell or CollisionModel for the blend radii.
+    tool_mass, tool_cog
+        kg and ``(3,)`` mm in the flange frame.
+    row, exact
+        ``(k,)``: the route row each joint row belongs to and whether it is on the route
+        (:class:`~weldplan.robot.configs.RobotRoute`); default ``arange(n)`` and all true.
+    moves
+        ``"linear"`` or ``"joint"`` between exact rows (module docstring).
+    line_tolerance
+        mm: with ``"linear"``, a move between two exact rows is linear only where the checked
+        joint path's TCP stays this close to the Cartesian segment
+        (:func:`joint_line_deviation`); else it is a joint move.
+
+    A route row without an exact joint row (a weld the robot cannot serve, which the robot route
+    interpolates across in joint space) is passed by joint moves without welding and listed in
+    :attr:`ProgramBuild.skipped` and the program's header.
+
+    Raises
+    ------
+    PlanningError
+        An exact row whose FK is off its route waypoint by more than :data:`ROW_TOLERANCE_MM`,
+        a weld row with no joint row at all.
+    """
+    from weldplan.io.export import route_rows
+
+    if moves not in ("linear", "joint"):
+        raise ConfigError(f"moves must be 'linear' or 'joint', got {moves!r}", field="moves")
+    rows = route_rows(route)
+    n = len(rows)
+    Q = np.asarray(q, dtype=np.float64).reshape(-1, 6)
+    k = len(Q)
+    R = np.arange(k, dtype=np.int64) if row is None else np.asarray(row, dtype=np.int64)
+    X = np.ones(k, dtype=bool) if exact is None else np.asarray(exact, dtype=bool)
+    if len(R) != k or len(X) != k or (k and (R.min() < 0 or R.max() >= n)):
+        raise PlanningError(f"{k} joint rows do not map onto a route of {n} waypoints")
+    at = _exact_index(R, X, n)  # route row -> joint row (-1: not served)
+    Tft = np.asarray(T_flange_tcp, dtype=np.float64).reshape(4, 4)
+    poses = robot.fk(Q) @ Tft  # (k, 4, 4) TCP in the part frame
+    pts = np.array([[r["x"], r["y"], r["z"]] for r in rows], dtype=np.float64)
+    served = at >= 0
+    err = np.zeros(n)
+    err[served] = np.linalg.norm(poses[at[served], :3, 3] - pts[served], axis=1)
+    if n and err.max() > ROW_TOLERANCE_MM:
+        j = int(np.argmax(err))
+        raise PlanningError(
+            f"forward kinematics puts the TCP {err[j]:.3g} mm from route row {j} "
+            f"(tolerance {ROW_TOLERANCE_MM} mm): the joint route is not the verified route"
+        )
+    kind_of = [rows[int(r)]["kind"] if X[i] and at[R[i]] == i else "via" for i, r in enumerate(R)]
+    # program order: approach (route row 1), every joint row, retreat (route row n - 2)
+    framed = n >= 3
+    order = (
+        [_first_on(R, at, 1, True), *range(k), _first_on(R, at, n - 2, False)]
+        if framed
+        else list(range(k))
+    )
+    kinds = ["approach", *kind_of, "retreat"] if framed else list(kind_of)
+    # a move is linear only between two exact rows (a Cartesian segment of the verified route);
+    # the first comes from wherever the robot is
+    ex = X[order]
+    off_line = joint_line_deviation(robot, Tft, Q[order[:-1]], Q[order[1:]])
+    linear = np.concatenate(
+        [[False], (moves == "linear") & ex[1:] & ex[:-1] & (off_line <= line_tolerance)]
+    )
+    c = route_clearance(route, clearance)
+    # a via may fly by only between two linear moves (the blend argument is for lines)
+    nxt = np.concatenate([linear[1:], [False]])
+    cand = [kd == "via" and a and b for kd, a, b in zip(kinds, linear, nxt, strict=True)]
+    radii = allowed_radii(poses[order, :3, 3], cand, part, c)
+    off = 1 if framed else 0
+    stops = radii[off : off + k] < RAPID_ZONES["z0"]
+    weld_rows = [j for j, r in enumerate(rows) if r["kind"] == "weld"]
+    missing = [j for j in weld_rows if not np.any(R == j)]
+    if missing:
+        raise PlanningError(f"the joint route has no row for the weld at route row {missing[0]}")
+    welds = at[[j for j in weld_rows if at[j] >= 0]]
+    skipped = [str(rows[j]["joint_id"]) for j in weld_rows if at[j] < 0]
+
+    timing = time_route(
+        Q,
+        robot.velocity,
+        robot.acceleration,
+        weld_rows=welds,
+        stops=stops,
+        weld_time=weld_time,
+        tolerance=tolerance,
+        joint_names=tuple(robot.joint_names),
+    )
+    speed, dev = _tcp_speeds(poses[:, :3, 3], robot, Tft, timing, linear[off : off + k])
+    flags = arm_flags(robot, Q)
+    targets = []
+    for i, (j, kind) in enumerate(zip(order, kinds, strict=True)):
+        if kind == "approach":
+            v = APPROACH_SPEED
+        elif framed and i == 1:  # the first weld, from the approach point: row 1 -> 0 reversed
+            v = speed[min(_first_on(R, at, 1, True), k - 1)]
+        elif kind == "retreat":
+            v = speed[k - 1]
+        else:
+            v = speed[j]
+        targets.append(
+            Target(
+                kind=kind,
+                row=int(R[j]),
+                joint_id=str(rows[int(R[j])]["joint_id"]) if kind == "weld" else "",
+                pose=poses[j],
+                q=Q[j],
+                flags=flags[j],
+                move="linear" if linear[i] else "joint",
+                blend=float(radii[i]),
+                speed=float(max(v, 1.0)),
+            )
+        )
+    cst = constant_speed_time(pts, len(welds), speed=tcp_speed, weld_time=timing.weld_time)
+    if skipped:
+        log.warning("the program passes %d weld(s) without welding: %s", len(skipped), skipped)
+    program = RobotProgram(
+        name=name,
+        robot=robot.name,
+        joint_names=tuple(robot.joint_names),
+        targets=tuple(targets),
+        tool_frame=Tft,
+        tool_mass=float(tool_mass),
+        tool_cog=np.asarray(tool_cog, dtype=np.float64).reshape(3),
+        part_frame=np.linalg.inv(robot.base),
+        weld_time=timing.weld_time,
+        notes=_notes(route, len(targets), timing, cst, tcp_speed, c, moves, skipped),
+    )
+    return ProgramBuild(program, timing, cst, float(tcp_speed), dev, tuple(skipped))
+
+
+def _notes(
+    route: Any,
+    n_targets: int,
+    timing: TimedTrajectory,
+    cst: float,
+    tcp_speed: float,
+    c: float,
+    moves: str,
+    skipped: list[str],
+) -> tuple[str, ...]:
+    """The header comment lines of the program."""
+    miss = (
+        (f"Not welded (the robot cannot serve them; passed in joint space): {', '.join(skipped)}.",)
+        if skipped
+        else ()
+    )
+    return miss + (
+        f"{len(route.joint_ids)} weld joints, {n_targets} targets, route length "
+        f"{route.length:.2f} mm, order {'-'.join(route.order)}.",
+        f"Cycle time {timing.total:.2f} s (toppra, URDF velocity and the run's acceleration "
+        f"limits, {timing.weld_time:g} s a weld; first weld to the end of the last, without the "
+        f"approach and retreat); at a constant {tcp_speed:g} mm/s TCP speed: {cst:.2f} s.",
+        f"Moves between route rows: {moves}. Speeds: the peak TCP speed of each move in the "
+        "timed trajectory.",
+        f"Zones: a linear move's via flies by within its free margin (distance to the part - "
+        f"{c:g} mm clearance), else fine; joint moves stop.",
+        "Configurations: of the planned joint values (IK branch), kept by the controller.",
+    )
+
+
+def _tcp_speeds(
+    P_rows: NDArray, robot: Any, Tft: NDArray, timing: TimedTrajectory, linear: NDArray
+) -> tuple[NDArray[np.float64], float]:
+    """``(k,)`` peak TCP speed (mm/s) of the move into each joint row, and the largest TCP
+    distance (mm) of the timed samples from the Cartesian segment of a linear move
+    (``linear (k,)``: the move into that joint row is linear)."""
+    k = len(P_rows)
+    P = (robot.fk(timing.q) @ Tft)[:, :3, 3]
+    dt = np.diff(timing.t)
+    moving = dt > 1e-12
+    v = np.zeros(len(dt))
+    v[moving] = np.linalg.norm(np.diff(P, axis=0)[moving], axis=1) / dt[moving]
+    speed = np.zeros(k)
+    np.maximum.at(speed, timing.step[1:], v)
+    if k < 2:
+        return speed, 0.0
+    s = np.clip(timing.step, 1, k - 1)
+    both = linear[s] & (timing.step > 0)
+    if not np.any(both):
+        return speed, 0.0
+    dev = _segment_distance(P[both], P_rows[s - 1][both], P_rows[s][both])
+    return speed, float(dev.max())
