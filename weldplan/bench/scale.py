@@ -25,6 +25,11 @@ With a heuristic sequencer both routes are heuristic, so the ratio compares two 
 seed. Throughput (``--workers``, default 1 and 2; ``--throughput-only`` skips the end-to-end runs)
 plans the same batch of blocked pairs serially and on pools holding the cell. Timings are wall
 clock on whatever machine runs it; the load average is written beside every figure.
+
+``--joints N`` (issue #18 item 3) is the whole-body mode instead: the ``N``-joint set (4000:
+the synthetic generator's ``whole-body`` profile), pair planning on Dask with each of
+``--workers`` and the product path end to end with each of ``--e2e-workers``, with CPU seconds
+and the peak RSS of the whole process tree (:mod:`weldplan.bench.scale_body`).
 """
 
 from __future__ import annotations
