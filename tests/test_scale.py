@@ -232,3 +232,15 @@ def test_bench_scale_reports_a_refused_size_as_a_row(tmp_path, monkeypatch):
     assert scale.run(args) == 0
     md = (tmp_path / "scale.md").read_text()
     assert "| 1000 | 20.0 |" in md and "failed after 500.0" in md and "2 groups" in md
+
+
+def test_batches_keep_order_and_respect_a_largest_size():
+    from weldplan.weld.parallel import batches
+
+    items = list(range(1000))
+    big = batches(items, 2)
+    assert len(big) == 8 and [x for b in big for x in b] == items
+    small = batches(items, 2, max_size=64)
+    assert max(len(b) for b in small) == 64 and len(small) == 16
+    assert [x for b in small for x in b] == items
+    assert batches(items[:5], 2, max_size=64) == [[0], [1], [2], [3], [4]]

@@ -25,6 +25,11 @@ With a heuristic sequencer both routes are heuristic, so the ratio compares two 
 seed. Throughput (``--workers``, default 1 and 2; ``--throughput-only`` skips the end-to-end runs)
 plans the same batch of blocked pairs serially and on pools holding the cell. Timings are wall
 clock on whatever machine runs it; the load average is written beside every figure.
+
+``--joints N`` (issue #18 item 3) is the whole-body mode instead: the ``N``-joint set (4000:
+the synthetic generator's ``whole-body`` profile), pair planning on Dask with each of
+``--workers`` and the product path end to end with each of ``--e2e-workers``, with CPU seconds
+and the peak RSS of the whole process tree (:mod:`weldplan.bench.scale_body`).
 """
 
 from __future__ import annotations
@@ -39,7 +44,10 @@ from weldplan.weld.pipeline import SEQUENCERS
 
 REFERENCES = ("lazy", "all", "none")
 
-HELP = "car2 station scale: 50/200/1000 synthetic joints end to end, 1 vs 2 workers"
+HELP = (
+    "car2 station scale: 50/200/1000 synthetic joints end to end, 1 vs 2 workers; --joints "
+    "4000: the whole-body station on Dask"
+)
 
 ASSETS = Path(__file__).resolve().parents[2] / "assets" / "car2"
 
@@ -212,6 +220,22 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="only the pair-planning throughput (1 vs 2 workers on the 200-joint set)",
     )
     p.add_argument("--quick", action="store_true", help="50 and 200 joints, 40 throughput pairs")
+    p.add_argument(
+        "--joints",
+        type=int,
+        default=None,
+        help="whole-body mode (weldplan.bench.scale_body): the N-joint set (4000), pair planning "
+        "on Dask with each of --workers, then end to end with each of --e2e-workers",
+    )
+    p.add_argument(
+        "--e2e-workers",
+        type=_ints,
+        default=[2],
+        help="with --joints: Dask worker processes of the end-to-end runs, comma-separated (2)",
+    )
+    p.add_argument(
+        "--e2e-only", action="store_true", help="with --joints: skip the throughput runs"
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -223,6 +247,10 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     before = conditions()
+    if args.joints is not None:
+        from weldplan.bench.scale_body import run_body
+
+        return run_body(args, mesh, out, before, run_child)
     rows, raw = [], {}
     for n in sizes:
         joints = str(ASSETS / f"car2_synthetic_{n}.csv")

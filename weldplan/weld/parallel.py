@@ -136,11 +136,15 @@ def share_cell(cell: Any, executor: Executor | None) -> Any:
     return CellRef(cell)
 
 
-def batches(items: Sequence[Any], workers: int) -> list[list[Any]]:
-    """``items`` cut into about ``BATCHES_PER_WORKER * workers`` consecutive batches."""
+def batches(items: Sequence[Any], workers: int, max_size: int | None = None) -> list[list[Any]]:
+    """``items`` cut into about ``BATCHES_PER_WORKER * workers`` consecutive batches, each of at
+    most ``max_size`` items when given (more, smaller batches: a worker that runs out of work
+    waits at most one small batch for the last one to finish)."""
     if not items:
         return []
     size = max(1, math.ceil(len(items) / (BATCHES_PER_WORKER * max(1, workers))))
+    if max_size is not None:
+        size = min(size, max(1, int(max_size)))
     return [list(items[k : k + size]) for k in range(0, len(items), size)]
 
 

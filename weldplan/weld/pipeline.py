@@ -91,7 +91,8 @@ Progress = Callable[[str, int, int], None]
 #: the exact straight-line lower bound (Held-Karp) is used up to this many joints, else the
 #: 1-tree bound
 LOWER_BOUND_EXACT_MAX = 16
-#: wall-time cap of the 1-tree bound's subgradient ascent (s): 200 joints finish in ~3 s
+#: CPU-time cap of the 1-tree bound's subgradient ascent (s of the calling thread): 200 joints
+#: finish in ~3 s
 LOWER_BOUND_SECONDS = 10.0
 
 #: SO-ACO settings of the demo target (N = M = 10; the paper's Table 3 also runs 50/50)

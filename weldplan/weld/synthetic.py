@@ -30,9 +30,22 @@ realistic stand-ins, labelled *synthetic* in every file it writes:
 
 Everything is a function of the mesh and ``seed``: the same call gives the same spots.
 
+Two profiles (:data:`PROFILES`) set steps 2-3:
+
+``station`` (the default; the 50/200/1000 sets)
+    One flange per line (the first face of each sharp edge), 40-60 mm pitch, spots of different
+    lines at least 30 mm apart: 1,423 spots on car2 at seed 0, 1,420 reachable.
+``whole-body`` (the 4000 set: a whole body's spot count, issue #18 item 3)
+    Both flanges of every sharp-edge line (the second face's lines are spotted after the
+    first's, from the same generator), 20-30 mm pitch, and no two spots nearer than 15 mm
+    whatever their lines (snapping to the surface can bring two spots of one line within a
+    millimetre; the station rule lets those stand): 4,524 spots at seed 0 (3,170 on the first
+    flanges, 1,354 on the second), 4,512 reachable; the 4000 set is the 4000 of them nearest
+    the most populated station's centroid, so it spans every station of the body. The labels
+    are those of step 4 (``Z{zone}{L|R}``) plus the flange (0 or 1) of each spot.
+
 Deviation named: the issue also allows flanges where two sheets overlap; only sharp-edge lines
-are used (car2's edges at >= 12 degrees give 1,423 spots at seed 0, enough for the
-1000-joint set). The fixture posts of car2 are part of the mesh and may receive spots.
+are used. The fixture posts of car2 are part of the mesh and may receive spots.
 """
 
 from __future__ import annotations
@@ -42,6 +55,7 @@ import logging
 from dataclasses import dataclass
 from os import PathLike
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import trimesh
@@ -69,8 +83,24 @@ N_LENGTH_ZONES = 4
 #: along it the part is at least ``APPROACH_OPEN * s`` away, for each ``s`` in APPROACH_PROBE_MM
 APPROACH_PROBE_MM = (1.0, 2.5, 5.0, 10.0, 20.0, 40.0)
 APPROACH_OPEN = 0.7
-#: the set sizes the issue asks for
+#: the set sizes the issue asks for (station sets; the whole-body set below)
 SET_SIZES = (50, 200, 1000)
+#: the whole-body set: a car body's spot count (issue #18 item 3)
+WHOLE_BODY_SIZE = 4000
+#: named generator settings (keyword arguments of :func:`generate_spots`): ``station`` made the
+#: 50/200/1000 sets (one flange per line, 40-60 mm pitch, 30 mm between lines; 1,423 spots on
+#: car2 at seed 0); ``whole-body`` is the denser rule that gives a whole body's count (4,524
+#: spots, 4,512 reachable, at seed 0): 20-30 mm pitch, spots on both flanges of every
+#: sharp-edge line, and no two spots nearer than 15 mm, on one line or two
+PROFILES: dict[str, dict[str, Any]] = {
+    "station": {},
+    "whole-body": {
+        "spacing": (20.0, 30.0),
+        "min_gap": 15.0,
+        "flanges": (0, 1),
+        "gap_same_line": True,
+    },
+}
 
 
 @dataclass(frozen=True, eq=False)
@@ -86,22 +116,44 @@ class SyntheticSpots:
     stations
         ``(n,) str``: station (region) of each spot.
     line
-        ``(n,) int``: the sharp-edge polyline each spot lies on.
+        ``(n,) int``: the sharp-edge polyline each spot lies on (the second flange's lines are
+        numbered after the first's).
+    flange
+        ``(n,) int``: which face of its sharp edge the spot is on (0: the first, 1: the second;
+        :func:`sharp_polylines`).
     """
 
     xyz: NDArray[np.float64]
     directions: NDArray[np.float64]
     stations: NDArray[np.str_]
     line: NDArray[np.int64]
+    flange: NDArray[np.int64]
 
     def __len__(self) -> int:
         return len(self.xyz)
 
+    def take(self, index: NDArray[np.intp]) -> SyntheticSpots:
+        """The spots ``index`` (in that order)."""
+        return SyntheticSpots(
+            self.xyz[index],
+            self.directions[index],
+            self.stations[index],
+            self.line[index],
+            self.flange[index],
+        )
+
 
 def sharp_polylines(
-    mesh: trimesh.Trimesh, angle_deg: float = SHARP_ANGLE_DEG
+    mesh: trimesh.Trimesh, angle_deg: float = SHARP_ANGLE_DEG, face: int = 0
 ) -> list[tuple[NDArray[np.float64], NDArray[np.float64]]]:
     """Sharp-edge lines of ``mesh`` as polylines.
+
+    Parameters
+    ----------
+    face
+        Which of the two faces meeting at a sharp edge is its flange: 0 (trimesh's first face of
+        the adjacency, the original generator) or 1 (the other one: the second flange of the
+        same edge line).
 
     Returns
     -------
@@ -118,7 +170,7 @@ def sharp_polylines(
     fn = mesh.face_normals
     # the flange face of each edge: its first face; the inward direction lies in that face,
     # perpendicular to the edge, towards the face's centroid
-    fa = faces[:, 0]
+    fa = faces[:, face]
     nrm = fn[fa]
     e = mesh.vertices[edges[:, 1]] - mesh.vertices[edges[:, 0]]
     inward = np.cross(nrm, e)
@@ -148,28 +200,22 @@ def sharp_polylines(
     return [(np.asarray(p, dtype=float), np.asarray(n, dtype=float)) for p, n in out]
 
 
-def generate_spots(
+def _line_spots(
     mesh: trimesh.Trimesh,
-    *,
-    rng: RNGLike = 0,
-    angle_deg: float = SHARP_ANGLE_DEG,
-    spacing: tuple[float, float] = SPACING_MM,
-    min_gap: float = MIN_GAP_MM,
-    n_zones: int = N_LENGTH_ZONES,
-    inset: float = FLANGE_INSET_MM,
-) -> SyntheticSpots:
-    """Every synthetic spot on ``mesh`` (module docstring, steps 1-4). Deterministic in ``rng``.
-
-    Step 5 is :func:`keep_reachable`, kept apart because it builds the whole body's grid.
-    """
-    from scipy.spatial import cKDTree
-
-    gen = as_generator(rng)
+    gen: np.random.Generator,
+    angle_deg: float,
+    spacing: tuple[float, float],
+    inset: float,
+    face: int,
+    first_line: int,
+) -> tuple[list[NDArray[np.float64]], list[NDArray[np.float64]], list[int]]:
+    """Step 2 on the flanges ``face`` of every sharp-edge line: spot positions ``inset`` in from
+    the edge, the flange normals, and the line number of each (from ``first_line``)."""
     lo, hi = spacing
     xyz: list[NDArray[np.float64]] = []
     dirs: list[NDArray[np.float64]] = []
     lines: list[int] = []
-    for li, (pts, nrm) in enumerate(sharp_polylines(mesh, angle_deg)):
+    for li, (pts, nrm) in enumerate(sharp_polylines(mesh, angle_deg, face), start=first_line):
         seg = np.linalg.norm(np.diff(pts, axis=0), axis=1)
         cum = np.r_[0.0, np.cumsum(seg)]
         total = cum[-1]
@@ -183,9 +229,52 @@ def generate_spots(
         xyz.append(pts[k] * (1 - t) + pts[k + 1] * t + inset * nrm[k, 3:])
         dirs.append(nrm[k, :3])
         lines += [li] * len(s)
+    return xyz, dirs, lines
+
+
+def generate_spots(
+    mesh: trimesh.Trimesh,
+    *,
+    rng: RNGLike = 0,
+    angle_deg: float = SHARP_ANGLE_DEG,
+    spacing: tuple[float, float] = SPACING_MM,
+    min_gap: float = MIN_GAP_MM,
+    n_zones: int = N_LENGTH_ZONES,
+    inset: float = FLANGE_INSET_MM,
+    flanges: tuple[int, ...] = (0,),
+    gap_same_line: bool = False,
+) -> SyntheticSpots:
+    """Every synthetic spot on ``mesh`` (module docstring, steps 1-4). Deterministic in ``rng``.
+
+    ``flanges``: which faces of each sharp edge carry spots, ``(0,)`` (one flange per line, the
+    station sets) or ``(0, 1)`` (both; the lines of the second flange are numbered after those
+    of the first, and its random draws come after the first's, so ``(0,)`` spots are unchanged).
+    ``gap_same_line``: apply ``min_gap`` to spots of one line too (snapping to the surface can
+    bring two spots of a line within a millimetre of each other); False keeps the station sets'
+    rule (other lines only).
+    :data:`PROFILES` names the two settings in use. Step 5 is :func:`keep_reachable`, kept apart
+    because it builds the whole body's grid.
+    """
+    from scipy.spatial import cKDTree
+
+    if not flanges or any(f not in (0, 1) for f in flanges) or len(set(flanges)) != len(flanges):
+        raise ValueError(f"flanges must be distinct values of (0, 1), got {flanges!r}")
+    gen = as_generator(rng)
+    xyz: list[NDArray[np.float64]] = []
+    dirs: list[NDArray[np.float64]] = []
+    lines: list[int] = []
+    flange: list[NDArray[np.int64]] = []
+    for face in flanges:
+        first = max(lines) + 1 if lines else 0
+        x, d, li = _line_spots(mesh, gen, angle_deg, spacing, inset, face, first)
+        xyz += x
+        dirs += d
+        lines += li
+        flange.append(np.full(len(li), face, dtype=np.int64))
     P = np.concatenate(xyz)
     D = np.concatenate(dirs)
     L = np.asarray(lines, dtype=np.int64)
+    F = np.concatenate(flange)
     # onto the surface: the nearest point, approach = that face's normal on the flange's side
     P, _, tri = trimesh.proximity.closest_point(mesh, P)
     N = mesh.face_normals[tri]
@@ -198,14 +287,14 @@ def generate_spots(
     dist = CollisionModel(mesh).clearance(Q.reshape(-1, 3)).reshape(len(P), len(probe))
     ok = np.all(dist >= APPROACH_OPEN * probe, axis=1)
     log.info("%d of %d spots have an open approach", ok.sum(), len(P))
-    P, D, L = P[ok], D[ok], L[ok]
+    P, D, L, F = P[ok], D[ok], L[ok], F[ok]
     # drop spots too near an earlier spot of another line (greedy, in line order)
     tree = cKDTree(P)
     keep = np.ones(len(P), dtype=bool)
     for a, b in sorted(tree.query_pairs(min_gap)):
-        if keep[a] and keep[b] and L[a] != L[b]:
+        if keep[a] and keep[b] and (gap_same_line or L[a] != L[b]):
             keep[b] = False
-    P, D, L = P[keep], D[keep], L[keep]
+    P, D, L, F = P[keep], D[keep], L[keep], F[keep]
     # stations by region
     bmin, bmax = mesh.bounds
     axis = int(np.argmax(bmax - bmin))
@@ -219,7 +308,7 @@ def generate_spots(
     lr = np.where(P[:, side] < centre, "R", "L")
     stations = np.array([f"Z{z + 1}{s}" for z, s in zip(zone, lr, strict=True)])
     log.info("%d synthetic spots on %d lines", len(P), len(set(L.tolist())))
-    return SyntheticSpots(P, D, stations, L)
+    return SyntheticSpots(P, D, stations, L, F)
 
 
 def keep_reachable(mesh: trimesh.Trimesh, spots: SyntheticSpots) -> SyntheticSpots:
@@ -244,9 +333,7 @@ def keep_reachable(mesh: trimesh.Trimesh, spots: SyntheticSpots) -> SyntheticSpo
     main = np.bincount(region[region > 0]).argmax()
     keep = region == main
     log.info("%d of %d spots reach the main free region", keep.sum(), len(spots))
-    return SyntheticSpots(
-        spots.xyz[keep], spots.directions[keep], spots.stations[keep], spots.line[keep]
-    )
+    return spots.take(np.flatnonzero(keep))
 
 
 def select_set(spots: SyntheticSpots, n: int) -> tuple[Joints, NDArray[np.str_]]:
@@ -276,21 +363,50 @@ def car2_part() -> trimesh.Trimesh:
     return load_part(CAR2, length=CAR2_LENGTH_MM)
 
 
-def car2_joints(n: int, *, seed: int = 0, mesh: trimesh.Trimesh | None = None) -> Joints:
-    """The synthetic ``n``-joint set on car2 (scaled to 4500 mm)."""
+def car2_joints(
+    n: int, *, seed: int = 0, mesh: trimesh.Trimesh | None = None, profile: str = "station"
+) -> Joints:
+    """The synthetic ``n``-joint set on car2 (scaled to 4500 mm), made with ``profile``
+    (:data:`PROFILES`)."""
     mesh = car2_part() if mesh is None else mesh
-    return select_set(keep_reachable(mesh, generate_spots(mesh, rng=seed)), n)[0]
+    spots = generate_spots(mesh, rng=seed, **_profile(profile))
+    return select_set(keep_reachable(mesh, spots), n)[0]
+
+
+def _defaults() -> dict[str, Any]:
+    return {"spacing": SPACING_MM, "min_gap": MIN_GAP_MM, "flanges": (0,)}
+
+
+def _profile(name: str) -> dict[str, Any]:
+    if name not in PROFILES:
+        raise ValueError(f"profile must be one of {', '.join(PROFILES)}, got {name!r}")
+    return dict(PROFILES[name])
 
 
 def write_set(
-    path: str | PathLike[str], joints: Joints, stations: NDArray[np.str_], *, seed: int, body: str
+    path: str | PathLike[str],
+    joints: Joints,
+    stations: NDArray[np.str_],
+    *,
+    seed: int,
+    body: str,
+    profile: str = "station",
 ) -> None:
-    """Write ``id,x,y,z,nx,ny,nz,station`` with a ``# synthetic`` header (readable by
-    :func:`weldplan.io.joints.read_joints`, which ignores the station column)."""
+    """Write ``id,x,y,z,nx,ny,nz,station`` with a ``# synthetic`` header naming the generator's
+    ``profile`` (readable by :func:`weldplan.io.joints.read_joints`, which ignores the station
+    column)."""
+    rules = {**_defaults(), **_profile(profile)}
+    lo, hi = rules["spacing"]
+    how = f"spots every {lo:g}-{hi:g} mm along sharp-edge lines"
+    if profile != "station":
+        how = (
+            f"profile {profile}: {how} on {' and '.join('AB'[f] for f in rules['flanges'])} "
+            f"flanges, at least {rules['min_gap']:g} mm apart"
+        )
     lines = [
         f"# SYNTHETIC weld joints ({len(joints)}): not measured; generated by "
         f"weldplan.weld.synthetic (seed {seed}) on {body} scaled to {CAR2_LENGTH_MM:g} mm; "
-        f"spots every 40-60 mm along sharp-edge lines, {FLANGE_INSET_MM:g} mm in on the flange, "
+        f"{how}, {FLANGE_INSET_MM:g} mm in on the flange, "
         "approach = surface normal",
         "id,x,y,z,nx,ny,nz,station",
     ]
@@ -308,19 +424,32 @@ def main(argv: list[str] | None = None) -> int:
     )
     p.add_argument("--mesh", default=str(CAR2), help="body mesh (default: shared car2.obj)")
     p.add_argument("--out", default=".", help="output folder")
-    p.add_argument("--sizes", type=int, nargs="+", default=list(SET_SIZES))
+    p.add_argument(
+        "--sizes",
+        type=int,
+        nargs="+",
+        default=None,
+        help="set sizes (default: 50 200 1000, or 4000 with --profile whole-body)",
+    )
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument(
+        "--profile",
+        choices=sorted(PROFILES),
+        default="station",
+        help="generator settings (PROFILES): station sets or the whole-body set",
+    )
     args = p.parse_args(argv)
     from weldplan.io.mesh import load_part
 
+    sizes = args.sizes or (list(SET_SIZES) if args.profile == "station" else [WHOLE_BODY_SIZE])
     mesh = load_part(args.mesh, length=CAR2_LENGTH_MM)
-    spots = keep_reachable(mesh, generate_spots(mesh, rng=args.seed))
+    spots = keep_reachable(mesh, generate_spots(mesh, rng=args.seed, **_profile(args.profile)))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    for n in args.sizes:
+    for n in sizes:
         joints, st = select_set(spots, n)
         path = out / f"car2_synthetic_{n}.csv"
-        write_set(path, joints, st, seed=args.seed, body=Path(args.mesh).name)
+        write_set(path, joints, st, seed=args.seed, body=Path(args.mesh).name, profile=args.profile)
         print(f"{path}: {n} synthetic joints of {len(spots)} spots")  # noqa: T201
     return 0
 
