@@ -16,11 +16,14 @@ the rotation axis through the TCP, at most ``theta r``). So between two paramete
 The check (:meth:`SweepChecker.check`) is conservative advancement on FCL distances: at ``s``
 the **slack** (the distance from the tool to the part less the clearance, python-fcl
 ``distance``) is measured; no point of the tool can use it up before ``s + slack / L``, so the
-next sample is taken there. A slack below ``min_step`` stops the check (the motion is reported
-blocked at ``s``): at most ``L / min_step + 1`` samples per motion. A passed motion keeps **at
-least the clearance from the part at every ``s``**, not only at the samples: that is what the
-independent re-check (:mod:`weldplan.tool.verify_sweeps`) tests with its own uniform samples and
-its own bound.
+next sample is taken there. It advances from the start to the middle and from the end back to
+the middle (a weld pose may have little slack, which grows as the tool leaves it). A negative or
+zero slack, more than ``2 (L / min_step + 1)`` samples (a motion that grazes the part), or,
+from an end that is not a weld pose, a slack below ``min_step``, stops the check: the motion is
+reported blocked at ``s``. A passed motion keeps **at least the
+clearance from the part at every ``s``**, not only at the samples: that is what the independent
+re-check (:mod:`weldplan.tool.verify_sweeps`) tests with its own uniform samples and its own
+bound.
 
 The contact zone. At a weld the tool's electrode cap (or wire tip) touches the sheet: the pose
 search exempts the tool inside the sphere of ``contact_radius`` about the TCP
@@ -51,8 +54,8 @@ from weldplan.tool.model import ZONE_EDGE_MM, Tool, bvh
 
 log = logging.getLogger(__name__)
 
-#: mm: conservative advancement stops (motion blocked) when a step would be shorter than this:
-#: the planner wants every sample at least this much beyond the clearance
+#: mm: a motion of bound ``L`` may take at most ``2 (L / min_step + 1)`` samples (conservative
+#: advancement along a motion that grazes the part would never end)
 DEFAULT_MIN_STEP = 0.5
 
 
@@ -189,7 +192,7 @@ class SweepCheck:
     def describe(self) -> str:
         if self.ok:
             return f"free ({self.samples} samples, least slack {self.min_slack:.1f} mm)"
-        how = "collides or lacks clearance" if self.min_slack < 0 else "clears by less than a step"
+        how = "collides or lacks clearance" if self.min_slack < 0 else "grazes: sample budget spent"
         return f"blocked at {100 * self.blocked_at:.0f} % of the motion ({how})"
 
 
@@ -208,7 +211,7 @@ class SweepChecker:
         mm: the contact zone (module docstring) about the TCP and about the weld spots that a
         motion's ``exempt`` names.
     min_step
-        mm: the shortest conservative-advancement step (:data:`DEFAULT_MIN_STEP`).
+        mm: sets the sample budget of a motion (:data:`DEFAULT_MIN_STEP`).
     """
 
     def __init__(
@@ -283,22 +286,48 @@ class SweepChecker:
         p1: ArrayLike,
         q1: ArrayLike,
         exempt: ArrayLike | None = None,
+        soft: tuple[bool, bool] = (True, True),
     ) -> SweepCheck:
         """Check the motion ``(p0, q0) -> (p1, q1)`` by conservative advancement (module
-        docstring) on :meth:`slack`. ``exempt (m, 3)``: the weld spots whose zones apply."""
+        docstring) on :meth:`slack`. ``exempt (m, 3)``: the weld spots whose zones apply.
+        ``soft``: whether the advancement from the start (from the end) may take steps shorter
+        than ``min_step`` (a weld pose's slack may be small); where not, a slack below
+        ``min_step`` blocks the motion at once (what OMPL's motions use: fail fast)."""
         L = motion_bound(p0, q0, p1, q1, self.reach)
-        s, n, smin = 0.0, 0, math.inf
-        while True:
+        budget = [max_samples(L, self.min_step)]
+        smin = [math.inf]
+
+        def slack_at(s: float) -> float:
             pos, rot = interpolate(p0, q0, p1, q1, [s])
-            slack = self.slack(pos[0], rot[0], exempt)
-            n += 1
-            smin = min(smin, slack)
-            if s >= 1.0 or L <= 0:  # the last pose (or the only one: no motion)
-                ok = slack >= 0.0
-                return SweepCheck(ok, n, smin, float("nan") if ok else s, L)
-            if slack < self.min_step:
-                return SweepCheck(False, n, smin, s, L)
-            s = min(1.0, s + slack / L)
+            v = self.slack(pos[0], rot[0], exempt)
+            budget[0] -= 1
+            smin[0] = min(smin[0], v)
+            return v
+
+        # forward from the start and backward from the end, meeting half-way: the slack at a
+        # weld pose may be small, and grows as the tool leaves it
+        blocked = float("nan")
+        for start, stop, sign, may in ((0.0, 0.5, 1.0, soft[0]), (1.0, 0.5, -1.0, soft[1])):
+            s = start
+            while True:
+                v = slack_at(s)
+                short = v < self.min_step and not may
+                if v < 0 or (v == 0 and L > 0) or budget[0] < 0 or (short and L > 0):
+                    blocked = s
+                    break
+                if L <= 0 or sign * (stop - s) <= 0:
+                    break
+                s = s + sign * min(v / L, sign * (stop - s))
+            if not math.isnan(blocked):
+                break
+        n = max_samples(L, self.min_step) - budget[0]
+        ok = math.isnan(blocked)
+        return SweepCheck(ok, n, smin[0], blocked, L)
+
+
+def max_samples(bound: float, min_step: float) -> int:
+    """Samples one motion of bound ``bound`` mm may take: ``2 (bound / min_step + 1)``."""
+    return 2 * (math.ceil(bound / min_step) + 1)
 
 
 def exempt_for(*spots: Any) -> NDArray[np.float64] | None:
