@@ -118,10 +118,17 @@ def test_retract_is_free_for_a_stick_and_blocked_for_a_fork_that_straddles_the_s
     assert t.length == pytest.approx(50 + 200 + 50)
     v = verify_sweeps(path, poses, sheet, _stick())
     assert v.ok and v.checked == 1, v.describe()
-    fork = plan_transitions(sheet, _fork(), poses, retract=50.0, se3=False)
+    fork = plan_transitions(sheet, _fork(), poses, retract=50.0, se3=False, side_exit=0.0)
     (tf,) = fork.transitions
     assert tf.status == BLOCKED and "retract" in tf.reason
     assert verify_sweeps(fork, poses, sheet, _fork()).blocked == ("a->b",)
+    # sideways, the fork's jaw comes off the sheet past its edge (x = 60): towards TCP +x only
+    side = plan_transitions(sheet, _fork(), poses, retract=50.0, se3=False, side_exit=120.0)
+    (ts,) = side.transitions
+    assert ts.status == DIRECT and ts.kinds[:3] == ("lift", "exit +x", "retract"), ts.kinds
+    assert ts.kinds[-3:] == ("approach", "enter +x", "lift")
+    assert ts.positions[2][0] == pytest.approx(30 + 120)
+    assert verify_sweeps(side, poses, sheet, _fork()).ok
 
 
 def test_the_recheck_catches_a_transition_through_the_part():

@@ -291,8 +291,9 @@ class SweepChecker:
         """Check the motion ``(p0, q0) -> (p1, q1)`` by conservative advancement (module
         docstring) on :meth:`slack`. ``exempt (m, 3)``: the weld spots whose zones apply.
         ``soft``: whether the advancement from the start (from the end) may take steps shorter
-        than ``min_step`` (a weld pose's slack may be small); where not, a slack below
-        ``min_step`` blocks the motion at once (what OMPL's motions use: fail fast)."""
+        than ``min_step`` over its first ``max(contact_radius, 10 min_step)`` mm of tool motion
+        (a weld pose's slack may be small); elsewhere a slack below ``min_step`` blocks the
+        motion at once (fail fast: OMPL asks about many motions)."""
         L = motion_bound(p0, q0, p1, q1, self.reach)
         budget = [max_samples(L, self.min_step)]
         smin = [math.inf]
@@ -311,7 +312,10 @@ class SweepChecker:
             s = start
             while True:
                 v = slack_at(s)
-                short = v < self.min_step and not may
+                soft_here = may and abs(s - start) * L <= max(
+                    self.contact_radius, 10 * self.min_step
+                )
+                short = v < self.min_step and not soft_here
                 if v < 0 or (v == 0 and L > 0) or budget[0] < 0 or (short and L > 0):
                     blocked = s
                     break

@@ -45,6 +45,11 @@ log = logging.getLogger(__name__)
 DEFAULT_RETRACT = 50.0
 #: default OMPL planner for blocked transitions (stops at its first solution, then simplified)
 DEFAULT_SE3_PLANNER = "rrtconnect"
+#: mm: lifts along the TCP axis tried before a side exit (:meth:`TransitionPlanner._leave`)
+SIDE_LIFTS = (5.0, 10.0, 20.0)
+#: mm: default side exit when the axial retract is blocked (a C-gun's jaws round a flange: the
+#: shared gun's C back stands 231 mm from its electrode axis)
+DEFAULT_SIDE_EXIT = 250.0
 #: default seconds OMPL may spend on one transition
 DEFAULT_SE3_TIME = 5.0
 
@@ -67,6 +72,9 @@ class TransitionPlanner:
         mm, as in the pose search.
     retract
         mm along the TCP axis (0: no retract/approach motions, the move starts at the spot).
+    side_exit
+        mm: when the axial retract is blocked, try leaving sideways by this much first
+        (:meth:`_leave`; 0: never).
     se3
         Re-plan blocked transitions with OMPL (needs ``weldplan[ompl]``).
     planner, time_s, seed, rot_weight
@@ -87,6 +95,7 @@ class TransitionPlanner:
         seed: int | None = 0,
         rot_weight: float = 200.0,
         min_step: float = DEFAULT_MIN_STEP,
+        side_exit: float = DEFAULT_SIDE_EXIT,
     ) -> None:
         if not (np.isfinite(retract) and retract >= 0):
             raise InputError(f"must be a finite number of mm >= 0, got {retract}", field="retract")
@@ -98,19 +107,60 @@ class TransitionPlanner:
         self.time_s = float(time_s)
         self.seed = seed
         self.rot_weight = float(rot_weight)
+        self.side_exit = float(side_exit)
         self.checker = SweepChecker(part, tool, clearance, contact_radius, min_step=min_step)
         self.samples = 0
 
-    def _motions(self, P: NDArray, Q: NDArray, exempt: NDArray) -> tuple[bool, int, str]:
+    def _motions(
+        self,
+        P: NDArray,
+        Q: NDArray,
+        exempt: NDArray,
+        soft_first: bool = False,
+        soft_last: bool = False,
+    ) -> tuple[bool, int, str]:
         """Check consecutive poses; returns (all free, first blocked motion, its description).
-        Only the path's two ends (weld poses or retract points) may have a small slack."""
+        Only a weld pose (the first / last pose when ``soft_first`` / ``soft_last``) may have a
+        small slack."""
         for k in range(len(P) - 1):
-            soft = (k == 0, k == len(P) - 2)
+            soft = (soft_first and k == 0, soft_last and k == len(P) - 2)
             out = self.checker.check(P[k], Q[k], P[k + 1], Q[k + 1], exempt, soft)
             self.samples += out.samples
             if not out.ok:
                 return False, k, out.describe()
         return True, -1, ""
+
+    def _leave(self, w: Any, exempt: NDArray) -> tuple[NDArray | None, tuple[str, ...], str]:
+        """Positions from weld ``w``'s pose to a clear point, its orientation kept: the retract
+        along the TCP axis; when that is blocked and ``side_exit > 0``, a lift of
+        :data:`SIDE_LIFTS` mm along the axis, a side exit of ``side_exit`` mm along TCP -x, +x,
+        -y or +y, and the rest of the retract (a C-gun leaves the flange it straddles sideways,
+        its jaws opened round the sheet). ``None`` and why when all are blocked.
+        The same positions, reversed, are the approach (the same swept set)."""
+        p = np.asarray(w.position, dtype=np.float64)
+        q = np.asarray(w.quaternion, dtype=np.float64)
+        if self.retract <= 0:
+            return p[None], (), ""
+        R = quat_to_matrix(q)
+        back = -self.retract * R[:, 2]
+        cands: list[tuple[list[NDArray], tuple[str, ...]]] = [([p, p + back], ("retract",))]
+        z = R[:, 2]
+        dirs = (("-x", -R[:, 0]), ("+x", R[:, 0]), ("-y", -R[:, 1]), ("+y", R[:, 1]))
+        for lift in SIDE_LIFTS if self.side_exit > 0 else ():
+            lift = min(lift, self.retract)
+            for name, d in dirs:
+                up = p - lift * z
+                side = up + self.side_exit * d
+                pts = [p, up, side, p + self.side_exit * d + back]
+                cands.append((pts, ("lift", f"exit {name}", "retract")))
+        first = ""
+        for pts, kinds in cands:
+            P = np.array(pts)
+            ok, k, why = self._motions(P, np.repeat(q[None], len(P), axis=0), exempt, True)
+            if ok:
+                return P, kinds, ""
+            first = first or f"{kinds[k]} {why}"
+        return None, (), first
 
     def plan(self, a: Any, b: Any) -> Transition:
         """The transition from weld pose ``a`` to ``b`` (:class:`~weldplan.tool.result.WeldPose`,
@@ -119,39 +169,42 @@ class TransitionPlanner:
         pa, pb = (np.asarray(w.position, dtype=np.float64) for w in (a, b))
         qa, qb = (np.asarray(w.quaternion, dtype=np.float64) for w in (a, b))
         exempt = np.array([pa, pb])
-        za, zb = quat_to_matrix(qa)[:, 2], quat_to_matrix(qb)[:, 2]
-        ra, rb = pa - self.retract * za, pb - self.retract * zb
-        if self.retract > 0:
-            P = np.array([pa, ra, rb, pb])
-            Q = np.array([qa, qa, qb, qb])
-            kinds = ("retract", "move", "approach")
+        la, ka, why_a = self._leave(a, exempt)
+        lb, kb, why_b = self._leave(b, exempt)
+        enter = tuple(
+            k.replace("retract", "approach").replace("exit", "enter") for k in reversed(kb)
+        )
+        if la is not None and lb is not None:
+            P = np.concatenate([la, lb[::-1]])
+            Q = np.array([qa] * len(la) + [qb] * len(lb))
+            kinds = ka + ("move",) + enter
+            ok, _, why = self._motions(P[len(la) - 1 : len(la) + 1], Q[len(la) - 1 : len(la) + 1],
+                                       exempt)  # fmt: skip
+            if ok:
+                return Transition(a.id, b.id, P, Q, kinds, DIRECT, "", self.samples - n0)
+            reason = f"move {why}"
         else:
             P, Q, kinds = np.array([pa, pb]), np.array([qa, qb]), ("move",)
-        ok, k, why = self._motions(P, Q, exempt)
-        if ok:
-            return Transition(a.id, b.id, P, Q, kinds, DIRECT, "", self.samples - n0)
-        reason = f"{kinds[k]} {why}"
+            reason = f"leaving {a.id}: {why_a}" if la is None else f"reaching {b.id}: {why_b}"
         if not self.se3:
             return Transition(a.id, b.id, P, Q, kinds, BLOCKED, reason, self.samples - n0)
-        # re-plan between the retract points when both retracts are free, else from the welds
-        retracts_free = self.retract > 0 and kinds[k] == "move"
-        if retracts_free:
-            ok2, _, _ = self._motions(P[2:], Q[2:], exempt)
-            retracts_free = ok2
-        start, goal = ((ra, qa), (rb, qb)) if retracts_free else ((pa, qa), (pb, qb))
+        # re-plan between the clear points when both ends have one, else between the welds
+        ends = la is not None and lb is not None
+        start, goal = ((la[-1], qa), (lb[-1], qb)) if ends else ((pa, qa), (pb, qb))
         path, status = self._se3(start, goal, exempt)
         if path is None:
             return Transition(
                 a.id, b.id, P, Q, kinds, BLOCKED, f"{reason}; SE(3): {status}", self.samples - n0
             )
         sp, sq = path[:, :3], path[:, 3:]
-        if retracts_free:
-            sp = np.concatenate([[pa], sp, [pb]])
-            sq = np.concatenate([[qa], sq, [qb]])
-            skinds = ("retract",) + ("se3",) * (len(path) - 1) + ("approach",)
-        else:
-            skinds = ("se3",) * (len(path) - 1)
-        ok3, k3, why3 = self._motions(sp, sq, exempt)  # the planner's answer, checked again
+        skinds: tuple[str, ...] = ("se3",) * (len(path) - 1)
+        if ends:
+            assert la is not None and lb is not None
+            sp = np.concatenate([la[:-1], sp, lb[::-1][1:]])
+            sq = np.concatenate([[qa] * (len(la) - 1), sq, [qb] * (len(lb) - 1)])
+            skinds = ka + skinds + enter
+        # the planner's answer, checked again (the whole path: the ends are known free)
+        ok3, k3, why3 = self._motions(path[:, :3], path[:, 3:], exempt, not ends, not ends)
         if not ok3:
             return Transition(
                 a.id, b.id, sp, sq, skinds, BLOCKED,
@@ -210,6 +263,7 @@ def plan_transitions(
     time_s: float = DEFAULT_SE3_TIME,
     seed: int | None = 0,
     rot_weight: float = 200.0,
+    side_exit: float = DEFAULT_SIDE_EXIT,
     stats: dict[str, Any] | None = None,
 ) -> ToolPath:
     """The whole tool's transitions through the welds with a pose (module docstring).
@@ -224,7 +278,7 @@ def plan_transitions(
     order
         The welds' visiting order (ids with a pose); default the poses' own order
         (:func:`weldplan.tool.tool_order.tool_order` gives the tool-aware one).
-    retract, se3, planner, time_s, seed, rot_weight
+    retract, se3, planner, time_s, seed, rot_weight, side_exit
         :class:`TransitionPlanner`.
     stats
         Extra figures to record (the ordering's costs).
@@ -243,7 +297,7 @@ def plan_transitions(
     radius = float(poses.settings["contact_radius"])
     tp = TransitionPlanner(
         part, tool, clearance=clearance, contact_radius=radius, retract=retract, se3=se3,
-        planner=planner, time_s=time_s, seed=seed, rot_weight=rot_weight,
+        planner=planner, time_s=time_s, seed=seed, rot_weight=rot_weight, side_exit=side_exit,
     )  # fmt: skip
     transitions = tuple(
         tp.plan(poses[a], poses[b]) for a, b in zip(order[:-1], order[1:], strict=True)
@@ -254,6 +308,7 @@ def plan_transitions(
         skipped=tuple(p.id for p in poses.poses if not p.ok),
         settings={
             "retract": retract,
+            "side_exit": side_exit,
             "clearance": clearance,
             "contact_radius": radius,
             "rot_weight": rot_weight,
