@@ -26,6 +26,7 @@ Conventions
 
 from __future__ import annotations
 
+import functools
 import logging
 import time
 from collections.abc import Callable
@@ -231,7 +232,7 @@ def _solve(
     if motion_valid is None:
         si.setStateValidityCheckingResolution(resolution)
     else:
-        si.setMotionValidator(_motion_validator(ob, si, read, motion_valid))
+        si.setMotionValidator(_motion_validator(si, read, motion_valid))
     ss.setOptimizationObjective(ob.PathLengthOptimizationObjective(si))
     ss.setPlanner(getattr(og, PLANNERS[planner])(si))
 
@@ -268,7 +269,12 @@ def _solve(
     return SampledPath(pts, length, solved, planner, wall, line)
 
 
-def _py_motion_validator_class(ob: Any) -> type:
+@functools.cache
+def _validator_class() -> type:
+    """An OMPL ``MotionValidator`` subclass calling a Python ``check(a, b)`` on numpy states
+    (built once: OMPL is imported lazily)."""
+    ob = _import_ompl()[0]
+
     class _Validator(ob.MotionValidator):  # type: ignore[misc, name-defined]
         def __init__(self, si: Any, read: Callable, check: MotionCheck) -> None:
             super().__init__(si)
@@ -281,15 +287,9 @@ def _py_motion_validator_class(ob: Any) -> type:
     return _Validator
 
 
-_VALIDATOR_CLASS: type | None = None
-
-
-def _motion_validator(ob: Any, si: Any, read: Callable, check: MotionCheck) -> Any:
-    """An OMPL MotionValidator that calls the Python ``check(a, b)`` on numpy states."""
-    global _VALIDATOR_CLASS
-    if _VALIDATOR_CLASS is None:
-        _VALIDATOR_CLASS = _py_motion_validator_class(ob)
-    return _VALIDATOR_CLASS(si, read, check)
+def _motion_validator(si: Any, read: Callable, check: MotionCheck) -> Any:
+    """An OMPL MotionValidator for ``si`` that calls the Python ``check(a, b)``."""
+    return _validator_class()(si, read, check)
 
 
 # --------------------------------------------------------------------------- R^n
