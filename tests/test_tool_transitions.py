@@ -189,3 +189,22 @@ def test_tool_order_trades_length_for_rotation_with_the_weight():
     assert st["point_order"]["rotation_deg"] == pytest.approx(270.0)
     assert st["tool_order"]["cost"] < st["point_order"]["cost"]
     assert {order[0], order[1]} in ({"a", "c"}, {"b", "d"})
+
+
+def test_a_blocked_move_is_replanned_in_se3_and_the_recheck_agrees():
+    pytest.importorskip("ompl")
+    sheet = _box((400, 400, 2), (0, 0, -1))
+    wall = _box((400, 4, 150), (0, 0, 75))  # between the welds, 150 mm high
+    part = trimesh.util.concatenate([sheet, wall])
+    poses = _poses([("a", (0, -100, 0)), ("b", (0, 100, 0))], DOWN)
+    stick = _stick(100.0)
+    path = plan_transitions(part, stick, poses, retract=50.0, time_s=5.0, seed=1)
+    (t,) = path.transitions
+    assert t.status == "replanned", t.reason
+    assert t.kinds[0] == "retract" and t.kinds[-1] == "approach" and "se3" in t.kinds
+    assert "move" in t.reason  # what blocked the direct transition
+    # it goes round or over the wall: longer than the straight 300 mm, and its TCP clears the top
+    # or the sides of the wall somewhere
+    assert t.length > 300.0
+    v = verify_sweeps(path, poses, part, stick)
+    assert v.ok and v.checked == 1, v.describe()

@@ -109,6 +109,14 @@ def add_transition_arguments(p: argparse.ArgumentParser) -> None:
         "(default 50; every motion of the swept tool is checked)",
     )
     p.add_argument(
+        "--side-exit",
+        metavar="MM",
+        type=_nonneg_mm,
+        default=250.0,
+        help="with --tool: where the axial retract is blocked, try leaving sideways by this many "
+        "mm first (a C-gun round a flange; default 250, 0: never)",
+    )
+    p.add_argument(
         "--rot-weight",
         metavar="MM/RAD",
         type=_nonneg_mm,
@@ -213,6 +221,7 @@ def plan_tool_path(
         time_s=max(args.se3_time, 1e-3),
         seed=seed,
         rot_weight=max(args.rot_weight, 1.0),
+        side_exit=args.side_exit,
         stats=stats,
     )
     return path, verify_sweeps(path, poses, part, tool)
@@ -234,7 +243,8 @@ def transition_rows(route: Any, check: Any) -> list[tuple[str, str]]:
         (
             "tool transitions",
             f"{n - len(path.blocked)} / {n} free for the swept tool, {path.n_replanned} "
-            f"re-planned in SE(3); retract {path.settings['retract']:g} mm"
+            f"re-planned in SE(3); retract {path.settings['retract']:g} mm, side exit "
+            f"{path.settings.get('side_exit', 0):g} mm"
             + (f"; re-checked: {sweeps.describe()}" if sweeps is not None else ""),
         ),
         (
