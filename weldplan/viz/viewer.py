@@ -308,6 +308,10 @@ def build_scene(
         for f, p in zip(frames, W, strict=True):
             with anim.at_frame(torch, int(f)) as frame:
                 frame.set_transform(_torch_pose(p, r_joint))
+        if route.tool:
+            from weldplan.viz.tool_scene import animate_tool
+
+            animate_tool(anim, root, route, tool, ANIMATION_SECONDS, 30)
         vis.set_animation(anim, play=True, repetitions=1000)
     if camera:
         # meshcat's camera frame is y-up: this looks down at the part from the front right
