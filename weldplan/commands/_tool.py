@@ -179,7 +179,7 @@ def plan_poses(
     both = ToolChecks(
         ok=sweeps.ok,
         checked=check.checked,
-        failures=tuple(sweeps.failures),
+        failures=tuple((f"transition {k}", r) for k, r in sweeps.failures),
         sweeps=sweeps,
     )
     return dataclasses.replace(route, tool=data), both
