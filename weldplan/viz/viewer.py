@@ -243,6 +243,8 @@ def build_scene(
     # frame the route (joints and legs), not the whole part: on a car body the route would
     # otherwise be a speck; the part is drawn around it (zoom out to see all of it)
     pts = [route.joint_xyz, *(leg.points for leg in route.legs)]
+    if route.tool.get("transitions"):  # the tool's path too: its retracts and exits
+        pts += [np.asarray(t["positions"]) for t in route.tool["transitions"]["transitions"]]
     allp = np.concatenate(pts, axis=0)
     if len(allp) < 2 or np.ptp(allp, axis=0).max() < 1e-6:
         if mesh is not None:
