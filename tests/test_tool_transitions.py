@@ -194,11 +194,12 @@ def test_tool_order_trades_length_for_rotation_with_the_weight():
 def test_a_blocked_move_is_replanned_in_se3_and_the_recheck_agrees():
     pytest.importorskip("ompl")
     sheet = _box((400, 400, 2), (0, 0, -1))
-    wall = _box((400, 4, 150), (0, 0, 75))  # between the welds, 150 mm high
+    wall = _box((400, 4, 80), (0, 0, 40))  # between the welds, 80 mm high
     part = trimesh.util.concatenate([sheet, wall])
     poses = _poses([("a", (0, -100, 0)), ("b", (0, 100, 0))], DOWN)
     stick = _stick(100.0)
-    path = plan_transitions(part, stick, poses, retract=50.0, time_s=5.0, seed=1)
+    # RRT-Connect stops at its first solution; the time is only a cap (a loaded machine is slow)
+    path = plan_transitions(part, stick, poses, retract=50.0, time_s=30.0, seed=1)
     (t,) = path.transitions
     assert t.status == "replanned", t.reason
     assert t.kinds[0] == "retract" and t.kinds[-1] == "approach" and "se3" in t.kinds
