@@ -1,5 +1,5 @@
 """The viewer animates the tool along its transitions (issue 16, item 5): keyframes at the
-waypoints with their orientations, blocked transitions in red; checked in headless Chromium."""
+waypoints with their orientations, blocked transitions in magenta; checked in headless Chromium."""
 
 from __future__ import annotations
 
@@ -78,10 +78,10 @@ def test_keyframe_times_give_a_turn_on_the_spot_its_share():
     np.testing.assert_allclose(t, [0.0, 100 / (100 + 100 * np.pi), 1.0])
 
 
-def test_a_blocked_transition_is_drawn_red(tool_route):
+def test_a_blocked_transition_is_drawn_magenta(tool_route):
     from meshcat.servers.tree import find_node
 
-    from weldplan.viz.tool_scene import MISS_COLOR
+    from weldplan.viz.tool_scene import BLOCKED_COLOR
     from weldplan.viz.viewer import RecordingWindow, build_scene
 
     route, torch, path = tool_route
@@ -99,7 +99,7 @@ def test_a_blocked_transition_is_drawn_red(tool_route):
         )["object"]["materials"][0]["color"]
         for k in range(2)
     ]
-    assert colors == [TOOL_COLOR, MISS_COLOR]
+    assert colors == [TOOL_COLOR, BLOCKED_COLOR]
 
 
 @pytest.mark.slow

@@ -4,9 +4,9 @@ Drawn under ``weldplan/tool``: ``tool/<id>`` a copy of the tool mesh at weld ``<
 TCP frame in the part frame), ``tool_miss/<id>`` a red halo about each weld without a free pose.
 With transitions (``route.tool["transitions"]``, :mod:`weldplan.tool.transitions`):
 ``path/<k>`` the TCP path of transition ``k`` (free ones in the tool copies' colour, blocked
-ones in red), and ``gun`` the tool itself, animated along the whole path (:func:`animate_tool`: one
-keyframe per waypoint, so the viewer's linear position and slerped rotation between keyframes are
-the motion that was checked).
+ones in magenta), and ``gun`` the tool itself, animated along the whole path
+(:func:`animate_tool`: one keyframe per waypoint, so the viewer's linear position and slerped
+rotation between keyframes are the motion that was checked).
 The tool is drawn at every weld with a pose up to :data:`MAX_INSTANCES`, else at that many
 welds spread evenly along the route order (each copy costs the page the whole mesh).
 
@@ -116,8 +116,10 @@ def draw_tool(root: Any, route: Route, tool: Any, r_joint: float) -> None:
     )
 
 
-#: colour of the animated tool (free transitions are drawn in TOOL_COLOR, blocked in MISS_COLOR)
+#: colour of the animated tool (free transitions are drawn in TOOL_COLOR)
 GUN_COLOR = 0x8E44AD
+#: colour of blocked transitions: magenta, so that red stays the welds without a pose
+BLOCKED_COLOR = 0xD000D0
 
 
 def tool_path_of(route: Route) -> Any:
@@ -154,7 +156,7 @@ def animate_tool(anim: Any, root: Any, route: Route, tool: Any, seconds: float, 
         return False
     node = root["tool"]
     for k, t in enumerate(path.transitions):
-        color = TOOL_COLOR if t.free else MISS_COLOR
+        color = TOOL_COLOR if t.free else BLOCKED_COLOR
         node["path"][str(k)].set_object(
             g.Line(
                 g.PointsGeometry(np.asarray(t.positions, dtype=np.float32).T),
