@@ -100,7 +100,8 @@ def test_verify_with_the_same_tool_rechecks_the_poses(planned, capsys):
               "--tool", str(tmp / "torch.stl"), "--tcp", "0,0,0,0,0,0"])  # fmt: skip
     out = capsys.readouterr().out
     assert rc == EXIT_PARTIAL, out
-    assert "4 / 5 welds with a free pose" in out and "E" in out.splitlines()[-1]
+    (poses_line,) = [ln for ln in out.splitlines() if ln.startswith("tool poses ok")]
+    assert "4 / 5 welds with a free pose" in poses_line and "E" in poses_line
 
 
 def test_verify_refuses_a_route_planned_with_another_tool(planned, capsys):
@@ -277,6 +278,11 @@ def test_headless_chromium_draws_the_tool_copies(planned, tmp_path):
     assert _chromium()
     tmp, _ = planned
     route = read_route(tmp / "r.json")
+    # the copies and the misses only: the transitions (animated, framed with the route) are
+    # tested in test_tool_viewer.py
+    route = dataclasses.replace(
+        route, tool={k: v for k, v in route.tool.items() if k != "transitions"}
+    )
     tool, _ = load_tool(tmp / "torch.stl", tcp="0,0,0,0,0,0")
     without = dataclasses.replace(route, tool={})
     shots = {}
@@ -294,3 +300,25 @@ def test_headless_chromium_draws_the_tool_copies(planned, tmp_path):
     # the see-through tool copies change a good share of the view
     assert (np.abs(shots["tool"] - shots["plain"]).max(axis=-1) > 30).mean() > 0.2
     assert red(shots["plain"]) >= 30 and red(shots["tool"]) < red(shots["plain"]) / 3
+
+
+def test_verify_rechecks_the_transitions_and_catches_a_tampered_one(planned, capsys):
+    tmp, _ = planned
+    d = json.loads((tmp / "r.json").read_text())
+    trans = d["tool"]["transitions"]["transitions"]
+    free = [t for t in trans if t["status"] != "blocked"]
+    assert free, "the box station has free transitions"
+    capsys.readouterr()
+    argv = ["verify", None, str(tmp / "box.stl"), "--tool", str(tmp / "torch.stl"),
+            "--tcp", "0,0,0,0,0,0"]  # fmt: skip
+    argv[1] = str(tmp / "r.json")
+    _rc(argv)
+    assert "tool transitions ok" in capsys.readouterr().out
+    # send the first free transition's second waypoint 50 mm under the floor
+    free[0]["positions"][1][2] = -50.0
+    bad = tmp / "tampered_transition.json"
+    bad.write_text(json.dumps(d))
+    argv[1] = str(bad)
+    assert _rc(argv) == 1
+    err = capsys.readouterr().err
+    assert "tool transitions" in err and f"{free[0]['from']}->{free[0]['to']}" in err

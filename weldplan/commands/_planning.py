@@ -407,7 +407,9 @@ def _partial_code(route: Any) -> int:
                 file=sys.stderr,
             )
             code = EXIT_PARTIAL
-    return code
+    from weldplan.commands._tool import transitions_partial
+
+    return EXIT_PARTIAL if transitions_partial(route) else code
 
 
 def _gap_rounds(g: Any) -> str:

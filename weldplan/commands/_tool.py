@@ -6,6 +6,15 @@ pose of the whole tool at every weld in the route's order
 (:func:`weldplan.tool.verify_poses.verify_poses`, fresh FCL models) and only then renders the
 outputs. A weld without a free pose is listed with its closest miss; the run then exits with
 :data:`weldplan.errors.EXIT_PARTIAL`.
+
+Then the transitions (issue 16, items 3 and 4): the welds with a pose are ordered on the tool's
+own costs (:func:`weldplan.tool.tool_order.tool_order`, ``--rot-weight``; ``--tool-order route``
+keeps the point-tip order), the tool retracts ``--retract`` mm along its axis, moves and
+approaches, every motion checked for the swept tool, blocked ones re-planned in SE(3) with OMPL
+for up to ``--se3-time`` seconds (:func:`weldplan.tool.transitions.plan_transitions`), and the
+whole path is re-checked independently (:func:`weldplan.tool.verify_sweeps.verify_sweeps`)
+before anything is written. A blocked transition is listed; the run then exits with
+``EXIT_PARTIAL``.
 """
 
 from __future__ import annotations
@@ -14,6 +23,7 @@ import argparse
 import dataclasses
 import logging
 import math
+from dataclasses import dataclass
 from typing import Any
 
 from weldplan.errors import WeldplanError
@@ -81,6 +91,54 @@ def add_tool_arguments(p: argparse.ArgumentParser, *, search: bool = True) -> No
             help="the tool may touch the part only inside this sphere about the weld spot, mm "
             "(default 20: the electrode tip)",
         )
+        add_transition_arguments(p)
+
+
+def _seconds(text: str) -> float:
+    return _nonneg_mm(text)  # the same rule: a finite number >= 0
+
+
+def add_transition_arguments(p: argparse.ArgumentParser) -> None:
+    """``--retract``, ``--rot-weight``, ``--tool-order``, ``--se3-time`` (the transitions)."""
+    p.add_argument(
+        "--retract",
+        metavar="MM",
+        type=_nonneg_mm,
+        default=50.0,
+        help="with --tool: leave and approach each weld along the tool axis over this many mm "
+        "(default 50; every motion of the swept tool is checked)",
+    )
+    p.add_argument(
+        "--side-exit",
+        metavar="MM",
+        type=_nonneg_mm,
+        default=250.0,
+        help="with --tool: where the axial retract is blocked, try leaving sideways by this many "
+        "mm first (a C-gun round a flange; default 250, 0: never)",
+    )
+    p.add_argument(
+        "--rot-weight",
+        metavar="MM/RAD",
+        type=_nonneg_mm,
+        default=200.0,
+        help="with --tool: the weld order minimises TCP length + this x orientation change "
+        "(default 200 mm per rad)",
+    )
+    p.add_argument(
+        "--tool-order",
+        choices=("tool", "route"),
+        default="tool",
+        help="with --tool: order the welds on the tool's costs (default) or keep the point-tip "
+        "route's order",
+    )
+    p.add_argument(
+        "--se3-time",
+        metavar="S",
+        type=_seconds,
+        default=5.0,
+        help="with --tool: seconds OMPL may spend re-planning one blocked transition in SE(3) "
+        "(default 5; 0: report blocked transitions without re-planning)",
+    )
 
 
 def tool_from_args(args: argparse.Namespace) -> tuple[Any, dict[str, Any]] | None:
@@ -113,7 +171,115 @@ def plan_poses(
         cell, route, tool, cone=args.tool_cone, contact_radius=args.contact_radius
     )
     check = verify_poses(poses, cell.part, tool)
-    return dataclasses.replace(route, tool={"provenance": prov, "poses": poses.to_dict()}), check
+    data: dict[str, Any] = {"provenance": prov, "poses": poses.to_dict()}
+    if not check.ok:
+        return dataclasses.replace(route, tool=data), check
+    path, sweeps = plan_tool_path(args, cell.part, tool, poses, seed=getattr(args, "seed", None))
+    data["transitions"] = path.to_dict()
+    both = ToolChecks(
+        ok=sweeps.ok,
+        checked=check.checked,
+        failures=tuple((f"transition {k}", r) for k, r in sweeps.failures),
+        sweeps=sweeps,
+    )
+    return dataclasses.replace(route, tool=data), both
+
+
+@dataclass(frozen=True)
+class ToolChecks:
+    """The re-checks of the tool stage: poses (``checked`` ok poses) and sweeps."""
+
+    ok: bool
+    checked: int
+    failures: tuple[tuple[str, str], ...]
+    sweeps: Any = None
+
+
+def plan_tool_path(
+    args: argparse.Namespace, part: Any, tool: Any, poses: Any, *, seed: int | None = None
+) -> tuple[Any, Any]:
+    """Order the welds on the tool's costs, plan the transitions, re-check them independently.
+
+    Returns the :class:`~weldplan.tool.transit.ToolPath` and its
+    :class:`~weldplan.tool.verify_sweeps.SweepsVerification`.
+    """
+    from weldplan.tool.tool_order import tool_order
+    from weldplan.tool.transitions import plan_transitions
+    from weldplan.tool.verify_sweeps import verify_sweeps
+
+    order, stats = tool_order(poses, args.retract, args.rot_weight, rng=seed)
+    if args.tool_order == "route":
+        order = [p.id for p in poses.poses if p.ok]
+    stats["order_from"] = args.tool_order
+    path = plan_transitions(
+        part,
+        tool,
+        poses,
+        order=order,
+        retract=args.retract,
+        se3=args.se3_time > 0,
+        time_s=max(args.se3_time, 1e-3),
+        seed=seed,
+        rot_weight=max(args.rot_weight, 1.0),
+        side_exit=args.side_exit,
+        stats=stats,
+    )
+    return path, verify_sweeps(path, poses, part, tool)
+
+
+def transition_rows(route: Any, check: Any) -> list[tuple[str, str]]:
+    """Summary rows of the transitions: free / total, re-planned, length and rotation versus the
+    point-tip order, and each blocked transition."""
+    from weldplan.tool.transit import ToolPath
+
+    d = route.tool.get("transitions")
+    if not d:
+        return []
+    path = ToolPath.from_dict(d)
+    sweeps = getattr(check, "sweeps", None)
+    n = len(path.transitions)
+    est = path.stats.get("point_order")
+    rows = [
+        (
+            "tool transitions",
+            f"{n - len(path.blocked)} / {n} free for the swept tool, {path.n_replanned} "
+            f"re-planned in SE(3); retract {path.settings['retract']:g} mm, side exit "
+            f"{path.settings.get('side_exit', 0):g} mm"
+            + (f"; re-checked: {sweeps.describe()}" if sweeps is not None else ""),
+        ),
+        (
+            "tool path",
+            f"{path.length:.1f} mm, orientation change {path.rotation:.1f} deg, order "
+            f"{path.stats.get('order_from', '?')}"
+            + (
+                f" (estimated on direct transitions: point-tip order {est['length']:.1f} mm, "
+                f"{est['rotation_deg']:.1f} deg; tool order "
+                f"{path.stats['tool_order']['length']:.1f} mm, "
+                f"{path.stats['tool_order']['rotation_deg']:.1f} deg)"
+                if est
+                else ""
+            ),
+        ),
+    ]
+    rows += [(f"  {t.from_id}->{t.to_id}", f"blocked; {t.reason}") for t in path.blocked]
+    return rows
+
+
+def transitions_partial(route: Any) -> bool:
+    """Whether the route's tool path has blocked transitions (one stderr line if so)."""
+    import sys
+
+    d = route.tool.get("transitions") if route.tool else None
+    if not d:
+        return False
+    blocked = [f"{t['from']}->{t['to']}" for t in d["transitions"] if t["status"] == "blocked"]
+    if blocked:
+        shown = ", ".join(blocked[:10]) + (", ..." if len(blocked) > 10 else "")
+        print(
+            f"weldplan: {len(blocked)} tool transition(s) blocked for the swept tool ({shown})",
+            file=sys.stderr,
+        )
+    return bool(blocked)
 
 
 def pose_rows(route: Any, check: Any) -> list[tuple[str, str]]:
@@ -136,4 +302,4 @@ def pose_rows(route: Any, check: Any) -> list[tuple[str, str]]:
         for p in poses.poses
         if not p.ok
     ]
-    return rows
+    return rows + transition_rows(route, check)

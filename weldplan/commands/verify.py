@@ -10,7 +10,7 @@ from weldplan.commands.plan import add_cell_arguments
 
 HELP = (
     "re-check a route JSON against the part mesh (FCL, every segment; every joint once; with "
-    "--tool the weld poses of the whole tool)"
+    "--tool the weld poses and the transitions of the whole tool)"
 )
 
 
@@ -61,7 +61,15 @@ def run(args: argparse.Namespace) -> int:
         print(f"weldplan verify: tool poses: {check.describe()}", file=sys.stderr)
         return 1
     print(f"tool poses ok: {check.describe()}")
-    if check.missing:
+    from weldplan.tool.check_route import verify_route_sweeps
+
+    sweeps = verify_route_sweeps(route, part, tool[0])
+    if sweeps is not None and not sweeps.ok:
+        print(f"weldplan verify: tool transitions: {sweeps.describe()}", file=sys.stderr)
+        return 1
+    if sweeps is not None:
+        print(f"tool transitions ok: {sweeps.describe()}")
+    if check.missing or (sweeps is not None and sweeps.blocked):
         from weldplan.errors import EXIT_PARTIAL
 
         return EXIT_PARTIAL

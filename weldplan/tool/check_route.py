@@ -5,7 +5,10 @@ provenance: file sha256, mesh sha256, TCP, units). :func:`check_tool_provenance`
 planned with another tool, or without one. :func:`verify_route_poses` then checks that the poses
 belong to the route (one per visited weld, in its order, each at its weld spot) and re-checks every
 pose reported ok with :func:`weldplan.tool.verify_poses.verify_poses` (fresh FCL models of the
-whole part and the whole tool, none of the search's caches).
+whole part and the whole tool, none of the search's caches). :func:`verify_route_sweeps`
+re-checks the tool's transitions (``route.tool["transitions"]``) for the swept tool with
+:func:`weldplan.tool.verify_sweeps.verify_sweeps` (fresh FCL models, uniform samples and its own
+bound).
 """
 
 from __future__ import annotations
@@ -99,3 +102,24 @@ def verify_route_poses(route: Route, part: Any, tool: Any) -> RoutePosesCheck:
     v = verify_poses(poses, part, tool)
     missing = tuple(p.id for p in poses.poses if not p.ok)
     return RoutePosesCheck(v.ok, len(poses.poses), poses.n_ok, missing, tuple(v.failures))
+
+
+def verify_route_sweeps(route: Route, part: Any, tool: Any) -> Any:
+    """Re-check the transitions ``route.tool`` carries (``None`` when it carries none).
+
+    Returns a :class:`~weldplan.tool.verify_sweeps.SweepsVerification`; an unreadable tool path
+    is a failed one.
+    """
+    from weldplan.tool.result import WeldPoses
+    from weldplan.tool.transit import ToolPath
+    from weldplan.tool.verify_sweeps import SweepsVerification, verify_sweeps
+
+    d = route.tool.get("transitions") if route.tool else None
+    if not d:
+        return None
+    try:
+        path = ToolPath.from_dict(d)
+        poses = WeldPoses.from_dict(route.tool["poses"])
+    except (KeyError, TypeError, ValueError) as exc:
+        return SweepsVerification(False, 0, 0, failures=(("-", f"unreadable tool path: {exc}"),))
+    return verify_sweeps(path, poses, part, tool)

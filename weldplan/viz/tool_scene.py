@@ -2,6 +2,11 @@
 
 Drawn under ``weldplan/tool``: ``tool/<id>`` a copy of the tool mesh at weld ``<id>``'s pose (the
 TCP frame in the part frame), ``tool_miss/<id>`` a red halo about each weld without a free pose.
+With transitions (``route.tool["transitions"]``, :mod:`weldplan.tool.transitions`):
+``path/<k>`` the TCP path of transition ``k`` (free ones in the tool copies' colour, blocked
+ones in magenta), and ``gun`` the tool itself, animated along the whole path
+(:func:`animate_tool`: one keyframe per waypoint, so the viewer's linear position and slerped
+rotation between keyframes are the motion that was checked).
 The tool is drawn at every weld with a pose up to :data:`MAX_INSTANCES`, else at that many
 welds spread evenly along the route order (each copy costs the page the whole mesh).
 
@@ -109,3 +114,75 @@ def draw_tool(root: Any, route: Route, tool: Any, r_joint: float) -> None:
         len(ok),
         len(poses.poses) - len(ok),
     )
+
+
+#: colour of the animated tool (free transitions are drawn in TOOL_COLOR)
+GUN_COLOR = 0x8E44AD
+#: colour of blocked transitions: magenta, so that red stays the welds without a pose
+BLOCKED_COLOR = 0xD000D0
+
+
+def tool_path_of(route: Route) -> Any:
+    """The route's :class:`~weldplan.tool.transit.ToolPath`, ``None`` without transitions."""
+    from weldplan.tool.transit import ToolPath
+
+    d = route.tool.get("transitions") if route.tool else None
+    return None if not d else ToolPath.from_dict(d)
+
+
+def keyframe_times(positions: NDArray[np.float64], quaternions: NDArray[np.float64],
+                   reach: float) -> NDArray[np.float64]:  # fmt: skip
+    """``(m,)`` from 0 to 1: each waypoint's share of the path, by the motion bound of each
+    motion (TCP distance + rotation angle x ``reach`` mm), so a turn on the spot takes time."""
+    from weldplan.tool.transit import path_rotation
+
+    step = np.linalg.norm(np.diff(positions, axis=0), axis=1)
+    turn = np.array(
+        [np.radians(path_rotation(quaternions[k : k + 2])) for k in range(len(quaternions) - 1)]
+    )
+    cum = np.concatenate([[0.0], np.cumsum(step + turn * reach)])
+    return cum / max(float(cum[-1]), 1e-9)
+
+
+def animate_tool(anim: Any, root: Any, route: Route, tool: Any, seconds: float, fps: int) -> bool:
+    """Draw the tool path and animate the tool along it in ``anim`` (a meshcat ``Animation``).
+
+    Returns whether anything was drawn (no transitions or no tool: nothing).
+    """
+    import meshcat.geometry as g
+
+    path = tool_path_of(route)
+    if path is None or not path.transitions:
+        return False
+    node = root["tool"]
+    for k, t in enumerate(path.transitions):
+        color = TOOL_COLOR if t.free else BLOCKED_COLOR
+        node["path"][str(k)].set_object(
+            g.Line(
+                g.PointsGeometry(np.asarray(t.positions, dtype=np.float32).T),
+                g.LineBasicMaterial(color=color, linewidth=3),
+            )
+        )
+    if tool is None:
+        return True
+    P, Q = path.waypoints()
+    V, F = display_mesh(tool)
+    gun = node["gun"]
+    gun.set_object(
+        g.TriangularMeshGeometry(V, F),
+        g.MeshLambertMaterial(color=GUN_COLOR, opacity=0.85, transparent=True),
+    )
+    times = keyframe_times(P, Q, float(np.linalg.norm(tool.vertices, axis=1).max()))
+    frames = np.round(times * seconds * fps).astype(int)
+    from scipy.spatial.transform import Rotation
+
+    R = Rotation.from_quat(np.roll(Q, -1, axis=1)).as_matrix()
+    T = np.tile(np.eye(4), (len(P), 1, 1))
+    T[:, :3, :3] = R
+    T[:, :3, 3] = P
+    gun.set_transform(T[0])
+    for f, Tk in zip(frames, T, strict=True):
+        with anim.at_frame(gun, int(f)) as frame:
+            frame.set_transform(Tk)
+    log.debug("tool animated along %d waypoints", len(P))
+    return True

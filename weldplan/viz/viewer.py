@@ -243,6 +243,8 @@ def build_scene(
     # frame the route (joints and legs), not the whole part: on a car body the route would
     # otherwise be a speck; the part is drawn around it (zoom out to see all of it)
     pts = [route.joint_xyz, *(leg.points for leg in route.legs)]
+    if route.tool.get("transitions"):  # the tool's path too: its retracts and exits
+        pts += [np.asarray(t["positions"]) for t in route.tool["transitions"]["transitions"]]
     allp = np.concatenate(pts, axis=0)
     if len(allp) < 2 or np.ptp(allp, axis=0).max() < 1e-6:
         if mesh is not None:
@@ -308,6 +310,10 @@ def build_scene(
         for f, p in zip(frames, W, strict=True):
             with anim.at_frame(torch, int(f)) as frame:
                 frame.set_transform(_torch_pose(p, r_joint))
+        if route.tool:
+            from weldplan.viz.tool_scene import animate_tool
+
+            animate_tool(anim, root, route, tool, ANIMATION_SECONDS, 30)
         vis.set_animation(anim, play=True, repetitions=1000)
     if camera:
         # meshcat's camera frame is y-up: this looks down at the part from the front right

@@ -1,0 +1,115 @@
+"""The weld order on the tool's own costs (issue 16, item 4), not on point-tip lengths.
+
+The tool leaves weld ``i`` by retracting ``retract`` mm along its TCP axis to the retract point
+``r_i = p_i - retract z_i``, moves to ``r_j`` while its orientation turns from ``q_i`` to
+``q_j`` (slerp), and approaches weld ``j`` along its axis (:mod:`weldplan.tool.transitions`).
+The estimated cost of that transition is its TCP length plus a weight on its rotation::
+
+    c_ij = 2 retract + |r_i - r_j| + w angle(q_i, q_j)          (mm; w in mm per rad)
+
+the length and rotation of the direct transition. It is a lower bound-like estimate: a
+transition re-planned in SE(3) is longer. The order is the open path of least total cost over
+the welds with a pose (:func:`weldplan.optim.discrete.sequence.solve_sequence`: exact up to its
+exact limit, fast-tsp above). The poses are those chosen along the point-tip order
+(:func:`weldplan.tool.poses.plan_weld_poses`); they are not re-chosen for the new order.
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from weldplan.tool.result import WeldPoses
+from weldplan.tool.sweep import quat_to_matrix
+
+log = logging.getLogger(__name__)
+
+#: mm per rad: default weight of the orientation change in the leg costs (a turn of 1 rad costs
+#: as much as 200 mm of TCP travel: about what a 0.7 m gun's far end sweeps through)
+DEFAULT_ROT_WEIGHT = 200.0
+
+
+def retract_points(poses: WeldPoses, ids: list[str], retract: float) -> NDArray[np.float64]:
+    """``(n, 3)`` mm: each weld's retract point ``p - retract z`` (z the TCP axis of its pose)."""
+    P = np.array([poses[i].position for i in ids], dtype=np.float64)
+    Q = np.array([poses[i].quaternion for i in ids], dtype=np.float64)
+    return P - retract * quat_to_matrix(Q)[:, :, 2]
+
+
+def tool_leg_costs(
+    poses: WeldPoses, ids: list[str], retract: float, rot_weight: float
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """The estimated tool costs between the welds ``ids`` (all with a pose), module docstring.
+
+    Returns
+    -------
+    cost, length, angle
+        ``(n, n)`` mm, ``(n, n)`` mm of TCP path, ``(n, n)`` rad of rotation.
+    """
+    R = retract_points(poses, ids, retract)
+    Q = np.array([poses[i].quaternion for i in ids], dtype=np.float64)
+    length = np.linalg.norm(R[:, None, :] - R[None, :, :], axis=2) + 2.0 * retract
+    angle = 2.0 * np.arccos(np.clip(np.abs(Q @ Q.T), 0.0, 1.0))
+    np.fill_diagonal(length, 0.0)
+    np.fill_diagonal(angle, 0.0)
+    return length + rot_weight * angle, length, angle
+
+
+def order_cost(cost: NDArray[np.float64], order: list[int]) -> float:
+    """The summed cost of consecutive pairs along ``order``."""
+    return float(sum(cost[a, b] for a, b in zip(order[:-1], order[1:], strict=True)))
+
+
+def tool_order(
+    poses: WeldPoses,
+    retract: float,
+    rot_weight: float = DEFAULT_ROT_WEIGHT,
+    *,
+    rng: Any = None,
+) -> tuple[list[str], dict[str, Any]]:
+    """The order of the welds with a pose that minimises the tool costs (module docstring).
+
+    Parameters
+    ----------
+    poses
+        The weld poses, in the point-tip route's order.
+    retract
+        mm along the TCP axis.
+    rot_weight
+        mm per rad.
+    rng
+        Seed for the sequencer (used above its exact limit).
+
+    Returns
+    -------
+    order, stats
+        The weld ids in the new order, and the estimated costs (mm, mm, deg) of the point-tip
+        order and of the new one.
+    """
+    from weldplan.optim.discrete.sequence import solve_sequence
+
+    ids = [p.id for p in poses.poses if p.ok]
+    stats: dict[str, Any] = {"rot_weight": rot_weight}
+    if len(ids) < 3:
+        return ids, stats
+    cost, length, angle = tool_leg_costs(poses, ids, retract, rot_weight)
+    point = list(range(len(ids)))
+    seq = solve_sequence(cost, rng=rng)
+    order = [int(k) for k in seq.order]
+    if order_cost(cost, order) > order_cost(cost, point):  # never worse than the point-tip order
+        order = point
+    for name, o in (("point_order", point), ("tool_order", order)):
+        stats[name] = {
+            "cost": order_cost(cost, o),
+            "length": order_cost(length, o),
+            "rotation_deg": float(np.degrees(order_cost(angle, o))),
+        }
+    log.info(
+        "tool order: estimated cost %.1f mm (point-tip order %.1f mm)",
+        stats["tool_order"]["cost"],
+        stats["point_order"]["cost"],
+    )
+    return [ids[k] for k in order], stats
