@@ -82,9 +82,10 @@ def test_bench_local_peers_end_to_end(box_cell, tmp_path: Path, monkeypatch) -> 
     assert rc == 0
     data = json.loads((tmp_path / "local-peers.json").read_text())
     cols = [
-        "SO-ACO (default)",
-        "exact (A* + SO)",
+        "SO-ACO (paper)",
         "SO-ACO + refine",
+        "exact (A* + SO)",
+        "exact + refine (default)",
         "OMPL BIT* 0.05 s",
         "OMPL BIT* 0.2 s",
     ]
@@ -95,7 +96,9 @@ def test_bench_local_peers_end_to_end(box_cell, tmp_path: Path, monkeypatch) -> 
         assert r["best"] == min(ok)
         # the refinement starts from the same seeded SO-ACO path and is never longer
         runs = r["runs"]
-        assert runs["SO-ACO + refine"]["length"] <= runs["SO-ACO (default)"]["length"] + 1e-9
+        assert runs["SO-ACO + refine"]["length"] <= runs["SO-ACO (paper)"]["length"] + 1e-9
+        exact = runs["exact (A* + SO)"]["length"]
+        assert runs["exact + refine (default)"]["length"] <= exact + 1e-9
     md = (tmp_path / "local-peers.md").read_text()
-    assert "| SO-ACO (default) | 2/2 |" in md and "Reference: OMPL BIT* 0.2 s" in md
+    assert "| exact + refine (default) | 2/2 |" in md and "Reference: OMPL BIT* 0.2 s" in md
     assert "## Targets" in md and "load average" in md

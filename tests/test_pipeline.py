@@ -52,6 +52,10 @@ def test_route_visits_every_joint_and_verifies(cell):
     assert sorted(r.order) == sorted(IDS)
     assert verify_route(r, cell.part).ok
     assert r.lower_bound <= r.length
+    # the measure between virtual joints has its own bound, over the virtual joints
+    V = np.asarray(cell.virtual_xyz, dtype=float)
+    assert r.stats["bound_virtual"] == pytest.approx(straight_lower_bound(V)[0])
+    assert r.stats["bound_virtual"] <= r.inner_length * (1 + 1e-12)
     assert r.stats["pairs"] == 15
     assert r.stats["pairs_straight"] + r.stats["pairs_blocked"] == 15
     assert r.stats["pairs_blocked"] > 0  # the wall blocks the pairs across it

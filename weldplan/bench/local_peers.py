@@ -3,13 +3,13 @@
 Issue 15 item 5. On each cell, every pair of joints whose straight segment between the virtual
 joints is blocked (the FCL capsule at the clearance) is planned by
 
-- ours: SO-ACO (the default, ``plan_pair(method="so-aco")``) and exact (26-connected A* + the
-  secondary optimisation, ``method="exact"``);
+- ours: SO-ACO as the paper prints it (``plan_pair(method="so-aco")``) and exact (26-connected A*
+  + the secondary optimisation, ``method="exact"``), each alone and followed by the continuous
+  refinement (:func:`weldplan.weld.refine.refine_local_path`); "exact + refine" is the default
+  pipeline of ``weldplan plan``;
 - OMPL (:mod:`weldplan.motion.local`): BIT* and RRT* for each of ``--budgets`` seconds, then
   OMPL's simplifier, with weldplan's own FCL checks as the validity checker (the sphere at the
   clearance + closed-solid test for states, the ``method="fcl"`` capsule for motions);
-- "ours + refine" when :mod:`weldplan.weld.refine` provides ``refine_path`` (the continuous
-  refinement of issue 15 items 1-2); absent, the column is left out and the report says so.
 
 Every length is the inner length between the two virtual joints (the same for every planner).
 Per pair, the best known length is the shortest successful path any planner found; the issue's
@@ -164,14 +164,15 @@ def blocked_pairs(cell: Any, limit: int | None) -> list[tuple[int, int]]:
 # --------------------------------------------------------------------------- planners
 
 
-def _refine_hook() -> Callable[[Any, Any], Any] | None:
+#: the column of weldplan's default pipeline (``weldplan plan``: exact + the refinement)
+DEFAULT_COLUMN = "exact + refine (default)"
+
+
+def _refine_hook() -> Callable[[Any, Any], Any]:
     """``refine(cell, local_path) -> LocalPath``: the pipeline's own continuous refinement
     (:func:`weldplan.weld.refine.refine_local_path`, python-fcl checks) applied to a planned
-    pair, with its CPU time added; ``None`` when this build has no refinement stage."""
-    try:
-        from weldplan.weld.refine import refine_local_path
-    except ImportError:
-        return None
+    pair, with its CPU time added."""
+    from weldplan.weld.refine import refine_local_path
 
     def refine(cell: Any, lp: Any) -> Any:
         c0 = time.process_time()
@@ -188,15 +189,15 @@ def planners(budgets: list[float], ompl: list[str]) -> dict[str, Callable[..., A
     from weldplan.motion.local import plan_pair_ompl
     from weldplan.weld.local import plan_pair
 
-    cols: dict[str, Callable[..., Any]] = {
-        "SO-ACO (default)": lambda c, i, j, s, ch: plan_pair(c, i, j, method="so-aco", rng=s),
-        "exact (A* + SO)": lambda c, i, j, s, ch: plan_pair(c, i, j, method="exact"),
-    }
     refine = _refine_hook()
-    if refine is not None:
-        cols["SO-ACO + refine"] = lambda c, i, j, s, ch: refine(
+    cols: dict[str, Callable[..., Any]] = {
+        "SO-ACO (paper)": lambda c, i, j, s, ch: plan_pair(c, i, j, method="so-aco", rng=s),
+        "SO-ACO + refine": lambda c, i, j, s, ch: refine(
             c, plan_pair(c, i, j, method="so-aco", rng=s)
-        )
+        ),
+        "exact (A* + SO)": lambda c, i, j, s, ch: plan_pair(c, i, j, method="exact"),
+        DEFAULT_COLUMN: lambda c, i, j, s, ch: refine(c, plan_pair(c, i, j, method="exact")),
+    }
     label = {"bitstar": "BIT*", "rrtstar": "RRT*"}
     for name in ompl:
         for b in budgets:
@@ -321,8 +322,8 @@ def markdown(
             )
         lines.append("")
     allc = summary["all cells"]
-    ours = allc.get("SO-ACO (default)")
-    lines += ["## Targets (issue 15, SO-ACO default vs OMPL)", ""]
+    ours = allc.get(DEFAULT_COLUMN)
+    lines += [f"## Targets (issue 15, {DEFAULT_COLUMN} vs OMPL)", ""]
     if ours:
         lines.append(
             f"- Every blocked pair solved: {ours['solved']}/{ours['pairs']} "
@@ -389,10 +390,8 @@ def run(args: argparse.Namespace) -> int:
             "load_after": f"{load[0]:.2f} {load[1]:.2f} {load[2]:.2f}",
             "wall_s": time.perf_counter() - t0,
             "refine_note": (
-                "Ours + refine: weldplan.weld.refine.refine_path applied to the SO-ACO path."
-                if "SO-ACO + refine" in cols
-                else "Ours + refine: not measured (weldplan.weld.refine.refine_path is not in "
-                "this build; the column appears when it is)."
+                "+ refine: weldplan.weld.refine.refine_local_path (the pipeline's continuous "
+                "refinement, FCL-checked) applied to that planner's path."
             ),
         }
         (out / "local-peers.md").write_text(markdown(records, summary, ref, fast, meta))

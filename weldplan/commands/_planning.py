@@ -42,16 +42,18 @@ def add_planning_arguments(p: argparse.ArgumentParser, *, default_output: str | 
     p.add_argument("--post-file", metavar="F", help="where --post writes (default: CSV stem)")
     p.add_argument(
         "--planner",
-        default="so-aco",
+        default="exact",
         choices=("so-aco", "aco", "exact", "ompl"),
-        help="local planner for blocked pairs (default so-aco; ompl: OMPL's BIT*, 1 s a pair, on "
+        help="local planner for blocked pairs (default exact: 26-connected A* + the secondary "
+        "optimisation, then the refinement; so-aco: the paper's; ompl: OMPL's BIT*, 1 s a pair, on "
         "the same FCL checks; needs the ompl extra)",
     )
     p.add_argument(
         "--no-refine",
         action="store_true",
-        help="skip the continuous refinement after the grid planner (the paper's SO-ACO as "
-        "printed; default: refine, shortcuts anywhere on the path re-checked by FCL)",
+        help="skip the continuous refinement after the grid planner (with --planner so-aco: the "
+        "paper's pipeline as printed; default: refine, shortcuts anywhere on the path re-checked "
+        "by FCL)",
     )
     p.add_argument(
         "--sequencer",
@@ -425,8 +427,13 @@ def _gaps(route: Any) -> str:
         return "n/a"
     parts = [
         f"{100 * route.gap:.2f} % over the straight-line bound",
-        f"{100 * (route.inner_length / route.lower_bound - 1):+.2f} % between virtual joints",
     ]
+    b = route.stats.get("bound_virtual")
+    if b is not None and b == b and b > 0:
+        parts.append(
+            f"{100 * (route.inner_length / b - 1):.2f} % between virtual joints over their own "
+            f"straight-line bound ({b:.2f} mm)"
+        )
     b = route.stats.get("bound_with_approaches")
     if b is not None and b == b and b > 0:
         parts.append(
