@@ -1,0 +1,527 @@
+"""OMPL's sampling-based planners in R^n and SE(3), with the caller's validity checks.
+
+This is weldplan's one wrapper of OMPL (``pip install 'weldplan[ompl]'``, OMPL 2's official
+nanobind bindings). OMPL samples and searches; whether a state or a motion is free is always
+decided by the caller's callables (for the torch: weldplan's FCL sphere and capsule checks), so a
+path from here is exactly as trustworthy as those callables, and is re-verified downstream like
+any other.
+
+Conventions
+-----------
+- States are numpy arrays: R^n states ``(d,)``; SE(3) states ``(7,)`` as ``x, y, z, qw, qx, qy,
+  qz`` (positions in mm, unit quaternion scalar first).
+- Motions: when ``motion_valid`` is ``None``, OMPL's discrete motion validator checks states along
+  each motion every ``resolution`` x (the space's maximum extent) and calls ``is_valid`` on them;
+  otherwise ``motion_valid(a, b)`` alone decides whether the straight motion a -> b (SE(3):
+  linear position, slerp rotation) is free, and it must check both ends as well as the inside.
+- Seeds: OMPL has one process-wide seed generator (``ompl.util.RNG.setSeed``), which seeds every
+  RNG that OMPL creates afterwards. A call with ``seed`` resets it, so a planner that stops on its
+  own (``rrtconnect`` stops at its first solution) and ``simplify`` give the same path for the
+  same seed. Anytime planners (``bitstar``, ``rrtstar``...) stop on the clock, so how far they
+  improve depends on the machine's speed: the seed fixes the sample sequence, not the result.
+  Because the seed generator is process-wide, run parallel plans in processes, not threads.
+- "No path found" is a result (``solved=False``), never an exception;
+  :class:`SamplingArgumentError` is raised only for bad arguments.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from weldplan.errors import ConfigError, PlanningError
+
+log = logging.getLogger(__name__)
+
+#: weldplan's planner names -> OMPL ``ompl.geometric`` classes. Every planner here was checked to
+#: work with a Python motion validator (OMPL's two-state ``checkMotion``).
+PLANNERS: dict[str, str] = {
+    "bitstar": "BITstar",
+    "rrtstar": "RRTstar",
+    "informedrrtstar": "InformedRRTstar",
+    "rrtconnect": "RRTConnect",
+    "prmstar": "PRMstar",
+}
+
+#: OMPL's default state-validity checking resolution (fraction of the space's maximum extent)
+DEFAULT_RESOLUTION = 0.01
+#: largest deviation of a quaternion's norm from 1 that is accepted (and then normalised away)
+QUAT_NORM_TOL = 1e-6
+#: OMPL seeds must be positive 32-bit integers (0 is ignored by OMPL)
+_SEED_MOD = 2**32 - 1
+
+StateCheck = Callable[[NDArray[np.float64]], bool]
+MotionCheck = Callable[[NDArray[np.float64], NDArray[np.float64]], bool]
+
+
+class SamplingArgumentError(PlanningError, ValueError):
+    """A bad argument to :func:`plan_rn` / :func:`plan_se3` (shapes, bounds, planner name, time).
+
+    A :class:`~weldplan.errors.PlanningError` (the agreed interface of this module) and a
+    ``ValueError`` (the project's rule for input errors of the public API).
+    """
+
+
+@dataclass(frozen=True)
+class SampledPath:
+    """A path found by an OMPL planner.
+
+    Attributes
+    ----------
+    points
+        ``(n, d)`` float, read-only: the path's vertices, start first and goal last (mm for
+        positions; SE(3): columns ``x, y, z, qw, qx, qy, qz``). ``(0, d)`` when not solved.
+    length
+        Path length: R^n, the Euclidean length (mm for positions); SE(3), the sum over segments of
+        the position distance (mm) plus ``rot_weight`` x the rotation angle (rad). ``inf`` when
+        not solved.
+    solved
+        True when OMPL found an exact solution (the path reaches the goal).
+    planner
+        The planner's name in :data:`PLANNERS`.
+    time_s
+        Wall time of the call (planning and simplification), s.
+    status
+        One line: OMPL's status, vertex count, length, simplification.
+    """
+
+    points: NDArray[np.float64]
+    length: float
+    solved: bool
+    planner: str
+    time_s: float
+    status: str
+
+    def __post_init__(self) -> None:
+        pts = np.array(self.points, dtype=np.float64, copy=True)
+        pts.setflags(write=False)
+        object.__setattr__(self, "points", pts)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dict (``points`` as nested lists; an unsolved length as ``None``)."""
+        return {
+            "points": self.points.tolist(),
+            "length": float(self.length) if np.isfinite(self.length) else None,
+            "solved": bool(self.solved),
+            "planner": self.planner,
+            "time_s": float(self.time_s),
+            "status": self.status,
+        }
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> SampledPath:
+        """Inverse of :meth:`to_dict`."""
+        length = data["length"]
+        return cls(
+            points=np.asarray(data["points"], dtype=np.float64).reshape(len(data["points"]), -1),
+            length=float("inf") if length is None else float(length),
+            solved=bool(data["solved"]),
+            planner=str(data["planner"]),
+            time_s=float(data["time_s"]),
+            status=str(data["status"]),
+        )
+
+
+def ompl_available() -> bool:
+    """True when OMPL's Python bindings can be imported."""
+    try:
+        _import_ompl()
+    except ConfigError:
+        return False
+    return True
+
+
+def _import_ompl() -> tuple[Any, Any, Any]:
+    try:
+        from ompl import base as ob
+        from ompl import geometric as og
+        from ompl import util as ou
+    except ImportError as exc:  # pragma: no cover - exercised only without the extra
+        raise ConfigError(
+            f"OMPL is not installed ({exc}); install the extra: pip install 'weldplan[ompl]'",
+            field="planner",
+        ) from exc
+    return ob, og, ou
+
+
+# --------------------------------------------------------------------------- argument checks
+
+
+def _vector(name: str, value: ArrayLike, d: int | None = None) -> NDArray[np.float64]:
+    arr = np.asarray(value, dtype=np.float64)
+    if arr.ndim != 1 or (d is not None and arr.shape[0] != d) or arr.shape[0] == 0:
+        want = f"({d},)" if d is not None else "(d,) with d >= 1"
+        raise SamplingArgumentError(f"{name} must have shape {want}, got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise SamplingArgumentError(f"{name} must be finite, got {arr.tolist()}")
+    return arr
+
+
+def _check_box(lower: NDArray, upper: NDArray, points: dict[str, NDArray]) -> None:
+    if np.any(upper <= lower):
+        raise SamplingArgumentError(
+            f"upper must exceed lower on every axis: lower {lower.tolist()}, upper {upper.tolist()}"
+        )
+    for name, p in points.items():
+        if np.any(p < lower) or np.any(p > upper):
+            raise SamplingArgumentError(
+                f"{name} {p.tolist()} lies outside the bounds [{lower.tolist()}, {upper.tolist()}]"
+            )
+
+
+def _unit_quat(name: str, value: ArrayLike) -> NDArray[np.float64]:
+    q = _vector(name, value, 4)
+    norm = float(np.linalg.norm(q))
+    if abs(norm - 1.0) > QUAT_NORM_TOL:
+        raise SamplingArgumentError(
+            f"{name} must be a unit quaternion (w, x, y, z), got norm {norm:.9g}"
+        )
+    return q / norm
+
+
+def _check_common(planner: str, time_s: float, resolution: float) -> None:
+    if planner not in PLANNERS:
+        raise SamplingArgumentError(
+            f"unknown planner {planner!r}; choose one of {', '.join(PLANNERS)}"
+        )
+    if not (np.isfinite(time_s) and time_s > 0):
+        raise SamplingArgumentError(f"time_s must be a positive number of seconds, got {time_s}")
+    if not (0.0 < resolution <= 1.0):
+        raise SamplingArgumentError(
+            f"resolution is a fraction of the space's extent in (0, 1], got {resolution}"
+        )
+
+
+def _ompl_seed(seed: int | np.random.Generator | None) -> int | None:
+    """OMPL seed (positive 32-bit) for ``seed``; a Generator contributes one draw."""
+    if seed is None:
+        return None
+    if isinstance(seed, np.random.Generator):
+        seed = int(seed.integers(0, _SEED_MOD))
+    if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool):
+        raise SamplingArgumentError(f"seed must be an int, a numpy Generator or None, got {seed!r}")
+    return int(seed) % _SEED_MOD + 1
+
+
+# --------------------------------------------------------------------------- the shared solve
+
+
+def _solve(
+    ss: Any,
+    *,
+    read: Callable[[Any], NDArray[np.float64]],
+    motion_valid: MotionCheck | None,
+    resolution: float,
+    planner: str,
+    time_s: float,
+    seed: int | np.random.Generator | None,
+    simplify: bool,
+    measure: Callable[[NDArray[np.float64]], float],
+    dim: int,
+) -> SampledPath:
+    """Run ``planner`` on the prepared SimpleSetup ``ss`` and read the path back."""
+    ob, og, ou = _import_ompl()
+    si = ss.getSpaceInformation()
+    if motion_valid is None:
+        si.setStateValidityCheckingResolution(resolution)
+    else:
+        si.setMotionValidator(_motion_validator(ob, si, read, motion_valid))
+    ss.setOptimizationObjective(ob.PathLengthOptimizationObjective(si))
+    ss.setPlanner(getattr(og, PLANNERS[planner])(si))
+
+    ompl_seed = _ompl_seed(seed)
+    level = ou.getLogLevel()
+    # OMPL logs to stderr by itself; the library never prints, so OMPL stays quiet unless this
+    # module's logger is at DEBUG.
+    ou.setLogLevel(ou.LOG_DEBUG if log.isEnabledFor(logging.DEBUG) else ou.LOG_NONE)
+    t0 = time.perf_counter()
+    try:
+        if ompl_seed is not None:
+            ou.RNG.setSeed(ompl_seed)
+        status = ss.solve(float(time_s))
+        solved = bool(ss.haveExactSolutionPath())
+        simplified = False
+        if solved and simplify:
+            ss.simplifySolution(0.0)  # 0: simplifyMax, deterministic and complete
+            simplified = True
+        if solved:
+            path = ss.getSolutionPath()
+            pts = np.array([read(path.getState(i)) for i in range(path.getStateCount())])
+        else:
+            pts = np.zeros((0, dim))
+    finally:
+        ou.setLogLevel(level)
+    wall = time.perf_counter() - t0
+    length = measure(pts) if solved else float("inf")
+    line = (
+        f"{planner}: {status.asString()}, {len(pts)} vertices, length {length:.6g}"
+        + (", simplified" if simplified else "")
+        + f", {wall:.3g} s"
+    )
+    log.debug(line)
+    return SampledPath(pts, length, solved, planner, wall, line)
+
+
+def _py_motion_validator_class(ob: Any) -> type:
+    class _Validator(ob.MotionValidator):  # type: ignore[misc, name-defined]
+        def __init__(self, si: Any, read: Callable, check: MotionCheck) -> None:
+            super().__init__(si)
+            self._read = read
+            self._check = check
+
+        def checkMotion(self, s1: Any, s2: Any) -> bool:  # OMPL's virtual method
+            return bool(self._check(self._read(s1), self._read(s2)))
+
+    return _Validator
+
+
+_VALIDATOR_CLASS: type | None = None
+
+
+def _motion_validator(ob: Any, si: Any, read: Callable, check: MotionCheck) -> Any:
+    """An OMPL MotionValidator that calls the Python ``check(a, b)`` on numpy states."""
+    global _VALIDATOR_CLASS
+    if _VALIDATOR_CLASS is None:
+        _VALIDATOR_CLASS = _py_motion_validator_class(ob)
+    return _VALIDATOR_CLASS(si, read, check)
+
+
+# --------------------------------------------------------------------------- R^n
+
+
+def plan_rn(
+    start: ArrayLike,
+    goal: ArrayLike,
+    lower: ArrayLike,
+    upper: ArrayLike,
+    is_valid: StateCheck,
+    *,
+    motion_valid: MotionCheck | None = None,
+    resolution: float = DEFAULT_RESOLUTION,
+    planner: str = "bitstar",
+    time_s: float = 1.0,
+    seed: int | np.random.Generator | None = None,
+    simplify: bool = True,
+) -> SampledPath:
+    """Plan a path from ``start`` to ``goal`` in the box ``[lower, upper]`` of R^d with OMPL.
+
+    Parameters
+    ----------
+    start, goal
+        ``(d,)`` float, inside the box (mm for positions, rad for joints).
+    lower, upper
+        ``(d,)`` float, the box the planner samples; ``upper > lower`` on every axis.
+    is_valid
+        ``is_valid(x (d,)) -> bool``: whether a state is free.
+    motion_valid
+        ``motion_valid(a (d,), b (d,)) -> bool``: whether the straight segment a -> b (ends
+        included) is free, e.g. weldplan's FCL capsule check. ``None``: OMPL's discrete check of
+        ``is_valid`` every ``resolution`` x the box's diagonal.
+    resolution
+        Fraction of the box's diagonal between the states OMPL checks on a motion when
+        ``motion_valid`` is ``None`` (OMPL's default 0.01).
+    planner
+        A name in :data:`PLANNERS`; ``bitstar`` (Gammell et al., BIT*) by default.
+    time_s
+        Planning time limit, s. Anytime planners use all of it; ``rrtconnect`` stops at its first
+        solution.
+    seed
+        Seeds OMPL's process-wide RNG (see the module notes); ``None`` leaves it alone.
+    simplify
+        Run OMPL's path simplifier to convergence (``simplifyMax``: shortcutting, vertex
+        reduction, B-spline smoothing with validity checks) after planning.
+
+    Returns
+    -------
+    SampledPath
+        ``solved=False`` (and no points) when no exact solution was found in time.
+
+    Raises
+    ------
+    SamplingArgumentError
+        For bad shapes, bounds, planner names, times or seeds.
+    weldplan.errors.ConfigError
+        When OMPL is not installed.
+    """
+    s = _vector("start", start)
+    d = s.shape[0]
+    g = _vector("goal", goal, d)
+    lo = _vector("lower", lower, d)
+    hi = _vector("upper", upper, d)
+    _check_box(lo, hi, {"start": s, "goal": g})
+    _check_common(planner, time_s, resolution)
+    ob, og, _ = _import_ompl()
+
+    space = ob.RealVectorStateSpace(d)
+    bounds = ob.RealVectorBounds(d)
+    for i in range(d):
+        bounds.setLow(i, float(lo[i]))
+        bounds.setHigh(i, float(hi[i]))
+    space.setBounds(bounds)
+    ss = og.SimpleSetup(space)
+
+    def read(state: Any) -> NDArray[np.float64]:
+        return np.array([state[i] for i in range(d)], dtype=np.float64)
+
+    ss.setStateValidityChecker(lambda state: bool(is_valid(read(state))))
+    a = space.allocState()
+    b = space.allocState()
+    for i in range(d):
+        a[i] = float(s[i])
+        b[i] = float(g[i])
+    ss.setStartAndGoalStates(a, b)
+
+    def measure(pts: NDArray[np.float64]) -> float:
+        return float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum())
+
+    return _solve(
+        ss,
+        read=read,
+        motion_valid=motion_valid,
+        resolution=resolution,
+        planner=planner,
+        time_s=time_s,
+        seed=seed,
+        simplify=simplify,
+        measure=measure,
+        dim=d,
+    )
+
+
+# --------------------------------------------------------------------------- SE(3)
+
+
+def se3_length(points: ArrayLike, rot_weight: float) -> float:
+    """Length of an SE(3) polyline: sum of position steps (mm) + ``rot_weight`` x rotation angles.
+
+    Parameters
+    ----------
+    points
+        ``(n, 7)`` rows ``x, y, z, qw, qx, qy, qz`` (unit quaternions).
+    rot_weight
+        mm per rad of rotation.
+
+    Returns
+    -------
+    float
+        mm; the rotation angle between q1 and q2 is ``2 acos(|q1 . q2|)`` (q and -q are one
+        rotation).
+    """
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 7)
+    if len(p) < 2:
+        return 0.0
+    trans = np.linalg.norm(np.diff(p[:, :3], axis=0), axis=1)
+    dots = np.abs(np.einsum("ij,ij->i", p[:-1, 3:], p[1:, 3:]))
+    angles = 2.0 * np.arccos(np.clip(dots, 0.0, 1.0))
+    return float(trans.sum() + rot_weight * angles.sum())
+
+
+def plan_se3(
+    start_pos: ArrayLike,
+    start_quat_wxyz: ArrayLike,
+    goal_pos: ArrayLike,
+    goal_quat: ArrayLike,
+    lower: ArrayLike,
+    upper: ArrayLike,
+    is_valid: Callable[[NDArray[np.float64], NDArray[np.float64]], bool],
+    *,
+    motion_valid: MotionCheck | None = None,
+    rot_weight: float = 100.0,
+    resolution: float = DEFAULT_RESOLUTION,
+    planner: str = "bitstar",
+    time_s: float = 1.0,
+    seed: int | np.random.Generator | None = None,
+    simplify: bool = True,
+) -> SampledPath:
+    """Plan a rigid-body path (a torch or a gun) between two poses with OMPL in SE(3).
+
+    Parameters
+    ----------
+    start_pos, goal_pos
+        ``(3,)`` positions, mm, inside ``[lower, upper]``.
+    start_quat_wxyz, goal_quat
+        ``(4,)`` unit quaternions ``w, x, y, z`` (norm within 1e-6 of 1, then normalised).
+    lower, upper
+        ``(3,)`` the position box, mm; rotations are unbounded.
+    is_valid
+        ``is_valid(pos (3,), quat_wxyz (4,)) -> bool``: whether the body is free at that pose.
+    motion_valid
+        ``motion_valid(a (7,), b (7,)) -> bool`` on rows ``x, y, z, qw, qx, qy, qz``: whether the
+        motion a -> b (position linear, rotation slerp, ends included) is free, e.g. a swept FCL
+        check. ``None``: OMPL's discrete check of ``is_valid`` every ``resolution`` x the space's
+        maximum extent.
+    rot_weight
+        mm per rad: the metric is position distance + ``rot_weight`` x rotation angle. (OMPL's
+        SO(3) distance is half the rotation angle, so its subspace weight is ``2 rot_weight``.)
+    resolution, planner, time_s, seed, simplify
+        As in :func:`plan_rn`.
+
+    Returns
+    -------
+    SampledPath
+        ``points (n, 7)``; the first row is the start pose and the last the goal pose as given
+        (normalised); ``length`` by :func:`se3_length`.
+
+    Raises
+    ------
+    SamplingArgumentError
+        For bad shapes, bounds, quaternions, weights, planner names, times or seeds.
+    """
+    p0 = _vector("start_pos", start_pos, 3)
+    p1 = _vector("goal_pos", goal_pos, 3)
+    q0 = _unit_quat("start_quat_wxyz", start_quat_wxyz)
+    q1 = _unit_quat("goal_quat", goal_quat)
+    lo = _vector("lower", lower, 3)
+    hi = _vector("upper", upper, 3)
+    _check_box(lo, hi, {"start_pos": p0, "goal_pos": p1})
+    _check_common(planner, time_s, resolution)
+    if not (np.isfinite(rot_weight) and rot_weight > 0):
+        raise SamplingArgumentError(f"rot_weight must be a positive mm per rad, got {rot_weight}")
+    ob, og, _ = _import_ompl()
+
+    space = ob.SE3StateSpace()
+    bounds = ob.RealVectorBounds(3)
+    for i in range(3):
+        bounds.setLow(i, float(lo[i]))
+        bounds.setHigh(i, float(hi[i]))
+    space.setBounds(bounds)
+    space.setSubspaceWeight(1, 2.0 * float(rot_weight))
+    ss = og.SimpleSetup(space)
+
+    def read(state: Any) -> NDArray[np.float64]:
+        r = state.rotation()
+        return np.array(
+            [state.getX(), state.getY(), state.getZ(), r.w, r.x, r.y, r.z], dtype=np.float64
+        )
+
+    def state_valid(state: Any) -> bool:
+        x = read(state)
+        return bool(is_valid(x[:3], x[3:]))
+
+    ss.setStateValidityChecker(state_valid)
+    a = space.allocState()
+    b = space.allocState()
+    for st, p, q in ((a, p0, q0), (b, p1, q1)):
+        st.setXYZ(float(p[0]), float(p[1]), float(p[2]))
+        r = st.rotation()
+        r.w, r.x, r.y, r.z = (float(v) for v in q)
+    ss.setStartAndGoalStates(a, b)
+
+    return _solve(
+        ss,
+        read=read,
+        motion_valid=motion_valid,
+        resolution=resolution,
+        planner=planner,
+        time_s=time_s,
+        seed=seed,
+        simplify=simplify,
+        measure=lambda pts: se3_length(pts, rot_weight),
+        dim=7,
+    )
