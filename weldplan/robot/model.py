@@ -168,9 +168,28 @@ class Robot:
         T = np.broadcast_to(self.base, (n, 4, 4)).copy()
         out[:, 0] = T
         for j in range(6):
-            T = T @ self.origins[j] @ _rotations(self.axes[j], Q[:, j])
+            T = T @ self._joint_frames(j, Q[:, j])
             out[:, j + 1] = T
         return out
+
+    def _joint_frames(self, j: int, angles: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``(n, 4, 4)``: ``origin_j @ rotation(axis_j, angle)`` (Rodrigues, terms cached)."""
+        key = ("rodrigues", j)
+        if key not in self._cache:
+            a = self.axes[j]
+            K = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+            O = self.origins[j]
+            # origin @ [[I + s K + (1 - c) K^2, 0], [0, 1]] = A + s B + (1 - c) C
+            A = O.copy()
+            B = np.zeros((4, 4))
+            C = np.zeros((4, 4))
+            B[:3, :3] = O[:3, :3] @ K
+            C[:3, :3] = O[:3, :3] @ K @ K
+            self._cache[key] = (A, B, C)
+        A, B, C = self._cache[key]
+        s = np.sin(angles)[:, None, None]
+        c = np.cos(angles)[:, None, None]
+        return A + s * B + (1 - c) * C
 
     def fk(self, q: ArrayLike) -> NDArray[np.float64]:
         """``(n, 4, 4)`` mm: the flange pose in the part frame from the URDF chain.
@@ -273,18 +292,6 @@ def _as_q(q: ArrayLike) -> NDArray[np.float64]:
     if Q.ndim != 2 or Q.shape[1] != 6:
         raise InputError(f"joint vectors must be (n, 6), got shape {Q.shape}", field="q")
     return Q
-
-
-def _rotations(axis: NDArray[np.float64], angles: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``(n, 4, 4)``: rotations by ``angles (n,)`` rad about the unit ``axis (3,)`` (Rodrigues)."""
-    n = len(angles)
-    K = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
-    s = np.sin(angles)[:, None, None]
-    c = np.cos(angles)[:, None, None]
-    out = np.zeros((n, 4, 4))
-    out[:, :3, :3] = np.eye(3) + s * K + (1 - c) * (K @ K)
-    out[:, 3, 3] = 1.0
-    return out
 
 
 def _check_base(base: ArrayLike | None) -> NDArray[np.float64]:
