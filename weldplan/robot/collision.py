@@ -1,0 +1,340 @@
+"""The robot's links and its tool against the part, along a joint-space path (python-fcl judges).
+
+Bodies. Each link's collision mesh rides on its link frame; the tool's mesh rides on the last
+link (``tip @ flange_tcp``). Near a weld the tool touches the part by design: on a motion with an
+end at a weld the tool minus its contact zone (a sphere of ``contact_radius`` mm about the TCP,
+:meth:`weldplan.tool.model.Tool.outside_zone`) is checked instead of the whole tool.
+
+The motion between two rows is linear in joint space. It is proven free conservatively, in
+two levels, with no shortcut shared with any planner:
+
+1. *Bound.* During a motion ``qa -> qb`` no point of a body moves farther than
+   ``D = sum_j |dq_j| R_j`` mm, where ``R_j`` bounds the point's distance from joint j's axis (the
+   chain's link offsets after joint j plus the body's extent about its frame origin). The motion is
+   sampled so that between samples a point moves at most ``delta = D / (n - 1)``.
+2. *Spheres.* Each body is covered by spheres (its triangles grouped by a grid on their centroids,
+   each group inside one sphere). At every sample, every sphere's centre distance to the part
+   (exact point-triangle distance, open3d) must exceed its radius plus ``delta / 2`` plus
+   :data:`MIN_GAP_MM`: then no point of the body comes closer than :data:`MIN_GAP_MM` to the part
+   between samples. A (motion, body) that fails this is decided by python-fcl on the body's mesh:
+   FCL distance with conservative advancement (from a configuration at distance ``d`` the body
+   cannot touch the part before it has moved ``d``), collide at every step. A body that comes
+   within :data:`MIN_GAP_MM` of the part counts as a collision.
+
+The part is a surface (sheet metal): a body wholly inside a closed solid is not seen here.
+Robot self-collision and the floor are not checked.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+
+import fcl
+import numpy as np
+import trimesh
+from numpy.typing import ArrayLike, NDArray
+
+from weldplan.robot.model import Robot
+from weldplan.tool.model import Tool, bvh
+
+log = logging.getLogger(__name__)
+
+#: mm: a body closer than this to the part counts as colliding (the conservative check's floor)
+MIN_GAP_MM = 1.0
+#: mm: the most any body point moves between the first-level samples
+SAMPLE_MM = 20.0
+#: mm: grid cell of the sphere cover (triangles whose centroids share a cell share a sphere)
+SPHERE_CELL_MM = 60.0
+#: conservative-advancement steps per (motion, body) before a motion is declared blocked
+MAX_ADVANCE_STEPS = 400
+
+
+@dataclass(frozen=True, eq=False)
+class Body:
+    """A rigid body of the robot: mesh in the frame of link ``frame`` (0 = base), its sphere
+    cover and its FCL object."""
+
+    name: str
+    frame: int
+    vertices: NDArray[np.float64]
+    faces: NDArray[np.int64]
+    centres: NDArray[np.float64]
+    radii: NDArray[np.float64]
+    group: NDArray[np.int64]
+    obj: fcl.CollisionObject
+    centre: NDArray[np.float64]
+    radius: float
+    parts: dict[int, fcl.CollisionObject] = field(default_factory=dict, repr=False)
+
+    def part(self, sphere: int) -> fcl.CollisionObject:
+        """The FCL object of the triangles in sphere ``sphere`` (built once)."""
+        if sphere not in self.parts:
+            f = self.faces[self.group == sphere]
+            used, inv = np.unique(f, return_inverse=True)
+            sub = bvh(self.vertices[used], inv.reshape(-1, 3))
+            self.parts[sphere] = fcl.CollisionObject(sub, fcl.Transform())
+        return self.parts[sphere]
+
+
+@dataclass(frozen=True)
+class Hit:
+    """Where a motion was found blocked.
+
+    Attributes
+    ----------
+    segment
+        The motion's index (rows ``segment -> segment + 1``).
+    t
+        Fraction of the motion (0..1) where the body came within :data:`MIN_GAP_MM`.
+    body
+        The body's name (a link name or ``tool``).
+    distance
+        mm: FCL distance there (0 when the meshes intersect).
+    """
+
+    segment: int
+    t: float
+    body: str
+    distance: float
+
+
+def sphere_cover(
+    vertices: NDArray[np.float64], faces: NDArray[np.int64], cell: float = SPHERE_CELL_MM
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
+    """Spheres ``(s, 3)`` centres, ``(s,)`` radii (mm) whose union holds every triangle: the
+    triangles are grouped by the grid cell of their centroid, each group's sphere is centred on
+    its vertices' bounding-box centre and reaches its farthest vertex (a ball is convex, so it
+    holds the triangles whose corners it holds). Also returns each triangle's sphere ``(m,)``."""
+    tri = vertices[faces]  # (m, 3, 3)
+    key = np.floor(tri.mean(axis=1) / cell).astype(np.int64)
+    _, group = np.unique(key, axis=0, return_inverse=True)
+    group = group.ravel()
+    g = int(group.max()) + 1
+    pts = tri.reshape(-1, 3)
+    pg = np.repeat(group, 3)
+    lo = np.full((g, 3), np.inf)
+    hi = np.full((g, 3), -np.inf)
+    np.minimum.at(lo, pg, pts)
+    np.maximum.at(hi, pg, pts)
+    centres = (lo + hi) / 2
+    r = np.zeros(g)
+    np.maximum.at(r, pg, np.linalg.norm(pts - centres[pg], axis=1))
+    return centres, r * (1 + 1e-9) + 1e-9, group.astype(np.int64)
+
+
+def _fcl_tf(T: NDArray[np.float64]) -> fcl.Transform:
+    return fcl.Transform(T[:3, :3], T[:3, 3])
+
+
+def _distance(obj: fcl.CollisionObject, T: NDArray[np.float64], part: fcl.CollisionObject) -> float:
+    """mm: FCL distance of ``obj`` placed at ``T (4, 4)`` to ``part``; 0 when they touch."""
+    obj.setTransform(_fcl_tf(T))
+    if fcl.collide(obj, part, fcl.CollisionRequest(), fcl.CollisionResult()):
+        return 0.0
+    return max(float(fcl.distance(obj, part, fcl.DistanceRequest(), fcl.DistanceResult())), 0.0)
+
+
+class RobotCollision:
+    """Collision checks of a robot (and its tool) against a part (module docstring).
+
+    Parameters
+    ----------
+    robot
+        The robot, at its base.
+    part
+        The part mesh (mm, part frame).
+    tool
+        The tool (mesh in its TCP frame), or ``None``.
+    flange_tcp
+        ``(4, 4)`` mm: the TCP in the flange frame.
+    contact_radius
+        mm: the tool's contact zone exempt on motions that end at a weld.
+    """
+
+    def __init__(
+        self,
+        robot: Robot,
+        part: trimesh.Trimesh,
+        tool: Tool | None = None,
+        flange_tcp: ArrayLike | None = None,
+        *,
+        contact_radius: float = 20.0,
+    ) -> None:
+        from weldplan.geometry.distance import SurfaceDistance
+
+        self.robot = robot
+        self.part = part
+        self.distance = SurfaceDistance(part)
+        self.part_obj = fcl.CollisionObject(bvh(part.vertices, part.faces), fcl.Transform())
+        self.flange_tcp = np.eye(4) if flange_tcp is None else np.asarray(flange_tcp, float)
+        bodies = [self._body(lk.name, lk.index, lk.vertices, lk.faces) for lk in robot.links]
+        self.zone_bodies = list(bodies)
+        if tool is not None:
+            T6 = robot.tip @ self.flange_tcp  # TCP frame in the last link's frame
+            v = tool.vertices @ T6[:3, :3].T + T6[:3, 3]
+            bodies.append(self._body("tool", 6, v, tool.faces))
+            vz, fz = tool.outside_zone(contact_radius)
+            self.zone_bodies.append(self._body("tool", 6, vz @ T6[:3, :3].T + T6[:3, 3], fz))
+        self.bodies = bodies
+        self.radii_full = self._motion_radii(bodies)
+        self.radii_zone = self._motion_radii(self.zone_bodies)
+
+    @staticmethod
+    def _body(name: str, frame: int, v: NDArray, f: NDArray) -> Body:
+        c, r, g = sphere_cover(v, f)
+        obj = fcl.CollisionObject(bvh(v, f), fcl.Transform())
+        centre = (v.min(axis=0) + v.max(axis=0)) / 2
+        radius = float(np.linalg.norm(v - centre, axis=1).max()) * (1 + 1e-9) + 1e-9
+        return Body(name, frame, np.asarray(v), np.asarray(f), c, r, g, obj, centre, radius)
+
+    def _motion_radii(self, bodies: list[Body]) -> NDArray[np.float64]:
+        """``(6, b)`` mm: ``R[j, b]`` bounds the distance of body b's points from joint j's axis
+        (0 for joints that do not move it)."""
+        t = np.linalg.norm(self.robot.origins[:, :3, 3], axis=1)  # link offsets
+        R = np.zeros((6, len(bodies)))
+        for b, body in enumerate(bodies):
+            rho = float(np.linalg.norm(body.vertices, axis=1).max())
+            for j in range(body.frame):  # joint j (0-based) moves frames j+1..6
+                R[j, b] = t[j + 1 : body.frame].sum() + rho
+        return R
+
+    # ---------------------------------------------------------------------------- one state
+    def state_free(self, q: ArrayLike, *, zone: bool = False) -> bool:
+        """Whether no body (FCL collide) touches the part at configuration ``q (6,)`` rad."""
+        F = self.robot.link_frames(np.asarray(q, dtype=np.float64))[0]
+        for body in self.zone_bodies if zone else self.bodies:
+            body.obj.setTransform(_fcl_tf(F[body.frame]))
+            if fcl.collide(body.obj, self.part_obj, fcl.CollisionRequest(), fcl.CollisionResult()):
+                return False
+        return True
+
+    def body_distance(self, body: Body, F: NDArray[np.float64]) -> float:
+        """mm: FCL distance of ``body`` at link frames ``F (7, 4, 4)`` to the part; 0 on contact."""
+        return _distance(body.obj, F[body.frame], self.part_obj)
+
+    # ---------------------------------------------------------------------------- a path
+    def path_hits(
+        self, Q: ArrayLike, zone: ArrayLike | None = None, *, first_only: bool = False
+    ) -> list[Hit]:
+        """The blocked motions of the joint path ``Q (k, 6)`` rad (module docstring).
+
+        Parameters
+        ----------
+        Q
+            ``(k, 6)`` rad: rows; the motion ``i`` is ``Q[i] -> Q[i + 1]``.
+        zone
+            ``(k - 1,) bool``: motions checked with the tool's contact zone exempt.
+        first_only
+            Stop at the first blocked motion.
+
+        Returns
+        -------
+        list of Hit
+            One per blocked motion (none: the whole path is free).
+        """
+        Q = np.asarray(Q, dtype=np.float64).reshape(-1, 6)
+        ns = len(Q) - 1
+        if ns < 1:
+            if len(Q) == 1 and not self.state_free(Q[0]):
+                return [Hit(0, 0.0, "?", 0.0)]
+            return []
+        Z = np.zeros(ns, dtype=bool) if zone is None else np.asarray(zone, dtype=bool)
+        dq = np.abs(np.diff(Q, axis=0))  # (ns, 6)
+        hits: list[Hit] = []
+        for zflag in (False, True):
+            seg = np.flatnonzero(Z == zflag)
+            if len(seg) == 0:
+                continue
+            bodies = self.zone_bodies if zflag else self.bodies
+            Rm = self.radii_zone if zflag else self.radii_full
+            D = dq[seg] @ Rm  # (s, b) mm: motion bound per body
+            suspects = self._sphere_level(Q, seg, D, bodies)
+            for s_i, b, spheres in suspects:
+                if any(h.segment == int(seg[s_i]) for h in hits):
+                    continue
+                hit = self._advance(Q, int(seg[s_i]), bodies[b], spheres, float(D[s_i, b]))
+                if hit is not None and not any(h.segment == hit.segment for h in hits):
+                    hits.append(hit)
+                    if first_only:
+                        return hits
+        return sorted(hits, key=lambda h: h.segment)
+
+    def _sphere_level(
+        self, Q: NDArray, seg: NDArray[np.int64], D: NDArray, bodies: list[Body]
+    ) -> list[tuple[int, int, NDArray[np.int64]]]:
+        """(motion position in ``seg``, body, spheres) the sphere test cannot prove free."""
+        n = np.maximum(np.ceil(D.max(axis=1) / SAMPLE_MM).astype(np.int64), 1) + 1  # samples
+        t = np.concatenate([np.linspace(0.0, 1.0, k) for k in n])
+        owner = np.repeat(np.arange(len(seg)), n)
+        qs = Q[seg[owner]] + t[:, None] * (Q[seg[owner] + 1] - Q[seg[owner]])
+        F = self.robot.link_frames(qs)  # (N, 7, 4, 4)
+        out = []
+        for b, body in enumerate(bodies):
+            Fb = F[:, body.frame]
+            delta = D[owner, b] / (n[owner] - 1)  # (N,) mm a point moves between samples
+            # the body's bounding sphere first, its cover only where that is not enough
+            c0 = Fb[:, :3, :3] @ body.centre + Fb[:, :3, 3]
+            near = self.distance(c0) - body.radius - delta / 2 - MIN_GAP_MM <= 1e-3
+            near_seg = np.unique(owner[near])
+            if len(near_seg) == 0:
+                continue
+            pick = np.flatnonzero(np.isin(owner, near_seg))
+            Fp = Fb[pick]
+            c = np.einsum("nij,sj->nsi", Fp[:, :3, :3], body.centres) + Fp[:, None, :3, 3]
+            d = self.distance(c.reshape(-1, 3)).reshape(len(pick), -1)
+            bad = d - body.radii[None] - delta[pick, None] / 2 - MIN_GAP_MM <= 1e-3
+            rows = np.flatnonzero(bad.any(axis=1))
+            for s_i in np.unique(owner[pick][rows]):
+                spheres = np.flatnonzero(bad[owner[pick] == s_i].any(axis=0))
+                out.append((int(s_i), b, spheres))
+        return out
+
+    def _advance(
+        self, Q: NDArray, s: int, body: Body, spheres: NDArray[np.int64], D: float
+    ) -> Hit | None:
+        """Conservative advancement of the triangles of ``spheres`` of ``body`` along motion
+        ``s`` (module docstring); the first hit, else ``None``."""
+        qa, qb = Q[s], Q[s + 1]
+        dq = np.abs(qb - qa)
+        for sp in spheres:
+            obj = body.part(int(sp))
+            c, r = body.centres[sp], float(body.radii[sp])
+            t = 0.0
+            for _ in range(MAX_ADVANCE_STEPS):
+                F = self.robot.link_frames(qa + t * (qb - qa))[0]
+                d = _distance(obj, F[body.frame], self.part_obj)
+                if d <= MIN_GAP_MM:
+                    return Hit(s, t, body.name, d)
+                if t >= 1.0:
+                    break
+                rate = self._rate(F, body.frame, c, r, dq * (1.0 - t))
+                if rate <= 0:
+                    break
+                t = min(1.0, t + (d - MIN_GAP_MM) / rate * (1.0 - t))
+            else:
+                return Hit(s, t, body.name, d)
+        return None
+
+    def _rate(self, F: NDArray, frame: int, c: NDArray, r: float, dq: NDArray[np.float64]) -> float:
+        """mm: a bound on how far any point of the sphere ``(c, r)`` (in link ``frame``) moves
+        during the joint motion ``dq (6,)`` rad (absolute) from link frames ``F (7, 4, 4)``.
+
+        A point's distance to joint j's axis changes only through the joints after j, so, from
+        the wrist down, ``R_j = |p - o_j| + sum_{i > j} |dq_i| R_i`` bounds it over the whole
+        motion (``o_j`` a point on the axis), and the point moves at most ``sum_j |dq_j| R_j``.
+        """
+        p = F[frame, :3, :3] @ c + F[frame, :3, 3]
+        total = 0.0
+        inner = 0.0  # sum_{i > j} |dq_i| R_i
+        for j in range(frame - 1, -1, -1):
+            o = F[j + 1, :3, 3]  # link j+1's origin lies on joint j's axis
+            R = float(np.linalg.norm(p - o)) + r + inner
+            inner += dq[j] * R
+            total = inner
+        return total
+
+    def motion_free(self, qa: ArrayLike, qb: ArrayLike, *, zone: bool = False) -> bool:
+        """Whether the joint-space motion ``qa -> qb`` (ends included) is free."""
+        Q = np.vstack([np.asarray(qa, float), np.asarray(qb, float)])
+        return not self.path_hits(Q, np.array([zone]), first_only=True)

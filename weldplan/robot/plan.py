@@ -1,0 +1,399 @@
+"""From a tool-aware route to a verified joint-space route: :func:`plan_robot_route`.
+
+::
+
+    robot = load_robot(".../kr150r3100_2.urdf")
+    flange_tcp = tool_flange_tcp(robot, ".../spot_welding_gun.urdf", "nozzle_tip")
+    rr = plan_robot_route(route, poses, robot, flange_tcp=flange_tcp, part=cell.part, tool=gun)
+
+Steps: TCP poses of every route waypoint (weld poses, slerped between them) -> flange poses ->
+base given or searched (:mod:`weldplan.robot.reach`) -> one IK solution per waypoint, continuous
+(:mod:`weldplan.robot.configs`) -> robot + tool against the part along the joint path
+(:mod:`weldplan.robot.collision`) -> a blocked leg re-planned in joint space with OMPL
+(:func:`weldplan.motion.sampling.plan_rn`) between the waypoints after and before its welds ->
+verification that shares nothing with the planner: FK of the URDF chain at every exact row equals
+the route's TCP pose, and the collision check of the final path.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from os import PathLike
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.spatial.transform import Rotation
+
+from weldplan.errors import ConfigError, InputError, PlanningError
+from weldplan.robot.collision import Hit, RobotCollision
+from weldplan.robot.configs import FLIP_PENALTY_S, RobotRoute, joint_path
+from weldplan.robot.model import Robot
+from weldplan.robot.reach import (
+    COLLISION,
+    DEFAULT_SINGULAR_DEG,
+    NO_POSE,
+    OK,
+    BaseSearch,
+    Placement,
+    classify,
+    search_base,
+)
+from weldplan.robot.urdf import chain_transform
+
+log = logging.getLogger(__name__)
+
+#: default OMPL planner and time (s) for a blocked leg
+REPLAN_PLANNER = "rrtconnect"
+REPLAN_TIME_S = 5.0
+#: mm / deg: the verification tolerance of an exact row's FK against the route's pose
+POSE_TOL_MM = 1e-6
+POSE_TOL_DEG = 1e-6
+
+
+def tool_flange_tcp(
+    robot: Robot, tool_urdf: str | PathLike[str], tcp: str | None = None
+) -> NDArray[np.float64]:
+    """``(4, 4)`` mm: the TCP in the robot's flange frame for a tool URDF whose root link is its
+    mounting frame (``robot.mount @ root->tcp``); ``tcp`` names the TCP joint or link (default:
+    the last fixed joint of the file)."""
+    if tcp is None:
+        from weldplan.robot.urdf import parse_urdf
+
+        _, _, joints = parse_urdf(tool_urdf)
+        fixed = [j for j in joints if j.kind == "fixed"]
+        if not fixed:
+            raise ConfigError("the tool URDF has no fixed joint to take the TCP from", field="tcp")
+        tcp = fixed[-1].name
+    return robot.tool_transform(chain_transform(tool_urdf, tcp))
+
+
+def tcp_waypoint_poses(route: Any, poses: Any) -> NDArray[np.float64]:
+    """``(m, 4, 4)`` mm: the TCP pose at every route waypoint (NaN where there is none)."""
+    from weldplan.tool.route_frames import waypoint_quaternions
+
+    pts = route.waypoints()
+    quat = waypoint_quaternions(route, poses)
+    T = np.full((len(pts), 4, 4), np.nan)
+    has = np.all(np.isfinite(quat), axis=1)
+    T[has, :3, :3] = Rotation.from_quat(np.roll(quat[has], -1, axis=1)).as_matrix()
+    T[:, :3, 3] = pts
+    T[:, 3] = [0.0, 0.0, 0.0, 1.0]
+    return T
+
+
+def plan_robot_route(
+    route: Any,
+    poses: Any,
+    robot: Robot,
+    *,
+    flange_tcp: ArrayLike,
+    part: Any = None,
+    tool: Any = None,
+    base: ArrayLike | None = None,
+    search: BaseSearch | None = None,
+    singular_deg: float = DEFAULT_SINGULAR_DEG,
+    flip_penalty: float = FLIP_PENALTY_S,
+    contact_radius: float | None = None,
+    check_collision: bool = True,
+    replan: bool = True,
+    planner: str = REPLAN_PLANNER,
+    replan_time_s: float = REPLAN_TIME_S,
+    rng: int | None = 0,
+) -> RobotRoute:
+    """The route in joint space, verified (module docstring).
+
+    Parameters
+    ----------
+    route, poses
+        The route (:class:`~weldplan.weld.route.Route`) and its weld poses
+        (:class:`~weldplan.tool.result.WeldPoses`, one per visited weld in route order).
+    robot
+        The robot (:func:`~weldplan.robot.model.load_robot`).
+    flange_tcp
+        ``(4, 4)`` mm: the TCP in the flange frame (:func:`tool_flange_tcp`).
+    part
+        The part mesh (mm); required for the collision check and the base search's part filter.
+    tool
+        The tool (:class:`~weldplan.tool.model.Tool`) for the collision check (else only links).
+    base
+        ``(4, 4)`` mm: the robot base in the part frame. ``None``: searched (``search``), or the
+        robot's own base when ``search`` is ``None`` too.
+    search
+        Where to search for the base (:class:`~weldplan.robot.reach.BaseSearch`).
+    singular_deg
+        A5 within this many degrees of 0 is near-singular and avoided.
+    flip_penalty
+        s of joint motion a branch change costs (:mod:`weldplan.robot.configs`).
+    contact_radius
+        mm: the tool's contact zone exempt at the welds (default: the poses' own setting).
+    check_collision, replan
+        Check robot and tool against the part; re-plan blocked legs with OMPL.
+    planner, replan_time_s, rng
+        OMPL planner name, its time limit per leg (s) and seed.
+
+    Raises
+    ------
+    InputError
+        The robot reaches none of the route's poses from the given base (field
+        ``--robot-base``).
+    PlanningError
+        The robot reaches none of them from the searched base.
+    ConfigError
+        A bad setting (a non-finite threshold, a collision check without a part).
+    """
+    t0 = time.perf_counter()
+    if not (0.0 <= singular_deg < 90.0):
+        raise ConfigError(
+            f"singular_deg must be in [0, 90), got {singular_deg}", field="singular_deg"
+        )
+    if check_collision and part is None:
+        raise ConfigError("the collision check needs the part mesh", field="part")
+    F = np.asarray(flange_tcp, dtype=np.float64).reshape(4, 4)
+    T_tcp = tcp_waypoint_poses(route, poses)
+    T_fl = T_tcp @ np.linalg.inv(F)
+    from weldplan.tool.route_frames import weld_rows
+
+    rows = weld_rows(route)
+    placement = _place(robot, T_fl[rows], part, base, search, singular_deg)
+    rb = robot.with_base(placement.base)
+    try:
+        q, branch, exact, row_status = joint_path(
+            rb, T_fl, singular_deg=singular_deg, flip_penalty=flip_penalty
+        )
+    except PlanningError:
+        has = np.all(np.isfinite(T_fl[rows]), axis=(1, 2))
+        st = classify(rb.ik_all(np.where(has[:, None, None], T_fl[rows], np.eye(4))), singular_deg)
+        st[~has] = NO_POSE
+        words, counts = np.unique(st, return_counts=True)
+        why = ", ".join(f"{c} {w.replace('_', ' ')}" for w, c in zip(words, counts, strict=True))
+        x, y, z, yaw = placement.xyz_yaw()
+        msg = (
+            f"the robot reaches none of the {len(rows)} welds from its base at "
+            f"{x:.0f},{y:.0f},{z:.0f},{yaw:.1f} ({why})"
+        )
+        if placement.searched:
+            raise PlanningError(msg) from None
+        raise InputError(msg, field="--robot-base") from None
+    t_ik = time.perf_counter() - t0
+    status = [str(row_status[r]) for r in rows]
+    row = np.arange(len(q), dtype=np.int64)
+    stats: dict[str, Any] = {
+        "placement": {
+            "base_xyz_yaw": list(placement.xyz_yaw()),
+            "searched": placement.searched,
+            "candidates": placement.candidates,
+            "min_manipulability": placement.min_manipulability,
+        },
+        "seconds_ik_configs": round(t_ik, 3),
+    }
+    replanned: list[int] = []
+    hits: list[Hit] = []
+    if check_collision:
+        t1 = time.perf_counter()
+        checker = RobotCollision(
+            rb, part, tool, F, contact_radius=_contact_radius(contact_radius, poses)
+        )
+        zone = _zone_motions(row, rows)
+        hits = checker.path_hits(q, zone)
+        stats["first_check_hits"] = len(hits)
+        if hits and replan:
+            q, row, exact, branch, replanned = _replan(
+                rb, checker, q, row, exact, branch, rows, hits, planner, replan_time_s, rng
+            )
+            zone = _zone_motions(row, rows)
+            hits = checker.path_hits(q, zone)  # the verification of the final path
+        for h in hits:
+            k = _blamed_weld(h, row, rows, zone)
+            if k is not None and status[k] == OK:
+                status[k] = COLLISION
+        stats["seconds_collision"] = round(time.perf_counter() - t1, 3)
+        stats["collision_free"] = not hits
+        stats["hits"] = [
+            {
+                "segment": int(h.segment),
+                "t": round(float(h.t), 4),
+                "body": h.body,
+                "distance": float(h.distance),
+            }
+            for h in hits
+        ]
+    weld_index = np.array([int(np.flatnonzero(row == r)[0]) for r in rows], dtype=np.int64)
+    err_mm, err_deg = _pose_errors(rb, q, exact, T_fl, row)
+    stats["fk_max_error_mm"] = err_mm
+    stats["fk_max_error_deg"] = err_deg
+    if err_mm > POSE_TOL_MM or err_deg > POSE_TOL_DEG:
+        raise PlanningError(  # a bug, not bad input: FK must reproduce every solved pose
+            f"FK of the chosen configurations misses the route poses by {err_mm:.3g} mm, "
+            f"{err_deg:.3g} deg"
+        )
+    solved = branch >= 0
+    flips = [
+        int(i)
+        for i in range(1, len(q))
+        if solved[i] and solved[i - 1] and branch[i] != branch[i - 1]
+    ]
+    stats["seconds_total"] = round(time.perf_counter() - t0, 3)
+    rr = RobotRoute(
+        robot=robot.name,
+        joint_names=robot.joint_names,
+        base=placement.base,
+        flange_tcp=F,
+        q=q,
+        row=row,
+        exact=exact,
+        branch=branch,
+        weld_ids=tuple(route.order),
+        weld_index=weld_index,
+        status=tuple(status),
+        flips=tuple(flips),
+        replanned=tuple(replanned),
+        stats=stats,
+    )
+    log.info(
+        "robot route: %d/%d welds ok, %d flips, %d legs re-planned, %.1f s",
+        rr.n_ok,
+        len(status),
+        len(flips),
+        len(replanned),
+        stats["seconds_total"],
+    )
+    return rr
+
+
+def _contact_radius(contact_radius: float | None, poses: Any) -> float:
+    if contact_radius is not None:
+        return float(contact_radius)
+    from weldplan.tool.poses import DEFAULT_CONTACT_RADIUS
+
+    return float(getattr(poses, "settings", {}).get("contact_radius", DEFAULT_CONTACT_RADIUS))
+
+
+def _place(
+    robot: Robot,
+    T_weld: NDArray[np.float64],
+    part: Any,
+    base: ArrayLike | None,
+    search: BaseSearch | None,
+    singular_deg: float,
+) -> Placement:
+    if base is not None or search is None:
+        B = robot.base if base is None else np.asarray(base, dtype=np.float64)
+        return Placement(B, -1, len(T_weld), float("nan"), 0, False)
+    ok = np.all(np.isfinite(T_weld), axis=(1, 2))
+    return search_base(robot, T_weld[ok], part, search, singular_deg=singular_deg)
+
+
+def _zone_motions(row: NDArray[np.int64], weld_rows: NDArray[np.int64]) -> NDArray[np.bool_]:
+    """``(k - 1,) bool``: the motions checked with the tool's contact zone exempt: all of them
+    (module docstring of :mod:`weldplan.robot.collision`)."""
+    return np.ones(max(len(row) - 1, 0), dtype=bool)
+
+
+def _pose_errors(
+    robot: Robot, q: NDArray, exact: NDArray, T_fl: NDArray, row: NDArray
+) -> tuple[float, float]:
+    """Largest mm and deg between FK (URDF chain) of the exact rows and their route poses."""
+    if not exact.any():
+        return 0.0, 0.0
+    A = robot.fk(q[exact])
+    B = T_fl[row[exact]]
+    dp = np.linalg.norm(A[:, :3, 3] - B[:, :3, 3], axis=1)
+    R = np.swapaxes(A[:, :3, :3], 1, 2) @ B[:, :3, :3]
+    ang = np.degrees(Rotation.from_matrix(R).magnitude())
+    return float(dp.max()), float(ang.max())
+
+
+def _blamed_weld(
+    hit: Hit, row: NDArray[np.int64], rows: NDArray[np.int64], zone: NDArray[np.bool_]
+) -> int | None:
+    """The weld a blocked motion is charged to: the weld it leaves or reaches when it has one as
+    an end (the nearer end when both), else the weld its leg leads to."""
+    a, b = int(row[hit.segment]), int(row[hit.segment + 1])
+    at_a, at_b = np.flatnonzero(rows == a), np.flatnonzero(rows == b)
+    if len(at_a) and (hit.t <= 0.5 or not len(at_b)):
+        return int(at_a[0])
+    if len(at_b):
+        return int(at_b[0])
+    k = int(np.searchsorted(rows, b, side="left"))
+    return k if k < len(rows) else None
+
+
+def _index(row: NDArray[np.int64], r: int, *, first: bool) -> int:
+    """The first (or last) position of route row ``r`` in ``row``."""
+    at = np.flatnonzero(row == r)
+    return int(at[0] if first else at[-1])
+
+
+def _replan(
+    robot: Robot,
+    checker: RobotCollision,
+    q: NDArray,
+    row: NDArray,
+    exact: NDArray,
+    branch: NDArray,
+    rows: NDArray,
+    hits: list[Hit],
+    planner: str,
+    time_s: float,
+    rng: int | None,
+) -> tuple[NDArray, NDArray, NDArray, NDArray, list[int]]:
+    """Re-plan every leg with a blocked inner motion in joint space (module docstring)."""
+    from weldplan.motion.sampling import plan_rn
+
+    legs = sorted({int(np.searchsorted(rows, row[h.segment + 1], side="left")) - 1 for h in hits})
+    done: list[int] = []
+    pieces_q, pieces_row, pieces_exact, pieces_branch = [], [], [], []
+    cut = 0
+    for k in legs:
+        if k < 0 or k + 1 >= len(rows):
+            continue
+        # from the waypoints after and before the welds when they are free, else the welds
+        a, b = int(rows[k]) + 1, int(rows[k + 1]) - 1
+        ia, ib = _index(row, a, first=True), _index(row, b, first=False)
+        if b <= a or not (
+            checker.state_free(q[ia], zone=True) and checker.state_free(q[ib], zone=True)
+        ):
+            a, b = int(rows[k]), int(rows[k + 1])
+            ia, ib = _index(row, a, first=True), _index(row, b, first=False)
+        if not any(ia <= h.segment < ib for h in hits):
+            continue  # only the approach or retract is blocked: nothing to re-plan
+        if not (checker.state_free(q[ia], zone=True) and checker.state_free(q[ib], zone=True)):
+            log.info("leg %d: a weld's own configuration collides; not re-planned", k)
+            continue
+        res = plan_rn(
+            q[ia],
+            q[ib],
+            robot.lower,
+            robot.upper,
+            lambda x: checker.state_free(x, zone=True),
+            motion_valid=lambda x, y: checker.motion_free(x, y, zone=True),
+            planner=planner,
+            time_s=time_s,
+            seed=rng,
+        )
+        log.info("leg %d re-planned in joint space: %s", k, res.status)
+        if not res.solved:
+            continue
+        vias = np.asarray(res.points)[1:-1]
+        pieces_q += [q[cut : ia + 1], vias]
+        pieces_row += [row[cut : ia + 1], np.full(len(vias), a, dtype=np.int64)]
+        pieces_exact += [exact[cut : ia + 1], np.zeros(len(vias), dtype=bool)]
+        pieces_branch += [
+            branch[cut : ia + 1],
+            robot.branch_of(vias) if len(vias) else np.zeros(0, dtype=np.int64),
+        ]
+        cut = ib
+        done.append(k)
+    pieces_q.append(q[cut:])
+    pieces_row.append(row[cut:])
+    pieces_exact.append(exact[cut:])
+    pieces_branch.append(branch[cut:])
+    return (
+        np.concatenate(pieces_q),
+        np.concatenate(pieces_row),
+        np.concatenate(pieces_exact),
+        np.concatenate(pieces_branch),
+        done,
+    )

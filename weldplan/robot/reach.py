@@ -1,0 +1,295 @@
+"""Reach: which flange poses a robot can take, why not, and where to put the robot.
+
+A pose is *usable* on a branch when the branch exists (the wrist centre is inside the arm's
+reachable annulus), every joint is within its limits, and the wrist is farther from its
+singularity than ``singular_deg`` (``|sin(theta5)| >= sin(singular_deg)``: A4 and A6 aligned at
+``theta5 = 0``). A pose with no usable branch gets the first reason that applies:
+
+- :data:`OUT_OF_REACH`: no branch exists and the wrist centre is out of the arm's reach
+  (the solver's ``extension < 0``);
+- :data:`JOINT_LIMIT`: branches exist, none within the joint limits;
+- :data:`SINGULAR`: branches within the limits exist, all of them near the wrist singularity; or
+  the wrist centre is within reach and yet no branch exists (py-opw-kinematics drops a branch
+  exactly at ``theta5 = 0``, where A4 and A6 are not separable).
+
+Placement (:func:`search_base`): candidate base poses on the floor (a square grid about the weld
+poses) or along a line, each turned to face the welds (A1 then works about the middle of its
+range; more yaws on request). Candidates whose base column would stand in the part are dropped
+(a capsule about A1 from the floor to the A2 axis, radius the base's and A1 link's extent,
+checked by exact point-surface distance). A candidate is scored by the number of welds it makes
+usable, then by the smallest over those welds of the best manipulability over their usable
+branches (:meth:`~weldplan.robot.model.Robot.manipulability`); the best one wins.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from weldplan.errors import InputError
+from weldplan.robot.ik import IKBranches
+from weldplan.robot.model import Robot
+
+log = logging.getLogger(__name__)
+
+#: weld / waypoint status words (RobotRoute carries them)
+OK = "ok"
+OUT_OF_REACH = "out_of_reach"
+JOINT_LIMIT = "joint_limit"
+SINGULAR = "singular"
+COLLISION = "collision"
+NO_POSE = "no_pose"
+#: default wrist-singularity threshold (deg of A5 from 0)
+DEFAULT_SINGULAR_DEG = 5.0
+#: default floor-grid spacing for the base search (mm)
+DEFAULT_STEP = 250.0
+
+
+def base_pose(x: float, y: float, z: float, yaw_deg: float) -> NDArray[np.float64]:
+    """``(4, 4)``: a robot base at ``(x, y, z)`` mm in the part frame, turned ``yaw_deg`` about
+    the part's z axis (the floor normal)."""
+    c, s = math.cos(math.radians(yaw_deg)), math.sin(math.radians(yaw_deg))
+    B = np.eye(4)
+    B[:2, :2] = [[c, -s], [s, c]]
+    B[:3, 3] = [x, y, z]
+    return B
+
+
+def parse_base(text: str, fld: str = "--robot-base") -> NDArray[np.float64]:
+    """``"x,y,z,yaw"`` (mm, mm, mm, deg) -> :func:`base_pose`, else a one-line InputError."""
+    parts = text.replace(";", ",").split(",")
+    try:
+        vals = [float(p) for p in parts]
+    except ValueError:
+        raise InputError(f"not four numbers x,y,z,yaw: {text!r}", field=fld) from None
+    if len(vals) != 4 or not all(math.isfinite(v) for v in vals):
+        raise InputError(f"need four finite numbers x,y,z,yaw (mm, deg), got {text!r}", field=fld)
+    return base_pose(*vals)
+
+
+def usable(br: IKBranches, singular_deg: float = DEFAULT_SINGULAR_DEG) -> NDArray[np.bool_]:
+    """``(n, 8) bool``: the branches usable for each pose (module docstring)."""
+    thr = math.sin(math.radians(singular_deg))
+    with np.errstate(invalid="ignore"):
+        return br.in_limits & (np.nan_to_num(br.wrist) >= thr)
+
+
+def classify(br: IKBranches, singular_deg: float = DEFAULT_SINGULAR_DEG) -> NDArray[np.str_]:
+    """``(n,)`` status per pose: :data:`OK` or the reason it has no usable branch."""
+    ok = usable(br, singular_deg).any(axis=1)
+    out = np.full(len(ok), OK, dtype=object)
+    out[~ok & br.in_limits.any(axis=1)] = SINGULAR
+    out[~ok & ~br.in_limits.any(axis=1)] = JOINT_LIMIT
+    none = ~ok & ~br.exists.any(axis=1)
+    out[none] = np.where(br.extension[none] < 0, OUT_OF_REACH, SINGULAR)
+    return out.astype(str)
+
+
+@dataclass(frozen=True)
+class BaseSearch:
+    """Where :func:`search_base` looks for a base pose.
+
+    Attributes
+    ----------
+    floor_z
+        mm: the floor height in the part frame (default: the part's lowest point).
+    line
+        ``((x, y, z), (x, y, z))`` mm: search along this segment instead of the floor.
+    step
+        mm between candidate positions.
+    extra_yaws
+        Degrees added to the facing yaw, each a further candidate (default none).
+    half_width
+        mm: half the floor grid's side, about the welds' centre (default: the arm's reach).
+    """
+
+    floor_z: float | None = None
+    line: tuple[tuple[float, float, float], tuple[float, float, float]] | None = None
+    step: float = DEFAULT_STEP
+    extra_yaws: tuple[float, ...] = ()
+    half_width: float | None = None
+
+
+@dataclass(frozen=True)
+class Placement:
+    """The chosen base and how well it does.
+
+    Attributes
+    ----------
+    base
+        ``(4, 4)`` mm, part frame.
+    n_usable
+        Welds with a usable branch from it (of ``n_welds``).
+    min_manipulability
+        The smallest, over those welds, of the best manipulability of their usable branches.
+    candidates
+        Candidate bases scored (after the part-overlap filter).
+    searched
+        ``False`` when the base was given.
+    """
+
+    base: NDArray[np.float64]
+    n_usable: int
+    n_welds: int
+    min_manipulability: float
+    candidates: int
+    searched: bool
+
+    def xyz_yaw(self) -> tuple[float, float, float, float]:
+        """``(x, y, z, yaw_deg)`` of :attr:`base` (the ``--robot-base`` form)."""
+        yaw = math.degrees(math.atan2(self.base[1, 0], self.base[0, 0]))
+        return (*(float(v) for v in self.base[:3, 3]), yaw)
+
+
+def arm_reach(robot: Robot) -> float:
+    """mm: an upper bound of the wrist centre's distance from the A2 axis (``c2 + |(c3, a2)|``)."""
+    p = robot.opw
+    return p.c2 + math.hypot(p.c3, p.a2)
+
+
+def score_bases(
+    robot: Robot,
+    T_flange: NDArray[np.float64],
+    bases: NDArray[np.float64],
+    singular_deg: float = DEFAULT_SINGULAR_DEG,
+) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+    """Per candidate base ``(c, 4, 4)``: welds usable ``(c,)`` and smallest best manipulability
+    ``(c,)`` over flange poses ``(n, 4, 4)`` (mm, part frame). Manipulability is computed only
+    for the candidates that reach the most welds (the others cannot win)."""
+    n, c = len(T_flange), len(bases)
+    at_origin = robot.with_base(np.eye(4))
+    Tb = np.linalg.inv(bases)[:, None] @ T_flange[None]  # (c, n, 4, 4) in each base's frame
+    br_all = at_origin.ik_all(Tb.reshape(-1, 4, 4))
+    u_all = usable(br_all, singular_deg).reshape(c, n, -1)
+    counts = u_all.any(axis=2).sum(axis=1).astype(np.int64)
+    q_all = br_all.q.reshape(c, n, -1, 6)
+    mins = np.full(c, -np.inf)
+    if n == 0 or c == 0:
+        return counts, mins
+    for i in np.flatnonzero(counts == counts.max()):
+        u = u_all[i]
+        if not u.any():
+            continue
+        idx = np.argwhere(u)
+        m = at_origin.manipulability(q_all[i][idx[:, 0], idx[:, 1]])
+        best = np.full(n, -np.inf)
+        np.maximum.at(best, idx[:, 0], m)
+        mins[i] = float(best[u.any(axis=1)].min())
+    return counts, mins
+
+
+def candidate_bases(
+    robot: Robot,
+    T_flange: NDArray[np.float64],
+    part: object | None,
+    opts: BaseSearch,
+) -> NDArray[np.float64]:
+    """``(c, 4, 4)``: base candidates (module docstring), facing the welds' centre."""
+    centre = T_flange[:, :3, 3].mean(axis=0)
+    if opts.line is not None:
+        a, b = (np.asarray(p, dtype=np.float64) for p in opts.line)
+        k = max(2, int(math.ceil(np.linalg.norm(b - a) / opts.step)) + 1)
+        pts = a + np.linspace(0.0, 1.0, k)[:, None] * (b - a)
+    else:
+        z = opts.floor_z
+        if z is None:
+            z = float(part.bounds[0, 2]) if part is not None else 0.0  # type: ignore[attr-defined]
+        hw = opts.half_width if opts.half_width is not None else arm_reach(robot) + robot.opw.a1
+        g = np.arange(-hw, hw + 1e-9, opts.step)
+        X, Y = np.meshgrid(centre[0] + g, centre[1] + g, indexing="ij")
+        pts = np.c_[X.ravel(), Y.ravel(), np.full(X.size, z)]
+        # the wrist centre must be within the arm's reach of the A2 axis for some weld
+        wc = T_flange[:, :3, 3]
+        d = np.linalg.norm(wc[None] - (pts + [0.0, 0.0, robot.opw.c1])[:, None], axis=2).min(axis=1)
+        pts = pts[d <= arm_reach(robot) + robot.opw.a1 + robot.opw.c4]
+    pts = pts[_column_free(robot, pts, part)]
+    yaws = []
+    for p in pts:
+        face = math.degrees(math.atan2(centre[1] - p[1], centre[0] - p[0]))
+        yaws.extend((p, face + dy) for dy in (0.0, *opts.extra_yaws))
+    if not yaws:
+        return np.zeros((0, 4, 4))
+    return np.array([base_pose(*p, yaw) for p, yaw in yaws])
+
+
+def _column_free(robot: Robot, pts: NDArray[np.float64], part: object | None) -> NDArray[np.bool_]:
+    """``(k,) bool``: the capsule about A1 (floor to the A2 axis) of a base at each point is clear
+    of the part (module docstring)."""
+    if part is None or len(pts) == 0:
+        return np.ones(len(pts), dtype=bool)
+    from weldplan.geometry.distance import SurfaceDistance
+
+    radius = 0.0
+    for lk in robot.links[:2]:
+        radius = max(radius, float(np.linalg.norm(lk.vertices[:, :2], axis=1).max()))
+    h = robot.opw.c1
+    ts = np.linspace(0.0, h, max(2, int(math.ceil(h / (radius / 2))) + 1))
+    probe = pts[:, None, :] + np.c_[np.zeros((len(ts), 2)), ts][None]
+    d = SurfaceDistance(part)(probe.reshape(-1, 3)).reshape(len(pts), len(ts))
+    # points of the column lie within radius + half the probe spacing of a probe
+    return d.min(axis=1) > radius + (ts[1] - ts[0]) / 2
+
+
+def search_base(
+    robot: Robot,
+    T_flange: ArrayLike,
+    part: object | None = None,
+    opts: BaseSearch | None = None,
+    *,
+    singular_deg: float = DEFAULT_SINGULAR_DEG,
+) -> Placement:
+    """The candidate base (module docstring) that makes the most welds usable, then has the
+    largest smallest manipulability over them.
+
+    Parameters
+    ----------
+    robot
+        The robot (its own base is ignored).
+    T_flange
+        ``(n, 4, 4)`` mm: the flange poses at the welds, part frame.
+    part
+        The part mesh (mm), to keep the base column out of it and for the default floor height.
+    opts
+        Where to look (:class:`BaseSearch`).
+
+    Raises
+    ------
+    PlanningError
+        No candidate is clear of the part, or none reaches any weld.
+    """
+    from weldplan.errors import PlanningError
+
+    opts = opts or BaseSearch()
+    if not (opts.step > 0 and math.isfinite(opts.step)):
+        raise InputError(
+            f"the search step must be a positive number of mm, got {opts.step}", field="step"
+        )
+    T = np.asarray(T_flange, dtype=np.float64).reshape(-1, 4, 4)
+    bases = candidate_bases(robot, T, part, opts)
+    if len(bases) == 0:
+        raise PlanningError("no base candidate is clear of the part within reach of the welds")
+    counts, mins = score_bases(robot, T, bases, singular_deg)
+    if counts.max() == 0:
+        raise PlanningError(
+            f"no base among {len(bases)} candidates reaches any weld: widen the search"
+        )
+    best = int(np.lexsort((-mins, -counts))[0])
+    log.info(
+        "base search: %d candidates, best reaches %d/%d welds, min manipulability %.4f",
+        len(bases),
+        counts[best],
+        len(T),
+        mins[best],
+    )
+    return Placement(
+        base=bases[best],
+        n_usable=int(counts[best]),
+        n_welds=len(T),
+        min_manipulability=float(mins[best]),
+        candidates=len(bases),
+        searched=True,
+    )
