@@ -135,6 +135,39 @@ def _distance(obj: fcl.CollisionObject, T: NDArray[np.float64], part: fcl.Collis
     return max(float(fcl.distance(obj, part, fcl.DistanceRequest(), fcl.DistanceResult())), 0.0)
 
 
+def sphere_rates(
+    F: NDArray[np.float64],
+    frame: int,
+    centres: NDArray[np.float64],
+    radii: NDArray[np.float64],
+    dq: NDArray[np.float64],
+) -> NDArray[np.float64]:
+    """``(n, s)`` mm: bounds on how far any point of each sphere moves during each motion.
+
+    Parameters
+    ----------
+    F
+        ``(n, 7, 4, 4)``: the link frames at each motion's start.
+    frame
+        The link the spheres ride on.
+    centres, radii
+        ``(s, 3)`` mm in that link's frame, ``(s,)`` mm.
+    dq
+        ``(n, 6)`` rad: each motion's absolute joint change.
+
+    A point's distance to joint j's axis changes only through the joints after j, so, from the
+    wrist down, ``R_j = |p - o_j| + r + sum_{i > j} |dq_i| R_i`` bounds it over the whole motion
+    (``o_j`` the start position of a point on the axis: link j+1's origin), and the point moves at
+    most ``sum_j |dq_j| R_j``.
+    """
+    p = np.einsum("nij,sj->nsi", F[:, frame, :3, :3], centres) + F[:, None, frame, :3, 3]
+    inner = np.zeros(p.shape[:2])
+    for j in range(frame - 1, -1, -1):
+        R = np.linalg.norm(p - F[:, None, j + 1, :3, 3], axis=2) + radii[None] + inner
+        inner = inner + dq[:, j, None] * R
+    return inner
+
+
 class RobotCollision:
     """Collision checks of a robot (and its tool) against a part (module docstring).
 
@@ -250,10 +283,10 @@ class RobotCollision:
             Rm = self.radii_zone if zflag else self.radii_full
             D = dq[seg] @ Rm  # (s, b) mm: motion bound per body
             suspects = self._sphere_level(Q, seg, D, bodies)
-            for s_i, b, spheres in suspects:
+            for s_i, b, spheres, rates in suspects:
                 if any(h.segment == int(seg[s_i]) for h in hits):
                     continue
-                hit = self._advance(Q, int(seg[s_i]), bodies[b], spheres, float(D[s_i, b]))
+                hit = self._advance(Q, int(seg[s_i]), bodies[b], spheres, rates)
                 if hit is not None and not any(h.segment == hit.segment for h in hits):
                     hits.append(hit)
                     if first_only:
@@ -262,8 +295,9 @@ class RobotCollision:
 
     def _sphere_level(
         self, Q: NDArray, seg: NDArray[np.int64], D: NDArray, bodies: list[Body]
-    ) -> list[tuple[int, int, NDArray[np.int64]]]:
-        """(motion position in ``seg``, body, spheres) the sphere test cannot prove free."""
+    ) -> list[tuple[int, int, NDArray[np.int64], NDArray[np.float64]]]:
+        """(motion position in ``seg``, body, spheres, their motion bounds in mm) that the
+        sphere test cannot prove free."""
         n = np.maximum(np.ceil(D.max(axis=1) / SAMPLE_MM).astype(np.int64), 1) + 1  # samples
         t = np.concatenate([np.linspace(0.0, 1.0, k) for k in n])
         owner = np.repeat(np.arange(len(seg)), n)
@@ -283,56 +317,47 @@ class RobotCollision:
             Fp = Fb[pick]
             c = np.einsum("nij,sj->nsi", Fp[:, :3, :3], body.centres) + Fp[:, None, :3, 3]
             d = self.distance(c.reshape(-1, 3)).reshape(len(pick), -1)
-            bad = d - body.radii[None] - delta[pick, None] / 2 - MIN_GAP_MM <= 1e-3
+            # each sphere's own motion bound, no larger than the body's
+            first = np.searchsorted(owner, near_seg)  # the t = 0 sample of each near motion
+            dq = np.abs(Q[seg[near_seg] + 1] - Q[seg[near_seg]])
+            rates = sphere_rates(F[first], body.frame, body.centres, body.radii, dq)
+            rates = np.minimum(rates, D[near_seg, b][:, None])  # (near motions, spheres)
+            k = np.searchsorted(near_seg, owner[pick])
+            step = rates[k] / (n[owner[pick]] - 1)[:, None]
+            bad = d - body.radii[None] - step / 2 - MIN_GAP_MM <= 1e-3
             rows = np.flatnonzero(bad.any(axis=1))
             for s_i in np.unique(owner[pick][rows]):
                 spheres = np.flatnonzero(bad[owner[pick] == s_i].any(axis=0))
-                out.append((int(s_i), b, spheres))
+                r_i = rates[int(np.searchsorted(near_seg, s_i)), spheres]
+                out.append((int(s_i), b, spheres, r_i))
         return out
 
     def _advance(
-        self, Q: NDArray, s: int, body: Body, spheres: NDArray[np.int64], D: float
+        self,
+        Q: NDArray,
+        s: int,
+        body: Body,
+        spheres: NDArray[np.int64],
+        rates: NDArray[np.float64],
     ) -> Hit | None:
-        """Conservative advancement of the triangles of ``spheres`` of ``body`` along motion
-        ``s`` (module docstring); the first hit, else ``None``."""
+        """Conservative advancement of the triangles of each of ``spheres`` of ``body`` along
+        motion ``s``, each moving at most ``rates`` mm over the whole motion (module docstring);
+        the first hit, else ``None``."""
         qa, qb = Q[s], Q[s + 1]
-        dq = np.abs(qb - qa)
-        for sp in spheres:
+        for sp, rate in zip(spheres, rates, strict=True):
             obj = body.part(int(sp))
-            c, r = body.centres[sp], float(body.radii[sp])
             t = 0.0
             for _ in range(MAX_ADVANCE_STEPS):
                 F = self.robot.link_frames(qa + t * (qb - qa))[0]
                 d = _distance(obj, F[body.frame], self.part_obj)
                 if d <= MIN_GAP_MM:
                     return Hit(s, t, body.name, d)
-                if t >= 1.0:
+                if t >= 1.0 or rate <= 0:
                     break
-                rate = self._rate(F, body.frame, c, r, dq * (1.0 - t))
-                if rate <= 0:
-                    break
-                t = min(1.0, t + (d - MIN_GAP_MM) / rate * (1.0 - t))
+                t = min(1.0, t + (d - MIN_GAP_MM) / rate)
             else:
                 return Hit(s, t, body.name, d)
         return None
-
-    def _rate(self, F: NDArray, frame: int, c: NDArray, r: float, dq: NDArray[np.float64]) -> float:
-        """mm: a bound on how far any point of the sphere ``(c, r)`` (in link ``frame``) moves
-        during the joint motion ``dq (6,)`` rad (absolute) from link frames ``F (7, 4, 4)``.
-
-        A point's distance to joint j's axis changes only through the joints after j, so, from
-        the wrist down, ``R_j = |p - o_j| + sum_{i > j} |dq_i| R_i`` bounds it over the whole
-        motion (``o_j`` a point on the axis), and the point moves at most ``sum_j |dq_j| R_j``.
-        """
-        p = F[frame, :3, :3] @ c + F[frame, :3, 3]
-        total = 0.0
-        inner = 0.0  # sum_{i > j} |dq_i| R_i
-        for j in range(frame - 1, -1, -1):
-            o = F[j + 1, :3, 3]  # link j+1's origin lies on joint j's axis
-            R = float(np.linalg.norm(p - o)) + r + inner
-            inner += dq[j] * R
-            total = inner
-        return total
 
     def motion_free(self, qa: ArrayLike, qb: ArrayLike, *, zone: bool = False) -> bool:
         """Whether the joint-space motion ``qa -> qb`` (ends included) is free."""

@@ -187,6 +187,12 @@ def plan_robot_route(
             "min_manipulability": placement.min_manipulability,
         },
         "seconds_ik_configs": round(t_ik, 3),
+        "waypoints": len(q),
+        # waypoints whose joint vector is interpolated (no usable IK solution), by reason
+        "waypoints_unsolved": {
+            str(w): int(c)
+            for w, c in zip(*np.unique(row_status[~exact], return_counts=True), strict=True)
+        },
     }
     replanned: list[int] = []
     hits: list[Hit] = []
