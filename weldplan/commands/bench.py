@@ -20,6 +20,7 @@ BENCHES: dict[str, str] = {
     "planar": "weldplan.bench.planar",
     "tour": "weldplan.bench.tour",
     "queries": "weldplan.bench.queries",
+    "robot": "weldplan.bench.robot",
 }
 
 
