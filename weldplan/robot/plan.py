@@ -197,36 +197,25 @@ def plan_robot_route(
         },
     }
     replanned: list[int] = []
-    hits: list[Hit] = []
     if check_collision:
-        t1 = time.perf_counter()
-        checker = RobotCollision(
-            rb, part, tool, F, contact_radius=_contact_radius(contact_radius, poses)
+        q, row, exact, branch, replanned = _collision_stage(
+            rb,
+            part,
+            tool,
+            F,
+            _contact_radius(contact_radius, poses),
+            q,
+            row,
+            exact,
+            branch,
+            rows,
+            status,
+            stats,
+            replan=replan,
+            planner=planner,
+            time_s=replan_time_s,
+            rng=rng,
         )
-        zone = _zone_motions(row, rows)
-        hits = checker.path_hits(q, zone)
-        stats["first_check_hits"] = len(hits)
-        if hits and replan:
-            q, row, exact, branch, replanned = _replan(
-                rb, checker, q, row, exact, branch, rows, hits, planner, replan_time_s, rng
-            )
-            zone = _zone_motions(row, rows)
-            hits = checker.path_hits(q, zone)  # the verification of the final path
-        for h in hits:
-            k = _blamed_weld(h, row, rows, zone)
-            if k is not None and status[k] == OK:
-                status[k] = COLLISION
-        stats["seconds_collision"] = round(time.perf_counter() - t1, 3)
-        stats["collision_free"] = not hits
-        stats["hits"] = [
-            {
-                "segment": int(h.segment),
-                "t": round(float(h.t), 4),
-                "body": h.body,
-                "distance": float(h.distance),
-            }
-            for h in hits
-        ]
     weld_index = np.array([int(np.flatnonzero(row == r)[0]) for r in rows], dtype=np.int64)
     err_mm, err_deg = _pose_errors(rb, q, exact, T_fl, row)
     stats["fk_max_error_mm"] = err_mm
@@ -268,6 +257,58 @@ def plan_robot_route(
         stats["seconds_total"],
     )
     return rr
+
+
+def _collision_stage(
+    rb: Robot,
+    part: Any,
+    tool: Any,
+    F: NDArray,
+    contact_radius: float,
+    q: NDArray,
+    row: NDArray,
+    exact: NDArray,
+    branch: NDArray,
+    rows: NDArray,
+    status: list[str],
+    stats: dict[str, Any],
+    *,
+    replan: bool,
+    planner: str,
+    time_s: float,
+    rng: int | None,
+) -> tuple[NDArray, NDArray, NDArray, NDArray, list[int]]:
+    """Check the joint path, re-plan blocked legs, check the final path again; welds charged
+    with a remaining blocked motion get :data:`COLLISION` in ``status`` (in place), and the
+    figures go to ``stats``."""
+    t1 = time.perf_counter()
+    checker = RobotCollision(rb, part, tool, F, contact_radius=contact_radius)
+    zone = _zone_motions(row, rows)
+    hits = checker.path_hits(q, zone)
+    stats["first_check_hits"] = len(hits)
+    replanned: list[int] = []
+    if hits and replan:
+        q, row, exact, branch, replanned = _replan(
+            rb, checker, q, row, exact, branch, rows, hits, planner, time_s, rng
+        )
+        zone = _zone_motions(row, rows)
+        hits = checker.path_hits(q, zone)  # the verification of the final path
+    for h in hits:
+        k = _blamed_weld(h, row, rows, zone)
+        if k is not None and status[k] == OK:
+            status[k] = COLLISION
+    stats["seconds_collision"] = round(time.perf_counter() - t1, 3)
+    stats["collision_free"] = not hits
+    stats["hits"] = [
+        {
+            "segment": int(h.segment),
+            "t": round(float(h.t), 4),
+            "body": h.body,
+            "distance": float(h.distance),
+        }
+        for h in hits
+    ]
+    return q, row, exact, branch, replanned
 
 
 def _contact_radius(contact_radius: float | None, poses: Any) -> float:
