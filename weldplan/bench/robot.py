@@ -5,7 +5,8 @@ seed 0, scaled to 4500 mm, SYNTHETIC spots), visited in its line order; each leg
 from a spot to its virtual joint ``approach_mm`` out along its approach direction, to the next
 spot's virtual joint, and down to that spot (the torch route's shape without the pair planner,
 whose time is not what this measures). The shared spot gun's pose at each spot comes from
-:func:`weldplan.tool.plan_weld_poses` (cached in ``--cache``: it is the tool stage's cost). The
+:func:`weldplan.tool.plan_weld_poses` over 12 spins without tilt (:data:`POSE_SPIN_STEP`;
+cached in ``--cache``: it is the tool stage's cost, not this one's). The
 robot is the KUKA KR 150 R3100-2; its base is searched on the floor (the part's lowest point)
 or given with ``--robot-base``.
 
@@ -31,6 +32,10 @@ log = logging.getLogger(__name__)
 
 #: mm: how far out along the approach the legs leave and reach a spot
 APPROACH_MM = 10.0
+#: the gun-pose search of the set-up (deg): spins only, no tilt, so the set-up stays short on 2
+#: cores (the poses are still verified; the tool stage's own defaults search a 15 deg cone)
+POSE_CONE = 0.0
+POSE_SPIN_STEP = 30.0
 
 
 def straight_route(joints, approach_mm: float = APPROACH_MM):
@@ -70,7 +75,7 @@ def station(n: int, cache: Path | None):
         poses = WeldPoses.from_json(f.read_text())
     else:
         t = time.perf_counter()
-        poses = plan_weld_poses(part, route, gun)
+        poses = plan_weld_poses(part, route, gun, cone=POSE_CONE, spin_step=POSE_SPIN_STEP)
         log.info("gun poses for %d spots: %.1f s", n, time.perf_counter() - t)
         if f is not None:
             f.parent.mkdir(parents=True, exist_ok=True)
