@@ -61,16 +61,16 @@ def straight_route(joints, approach_mm: float = APPROACH_MM):
     )
 
 
-def station(n: int, cache: Path | None):
-    """``(part, route, poses, gun)`` of the ``n``-joint car2 station (module docstring)."""
-    from weldplan.tool import WeldPoses, plan_weld_poses, shared_spot_gun
+def station(n: int, cache: Path | None, tool_name: str = "gun"):
+    """``(part, route, poses, tool)`` of the ``n``-joint car2 station (module docstring)."""
+    from weldplan.tool import WeldPoses, arc_torch, plan_weld_poses, shared_spot_gun
     from weldplan.weld.synthetic import car2_joints, car2_part
 
     part = car2_part()
     joints = car2_joints(n, mesh=part)
     route = straight_route(joints)
-    gun = shared_spot_gun()
-    f = None if cache is None else cache / f"car2_{n}_poses.json"
+    gun = shared_spot_gun() if tool_name == "gun" else arc_torch(bend_angle=0.0)
+    f = None if cache is None else cache / f"car2_{n}_{tool_name}_poses.json"
     if f is not None and f.is_file():
         poses = WeldPoses.from_json(f.read_text())
     else:
@@ -83,7 +83,14 @@ def station(n: int, cache: Path | None):
     return part, route, poses, gun
 
 
-def measure(n: int, base: str | None, cache: Path | None, search_step: float) -> dict:
+#: flange -> TCP of the straight arc torch: its TCP 425 mm out along the flange's z axis
+#: (stick-out 15 + nozzle 60 + neck 150 + body 200 mm, the body's end on the flange)
+TORCH_REACH_MM = 425.0
+
+
+def measure(
+    n: int, base: str | None, cache: Path | None, search_step: float, tool_name: str = "gun"
+) -> dict:
     from weldplan.robot import load_robot
     from weldplan.robot.plan import plan_robot_route, tool_flange_tcp
     from weldplan.robot.reach import BaseSearch, parse_base
@@ -91,9 +98,13 @@ def measure(n: int, base: str | None, cache: Path | None, search_step: float) ->
     from weldplan.weld.synthetic import CAR2
 
     robot_dir = Path(CAR2).parents[1] / "robots" / "kuka_kr150r3100_2"
-    part, route, poses, gun = station(n, cache)
+    part, route, poses, gun = station(n, cache, tool_name)
     robot = load_robot(robot_dir / "kr150r3100_2.urdf")
-    F = tool_flange_tcp(robot, SHARED_GUN_DIR / "spot_welding_gun.urdf", "nozzle_tip")
+    if tool_name == "gun":
+        F = tool_flange_tcp(robot, SHARED_GUN_DIR / "spot_welding_gun.urdf", "nozzle_tip")
+    else:
+        F = np.eye(4)
+        F[2, 3] = TORCH_REACH_MM
     t0 = time.perf_counter()
     c0 = time.process_time()
     kw = {"base": parse_base(base)} if base else {"search": BaseSearch(step=search_step)}
@@ -104,7 +115,7 @@ def measure(n: int, base: str | None, cache: Path | None, search_step: float) ->
     cpu = time.process_time() - c0
     st = {s: rr.status.count(s) for s in sorted(set(rr.status))}
     return {
-        "station": f"car2 synthetic {n} joints (seed 0), straight legs",
+        "station": f"car2 synthetic {n} joints (seed 0), straight legs, tool {tool_name}",
         "gun_poses_ok": poses.n_ok,
         "welds": st,
         "flips": len(rr.flips),
@@ -130,12 +141,18 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("-n", type=int, default=200, help="joints in the station (default 200)")
     p.add_argument("--robot-base", default=None, help="x,y,z,yaw (mm, deg); default: searched")
     p.add_argument("--search-step", type=float, default=250.0, help="floor grid step (mm)")
-    p.add_argument("--cache", type=Path, default=None, help="folder caching the gun poses")
+    p.add_argument("--cache", type=Path, default=None, help="folder caching the tool poses")
+    p.add_argument(
+        "--tool",
+        choices=("gun", "torch"),
+        default="gun",
+        help="the shared spot gun (default) or the straight arc torch",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
     try:
-        out = measure(args.n, args.robot_base, args.cache, args.search_step)
+        out = measure(args.n, args.robot_base, args.cache, args.search_step, args.tool)
     except WeldplanError as exc:
         print(f"error: {exc}")
         return 2
@@ -144,7 +161,7 @@ def run(args: argparse.Namespace) -> int:
     folder = getattr(args, "out", None)
     if folder:
         Path(folder).mkdir(parents=True, exist_ok=True)
-        (Path(folder) / f"robot-{args.n}.json").write_text(text + "\n")
+        (Path(folder) / f"robot-{args.n}-{args.tool}.json").write_text(text + "\n")
     return 0
 
 
