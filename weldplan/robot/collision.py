@@ -20,9 +20,10 @@ shortcut shared with any planner:
    radius plus half its motion between samples plus :data:`MIN_GAP_MM`: then no point of it comes
    closer than :data:`MIN_GAP_MM` to the part on the whole motion.
 3. *FCL.* The triangles of the spheres that fail, together, are advanced along the motion with
-   python-fcl (conservative advancement: from a configuration at distance ``d`` they cannot touch
-   the part before they have moved ``d``; collide at every step). Closer than :data:`MIN_GAP_MM`
-   counts as a collision.
+   python-fcl against the part's triangles within their reach on that motion (conservative
+   advancement: from a configuration at distance ``d`` they cannot touch the part before they
+   have moved ``d``; collide at every step). Closer than :data:`MIN_GAP_MM` counts as a
+   collision.
 
 The part is a surface (sheet metal): a body wholly inside a closed solid is not seen here.
 Robot self-collision and the floor are not checked.
@@ -212,6 +213,9 @@ class RobotCollision:
         self.part = part
         self.distance = SurfaceDistance(part)
         self.part_obj = fcl.CollisionObject(bvh(part.vertices, part.faces), fcl.Transform())
+        tri = np.asarray(part.vertices, dtype=np.float64)[np.asarray(part.faces)]
+        self._tri_centre = (tri.min(axis=1) + tri.max(axis=1)) / 2
+        self._tri_radius = np.linalg.norm(tri - self._tri_centre[:, None], axis=2).max(axis=1)
         self.flange_tcp = np.eye(4) if flange_tcp is None else np.asarray(flange_tcp, float)
         links = [self._body(lk.name, lk.index, lk.vertices, lk.faces) for lk in robot.links]
         self.zone_bodies = list(links)
@@ -373,17 +377,40 @@ class RobotCollision:
         qa, qb = Q[s], Q[s + 1]
         obj = body.union(spheres)
         rate = float(np.max(rates))
+        target = self._near_part(qa, body, spheres, rates)
+        if target is None:
+            return None  # no part triangle within reach of these spheres on this motion
         t = 0.0
         d = 0.0
         for _ in range(MAX_ADVANCE_STEPS):
             F = self.robot.link_frames(qa + t * (qb - qa))[0]
-            d = _distance(obj, F[body.frame], self.part_obj)
+            d = _distance(obj, F[body.frame], target)
             if d <= MIN_GAP_MM:
                 return Hit(s, t, body.name, d)
             if t >= 1.0 or rate <= 0:
                 return None
             t = min(1.0, t + (d - MIN_GAP_MM) / rate)
         return Hit(s, t, body.name, d)
+
+    def _near_part(
+        self, qa: NDArray, body: Body, spheres: NDArray[np.int64], rates: NDArray[np.float64]
+    ) -> fcl.CollisionObject | None:
+        """An FCL object of the part's triangles that the spheres can reach on the motion: a
+        point of sphere ``i`` stays within ``r_i + rates_i`` of its start centre, so a triangle
+        whose bounding sphere is farther than that (plus :data:`MIN_GAP_MM`) from every start
+        centre can neither be touched nor come within the gap; ``None`` when none is left."""
+        F = self.robot.link_frames(qa)[0, body.frame]
+        c = body.centres[spheres] @ F[:3, :3].T + F[:3, 3]
+        reach = body.radii[spheres] + rates + MIN_GAP_MM
+        near = np.zeros(len(self._tri_centre), dtype=bool)
+        for ci, ri in zip(c, reach, strict=True):
+            near |= np.linalg.norm(self._tri_centre - ci, axis=1) <= ri + self._tri_radius
+        if not near.any():
+            return None
+        f = np.asarray(self.part.faces)[near]
+        used, inv = np.unique(f, return_inverse=True)
+        sub = bvh(np.asarray(self.part.vertices)[used], inv.reshape(-1, 3))
+        return fcl.CollisionObject(sub, fcl.Transform())
 
     def motion_free(self, qa: ArrayLike, qb: ArrayLike, *, zone: bool = False) -> bool:
         """Whether the joint-space motion ``qa -> qb`` (ends included) is free."""
