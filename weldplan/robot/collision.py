@@ -377,6 +377,9 @@ class RobotCollision:
         qa, qb = Q[s], Q[s + 1]
         obj = body.union(spheres)
         rate = float(np.max(rates))
+        obj.setTransform(_fcl_tf(self.robot.link_frames(qa)[0, body.frame]))
+        if fcl.collide(obj, self.part_obj, fcl.CollisionRequest(), fcl.CollisionResult()):
+            return Hit(s, 0.0, body.name, 0.0)  # blocked at its start: no need to crop the part
         target = self._near_part(qa, body, spheres, rates)
         if target is None:
             return None  # no part triangle within reach of these spheres on this motion
