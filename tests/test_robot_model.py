@@ -227,3 +227,16 @@ def test_link_meshes_load_in_mm(robot):
     # link_2 (upper arm) spans the 1350 mm between A2 and A3 and more
     ext = np.ptp(links[2].vertices, axis=0).max()
     assert 1350 < ext < 2000
+
+
+def test_shared_gun_flange_tcp(robot):
+    """The gun's root mounts on the URDF 'flange' link (x out of the face); tool0 is that link
+    turned +90 deg about y, so the gun's TCP (root xyz 0.67936, 0, 0.00043 m, rpy 0, pi/2, 0)
+    lies 679.36 mm out along tool0's z with tool0's own axes."""
+    from weldplan.robot.plan import tool_flange_tcp
+
+    gun = require_shared("tools", "spot_welding_gun")
+    F = tool_flange_tcp(robot, gun / "spot_welding_gun.urdf", "nozzle_tip")
+    np.testing.assert_allclose(F[:3, 3], [-0.43, 0.0, 679.36], atol=1e-3)
+    np.testing.assert_allclose(F[:3, :3], np.eye(3), atol=1e-5)  # the URDF's 1.5708 ~ pi/2
+    np.testing.assert_allclose(robot.mount[:3, 0], [0, 0, 1], atol=1e-9)  # flange x = tool0 z

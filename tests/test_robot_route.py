@@ -282,7 +282,7 @@ def test_search_along_a_line_finds_a_base_that_reaches_every_weld(robot):
 
     T = tcp_waypoint_poses(route, poses)[weld_rows(route)] @ np.linalg.inv(TORCH_TCP)
     line = ((-3000.0, -1000.0, -700.0), (-500.0, -1000.0, -700.0))
-    pl = search_base(robot, T, box_part(), BaseSearch(line=line, step=100.0))
+    pl = search_base(robot, T, box_part(), BaseSearch(line=line, step=100.0), top=3)[0]
     assert pl.n_usable == 3 and pl.searched
     x, y, z, yaw = pl.xyz_yaw()
     assert y == pytest.approx(-1000.0) and z == pytest.approx(-700.0)
@@ -291,3 +291,43 @@ def test_search_along_a_line_finds_a_base_that_reaches_every_weld(robot):
     assert yaw == pytest.approx(math.degrees(math.atan2(c[1] - y, c[0] - x)), abs=1e-6)
     with pytest.raises(PlanningError):
         search_base(robot, T, box_part(), BaseSearch(line=((9000, 0, 0), (9500, 0, 0))))
+
+
+@pytest.mark.slow
+def test_demo_cell_with_the_shared_gun_and_a_searched_base(robot):
+    """The demo cell end to end: route, gun poses, base search, configurations, collision."""
+    import weldplan
+    from weldplan.robot.plan import tcp_waypoint_poses, tool_flange_tcp
+    from weldplan.tool import plan_weld_poses, shared_spot_gun
+    from weldplan.tool.torch import SHARED_GUN_DIR
+
+    require_shared("tools", "spot_welding_gun")
+    cell = weldplan.demo_cell()
+    route = weldplan.plan_route(cell, rng=0)
+    gun = shared_spot_gun()
+    poses = plan_weld_poses(cell, route, gun)
+    F = tool_flange_tcp(robot, SHARED_GUN_DIR / "spot_welding_gun.urdf", "nozzle_tip")
+    rr = plan_robot_route(
+        route,
+        poses,
+        robot,
+        flange_tcp=F,
+        part=cell.part,
+        tool=gun,
+        search=BaseSearch(),
+        replan=False,
+    )
+    allowed = {"ok", "out_of_reach", "joint_limit", "singular", "no_pose", "collision"}
+    assert set(rr.status) <= allowed and len(rr.status) == 15
+    # welds without a gun pose are no_pose, and only they
+    assert [s == "no_pose" for s in rr.status] == [not p.ok for p in poses.poses]
+    assert rr.n_ok >= 8
+    # every exact row is the route's TCP pose, by FK of the URDF chain
+    T = rr.tcp(robot)
+    want = tcp_waypoint_poses(route, poses)[rr.row]
+    ex = rr.exact
+    np.testing.assert_allclose(T[ex], want[ex], atol=1e-6)
+    ok = np.array([s == "ok" for s in rr.status])
+    assert (rr.weld_branch[ok] >= 0).all() and rr.flips == ()
+    # a weld charged with a collision has a blocked motion at or next to it
+    assert rr.stats["collision_free"] == (not rr.stats["hits"])

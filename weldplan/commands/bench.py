@@ -21,6 +21,7 @@ BENCHES: dict[str, str] = {
     "tour": "weldplan.bench.tour",
     "queries": "weldplan.bench.queries",
     "tool": "weldplan.bench.tool",
+    "robot": "weldplan.bench.robot",
 }
 
 

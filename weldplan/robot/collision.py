@@ -1,25 +1,29 @@
 """The robot's links and its tool against the part, along a joint-space path (python-fcl judges).
 
 Bodies. Each link's collision mesh rides on its link frame; the tool's mesh rides on the last
-link (``tip @ flange_tcp``). Near a weld the tool touches the part by design: on a motion with an
-end at a weld the tool minus its contact zone (a sphere of ``contact_radius`` mm about the TCP,
-:meth:`weldplan.tool.model.Tool.outside_zone`) is checked instead of the whole tool.
+link (``tip @ flange_tcp``). The tool touches the part at a weld by design, and its poses were
+verified without its contact zone (:func:`weldplan.tool.plan_weld_poses`): paths are checked with
+the tool minus that zone (a sphere of ``contact_radius`` mm about the TCP,
+:meth:`weldplan.tool.model.Tool.outside_zone`); ``zone=False`` checks the whole tool. Between
+welds the TCP point itself is the route's (verified with the cell's clearance).
 
-The motion between two rows is linear in joint space. It is proven free conservatively, in
-two levels, with no shortcut shared with any planner:
+The motion between two rows is linear in joint space. It is proven free conservatively, with no
+shortcut shared with any planner:
 
-1. *Bound.* During a motion ``qa -> qb`` no point of a body moves farther than
-   ``D = sum_j |dq_j| R_j`` mm, where ``R_j`` bounds the point's distance from joint j's axis (the
-   chain's link offsets after joint j plus the body's extent about its frame origin). The motion is
-   sampled so that between samples a point moves at most ``delta = D / (n - 1)``.
+1. *Bound.* During a motion no point of a sphere (centre ``p``, radius ``r``) moves farther than
+   ``sum_j |dq_j| R_j`` mm, where ``R_j = |p - o_j| + r + sum_{i > j} |dq_i| R_i`` bounds its
+   distance to joint j's axis over the whole motion (:func:`sphere_rates`); a static bound per
+   body (chain offsets plus the body's extent) caps it and sets the number of samples.
 2. *Spheres.* Each body is covered by spheres (its triangles grouped by a grid on their centroids,
-   each group inside one sphere). At every sample, every sphere's centre distance to the part
-   (exact point-triangle distance, open3d) must exceed its radius plus ``delta / 2`` plus
-   :data:`MIN_GAP_MM`: then no point of the body comes closer than :data:`MIN_GAP_MM` to the part
-   between samples. A (motion, body) that fails this is decided by python-fcl on the body's mesh:
-   FCL distance with conservative advancement (from a configuration at distance ``d`` the body
-   cannot touch the part before it has moved ``d``), collide at every step. A body that comes
-   within :data:`MIN_GAP_MM` of the part counts as a collision.
+   each group inside one sphere), and by one bounding sphere checked first. At every sample each
+   sphere's centre distance to the part (exact point-triangle distance, open3d) must exceed its
+   radius plus half its motion between samples plus :data:`MIN_GAP_MM`: then no point of it comes
+   closer than :data:`MIN_GAP_MM` to the part on the whole motion.
+3. *FCL.* The triangles of the spheres that fail, together, are advanced along the motion with
+   python-fcl against the part's triangles within their reach on that motion (conservative
+   advancement: from a configuration at distance ``d`` they cannot touch the part before they
+   have moved ``d``; collide at every step). Closer than :data:`MIN_GAP_MM` counts as a
+   collision.
 
 The part is a surface (sheet metal): a body wholly inside a closed solid is not seen here.
 Robot self-collision and the floor are not checked.
@@ -44,8 +48,10 @@ log = logging.getLogger(__name__)
 MIN_GAP_MM = 1.0
 #: mm: the most any body point moves between the first-level samples
 SAMPLE_MM = 20.0
-#: mm: grid cell of the sphere cover (triangles whose centroids share a cell share a sphere)
+#: mm: grid cell of the sphere cover (triangles whose centroids share a cell share a sphere);
+#: finer for the tool, which works close to the part
 SPHERE_CELL_MM = 60.0
+TOOL_SPHERE_CELL_MM = 25.0
 #: conservative-advancement steps per (motion, body) before a motion is declared blocked
 MAX_ADVANCE_STEPS = 400
 
@@ -62,19 +68,26 @@ class Body:
     centres: NDArray[np.float64]
     radii: NDArray[np.float64]
     group: NDArray[np.int64]
-    obj: fcl.CollisionObject
     centre: NDArray[np.float64]
     radius: float
-    parts: dict[int, fcl.CollisionObject] = field(default_factory=dict, repr=False)
+    parts: dict[tuple[int, ...], fcl.CollisionObject] = field(default_factory=dict, repr=False)
 
-    def part(self, sphere: int) -> fcl.CollisionObject:
-        """The FCL object of the triangles in sphere ``sphere`` (built once)."""
-        if sphere not in self.parts:
-            f = self.faces[self.group == sphere]
+    @property
+    def obj(self) -> fcl.CollisionObject:
+        """The FCL object of the whole body (built once)."""
+        if () not in self.parts:
+            self.parts[()] = fcl.CollisionObject(bvh(self.vertices, self.faces), fcl.Transform())
+        return self.parts[()]
+
+    def union(self, spheres: NDArray[np.int64]) -> fcl.CollisionObject:
+        """An FCL object of the triangles in ``spheres`` (cached per set of spheres)."""
+        key = tuple(int(x) for x in np.sort(spheres))
+        if key not in self.parts:
+            f = self.faces[np.isin(self.group, key)]
             used, inv = np.unique(f, return_inverse=True)
             sub = bvh(self.vertices[used], inv.reshape(-1, 3))
-            self.parts[sphere] = fcl.CollisionObject(sub, fcl.Transform())
-        return self.parts[sphere]
+            self.parts[key] = fcl.CollisionObject(sub, fcl.Transform())
+        return self.parts[key]
 
 
 @dataclass(frozen=True)
@@ -135,6 +148,39 @@ def _distance(obj: fcl.CollisionObject, T: NDArray[np.float64], part: fcl.Collis
     return max(float(fcl.distance(obj, part, fcl.DistanceRequest(), fcl.DistanceResult())), 0.0)
 
 
+def sphere_rates(
+    F: NDArray[np.float64],
+    frame: int,
+    centres: NDArray[np.float64],
+    radii: NDArray[np.float64],
+    dq: NDArray[np.float64],
+) -> NDArray[np.float64]:
+    """``(n, s)`` mm: bounds on how far any point of each sphere moves during each motion.
+
+    Parameters
+    ----------
+    F
+        ``(n, 7, 4, 4)``: the link frames at each motion's start.
+    frame
+        The link the spheres ride on.
+    centres, radii
+        ``(s, 3)`` mm in that link's frame, ``(s,)`` mm.
+    dq
+        ``(n, 6)`` rad: each motion's absolute joint change.
+
+    A point's distance to joint j's axis changes only through the joints after j, so, from the
+    wrist down, ``R_j = |p - o_j| + r + sum_{i > j} |dq_i| R_i`` bounds it over the whole motion
+    (``o_j`` the start position of a point on the axis: link j+1's origin), and the point moves at
+    most ``sum_j |dq_j| R_j``.
+    """
+    p = np.einsum("nij,sj->nsi", F[:, frame, :3, :3], centres) + F[:, None, frame, :3, 3]
+    inner = np.zeros(p.shape[:2])
+    for j in range(frame - 1, -1, -1):
+        R = np.linalg.norm(p - F[:, None, j + 1, :3, 3], axis=2) + radii[None] + inner
+        inner = inner + dq[:, j, None] * R
+    return inner
+
+
 class RobotCollision:
     """Collision checks of a robot (and its tool) against a part (module docstring).
 
@@ -167,26 +213,44 @@ class RobotCollision:
         self.part = part
         self.distance = SurfaceDistance(part)
         self.part_obj = fcl.CollisionObject(bvh(part.vertices, part.faces), fcl.Transform())
+        tri = np.asarray(part.vertices, dtype=np.float64)[np.asarray(part.faces)]
+        self._tri_centre = (tri.min(axis=1) + tri.max(axis=1)) / 2
+        self._tri_radius = np.linalg.norm(tri - self._tri_centre[:, None], axis=2).max(axis=1)
         self.flange_tcp = np.eye(4) if flange_tcp is None else np.asarray(flange_tcp, float)
-        bodies = [self._body(lk.name, lk.index, lk.vertices, lk.faces) for lk in robot.links]
-        self.zone_bodies = list(bodies)
+        links = [self._body(lk.name, lk.index, lk.vertices, lk.faces) for lk in robot.links]
+        self.zone_bodies = list(links)
+        self._links = links
+        self._tool = tool
         if tool is not None:
-            T6 = robot.tip @ self.flange_tcp  # TCP frame in the last link's frame
-            v = tool.vertices @ T6[:3, :3].T + T6[:3, 3]
-            bodies.append(self._body("tool", 6, v, tool.faces))
             vz, fz = tool.outside_zone(contact_radius)
-            self.zone_bodies.append(self._body("tool", 6, vz @ T6[:3, :3].T + T6[:3, 3], fz))
-        self.bodies = bodies
-        self.radii_full = self._motion_radii(bodies)
+            self.zone_bodies.append(
+                self._body("tool", 6, self._on_link6(vz), fz, TOOL_SPHERE_CELL_MM)
+            )
         self.radii_zone = self._motion_radii(self.zone_bodies)
 
+    def _on_link6(self, v: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Tool vertices (TCP frame, mm) in the last link's frame."""
+        T6 = self.robot.tip @ self.flange_tcp
+        return v @ T6[:3, :3].T + T6[:3, 3]
+
+    @property
+    def bodies(self) -> list[Body]:
+        """The links and the whole tool (built on first use)."""
+        if not hasattr(self, "_bodies"):
+            full = list(self._links)
+            if self._tool is not None:
+                v = self._on_link6(self._tool.vertices)
+                full.append(self._body("tool", 6, v, self._tool.faces, TOOL_SPHERE_CELL_MM))
+            self._bodies = full
+            self.radii_full = self._motion_radii(full)
+        return self._bodies
+
     @staticmethod
-    def _body(name: str, frame: int, v: NDArray, f: NDArray) -> Body:
-        c, r, g = sphere_cover(v, f)
-        obj = fcl.CollisionObject(bvh(v, f), fcl.Transform())
+    def _body(name: str, frame: int, v: NDArray, f: NDArray, cell: float = SPHERE_CELL_MM) -> Body:
+        c, r, g = sphere_cover(v, f, cell)
         centre = (v.min(axis=0) + v.max(axis=0)) / 2
         radius = float(np.linalg.norm(v - centre, axis=1).max()) * (1 + 1e-9) + 1e-9
-        return Body(name, frame, np.asarray(v), np.asarray(f), c, r, g, obj, centre, radius)
+        return Body(name, frame, np.asarray(v), np.asarray(f), c, r, g, centre, radius)
 
     def _motion_radii(self, bodies: list[Body]) -> NDArray[np.float64]:
         """``(6, b)`` mm: ``R[j, b]`` bounds the distance of body b's points from joint j's axis
@@ -247,13 +311,13 @@ class RobotCollision:
             if len(seg) == 0:
                 continue
             bodies = self.zone_bodies if zflag else self.bodies
-            Rm = self.radii_zone if zflag else self.radii_full
+            Rm = self.radii_zone if zflag else self.radii_full  # set by .bodies
             D = dq[seg] @ Rm  # (s, b) mm: motion bound per body
             suspects = self._sphere_level(Q, seg, D, bodies)
-            for s_i, b, spheres in suspects:
+            for s_i, b, spheres, rates in suspects:
                 if any(h.segment == int(seg[s_i]) for h in hits):
                     continue
-                hit = self._advance(Q, int(seg[s_i]), bodies[b], spheres, float(D[s_i, b]))
+                hit = self._advance(Q, int(seg[s_i]), bodies[b], spheres, rates)
                 if hit is not None and not any(h.segment == hit.segment for h in hits):
                     hits.append(hit)
                     if first_only:
@@ -262,8 +326,9 @@ class RobotCollision:
 
     def _sphere_level(
         self, Q: NDArray, seg: NDArray[np.int64], D: NDArray, bodies: list[Body]
-    ) -> list[tuple[int, int, NDArray[np.int64]]]:
-        """(motion position in ``seg``, body, spheres) the sphere test cannot prove free."""
+    ) -> list[tuple[int, int, NDArray[np.int64], NDArray[np.float64]]]:
+        """(motion position in ``seg``, body, spheres, their motion bounds in mm) that the
+        sphere test cannot prove free."""
         n = np.maximum(np.ceil(D.max(axis=1) / SAMPLE_MM).astype(np.int64), 1) + 1  # samples
         t = np.concatenate([np.linspace(0.0, 1.0, k) for k in n])
         owner = np.repeat(np.arange(len(seg)), n)
@@ -283,56 +348,72 @@ class RobotCollision:
             Fp = Fb[pick]
             c = np.einsum("nij,sj->nsi", Fp[:, :3, :3], body.centres) + Fp[:, None, :3, 3]
             d = self.distance(c.reshape(-1, 3)).reshape(len(pick), -1)
-            bad = d - body.radii[None] - delta[pick, None] / 2 - MIN_GAP_MM <= 1e-3
+            # each sphere's own motion bound, no larger than the body's
+            first = np.searchsorted(owner, near_seg)  # the t = 0 sample of each near motion
+            dq = np.abs(Q[seg[near_seg] + 1] - Q[seg[near_seg]])
+            rates = sphere_rates(F[first], body.frame, body.centres, body.radii, dq)
+            rates = np.minimum(rates, D[near_seg, b][:, None])  # (near motions, spheres)
+            k = np.searchsorted(near_seg, owner[pick])
+            step = rates[k] / (n[owner[pick]] - 1)[:, None]
+            bad = d - body.radii[None] - step / 2 - MIN_GAP_MM <= 1e-3
             rows = np.flatnonzero(bad.any(axis=1))
             for s_i in np.unique(owner[pick][rows]):
                 spheres = np.flatnonzero(bad[owner[pick] == s_i].any(axis=0))
-                out.append((int(s_i), b, spheres))
+                r_i = rates[int(np.searchsorted(near_seg, s_i)), spheres]
+                out.append((int(s_i), b, spheres, r_i))
         return out
 
     def _advance(
-        self, Q: NDArray, s: int, body: Body, spheres: NDArray[np.int64], D: float
+        self,
+        Q: NDArray,
+        s: int,
+        body: Body,
+        spheres: NDArray[np.int64],
+        rates: NDArray[np.float64],
     ) -> Hit | None:
-        """Conservative advancement of the triangles of ``spheres`` of ``body`` along motion
-        ``s`` (module docstring); the first hit, else ``None``."""
+        """Conservative advancement along motion ``s`` of the triangles of ``spheres`` of
+        ``body`` together (one FCL object), no point of which moves more than ``max(rates)`` mm
+        over the whole motion (module docstring); the hit, else ``None``."""
         qa, qb = Q[s], Q[s + 1]
-        dq = np.abs(qb - qa)
-        for sp in spheres:
-            obj = body.part(int(sp))
-            c, r = body.centres[sp], float(body.radii[sp])
-            t = 0.0
-            for _ in range(MAX_ADVANCE_STEPS):
-                F = self.robot.link_frames(qa + t * (qb - qa))[0]
-                d = _distance(obj, F[body.frame], self.part_obj)
-                if d <= MIN_GAP_MM:
-                    return Hit(s, t, body.name, d)
-                if t >= 1.0:
-                    break
-                rate = self._rate(F, body.frame, c, r, dq * (1.0 - t))
-                if rate <= 0:
-                    break
-                t = min(1.0, t + (d - MIN_GAP_MM) / rate * (1.0 - t))
-            else:
+        obj = body.union(spheres)
+        rate = float(np.max(rates))
+        obj.setTransform(_fcl_tf(self.robot.link_frames(qa)[0, body.frame]))
+        if fcl.collide(obj, self.part_obj, fcl.CollisionRequest(), fcl.CollisionResult()):
+            return Hit(s, 0.0, body.name, 0.0)  # blocked at its start: no need to crop the part
+        target = self._near_part(qa, body, spheres, rates)
+        if target is None:
+            return None  # no part triangle within reach of these spheres on this motion
+        t = 0.0
+        d = 0.0
+        for _ in range(MAX_ADVANCE_STEPS):
+            F = self.robot.link_frames(qa + t * (qb - qa))[0]
+            d = _distance(obj, F[body.frame], target)
+            if d <= MIN_GAP_MM:
                 return Hit(s, t, body.name, d)
-        return None
+            if t >= 1.0 or rate <= 0:
+                return None
+            t = min(1.0, t + (d - MIN_GAP_MM) / rate)
+        return Hit(s, t, body.name, d)
 
-    def _rate(self, F: NDArray, frame: int, c: NDArray, r: float, dq: NDArray[np.float64]) -> float:
-        """mm: a bound on how far any point of the sphere ``(c, r)`` (in link ``frame``) moves
-        during the joint motion ``dq (6,)`` rad (absolute) from link frames ``F (7, 4, 4)``.
-
-        A point's distance to joint j's axis changes only through the joints after j, so, from
-        the wrist down, ``R_j = |p - o_j| + sum_{i > j} |dq_i| R_i`` bounds it over the whole
-        motion (``o_j`` a point on the axis), and the point moves at most ``sum_j |dq_j| R_j``.
-        """
-        p = F[frame, :3, :3] @ c + F[frame, :3, 3]
-        total = 0.0
-        inner = 0.0  # sum_{i > j} |dq_i| R_i
-        for j in range(frame - 1, -1, -1):
-            o = F[j + 1, :3, 3]  # link j+1's origin lies on joint j's axis
-            R = float(np.linalg.norm(p - o)) + r + inner
-            inner += dq[j] * R
-            total = inner
-        return total
+    def _near_part(
+        self, qa: NDArray, body: Body, spheres: NDArray[np.int64], rates: NDArray[np.float64]
+    ) -> fcl.CollisionObject | None:
+        """An FCL object of the part's triangles that the spheres can reach on the motion: a
+        point of sphere ``i`` stays within ``r_i + rates_i`` of its start centre, so a triangle
+        whose bounding sphere is farther than that (plus :data:`MIN_GAP_MM`) from every start
+        centre can neither be touched nor come within the gap; ``None`` when none is left."""
+        F = self.robot.link_frames(qa)[0, body.frame]
+        c = body.centres[spheres] @ F[:3, :3].T + F[:3, 3]
+        reach = body.radii[spheres] + rates + MIN_GAP_MM
+        near = np.zeros(len(self._tri_centre), dtype=bool)
+        for ci, ri in zip(c, reach, strict=True):
+            near |= np.linalg.norm(self._tri_centre - ci, axis=1) <= ri + self._tri_radius
+        if not near.any():
+            return None
+        f = np.asarray(self.part.faces)[near]
+        used, inv = np.unique(f, return_inverse=True)
+        sub = bvh(np.asarray(self.part.vertices)[used], inv.reshape(-1, 3))
+        return fcl.CollisionObject(sub, fcl.Transform())
 
     def motion_free(self, qa: ArrayLike, qb: ArrayLike, *, zone: bool = False) -> bool:
         """Whether the joint-space motion ``qa -> qb`` (ends included) is free."""

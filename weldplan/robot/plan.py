@@ -17,6 +17,7 @@ the route's TCP pose, and the collision check of the final path.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import time
 from os import PathLike
@@ -47,6 +48,8 @@ log = logging.getLogger(__name__)
 #: default OMPL planner and time (s) for a blocked leg
 REPLAN_PLANNER = "rrtconnect"
 REPLAN_TIME_S = 5.0
+#: base-search candidates re-scored along the whole route
+SEARCH_TOP = 5
 #: mm / deg: the verification tolerance of an exact row's FK against the route's pose
 POSE_TOL_MM = 1e-6
 POSE_TOL_DEG = 1e-6
@@ -101,6 +104,7 @@ def plan_robot_route(
     planner: str = REPLAN_PLANNER,
     replan_time_s: float = REPLAN_TIME_S,
     rng: int | None = 0,
+    search_top: int = SEARCH_TOP,
 ) -> RobotRoute:
     """The route in joint space, verified (module docstring).
 
@@ -132,6 +136,8 @@ def plan_robot_route(
         Check robot and tool against the part; re-plan blocked legs with OMPL.
     planner, replan_time_s, rng
         OMPL planner name, its time limit per leg (s) and seed.
+    search_top
+        The best candidates of the base search re-scored along the whole route.
 
     Raises
     ------
@@ -156,26 +162,21 @@ def plan_robot_route(
     from weldplan.tool.route_frames import weld_rows
 
     rows = weld_rows(route)
-    placement = _place(robot, T_fl[rows], part, base, search, singular_deg)
+    placement, solved = _place(
+        robot, T_fl, rows, part, base, search, singular_deg, flip_penalty, search_top
+    )
     rb = robot.with_base(placement.base)
-    try:
-        q, branch, exact, row_status = joint_path(
-            rb, T_fl, singular_deg=singular_deg, flip_penalty=flip_penalty
-        )
-    except PlanningError:
-        has = np.all(np.isfinite(T_fl[rows]), axis=(1, 2))
-        st = classify(rb.ik_all(np.where(has[:, None, None], T_fl[rows], np.eye(4))), singular_deg)
-        st[~has] = NO_POSE
-        words, counts = np.unique(st, return_counts=True)
-        why = ", ".join(f"{c} {w.replace('_', ' ')}" for w, c in zip(words, counts, strict=True))
-        x, y, z, yaw = placement.xyz_yaw()
-        msg = (
-            f"the robot reaches none of the {len(rows)} welds from its base at "
-            f"{x:.0f},{y:.0f},{z:.0f},{yaw:.1f} ({why})"
-        )
-        if placement.searched:
-            raise PlanningError(msg) from None
-        raise InputError(msg, field="--robot-base") from None
+    if solved is not None:
+        q, branch, exact, row_status = solved
+    else:
+        try:
+            q, branch, exact, row_status = joint_path(
+                rb, T_fl, singular_deg=singular_deg, flip_penalty=flip_penalty
+            )
+        except PlanningError:
+            raise InputError(
+                _nothing_reached(rb, T_fl, rows, placement, singular_deg), field="--robot-base"
+            ) from None
     t_ik = time.perf_counter() - t0
     status = [str(row_status[r]) for r in rows]
     row = np.arange(len(q), dtype=np.int64)
@@ -184,41 +185,37 @@ def plan_robot_route(
             "base_xyz_yaw": list(placement.xyz_yaw()),
             "searched": placement.searched,
             "candidates": placement.candidates,
-            "min_manipulability": placement.min_manipulability,
         },
+        # smallest manipulability (Robot.manipulability) over the solved waypoints
+        "min_manipulability": float(rb.manipulability(q[exact]).min()) if exact.any() else None,
         "seconds_ik_configs": round(t_ik, 3),
+        "waypoints": len(q),
+        # waypoints whose joint vector is interpolated (no usable IK solution), by reason
+        "waypoints_unsolved": {
+            str(w): int(c)
+            for w, c in zip(*np.unique(row_status[~exact], return_counts=True), strict=True)
+        },
     }
     replanned: list[int] = []
-    hits: list[Hit] = []
     if check_collision:
-        t1 = time.perf_counter()
-        checker = RobotCollision(
-            rb, part, tool, F, contact_radius=_contact_radius(contact_radius, poses)
+        q, row, exact, branch, replanned = _collision_stage(
+            rb,
+            part,
+            tool,
+            F,
+            _contact_radius(contact_radius, poses),
+            q,
+            row,
+            exact,
+            branch,
+            rows,
+            status,
+            stats,
+            replan=replan,
+            planner=planner,
+            time_s=replan_time_s,
+            rng=rng,
         )
-        zone = _zone_motions(row, rows)
-        hits = checker.path_hits(q, zone)
-        stats["first_check_hits"] = len(hits)
-        if hits and replan:
-            q, row, exact, branch, replanned = _replan(
-                rb, checker, q, row, exact, branch, rows, hits, planner, replan_time_s, rng
-            )
-            zone = _zone_motions(row, rows)
-            hits = checker.path_hits(q, zone)  # the verification of the final path
-        for h in hits:
-            k = _blamed_weld(h, row, rows, zone)
-            if k is not None and status[k] == OK:
-                status[k] = COLLISION
-        stats["seconds_collision"] = round(time.perf_counter() - t1, 3)
-        stats["collision_free"] = not hits
-        stats["hits"] = [
-            {
-                "segment": int(h.segment),
-                "t": round(float(h.t), 4),
-                "body": h.body,
-                "distance": float(h.distance),
-            }
-            for h in hits
-        ]
     weld_index = np.array([int(np.flatnonzero(row == r)[0]) for r in rows], dtype=np.int64)
     err_mm, err_deg = _pose_errors(rb, q, exact, T_fl, row)
     stats["fk_max_error_mm"] = err_mm
@@ -262,6 +259,58 @@ def plan_robot_route(
     return rr
 
 
+def _collision_stage(
+    rb: Robot,
+    part: Any,
+    tool: Any,
+    F: NDArray,
+    contact_radius: float,
+    q: NDArray,
+    row: NDArray,
+    exact: NDArray,
+    branch: NDArray,
+    rows: NDArray,
+    status: list[str],
+    stats: dict[str, Any],
+    *,
+    replan: bool,
+    planner: str,
+    time_s: float,
+    rng: int | None,
+) -> tuple[NDArray, NDArray, NDArray, NDArray, list[int]]:
+    """Check the joint path, re-plan blocked legs, check the final path again; welds charged
+    with a remaining blocked motion get :data:`COLLISION` in ``status`` (in place), and the
+    figures go to ``stats``."""
+    t1 = time.perf_counter()
+    checker = RobotCollision(rb, part, tool, F, contact_radius=contact_radius)
+    zone = _zone_motions(row, rows)
+    hits = checker.path_hits(q, zone)
+    stats["first_check_hits"] = len(hits)
+    replanned: list[int] = []
+    if hits and replan:
+        q, row, exact, branch, replanned = _replan(
+            rb, checker, q, row, exact, branch, rows, hits, planner, time_s, rng
+        )
+        zone = _zone_motions(row, rows)
+        hits = checker.path_hits(q, zone)  # the verification of the final path
+    for h in hits:
+        k = _blamed_weld(h, row, rows, zone)
+        if k is not None and status[k] == OK:
+            status[k] = COLLISION
+    stats["seconds_collision"] = round(time.perf_counter() - t1, 3)
+    stats["collision_free"] = not hits
+    stats["hits"] = [
+        {
+            "segment": int(h.segment),
+            "t": round(float(h.t), 4),
+            "body": h.body,
+            "distance": float(h.distance),
+        }
+        for h in hits
+    ]
+    return q, row, exact, branch, replanned
+
+
 def _contact_radius(contact_radius: float | None, poses: Any) -> float:
     if contact_radius is not None:
         return float(contact_radius)
@@ -272,17 +321,58 @@ def _contact_radius(contact_radius: float | None, poses: Any) -> float:
 
 def _place(
     robot: Robot,
-    T_weld: NDArray[np.float64],
+    T_fl: NDArray[np.float64],
+    rows: NDArray[np.int64],
     part: Any,
     base: ArrayLike | None,
     search: BaseSearch | None,
     singular_deg: float,
-) -> Placement:
+    flip_penalty: float,
+    top: int,
+) -> tuple[Placement, tuple[Any, ...] | None]:
+    """The base: given, the robot's own, or the best of ``search_base``'s ``top`` candidates
+    re-scored along the whole route (most welds ok, then the largest smallest manipulability of
+    the chosen configurations over every solved waypoint); with that candidate's joint path."""
+    T_weld = T_fl[rows]
     if base is not None or search is None:
         B = robot.base if base is None else np.asarray(base, dtype=np.float64)
-        return Placement(B, -1, len(T_weld), float("nan"), 0, False)
+        return Placement(B, -1, len(T_weld), float("nan"), 0, False), None
     ok = np.all(np.isfinite(T_weld), axis=(1, 2))
-    return search_base(robot, T_weld[ok], part, search, singular_deg=singular_deg)
+    cands = search_base(robot, T_weld[ok], part, search, singular_deg=singular_deg, top=top)
+    best: tuple[tuple[int, float], Placement, tuple[Any, ...]] | None = None
+    for pl in cands:
+        rb = robot.with_base(pl.base)
+        try:
+            path = joint_path(rb, T_fl, singular_deg=singular_deg, flip_penalty=flip_penalty)
+        except PlanningError:
+            continue
+        q, _, exact, status = path
+        n_ok = int(sum(status[r] == OK for r in rows))
+        m = float(rb.manipulability(q[exact]).min()) if exact.any() else -np.inf
+        key = (n_ok, m)
+        if best is None or key > best[0]:
+            best = (key, dataclasses.replace(pl, min_manipulability=m), path)
+    if best is None:
+        raise PlanningError(
+            _nothing_reached(robot.with_base(cands[0].base), T_fl, rows, cands[0], singular_deg)
+        )
+    return best[1], best[2]
+
+
+def _nothing_reached(
+    rb: Robot, T_fl: NDArray, rows: NDArray, placement: Placement, singular_deg: float
+) -> str:
+    """One line: no weld reached from the base, with the count of each reason."""
+    has = np.all(np.isfinite(T_fl[rows]), axis=(1, 2))
+    st = classify(rb.ik_all(np.where(has[:, None, None], T_fl[rows], np.eye(4))), singular_deg)
+    st[~has] = NO_POSE
+    words, counts = np.unique(st, return_counts=True)
+    why = ", ".join(f"{c} {w.replace('_', ' ')}" for w, c in zip(words, counts, strict=True))
+    x, y, z, yaw = placement.xyz_yaw()
+    return (
+        f"the robot reaches none of the {len(rows)} welds from its base at "
+        f"{x:.0f},{y:.0f},{z:.0f},{yaw:.1f} ({why})"
+    )
 
 
 def _zone_motions(row: NDArray[np.int64], weld_rows: NDArray[np.int64]) -> NDArray[np.bool_]:

@@ -12,7 +12,8 @@ singularity than ``singular_deg`` (``|sin(theta5)| >= sin(singular_deg)``: A4 an
   the wrist centre is within reach and yet no branch exists (py-opw-kinematics drops a branch
   exactly at ``theta5 = 0``, where A4 and A6 are not separable).
 
-Placement (:func:`search_base`): candidate base poses on the floor (a square grid about the weld
+Placement (:func:`search_base`, then :func:`weldplan.robot.plan.plan_robot_route` re-scores its
+best few along the whole route): candidate base poses on the floor (a square grid about the weld
 poses) or along a line, each turned to face the welds (A1 then works about the middle of its
 range; more yaws on request). Candidates whose base column would stand in the part are dropped
 (a capsule about A1 from the floor to the A2 axis, radius the base's and A1 link's extent,
@@ -241,9 +242,10 @@ def search_base(
     opts: BaseSearch | None = None,
     *,
     singular_deg: float = DEFAULT_SINGULAR_DEG,
-) -> Placement:
-    """The candidate base (module docstring) that makes the most welds usable, then has the
-    largest smallest manipulability over them.
+    top: int = 1,
+) -> list[Placement]:
+    """The ``top`` best candidate bases (module docstring): most welds usable, then the largest
+    smallest manipulability over them; best first.
 
     Parameters
     ----------
@@ -255,6 +257,8 @@ def search_base(
         The part mesh (mm), to keep the base column out of it and for the default floor height.
     opts
         Where to look (:class:`BaseSearch`).
+    top
+        How many placements to return (fewer when there are fewer candidates).
 
     Raises
     ------
@@ -277,7 +281,9 @@ def search_base(
         raise PlanningError(
             f"no base among {len(bases)} candidates reaches any weld: widen the search"
         )
-    best = int(np.lexsort((-mins, -counts))[0])
+    order = np.lexsort((-mins, -counts))[: max(1, int(top))]
+    order = order[counts[order] > 0]
+    best = int(order[0])
     log.info(
         "base search: %d candidates, best reaches %d/%d welds, min manipulability %.4f",
         len(bases),
@@ -285,11 +291,14 @@ def search_base(
         len(T),
         mins[best],
     )
-    return Placement(
-        base=bases[best],
-        n_usable=int(counts[best]),
-        n_welds=len(T),
-        min_manipulability=float(mins[best]),
-        candidates=len(bases),
-        searched=True,
-    )
+    return [
+        Placement(
+            base=bases[i],
+            n_usable=int(counts[i]),
+            n_welds=len(T),
+            min_manipulability=float(mins[i]),
+            candidates=len(bases),
+            searched=True,
+        )
+        for i in order
+    ]
