@@ -41,8 +41,8 @@ import trimesh
 from numpy.typing import ArrayLike, NDArray
 
 from weldplan.errors import InputError
-from weldplan.robot import urdf as _urdf
 from weldplan.robot.ik import IKBranches, IKSolutions, OPWParams, load_opw, solve
+from weldplan.robot.urdf import UrdfJoint, chain, joint_limits, link_geometry, parse_urdf
 
 log = logging.getLogger(__name__)
 
@@ -344,7 +344,7 @@ def load_robot(
         OPW parameters whose FK differs from the URDF chain's.
     """
     path = Path(urdf)
-    root, text, joints = _urdf.parse_urdf(path)
+    root, text, joints = parse_urdf(path)
     children = {j.child for j in joints}
     parents = {j.parent for j in joints}
     if tip is None:
@@ -355,7 +355,7 @@ def load_robot(
             tip = movable[-1].child if movable else (leaves[-1] if leaves else "")
     if tip not in children:
         raise InputError(f"no link named {tip!r}", path=path, field="tip")
-    ch = _urdf.chain(joints, tip, path)
+    ch = chain(joints, tip, path)
     while ch and ch[0].kind == "fixed":  # the base is the first movable joint's parent link
         ch = ch[1:]
     moving = [j for j in ch if j.kind != "fixed"]
@@ -375,7 +375,7 @@ def load_robot(
             origins.append(pending @ j.origin)
             pending = np.eye(4)
     tip_T = pending
-    limits = np.array([_urdf.joint_limits(root, text, j, path) for j in moving])
+    limits = np.array([joint_limits(root, text, j, path) for j in moving])
     lower, upper, velocity = limits.T
     acc = _acceleration(acceleration, velocity)
     mount = np.eye(4)
@@ -394,8 +394,8 @@ def load_robot(
             )
     params = opw if isinstance(opw, OPWParams) else load_opw(opw)
     link_root = moving[0].parent
-    geometry = [_urdf.link_geometry(root, link_root, path)] + [
-        _urdf.link_geometry(root, j.child, path) for j in moving
+    geometry = [link_geometry(root, link_root, path)] + [
+        link_geometry(root, j.child, path) for j in moving
     ]
     robot = Robot(
         name=root.get("name", path.stem),
@@ -419,11 +419,11 @@ def load_robot(
     return robot
 
 
-def _fixed_pose(joints: list[_urdf.UrdfJoint], link: str, path: Path) -> NDArray | None:
+def _fixed_pose(joints: list[UrdfJoint], link: str, path: Path) -> NDArray | None:
     """The pose of ``link`` in the last movable joint's child frame, through fixed joints only
     (``None`` when the link is not below the last movable joint by fixed joints)."""
     T = np.eye(4)
-    for j in reversed(_urdf.chain(joints, link, path)):
+    for j in reversed(chain(joints, link, path)):
         if j.kind != "fixed":
             return T
         T = j.origin @ T

@@ -439,6 +439,7 @@ def main(argv: list[str] | None = None) -> int:
         help="generator settings (PROFILES): station sets or the whole-body set",
     )
     args = p.parse_args(argv)
+    logging.basicConfig(level=logging.INFO, format="%(message)s")
     from weldplan.io.mesh import load_part
 
     sizes = args.sizes or (list(SET_SIZES) if args.profile == "station" else [WHOLE_BODY_SIZE])
@@ -450,7 +451,7 @@ def main(argv: list[str] | None = None) -> int:
         joints, st = select_set(spots, n)
         path = out / f"car2_synthetic_{n}.csv"
         write_set(path, joints, st, seed=args.seed, body=Path(args.mesh).name, profile=args.profile)
-        print(f"{path}: {n} synthetic joints of {len(spots)} spots")  # noqa: T201
+        log.info("%s: %d synthetic joints of %d spots", path, n, len(spots))
     return 0
 
 
