@@ -8,9 +8,9 @@ import math
 import numpy as np
 import pytest
 
+from tests.cli_helpers import run_cli
 from tests.conftest import require_shared
 from weldplan.bench.queries import read_queries
-from weldplan.cli import main
 from weldplan.errors import InputError
 
 #: two unit squares side by side, as a Polyanya .mesh v2 file
@@ -27,12 +27,6 @@ TWO_SQUARES = """mesh
 4 1 2 3 4 0 -1 -1 -1
 """
 
-
-def _rc(argv) -> int:
-    try:
-        return main(argv)
-    except SystemExit as e:
-        return int(e.code)
 
 
 def _scen(rows: list[tuple[float, float, float, float, str]]) -> str:
@@ -52,7 +46,7 @@ def test_counts_equal_shorter_longer_and_no_path(tmp_path, capsys):
         _scen([(0, 0, 2, 0, "2.0000001"), (0, 0, 2, 1, "3"), (0, 0, 1, 1, "1"), (0, 0, 5, 5, "9")])
     )
     out_csv = tmp_path / "q.csv"
-    assert _rc(["bench", "queries", str(mesh), str(scen), "--csv", str(out_csv)]) == 0
+    assert run_cli(["bench", "queries", str(mesh), str(scen), "--csv", str(out_csv)]) == 0
     out = capsys.readouterr().out
     assert "4 queries, any-angle" in out
     assert "equal to the file's" in out and ": 1, shorter: 1, longer: 1, no path: 1" in out
@@ -79,12 +73,13 @@ def test_printed_digits_count_as_equal():
 
 def test_arena_octile_and_any_angle(capsys):
     folder = require_shared("movingai")
-    assert _rc(["bench", "queries", str(folder / "arena.map"), str(folder / "arena.map.scen")]) == 0
+    argv = ["bench", "queries", str(folder / "arena.map"), str(folder / "arena.map.scen")]
+    assert run_cli(argv) == 0
     out = capsys.readouterr().out
     assert "160 queries, octile" in out and ": 160, shorter: 0, longer: 0, no path: 0" in out
     mesh = require_shared("meshmaps", "arena.mesh")
     aa = require_shared("meshmaps", "arena.mesh.anyangle.scen")
-    assert _rc(["bench", "queries", str(mesh), str(aa)]) == 0
+    assert run_cli(["bench", "queries", str(mesh), str(aa)]) == 0
     out = capsys.readouterr().out
     assert "160 queries, any-angle" in out and ": 160, shorter: 0, longer: 0, no path: 0" in out
 
@@ -94,16 +89,16 @@ def test_bad_files_are_one_line_errors(tmp_path, capsys):
     mesh.write_text(TWO_SQUARES)
     scen = tmp_path / "bad.scen"
     scen.write_text("version 1\n0\tm.map\t2\t1\t0\t0\t1\tx\t1.0\n")
-    assert _rc(["bench", "queries", str(mesh), str(scen)]) == 2
+    assert run_cli(["bench", "queries", str(mesh), str(scen)]) == 2
     err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
     assert len(err) == 1 and "bad.scen" in err[0] and "2" in err[0] and "goal y" in err[0]
     bad_mesh = tmp_path / "bad.mesh"
     bad_mesh.write_text(TWO_SQUARES.replace("4 1 2 3 4 0", "4 1 2 3 x 0"))
     scen.write_text(_scen([(0, 0, 2, 0, "2")]))
-    assert _rc(["bench", "queries", str(bad_mesh), str(scen)]) == 2
+    assert run_cli(["bench", "queries", str(bad_mesh), str(scen)]) == 2
     err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
     assert len(err) == 1 and "bad.mesh" in err[0] and "11" in err[0]
-    assert _rc(["bench", "queries", str(mesh), str(scen), "--metric", "octile"]) == 2
+    assert run_cli(["bench", "queries", str(mesh), str(scen), "--metric", "octile"]) == 2
     assert "octile" in capsys.readouterr().err
     with pytest.raises(InputError):
         read_queries(tmp_path / "missing.scen")

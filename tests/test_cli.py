@@ -9,6 +9,7 @@ import json
 import numpy as np
 import pytest
 
+from tests.cli_helpers import run_cli
 from tests.route_fixtures import BOX_JOINTS_CSV, write_box_station
 from weldplan.cli import main
 from weldplan.weld import verify as verify_mod
@@ -27,13 +28,6 @@ def _needs_planner():
 def files(tmp_path):
     return write_box_station(tmp_path)
 
-
-def _rc(argv) -> int:
-    """Exit code of ``weldplan argv`` (argparse errors exit through SystemExit)."""
-    try:
-        return main(argv)
-    except SystemExit as e:
-        return int(e.code)
 
 
 def _one_line_error(capsys, rc_expected=2):
@@ -108,7 +102,7 @@ def test_user_errors_exit_2_with_one_line(files, capsys):
         "aco": (["demo", "--aco", "0", "-o", str(tmp / "r.csv")], "--aco"),
     }
     for name, (argv, needle) in cases.items():
-        assert _rc(argv) == 2, name
+        assert run_cli(argv) == 2, name
         line = _one_line_error(capsys)
         assert needle in line, (name, line)
 

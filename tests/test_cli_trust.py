@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 import trimesh
 
+from tests.cli_helpers import run_cli
 from tests.route_fixtures import BOX_JOINTS_CSV, box_part, write_box_station
 from weldplan.cli import main
 from weldplan.errors import ConfigError, InputError, RunError, UnreachableJointsError
@@ -24,12 +25,6 @@ JOINTS_CSV = BOX_JOINTS_CSV
 #: it: A, C, D on one side, B alone on the other
 PANEL_JOINTS_CSV = "id,x,y,z\nA,-8,0,0\nB,8,0,0\nC,-8,40,0\nD,-8,-30,0\n"
 
-
-def _rc(argv) -> int:
-    try:
-        return main(argv)
-    except SystemExit as e:
-        return int(e.code)
 
 
 def _one_line(capsys) -> str:
@@ -85,7 +80,7 @@ def test_help_documents_the_exit_codes(capsys):
 @pytest.mark.parametrize("seed", ["-1", "1.5", "x"])
 def test_negative_or_non_integer_seed_is_one_line_exit_2(files, capsys, seed):
     tmp, mesh, joints = files
-    assert _rc(_plan_argv(mesh, joints, tmp / "r.csv", "--seed", seed)) == 2
+    assert run_cli(_plan_argv(mesh, joints, tmp / "r.csv", "--seed", seed)) == 2
     line = _one_line(capsys)
     assert "--seed" in line
     assert not (tmp / "r.csv").exists()
@@ -106,7 +101,7 @@ def test_a_huge_coordinate_is_one_line(files, capsys):
     tmp, mesh, _ = files
     joints = tmp / "far.csv"
     joints.write_text("id,x,y,z\nA,1e300,0,0\nB,0,0,0\n")
-    rc = _rc(_plan_argv(mesh, joints, tmp / "r.csv"))
+    rc = run_cli(_plan_argv(mesh, joints, tmp / "r.csv"))
     assert rc == 2
     line = _one_line(capsys)
     assert "weldplan plan: error:" in line
@@ -120,7 +115,7 @@ def test_unreachable_dask_scheduler_is_one_line_exit_1(files, capsys, monkeypatc
     # the scheduler is reached before the cell is built
     monkeypatch.setattr(cell_mod, "load_cell", lambda *a, **k: 1 / 0)
     # port 1 on this machine: nothing listens; the connection is refused or times out (5 s)
-    rc = _rc(_plan_argv(mesh, joints, tmp / "r.csv", "--dask", "tcp://127.0.0.1:1"))
+    rc = run_cli(_plan_argv(mesh, joints, tmp / "r.csv", "--dask", "tcp://127.0.0.1:1"))
     assert rc == 1
     line = _one_line(capsys)
     assert "cannot reach the Dask scheduler at tcp://127.0.0.1:1" in line
@@ -130,7 +125,7 @@ def test_unreachable_dask_scheduler_is_one_line_exit_1(files, capsys, monkeypatc
 def test_malformed_dask_address_is_bad_input(files, capsys):
     pytest.importorskip("distributed")
     tmp, mesh, joints = files
-    assert _rc(_plan_argv(mesh, joints, tmp / "r.csv", "--dask", "nohostnoport")) == 2
+    assert run_cli(_plan_argv(mesh, joints, tmp / "r.csv", "--dask", "nohostnoport")) == 2
     assert "Dask scheduler address" in _one_line(capsys)
 
 
@@ -149,7 +144,7 @@ def test_full_disk_at_the_write_layer_is_one_line_exit_1(files, capsys, monkeypa
         return real(path, text, encoding)
 
     monkeypatch.setattr(outputset, "_write_temp", full_disk)
-    rc = _rc(_plan_argv(mesh, joints, tmp / "r.csv", "--json", str(tmp / "r.json")))
+    rc = run_cli(_plan_argv(mesh, joints, tmp / "r.csv", "--json", str(tmp / "r.json")))
     assert rc == 1
     line = _one_line(capsys)
     assert "No space left on device" in line and "no output file was changed" in line
@@ -187,7 +182,7 @@ def test_a_real_full_disk_is_one_line_exit_1(files, tiny_disk, capsys):
         assert exc.errno == errno.ENOSPC
     finally:
         os.close(fd)
-    rc = _rc(_plan_argv(mesh, joints, tiny_disk / "r.csv", "--json", str(tiny_disk / "r.json")))
+    rc = run_cli(_plan_argv(mesh, joints, tiny_disk / "r.csv", "--json", str(tiny_disk / "r.json")))
     assert rc == 1
     line = _one_line(capsys)
     assert "No space left on device" in line and "no output file was changed" in line
@@ -218,7 +213,7 @@ def test_write_protected_output_is_refused_before_planning(files, capsys, monkey
         raise AssertionError("planned before checking the outputs")
 
     monkeypatch.setattr(pipeline, "plan_route", no_planning)
-    rc = _rc(_plan_argv(mesh, joints, tmp / "r.csv", "--json", str(tmp / "r.json")))
+    rc = run_cli(_plan_argv(mesh, joints, tmp / "r.csv", "--json", str(tmp / "r.json")))
     assert rc == 2
     line = _one_line(capsys)
     assert "r.json" in line and "write-protected" in line
@@ -234,7 +229,7 @@ def test_unwritable_folder_is_refused_before_planning(files, capsys, monkeypatch
 
     monkeypatch.setattr(pipeline, "plan_route", lambda *a, **k: 1 / 0)
     try:
-        rc = _rc(_plan_argv(mesh, joints, locked / "r.csv"))
+        rc = run_cli(_plan_argv(mesh, joints, locked / "r.csv"))
     finally:
         locked.chmod(0o755)
     assert rc == 2
@@ -260,7 +255,7 @@ def test_a_name_too_long_is_refused_up_front(files, capsys):
     tmp, mesh, joints = files
     old = _old_outputs(tmp)
     long_json = tmp / ("j" * 300 + ".json")
-    assert _rc(_plan_argv(mesh, joints, tmp / "r.csv", "--json", str(long_json))) == 2
+    assert run_cli(_plan_argv(mesh, joints, tmp / "r.csv", "--json", str(long_json))) == 2
     assert "File name too long" in _one_line(capsys)
     _unchanged(old)
 
@@ -283,7 +278,7 @@ def test_failed_rename_in_the_middle_restores_every_file(files, capsys, monkeypa
 
     monkeypatch.setattr(outputset.os, "replace", failing_replace)
     argv = _plan_argv(mesh, joints, tmp / "r.csv", "--json", str(tmp / "r.json"))
-    rc = _rc([*argv, "--html", str(tmp / "r.html")])
+    rc = run_cli([*argv, "--html", str(tmp / "r.html")])
     monkeypatch.setattr(outputset.os, "replace", real)
     assert rc == 1
     assert "no output file was changed" in _one_line(capsys)
@@ -332,7 +327,7 @@ def test_huge_margin_is_refused_up_front_naming_the_option(files, capsys, monkey
     from weldplan.weld import cell as cell_mod
 
     monkeypatch.setattr(cell_mod, "load_cell", lambda *a, **k: 1 / 0)  # never reached
-    rc = _rc(_plan_argv(mesh, joints, tmp / "r.csv", "--margin", "2700", "--memory-limit", "1"))
+    rc = run_cli(_plan_argv(mesh, joints, tmp / "r.csv", "--margin", "2700", "--memory-limit", "1"))
     assert rc == 2
     line = _one_line(capsys)
     assert "--margin" in line and "--pitch" in line and "1.0 GB limit (--memory-limit)" in line
@@ -341,13 +336,13 @@ def test_huge_margin_is_refused_up_front_naming_the_option(files, capsys, monkey
 @pytest.mark.parametrize("value", ["0", "-1", "nan", "inf", "lots"])
 def test_memory_limit_must_be_a_positive_number(files, capsys, value):
     tmp, mesh, joints = files
-    assert _rc(_plan_argv(mesh, joints, tmp / "r.csv", "--memory-limit", value)) == 2
+    assert run_cli(_plan_argv(mesh, joints, tmp / "r.csv", "--memory-limit", value)) == 2
     assert "--memory-limit" in _one_line(capsys)
 
 
 def test_memory_limit_that_fits_plans(files, capsys):
     tmp, mesh, joints = files
-    assert _rc(_plan_argv(mesh, joints, tmp / "r.csv", "--memory-limit", "4")) == 0
+    assert run_cli(_plan_argv(mesh, joints, tmp / "r.csv", "--memory-limit", "4")) == 0
 
 
 def test_many_joints_are_refused_naming_candidates_or_a_split():
@@ -457,7 +452,7 @@ def test_cli_and_api_say_the_same_about_a_seed(files, capsys):
     from weldplan.weld.pipeline import plan_route
 
     tmp, mesh, joints = files
-    _rc(_plan_argv(mesh, joints, tmp / "r.csv", "--seed", "-3"))
+    run_cli(_plan_argv(mesh, joints, tmp / "r.csv", "--seed", "-3"))
     line = _one_line(capsys)
     with pytest.raises(ConfigError) as e:
         plan_route(demo_cell(), rng=-3)
@@ -467,7 +462,7 @@ def test_cli_and_api_say_the_same_about_a_seed(files, capsys):
 # ---------------------------------------------------------------- section 3: --skip-unreachable
 def test_unreachable_joint_fails_the_run_without_the_flag(panel, capsys):
     tmp, mesh, joints = panel
-    assert _rc(_plan_argv(mesh, joints, tmp / "r.csv")) == 1
+    assert run_cli(_plan_argv(mesh, joints, tmp / "r.csv")) == 1
     line = _one_line(capsys)
     assert "no collision-free path from joint(s) B to any other joint" in line
     assert not (tmp / "r.csv").exists()
@@ -477,7 +472,7 @@ def test_skip_unreachable_plans_the_rest_lists_it_and_exits_3(panel, capsys):
     tmp, mesh, joints = panel
     out, js = tmp / "r.csv", tmp / "r.json"
     argv = ["plan", str(mesh), str(joints), "-o", str(out), "--json", str(js), "--margin", "50"]
-    assert _rc([*argv, "--skip-unreachable"]) == 3
+    assert run_cli([*argv, "--skip-unreachable"]) == 3
     cap = capsys.readouterr()
     assert "skipped" in cap.out and "B" in cap.out
     assert "partial route: 1 joint(s) skipped (B)" in cap.err
@@ -488,11 +483,11 @@ def test_skip_unreachable_plans_the_rest_lists_it_and_exits_3(panel, capsys):
     assert route["joints"]["ids"] == ["A", "B", "C", "D"]
     assert route["settings"]["skip_unreachable"] is True
     # the independent check accepts the route with B listed as skipped, against the whole file
-    assert _rc(["verify", str(js), str(mesh), "--joints", str(joints)]) == 0
+    assert run_cli(["verify", str(js), str(mesh), "--joints", str(joints)]) == 0
     # ... and refuses it once B is no longer listed
     route["stats"]["skipped"] = []
     js.write_text(json.dumps(route))
-    assert _rc(["verify", str(js), str(mesh), "--joints", str(joints)]) == 1
+    assert run_cli(["verify", str(js), str(mesh), "--joints", str(joints)]) == 1
     assert "joint B is never visited" in capsys.readouterr().err
 
 
@@ -571,13 +566,13 @@ def test_skip_unreachable_leaves_out_a_joint_inside_a_closed_room(tmp_path, caps
     joints.write_text("id,x,y,z\nA,0,0,-40\nC,20,0,-40\nE,0,0,-22\nD,-20,10,-40\n")
     out, js = tmp_path / "r.csv", tmp_path / "r.json"
     argv = ["plan", str(mesh), str(joints), "-o", str(out), "--json", str(js), "--margin", "30"]
-    assert _rc(argv) == 1
+    assert run_cli(argv) == 1
     assert "no collision-free path from joint(s) E" in _one_line(capsys)
-    assert _rc([*argv, "--skip-unreachable", "--quiet"]) == 3
+    assert run_cli([*argv, "--skip-unreachable", "--quiet"]) == 3
     route = json.loads(js.read_text())
     assert [s["id"] for s in route["stats"]["skipped"]] == ["E"]
     assert sorted(route["order"]) == ["A", "C", "D"]
-    assert _rc(["verify", str(js), str(mesh), "--joints", str(joints)]) == 0
+    assert run_cli(["verify", str(js), str(mesh), "--joints", str(joints)]) == 0
 
 
 def test_skipped_joint_before_blocked_pairs_plans_the_right_pairs(tmp_path):

@@ -11,24 +11,9 @@ import numpy as np
 import pytest
 import trimesh
 
+from tests.cli_helpers import one_line_error, run_cli
 from tests.conftest import require_shared
 from tests.route_fixtures import write_box_station
-from weldplan.cli import main
-
-
-def _rc(argv) -> int:
-    try:
-        return main(argv)
-    except SystemExit as e:
-        return int(e.code)
-
-
-def _one_line_error(capsys) -> str:
-    err = capsys.readouterr().err
-    assert "Traceback" not in err
-    lines = [ln for ln in err.splitlines() if ln.strip()]
-    assert len(lines) == 1, err
-    return lines[0]
 
 
 def _robot_urdf():
@@ -53,8 +38,8 @@ def test_bad_robot_options_are_one_line_errors(tmp_path, capsys, extra, needle):
     _, mesh, joints = write_box_station(tmp_path)
     argv = ["plan", str(mesh), str(joints), "-o", str(tmp_path / "r.csv"), "--quiet",
             "--tool", str(_gun_urdf()), "--robot", str(_robot_urdf()), *extra]  # fmt: skip
-    assert _rc(argv) == 2
-    assert needle in _one_line_error(capsys)
+    assert run_cli(argv) == 2
+    assert needle in one_line_error(capsys)
     assert not (tmp_path / "r.csv").exists()
 
 
@@ -70,8 +55,8 @@ def test_robot_options_need_their_companions(tmp_path, capsys, extra, needle):
     _, mesh, joints = write_box_station(tmp_path)
     extra = [str(_robot_urdf()) if e == "ROBOT" else e for e in extra]
     argv = ["plan", str(mesh), str(joints), "-o", str(tmp_path / "r.csv"), "--quiet", *extra]
-    assert _rc(argv) == 2
-    assert needle in _one_line_error(capsys)
+    assert run_cli(argv) == 2
+    assert needle in one_line_error(capsys)
 
 
 #: a straight arc torch as a URDF tool: root = the robot's mount frame (x out of the flange),
@@ -115,7 +100,7 @@ def robot_run(tmp_path_factory):
         "--robot-base=-1800,0,-700,0", "--weld-time", "0.4", "--post", "krl",
         "--trajectory", str(tmp / "traj.csv"),
     ]  # fmt: skip
-    return tmp, _rc(argv)
+    return tmp, run_cli(argv)
 
 
 def test_plan_with_robot_writes_krl_src_dat_and_trajectory_that_replay(robot_run):
@@ -153,7 +138,7 @@ def test_plan_with_robot_refuses_a_base_that_reaches_nothing(tmp_path, capsys):
         "--tool", str(_torch_urdf(tmp_path)), "--robot", str(_robot_urdf()),
         "--robot-base=-9000,0,0,0", "--trajectory", str(tmp_path / "t.csv"),
     ]  # fmt: skip
-    assert _rc(argv) == 2  # bad input: the base, named as the field
-    line = _one_line_error(capsys)
+    assert run_cli(argv) == 2  # bad input: the base, named as the field
+    line = one_line_error(capsys)
     assert "reaches none" in line and "--robot-base" in line
     assert not (tmp_path / "r.csv").exists() and not (tmp_path / "t.csv").exists()

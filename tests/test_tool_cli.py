@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from tests.cli_helpers import one_line_error, run_cli
 from tests.conftest import require_shared
 from tests.route_fixtures import box_part, box_route
-from weldplan.cli import main
 from weldplan.errors import EXIT_PARTIAL, InputError
 from weldplan.io.export import CSV_FIELDS, POSE_FIELDS, to_csv_text
 from weldplan.tool import WeldPose, WeldPoses, arc_torch
@@ -25,19 +25,6 @@ from weldplan.tool.route_frames import waypoint_quaternions, weld_rows
 JOINTS_CSV = "id,x,y,z\nA,-40,0,0\nB,40,0,0\nC,-40,60,0\nD,40,-30,0\nE,-3,0,5\n"
 
 
-def _rc(argv) -> int:
-    try:
-        return main(argv)
-    except SystemExit as e:
-        return int(e.code)
-
-
-def _one_line_error(capsys) -> str:
-    err = capsys.readouterr().err
-    assert "Traceback" not in err
-    lines = [ln for ln in err.splitlines() if ln.strip()]
-    assert len(lines) == 1, err
-    return lines[0]
 
 
 @pytest.fixture(scope="module")
@@ -52,7 +39,7 @@ def planned(tmp_path_factory):
         "-o", str(tmp / "r.csv"), "--json", str(tmp / "r.json"), "--html", str(tmp / "r.html"),
         "--tool", str(tmp / "torch.stl"), "--tcp", "0,0,0,0,0,0",
     ]  # fmt: skip
-    rc = _rc(argv)
+    rc = run_cli(argv)
     return tmp, rc
 
 
@@ -96,7 +83,7 @@ def test_plan_with_tool_csv_has_orientations_at_every_waypoint(planned):
 def test_verify_with_the_same_tool_rechecks_the_poses(planned, capsys):
     tmp, _ = planned
     capsys.readouterr()
-    rc = _rc(["verify", str(tmp / "r.json"), str(tmp / "box.stl"),
+    rc = run_cli(["verify", str(tmp / "r.json"), str(tmp / "box.stl"),
               "--tool", str(tmp / "torch.stl"), "--tcp", "0,0,0,0,0,0"])  # fmt: skip
     out = capsys.readouterr().out
     assert rc == EXIT_PARTIAL, out
@@ -107,10 +94,10 @@ def test_verify_with_the_same_tool_rechecks_the_poses(planned, capsys):
 def test_verify_refuses_a_route_planned_with_another_tool(planned, capsys):
     tmp, _ = planned
     capsys.readouterr()
-    rc = _rc(["verify", str(tmp / "r.json"), str(tmp / "box.stl"),
+    rc = run_cli(["verify", str(tmp / "r.json"), str(tmp / "box.stl"),
               "--tool", str(tmp / "torch.stl"), "--tcp", "0,0,1,0,0,0"])  # fmt: skip
     assert rc == 2
-    line = _one_line_error(capsys)
+    line = one_line_error(capsys)
     assert "planned with another tool" in line and "tcp" in line
 
 
@@ -124,7 +111,7 @@ def test_verify_catches_a_tampered_pose(planned, capsys):
     bad = tmp / "tampered.json"
     bad.write_text(json.dumps(d))
     capsys.readouterr()
-    rc = _rc(["verify", str(bad), str(tmp / "box.stl"),
+    rc = run_cli(["verify", str(bad), str(tmp / "box.stl"),
               "--tool", str(tmp / "torch.stl"), "--tcp", "0,0,0,0,0,0"])  # fmt: skip
     assert rc == 1
     err = capsys.readouterr().err
@@ -237,9 +224,9 @@ def test_bad_tool_input_is_one_line_before_any_planning(tmp_path, capsys, extra,
     )
     argv = ["plan", str(tmp_path / "box.stl"), str(tmp_path / "joints.csv"), "--quiet",
             "-o", str(tmp_path / "r.csv")]  # fmt: skip
-    rc = _rc(argv + [a.format(tmp=tmp_path) for a in extra])
+    rc = run_cli(argv + [a.format(tmp=tmp_path) for a in extra])
     assert rc == 2
-    assert words in _one_line_error(capsys)
+    assert words in one_line_error(capsys)
     assert not (tmp_path / "r.csv").exists()
 
 
@@ -259,11 +246,11 @@ def test_view_html_with_the_tool_and_another_tool_refused(planned, capsys):
     tmp, _ = planned
     page = tmp / "view.html"
     base = ["view", str(tmp / "r.json"), str(tmp / "box.stl"), "--html", str(page)]
-    assert _rc(base + ["--tool", str(tmp / "torch.stl"), "--tcp", "0,0,0,0,0,0"]) == 0
+    assert run_cli(base + ["--tool", str(tmp / "torch.stl"), "--tcp", "0,0,0,0,0,0"]) == 0
     assert page.stat().st_size > 0
     capsys.readouterr()
-    assert _rc(base + ["--tool", str(tmp / "torch.stl"), "--tcp", "0,0,2,0,0,0"]) == 2
-    assert "another tool" in _one_line_error(capsys)
+    assert run_cli(base + ["--tool", str(tmp / "torch.stl"), "--tcp", "0,0,2,0,0,0"]) == 2
+    assert "another tool" in one_line_error(capsys)
 
 
 @pytest.mark.slow
@@ -312,13 +299,13 @@ def test_verify_rechecks_the_transitions_and_catches_a_tampered_one(planned, cap
     argv = ["verify", None, str(tmp / "box.stl"), "--tool", str(tmp / "torch.stl"),
             "--tcp", "0,0,0,0,0,0"]  # fmt: skip
     argv[1] = str(tmp / "r.json")
-    _rc(argv)
+    run_cli(argv)
     assert "tool transitions ok" in capsys.readouterr().out
     # send the first free transition's second waypoint 50 mm under the floor
     free[0]["positions"][1][2] = -50.0
     bad = tmp / "tampered_transition.json"
     bad.write_text(json.dumps(d))
     argv[1] = str(bad)
-    assert _rc(argv) == 1
+    assert run_cli(argv) == 1
     err = capsys.readouterr().err
     assert "tool transitions" in err and f"{free[0]['from']}->{free[0]['to']}" in err

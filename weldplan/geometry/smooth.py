@@ -36,7 +36,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.interpolate import BSpline
 
-from weldplan.geometry.pathcore import PathObstacle, as_path
+from weldplan.geometry.pathcore import PathObstacle, as_path, polyline_length
 from weldplan.geometry.splines import interpolating_bspline
 
 log = logging.getLogger(__name__)
@@ -219,7 +219,7 @@ def smooth_path(
         control=np.asarray(spl.c),
         degree=int(spl.k),
         params=u,
-        length=float(np.linalg.norm(np.diff(S, axis=0), axis=1).sum()),
+        length=polyline_length(S),
         max_curvature=float(kappa.max(initial=0.0)),
         min_clearance=float(dist.min(initial=math.inf)),
         max_deviation=float(e.max(initial=0.0)),

@@ -30,6 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from weldplan.geometry.collision import CollisionModel
+from weldplan.geometry.pathcore import polyline_length
 from weldplan.geometry.solids import ClosedSolids
 from weldplan.motion.sampling import plan_rn
 from weldplan.random import RNGLike, seed_of
@@ -119,10 +120,6 @@ def _assemble(
     return np.concatenate(parts)
 
 
-def _length(P: NDArray[np.float64]) -> float:
-    return float(np.linalg.norm(np.diff(P, axis=0), axis=1).sum()) if len(P) > 1 else 0.0
-
-
 def plan_pair_ompl(
     cell: Any,
     i: int,
@@ -180,10 +177,10 @@ def plan_pair_ompl(
     def done(inner: NDArray[np.float64] | None, reason: str, **kw: Any) -> Any:
         ok = inner is not None
         pts = _assemble(xyz[i], inner, xyz[j]) if ok else np.zeros((0, 3))
-        inner_len = _length(inner) if ok else math.inf
+        inner_len = polyline_length(inner) if ok else math.inf
         return LocalPath(
             points=pts,
-            length=_length(pts) if ok else math.inf,
+            length=polyline_length(pts) if ok else math.inf,
             inner_length=inner_len,
             method="ompl",
             success=ok,

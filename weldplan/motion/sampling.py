@@ -37,6 +37,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from weldplan.errors import ConfigError, PlanningError
+from weldplan.geometry.pathcore import polyline_length
 
 log = logging.getLogger(__name__)
 
@@ -377,9 +378,6 @@ def plan_rn(
         b[i] = float(g[i])
     ss.setStartAndGoalStates(a, b)
 
-    def measure(pts: NDArray[np.float64]) -> float:
-        return float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum())
-
     return _solve(
         ss,
         read=read,
@@ -389,7 +387,7 @@ def plan_rn(
         time_s=time_s,
         seed=seed,
         simplify=simplify,
-        measure=measure,
+        measure=polyline_length,
         dim=d,
     )
 

@@ -50,6 +50,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from weldplan.errors import ConfigError, PlanningError
+from weldplan.geometry.pathcore import polyline_length
 
 log = logging.getLogger(__name__)
 
@@ -387,8 +388,7 @@ def constant_speed_time(
         raise ConfigError(
             f"TCP speed must be a finite number of mm/s > 0, got {speed!r}", field="tcp_speed"
         )
-    P = np.asarray(points, dtype=np.float64).reshape(-1, 3)
-    length = float(np.linalg.norm(np.diff(P, axis=0), axis=1).sum()) if len(P) > 1 else 0.0
+    length = polyline_length(np.asarray(points, dtype=np.float64).reshape(-1, 3))
     return length / speed + n_welds * check_weld_time(weld_time)
 
 

@@ -17,6 +17,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from weldplan.geometry.pathcore import polyline_length
+
 #: a transition that retracts, moves and approaches on the TCP path, its sweeps all free
 DIRECT = "direct"
 #: a transition re-planned in SE(3) (OMPL), its sweeps all free
@@ -29,8 +31,7 @@ FREE_STATUSES = (DIRECT, REPLANNED)
 
 def path_length(positions: NDArray[np.float64]) -> float:
     """mm: the TCP polyline's length."""
-    P = np.asarray(positions, dtype=np.float64).reshape(-1, 3)
-    return float(np.linalg.norm(np.diff(P, axis=0), axis=1).sum()) if len(P) > 1 else 0.0
+    return polyline_length(np.asarray(positions, dtype=np.float64).reshape(-1, 3))
 
 
 def path_rotation(quaternions: NDArray[np.float64]) -> float:

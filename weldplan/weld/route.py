@@ -36,6 +36,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from weldplan.geometry.pathcore import polyline_length as _polyline_length
+
 #: format tag written into the JSON, bumped when the layout changes
 ROUTE_FORMAT = "weldplan.route/1"
 
@@ -48,10 +50,7 @@ def _points(a: ArrayLike) -> NDArray[np.float64]:
 
 def polyline_length(points: ArrayLike) -> float:
     """Length (mm) of the polyline ``points (k, 3)``: the sum of its segment lengths."""
-    P = np.asarray(points, dtype=np.float64).reshape(-1, 3)
-    if len(P) < 2:
-        return 0.0
-    return float(np.linalg.norm(np.diff(P, axis=0), axis=1).sum())
+    return _polyline_length(np.asarray(points, dtype=np.float64).reshape(-1, 3))
 
 
 @dataclass(frozen=True, eq=False)
