@@ -4,8 +4,9 @@ route -> export/view).
 The graph is read from the source (ast), so it holds every import: module level, inside
 functions (the lazy ones), under ``TYPE_CHECKING``. An import of ``weldplan.a.b`` is an edge to
 ``weldplan.a.b`` and to the packages above it (``weldplan.a``: Python runs its ``__init__``),
-except a module's own packages. ``from weldplan.a import b`` is an edge to ``weldplan.a.b`` when
-``b`` is a module, else to ``weldplan.a``.
+except a module's own packages. ``from weldplan.a import b`` is an edge to ``weldplan.a`` (its
+``__init__`` runs first, even for a module inside ``weldplan.a``) and to ``weldplan.a.b`` when
+``b`` is a module.
 """
 
 from __future__ import annotations
@@ -38,7 +39,8 @@ def _targets(node: ast.AST, package: str, mods: dict) -> list[str]:
             mod = ".".join(base + ([node.module] if node.module else []))
         else:
             mod = node.module or ""
-        names = [f"{mod}.{a.name}" if f"{mod}.{a.name}" in mods else mod for a in node.names]
+        # ``from pkg import sub`` runs pkg's __init__ first, so it imports pkg as well as sub
+        names = [mod] + [f"{mod}.{a.name}" for a in node.names if f"{mod}.{a.name}" in mods]
     else:
         return []
     out = []
@@ -60,7 +62,12 @@ def import_graph(root: Path = PACKAGE) -> nx.DiGraph:
         package = m if is_pkg else m.rpartition(".")[0]
         for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
             for t in _targets(node, package, mods):
-                # the target and the packages above it that are not the importer's own
+                # the target itself, even the importer's own package when the import names it
+                # (``from pkg import sub`` inside pkg), and the packages above it that are not
+                # the importer's own
+                if t in mods and t != m:
+                    g.add_edge(m, t, line=node.lineno)
+                t = t.rpartition(".")[0]
                 while t:
                     if t in mods and t != m and not m.startswith(t + "."):
                         g.add_edge(m, t, line=node.lineno)
