@@ -69,6 +69,12 @@ class Leg:
         virtual joints was free), ``"so-aco"``, ``"aco"`` or ``"exact"``.
     length
         Polyline length in mm (computed from ``points`` when not given).
+    smooth
+        ``(m, 3) float`` mm or ``None``: the smooth path of the leg (``weldplan plan --smooth``,
+        :func:`weldplan.weld.smoothing.smooth_route`): the same weld spots and approach segments
+        as ``points``, and between the virtual joints dense waypoints on a C2 curve, every chord
+        checked at the clearance. ``None`` when the leg was not smoothed (its polyline is the
+        path). Read-only.
     """
 
     from_id: str
@@ -76,12 +82,18 @@ class Leg:
     points: NDArray[np.float64]
     method: str = "straight"
     length: float = float("nan")
+    smooth: NDArray[np.float64] | None = None
 
     def __post_init__(self) -> None:
         P = _points(self.points)
         if len(P) < 2:
             raise ValueError(f"leg {self.from_id}->{self.to_id}: needs at least 2 points")
         object.__setattr__(self, "points", P)
+        if self.smooth is not None:
+            S = _points(self.smooth)
+            if len(S) < 2:
+                raise ValueError(f"leg {self.from_id}->{self.to_id}: a smooth path needs 2 points")
+            object.__setattr__(self, "smooth", S)
         object.__setattr__(self, "from_id", str(self.from_id))
         object.__setattr__(self, "to_id", str(self.to_id))
         if not np.isfinite(self.length):
@@ -98,28 +110,45 @@ class Leg:
         """``(k - 2, 3)`` the waypoints strictly between the two weld spots."""
         return self.points[1:-1]
 
+    @property
+    def path(self) -> NDArray[np.float64]:
+        """``(m, 3)`` the points the torch travels: :attr:`smooth` when the leg has one, else
+        :attr:`points`."""
+        return self.points if self.smooth is None else self.smooth
+
+    @property
+    def smooth_length(self) -> float:
+        """mm along :attr:`path` (the polyline length when the leg is not smoothed)."""
+        return self.length if self.smooth is None else polyline_length(self.smooth)
+
     def reversed(self) -> Leg:
         """The same leg travelled the other way."""
-        return Leg(self.to_id, self.from_id, self.points[::-1], self.method, self.length)
+        smooth = None if self.smooth is None else self.smooth[::-1]
+        return Leg(self.to_id, self.from_id, self.points[::-1], self.method, self.length, smooth)
 
     def to_dict(self) -> dict[str, Any]:
-        return {
+        d: dict[str, Any] = {
             "from": self.from_id,
             "to": self.to_id,
             "method": self.method,
             "length": self.length,
             "points": self.points.tolist(),
         }
+        if self.smooth is not None:
+            d["smooth"] = self.smooth.tolist()
+        return d
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> Leg:
         length = d.get("length")
+        smooth = d.get("smooth")
         return cls(
             d["from"],
             d["to"],
             np.asarray(d["points"], dtype=float),
             d.get("method", "straight"),
             float("nan") if length is None else float(length),
+            None if smooth is None else np.asarray(smooth, dtype=float),
         )
 
 
@@ -258,14 +287,28 @@ class Route:
         """Row of ``joint_id`` in :attr:`joint_xyz`."""
         return self.joint_ids.index(str(joint_id))
 
-    def waypoints(self) -> NDArray[np.float64]:
-        """``(m, 3)`` the whole route as one polyline (shared weld spots not repeated)."""
+    def waypoints(self, smooth: bool = False) -> NDArray[np.float64]:
+        """``(m, 3)`` the whole route as one polyline (shared weld spots not repeated).
+
+        ``smooth=True``: each leg's :attr:`Leg.path` (its smooth waypoints where it has them)
+        instead of its polyline.
+        """
         if not self.legs:
             if self.order:
                 return self.joint_xyz[[self.index_of(self.order[0])]]
             return np.zeros((0, 3))
-        parts = [self.legs[0].points] + [leg.points[1:] for leg in self.legs[1:]]
-        return np.concatenate(parts, axis=0)
+        pts = [leg.path if smooth else leg.points for leg in self.legs]
+        return np.concatenate([pts[0]] + [p[1:] for p in pts[1:]], axis=0)
+
+    @property
+    def has_smooth(self) -> bool:
+        """Whether any leg carries a smooth path (``weldplan plan --smooth``)."""
+        return any(leg.smooth is not None for leg in self.legs)
+
+    @property
+    def smooth_length(self) -> float:
+        """mm along the legs' :attr:`Leg.path` (smooth where smoothed, else the polyline)."""
+        return float(sum(leg.smooth_length for leg in self.legs))
 
     def table(self) -> list[dict[str, Any]]:
         """One dict per leg (step, from, to, method, via points, length mm) for display."""
