@@ -56,6 +56,21 @@ def add_planning_arguments(p: argparse.ArgumentParser, *, default_output: str | 
         "by FCL)",
     )
     p.add_argument(
+        "--smooth",
+        action="store_true",
+        help="give each leg a smooth path: a C2 curve between its virtual joints, checked at the "
+        "clearance and exported as dense waypoints (CSV/JSON kind 'smooth'; RAPID MoveL, KRL "
+        "SPLINE); a leg whose curve fails keeps its polyline and the summary says so",
+    )
+    p.add_argument(
+        "--smooth-spacing",
+        metavar="MM",
+        type=_positive_mm,
+        default=5.0,
+        help="with --smooth: largest spacing of the smooth waypoints, mm (default 5; denser "
+        "where a chord would cut into the clearance)",
+    )
+    p.add_argument(
         "--sequencer",
         default="auto",
         choices=("auto", "fast-tsp", "pso", "exact", "nn"),
@@ -113,6 +128,14 @@ def add_planning_arguments(p: argparse.ArgumentParser, *, default_output: str | 
     add_robot_arguments(p)
 
 
+def _positive_mm(text: str) -> float:
+    """argparse type: a positive, finite number of mm (:func:`weldplan.commands.demo.positive_mm`,
+    imported here because demo imports this module)."""
+    from weldplan.commands.demo import positive_mm
+
+    return positive_mm(text)
+
+
 def seed_type(text: str) -> int:
     """argparse type: an integer >= 0 (what numpy's ``default_rng`` takes)."""
     from weldplan.errors import ConfigError
@@ -160,6 +183,8 @@ def config_from_args(args: argparse.Namespace) -> Any:
         sequencer=args.sequencer,
         aco={"n_iterations": args.aco, "n_ants": args.aco},
         refine=not getattr(args, "no_refine", False),
+        smooth=bool(getattr(args, "smooth", False)),
+        smooth_spacing=getattr(args, "smooth_spacing", 5.0),
         candidates=getattr(args, "candidates", None),
         candidate_radius=getattr(args, "candidate_radius", None),
         skip_unreachable=bool(getattr(args, "skip_unreachable", False)),
@@ -354,8 +379,9 @@ def _plan(
             route = plan_route(cell, config=config, rng=args.seed, executor=executor, progress=bars)
         finally:
             bars.close()
-    for k in ("straight", "local", "sequence"):
-        times[k] = route.stats["seconds"][k]
+    for k in ("straight", "local", "sequence", "smooth"):
+        if k in route.stats["seconds"]:
+            times[k] = route.stats["seconds"][k]
     return cell, route
 
 
@@ -459,6 +485,35 @@ def _skipped_rows(route: Any) -> list[tuple[str, str]]:
     return rows
 
 
+def smooth_rows(route: Any) -> list[tuple[str, str]]:
+    """The smoothing's totals (``--smooth``), and one row per leg whose polyline was kept."""
+    sm = route.stats.get("smooth")
+    if not sm:
+        return []
+    c = sm["clearance"]
+    k = sm["max_curvature"]
+    line = (
+        f"{sm['smoothed']} of {sm['curved']} curved legs smoothed ({len(route.legs)} legs, "
+        f"{len(route.legs) - sm['curved']} straight between their virtual joints)"
+    )
+    if sm["smoothed"]:
+        radius = f", radius {1 / k:.2f} mm" if k > 0 else ""
+        m = sm["min_clearance_margin"]
+        line += (
+            f"; max curvature {k:.4f} 1/mm{radius}; min clearance {c + m:.3f}"
+            f" mm (margin {m:.3f} mm over {c:g}); smooth length "
+            f"{sm['length']:.2f} mm ({sm['length'] - route.length:+.2f}); spacing <= "
+            f"{sm['spacing']:g} mm"
+        )
+    rows = [("smooth", line)]
+    rows += [
+        (f"  leg {f['leg']}", f"{f['from_id']} -> {f['to_id']}: {f['status']}")
+        for f in sm["legs"]
+        if f["curved"] and not f["smoothed"]
+    ]
+    return rows
+
+
 def summary_table(
     route: Any,
     times: dict[str, float],
@@ -499,6 +554,7 @@ def summary_table(
         ("gap", _gaps(route)),
         ("order", "-".join(route.order)),
         *_skipped_rows(route),
+        *smooth_rows(route),
         ("verified", report.describe()),
         *(extra or []),
         (

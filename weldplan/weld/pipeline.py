@@ -194,6 +194,15 @@ class PlanConfig:
         by default, the best pipeline; False (``weldplan plan --no-refine``) plans the paper's
         SO-ACO as printed. It is passed to the planner as ``aco["refine"]`` (an explicit
         ``aco["refine"]`` wins).
+    smooth
+        After the route is built, give each leg a smooth path (:mod:`weldplan.weld.smoothing`:
+        a C2 curve between its virtual joints, exported as dense waypoints whose chords are
+        checked by FCL at the clearance); a leg whose curve fails keeps its polyline and
+        ``Route.stats["smooth"]`` says why. Off by default (``weldplan plan --smooth``): the
+        polyline stays the route the robot stages read.
+    smooth_spacing
+        mm, the largest spacing of the smooth waypoints along the curve (denser where a chord
+        would cut a bend into the clearance).
     """
 
     clearance: float = 5.0
@@ -219,6 +228,8 @@ class PlanConfig:
     gap_target: float | None = 0.01
     gap_rounds: int = 30
     refine: bool = True
+    smooth: bool = False
+    smooth_spacing: float = 5.0
 
     def __post_init__(self) -> None:
         from weldplan.weld.validate import check_config
@@ -374,6 +385,13 @@ def _plan(
         stats=_stats(work, seq, legs, bounds, seconds),
         provenance=dict(getattr(cell, "provenance", None) or {}),
     )
+    if config.smooth:
+        from weldplan.weld.smoothing import smooth_route
+
+        route = smooth_route(route, cell, spacing=config.smooth_spacing)
+        seconds["smooth"] = route.stats["smooth"]["seconds"]
+        seconds["total"] = time.perf_counter() - t_start
+        route.stats["seconds"] = {k: round(v, 6) for k, v in seconds.items()}
     log.info(
         "route %.2f mm (lower bound %.2f mm), %d pairs planned, %.2f s",
         route.length,

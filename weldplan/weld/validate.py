@@ -103,6 +103,7 @@ def check_config(c: Any) -> None:
     choice("pairs", c.pairs, ("lazy", "all"))
     put(c, "clearance", positive_mm("clearance", c.clearance))
     put(c, "pitch", positive_mm("pitch", c.pitch))
+    put(c, "smooth_spacing", positive_mm("smooth_spacing", c.smooth_spacing))
     if not (_is_real(c.margin) and math.isfinite(c.margin) and c.margin >= 0):
         raise ConfigError(f"margin must be >= 0 mm, got {c.margin!r}", field="margin")
     put(c, "margin", float(c.margin))
@@ -116,7 +117,7 @@ def check_config(c: Any) -> None:
         "candidate_radius",
         optional_positive("candidate_radius", c.candidate_radius, "mm", allow_inf=True),
     )
-    for name in ("polish", "warm_rounds", "known_first", "skip_unreachable", "refine"):
+    for name in ("polish", "warm_rounds", "known_first", "skip_unreachable", "refine", "smooth"):
         put(c, name, flag(name, getattr(c, name)))
     for name in ("local_time_budget", "sequence_time_budget"):
         put(c, name, optional_positive(name, getattr(c, name), "seconds"))
