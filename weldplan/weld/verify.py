@@ -119,10 +119,16 @@ class VerifyReport:
     def describe(self, limit: int = 5) -> str:
         """One line a user can act on (the first ``limit`` violations)."""
         if self.ok:
+            smooth = self.stats.get("smooth_segments")
             return (
                 f"route ok: {self.segments_checked} segments free at {self.clearance:g} mm "
                 f"clearance, {self.approach_segments} approaches within their cones, "
                 f"{self.joints_visited} joints visited once each"
+                + (
+                    f"; {smooth} segments of {self.stats['smooth_legs']} smooth legs free too"
+                    if smooth
+                    else ""
+                )
             )
         shown = "; ".join(str(v) for v in self.violations[:limit])
         more = len(self.violations) - limit
@@ -217,15 +223,18 @@ def check_provenance(route: Route, mesh: trimesh.Trimesh, clearance: float | Non
 
 
 def _inside_solids(
-    route: Route, solids: ClosedSolids, tol: float
+    route: Route, solids: ClosedSolids, tol: float, smooth: bool = False
 ) -> list[tuple[int, int, NDArray[np.float64]]]:
     """``(leg, segment, point)`` of each route point (but weld spots on the surface) that lies
-    inside a closed solid (trimesh ray parity: :meth:`ClosedSolids.contains`)."""
+    inside a closed solid (trimesh ray parity: :meth:`ClosedSolids.contains`); ``smooth``: of
+    the legs' smooth paths instead of their polylines."""
     if len(solids) == 0:
         return []
     pts, where = [], []
     for k, leg in enumerate(route.legs):
-        P = leg.points
+        if smooth and leg.smooth is None:
+            continue
+        P = leg.smooth if smooth else leg.points
         if not (np.all(np.isfinite(P)) and np.abs(P).max() <= MAX_COORD_MM):
             continue
         first = 0 if route.is_virtual(leg.from_id, P[0], tol) else 1
@@ -341,6 +350,8 @@ def verify_route(
     failed = _collisions(model, pieces, clearance)
     violations += _collision_violations(route, failed)
     violations += _inside_violations(route, model, failed)
+    smooth = _smooth_paths(route, model, clearance, approach_pieces_per_segment)
+    violations += smooth[0]
     report = VerifyReport(
         ok=not violations,
         violations=tuple(violations),
@@ -348,9 +359,57 @@ def verify_route(
         segments_checked=len(pieces.mid_a),
         approach_segments=len(set(pieces.app_where)),
         joints_visited=sum(1 for jid in route.joint_ids if counts.get(jid, 0) == 1),
+        stats=smooth[1],
     )
     log.info("%s", report.describe())
     return report
+
+
+class _SmoothView:
+    """A leg seen through its smooth path (what :class:`_LegPieces` reads of a leg)."""
+
+    def __init__(self, leg: Any) -> None:
+        self.points = leg.smooth
+        self.from_id = leg.from_id
+        self.to_id = leg.to_id
+
+
+def _smooth_paths(
+    route: Route, model: CollisionModel, clearance: float, n_pieces: int
+) -> tuple[list[Violation], dict[str, Any]]:
+    """The legs' smooth paths (``weldplan plan --smooth``), checked as their polylines are: each
+    chord between dense waypoints at the full clearance with python-fcl, the approach segments
+    as cones, the ends on the weld spots, no point inside a closed solid. Violations are of
+    kind ``"smooth"``, their segment numbered along the smooth path."""
+    legs = [k for k, leg in enumerate(route.legs) if leg.smooth is not None]
+    if not legs:
+        return [], {}
+    pieces = _LegPieces()
+    found: list[Violation] = []
+    for k in legs:
+        found += pieces.add(route, k, _SmoothView(route.legs[k]), clearance, n_pieces)
+    failed = _collisions(model, pieces, clearance)
+    found += _collision_violations(route, failed)
+    out = []
+    for k, seg, p in _inside_solids(route, ClosedSolids.of(model.mesh), ENDPOINT_TOL_MM, True):
+        if (k, seg) not in failed:
+            failed[(k, seg)] = "inside"
+            msg = f"the point {np.round(p, 3).tolist()} lies inside a closed solid of the part"
+            found.append(Violation("inside", msg, k, seg))
+    for v in found:
+        leg = route.legs[v.leg] if v.leg is not None else None
+        out.append(
+            Violation(
+                "smooth",
+                f"smooth path: {v.message}",
+                v.leg,
+                v.segment,
+                None if leg is None else leg.from_id,
+                None if leg is None else leg.to_id,
+            )
+        )
+    stats = {"smooth_legs": len(legs), "smooth_segments": len(pieces.mid_a)}
+    return out, stats
 
 
 def _joint_table(route: Route, joints: Any) -> list[Violation]:
