@@ -12,7 +12,11 @@ CSV layout (one row per waypoint, in travel order)::
     ...
 
 ``kind`` is ``weld`` at a weld spot and ``via`` at a waypoint between spots (virtual joints and
-local-path points); ``tool_*`` is the joint's unit approach direction as the joints CSV gave it
+local-path points); on a leg with a smooth path (``weldplan plan --smooth``,
+:mod:`weldplan.weld.smoothing`) the waypoints between its two virtual joints are the dense
+points of its C2 curve instead of the polyline's vias, of kind ``smooth`` (every chord between
+them checked at the clearance, at most ``--smooth-spacing`` mm apart); ``tool_*`` is the
+joint's unit approach direction as the joints CSV gave it
 (columns ``nx, ny, nz``: from the weld spot towards the side the torch comes from), empty where
 the CSV gave none and always on via rows. Coordinates are mm. A route planned with a tool
 (``weldplan plan --tool``) has five more columns, ``qw,qx,qy,qz,status``: the TCP orientation
@@ -51,6 +55,7 @@ from numpy.typing import NDArray
 
 from weldplan.errors import InputError, WeldplanError
 from weldplan.io.blending import allowed_radii, krl_cdis, rapid_zone, route_clearance
+from weldplan.io.smooth_moves import krl_smooth_note, smooth_header, spline_rows
 from weldplan.weld.route import Route
 
 log = logging.getLogger(__name__)
@@ -99,10 +104,12 @@ def write_text_atomic(path: str | PathLike[str], text: str, *, encoding: str = "
 
 
 # ---------------------------------------------------------------------------- rows
-def route_rows(route: Route) -> list[dict[str, Any]]:
+def route_rows(route: Route, smooth: bool = False) -> list[dict[str, Any]]:
     """The route as waypoint rows (see the module docstring), in travel order.
 
-    Weld spots shared by consecutive legs appear once.
+    Weld spots shared by consecutive legs appear once. ``smooth=True``: the legs' smooth paths
+    where they have one (rows of kind ``smooth`` between the virtual joints), as the exports
+    write them; False (default): the polylines, the rows of :meth:`Route.waypoints`.
     """
     rows: list[dict[str, Any]] = []
 
@@ -129,10 +136,27 @@ def route_rows(route: Route) -> list[dict[str, Any]]:
     first = route.legs[0]
     add("weld", first.from_id, first.points[0])
     for leg in route.legs:
-        for p in leg.points[1:-1]:
-            add("via", "", p)
+        vias = leg.points[1:-1]
+        for p in (leg.path if smooth else leg.points)[1:-1]:
+            on_polyline = leg.smooth is None or not smooth or bool(np.all(vias == p, axis=1).any())
+            add("via" if on_polyline else "smooth", "", p)
         add("weld", leg.to_id, leg.points[-1])
     return rows
+
+
+def travel_route(route: Route) -> Route:
+    """``route`` with each leg's polyline replaced by its :attr:`~weldplan.weld.route.Leg.path`
+    (its smooth path where it has one): the route whose :meth:`Route.waypoints` are the rows of
+    ``route_rows(route, smooth=True)``. ``route`` itself when no leg is smoothed."""
+    if not route.has_smooth:
+        return route
+    import dataclasses
+
+    legs = tuple(
+        dataclasses.replace(leg, points=leg.path, smooth=None, length=float("nan"))
+        for leg in route.legs
+    )
+    return dataclasses.replace(route, legs=legs)
 
 
 def to_csv_text(route: Route) -> str:
@@ -143,16 +167,16 @@ def to_csv_text(route: Route) -> str:
     (:func:`weldplan.tool.route_frames.waypoint_quaternions`; empty at a weld without a pose)
     and, on weld rows, the weld's status (``ok`` or ``no free pose``).
     """
-    rows = route_rows(route)
+    rows = route_rows(route, smooth=True)
     quats, status = None, None
     if route.tool.get("poses"):
         from weldplan.tool.route_frames import route_poses, waypoint_quaternions, weld_rows
 
         poses = route_poses(route)
         assert poses is not None
-        quats = waypoint_quaternions(route, poses)
+        quats = waypoint_quaternions(travel_route(route), poses)
         status = [""] * len(rows)
-        for i, r in enumerate(weld_rows(route)):
+        for i, r in enumerate(weld_rows(travel_route(route))):
             status[int(r)] = poses.poses[i].status
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
@@ -264,7 +288,7 @@ def _program_rows(route: Route) -> list[dict[str, Any]]:
     joint, the approach point of the first weld, and ends by retreating to the last virtual
     joint; both points are already on the verified route.
     """
-    rows = route_rows(route)
+    rows = route_rows(route, smooth=True)
     if not route.legs:
         return rows
     first, last = route.legs[0].points[1], route.legs[-1].points[-2]
@@ -364,7 +388,7 @@ def _blend_radii(route: Route, rows: list[dict[str, Any]], part: Any, clearance:
     """``(n,)`` allowed blend radius (mm) per program row: vias only (:mod:`.blending`)."""
     c = route_clearance(route, clearance)
     pts = np.array([[float(r[k]) for k in ("x", "y", "z")] for r in rows]).reshape(-1, 3)
-    return allowed_radii(pts, [r["kind"] == "via" for r in rows], part, c), c
+    return allowed_radii(pts, [r["kind"] in ("via", "smooth") for r in rows], part, c), c
 
 
 def _name(path_stem: str, default: str) -> str:
@@ -411,7 +435,7 @@ def render_rapid(
     rapid_zone(0.0, zone)  # validates ``zone`` even where no corner blends
     radii, c = _blend_radii(route, rows, part, clearance)
     zones = [rapid_zone(float(r), zone) if r > 0 else "fine" for r in radii]
-    n_via = sum(r["kind"] == "via" for r in rows)
+    n_via = sum(r["kind"] in ("via", "smooth") for r in rows)
     n_fly = sum(z != "fine" for z in zones)
     out = [
         f"MODULE {module}",
@@ -422,6 +446,7 @@ def render_rapid(
         f"    ! Zones: a via point flies by with the largest zonedata up to {zone} whose radius is",
         f"    ! within its free margin (distance to the part - {c:g} mm clearance) and half of",
         f"    ! each adjacent segment, else fine: {n_fly} of {n_via} via points fly by.",
+        *smooth_header(route, rows, "    ! ", "dense MoveL targets (RAPID has no spline move)"),
     ]
     names = []
     for r, R in zip(rows, frames, strict=True):
@@ -460,8 +485,18 @@ def render_krl(
     tool: int = 1,
     base: int = 1,
     vel_cp: float = 0.2,
+    smooth: str = "spline",
 ) -> str:
     """A KUKA KRL ``.src``: ``PTP`` to the first weld's approach point, then ``LIN`` moves.
+
+    A leg with a smooth path (``weldplan plan --smooth``) runs from its first virtual joint
+    through its dense waypoints as one ``SPLINE`` block of ``SPL`` points (``smooth="spline"``,
+    the default) ending on its second virtual joint, or as ``LIN`` moves along the checked
+    chords (``smooth="lin"``). The controller's spline through the waypoints is its own
+    interpolation, not the C2 curve weldplan checked; a block is written only where every chord
+    is free at the clearance plus twice the sagitta of the circle through its neighbouring
+    waypoints (an estimate of how far a spline through them bulges off the chord, not a
+    proof), else that leg's waypoints are ``LIN`` moves; the header counts both.
 
     Frames are ``{X, Y, Z, A, B, C}`` in mm and degrees (``A, B, C`` = Z-Y-X Euler angles of the
     tool frame, see :func:`euler_zyx_deg`). A via point uses ``C_DIS`` approximation with its own
@@ -477,7 +512,10 @@ def render_krl(
     krl_cdis(0.0, cdis)  # validates ``cdis`` even where no corner blends
     radii, c = _blend_radii(route, rows, part, clearance)
     cd = [krl_cdis(float(r), cdis) for r in radii]
-    n_via = sum(r["kind"] == "via" for r in rows)
+    spl = spline_rows(rows, part, c) if smooth == "spline" else np.zeros(len(rows), dtype=bool)
+    if smooth not in ("spline", "lin"):
+        raise WeldplanError(f"smooth must be 'spline' or 'lin', got {smooth!r}")
+    n_via = sum(r["kind"] in ("via", "smooth") for r in rows)
     out = [
         f"DEF {program}()",
         "  ; Generated by weldplan: an ordered, collision-checked torch route.",
@@ -488,6 +526,7 @@ def render_krl(
         f"  ; within its free margin (distance to the part - {c:g} mm clearance) and half of each",
         f"  ; adjacent segment, else an exact stop: {sum(v > 0 for v in cd)} of {n_via} via "
         "points approximated.",
+        *smooth_header(route, rows, "  ; ", krl_smooth_note(smooth, spl)),
         f"  $VEL.CP = {vel_cp}",
     ]
     current = None
@@ -498,7 +537,13 @@ def render_krl(
             "{" + ", ".join(f"{n} {_fmt(v, 3)}" for n, v in zip("XYZABC", vals, strict=True)) + "}"
         )
         move = "PTP" if k == 0 else "LIN"
-        if r["kind"] == "weld":
+        if spl[k]:
+            if not spl[k - 1]:
+                out.append("  SPLINE")
+            out.append(f"    SPL {frame}")
+            if k + 1 == len(spl) or not spl[k + 1]:
+                out.append("  ENDSPLINE")
+        elif r["kind"] == "weld":
             out.append(f"  {move} {frame} ; weld joint {r['joint_id']}")
         elif cd[k] > 0:
             if cd[k] != current:
