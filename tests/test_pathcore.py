@@ -13,9 +13,11 @@ from weldplan.geometry.obstacles2d import Obstacles2D
 from weldplan.geometry.pathcore import (
     PathObstacle,
     arc_lengths,
+    at_fractions,
     point_at,
     polyline_length,
     resample_count,
+    resample_even,
     split_segments,
 )
 from weldplan.geometry.pathmetrics import path_length
@@ -149,3 +151,25 @@ def test_a_curve_that_cuts_into_an_obstacle_is_reported() -> None:
     # and the report is sound: dense samples of the curve confirm it
     u = np.linspace(0.0, 1.0, 20001)
     assert disc.distance(np.asarray(sm.spline(u))).min() < 0.25
+
+
+@given(st.lists(st.tuples(coords, coords), min_size=2, max_size=12), st.integers(2, 40))
+def test_at_fractions_and_resample_even_are_the_planar_formulas_bit_for_bit(pts, n) -> None:
+    # the copies these replaced (planar/homology, planar/encodings, planar/solve), verbatim
+    P = np.array(pts, dtype=float)
+    s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(P, axis=0), axis=1))])
+    t = np.linspace(0.0, s[-1], n)
+    old = np.stack([np.interp(t, s, P[:, 0]), np.interp(t, s, P[:, 1])], axis=1)
+    assert np.array_equal(resample_even(P, n), old)
+    q = np.random.default_rng(n).uniform(0.0, 1.0, (3, 5))
+    at = q * s[-1]
+    old = np.stack([np.interp(at, s, P[:, 0]), np.interp(at, s, P[:, 1])], -1)
+    assert np.array_equal(at_fractions(P, q), old)
+    assert np.array_equal(at_fractions(P, [0.0, 1.0]), P[[0, -1]])
+
+
+def test_resample_even_spaces_points_evenly_in_3d() -> None:
+    P = np.array([[0.0, 0.0, 0.0], [3.0, 0.0, 0.0], [3.0, 4.0, 0.0], [3.0, 4.0, 12.0]])
+    R = resample_even(P, 20)
+    assert np.array_equal(R[[0, -1]], P[[0, -1]])
+    assert np.allclose(np.diff(arc_lengths(R)), 1.0)

@@ -34,9 +34,11 @@ __all__ = [
     "PathObstacle",
     "arc_lengths",
     "as_path",
+    "at_fractions",
     "point_at",
     "polyline_length",
     "resample_count",
+    "resample_even",
     "segment_free",
     "split_segments",
 ]
@@ -116,6 +118,43 @@ def point_at(points: ArrayLike, s: ArrayLike) -> FloatArray:
     exact = np.isclose(t, 1.0, rtol=0.0, atol=0.0)
     out[exact] = P[k[exact] + 1]
     return out
+
+
+def _norm_arc_lengths(P: FloatArray) -> FloatArray:
+    """Cumulative arc length of ``P (n, d)`` with :func:`numpy.linalg.norm` in every dimension
+    (see :func:`at_fractions`)."""
+    return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(P, axis=0), axis=1))])
+
+
+def _interp(P: FloatArray, S: FloatArray, s: FloatArray) -> FloatArray:
+    """Each coordinate of ``P`` interpolated at arc lengths ``s (...)`` (:func:`numpy.interp`,
+    clamped to the ends): ``(..., d)``."""
+    return np.stack([np.interp(s, S, P[:, i]) for i in range(P.shape[1])], axis=-1)
+
+
+def at_fractions(points: ArrayLike, q: ArrayLike) -> FloatArray:
+    """Points at the fractions ``q`` (any shape ``(...)``, in ``[0, 1]``) of the arc length of
+    ``points (n, d)``: ``(..., d)``, each coordinate interpolated with :func:`numpy.interp`.
+
+    This is how the planar encodings seed nodes along a path (roadmap seeding, the spline
+    encoding's optimum). The arc length here is summed from :func:`numpy.linalg.norm` of each
+    segment in every dimension, as those callers always did; :func:`arc_lengths` uses
+    :func:`~weldplan.geometry.pathmetrics.segment_lengths`, whose 2D fast path (``hypot``)
+    differs from it in the last bit on about one segment in six, so the two are kept apart to
+    keep the planar planners' seeded outputs bit for bit. :func:`point_at` rounds differently
+    again (it returns a vertex exactly at its own arc length).
+    """
+    P = np.asarray(points, dtype=np.float64)
+    S = _norm_arc_lengths(P)
+    return _interp(P, S, np.asarray(q, dtype=np.float64) * S[-1])
+
+
+def resample_even(points: ArrayLike, n: int) -> FloatArray:
+    """``n`` points at even arc-length steps along ``points (k, d)``, both ends included (the
+    arc length and interpolation of :func:`at_fractions`)."""
+    P = np.asarray(points, dtype=np.float64)
+    S = _norm_arc_lengths(P)
+    return _interp(P, S, np.linspace(0.0, S[-1], int(n)))
 
 
 def split_segments(points: ArrayLike, step: float) -> FloatArray:

@@ -25,6 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from weldplan.errors import WeldplanError
 from weldplan.geometry.obstacles2d import Obstacles2D
+from weldplan.geometry.pathcore import at_fractions
 from weldplan.geometry.pathmetrics import PathMetrics, measure, path_length, smoothness
 from weldplan.geometry.splines import N_INTERP, cubic_spline_path
 from weldplan.optim.core import Problem
@@ -123,12 +124,9 @@ class PathProblem(Problem):
             return X
         if k == 0:
             return X
-        seg = np.linalg.norm(np.diff(path, axis=0), axis=1)
-        cum = np.concatenate([[0.0], np.cumsum(seg)])
         m = self.n_seed_nodes
         q = (np.arange(1, m + 1) + rng.uniform(-0.5, 0.5, (k, m))) / (m + 1)
-        at = q * cum[-1]
-        nodes = np.stack([np.interp(at, cum, path[:, 0]), np.interp(at, cum, path[:, 1])], -1)
+        nodes = at_fractions(path, q)
         nodes += rng.normal(0.0, ROADMAP_CELL, nodes.shape)
         X[:k] = np.clip(self.encode_nodes(nodes, path, rng), self.lower, self.upper)
         return X

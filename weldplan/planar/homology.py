@@ -12,6 +12,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from weldplan.geometry.obstacles2d import Obstacles2D
+from weldplan.geometry.pathcore import resample_even
 from weldplan.geometry.primitives2d import segments_touch
 from weldplan.optim.algorithms.parapa import CrossFunction
 from weldplan.planar.encodings import SegmentPathProblem
@@ -87,15 +88,10 @@ def path_crossings(A: ArrayLike, B: ArrayLike) -> NDArray[np.int64]:
 def hausdorff(a: ArrayLike, b: ArrayLike, samples: int = HAUSDORFF_SAMPLES) -> float:
     """Symmetric Hausdorff distance between two polylines sampled at ``samples`` points each
     by arc length (map units; reported, not used for decisions)."""
-    pa, pb = _resample(np.asarray(a, float), samples), _resample(np.asarray(b, float), samples)
+    pa = resample_even(np.asarray(a, float), samples)
+    pb = resample_even(np.asarray(b, float), samples)
     d = np.linalg.norm(pa[:, None] - pb[None], axis=-1)
     return float(max(d.min(axis=1).max(), d.min(axis=0).max()))
-
-
-def _resample(p: FloatArray, n: int) -> FloatArray:
-    s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))])
-    t = np.linspace(0.0, s[-1], n)
-    return np.stack([np.interp(t, s, p[:, 0]), np.interp(t, s, p[:, 1])], axis=1)
 
 
 def crossing_cross(problem: SegmentPathProblem) -> CrossFunction:

@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from weldplan.geometry.pathcore import at_fractions
 from weldplan.geometry.pathmetrics import measure
 from weldplan.optim.core import minimize
 from weldplan.optim.registry import get_optimizer
@@ -119,7 +120,6 @@ def spline_encoding_optimum(
         return _EXACT_CACHE[key].length
     prob = make_problem(scenario, "spline")
     pts = exact_optimum(scenario, "spline").points_array
-    cum = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
     gen = as_generator(rng)
     m = prob.n_var // 2
     fracs = [
@@ -133,8 +133,7 @@ def spline_encoding_optimum(
 
     best = np.inf
     for q in fracs:
-        at = q * cum[-1]
-        x0 = np.stack([np.interp(at, cum, pts[:, 0]), np.interp(at, cum, pts[:, 1])], -1)
+        x0 = at_fractions(pts, q)
         x = x0.ravel()
         for _ in range(2):  # one restart: Nelder-Mead's simplex collapses early on eq. 10
             opts = {"maxiter": max_iter, "xatol": 1e-7, "fatol": 1e-9}
