@@ -65,7 +65,7 @@ def add_planning_arguments(p: argparse.ArgumentParser, *, default_output: str | 
     p.add_argument(
         "--smooth-spacing",
         metavar="MM",
-        type=_positive_mm,
+        type=positive_mm,
         default=5.0,
         help="with --smooth: largest spacing of the smooth waypoints, mm (default 5; denser "
         "where a chord would cut into the clearance)",
@@ -128,12 +128,15 @@ def add_planning_arguments(p: argparse.ArgumentParser, *, default_output: str | 
     add_robot_arguments(p)
 
 
-def _positive_mm(text: str) -> float:
-    """argparse type: a positive, finite number of mm (:func:`weldplan.commands.demo.positive_mm`,
-    imported here because demo imports this module)."""
-    from weldplan.commands.demo import positive_mm
-
-    return positive_mm(text)
+def positive_mm(text: str) -> float:
+    """argparse type: a positive, finite number of millimetres."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (value > 0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"must be a positive number of mm, got {text!r}")
+    return value
 
 
 def seed_type(text: str) -> int:

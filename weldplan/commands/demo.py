@@ -4,20 +4,13 @@ from __future__ import annotations
 
 import argparse
 
-from weldplan.commands._planning import add_planning_arguments, run_planning
+from weldplan.commands._planning import (  # positive_mm: also imported from here by plan, verify
+    add_planning_arguments,
+    positive_mm,
+    run_planning,
+)
 
 HELP = "plan, verify and export the embedded demo cell (15 joints of Wang et al. 2017)"
-
-
-def positive_mm(text: str) -> float:
-    """argparse type: a positive, finite number of millimetres."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not (value > 0 and value < float("inf")):
-        raise argparse.ArgumentTypeError(f"must be a positive number of mm, got {text!r}")
-    return value
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
