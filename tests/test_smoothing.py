@@ -14,6 +14,7 @@ from tests.cli_helpers import one_line_error, run_cli
 from tests.route_fixtures import CLEARANCE, VIRTUAL, box_part, box_route, write_box_station
 from weldplan.errors import ConfigError
 from weldplan.geometry.collision import CollisionModel
+from weldplan.geometry.smooth import smooth_path
 from weldplan.io.export import read_route, render_post, route_rows, to_csv_text, write_json
 from weldplan.weld.pipeline import PlanConfig
 from weldplan.weld.smoothing import smooth_leg, smooth_route
@@ -168,3 +169,19 @@ def test_cli_plan_smooth_then_verify(tmp_path, capsys) -> None:
     assert len(smoothed) == figs["smoothed"]
     assert run_cli(["verify", str(js), str(mesh)]) == 0
     assert "route ok" in capsys.readouterr().out
+
+
+def test_the_least_curved_of_the_parameterisations_is_kept() -> None:
+    # a very short segment (0.14 mm, as the refinement leaves on car2) kinks the centripetal
+    # curve; the chord-length curve through the same points bends far less
+    far = trimesh.creation.box(extents=[1.0, 1.0, 1.0])
+    far.apply_translation([0.0, 0.0, 500.0])
+    m = CollisionModel(far)
+    mid = np.array(
+        [[0.0, 0, 0], [20.0, 0, 0], [43.8, 3.0, 0], [43.94, 3.02, 0], [53.6, 4.0, 0], [100, 10, 0]]
+    )
+    W, fig = smooth_leg(mid, m, 5.0)
+    assert W is not None and fig["smoothed"]
+    kappas = {a: smooth_path(mid, m, 5.0, alpha=a).max_curvature for a in (0.5, 1.0)}
+    assert fig["max_curvature"] == min(kappas.values())
+    assert kappas[1.0] < kappas[0.5]
