@@ -38,11 +38,12 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from weldplan.errors import ConfigError
+from weldplan.errors import ConfigError, PlanningError
 
 log = logging.getLogger(__name__)
 
@@ -201,6 +202,76 @@ def leg_times(
         float(bound[np.triu_indices(n, 1)].mean()) if n > 1 else 0.0,
     )
     return LegTimes(cost, bound, wt, served, b0)
+
+
+def weld_flange_poses(poses: Any, joint_ids: tuple[str, ...], flange_tcp: ArrayLike) -> NDArray:
+    """``(n, 4, 4)`` mm: the flange pose at each weld ``joint_ids`` of the
+    :class:`~weldplan.tool.result.WeldPoses` ``poses``; NaN where the weld has no free pose."""
+    inv = np.linalg.inv(np.asarray(flange_tcp, dtype=np.float64).reshape(4, 4))
+    T = np.full((len(joint_ids), 4, 4), np.nan)
+    for k, jid in enumerate(joint_ids):
+        p = poses[str(jid)]
+        if p.ok:
+            Tk = np.eye(4)
+            Tk[:3, :3] = p.rotation()
+            Tk[:3, 3] = p.position
+            T[k] = Tk @ inv
+    return T
+
+
+def cell_leg_times(
+    cell: Any,
+    tool: Any,
+    robot: Any,
+    flange_tcp: ArrayLike,
+    *,
+    weld_time: float = 0.0,
+    velocity_scale: float = 1.0,
+    acceleration_scale: float = 1.0,
+    search: Any = None,
+    **pose_options: Any,
+) -> tuple[LegTimes, Any]:
+    """Leg times between every pair of the cell's welds, before any order exists.
+
+    The weld poses are planned once per weld (:func:`weldplan.tool.plan_weld_poses` over the
+    cell's joints; a weld's pose does not depend on the order, ``pose_options`` are its
+    options); the robot stays at its base, or, with ``search``
+    (:class:`~weldplan.robot.reach.BaseSearch`), is placed at the best base for those poses
+    (:func:`weldplan.robot.reach.search_base`).
+
+    Returns
+    -------
+    (LegTimes, Robot)
+        Over ``cell.joints.ids`` in file order; the robot as placed (keep it for the robot
+        route, so the times are of the same base).
+
+    Raises
+    ------
+    PlanningError
+        No weld has a free tool pose, or the robot serves none of them.
+    """
+    from weldplan.robot.reach import search_base
+    from weldplan.tool import plan_weld_poses
+
+    poses = plan_weld_poses(cell, None, tool, **pose_options)
+    T = weld_flange_poses(poses, tuple(str(i) for i in cell.joints.ids), flange_tcp)
+    has = np.all(np.isfinite(T), axis=(1, 2))
+    if not has.any():
+        raise PlanningError("--cost time: no weld has a collision-free tool pose")
+    if search is not None:
+        best = search_base(robot, T[has], cell.part, search)[0]
+        robot = robot.with_base(best.base)  # type: ignore[attr-defined]
+        log.info("leg times: base searched from the weld poses: %s", best.xyz_yaw())
+    configs = weld_configurations(robot, T)
+    if not configs.served.any():
+        raise PlanningError("--cost time: the robot serves none of the welds from its base")
+    legs = leg_times(
+        configs,
+        np.asarray(robot.velocity) * velocity_scale,  # type: ignore[attr-defined]
+        np.asarray(robot.acceleration) * acceleration_scale,  # type: ignore[attr-defined]
+        weld_time=weld_time,
+    )
+    return legs, robot
 
 
 #: Held-Karp for the time bound up to this many welds, else the 1-tree bound (as the pipeline's
