@@ -275,6 +275,7 @@ def run_planning(
         times["robot"] = st.seconds
         extra_rows += stage.rows
         texts = stage.texts
+        route = stage.route  # with the robot route, for the JSON
         robot_partial = bool(stage.skipped)
 
     with bars.stage("export") as st:

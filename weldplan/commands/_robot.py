@@ -163,6 +163,7 @@ class RobotStage:
     texts: dict[str, str]
     rows: list[tuple[str, str]]
     skipped: tuple[str, ...] = ()
+    route: Any = None  # the route carrying the robot route (route.tool["robot"])
 
 
 def robot_stage(
@@ -229,7 +230,12 @@ def robot_stage(
             route_points=route.waypoints(),
         )  # fmt: skip
     rows = _rows(rr, build) + cost_rows(route, build.timing.total)
-    return RobotStage(rr, build, texts, rows, tuple(build.skipped))
+    from weldplan.robot.routejson import _poses_contact_radius, attach_robot_route
+
+    route = attach_robot_route(
+        route, rr, urdf=args.robot, contact_radius=_poses_contact_radius(route)
+    )
+    return RobotStage(rr, build, texts, rows, tuple(build.skipped), route)
 
 
 def _texts(args: argparse.Namespace, build: Any, rr: Any, rb: Any, outputs: dict) -> dict:
