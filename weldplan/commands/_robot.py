@@ -174,6 +174,7 @@ def robot_stage(
     from weldplan.robot.plan import plan_robot_route
     from weldplan.robot.program import robot_program
     from weldplan.robot.reach import BaseSearch
+    from weldplan.robot.routejson import attach_robot_route, poses_contact_radius
     from weldplan.tool.route_frames import route_poses
 
     poses = route_poses(route)
@@ -218,6 +219,8 @@ def robot_stage(
         weld_time=args.weld_time,
         tcp_speed=args.tcp_speed,
         name=stem,
+        tool=tool,
+        contact_radius=poses_contact_radius(route),
     )
     if len(build.skipped) == len(rr.weld_ids):
         raise PlanningError(f"the robot serves none of the welds ({', '.join(rr.status)})")
@@ -230,10 +233,8 @@ def robot_stage(
             route_points=route.waypoints(),
         )  # fmt: skip
     rows = _rows(rr, build) + cost_rows(route, build.timing.total)
-    from weldplan.robot.routejson import _poses_contact_radius, attach_robot_route
-
     route = attach_robot_route(
-        route, rr, urdf=args.robot, contact_radius=_poses_contact_radius(route)
+        route, rr, urdf=args.robot, contact_radius=poses_contact_radius(route)
     )
     return RobotStage(rr, build, texts, rows, tuple(build.skipped), route)
 

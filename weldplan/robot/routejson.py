@@ -159,7 +159,7 @@ def verify_robot_route(
     )
     if contact_radius is None:
         stored = (route.tool or {}).get("robot", {}).get("contact_radius")
-        contact_radius = stored if stored is not None else _poses_contact_radius(route)
+        contact_radius = stored if stored is not None else poses_contact_radius(route)
     checker = RobotCollision(rb, part, tool, rr.flange_tcp, contact_radius=float(contact_radius))
     zone = np.ones(max(len(rr.q) - 1, 0), dtype=bool)  # as the robot route was checked
     hits = checker.path_hits(rr.q, zone)
@@ -175,7 +175,7 @@ def verify_robot_route(
     )
 
 
-def _poses_contact_radius(route: Any) -> float:
+def poses_contact_radius(route: Any) -> float:
     from weldplan.tool.poses import DEFAULT_CONTACT_RADIUS
 
     poses = (route.tool or {}).get("poses") or {}
