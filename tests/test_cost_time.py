@@ -156,3 +156,28 @@ def test_cost_time_beats_cost_length_on_the_timed_cycle():
     # the proved bound sits below both timed cycles, in the same unit (s)
     assert st["time_bound"] <= t_time and st["time_bound"] <= t_len
     assert st["time_bound"] <= st["time_cost"]
+
+
+def test_leg_times_are_the_least_bound_over_configurations_pair_by_pair():
+    """Random configuration sets (seeded) against a plain double loop; a weld without any
+    configuration costs 0 s to and from it; ``cost`` (station branch) is never below ``bound``."""
+    from weldplan.robot.legtime import WeldConfigurations, leg_times
+
+    rng = np.random.default_rng(5)
+    n, K = 5, 6
+    Q = rng.uniform(-2.0, 2.0, (n, K, 6))
+    branch = rng.integers(0, 2, (n, K))
+    valid = rng.random((n, K)) < 0.6
+    valid[3] = False
+    legs = leg_times(WeldConfigurations(Q, branch, valid), V, A, weld_time=0.3)
+    for i in range(n):
+        for j in range(n):
+            pairs = [
+                float(rest_to_rest_bound(Q[j, b] - Q[i, a], V, A))
+                for a in np.flatnonzero(valid[i])
+                for b in np.flatnonzero(valid[j])
+            ]
+            want = 0.0 if i == j or not pairs else min(pairs)
+            assert legs.bound[i, j] == pytest.approx(want, abs=1e-12)
+    assert np.all(legs.cost >= legs.bound - 1e-12)
+    assert not legs.served[3] and legs.order_time([3, 0]) == pytest.approx(0.3)

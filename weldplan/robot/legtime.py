@@ -150,11 +150,34 @@ def weld_configurations(
     return WeldConfigurations(Q, branch, valid)
 
 
-def _pair_min(Qa: NDArray, Qb: NDArray, v: NDArray, a: NDArray) -> float:
-    """s: the least :func:`rest_to_rest_bound` over every pair of rows of ``Qa``, ``Qb``."""
-    if not len(Qa) or not len(Qb):
-        return np.inf
-    return float(rest_to_rest_bound(Qb[None] - Qa[:, None], v, a).min())
+#: configurations compared per chunk in :func:`_min_matrix` (bounds its memory)
+CHUNK_ELEMENTS = 2_000_000
+
+
+def _min_matrix(
+    Q: NDArray, valid: NDArray[np.bool_], v: NDArray, a: NDArray
+) -> NDArray[np.float64]:
+    """``(n, n)`` s: for every pair of welds the least :func:`rest_to_rest_bound` over their
+    valid configurations ``Q (n, K, 6)`` / ``valid (n, K)``; ``inf`` where either has none."""
+    n, K = valid.shape
+    keep = np.flatnonzero(valid.any(axis=0))  # columns some weld uses
+    Q, valid = Q[:, keep], valid[:, keep]
+    K = len(keep)
+    out = np.full((n, n), np.inf)
+    if K == 0:
+        return out
+    step = max(1, CHUNK_ELEMENTS // max(1, K * K * 6))
+    for i in range(n):
+        Qi = Q[i, valid[i]]  # (ki, 6)
+        if not len(Qi):
+            continue
+        for j0 in range(0, n, step):
+            Qj = Q[j0 : j0 + step]  # (c, K, 6)
+            t = rest_to_rest_bound(Qj[:, None] - Qi[None, :, None], v, a)  # (c, ki, K)
+            t = np.where(valid[j0 : j0 + step, None, :], t, np.inf)
+            out[i, j0 : j0 + step] = t.min(axis=(1, 2))
+    np.fill_diagonal(out, 0.0)
+    return out
 
 
 def leg_times(
@@ -180,19 +203,13 @@ def leg_times(
     wt = check_weld_time(weld_time)
     v = np.asarray(velocity, dtype=np.float64)
     a = np.asarray(acceleration, dtype=np.float64)
-    n = len(configs.q)
     b0 = configs.station_branch()
-    sets = [configs.q[i, configs.valid[i]] for i in range(n)]
-    on = [configs.q[i, configs.valid[i] & (configs.branch[i] == b0)] for i in range(n)]
-    bound = np.zeros((n, n))
-    cost = np.zeros((n, n))
-    for i in range(n):
-        for j in range(i + 1, n):
-            lb = _pair_min(sets[i], sets[j], v, a)
-            c = _pair_min(on[i], on[j], v, a)
-            lb = 0.0 if not np.isfinite(lb) else lb
-            bound[i, j] = bound[j, i] = lb
-            cost[i, j] = cost[j, i] = c if np.isfinite(c) else lb
+    bound = _min_matrix(configs.q, configs.valid, v, a)
+    bound[~np.isfinite(bound)] = 0.0  # a weld without configuration: 0 s is all that holds
+    on = configs.valid & (configs.branch == b0)
+    cost = _min_matrix(configs.q, on, v, a)
+    cost = np.where(np.isfinite(cost), cost, bound)
+    n = len(configs.q)
     served = configs.served
     log.info(
         "leg times: %d welds, %d served, station branch %d, mean leg bound %.3f s",
