@@ -159,10 +159,12 @@ def _min_matrix(
 ) -> NDArray[np.float64]:
     """``(n, n)`` s: for every pair of welds the least :func:`rest_to_rest_bound` over their
     valid configurations ``Q (n, K, 6)`` / ``valid (n, K)``; ``inf`` where either has none."""
-    n, K = valid.shape
-    keep = np.flatnonzero(valid.any(axis=0))  # columns some weld uses
-    Q, valid = Q[:, keep], valid[:, keep]
-    K = len(keep)
+    n = len(valid)
+    K = int(valid.sum(axis=1).max()) if n else 0
+    # each weld's valid configurations first, padded to the most any weld has
+    col = np.argsort(~valid, axis=1, kind="stable")[:, :K]
+    Q = np.take_along_axis(Q, col[:, :, None], axis=1)
+    valid = np.take_along_axis(valid, col, axis=1)
     out = np.full((n, n), np.inf)
     if K == 0:
         return out
