@@ -27,8 +27,8 @@ its joint path was checked). Between exact rows:
   joint move otherwise; blended where the free margin allows (the blend argument of
   :mod:`weldplan.io.blending` is for linear moves). Named deviation: the timing moves in joint
   space between rows; :attr:`ProgramBuild.tcp_deviation` is how far that joint path's TCP
-  strays from the Cartesian lines (mm); ``line_tolerance`` also refuses a linear move whose
-  joint path strays more.
+  strays from the Cartesian lines (mm); ``line_tolerance`` (1 mm by default) also refuses a
+  linear move whose joint path strays more, so the cycle time is that of the program.
 * ``"joint"``: ``MoveJ`` / ``PTP`` everywhere, every target an exact stop (no joint-space blend
   is verified): exactly the joint path the robot check verified, and the timing of it.
 """
@@ -156,7 +156,7 @@ def robot_program(
     row: ArrayLike | None = None,
     exact: ArrayLike | None = None,
     moves: str = "linear",
-    line_tolerance: float | None = None,
+    line_tolerance: float | None = LINE_TOLERANCE_MM,
     weld_time: float = 0.0,
     clearance: float | None = None,
     tolerance: float = DEFAULT_TOLERANCE_RAD,
@@ -191,10 +191,11 @@ def robot_program(
         ``"linear"`` or ``"joint"`` between exact rows (module docstring).
     line_tolerance
         mm: with ``"linear"``, a move between two exact rows is linear where the Cartesian move
-        itself passes :func:`weldplan.robot.linear.check_linear_moves`; with a tolerance, also
-        only where the checked joint path's TCP stays this close to the Cartesian segment
-        (:func:`joint_line_deviation`, e.g. :data:`LINE_TOLERANCE_MM`, so that the timing of
-        the joint path stays near the controller's path). Else it is a joint move.
+        itself passes :func:`weldplan.robot.linear.check_linear_moves` *and* the checked joint
+        path's TCP stays this close to the Cartesian segment (:func:`joint_line_deviation`), so
+        that the timing and speeds of the joint path are those of a path within this of the
+        controller's; ``None``: the Cartesian check alone (the timing may then be of a path far
+        from the line: on the demo up to 149 mm). Else it is a joint move.
     tool, checker, contact_radius
         The linear moves' collision check: ``checker`` (a
         :class:`~weldplan.robot.collision.RobotCollision`), else one built from the part mesh and
