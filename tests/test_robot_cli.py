@@ -48,7 +48,7 @@ def test_bad_robot_options_are_one_line_errors(tmp_path, capsys, extra, needle):
     [
         (["--trajectory", "t.csv"], "--trajectory needs --robot"),
         (["--robot-base", "0,0,0,0"], "--robot-base needs --robot"),
-        (["--robot", "ROBOT"], "--robot needs a URDF --tool"),
+        (["--robot", "ROBOT"], "--robot needs a --tool"),
     ],
 )
 def test_robot_options_need_their_companions(tmp_path, capsys, extra, needle):

@@ -265,7 +265,21 @@ def run_planning(
     bars = ProgressBars(enabled=False if args.quiet else None)
     t_all = time.perf_counter()
     times: dict[str, float] = {}
-    cell, route = _plan(args, config, make_cell, bars, times)
+    legs: dict[str, Any] = {}
+    leg_cost: Callable[[Any], Any] | None = None
+    if robot is not None and getattr(args, "cost", "length") == "time":
+        from weldplan.commands._robot_cost import time_leg_cost
+
+        def leg_cost(cell: Any) -> Any:  # the robot's leg times, before the order exists
+            legs["legs"], legs["robot"] = time_leg_cost(args, cell, tool[0], robot)  # type: ignore[index]
+            return legs["legs"].cost
+
+    cell, route = _plan(args, config, make_cell, bars, times, leg_cost)
+    if legs:
+        from weldplan.commands._robot_cost import with_time_stats
+
+        route = with_time_stats(route, legs["legs"], tuple(str(i) for i in cell.joints.ids))
+        robot = legs["robot"]
 
     with bars.stage("verify") as st:
         report = verify_route(route, cell.part, joints=cell.joints)
@@ -289,6 +303,7 @@ def run_planning(
         times["robot"] = st.seconds
         extra_rows += stage.rows
         texts = stage.texts
+        route = stage.route  # with the robot route, for the JSON
         robot_partial = bool(stage.skipped)
 
     with bars.stage("export") as st:
@@ -360,8 +375,10 @@ def _plan(
     make_cell: Callable[[], Any],
     bars: ProgressBars,
     times: dict[str, float],
+    leg_cost: Callable[[Any], Any] | None = None,
 ) -> tuple[Any, Any]:
-    """The cell and the route, with the executor the options ask for (``times`` filled)."""
+    """The cell and the route, with the executor the options ask for (``times`` filled);
+    ``leg_cost(cell)``: what the sequencer minimises instead of length (``--cost time``)."""
     from weldplan.weld.pipeline import plan_route
 
     with contextlib.ExitStack() as stack:
@@ -379,7 +396,10 @@ def _plan(
 
             executor = stack.enter_context(process_pool(cell, args.jobs))
         try:
-            route = plan_route(cell, config=config, rng=args.seed, executor=executor, progress=bars)
+            extra = {} if leg_cost is None else {"leg_cost": leg_cost(cell)}
+            route = plan_route(
+                cell, config=config, rng=args.seed, executor=executor, progress=bars, **extra
+            )
         finally:
             bars.close()
     for k in ("straight", "local", "sequence", "smooth"):

@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from weldplan.commands._robot_cost import cost_rows, flange_tcp, is_urdf, tool_load
 from weldplan.errors import InputError, PlanningError, WeldplanError
 
 #: the round trip of an emitted program must close within these (mm, deg): the issue's target
@@ -109,6 +110,13 @@ def add_robot_arguments(p: argparse.ArgumentParser) -> None:
         type=_number("mass in kg", 0.0, 5000.0, lo_open=True),
         help="tool mass for the programs (default: the tool URDF's <inertial> masses)",
     )
+    g.add_argument(
+        "--cost",
+        choices=("length", "time"),
+        default="length",
+        help="what the sequencer minimises: route length (default) or the robot's cycle time "
+        "(rest-to-rest bounds between the welds' IK configurations; needs --robot)",
+    )
     g.add_argument("--trajectory", metavar="F", help="write the timed joint trajectory as CSV")
     g.add_argument(
         "--robot-html",
@@ -124,11 +132,20 @@ def robot_from_args(args: argparse.Namespace) -> Any:
         for opt in ("opw", "robot_base", "trajectory", "tool_mass", "robot_html"):
             if getattr(args, opt, None) is not None:
                 raise WeldplanError(f"--{opt.replace('_', '-')} needs --robot")
+        if getattr(args, "cost", "length") == "time":
+            raise WeldplanError("--cost time needs --robot (and a --tool)")
         return None
-    if not getattr(args, "tool", None) or Path(args.tool).suffix.lower() != ".urdf":
+    if not getattr(args, "tool", None):
         raise InputError(
-            "--robot needs a URDF --tool (its root link is what the flange carries)",
+            "--robot needs a --tool (a URDF whose root link is what the flange carries, or a "
+            "mesh in its mounting frame with --tcp and --tool-mass)",
             field="--tool",
+        )
+    if not is_urdf(args.tool) and args.tool_mass is None:
+        raise InputError(
+            "a mesh tool has no mass: give --tool-mass with --robot",
+            path=args.tool,
+            field="--tool-mass",
         )
     from weldplan.robot import load_robot
     from weldplan.robot.reach import parse_base
@@ -146,6 +163,7 @@ class RobotStage:
     texts: dict[str, str]
     rows: list[tuple[str, str]]
     skipped: tuple[str, ...] = ()
+    route: Any = None  # the route carrying the robot route (route.tool["robot"])
 
 
 def robot_stage(
@@ -153,13 +171,16 @@ def robot_stage(
 ) -> RobotStage:
     """Steps 1-4 of the module docstring. Raises :class:`PlanningError` when a weld cannot be
     served or the emitted program does not close its FK round trip."""
-    from weldplan.robot.plan import plan_robot_route, tool_flange_tcp
+    from weldplan.robot.plan import plan_robot_route
     from weldplan.robot.program import robot_program
     from weldplan.robot.reach import BaseSearch
+    from weldplan.robot.routejson import attach_robot_route, poses_contact_radius
     from weldplan.tool.route_frames import route_poses
 
     poses = route_poses(route)
-    Tft = tool_flange_tcp(robot, args.tool, args.tcp)
+    Tft = flange_tcp(args, robot)
+    # with --cost time the base was fixed (given or searched) before the order
+    given = args.robot_base is not None or getattr(args, "cost", "length") == "time"
     rr = plan_robot_route(
         route,
         poses,
@@ -167,8 +188,8 @@ def robot_stage(
         flange_tcp=Tft,
         part=cell.part,
         tool=tool,
-        base=None if args.robot_base is None else robot.base,
-        search=BaseSearch() if args.robot_base is None else None,
+        base=robot.base if given else None,
+        search=None if given else BaseSearch(),
         rng=args.seed,
     )
     if rr.stats.get("collision_free") is False:
@@ -182,7 +203,7 @@ def robot_stage(
         velocity=robot.velocity * args.vel_scale,
         acceleration=robot.acceleration * args.acc_scale,
     )
-    mass, cog = _tool_load(args, robot)
+    mass, cog = tool_load(args, robot, tool, rr.flange_tcp)
     stem = Path(outputs.get("post", outputs["csv"])).stem
     build = robot_program(
         route,
@@ -198,6 +219,8 @@ def robot_stage(
         weld_time=args.weld_time,
         tcp_speed=args.tcp_speed,
         name=stem,
+        tool=tool,
+        contact_radius=poses_contact_radius(route),
     )
     if len(build.skipped) == len(rr.weld_ids):
         raise PlanningError(f"the robot serves none of the welds ({', '.join(rr.status)})")
@@ -209,21 +232,11 @@ def robot_stage(
             rb, build.timing, rr.flange_tcp, part=cell.part, tool=tool,
             route_points=route.waypoints(),
         )  # fmt: skip
-    return RobotStage(rr, build, texts, _rows(rr, build), tuple(build.skipped))
-
-
-def _tool_load(args: argparse.Namespace, robot: Any) -> tuple[float, np.ndarray]:
-    """Tool mass (kg) and centre of gravity in the flange frame (mm)."""
-    from weldplan.robot.payload import urdf_payload
-
-    load = urdf_payload(args.tool)
-    if args.tool_mass is None and load is None:
-        raise InputError(
-            "the tool URDF has no <mass>: give --tool-mass", path=args.tool, field="--tool-mass"
-        )
-    cog_root = np.zeros(3) if load is None else load[1]
-    mass = float(args.tool_mass if args.tool_mass is not None else load[0])  # type: ignore[index]
-    return mass, (robot.mount @ np.r_[cog_root, 1.0])[:3]
+    rows = _rows(rr, build) + cost_rows(route, build.timing.total)
+    route = attach_robot_route(
+        route, rr, urdf=args.robot, contact_radius=poses_contact_radius(route)
+    )
+    return RobotStage(rr, build, texts, rows, tuple(build.skipped), route)
 
 
 def _texts(args: argparse.Namespace, build: Any, rr: Any, rb: Any, outputs: dict) -> dict:

@@ -28,6 +28,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     from weldplan.commands._tool import add_tool_arguments
 
     add_tool_arguments(p, search=False)
+    p.add_argument(
+        "--robot",
+        metavar="URDF",
+        help="the robot of a route that carries a robot route (default: the URDF it names)",
+    )
+    p.add_argument("--opw", metavar="F", help="OPW parameters (default: beside the URDF)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -69,8 +75,30 @@ def run(args: argparse.Namespace) -> int:
         return 1
     if sweeps is not None:
         print(f"tool transitions ok: {sweeps.describe()}")
+    if not _verify_robot(args, route, part, tool[0]):
+        return 1
     if check.missing or (sweeps is not None and sweeps.blocked):
         from weldplan.errors import EXIT_PARTIAL
 
         return EXIT_PARTIAL
     return 0
+
+
+def _verify_robot(args: argparse.Namespace, route: object, part: object, tool: object) -> bool:
+    """Re-check the robot route the route carries, if any (:mod:`weldplan.robot.routejson`):
+    FK, joint limits, robot + tool collision. False (said on stderr) when it fails."""
+    from weldplan.robot.routejson import robot_route_of, verify_robot_route
+
+    rr = robot_route_of(route, args.route)
+    if rr is None:
+        return True
+    urdf = args.robot or route.tool["robot"].get("urdf")  # type: ignore[attr-defined]
+    from weldplan.robot import load_robot
+
+    robot = load_robot(urdf, args.opw)
+    check = verify_robot_route(route, rr, robot, part, tool)
+    if not check.ok:
+        print(f"weldplan verify: robot route: {check.describe()}", file=sys.stderr)
+        return False
+    print(f"robot route ok: {check.describe()}")
+    return True

@@ -21,12 +21,14 @@ route (``exact``: FK puts the TCP on the route's pose) and, on legs re-planned i
 rows that are not. A target that is not exact is always a joint move with an exact stop (only
 its joint path was checked). Between exact rows:
 
-* ``"linear"`` (default): ``MoveL`` / ``LIN``, the Cartesian segments the point-tip route was
-  verified on, blended where the free margin allows (the blend argument of
-  :mod:`weldplan.io.blending` is for linear moves). Named deviation: the robot check and the
-  timing move in joint space between rows; :attr:`ProgramBuild.tcp_deviation` is how far that
-  joint path's TCP strays from the Cartesian lines (mm). A move whose joint path strays more
-  than ``line_tolerance`` (a wrist turn, a branch change between two rows) is a joint move.
+* ``"linear"`` (default): ``MoveL`` / ``LIN`` where the Cartesian move itself is verified
+  (:func:`weldplan.robot.linear.check_linear_moves`: IK along the line at 5 mm / 2 deg, same
+  branch, no flip, joint limits, no wrist singularity, robot links + tool against the part), a
+  joint move otherwise; blended where the free margin allows (the blend argument of
+  :mod:`weldplan.io.blending` is for linear moves). Named deviation: the timing moves in joint
+  space between rows; :attr:`ProgramBuild.tcp_deviation` is how far that joint path's TCP
+  strays from the Cartesian lines (mm); ``line_tolerance`` (1 mm by default) also refuses a
+  linear move whose joint path strays more, so the cycle time is that of the program.
 * ``"joint"``: ``MoveJ`` / ``PTP`` everywhere, every target an exact stop (no joint-space blend
   is verified): exactly the joint path the robot check verified, and the timing of it.
 """
@@ -34,6 +36,7 @@ its joint path was checked). Between exact rows:
 from __future__ import annotations
 
 import logging
+from collections import Counter
 from dataclasses import dataclass
 from typing import Any
 
@@ -153,12 +156,15 @@ def robot_program(
     row: ArrayLike | None = None,
     exact: ArrayLike | None = None,
     moves: str = "linear",
-    line_tolerance: float = LINE_TOLERANCE_MM,
+    line_tolerance: float | None = LINE_TOLERANCE_MM,
     weld_time: float = 0.0,
     clearance: float | None = None,
     tolerance: float = DEFAULT_TOLERANCE_RAD,
     tcp_speed: float = DEFAULT_TCP_SPEED,
     name: str = "weldplan_route",
+    tool: Any = None,
+    checker: Any = None,
+    contact_radius: float | None = None,
 ) -> ProgramBuild:
     """Build the program of ``route`` driven by the joint route ``q`` (module docstring).
 
@@ -174,7 +180,8 @@ def robot_program(
     T_flange_tcp
         ``(4, 4)`` mm: the TCP in the flange frame.
     part
-        Mesh, Cell or CollisionModel for the blend radii.
+        Mesh, Cell or CollisionModel for the blend radii (and, a mesh or Cell, for the linear
+        moves' collision check).
     tool_mass, tool_cog
         kg and ``(3,)`` mm in the flange frame.
     row, exact
@@ -183,9 +190,17 @@ def robot_program(
     moves
         ``"linear"`` or ``"joint"`` between exact rows (module docstring).
     line_tolerance
-        mm: with ``"linear"``, a move between two exact rows is linear only where the checked
-        joint path's TCP stays this close to the Cartesian segment
-        (:func:`joint_line_deviation`); else it is a joint move.
+        mm: with ``"linear"``, a move between two exact rows is linear where the Cartesian move
+        itself passes :func:`weldplan.robot.linear.check_linear_moves` *and* the checked joint
+        path's TCP stays this close to the Cartesian segment (:func:`joint_line_deviation`), so
+        that the timing and speeds of the joint path are those of a path within this of the
+        controller's; ``None``: the Cartesian check alone (the timing may then be of a path far
+        from the line: on the demo up to 149 mm). Else it is a joint move.
+    tool, checker, contact_radius
+        The linear moves' collision check: ``checker`` (a
+        :class:`~weldplan.robot.collision.RobotCollision`), else one built from the part mesh and
+        ``tool`` (links only without it) with the contact zone ``contact_radius`` (default the
+        pose search's) exempt.
 
     A route row without an exact joint row (a weld the robot cannot serve, which the robot route
     interpolates across in joint space) is passed by joint moves without welding and listed in
@@ -213,31 +228,14 @@ def robot_program(
     Tft = np.asarray(T_flange_tcp, dtype=np.float64).reshape(4, 4)
     poses = robot.fk(Q) @ Tft  # (k, 4, 4) TCP in the part frame
     pts = np.array([[r["x"], r["y"], r["z"]] for r in rows], dtype=np.float64)
-    served = at >= 0
-    err = np.zeros(n)
-    err[served] = np.linalg.norm(poses[at[served], :3, 3] - pts[served], axis=1)
-    if n and err.max() > ROW_TOLERANCE_MM:
-        j = int(np.argmax(err))
-        raise PlanningError(
-            f"forward kinematics puts the TCP {err[j]:.3g} mm from route row {j} "
-            f"(tolerance {ROW_TOLERANCE_MM} mm): the joint route is not the verified route"
-        )
+    _check_rows(poses, pts, at)
     kind_of = [rows[int(r)]["kind"] if X[i] and at[R[i]] == i else "via" for i, r in enumerate(R)]
-    # program order: approach (route row 1), every joint row, retreat (route row n - 2)
-    framed = n >= 3
-    order = (
-        [_first_on(R, at, 1, True), *range(k), _first_on(R, at, n - 2, False)]
-        if framed
-        else list(range(k))
-    )
-    kinds = ["approach", *kind_of, "retreat"] if framed else list(kind_of)
-    # a move is linear only between two exact rows (a Cartesian segment of the verified route);
-    # the first comes from wherever the robot is
-    ex = X[order]
-    off_line = joint_line_deviation(robot, Tft, Q[order[:-1]], Q[order[1:]])
-    linear = np.concatenate(
-        [[False], (moves == "linear") & ex[1:] & ex[:-1] & (off_line <= line_tolerance)]
-    )
+    order, kinds, framed = _program_order(R, at, n, k, kind_of)
+    linear = np.zeros(len(order), dtype=bool)
+    if moves == "linear":
+        if checker is None:
+            checker = _checker(robot, part, tool, Tft, contact_radius)
+        linear = _linear_moves(robot, Tft, Q, X, order, line_tolerance, checker)
     c = route_clearance(route, clearance)
     # a via may fly by only between two linear moves (the blend argument is for lines)
     nxt = np.concatenate([linear[1:], [False]])
@@ -263,7 +261,114 @@ def robot_program(
         joint_names=tuple(robot.joint_names),
     )
     speed, dev = _tcp_speeds(poses[:, :3, 3], robot, Tft, timing, linear[off : off + k])
-    flags = arm_flags(robot, Q)
+    targets = _targets(
+        rows, R, at, Q, poses, arm_flags(robot, Q), order, kinds, linear, radii, speed, framed
+    )
+    cst = constant_speed_time(pts, len(welds), speed=tcp_speed, weld_time=timing.weld_time)
+    if skipped:
+        log.warning("the program passes %d weld(s) without welding: %s", len(skipped), skipped)
+    program = RobotProgram(
+        name=name,
+        robot=robot.name,
+        joint_names=tuple(robot.joint_names),
+        targets=tuple(targets),
+        tool_frame=Tft,
+        tool_mass=float(tool_mass),
+        tool_cog=np.asarray(tool_cog, dtype=np.float64).reshape(3),
+        part_frame=np.linalg.inv(robot.base),
+        weld_time=timing.weld_time,
+        notes=_notes(route, len(targets), timing, cst, tcp_speed, c, moves, skipped),
+    )
+    return ProgramBuild(program, timing, cst, float(tcp_speed), dev, tuple(skipped))
+
+
+def _check_rows(poses: NDArray, pts: NDArray, at: NDArray[np.int64]) -> None:
+    """FK of every served row's joint vector must put the TCP on its route waypoint."""
+    served = at >= 0
+    err = np.zeros(len(pts))
+    err[served] = np.linalg.norm(poses[at[served], :3, 3] - pts[served], axis=1)
+    if len(pts) and err.max() > ROW_TOLERANCE_MM:
+        j = int(np.argmax(err))
+        raise PlanningError(
+            f"forward kinematics puts the TCP {err[j]:.3g} mm from route row {j} "
+            f"(tolerance {ROW_TOLERANCE_MM} mm): the joint route is not the verified route"
+        )
+
+
+def _program_order(
+    R: NDArray[np.int64], at: NDArray[np.int64], n: int, k: int, kind_of: list[str]
+) -> tuple[list[int], list[str], bool]:
+    """Joint rows in program order and their kinds: approach (route row 1), every joint row,
+    retreat (route row ``n - 2``) when the route has at least three rows."""
+    framed = n >= 3
+    if not framed:
+        return list(range(k)), list(kind_of), False
+    order = [_first_on(R, at, 1, True), *range(k), _first_on(R, at, n - 2, False)]
+    return order, ["approach", *kind_of, "retreat"], True
+
+
+def _checker(robot: Any, part: Any, tool: Any, Tft: NDArray, contact_radius: float | None) -> Any:
+    """Robot (+ tool) against the part mesh, or ``None`` where the part is no mesh (then no
+    move is linear)."""
+    import trimesh
+
+    mesh = getattr(part, "part", part)
+    if not isinstance(mesh, trimesh.Trimesh):
+        log.warning("no part mesh for the linear moves' collision check: joint moves only")
+        return None
+    from weldplan.robot.collision import RobotCollision
+    from weldplan.tool.poses import DEFAULT_CONTACT_RADIUS
+
+    cr = DEFAULT_CONTACT_RADIUS if contact_radius is None else float(contact_radius)
+    return RobotCollision(robot, mesh, tool, Tft, contact_radius=cr)
+
+
+def _linear_moves(
+    robot: Any,
+    Tft: NDArray,
+    Q: NDArray,
+    X: NDArray[np.bool_],
+    order: list[int],
+    line_tolerance: float | None,
+    checker: Any,
+) -> NDArray[np.bool_]:
+    """``(len(order),) bool``: the move into each program target is linear: both ends exact
+    rows (the first move comes from wherever the robot is), the Cartesian move itself verified
+    (:func:`weldplan.robot.linear.check_linear_moves`) and, with ``line_tolerance``, the checked
+    joint path within it of the Cartesian line."""
+    from weldplan.robot.linear import check_linear_moves
+
+    ex = X[order]
+    qa, qb = Q[order[:-1]], Q[order[1:]]
+    cand = ex[1:] & ex[:-1]
+    if line_tolerance is not None:
+        cand &= joint_line_deviation(robot, Tft, qa, qb) <= line_tolerance
+    cand &= np.any(qa != qb, axis=1)  # a move of zero length stays a joint move
+    idx = np.flatnonzero(cand)
+    checks = check_linear_moves(robot, Tft, qa[idx], qb[idx], checker=checker)
+    cand[idx] = checks.ok
+    refused = Counter(r for r in checks.reason if r != "ok")
+    if refused:
+        log.info("linear moves refused: %s", dict(refused))
+    return np.concatenate([[False], cand])
+
+
+def _targets(
+    rows: list[dict],
+    R: NDArray[np.int64],
+    at: NDArray[np.int64],
+    Q: NDArray,
+    poses: NDArray,
+    flags: Any,
+    order: list[int],
+    kinds: list[str],
+    linear: NDArray[np.bool_],
+    radii: NDArray,
+    speed: NDArray,
+    framed: bool,
+) -> list[Target]:
+    """The program's targets, in program order, with the speeds of the timed trajectory."""
+    k = len(Q)
     targets = []
     for i, (j, kind) in enumerate(zip(order, kinds, strict=True)):
         if kind == "approach":
@@ -287,22 +392,7 @@ def robot_program(
                 speed=float(max(v, 1.0)),
             )
         )
-    cst = constant_speed_time(pts, len(welds), speed=tcp_speed, weld_time=timing.weld_time)
-    if skipped:
-        log.warning("the program passes %d weld(s) without welding: %s", len(skipped), skipped)
-    program = RobotProgram(
-        name=name,
-        robot=robot.name,
-        joint_names=tuple(robot.joint_names),
-        targets=tuple(targets),
-        tool_frame=Tft,
-        tool_mass=float(tool_mass),
-        tool_cog=np.asarray(tool_cog, dtype=np.float64).reshape(3),
-        part_frame=np.linalg.inv(robot.base),
-        weld_time=timing.weld_time,
-        notes=_notes(route, len(targets), timing, cst, tcp_speed, c, moves, skipped),
-    )
-    return ProgramBuild(program, timing, cst, float(tcp_speed), dev, tuple(skipped))
+    return targets
 
 
 def _notes(

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from weldplan.errors import PlanningError, UnreachableJointsError
+from weldplan.errors import ConfigError, PlanningError, UnreachableJointsError
 
 log = logging.getLogger(__name__)
 
@@ -53,6 +53,13 @@ class PairPlanning:
         Indices of the cell's joints to plan (None: all). The local paths are still planned
         in ``cell`` (so workers keep the cell they hold); joint ``k`` here is
         ``subset[k]`` there.
+    leg_cost
+        ``(N, N)`` over the cell's joints: what the sequencer minimises instead of the legs'
+        lengths (``--cost time``: seconds, :func:`weldplan.robot.legtime.leg_times`). A leg
+        whose local path failed stays infinite; the lazy rounds still plan exactly the legs an
+        order uses. ``self.C`` stays in mm (the route's length and its proved length bounds);
+        the order's own cost over ``leg_cost`` and its proved bound are the caller's to state.
+        None: lengths (the default).
     """
 
     def __init__(
@@ -64,6 +71,7 @@ class PairPlanning:
         report: Callable[[str, int, int], None],
         exact_max: int,
         subset: NDArray[np.intp] | None = None,
+        leg_cost: NDArray[np.float64] | None = None,
     ) -> None:
         self.cell = cell
         self.config = config
@@ -99,6 +107,17 @@ class PairPlanning:
         self._shared: Any = None  # the cell as the executor's tasks carry it, made on first use
         self.pso: Any = None
         self.known_first = False
+        self.leg_cost = None if leg_cost is None else self._leg_cost(leg_cost, len(ids))
+
+    def _leg_cost(self, leg_cost: Any, n_cell: int) -> NDArray[np.float64]:
+        M = np.asarray(leg_cost, dtype=np.float64)
+        if M.shape != (n_cell, n_cell) or np.isnan(M).any() or (M < 0).any():
+            raise ConfigError(
+                f"leg_cost must be a ({n_cell}, {n_cell}) matrix of costs >= 0, got shape "
+                f"{M.shape}",
+                field="leg_cost",
+            )
+        return M[np.ix_(self.index, self.index)]
 
     # ------------------------------------------------------------------ straight checks
     def check(self, pairs: NDArray[np.intp]) -> None:
@@ -232,17 +251,26 @@ class PairPlanning:
                 stranded=stranded,
             )
 
+    def cost_matrix(self) -> NDArray[np.float64]:
+        """The matrix the sequencer minimises: ``C`` (mm), or ``leg_cost`` where ``C`` is finite
+        (a failed leg stays infinite)."""
+        if self.leg_cost is None:
+            return self.C
+        return np.where(np.isfinite(self.C), self.leg_cost, np.inf)
+
     def _sequencing_costs(self, method: str) -> NDArray[np.float64]:
         """The cost matrix the sequencer sees: with ``known_first``, an unknown leg costs its
         estimate plus a penalty larger than any route over known legs."""
+        base = self.cost_matrix()
         if not (self.known_first and method not in ("exact", "fast-tsp")):
-            return self.C  # fast-tsp avoids unknown legs instead (``sequence``)
+            return base  # fast-tsp avoids unknown legs instead (``sequence``)
         iu, ju, n = self.iu, self.ju, self.n
         off = ~self.known
-        finite = self.C[iu[self.known], ju[self.known]]
+        finite = base[iu[self.known], ju[self.known]]
         finite = finite[np.isfinite(finite)]
-        penalty = (n - 1) * float(finite.max() if len(finite) else self.est.max()) + 1.0
-        Cs = self.C.copy()
+        est = self.est if self.leg_cost is None else base[iu, ju][np.isfinite(base[iu, ju])]
+        penalty = (n - 1) * float(finite.max() if len(finite) else est.max(initial=0.0)) + 1.0
+        Cs = base.copy()
         Cs[iu[off], ju[off]] += penalty
         Cs[ju[off], iu[off]] += penalty
         return Cs
@@ -361,6 +389,7 @@ class PairPlanning:
         config = self.config
         if (
             config.gap_target is None
+            or self.leg_cost is not None  # its optimistic orders are over lengths
             or resolve_method(config.sequencer, self.n) != "fast-tsp"
             or config.pairs != "lazy"
             or self.n <= self.exact_max

@@ -279,6 +279,7 @@ def plan_route(
     rng: RNGLike = None,
     executor: Executor | None = None,
     progress: Progress | None = None,
+    leg_cost: NDArray[np.float64] | None = None,
 ) -> Route:
     """Plan the ordered, collision-free route through every joint of ``cell``.
 
@@ -302,6 +303,10 @@ def plan_route(
     progress
         ``progress(stage, done, total)`` for the stages ``"straight"``, ``"local"``,
         ``"sequence"``.
+    leg_cost
+        ``(n, n)`` over the cell's joints: what the sequencer minimises instead of length
+        (``weldplan plan --cost time``; :class:`~weldplan.weld.pairs.PairPlanning`). The route's
+        length bounds stay in mm.
 
     Returns
     -------
@@ -331,14 +336,14 @@ def plan_route(
     seed = seed_of(rng)
     report = progress or (lambda stage, done, total: None)
     if not config.skip_unreachable:
-        return _plan(cell, config, as_generator(rng), seed, executor, report)
+        return _plan(cell, config, as_generator(rng), seed, executor, report, leg_cost=leg_cost)
     subset = None
     skipped: list[dict[str, str]] = []
     while True:  # each pass leaves out at least one joint, so this ends
         try:
             # a seed starts each pass afresh: the route is the one of the kept joints alone
             gen = as_generator(rng)
-            route = _plan(cell, config, gen, seed, executor, report, subset)
+            route = _plan(cell, config, gen, seed, executor, report, subset, leg_cost)
         except UnreachableJointsError as exc:
             subset, more = reachable_subset(cell, subset, exc, float(cell.clearance))
             log.warning("skipping %d unreachable joint(s): %s", len(more), exc)
@@ -355,11 +360,14 @@ def _plan(
     executor: Executor | None,
     report: Progress,
     subset: NDArray[np.intp] | None = None,
+    leg_cost: NDArray[np.float64] | None = None,
 ) -> Route:
     """Straight checks, lazy rounds, then the route with its bounds and figures (over the
     joints ``subset`` of the cell, all when None)."""
     t_start = time.perf_counter()
-    work = PairPlanning(cell, config, gen, executor, report, LOWER_BOUND_EXACT_MAX, subset)
+    work = PairPlanning(
+        cell, config, gen, executor, report, LOWER_BOUND_EXACT_MAX, subset, leg_cost
+    )
     seconds = {"straight": work.straight_stage()}
     seq = work.run()
     seconds["local"] = work.t_local

@@ -1,0 +1,201 @@
+"""The robot route in the route JSON, and its re-check by ``weldplan verify``.
+
+``weldplan plan --robot ... --json F`` writes the joint route the program was built from into the
+route's tool section (``route.tool["robot"]``: :meth:`~weldplan.robot.configs.RobotRoute.to_dict`
+with per waypoint row ``q``, ``row``, ``exact``, ``branch``; per weld ``weld_ids``, ``status``
+and ``weld_branch``; plus the robot file and its sha256, the contact radius of the check).
+:func:`weldplan.io.export.read_route` reads it back with the rest of the route (the tool section
+is carried as it is); :func:`robot_route_of` turns it into a
+:class:`~weldplan.robot.configs.RobotRoute`.
+
+:func:`verify_robot_route` re-checks it with nothing from the planner but the joint values:
+forward kinematics of the URDF chain at every exact row puts the TCP on its route waypoint,
+turned as the route's weld poses say (slerped between welds; :data:`FK_TOLERANCE_MM`,
+:data:`FK_TOLERANCE_DEG`), every row is inside the joint limits, and the robot's links plus the
+tool are checked against the part along every joint-space motion
+(:class:`weldplan.robot.collision.RobotCollision`, the same proof the robot route was verified
+with: the contact zone about the TCP exempt, as the weld poses were verified).
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from os import PathLike
+from typing import Any
+
+import numpy as np
+
+from weldplan.errors import InputError
+
+log = logging.getLogger(__name__)
+
+#: mm and deg: FK of an exact row must put the TCP this close to its route waypoint's pose
+FK_TOLERANCE_MM = 0.01
+FK_TOLERANCE_DEG = 0.01
+#: rad of slack on the joint limits (float round trip through JSON)
+LIMIT_SLACK_RAD = 1e-9
+
+
+def attach_robot_route(
+    route: Any, rr: Any, *, urdf: str | PathLike[str], contact_radius: float | None = None
+) -> Any:
+    """``route`` with ``rr`` (a :class:`~weldplan.robot.configs.RobotRoute`) in
+    ``route.tool["robot"]`` (module docstring)."""
+    import dataclasses
+
+    from weldplan.io.mesh import file_sha256
+
+    d = rr.to_dict()
+    d["weld_branch"] = rr.weld_branch.tolist()
+    d["urdf"] = str(urdf)
+    d["urdf_sha256"] = file_sha256(urdf)
+    d["contact_radius"] = contact_radius
+    tool = dict(route.tool)
+    tool["robot"] = d
+    return dataclasses.replace(route, tool=tool)
+
+
+def robot_route_of(route: Any, path: str | PathLike[str] | None = None) -> Any:
+    """The :class:`~weldplan.robot.configs.RobotRoute` a route carries, ``None`` without one.
+
+    Raises
+    ------
+    InputError
+        A robot section that is not a joint route (``path``: the route file, for the message).
+    """
+    from weldplan.robot.configs import RobotRoute
+
+    d = (route.tool or {}).get("robot")
+    if not d:
+        return None
+    try:
+        rr = RobotRoute.from_dict(d)
+    except (KeyError, TypeError, ValueError) as exc:
+        raise InputError(
+            f"the robot route is not valid ({exc})", path=path, field="tool.robot"
+        ) from None
+    k = len(rr.q)
+    if not (len(rr.row) == len(rr.exact) == len(rr.branch) == k) or not np.all(np.isfinite(rr.q)):
+        raise InputError(
+            f"the robot route's rows do not match its {k} joint vectors (or are not finite)",
+            path=path,
+            field="tool.robot",
+        )
+    return rr
+
+
+@dataclass(frozen=True)
+class RobotCheck:
+    """What :func:`verify_robot_route` found.
+
+    Attributes
+    ----------
+    ok
+        Every check passed.
+    fk_mm, fk_deg
+        Largest TCP distance (mm) and angle (deg) of an exact row's FK from its route pose.
+    outside_limits
+        Rows outside the joint limits.
+    hits
+        Blocked joint-space motions (``(segment, body, distance mm)``).
+    rows
+        Joint rows checked.
+    """
+
+    ok: bool
+    fk_mm: float
+    fk_deg: float
+    outside_limits: tuple[int, ...]
+    hits: tuple[tuple[int, str, float], ...]
+    rows: int
+
+    def describe(self) -> str:
+        if self.ok:
+            return (
+                f"{self.rows} joint rows: FK within {self.fk_mm:.2g} mm, {self.fk_deg:.2g} deg of "
+                "the route, inside the limits, robot + tool collision-free"
+            )
+        parts = []
+        if self.fk_mm > FK_TOLERANCE_MM or self.fk_deg > FK_TOLERANCE_DEG:
+            parts.append(f"FK misses the route by {self.fk_mm:.3g} mm, {self.fk_deg:.3g} deg")
+        if self.outside_limits:
+            parts.append(f"rows {list(self.outside_limits[:5])} outside the joint limits")
+        if self.hits:
+            s, body, dist = self.hits[0]
+            parts.append(f"{len(self.hits)} blocked motion(s), first: motion {s} ({body})")
+        return "; ".join(parts)
+
+
+def verify_robot_route(
+    route: Any, rr: Any, robot: Any, part: Any, tool: Any, *, contact_radius: float | None = None
+) -> RobotCheck:
+    """Re-check the robot route ``rr`` of ``route`` (module docstring).
+
+    Parameters
+    ----------
+    robot
+        :class:`~weldplan.robot.model.Robot` (its base is taken from ``rr``).
+    part
+        The part mesh (mm).
+    tool
+        The :class:`~weldplan.tool.model.Tool` (mesh in its TCP frame), or None (links only).
+    contact_radius
+        mm: the tool's contact zone exempt (default: the value stored, else the poses').
+    """
+    from weldplan.robot.collision import RobotCollision
+
+    rb = robot.with_base(rr.base)
+    pts = route.waypoints()
+    if len(rr.row) and (rr.row.min() < 0 or rr.row.max() >= len(pts)):
+        raise InputError("the robot route's rows are not rows of the route", field="tool.robot")
+    ex = np.asarray(rr.exact, dtype=bool)
+    tcp = rb.fk(rr.q[ex]) @ rr.flange_tcp
+    err = np.linalg.norm(tcp[:, :3, 3] - pts[rr.row[ex]], axis=1)
+    fk_mm = float(err.max()) if len(err) else 0.0
+    fk_deg = _angle_error(route, rr, tcp)
+    inside = np.all(
+        (rr.q >= rb.lower - LIMIT_SLACK_RAD) & (rr.q <= rb.upper + LIMIT_SLACK_RAD), axis=1
+    )
+    if contact_radius is None:
+        stored = (route.tool or {}).get("robot", {}).get("contact_radius")
+        contact_radius = stored if stored is not None else poses_contact_radius(route)
+    checker = RobotCollision(rb, part, tool, rr.flange_tcp, contact_radius=float(contact_radius))
+    zone = np.ones(max(len(rr.q) - 1, 0), dtype=bool)  # as the robot route was checked
+    hits = checker.path_hits(rr.q, zone)
+    ok = fk_mm <= FK_TOLERANCE_MM and fk_deg <= FK_TOLERANCE_DEG and bool(inside.all())
+    ok = ok and not hits
+    return RobotCheck(
+        ok,
+        fk_mm,
+        fk_deg,
+        tuple(int(i) for i in np.flatnonzero(~inside)),
+        tuple((int(h.segment), str(h.body), float(h.distance)) for h in hits),
+        len(rr.q),
+    )
+
+
+def poses_contact_radius(route: Any) -> float:
+    from weldplan.tool.poses import DEFAULT_CONTACT_RADIUS
+
+    poses = (route.tool or {}).get("poses") or {}
+    return float((poses.get("settings") or {}).get("contact_radius", DEFAULT_CONTACT_RADIUS))
+
+
+def _angle_error(route: Any, rr: Any, tcp: Any) -> float:
+    """deg: the largest angle between the exact rows' TCP frames ``tcp (e, 4, 4)`` and the
+    route's TCP orientation at their rows (none without weld poses)."""
+    from scipy.spatial.transform import Rotation
+
+    from weldplan.robot.plan import tcp_waypoint_poses
+    from weldplan.tool.route_frames import route_poses
+
+    poses = route_poses(route)
+    if poses is None or not len(tcp):
+        return 0.0
+    T = tcp_waypoint_poses(route, poses)[rr.row[np.asarray(rr.exact, dtype=bool)]]
+    has = np.all(np.isfinite(T), axis=(1, 2))
+    if not has.any():
+        return 0.0
+    R = np.swapaxes(tcp[has, :3, :3], 1, 2) @ T[has, :3, :3]
+    return float(np.degrees(Rotation.from_matrix(R).magnitude()).max())
