@@ -189,12 +189,26 @@ def test_every_registered_planner_runs_with_a_python_motion_check():
 
 
 def test_sampled_path_round_trips_json_and_is_read_only():
-    path = plan_rn(START, GOAL, LO, HI, lambda x: not in_wall(x), time_s=0.1, seed=2)
+    # rrtconnect stops on its own, so the run is the same at any load (BIT* stops on the clock)
+    path = plan_rn(
+        START, GOAL, LO, HI, lambda x: not in_wall(x), planner="rrtconnect", time_s=30, seed=2
+    )
+    assert path.solved
     again = SampledPath.from_dict(path.to_dict())
     np.testing.assert_array_equal(again.points, path.points)
     assert (again.length, again.solved, again.planner) == (path.length, path.solved, path.planner)
     with pytest.raises(ValueError):
         path.points[0, 0] = 3.0
+
+
+def test_an_unsolved_path_round_trips_json_with_its_dimension():
+    blocked = plan_rn(
+        START, GOAL, LO, HI, lambda x: not 4.0 < x[0] < 6.0, planner="rrtconnect", time_s=0.2
+    )
+    assert not blocked.solved and blocked.points.shape[0] == 0
+    again = SampledPath.from_dict(blocked.to_dict())
+    assert again.points.shape == blocked.points.shape
+    assert again.length == blocked.length == float("inf")
 
 
 # --------------------------------------------------------------------------- SE(3)

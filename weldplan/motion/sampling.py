@@ -109,6 +109,7 @@ class SampledPath:
         """JSON-ready dict (``points`` as nested lists; an unsolved length as ``None``)."""
         return {
             "points": self.points.tolist(),
+            "dim": int(self.points.shape[1]) if self.points.ndim == 2 else 0,
             "length": float(self.length) if np.isfinite(self.length) else None,
             "solved": bool(self.solved),
             "planner": self.planner,
@@ -120,8 +121,11 @@ class SampledPath:
     def from_dict(cls, data: dict[str, Any]) -> SampledPath:
         """Inverse of :meth:`to_dict`."""
         length = data["length"]
+        points = np.asarray(data["points"], dtype=np.float64)
+        if points.size == 0:  # an unsolved path: keep its state dimension, (0, d)
+            points = points.reshape(0, int(data.get("dim", 0)))
         return cls(
-            points=np.asarray(data["points"], dtype=np.float64).reshape(len(data["points"]), -1),
+            points=points.reshape(len(data["points"]), -1) if points.size else points,
             length=float("inf") if length is None else float(length),
             solved=bool(data["solved"]),
             planner=str(data["planner"]),
