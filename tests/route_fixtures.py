@@ -64,4 +64,3 @@ def write_box_station(folder):
     joints = folder / "joints.csv"
     joints.write_text(BOX_JOINTS_CSV)
     return folder, mesh, joints
-

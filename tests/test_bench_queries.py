@@ -28,7 +28,6 @@ TWO_SQUARES = """mesh
 """
 
 
-
 def _scen(rows: list[tuple[float, float, float, float, str]]) -> str:
     lines = ["version 1"]
     for sx, sy, gx, gy, length in rows:

@@ -29,7 +29,6 @@ def files(tmp_path):
     return write_box_station(tmp_path)
 
 
-
 def _one_line_error(capsys, rc_expected=2):
     err = capsys.readouterr().err
     # log warnings said before the error (an old route without provenance, ...) are not the error

@@ -26,7 +26,6 @@ JOINTS_CSV = BOX_JOINTS_CSV
 PANEL_JOINTS_CSV = "id,x,y,z\nA,-8,0,0\nB,8,0,0\nC,-8,40,0\nD,-8,-30,0\n"
 
 
-
 def _one_line(capsys) -> str:
     err = capsys.readouterr().err
     lines = [ln for ln in err.splitlines() if ln.strip()]

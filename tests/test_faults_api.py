@@ -108,12 +108,8 @@ def test_load_cell_rejects_wrong_arguments(scene, args):
         pytest.param({"xyz": [[1, 2], [3, 4]]}, "", id="shape"),
         pytest.param({"xyz": [["x", "y", "z"], [0, 0, 0]]}, "", id="strings"),
         pytest.param({"ids": ("a", "a")}, "unique", id="duplicate-ids"),
-        pytest.param(
-            {"directions": [[np.nan, 0, 1], [0, 0, 1]]}, "", id="nan-direction"
-        ),
-        pytest.param(
-            {"directions": [[0, 0, 0], [0, 0, 1]]}, "direction", id="zero-direction"
-        ),
+        pytest.param({"directions": [[np.nan, 0, 1], [0, 0, 1]]}, "", id="nan-direction"),
+        pytest.param({"directions": [[0, 0, 0], [0, 0, 1]]}, "direction", id="zero-direction"),
     ],
 )
 def test_joints_reject_bad_values(kw, word):
@@ -165,9 +161,7 @@ def test_verify_route_rejects_a_meaningless_clearance(route, cell, clearance):
         _raises_weldplan(lambda: verify_route(route, cell.part, clearance=clearance), "clearance")
 
 
-@pytest.mark.parametrize(
-    "part", [pytest.param("part.stl"), pytest.param(None)]
-)
+@pytest.mark.parametrize("part", [pytest.param("part.stl"), pytest.param(None)])
 def test_verify_route_rejects_a_wrong_part(route, part):
     from weldplan.weld.verify import verify_route
 

@@ -15,6 +15,7 @@ import ast
 from pathlib import Path
 
 import networkx as nx
+import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "weldplan"
 
@@ -103,3 +104,55 @@ def test_the_graph_sees_lazy_and_relative_imports(tmp_path):
     }
     cycles = [c for c in nx.strongly_connected_components(g) if len(c) > 1]
     assert cycles == [{"demo.a", "demo.sub.b", "demo.sub"}]
+
+
+def test_exporting_a_route_with_poses_does_not_load_the_pose_planner():
+    """io/export reads a route's poses through weldplan.tool.route_frames, which runs the tool
+    package's ``__init__`` first: that ``__init__`` is lazy (PEP 562), so the pose planner, the
+    sweep checker and their FCL models stay unloaded (a fresh interpreter: other tests import
+    them)."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, weldplan.io.export, weldplan.tool.route_frames; "
+        "print(sorted(m for m in sys.modules if m.startswith('weldplan.tool')))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True,
+        cwd=PACKAGE.parent,
+    ).stdout  # fmt: skip
+    loaded = set(eval(out))
+    assert "weldplan.tool.route_frames" in loaded  # the import ran
+    assert not loaded & {"weldplan.tool.poses", "weldplan.tool.sweep", "weldplan.tool.model"}
+
+
+def test_the_tool_package_still_exports_every_name():
+    import importlib
+
+    import weldplan.tool as tool
+
+    for name in tool.__all__:
+        obj = getattr(tool, name)
+        assert obj is getattr(importlib.import_module(f"weldplan.tool.{tool._EXPORTS[name]}"), name)
+        assert name in dir(tool)
+    with pytest.raises(AttributeError, match="no attribute 'plan_nothing'"):
+        tool.plan_nothing  # noqa: B018
+
+
+def test_a_tool_module_imported_first_does_not_hide_its_function():
+    """``weldplan.tool.verify_poses`` is a module and the function the package exports; importing
+    the module first must leave the function as the package's name (fresh interpreter)."""
+    import subprocess
+    import sys
+
+    code = (
+        "import weldplan.tool.verify_poses, weldplan.tool.tool_order, weldplan.tool.verify_sweeps; "
+        "from weldplan.tool import tool_order, verify_poses, verify_sweeps; "
+        "print([type(f).__name__ for f in (tool_order, verify_poses, verify_sweeps)])"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True,
+        cwd=PACKAGE.parent,
+    ).stdout  # fmt: skip
+    assert eval(out) == ["function"] * 3

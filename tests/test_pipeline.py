@@ -100,7 +100,6 @@ def test_bound_of_planned_legs_on_a_larger_cell_is_a_1tree_bound_below_the_route
     route and below the exact optimum over the all-pairs costs, above the spanning tree."""
     from scipy.sparse.csgraph import minimum_spanning_tree
 
-
     small = plan_route(cell, config=PlanConfig(planner="exact", sequencer="exact"))
     exact = small.stats["bound_planned"]
     try:

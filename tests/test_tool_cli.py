@@ -25,8 +25,6 @@ from weldplan.tool.route_frames import waypoint_quaternions, weld_rows
 JOINTS_CSV = "id,x,y,z\nA,-40,0,0\nB,40,0,0\nC,-40,60,0\nD,40,-30,0\nE,-3,0,5\n"
 
 
-
-
 @pytest.fixture(scope="module")
 def planned(tmp_path_factory):
     """``weldplan plan box joints --tool torch.stl --tcp 0,0,0,0,0,0`` once for the module."""

@@ -19,7 +19,7 @@ import logging
 import math
 import time
 import weakref
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Any
 
@@ -247,23 +247,34 @@ def shortest_grid_path(
     if s == g:
         return GridPathResult(pg.index([s]), 0.0, 0)
     pairs = list(zip(offs, costs, strict=True))
-    table, maskl = None, None
+    tables = None
     if not corner_cutting:
         per_grid = _TABLES.setdefault(pg, {})
         if connectivity not in per_grid:
             per_grid[connectivity] = _move_tables(pg, moves, pairs)
-        table, maskl = per_grid[connectivity]
+        tables = per_grid[connectivity]
+    h = _lattice_heuristic(pg, g, connectivity == 6)
+    best, parent, expansions, reason = _astar(free, s, g, h, pairs, tables, blocked, deadline)
+    if reason:
+        return GridPathResult(None, math.inf, expansions, reason)
+    flat = [g]
+    while flat[-1] != s:
+        flat.append(parent[flat[-1]])
+    flat.reverse()
+    path = pg.index(np.asarray(flat, dtype=np.int64))
+    return GridPathResult(path, best[g] * pitch, expansions)
 
-    n = len(free)
+
+def _lattice_heuristic(pg: PaddedGrid, g: int, six: bool) -> Callable[[int], float]:
+    """``h(v)``: the lattice distance (grid steps) from padded flat index ``v`` to ``g``
+    (Manhattan for 6-connectivity, the 3D octile distance for 26), computed only for the voxels
+    the search touches (a whole-grid table costs O(n) a pair: 1 M voxels on the demo cell)."""
     sx, sy, _ = pg.strides
     gx, rem = divmod(g, sx)
     gy, gz = divmod(rem, sy)
     d2, d3 = _SQRT2 - 1.0, _SQRT3 - _SQRT2
-    six = connectivity == 6
 
     def h(v: int) -> float:
-        # the lattice distance to the goal, computed only for the voxels the search touches
-        # (a whole-grid table costs O(n) a pair: 1 M voxels on the demo cell)
         x, r = divmod(v, sx)
         y, z = divmod(r, sy)
         a = x - gx if x > gx else gx - x
@@ -275,8 +286,25 @@ def shortest_grid_path(
         lo = min(a, b, c)
         return hi + d2 * (a + b + c - hi - lo) + d3 * lo
 
+    return h
+
+
+def _astar(
+    free: NDArray[np.bool_],
+    s: int,
+    g: int,
+    h: Callable[[int], float],
+    pairs: list[tuple[int, float]],
+    tables: tuple[dict[int, list[tuple[int, float]]], array.array] | None,
+    blocked: set[tuple[int, int]],
+    deadline: float | None,
+) -> tuple[dict[int, float], dict[int, int], int, str]:
+    """The A* loop over padded flat indices: ``(g-costs, parents, expansions, reason)``,
+    ``reason`` empty when ``g`` was reached. ``pairs``: every (flat offset, cost) move;
+    ``tables``: :func:`_move_tables` (no corner cutting), ``None`` to allow every move."""
+    table, maskl = tables if tables is not None else (None, None)
     ok = bytearray(free.tobytes())  # free and not yet closed
-    mark = bytearray(n) if blocked else b""  # endpoints of blocked moves
+    mark = bytearray(len(free)) if blocked else b""  # endpoints of blocked moves
     for u, v in blocked:
         mark[u] = mark[v] = 1  # type: ignore[index]
     inf = math.inf
@@ -290,11 +318,11 @@ def shortest_grid_path(
         if not ok[u]:
             continue  # already closed (a stale heap entry)
         if u == g:
-            break
+            return best, parent, expansions, ""
         ok[u] = 0
         expansions += 1
         if deadline is not None and not expansions & 1023 and time.perf_counter() > deadline:
-            return GridPathResult(None, math.inf, expansions, "time budget exhausted")
+            return best, parent, expansions, "time budget exhausted"
         gu = -gneg
         check = blocked and mark[u]
         for off, c in pairs if table is None else table[maskl[u]]:
@@ -308,11 +336,4 @@ def shortest_grid_path(
                     parent[v] = u
                     # ties in f broken towards larger g (deeper nodes): fewer expansions
                     push(heap, (gv + h(v), -gv, v))
-    else:
-        return GridPathResult(None, math.inf, expansions, "goal not reachable from start")
-    flat = [g]
-    while flat[-1] != s:
-        flat.append(parent[flat[-1]])
-    flat.reverse()
-    path = pg.index(np.asarray(flat, dtype=np.int64))
-    return GridPathResult(path, best[g] * pitch, expansions)
+    return best, parent, expansions, "goal not reachable from start"

@@ -189,6 +189,24 @@ def read_joints(path: str | PathLike[str], *, units: str = "mm") -> Joints:
     """
     path = Path(path)
     factor = unit_scale(units)
+    rows = _rows(path)
+    header_line, header = rows[0]
+    sep, names, numeric = _header(header, path=path, line=header_line)
+    data = rows[1:]
+    if not data:
+        raise InputError("no data rows after the header", path=path, line=header_line)
+    ids, values = _parse_rows(data, sep, names, numeric, path=path)
+    xyz = values[:, :3] * factor
+    _check_range(xyz, data, path=path)
+    directions = values[:, 3:6] if len(numeric) > 3 else None
+    log.info("read %d joints from %s", len(ids), path)
+    lines = tuple(lineno for lineno, _ in data)
+    return Joints(ids=tuple(ids), xyz=xyz, directions=directions, source=path, lines=lines)
+
+
+def _rows(path: Path) -> list[tuple[int, str]]:
+    """``(line number, text)`` of the lines that are neither blank nor ``#`` comments; the
+    file's absence, a directory, non-UTF-8 text and an empty file are InputErrors."""
     if not path.exists():
         raise InputError("joints file not found", path=path)
     try:
@@ -197,7 +215,6 @@ def read_joints(path: str | PathLike[str], *, units: str = "mm") -> Joints:
         raise InputError(f"not a UTF-8 text file ({exc.reason})", path=path) from exc
     except IsADirectoryError:
         raise InputError("expected a CSV file, got a directory", path=path) from None
-
     rows = [
         (n, line)
         for n, line in enumerate(text.splitlines(), start=1)
@@ -205,8 +222,13 @@ def read_joints(path: str | PathLike[str], *, units: str = "mm") -> Joints:
     ]
     if not rows:
         raise InputError("empty file: expected a header 'id,x,y,z'", path=path)
+    return rows
 
-    header_line, header = rows[0]
+
+def _header(header: str, *, path: Path, line: int) -> tuple[str, list[str], list[str]]:
+    """Separator, column names (lower case) and the numeric columns to read (``x, y, z`` and
+    ``nx, ny, nz`` when present) of the header; InputError for a missing or repeated column or
+    an incomplete direction. Unknown columns are logged and ignored."""
     sep = ";" if header.count(";") > header.count(",") else ","
     names = [h.strip().lower() for h in header.split(sep)]
     for col in REQUIRED_COLUMNS:
@@ -214,15 +236,13 @@ def read_joints(path: str | PathLike[str], *, units: str = "mm") -> Joints:
             raise InputError(
                 f"missing column '{col}' in header {header.strip()!r} (need id,x,y,z)",
                 path=path,
-                line=header_line,
+                line=line,
                 field=col,
             )
     seen_cols: set[str] = set()
     for name in names:
         if name in seen_cols:
-            raise InputError(
-                f"column '{name}' appears twice", path=path, line=header_line, field=name
-            )
+            raise InputError(f"column '{name}' appears twice", path=path, line=line, field=name)
         seen_cols.add(name)
     present_dir = [c for c in DIRECTION_COLUMNS if c in names]
     if present_dir and len(present_dir) != 3:
@@ -230,19 +250,23 @@ def read_joints(path: str | PathLike[str], *, units: str = "mm") -> Joints:
         raise InputError(
             "direction columns must come together as nx,ny,nz",
             path=path,
-            line=header_line,
+            line=line,
             field=missing,
         )
     known = set(REQUIRED_COLUMNS) | set(DIRECTION_COLUMNS)
     extra = [n for n in names if n not in known]
     if extra:
         log.warning("%s: ignoring columns %s", path, ", ".join(extra))
-    numeric = ["x", "y", "z", *present_dir]
-    col_of = {name: names.index(name) for name in ["id", *numeric]}
+    return sep, names, ["x", "y", "z", *present_dir]
 
-    data = rows[1:]
-    if not data:
-        raise InputError("no data rows after the header", path=path, line=header_line)
+
+def _parse_rows(
+    data: list[tuple[int, str]], sep: str, names: list[str], numeric: list[str], *, path: Path
+) -> tuple[list[str], NDArray[np.float64]]:
+    """Ids and ``(n, len(numeric))`` values (file units) of the data rows; InputError naming
+    the line and column of a wrong field count, an empty or duplicate id, a value that is not
+    a finite number, or a zero-length direction."""
+    col_of = {name: names.index(name) for name in ["id", *numeric]}
     ids: list[str] = []
     first_line: dict[str, int] = {}
     values = np.empty((len(data), len(numeric)), dtype=np.float64)
@@ -267,14 +291,17 @@ def read_joints(path: str | PathLike[str], *, units: str = "mm") -> Joints:
         for c, name in enumerate(numeric):
             raw = fields[col_of[name]].strip()
             values[r, c] = _parse_number(raw, sep, path=path, line=lineno, field=name)
-        if present_dir:
+        if len(numeric) > 3:
             d = values[r, 3:6]
             if float(np.linalg.norm(d)) < _MIN_DIRECTION_NORM:
                 raise InputError(
                     "zero-length direction (nx,ny,nz)", path=path, line=lineno, field="nx"
                 )
+    return ids, values
 
-    xyz = values[:, :3] * factor
+
+def _check_range(xyz: NDArray[np.float64], data: list[tuple[int, str]], *, path: Path) -> None:
+    """InputError naming the first coordinate (mm) beyond :data:`MAX_COORD_MM`, with its line."""
     far = np.flatnonzero(np.abs(xyz).max(axis=1) > MAX_COORD_MM)
     if len(far):
         r = int(far[0])
@@ -286,10 +313,6 @@ def read_joints(path: str | PathLike[str], *, units: str = "mm") -> Joints:
             line=data[r][0],
             field="xyz"[c],
         )
-    directions = values[:, 3:6] if present_dir else None
-    log.info("read %d joints from %s", len(ids), path)
-    lines = tuple(lineno for lineno, _ in data)
-    return Joints(ids=tuple(ids), xyz=xyz, directions=directions, source=path, lines=lines)
 
 
 def coincident_joints(joints: Joints, tol: float = COINCIDENT_MM) -> list[tuple[int, int]]:

@@ -32,6 +32,7 @@ distance and ``l`` the start-to-current-position distance.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -262,24 +263,7 @@ def simulate_robots(
         plans.append(p)
         planner.append(who)
     glob = [tuple((int(a), int(b)) for a, b in p) for p in plans]
-    grid = scenario.grid
-    zones = obstacle_zones(scenario.obstacles) if risk else []
-    p_static = np.zeros(free.shape)
-    if zones:  # collision probability of every cell centre under the obstacles' zones
-        ij = np.argwhere(np.ones(free.shape, dtype=bool))
-        p_static[ij[:, 0], ij[:, 1]] = collision_probability(zones, grid.centre(ij))
-
-    def risk_of(cells: NDArray[np.int64], others: NDArray[np.int64]) -> NDArray[np.float64]:
-        """Collision probability of moving into ``cells``: the obstacles' zones and those of
-        the other robots' cells (unit squares)."""
-        p = p_static[cells[:, 0], cells[:, 1]]
-        if not risk or not len(others):
-            return p
-        h = 0.5 * grid.cell
-        sq = np.array([[-h, -h], [h, -h], [h, h], [-h, h]])
-        rz = [expansion_zone(grid.centre(o) + sq) for o in others]
-        return np.maximum(p, collision_probability(rz, grid.centre(cells)))
-
+    risk_of = _risk_model(scenario, free, risk)
     pos = S.copy()
     idx = [0] * n
     hist = [[tuple(int(v) for v in s)] for s in S]
@@ -291,38 +275,15 @@ def simulate_robots(
         for k in range(n):
             if arrival[k] >= 0:
                 continue
-            others_now = np.delete(pos, k, axis=0).astype(float)
-            moved = np.delete(new, k, axis=0).astype(float)  # lower indices already moved
             want = plans[k][idx[k] + 1] if idx[k] + 1 < len(plans[k]) else G[k]
-
-            def clear(c: NDArray[np.int64], here=pos[k], on=others_now, mv=moved) -> bool:
-                mid = 0.5 * (here + c)
-                mids = 0.5 * (on + mv)
-                return bool(
-                    np.all(np.linalg.norm(mv - c, axis=1) > safety)
-                    and np.all(np.linalg.norm(mids - mid, axis=1) > safety)
-                )
-
-            if _step_ok(free, pos[k], want) and clear(want):
-                new[k] = want
+            step = _step(free, pos, new, k, want, S[k], G[k], safety, risk_of)
+            if step == "follow":
                 idx[k] += 1
-            else:
-                cand = [pos[k] + m for m in _MOVES]
-                cand = [c for c in cand if (c == pos[k]).all() or _step_ok(free, pos[k], c)]
-                cand = [c for c in cand if clear(c)]
-                if not cand:  # nowhere safe: stay (checked again at the end of the step)
-                    continue
-                C = np.array(cand)
-                pc = risk_of(C, np.delete(new, k, axis=0))
-                best = C[local_choice(pos[k], G[k], S[k], C, pc)]
-                new[k] = best
-                if not (best == pos[k]).all():
-                    replans[k] += 1
-                    plans[k] = np.asarray(
-                        astar_grid(free, tuple(int(v) for v in best), tuple(G[k])).points,
-                        dtype=np.int64,
-                    )
-                    idx[k] = 0
+            elif step == "replan":
+                replans[k] += 1
+                start = tuple(int(v) for v in new[k])
+                plans[k] = np.asarray(astar_grid(free, start, tuple(G[k])).points, dtype=np.int64)
+                idx[k] = 0
             if (new[k] == G[k]).all():
                 arrival[k] = t
         mids = 0.5 * (pos + new)
@@ -341,6 +302,73 @@ def simulate_robots(
         replans=tuple(replans),
         planner=tuple(planner),
     )
+
+
+def _risk_model(
+    scenario, free: NDArray[np.bool_], risk: bool
+) -> Callable[[NDArray[np.int64], NDArray[np.int64]], NDArray[np.float64]]:
+    """``risk_of(cells (c, 2), others (r, 2))``: collision probability of moving into each
+    cell under the obstacles' expansion zones and those of the other robots' cells (unit
+    squares); all zeros when ``risk`` is False."""
+    grid = scenario.grid
+    zones = obstacle_zones(scenario.obstacles) if risk else []
+    p_static = np.zeros(free.shape)
+    if zones:  # collision probability of every cell centre under the obstacles' zones
+        ij = np.argwhere(np.ones(free.shape, dtype=bool))
+        p_static[ij[:, 0], ij[:, 1]] = collision_probability(zones, grid.centre(ij))
+
+    def risk_of(cells: NDArray[np.int64], others: NDArray[np.int64]) -> NDArray[np.float64]:
+        p = p_static[cells[:, 0], cells[:, 1]]
+        if not risk or not len(others):
+            return p
+        h = 0.5 * grid.cell
+        sq = np.array([[-h, -h], [h, -h], [h, h], [-h, h]])
+        rz = [expansion_zone(grid.centre(o) + sq) for o in others]
+        return np.maximum(p, collision_probability(rz, grid.centre(cells)))
+
+    return risk_of
+
+
+def _step(
+    free: NDArray[np.bool_],
+    pos: NDArray[np.int64],
+    new: NDArray[np.int64],
+    k: int,
+    want: NDArray[np.int64],
+    start: NDArray[np.int64],
+    goal: NDArray[np.int64],
+    safety: float,
+    risk_of: Callable[[NDArray[np.int64], NDArray[np.int64]], NDArray[np.float64]],
+) -> str:
+    """Robot ``k``'s move this step, written into ``new[k]`` (``pos``: every robot at the start
+    of the step; ``new``: lower indices already moved). ``"follow"``: the next cell of its
+    path ``want``; ``"replan"``: the local choice (a different cell: re-plan from there);
+    ``"stay"``: the local choice kept it, or nowhere was safe."""
+    here = pos[k]
+    others_now = np.delete(pos, k, axis=0).astype(float)
+    moved = np.delete(new, k, axis=0).astype(float)
+
+    def clear(c: NDArray[np.int64]) -> bool:
+        mid = 0.5 * (here + c)
+        mids = 0.5 * (others_now + moved)
+        return bool(
+            np.all(np.linalg.norm(moved - c, axis=1) > safety)
+            and np.all(np.linalg.norm(mids - mid, axis=1) > safety)
+        )
+
+    if _step_ok(free, here, want) and clear(want):
+        new[k] = want
+        return "follow"
+    cand = [here + m for m in _MOVES]
+    cand = [c for c in cand if (c == here).all() or _step_ok(free, here, c)]
+    cand = [c for c in cand if clear(c)]
+    if not cand:  # nowhere safe: stay (checked again at the end of the step)
+        return "stay"
+    C = np.array(cand)
+    pc = risk_of(C, np.delete(new, k, axis=0))
+    best = C[local_choice(here, goal, start, C, pc)]
+    new[k] = best
+    return "stay" if (best == here).all() else "replan"
 
 
 def _min_pair(P: NDArray[np.float64]) -> float:

@@ -393,34 +393,78 @@ def plan_tour(
     gen = as_generator(rng)
     seed = seed_of(rng)
     g, exact = _graphs(task, metric, graph, anyangle, exact)
+    gt = None
     if optimum is None or algorithm == "exact":
         t0 = time.perf_counter()
         gt_order, gt_len, gt_method = ground_truth(g, rng=gen)
-        gt_seconds = time.perf_counter() - t0
+        gt = (gt_order, gt_len, gt_method, time.perf_counter() - t0)
         optimum = gt_len
     stages: list[tuple[str, float, float, str]] = []
+    budget = {"pop_size": pop_size, "max_iter": max_iter, "max_evals": max_evals,
+              "time_budget": time_budget}  # fmt: skip
+    run = _order_stage(task, g, algorithm, gen, metric, gt, stages, polish=polish,
+                       polish_kicks=polish_kicks, two_opt=two_opt, budget=budget,
+                       params=params)  # fmt: skip
+    t1 = time.perf_counter()
+    joined = _join_and_smooth(task, g, run["order"], metric, taut, smooth, stages)
+    smooth_seconds = time.perf_counter() - t1
+    return _tour_result(task, g, run, joined, stages, metric=metric, pipeline=pipeline,
+                        optimum=optimum, exact=exact, seed=seed,
+                        polished=bool(polish and algorithm != "exact"),
+                        smooth_seconds=smooth_seconds)  # fmt: skip
+
+
+def _order_stage(
+    task: TourScenario,
+    g: TourGraph | AnyAngleTourGraph,
+    algorithm: str,
+    gen: np.random.Generator,
+    metric: str,
+    gt: tuple[tuple[int, ...], float, str, float] | None,
+    stages: list[tuple[str, float, float, str]],
+    **ordering: Any,
+) -> dict[str, Any]:
+    """The stops' order: the ground truth ``gt`` ``(order, length, method, seconds)`` for
+    ``"exact"``, else the optimiser (and the polish) by :func:`_ordering` (``**ordering``: its
+    keywords). Appends the ``order`` (and ``polish``) stages; returns ``order``, ``length``,
+    ``name``, ``seconds``, ``used`` (the parameters) and ``o`` (:func:`_ordering`'s record)."""
     if algorithm == "exact":
-        order, length, name, seconds = gt_order, gt_len, gt_method, gt_seconds
-        used: dict[str, Any] = {}
+        assert gt is not None
+        order, length, gt_method, seconds = gt
         o: dict[str, Any] = {"opt_length": None, "polish_seconds": 0.0, "cpu": 0.0,
                              "cpu_opt": 0.0, "n_eval": 0}  # fmt: skip
         stages.append(("order", length, seconds, f"sequencer ({gt_method}) over {metric} costs"))
-    else:
-        budget = {"pop_size": pop_size, "max_iter": max_iter, "max_evals": max_evals,
-                  "time_budget": time_budget}  # fmt: skip
-        o = _ordering(g, algorithm, gen, name=task.name, polish=polish,
-                      polish_kicks=polish_kicks, two_opt=two_opt, budget=budget,
-                      params=params)  # fmt: skip
-        order, length, name = o["order"], o["length"], algorithm
-        seconds, used = o["opt_seconds"] + o["polish_seconds"], o["params"]
-        stages.append(("order", o["opt_length"], o["opt_seconds"],
-                       f"{algorithm}'s own order over {metric} costs"))  # fmt: skip
-        if polish:
-            stages.append(("polish", length, o["polish_seconds"], "2-opt/Or-opt ILS"))
-    t1 = time.perf_counter()
-    joined = _join_and_smooth(task, g, order, metric, taut, smooth, stages)
+        return {"order": order, "length": length, "name": gt_method, "seconds": seconds,
+                "used": {}, "o": o}  # fmt: skip
+    o = _ordering(g, algorithm, gen, name=task.name, **ordering)
+    stages.append(("order", o["opt_length"], o["opt_seconds"],
+                   f"{algorithm}'s own order over {metric} costs"))  # fmt: skip
+    if ordering["polish"]:
+        stages.append(("polish", o["length"], o["polish_seconds"], "2-opt/Or-opt ILS"))
+    return {"order": o["order"], "length": o["length"], "name": algorithm,
+            "seconds": o["opt_seconds"] + o["polish_seconds"], "used": o["params"],
+            "o": o}  # fmt: skip
+
+
+def _tour_result(
+    task: TourScenario,
+    g: TourGraph | AnyAngleTourGraph,
+    run: dict[str, Any],
+    joined: tuple[NDArray[np.float64], bool, NDArray[np.float64], bool],
+    stages: list[tuple[str, float, float, str]],
+    *,
+    metric: str,
+    pipeline: str,
+    optimum: float,
+    exact: tuple[tuple[int, ...], float],
+    seed: int | None,
+    polished: bool,
+    smooth_seconds: float,
+) -> TourResult:
+    """The final independent check of the returned curve and the :class:`TourResult` of
+    :func:`plan_tour` (``run``: :func:`_order_stage`; ``joined``: :func:`_join_and_smooth`)."""
     poly, legs_free, curve, smoothed = joined
-    smooth_seconds = time.perf_counter() - t1
+    order, length, name, seconds, o = (run[k] for k in ("order", "length", "name", "seconds", "o"))
     # the independent final check is exact, also where the loop sampled (grid maps)
     free = bool(segments_clear(task.exact_world, curve[:-1], curve[1:]).all())
     log.info("%s %s (%s): tour %.6g (optimum %.6g, exact any-angle %.6g), smoothed %.6g in %.3f s",
@@ -445,10 +489,10 @@ def plan_tour(
         mesh_nodes=int(mesh_nodes),
         seed=seed,
         n_eval=int(o["n_eval"]),
-        params=used,
+        params=run["used"],
         optimizer_length=o["opt_length"],
         polyline_length=float(path_length(poly)),
-        polished=bool(polish and algorithm != "exact"),
+        polished=polished,
         polish_seconds=float(o["polish_seconds"]),
         cpu_seconds=float(o["cpu"]),
         optimizer_cpu_seconds=float(o["cpu_opt"]),

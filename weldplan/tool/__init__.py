@@ -10,18 +10,54 @@
     path = plan_transitions(cell.part, gun, poses, order=order)   # ToolPath: swept-gun checked
     verify_sweeps(path, poses, cell.part, gun).ok
 
+The names above are loaded on first use (PEP 562 module ``__getattr__``): importing a module of
+this package (``weldplan.tool.route_frames``, as :mod:`weldplan.io.export` does for a route with
+poses) runs this ``__init__`` first, and an eager one would load the pose planner, the sweep
+checker and FCL with it.
+
 See docs/tool.md.
 """
 
-from weldplan.tool.model import Tool, load_tool_urdf, tool_from_mesh
-from weldplan.tool.poses import plan_weld_poses, surface_approach
-from weldplan.tool.result import Miss, WeldPose, WeldPoses
-from weldplan.tool.tool_order import tool_order
-from weldplan.tool.torch import arc_torch, shared_spot_gun
-from weldplan.tool.transit import ToolPath, Transition
-from weldplan.tool.transitions import plan_transitions
-from weldplan.tool.verify_poses import PoseChecker, PosesVerification, verify_poses
-from weldplan.tool.verify_sweeps import SweepsVerification, verify_sweeps
+from __future__ import annotations
+
+import importlib
+import sys
+import types
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # the same names, for type checkers and readers
+    from weldplan.tool.model import Tool, load_tool_urdf, tool_from_mesh
+    from weldplan.tool.poses import plan_weld_poses, surface_approach
+    from weldplan.tool.result import Miss, WeldPose, WeldPoses
+    from weldplan.tool.tool_order import tool_order
+    from weldplan.tool.torch import arc_torch, shared_spot_gun
+    from weldplan.tool.transit import ToolPath, Transition
+    from weldplan.tool.transitions import plan_transitions
+    from weldplan.tool.verify_poses import PoseChecker, PosesVerification, verify_poses
+    from weldplan.tool.verify_sweeps import SweepsVerification, verify_sweeps
+
+#: exported name -> the module of this package that defines it
+_EXPORTS = {
+    "Miss": "result",
+    "PoseChecker": "verify_poses",
+    "PosesVerification": "verify_poses",
+    "SweepsVerification": "verify_sweeps",
+    "Tool": "model",
+    "ToolPath": "transit",
+    "Transition": "transit",
+    "WeldPose": "result",
+    "WeldPoses": "result",
+    "arc_torch": "torch",
+    "load_tool_urdf": "model",
+    "plan_transitions": "transitions",
+    "plan_weld_poses": "poses",
+    "shared_spot_gun": "torch",
+    "surface_approach": "poses",
+    "tool_from_mesh": "model",
+    "tool_order": "tool_order",
+    "verify_poses": "verify_poses",
+    "verify_sweeps": "verify_sweeps",
+}
 
 __all__ = [
     "Miss",
@@ -44,3 +80,37 @@ __all__ = [
     "verify_poses",
     "verify_sweeps",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    """Import the module that defines ``name`` on first use and keep the name here."""
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))
+
+
+class _ToolPackage(types.ModuleType):
+    """This package's module type: three exports share their module's name (``tool_order``,
+    ``verify_poses``, ``verify_sweeps``), and importing such a module anywhere binds the module
+    to the package's attribute of that name (``setattr(package, "tool_order", module)``), which
+    would hide the function from ``__getattr__``. Bind the function instead, as the eager
+    ``from weldplan.tool.tool_order import tool_order`` did."""
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if (
+            isinstance(value, types.ModuleType)
+            and _EXPORTS.get(name) == name
+            and value.__name__ == f"{__name__}.{name}"
+        ):
+            value = getattr(value, name)
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _ToolPackage

@@ -233,15 +233,39 @@ def build_scene(
     (:class:`~weldplan.tool.model.Tool`) at its weld poses and the welds without a pose in red
     (:func:`weldplan.viz.tool_scene.draw_tool`).
     """
-    mc = _meshcat()
-    g = mc.geometry
-    from meshcat.animation import Animation
-
+    g = _meshcat().geometry
     mesh = _part_mesh(part)
     root = vis["weldplan"]
     root.delete()
-    # frame the route (joints and legs), not the whole part: on a car body the route would
-    # otherwise be a speck; the part is drawn around it (zoom out to see all of it)
+    r_joint, r_via = _frame(root, route, mesh)
+    if mesh is not None:
+        root["part"].set_object(
+            g.TriangularMeshGeometry(np.asarray(mesh.vertices), np.asarray(mesh.faces)),
+            g.MeshLambertMaterial(color=0x9AA6B2, opacity=0.55, transparent=True, side=2),
+        )
+    _draw_joints(root, route, r_joint, labels)
+    _draw_legs(root, route, r_via)
+    if route.tool:
+        from weldplan.viz.tool_scene import draw_tool
+
+        draw_tool(root, route, tool, r_joint)
+    _draw_torch(vis, root, route, tool, r_joint, animate)
+    if camera:
+        # meshcat's camera frame is y-up: this looks down at the part from the front right
+        vis["/Cameras/default/rotated/<object>"].set_property("position", [1.3, 1.05, 1.65])
+        vis["/Grid"].set_property("visible", False)
+        vis["/Axes"].set_property("visible", False)
+    log.debug("scene: %d legs, %d joints", len(route.legs), len(route.joint_ids))
+
+
+def _frame(root: Any, route: Route, mesh: trimesh.Trimesh | None) -> tuple[float, float]:
+    """Set ``root``'s mm -> viewer transform (:func:`scene_transform`) and return the joint
+    and via sphere radii (mm, relative to the framed extent).
+
+    The frame holds the route (joints, legs and the tool's transitions), not the whole part: on
+    a car body the route would otherwise be a speck; the part is drawn around it (zoom out to
+    see all of it). A route of one point frames the part.
+    """
     pts = [route.joint_xyz, *(leg.points for leg in route.legs)]
     if route.tool.get("transitions"):  # the tool's path too: its retracts and exits
         pts += [np.asarray(t["positions"]) for t in route.tool["transitions"]["transitions"]]
@@ -249,17 +273,14 @@ def build_scene(
     if len(allp) < 2 or np.ptp(allp, axis=0).max() < 1e-6:
         if mesh is not None:
             allp = np.concatenate([allp, np.asarray(mesh.vertices)], axis=0)
-    T = scene_transform(allp)
-    root.set_transform(T)
+    root.set_transform(scene_transform(allp))
     extent = float(np.max(allp.max(axis=0) - allp.min(axis=0))) or 1.0
-    r_joint = extent / 120.0
-    r_via = extent / 300.0
+    return extent / 120.0, extent / 300.0
 
-    if mesh is not None:
-        root["part"].set_object(
-            g.TriangularMeshGeometry(np.asarray(mesh.vertices), np.asarray(mesh.faces)),
-            g.MeshLambertMaterial(color=0x9AA6B2, opacity=0.55, transparent=True, side=2),
-        )
+
+def _draw_joints(root: Any, route: Route, r_joint: float, labels: bool) -> None:
+    """``joints/<id>`` spheres (red where visited, grey where not) and ``labels/<id>``."""
+    g = _meshcat().geometry
     visited = set(route.order)
     for jid, p in zip(route.joint_ids, route.joint_xyz, strict=True):
         color = 0xD62728 if jid in visited else 0x7F7F7F
@@ -270,6 +291,10 @@ def build_scene(
             lab.set_object(_text_sprite(jid))
             lab.set_transform(_translation(p + [0.0, 0.0, 3.5 * r_joint], scale=14.0 * r_joint))
 
+
+def _draw_legs(root: Any, route: Route, r_via: float) -> None:
+    """``route/leg_<k>`` lines (one colour per leg) with their tubes, and ``vias/leg_<k>``."""
+    g = _meshcat().geometry
     colors = leg_colors(len(route.legs))
     for k, (leg, c) in enumerate(zip(route.legs, colors, strict=True)):
         P = np.asarray(leg.points, dtype=np.float32)
@@ -290,11 +315,16 @@ def build_scene(
             via.set_object(g.Sphere(r_via * 1.8), g.MeshLambertMaterial(color=0x222222))
             via.set_transform(_translation(v))
 
-    if route.tool:
-        from weldplan.viz.tool_scene import draw_tool
 
-        draw_tool(root, route, tool, r_joint)
+def _draw_torch(
+    vis: Any, root: Any, route: Route, tool: Any, r_joint: float, animate: bool
+) -> None:
+    """The ``torch`` cone at the first waypoint and, with ``animate``, its animation along
+    the route at constant speed (:data:`ANIMATION_SECONDS`, 30 frames a second; the tool's
+    too when the route carries one)."""
+    from meshcat.animation import Animation
 
+    g = _meshcat().geometry
     torch = root["torch"]
     torch.set_object(
         g.Cylinder(6 * r_joint, radiusTop=2.0 * r_joint, radiusBottom=0.0),
@@ -315,12 +345,6 @@ def build_scene(
 
             animate_tool(anim, root, route, tool, ANIMATION_SECONDS, 30)
         vis.set_animation(anim, play=True, repetitions=1000)
-    if camera:
-        # meshcat's camera frame is y-up: this looks down at the part from the front right
-        vis["/Cameras/default/rotated/<object>"].set_property("position", [1.3, 1.05, 1.65])
-        vis["/Grid"].set_property("visible", False)
-        vis["/Axes"].set_property("visible", False)
-    log.debug("scene: %d legs, %d joints", len(route.legs), len(route.joint_ids))
 
 
 def _torch_pose(p: NDArray[np.float64], r_joint: float) -> NDArray[np.float64]:

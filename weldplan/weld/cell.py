@@ -25,7 +25,6 @@ faces the loader removed.
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from os import PathLike
 from typing import Any
@@ -34,7 +33,7 @@ import numpy as np
 import trimesh
 from numpy.typing import ArrayLike, NDArray
 
-from weldplan.errors import InputError, PlanningError
+from weldplan.errors import InputError
 from weldplan.geometry.collision import CollisionModel
 from weldplan.geometry.grid import (
     DEFAULT_CLEARANCE,
@@ -47,19 +46,15 @@ from weldplan.geometry.solids import ClosedSolids
 from weldplan.io.joints import COINCIDENT_MM, Joints, coincident_joints, read_joints
 from weldplan.io.mesh import geometry_hash, load_part
 from weldplan.weld.validate import _is_real
+from weldplan.weld.virtual import (  # noqa: F401 - virtual_joints' home was this module
+    _SEARCH_FACTOR,
+    APPROACH_CONE_DEG,
+    APPROACH_TRIES,
+    virtual_joints,
+)
 
 log = logging.getLogger(__name__)
 
-#: default search radius (mm) for a joint's virtual joint, in units of (clearance + pitch)
-_SEARCH_FACTOR = 4.0
-#: default half-angle (degrees) of the cone around a joint's approach direction in which its
-#: virtual joint must lie. The verifier checks the approach spot -> virtual joint as a cone of
-#: radius growing from 0 to the clearance (weldplan.weld.verify); a virtual joint almost sideways
-#: of the approach (a flange seen edge-on) makes that cone graze the sheet: on car2's synthetic
-#: sets the old half-space rule (90 degrees) left 30 of 200 legs failing verification.
-APPROACH_CONE_DEG = 45.0
-#: candidates (nearest first) whose approach build_cell checks per joint before giving up
-APPROACH_TRIES = 64
 #: floor (mm) of the default largest distance from a joint to the part's surface
 JOINT_DISTANCE_MIN_MM = 20.0
 
@@ -250,120 +245,6 @@ def _fmt(v: ArrayLike) -> str:
     return "(" + ", ".join(f"{x:.2f}" for x in np.asarray(v, dtype=float)) + ")"
 
 
-def virtual_joints(
-    grid: ObstacleGrid,
-    xyz: ArrayLike,
-    *,
-    ids: tuple[str, ...] | None = None,
-    search_radius: float | None = None,
-    directions: ArrayLike | None = None,
-    approach_cone: float = APPROACH_CONE_DEG,
-    approach_free: Callable[[NDArray[np.float64], NDArray[np.float64]], bool] | None = None,
-    max_tries: int = APPROACH_TRIES,
-) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
-    """Nearest free voxel centre of each point (Wang et al. 2017, section 3, step 4).
-
-    Parameters
-    ----------
-    grid
-        The obstacle grid.
-    xyz
-        ``(n, 3)`` joint positions (mm).
-    ids
-        Joint names for error messages (default: 1-based row numbers).
-    search_radius
-        Largest allowed offset (mm); default ``4 * (clearance + pitch)`` (40 mm at 5/5 mm).
-    directions
-        Optional ``(n, 3)`` torch approach directions (pointing from the joint towards the torch):
-        when given, only free centres within ``approach_cone`` degrees of that direction are
-        candidates (``(c - p) . d >= |c - p| |d| cos(approach_cone)``).
-    approach_cone
-        Half-angle (degrees, in (0, 90]) of that cone; :data:`APPROACH_CONE_DEG` (45) by
-        default, 90 for the whole torch-side half-space. Not in the paper, which takes the
-        nearest free centre whatever its side: weldplan's approach is verified as a cone
-        (:mod:`weldplan.weld.verify`), and a virtual joint far off the approach direction fails
-        it.
-    approach_free
-        Optional ``approach_free(spot (3,), centre (3,)) -> bool``: the candidates (nearest
-        first, at most ``max_tries``) are offered to it and the first it accepts is taken; when
-        it accepts none, the nearest candidate is taken and a warning logged (the verifier will
-        then name the joint). :func:`build_cell` passes the verifier's approach-cone check
-        (:func:`weldplan.weld.verify.approach_free`), so that an approach which grazes a
-        neighbouring flange is avoided when a free centre a little farther has a clean one.
-    max_tries
-        Candidates offered to ``approach_free`` per joint.
-
-    Returns
-    -------
-    index, centre, offset
-        ``(n, 3) int64`` grid indices, ``(n, 3) float`` centres (mm), ``(n,) float`` distances.
-        Ties are broken by the lowest flat grid index, so the answer is deterministic.
-
-    Raises
-    ------
-    PlanningError
-        A joint has no free centre within ``search_radius`` (the message names the joint).
-    """
-    P = np.asarray(xyz, dtype=np.float64).reshape(-1, 3)
-    if ids is None:
-        ids = tuple(str(k + 1) for k in range(len(P)))
-    if search_radius is None:
-        search_radius = _SEARCH_FACTOR * (grid.clearance + grid.pitch)
-    D = None if directions is None else np.asarray(directions, dtype=np.float64).reshape(-1, 3)
-    if not 0.0 < approach_cone <= 90.0:
-        raise ValueError(f"approach_cone must lie in (0, 90] degrees, got {approach_cone}")
-    cos_cone = 0.0 if approach_cone == 90.0 else float(np.cos(np.radians(approach_cone)))
-    if D is not None:
-        D = D / np.maximum(np.linalg.norm(D, axis=1, keepdims=True), 1e-300)
-    reach = int(np.ceil(search_radius / grid.pitch)) + 1
-    shape = np.asarray(grid.shape)
-    index = np.empty((len(P), 3), dtype=np.int64)
-    offset = np.empty(len(P))
-    for k, p in enumerate(P):
-        c = grid.world_to_index(p)
-        lo = np.clip(c - reach, 0, shape)
-        hi = np.clip(c + reach + 1, 0, shape)
-        block = grid.free[lo[0] : hi[0], lo[1] : hi[1], lo[2] : hi[2]]
-        cand = np.argwhere(block) + lo
-        if len(cand):
-            centres = grid.index_to_world(cand)
-            dist = np.linalg.norm(centres - p, axis=1)
-            ok = dist <= search_radius
-            if D is not None:
-                ok &= (centres - p) @ D[k] >= dist * cos_cone
-            cand, dist = cand[ok], dist[ok]
-        if len(cand) == 0:
-            raise PlanningError(
-                f"weld joint {ids[k]!r} at {_fmt(p)} mm has no free voxel centre within "
-                f"{search_radius:g} mm (clearance {grid.clearance:g} mm, pitch {grid.pitch:g} mm)"
-                + (
-                    ""
-                    if D is None
-                    else f" within {approach_cone:g} degrees of its approach direction "
-                    f"{_fmt(D[k])} (approach_cone)"
-                )
-                + ("" if grid.contains(c) else "; it lies outside the grid region")
-            )
-        flat = grid.ravel(cand)
-        rank = np.lexsort((flat, dist))
-        best = rank[0]
-        if approach_free is not None:
-            for r in rank[:max_tries]:
-                if approach_free(p, grid.index_to_world(cand[r])):
-                    best = r
-                    break
-            else:
-                log.warning(
-                    "weld joint %r: none of its %d nearest free centres gives an approach "
-                    "clear of the part; taking the nearest",
-                    ids[k],
-                    min(len(rank), max_tries),
-                )
-        index[k] = cand[best]
-        offset[k] = dist[best]
-    return index, grid.index_to_world(index), offset
-
-
 def build_cell(
     part: trimesh.Trimesh,
     joints: Joints,
@@ -407,30 +288,16 @@ def build_cell(
     PlanningError
         A joint has no free voxel centre near it (:func:`virtual_joints`).
     """
-    pitch = _positive_mm("pitch", pitch)
-    clearance = _positive_mm("clearance", clearance)
-    margin = _finite_mm("margin", margin, minimum=0.0, text="margin must be >= 0 mm")
-    if search_radius is not None:
-        search_radius = _positive_mm("search_radius", search_radius)
-    if max_joint_distance is None:
-        max_joint_distance = default_max_joint_distance(clearance, pitch, search_radius)
-    else:
-        max_joint_distance = _positive_mm("max_joint_distance", max_joint_distance)
+    pitch, clearance, margin, search_radius, max_joint_distance = _settings(
+        pitch, clearance, margin, search_radius, max_joint_distance
+    )
     if not isinstance(joints, Joints):
         raise InputError(f"joints must be weldplan Joints, got {type(joints).__name__}")
     if not isinstance(part, trimesh.Trimesh) or len(part.faces) == 0:
         raise InputError("the part must be a trimesh.Trimesh with at least one triangle")
     collision = CollisionModel(part)
     far = check_joint_distances(collision, joints, max_joint_distance)
-    pairs = coincident_joints(joints)
-    for i, j in pairs:
-        log.warning(
-            "%s and %s are at the same coordinates %s mm (within %g mm)",
-            joints.where(i),
-            joints.where(j),
-            _fmt(joints.xyz[i]),
-            COINCIDENT_MM,
-        )
+    pairs = _coincident(joints)
     solids = ClosedSolids.of(part)
     grid = build_grid(
         part,
@@ -453,7 +320,6 @@ def build_cell(
         approach_cone=approach_cone,
         approach_free=lambda p, c: approach_free(collision, p, c, clearance),
     )
-    meta = part.metadata.get("weldplan") or {}
     return Cell(
         part=part,
         joints=joints,
@@ -464,14 +330,64 @@ def build_cell(
         offsets=off,
         clearance=float(clearance),
         pitch=float(pitch),
-        diagnostics={
-            "repairs": dict(meta.get("repairs") or {"degenerate_faces": 0, "duplicate_faces": 0}),
-            "coincident_joints": [(joints.ids[i], joints.ids[j]) for i, j in pairs],
-            "closed_solids": len(solids),
-            "joint_distance_max_mm": round(far, 6),
-            "max_joint_distance_mm": max_joint_distance,
-        },
+        diagnostics=_diagnostics(part, joints, pairs, len(solids), far, max_joint_distance),
     )
+
+
+def _diagnostics(
+    part: trimesh.Trimesh,
+    joints: Joints,
+    pairs: list[tuple[int, int]],
+    n_solids: int,
+    far: float,
+    max_joint_distance: float,
+) -> dict[str, Any]:
+    """:attr:`Cell.diagnostics`: the loader's repairs, coincident joints (by id), closed
+    solids, and the largest joint-to-part distance against its limit (mm)."""
+    meta = part.metadata.get("weldplan") or {}
+    return {
+        "repairs": dict(meta.get("repairs") or {"degenerate_faces": 0, "duplicate_faces": 0}),
+        "coincident_joints": [(joints.ids[i], joints.ids[j]) for i, j in pairs],
+        "closed_solids": n_solids,
+        "joint_distance_max_mm": round(far, 6),
+        "max_joint_distance_mm": max_joint_distance,
+    }
+
+
+def _settings(
+    pitch: Any,
+    clearance: Any,
+    margin: Any,
+    search_radius: Any,
+    max_joint_distance: Any,
+) -> tuple[float, float, float, float | None, float]:
+    """:func:`build_cell`'s settings checked (InputError naming the setting) and
+    ``max_joint_distance`` defaulted."""
+    pitch = _positive_mm("pitch", pitch)
+    clearance = _positive_mm("clearance", clearance)
+    margin = _finite_mm("margin", margin, minimum=0.0, text="margin must be >= 0 mm")
+    if search_radius is not None:
+        search_radius = _positive_mm("search_radius", search_radius)
+    if max_joint_distance is None:
+        max_joint_distance = default_max_joint_distance(clearance, pitch, search_radius)
+    else:
+        max_joint_distance = _positive_mm("max_joint_distance", max_joint_distance)
+    return pitch, clearance, margin, search_radius, max_joint_distance
+
+
+def _coincident(joints: Joints) -> list[tuple[int, int]]:
+    """The pairs of joints at the same coordinates (:func:`coincident_joints`), each logged as
+    a warning with its lines."""
+    pairs = coincident_joints(joints)
+    for i, j in pairs:
+        log.warning(
+            "%s and %s are at the same coordinates %s mm (within %g mm)",
+            joints.where(i),
+            joints.where(j),
+            _fmt(joints.xyz[i]),
+            COINCIDENT_MM,
+        )
+    return pairs
 
 
 def check_joint_distances(

@@ -222,59 +222,161 @@ def ant_colony_grid(
         path = pg.index(np.array([s]))
         return ColonyResult(path, 0.0, 0, 0, 0)
 
-    n_vox = len(free)
     moves = neighbour_offsets(6)
     offs = pg.offsets(moves)
     edge_ok = _blocked_mask(pg, offs, blocked_edges or ())
     max_steps = p.max_steps or int(free.sum())
     m = p.n_ants
+    eta_e, near_food = _visibility(pg, g, offs, p.beta, edge_ok)
 
-    # eta^beta per voxel, eta = 1 / (distance to the food) in steps (a common factor cancels in
-    # equation 3). The food gets 0 here: an ant next to it is sent there explicitly (eta = inf).
+    trail = _Pheromone(eta_e, p)
+    allowed = np.ones(m * len(free), dtype=bool)  # not in the tabu list, per ant (flat)
+    base = np.arange(m) * len(free)
+    walk = _Walk(offs, s, g, near_food, max_steps, deadline)
+
+    tally = _Tally()
+    timed_out = False
+    for it in range(p.n_iterations):
+        H, timed_out = walk.run(trail.weight, allowed, base, gen)
+        if timed_out:
+            break
+        reached = H[-1] == g
+        steps = (H[1:] != H[:-1]).sum(axis=0)
+        lengths = np.where(reached, steps * pitch, np.inf)
+        trail.deposit(H, reached, lengths, walk.code)
+        tally.add(H, reached, steps, lengths)
+        if callback is not None:
+            callback(it, tally.best_len)
+    if timed_out:
+        log.debug("colony stopped by its deadline after %d iterations", tally.done)
+    return tally.result(pg, m, timed_out)
+
+
+class _Tally:
+    """The best route so far and the per-iteration statistics of :class:`ColonyResult`."""
+
+    def __init__(self) -> None:
+        self.best_len = math.inf
+        self.best_flat: NDArray[np.int64] | None = None
+        self.best_hist: list[float] = []
+        self.it_best: list[float] = []
+        self.it_mean: list[float] = []
+        self.done = 0
+        self.dead_total = 0
+
+    def add(
+        self,
+        H: NDArray[np.int64],
+        reached: NDArray[np.bool_],
+        steps: NDArray[np.int64],
+        lengths: NDArray[np.float64],
+    ) -> None:
+        """One finished iteration: ``(T + 1, M)`` positions, and per ant whether it reached the
+        food, its moves and its route length (mm, inf when it did not)."""
+        self.done += 1
+        self.dead_total += int((~reached).sum())
+        k = int(np.argmin(lengths))
+        finite = lengths[np.isfinite(lengths)]
+        self.it_best.append(float(lengths[k]))
+        self.it_mean.append(float(finite.mean()) if finite.size else math.nan)
+        if lengths[k] < self.best_len:
+            self.best_len = float(lengths[k])
+            col = H[:, k]
+            self.best_flat = col[: int(steps[k]) + 1].copy()
+        self.best_hist.append(self.best_len)
+
+    def result(self, pg: PaddedGrid, m: int, timed_out: bool) -> ColonyResult:
+        reason = ""
+        if self.best_flat is None:
+            reason = (
+                "time budget exhausted before any ant reached the food"
+                if timed_out
+                else f"no ant reached the food in {self.done} iterations (dead ends)"
+            )
+        return ColonyResult(
+            None if self.best_flat is None else pg.index(self.best_flat),
+            self.best_len,
+            self.done,
+            self.done * m,
+            self.dead_total,
+            tuple(self.best_hist),
+            tuple(self.it_best),
+            tuple(self.it_mean),
+            reason,
+        )
+
+
+def _visibility(
+    pg: PaddedGrid,
+    g: int,
+    offs: NDArray[np.int64],
+    beta: float,
+    edge_ok: NDArray[np.bool_] | None,
+) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    """``(n_vox, 6)`` eta^beta of each move's target and ``(n_vox,)`` whether a voxel is next
+    to the food ``g`` (padded flat index).
+
+    eta = 1 / (distance to the food) in steps (a common factor cancels in equation 3); the food
+    gets 0 here: an ant next to it is sent there explicitly (eta = inf). A move into an
+    obstacle or along a blocked edge gets 0.
+    """
+    n_vox = len(pg.free)
     coords = np.indices(pg.padded_shape, dtype=np.float64).reshape(3, -1)
     gi = np.asarray(np.unravel_index(g, pg.padded_shape), dtype=np.float64)[:, None]
     dist = np.sqrt(((coords - gi) ** 2).sum(axis=0))
     del coords
     dist[g] = np.inf
-    eta_b = dist ** (-p.beta)
+    eta_b = dist ** (-beta)
     eta_b[g] = 0.0
     # per move (voxel, direction): eta^beta of the target, 0 where the target is an obstacle
     nb_all = np.arange(n_vox)[:, None] + offs
     np.clip(nb_all, 0, n_vox - 1, out=nb_all)  # rows of the padding layer are never used
-    eta_e = eta_b[nb_all] * free[nb_all]
+    eta_e = eta_b[nb_all] * pg.free[nb_all]
     if edge_ok is not None:
         eta_e *= edge_ok
-    del nb_all, dist, eta_b
     near_food = np.zeros(n_vox, dtype=bool)
     near_food[g - offs] = True
+    return eta_e, near_food
 
-    # tau = scale * tau_raw: evaporation is a uniform factor (it cancels in equation 3), so it
-    # only updates `scale`; deposits add Q / (L scale) to tau_raw, and the roulette weights
-    # w = tau_raw^alpha eta^beta change only on the moves that received pheromone.
-    tau_raw = np.full((n_vox, 6), p.tau0)
-    scale = 1.0
-    weight = (tau_raw**p.alpha if p.alpha != 1.0 else tau_raw) * eta_e
-    allowed = np.ones(m * n_vox, dtype=bool)  # not in the tabu list, per ant (flat)
-    ants = np.arange(m)
-    base = ants * n_vox
-    offs7 = np.append(offs, 0)  # move 6: stay (an ant at a dead end)
-    code = np.full(2 * int(np.abs(offs).max()) + 1, -1, dtype=np.int64)
-    code[offs + int(np.abs(offs).max())] = np.arange(6)  # flat move -> direction
 
-    best_len = math.inf
-    best_flat: NDArray[np.int64] | None = None
-    best_hist: list[float] = []
-    it_best: list[float] = []
-    it_mean: list[float] = []
-    done = 0
-    dead_total = 0
-    timed_out = False
-    for it in range(p.n_iterations):
-        pos = np.full(m, s, dtype=np.int64)
+class _Walk:
+    """One iteration's tour construction: every ant walks from the nest ``s`` by the roulette
+    wheel of equation 3 (tabu: no voxel twice) until it reaches the food ``g``, is stuck, or
+    ``max_steps`` pass."""
+
+    def __init__(
+        self,
+        offs: NDArray[np.int64],
+        s: int,
+        g: int,
+        near_food: NDArray[np.bool_],
+        max_steps: int,
+        deadline: float | None,
+    ) -> None:
+        self.offs, self.s, self.g = offs, s, g
+        self.near_food, self.max_steps, self.deadline = near_food, max_steps, deadline
+        self.offs7 = np.append(offs, 0)  # move 6: stay (an ant at a dead end)
+        self.cmax = int(np.abs(offs).max())
+        self.code = np.full(2 * self.cmax + 1, -1, dtype=np.int64)
+        self.code[offs + self.cmax] = np.arange(6)  # flat move + cmax -> direction
+
+    def run(
+        self,
+        weight: NDArray[np.float64],
+        allowed: NDArray[np.bool_],
+        base: NDArray[np.int64],
+        gen: np.random.Generator,
+    ) -> tuple[NDArray[np.int64], bool]:
+        """``(T + 1, M)`` positions (repeated once an ant has stopped) and whether the deadline
+        stopped the walk. ``allowed`` (the tabu lists, flat per ant) is cleared again on return."""
+        offs, offs7, g, near_food = self.offs, self.offs7, self.g, self.near_food
+        m = len(base)
+        pos = np.full(m, self.s, dtype=np.int64)
         active = np.ones(m, dtype=bool)
-        allowed[base + s] = False
+        allowed[base + self.s] = False
         hist = [pos]
         t = 0  # every walking ant moves at every step: its move count is the step count
+        timed_out = False
         while True:
             bp = base + pos
             w = weight[pos] * allowed[bp[:, None] + offs]  # (M, 6); padding keeps it inside
@@ -295,64 +397,55 @@ def ant_colony_grid(
             hist.append(pos)
             t += 1
             active = moving & (pos != g)
-            if t >= max_steps or not _count_nonzero(active):
+            if t >= self.max_steps or not _count_nonzero(active):
                 break
-            if deadline is not None and time.perf_counter() > deadline:
+            if self.deadline is not None and time.perf_counter() > self.deadline:
                 timed_out = True
                 break
-        H = np.stack(hist)  # (T + 1, M) positions, repeated once an ant has stopped
+        H = np.stack(hist)
         allowed[(base + H).ravel()] = True  # clear the tabu lists
-        if timed_out:
-            break
-        reached = pos == g
-        steps = (H[1:] != H[:-1]).sum(axis=0)
-        lengths = np.where(reached, steps * pitch, np.inf)
-        # equations 4-5: evaporate, then every ant that reached the food adds Q / L_k on its moves
-        scale *= p.rho
+        return H, timed_out
+
+
+class _Pheromone:
+    """The trails and the roulette weights w = tau^alpha eta^beta of every move ``(n_vox, 6)``.
+
+    tau = scale * tau_raw: evaporation is a uniform factor (it cancels in equation 3), so it
+    only updates ``scale``; deposits add Q / (L scale) to tau_raw, and the weights change only
+    on the moves that received pheromone.
+    """
+
+    def __init__(self, eta_e: NDArray[np.float64], p: AntColonyParams) -> None:
+        self.eta_e, self.p = eta_e, p
+        self.tau_raw = np.full(eta_e.shape, p.tau0)
+        self.scale = 1.0
+        self.weight = self._weights(self.tau_raw, eta_e)
+
+    def _weights(self, t: NDArray[np.float64], eta: NDArray[np.float64]) -> NDArray[np.float64]:
+        return (t**self.p.alpha if self.p.alpha != 1.0 else t) * eta
+
+    def deposit(
+        self,
+        H: NDArray[np.int64],
+        reached: NDArray[np.bool_],
+        lengths: NDArray[np.float64],
+        code: NDArray[np.int64],
+    ) -> None:
+        """Equations 4-5: evaporate, then every ant that reached the food adds Q / L_k on its
+        moves (``H``: ``(T + 1, M)`` positions; ``code``: flat move + cmax -> direction)."""
+        p, tau_raw = self.p, self.tau_raw
+        cmax = (len(code) - 1) // 2
+        self.scale *= p.rho
         src, dst = H[:-1], H[1:]
         moved = (src != dst) & reached
         if moved.any():
             u = src[moved]
-            d = code[dst[moved] - u + int(np.abs(offs).max())]
-            dep = np.broadcast_to(p.q / lengths, src.shape)[moved] / scale
+            d = code[dst[moved] - u + cmax]
+            dep = np.broadcast_to(p.q / lengths, src.shape)[moved] / self.scale
             np.add.at(tau_raw, (u, d), dep)
             rows = np.unique(u)
-            t = tau_raw[rows]
-            weight[rows] = (t**p.alpha if p.alpha != 1.0 else t) * eta_e[rows]
-        if scale < 1e-200:  # renormalise long before float64 underflows
-            tau_raw *= scale
-            scale = 1.0
-            weight = (tau_raw**p.alpha if p.alpha != 1.0 else tau_raw) * eta_e
-        done += 1
-        dead_total += int((~reached).sum())
-        k = int(np.argmin(lengths))
-        finite = lengths[np.isfinite(lengths)]
-        it_best.append(float(lengths[k]))
-        it_mean.append(float(finite.mean()) if finite.size else math.nan)
-        if lengths[k] < best_len:
-            best_len = float(lengths[k])
-            col = H[:, k]
-            best_flat = col[: int(steps[k]) + 1].copy()
-        best_hist.append(best_len)
-        if callback is not None:
-            callback(it, best_len)
-    if timed_out:
-        log.debug("colony stopped by its deadline after %d iterations", done)
-    reason = ""
-    if best_flat is None:
-        reason = (
-            "time budget exhausted before any ant reached the food"
-            if timed_out
-            else f"no ant reached the food in {done} iterations (dead ends)"
-        )
-    return ColonyResult(
-        None if best_flat is None else pg.index(best_flat),
-        best_len,
-        done,
-        done * m,
-        dead_total,
-        tuple(best_hist),
-        tuple(it_best),
-        tuple(it_mean),
-        reason,
-    )
+            self.weight[rows] = self._weights(tau_raw[rows], self.eta_e[rows])
+        if self.scale < 1e-200:  # renormalise long before float64 underflows
+            tau_raw *= self.scale
+            self.scale = 1.0
+            self.weight = self._weights(tau_raw, self.eta_e)
