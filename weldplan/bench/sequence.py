@@ -6,7 +6,9 @@ Four tables, one run, written as markdown to ``OUT/sequence.md``:
    the paper's PSO + polish, fast-tsp called directly, LKH-3 (elkai, if installed) and OR-Tools
    at each of ``--budgets`` seconds on the shared TSPLIB set up to u2152
    (:mod:`weldplan.bench.tsp_peers`); budgets above 10 s only on ``--long-instances``. Lengths
-   recomputed from the returned tours.
+   recomputed from the returned tours. fast-tsp has no seed, so ``--repeats R`` runs each cell
+   R times (solvers interleaved) and adds the distribution (min, median, max, runs within the
+   target).
 1. TSPLIB (closed tours, TSPLIB integer distances): gap to the known optimum and wall time of
    the paper's TSP-PSO alone (Table 4 parameters), PSO + polish and nearest neighbour + polish
    within ``--budget`` seconds each, OR-Tools (its default first solution plus

@@ -274,7 +274,7 @@ def solve_sequence(
             raise _no_finite_order(red, exact=True)
         name = "exact"
     elif method == "fast-tsp":
-        left = None if time_budget is None else time_budget - (time.perf_counter() - t0)
+        left = None if time_budget is None else max(0.0, time_budget - (time.perf_counter() - t0))
         tour, params = _fast_tsp(red, left, av, pp, gen)
         name = "fast-tsp"
     else:
