@@ -214,6 +214,25 @@ def test_bench_scale_options_parse():
             scale._ints(bad)
 
 
+def test_throughput_plans_with_the_pipelines_default_planner(station):
+    """bench scale's throughput batches (and the whole-body one) plan the blocked pairs with
+    ``PlanConfig()``'s planner and parameters (refinement included), not a hard-coded one."""
+    from weldplan.bench.scale_body import default_pair_args, default_planner
+    from weldplan.weld.pairtasks import _plan_pairs_task
+
+    cfg = PlanConfig()
+    n = len(station.joints.ids)
+    iu, ju = np.triu_indices(n, 1)
+    V = station.virtual_xyz
+    blocked = np.flatnonzero(~station.collision.segments_free(V[iu], V[ju], station.clearance))
+    args = default_pair_args(iu, ju, blocked[:1])
+    assert args == [(int(iu[blocked[0]]), int(ju[blocked[0]]), cfg.planner, dict(cfg.aco),
+                     int(blocked[0]))]  # fmt: skip
+    assert cfg.aco["refine"] and default_planner() == f"{cfg.planner} + refine"
+    (lp,) = _plan_pairs_task(station, args, None)
+    assert lp.success and lp.method == cfg.planner
+
+
 def test_bench_scale_reports_a_refused_size_as_a_row(tmp_path, monkeypatch):
     """A size whose plan is refused (car2's 1000-joint set: 3 joints no path reaches) is a row
     of the table, not a crash of the whole benchmark."""

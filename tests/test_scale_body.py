@@ -113,6 +113,7 @@ def test_bench_scale_whole_body_writes_both_tables(tmp_path):
     from weldplan.bench import scale_body
 
     thr = {"n": 4000, "candidates": 13338, "blocked": 4905, "pairs": 2, "cell": 100.0,
+           "planner": "exact + refine",
            "runs": [dict(workers=w, wall=10.0 / w, cpu=10.0, peak_mib=900.0 * w, same=True,
                          load_before=[1, 1, 1], load_after=[2, 2, 2]) for w in (1, 2)]}  # fmt: skip
     e2e = {"workers": 2, "cell": 90.0, "wall": 500.0, "cpu_self": 100.0, "cpu_children": 300.0,
@@ -123,6 +124,7 @@ def test_bench_scale_whole_body_writes_both_tables(tmp_path):
     assert scale_body.run_body(args, "car2.obj", tmp_path, "before", lambda code: next(got)) == 0
     md = (tmp_path / "scale-4000.md").read_text()
     assert "| 2 | 5.0 | **2.00x** | 10.0 | 1800 | True |" in md
+    assert "planner exact + refine (the pipeline's default)" in md
     assert "| 2 | 90 |" in md and "2 groups" in md and "| 400 | 4000 |" in md
     bad = _parser().parse_args(["--joints", "7"])
     from weldplan.errors import InputError

@@ -3,6 +3,8 @@ sequencer needs, the rounding bound, clipping, the ATSP transform, infinite and 
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 from conftest import require_shared
@@ -12,8 +14,10 @@ from weldplan.optim.discrete.costs import cost_matrix, order_cost, reduce_to_tou
 from weldplan.optim.discrete.sequence import solve_sequence
 from weldplan.optim.discrete.tsp_engine import (
     FINITE_MAX,
+    _integers,
     choose_scale,
     fast_tsp_tour,
+    search_threads,
     solve_fast_tsp,
 )
 
@@ -62,7 +66,10 @@ def test_integral_costs_are_exact_and_unscaled() -> None:
     assert got.cost == solve_sequence(C, method="exact", closed=True).cost
 
 
-@pytest.mark.parametrize(("name", "optimum"), [("att48", 10628), ("berlin52", 7542)])
+@pytest.mark.parametrize(
+    ("name", "optimum"),
+    [("att48", 10628), ("berlin52", 7542), ("eil51", 426), ("st70", 675), ("kroA100", 21282)],
+)
 def test_tsplib_optimum(name: str, optimum: int) -> None:
     from weldplan.io.tsplib import read_tsplib
 
@@ -132,3 +139,47 @@ def test_auto_uses_the_engine_above_held_karp_size() -> None:
     C = cost_matrix(_points(30, 6))
     assert solve_sequence(C).method == "fast-tsp"
     assert solve_sequence(C[:13, :13]).method == "exact"
+
+
+@pytest.mark.parametrize("name", ["a280", "rat783", "u1060", "d1291", "u2152"])
+def test_tsplib_distances_reach_the_solver_exactly(name: str) -> None:
+    """fast-tsp sees TSPLIB's own ``nint`` distances, unscaled: u1060's reach 20,262 (above the
+    16-bit room), so they are clipped at FINITE_MAX, far above any edge a good tour uses, rather
+    than scaled by a non-integer factor that would reorder tours one unit apart."""
+    from weldplan.io.tsplib import read_tsplib
+
+    D = read_tsplib(require_shared("tsplib", f"{name}.tsp")).matrix()
+    I, s, cap, exact = _integers(D, None, None)
+    assert s == 1.0 and exact
+    fits = D <= FINITE_MAX
+    assert np.array_equal(I[fits], D[fits])
+    assert (cap == FINITE_MAX) == (not fits.all())
+    if not fits.all():  # each node's 10 nearest, and 4x farther, are far below the clip
+        assert np.sort(D, axis=1)[:, 10].max() * 4 < FINITE_MAX
+
+
+def test_integral_costs_above_the_room_are_clipped_not_scaled() -> None:
+    # two clusters of 12 integer-rounded points 15.5 km apart: costs up to ~18,500 (> FINITE_MAX),
+    # every node's 10 nearest within its cluster; the tour's two long edges fit below the clip
+    rng = np.random.default_rng(11)
+    P = np.vstack([rng.uniform(0, 1500, (12, 2)), rng.uniform(0, 1500, (12, 2)) + [15500, 0]])
+    C = np.rint(cost_matrix(P))
+    assert C.max() > FINITE_MAX
+    assert choose_scale(C, ~np.eye(24, dtype=bool), None) == (1.0, float(FINITE_MAX))
+    got = solve_sequence(C, method="fast-tsp", closed=True, time_budget=0.3)
+    eng = got.params["engine"]
+    assert eng["scale"] == 1.0 and eng["rounding_bound"] == 0.0 and eng["clipped_edges"] == 0
+    assert got.cost == np.rint(got.cost)  # an integer length, as the solver saw it
+
+
+def test_search_threads_use_every_available_core() -> None:
+    assert search_threads() == len(os.sched_getaffinity(0))
+    assert search_threads(1) == 1
+    with pytest.raises(ValueError, match="threads"):
+        search_threads(0)
+    C = cost_matrix(_points(40, 8))
+    red = reduce_to_tour(C, True, None, None)
+    one = fast_tsp_tour(red.A, red.start, seconds=0.2, threads=1)
+    assert sorted(one.tour.tolist()) == list(range(40))
+    got = solve_sequence(C, method="fast-tsp", closed=True, time_budget=0.2)
+    assert got.params["engine"]["threads"] == search_threads()

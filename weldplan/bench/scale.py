@@ -40,6 +40,7 @@ import time
 from pathlib import Path
 
 from weldplan.bench.common import CHILD_PRELUDE, conditions, run_child, shared_path, table
+from weldplan.bench.scale_body import default_planner
 from weldplan.weld.pipeline import SEQUENCERS
 
 REFERENCES = ("lazy", "all", "none")
@@ -126,6 +127,7 @@ import logging, os, numpy as np
 from weldplan.weld.cell import load_cell
 from weldplan.weld.pipeline import _plan_pairs_task, candidate_pairs
 from weldplan.weld.parallel import process_pool, share_cell, batches
+from weldplan.bench.scale_body import default_pair_args, default_planner
 logging.disable(logging.WARNING)
 cell = load_cell({mesh!r}, {joints!r}, length=4500.0)
 n = len(cell.joints.ids)
@@ -134,8 +136,8 @@ V = cell.virtual_xyz
 cand = candidate_pairs(np.asarray(cell.joints.xyz), 6)
 free = cell.collision.segments_free(V[iu[cand]], V[ju[cand]], cell.clearance)
 todo = cand[~free][:{pairs}]
-args = [(int(iu[p]), int(ju[p]), 'so-aco', dict(n_iterations=10, n_ants=10), int(p)) for p in todo]
-res = dict(pairs=len(args), runs=[])
+args = default_pair_args(iu, ju, todo)
+res = dict(pairs=len(args), runs=[], planner=default_planner())
 serial = None
 for w in {workers}:
     l0 = os.getloadavg()
@@ -337,7 +339,8 @@ def run(args: argparse.Namespace) -> int:
         md += [
             f"Candidates k = {args.candidates} (radius {args.candidate_radius} mm), "
             f"{args.jobs} worker processes, sequencer "
-            f"{args.sequencer}, SO-ACO N = M = 10, seed 0. Seconds are wall clock; memory is "
+            f"{args.sequencer}, local planner {default_planner()} (the pipeline's default), "
+            "seed 0. Seconds are wall clock; memory is "
             "the peak RSS of the run's process or of its largest worker (MiB). Pairs: checked "
             "straight / free / searched. Length ratio: against the reference route "
             f"(--reference {args.reference}), same seed. Load: 1/5/15-minute load average "
@@ -368,7 +371,8 @@ def run(args: argparse.Namespace) -> int:
         base = runs[0]
         md += [
             f"Pair-planning throughput (200-joint set, {thr['pairs']} blocked candidate pairs, "
-            "SO-ACO N = M = 10; CPU seconds of the planning process or of the pool's workers, "
+            f"planner {thr['planner']}, the pipeline's default `PlanConfig().planner`; CPU "
+            "seconds of the planning process or of the pool's workers, "
             "worker start-up excluded from the wall time but included in the pool's CPU "
             "seconds: imports, cell unpickling and collision model in each worker):",
             "",

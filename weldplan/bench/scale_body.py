@@ -145,11 +145,14 @@ def throughput_child(spec: dict[str, Any]) -> dict[str, Any]:
         blocked = cand[~free]
         step = max(1, len(blocked) // spec["pairs"])
         todo = blocked[::step][: spec["pairs"]]
-        args = [
-            (int(iu[p]), int(ju[p]), "so-aco", {"n_iterations": 10, "n_ants": 10}, int(p))
-            for p in todo
-        ]
-        out.update(n=n, candidates=len(cand), blocked=len(blocked), pairs=len(args))
+        args = default_pair_args(iu, ju, todo)
+        out.update(
+            n=n,
+            candidates=len(cand),
+            blocked=len(blocked),
+            pairs=len(args),
+            planner=default_planner(),
+        )
         first = None
         for w in spec["workers"]:
             l0 = os.getloadavg()
@@ -234,6 +237,23 @@ def child_code(kind: str, spec: dict[str, Any]) -> str:
     )
 
 
+def default_planner() -> str:
+    """The pipeline's default local planner (``PlanConfig()``), as the tables name it."""
+    from weldplan.weld.pipeline import PlanConfig
+
+    cfg = PlanConfig()
+    return cfg.planner + (" + refine" if cfg.aco.get("refine") else "")
+
+
+def default_pair_args(iu: Any, ju: Any, todo: Any) -> list[tuple]:
+    """``_plan_pairs_task`` arguments planning pairs ``todo`` as the pipeline does by default:
+    ``PlanConfig().planner`` with ``PlanConfig().aco`` (which carries ``refine``), seed = pair."""
+    from weldplan.weld.pipeline import PlanConfig
+
+    cfg = PlanConfig()
+    return [(int(iu[p]), int(ju[p]), cfg.planner, dict(cfg.aco), int(p)) for p in todo]
+
+
 def _load(v: list[float]) -> str:
     return " ".join(f"{x:.2f}" for x in v)
 
@@ -242,7 +262,8 @@ def throughput_table(r: dict[str, Any]) -> list[str]:
     base = r["runs"][0]
     return [
         f"Pair planning on Dask ({r['n']}-joint station: {r['candidates']} candidate pairs, "
-        f"{r['blocked']} blocked; {r['pairs']} of them, spread over the list, SO-ACO N = M = 10; "
+        f"{r['blocked']} blocked; {r['pairs']} of them, spread over the list, planner "
+        f"{r['planner']} (the pipeline's default); "
         f"cell {r['cell']:.1f} s). Wall includes scattering the cell to the workers; CPU is the "
         "workers' (nannies included); peak RSS is summed over the whole process tree.",
         "",

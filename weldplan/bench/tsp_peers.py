@@ -7,6 +7,7 @@ returned tour itself (:func:`checked_length`), never from what a solver reports.
 * ``ours`` -- :func:`~weldplan.optim.discrete.sequence.solve_sequence` with ``method="auto"``
   (fast-tsp through :mod:`~weldplan.optim.discrete.tsp_engine` above 13 nodes), ``seconds`` as
   its budget.
+* ``ours-1t`` -- the same engine with fast-tsp on one thread (``ours`` uses every core).
 * ``pso+polish`` -- the paper's TSP-PSO (Table 4 parameters) + 2-opt / Or-opt iterated local
   search within ``seconds`` (the swarm's 100 iterations always run).
 * ``fast-tsp`` -- ``fast_tsp.find_tour`` called directly on the integer matrix (a runtime
@@ -48,6 +49,16 @@ def ours(D: NDArray[np.float64], seconds: float) -> tuple[NDArray[np.intp], floa
     t0 = time.perf_counter()
     s = solve_sequence(D, method="auto", closed=True, time_budget=seconds)
     return s.order_array, time.perf_counter() - t0
+
+
+def ours_one_thread(D: NDArray[np.float64], seconds: float) -> tuple[NDArray[np.intp], float]:
+    """``ours`` with fast-tsp on one thread (its own default): the engine on the closed tour
+    through node 0, as ``solve_sequence`` calls it, to measure what the second core adds."""
+    from weldplan.optim.discrete.tsp_engine import solve_fast_tsp
+
+    t0 = time.perf_counter()
+    res = solve_fast_tsp(D, 0, seconds=seconds, threads=1)
+    return res.tour, time.perf_counter() - t0
 
 
 def pso_polish(D: NDArray[np.float64], seconds: float) -> tuple[NDArray[np.intp], float]:
@@ -92,6 +103,7 @@ def ortools(D: NDArray[np.float64], seconds: float) -> tuple[NDArray[np.intp], f
 
 SOLVERS: dict[str, tuple[Solver, str | None]] = {
     "ours": (ours, None),
+    "ours-1t": (ours_one_thread, None),
     "pso+polish": (pso_polish, None),
     "fast-tsp": (fast_tsp_direct, "fast_tsp"),
     "lkh3": (lkh3, "elkai"),

@@ -217,8 +217,10 @@ def solve_sequence(
         Seconds for the whole solve: the polish stops kicking when they are spent (and, unless
         ``polish_params.kicks`` is set, kicks until then). The swarm always runs its iterations.
         Results then depend on the machine's speed; leave it ``None`` for reproducible runs.
-        For ``"fast-tsp"`` it is the solver's budget (default
-        :func:`~weldplan.optim.discrete.tsp_engine.default_seconds`: 1 ms a node).
+        For ``"fast-tsp"`` it is the wall budget of the whole call too: the engine searches
+        for what the checks and the integer conversion leave of it (default
+        :func:`~weldplan.optim.discrete.tsp_engine.default_seconds`: 1 ms a node), on every
+        available core.
     initial
         ``(n,) int`` a visiting order to start from (a warm start, e.g. the previous order after
         a few costs changed): the swarm / nearest-neighbour construction is skipped and only the
@@ -272,7 +274,8 @@ def solve_sequence(
             raise _no_finite_order(red, exact=True)
         name = "exact"
     elif method == "fast-tsp":
-        tour, params = _fast_tsp(red, time_budget, av, pp, gen)
+        left = None if time_budget is None else max(0.0, time_budget - (time.perf_counter() - t0))
+        tour, params = _fast_tsp(red, left, av, pp, gen)
         name = "fast-tsp"
     else:
         Ap, _ = penalised(red.A)
@@ -359,7 +362,7 @@ def _fast_tsp(
     """fast-tsp on the reduction; an order it returns through an ``inf`` pair (or an ATSP tour
     that does not alternate) is handed to the 2-opt / Or-opt polish over the penalised matrix
     before :func:`solve_sequence` gives up on it."""
-    from weldplan.optim.discrete.tsp_engine import solve_fast_tsp
+    from weldplan.optim.discrete.tsp_engine import search_threads, solve_fast_tsp
 
     res = solve_fast_tsp(red.A, red.start, seconds=seconds, avoid=avoid)
     params: dict[str, Any] = {
@@ -374,6 +377,7 @@ def _fast_tsp(
             "penalty_edges": res.penalty_edges,
             "feasible": res.feasible,
             "seconds": res.seconds,
+            "threads": search_threads(),
         }
     }
     tour = res.tour

@@ -19,11 +19,14 @@ adds it around the solver, each step a standard reduction:
   most ``0.5 / s`` (mm), so any order of ``k`` edges has ``|L_float - L_int / s| <= k / (2 s)``
   (:attr:`EngineResult.rounding_bound`); against the best order under the float costs the
   rounding can cost at most twice that (:attr:`EngineResult.optimality_loss_bound`). Integral
-  costs that fit are passed unscaled (``s = 1``, bound 0: TSPLIB). To spend the 16 bits where
+  costs are passed unscaled (``s = 1``, bound 0: TSPLIB's ``nint`` distances as they are)
+  whenever the clipping rule below fits under the top finite integer: never scaled by a
+  non-integer factor, which would reorder tours one unit apart. To spend the 16 bits where
   tours live, costs above ``cap`` (by default a few times each node's ``CAP_NEIGHBOUR``-th
-  nearest cost) are clipped to the top finite integer; the bounds above hold for every order
-  that uses no clipped edge (clipping only lowers a cost), and the caller re-solves without
-  clipping when the returned order uses one (:func:`solve_fast_tsp` does).
+  nearest cost; :data:`FINITE_MAX` for integral costs) are clipped to the top finite integer;
+  the bounds above hold for every order that uses no clipped edge (clipping only lowers a
+  cost), and the caller re-solves without clipping when the returned order uses one
+  (:func:`solve_fast_tsp` does).
 * **unplannable pairs**: ``inf`` becomes the largest integer (a large finite penalty); the
   returned order is checked and ``penalty_edges`` counts the ``inf`` edges it uses (the caller
   raises or repairs).
@@ -32,16 +35,21 @@ adds it around the solver, each step a standard reduction:
   connect badly"; the pipeline's legs not planned yet). Not above every *tour*: a detour of many
   edges may cost more than one avoided edge, and the caller learns it from ``avoided_edges``.
 
-The returned lengths are always recomputed in floats over the caller's matrix, never read back
-from the integers. fast-tsp has no seed: its result depends on wall time (two runs may return
-different tours of nearly equal cost). It solves up to 20 nodes exactly, in milliseconds.
+The budget is wall time for the whole call: the conversion and checks above come out of it
+(about 0.15 CPU s at 2,152 nodes, fast-tsp's set-up included) and fast-tsp searches for the
+rest, with one thread on each available core (:func:`search_threads`; fast-tsp's own default is
+one thread). The returned lengths are always recomputed in floats over the caller's matrix,
+never read back from the integers. fast-tsp has no seed: its result depends on wall time and on
+how the threads are scheduled (two runs may return different tours of nearly equal cost). It
+solves up to 20 nodes exactly, in milliseconds.
 """
 
 from __future__ import annotations
 
 import logging
+import os
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -64,6 +72,10 @@ PENALTY_INT = INT_MAX
 #: default clipping: ``cap = CAP_FACTOR x`` the largest ``CAP_NEIGHBOUR``-th nearest cost of a node
 CAP_NEIGHBOUR = 10
 CAP_FACTOR = 4.0
+#: fast-tsp searches at least this long (s), even when the conversion used up the budget
+MIN_SEARCH_SECONDS = 0.01
+#: a re-solve without clipping gets at least this fraction of the budget
+RESOLVE_FRACTION = 0.25
 
 
 def default_seconds(m: int) -> float:
@@ -128,51 +140,88 @@ def _import_fast_tsp():
 
 
 def choose_scale(
-    A: NDArray[np.float64], usable: NDArray[np.bool_], cap: float | None
+    A: NDArray[np.float64],
+    usable: NDArray[np.bool_],
+    cap: float | None,
+    *,
+    integral: bool | None = None,
 ) -> tuple[float, float]:
     """``(scale, cap)`` for the finite, usable entries of ``A``.
 
-    Integral costs up to :data:`FINITE_MAX` keep ``scale = 1`` (exact). Otherwise ``cap`` (None:
-    ``CAP_FACTOR`` times the largest ``CAP_NEIGHBOUR``-th nearest usable cost of any node, at
-    most the largest usable cost) maps to :data:`FINITE_MAX`.
+    Integral costs keep ``scale = 1`` (exact) whenever they can: unclipped when every usable
+    cost fits in :data:`FINITE_MAX`, else clipped at :data:`FINITE_MAX` when the default cap
+    (below) fits under it (TSPLIB's u1060: costs up to 20,262, tours' edges far below; scaling
+    such costs by a non-integer factor would perturb the order of tours one unit apart).
+    Otherwise ``cap`` (None: ``CAP_FACTOR`` times the largest ``CAP_NEIGHBOUR``-th nearest usable
+    cost of any node, at most the largest usable cost) maps to :data:`FINITE_MAX`.
+
+    Parameters
+    ----------
+    A
+        ``(m, m) float`` costs.
+    usable
+        ``(m, m) bool``: the finite entries that set the scale.
+    cap
+        Clip above this cost; None: the rule above.
+    integral
+        Whether the usable costs are integers (None: checked here).
     """
-    vals = A[usable]
-    if not len(vals):
+    if not usable.any():
         return 1.0, np.inf
-    top = float(vals.max())
-    if cap is None and top <= FINITE_MAX and np.all(vals == np.rint(vals)):
+    top = float(np.max(A, where=usable, initial=-np.inf))
+    if integral is None:
+        integral = bool(np.all((A == np.rint(A)) | ~usable))
+    if cap is None and integral and top <= FINITE_MAX:
         return 1.0, np.inf
     if cap is None:
-        m = A.shape[0]
-        k = min(CAP_NEIGHBOUR, m - 1)
-        R = np.where(usable, A, np.inf)
-        np.fill_diagonal(R, np.inf)
-        kth = np.partition(R, k - 1, axis=1)[:, k - 1] if k >= 1 else np.zeros(m)
-        kth = kth[np.isfinite(kth)]
-        cap = CAP_FACTOR * float(kth.max()) if len(kth) else top
+        cap = _default_cap(A, usable, top)
+        if integral and cap <= FINITE_MAX:
+            return 1.0, float(FINITE_MAX)
     cap = min(float(cap), top)
     if cap <= 0:
         return 1.0, np.inf
     return FINITE_MAX / cap, (cap if cap < top else np.inf)
 
 
+def _default_cap(A: NDArray[np.float64], usable: NDArray[np.bool_], top: float) -> float:
+    """``CAP_FACTOR`` x the largest ``CAP_NEIGHBOUR``-th nearest usable cost of any node."""
+    m = A.shape[0]
+    k = min(CAP_NEIGHBOUR, m - 1)
+    if k < 1:
+        return top
+    R = np.where(usable, A, np.inf)
+    np.fill_diagonal(R, np.inf)
+    kth = np.partition(R, k - 1, axis=1)[:, k - 1]
+    kth = kth[np.isfinite(kth)]
+    return CAP_FACTOR * float(kth.max()) if len(kth) else top
+
+
 def _integers(
     A: NDArray[np.float64], avoid: NDArray[np.bool_] | None, cap: float | None
-) -> tuple[NDArray[np.int64], float, float]:
+) -> tuple[NDArray[np.uint16], float, float, bool]:
+    """``(I, s, cap, exact)``: fast-tsp's ``uint16`` matrix, the scale, the cap (``inf``: no
+    clipping) and whether ``I`` is exact (``s = 1`` over integral costs) below the cap."""
     finite = np.isfinite(A)
+    all_finite = bool(finite.all())
     off = ~np.eye(A.shape[0], dtype=bool)
     usable = finite if avoid is None else finite & ~avoid
     scaling = usable & off
     if not (scaling & (A > 0)).any():  # nothing but avoided (or zero) edges: scale by those
         scaling = finite & off
-    s, cap_used = choose_scale(A, scaling, cap)
-    I = np.full(A.shape, PENALTY_INT, dtype=np.int64)
-    scaled = np.minimum(np.rint(np.where(finite, A, 0.0) * s), FINITE_MAX).astype(np.int64)
-    I[finite] = scaled[finite]
+    integral = bool(np.all((A == np.rint(A)) | ~finite))
+    s, cap_used = choose_scale(A, scaling, cap, integral=integral)
+    X = A.copy() if all_finite else np.where(finite, A, 0.0)
+    if s != 1.0:
+        X *= s
+    np.rint(X, out=X)
+    np.minimum(X, FINITE_MAX, out=X)
+    I = X.astype(np.uint16)
+    if not all_finite:
+        I[~finite] = PENALTY_INT
     if avoid is not None:
         I[finite & avoid] += AVOID_BASE
     np.fill_diagonal(I, 0)
-    return I, s, cap_used
+    return I, s, cap_used, s == 1.0 and integral
 
 
 def _edge_flags(
@@ -185,6 +234,23 @@ def _edge_flags(
     return int(clip.sum()), int(av.sum()), int(pen.sum())
 
 
+def search_threads(threads: int | None = None) -> int:
+    """fast-tsp's thread count: ``threads``, or every core this process may run on (None).
+
+    fast-tsp's own default is one thread (and its ``None`` one fewer than the cores): on the
+    2-core machines this project measures on, that leaves half of the CPU idle
+    (docs/bench-sequence.md).
+    """
+    if threads is not None:
+        if threads < 1:
+            raise ValueError(f"threads must be >= 1, got {threads}")
+        return int(threads)
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
 def fast_tsp_tour(
     A: NDArray[np.float64],
     start: int,
@@ -192,6 +258,7 @@ def fast_tsp_tour(
     seconds: float | None = None,
     avoid: NDArray[np.bool_] | None = None,
     cap: float | None = None,
+    threads: int | None = None,
 ) -> EngineResult:
     """Closed tour over ``A (m, m)`` through ``start`` by fast-tsp (module docstring).
 
@@ -204,12 +271,15 @@ def fast_tsp_tour(
         The tour is returned rotated to start here, in the orientation that ``A`` prices
         (for symmetric ``A``: the cheaper of the two).
     seconds
-        fast-tsp's wall-clock budget (it uses all of it above 20 nodes); default
-        :func:`default_seconds` of the solver's node count.
+        Wall-clock budget of the whole call, the integer conversion included: fast-tsp searches
+        for what is left of it (at least :data:`MIN_SEARCH_SECONDS`; it uses all of it above 20
+        nodes). Default :func:`default_seconds` of the solver's node count.
     avoid
         ``(m, m) bool``: edges to use only where no tour avoids them.
     cap
         Clip costs above it (module docstring); None: the default rule.
+    threads
+        fast-tsp's search threads (:func:`search_threads`; None: every available core).
     """
     t0 = time.perf_counter()
     fast_tsp = _import_fast_tsp()
@@ -218,36 +288,47 @@ def fast_tsp_tour(
     if m <= 3:
         tour = np.arange(m, dtype=np.intp)
         tour = np.roll(tour, -start)
-        return _result(A, tour, avoid, 1.0, np.inf, True, "symmetric", t0)
-    I, s, cap_used = _integers(A, avoid, cap)
-    symmetric = bool(np.array_equal(I, I.T)) and bool(
-        np.array_equal(np.isfinite(A), np.isfinite(A.T))
-    )
+        return _result(A, tour, avoid, 1.0, np.inf, True, True, "symmetric", t0)
+    I, s, cap_used, exact = _integers(A, avoid, cap)
+    symmetric = bool(np.array_equal(I, I.T))
+    n_solver = m if symmetric else 2 * m
+    budget = default_seconds(n_solver) if seconds is None else float(seconds)
     feasible = True
+
+    def search(M: NDArray) -> NDArray[np.intp]:
+        left = max(MIN_SEARCH_SECONDS, budget - (time.perf_counter() - t0))
+        return np.asarray(
+            fast_tsp.find_tour(M, left, max_threads=search_threads(threads)), dtype=np.intp
+        )
+
     if symmetric:
-        budget = default_seconds(m) if seconds is None else float(seconds)
-        t = np.asarray(fast_tsp.find_tour(I, budget), dtype=np.intp)
+        t = search(I)
         t = np.roll(t, -int(np.flatnonzero(t == start)[0]))
         rev = np.concatenate([t[:1], t[1:][::-1]])
         if _cost(A, rev, avoid) < _cost(A, t, avoid):
             t = rev
         transform = "symmetric"
     else:
-        S = np.full((2 * m, 2 * m), PENALTY_INT, dtype=np.int64)
-        ii = np.arange(m)
-        S[ii, ii + m] = S[ii + m, ii] = 0
-        cross = np.where(I < PENALTY_INT, I + ATSP_M, PENALTY_INT)
-        cross = np.minimum(cross, PENALTY_INT)
-        S[m:, :m] = cross  # out_i -> in_j costs A[i, j]
-        S[:m, m:] = cross.T
-        np.fill_diagonal(S[m:, :m], 0)
-        np.fill_diagonal(S[:m, m:], 0)
-        np.fill_diagonal(S, 0)
-        budget = default_seconds(2 * m) if seconds is None else float(seconds)
-        t2 = np.asarray(fast_tsp.find_tour(S, budget), dtype=np.intp)
-        t, feasible = _read_atsp(t2, m, start)
+        t, feasible = _read_atsp(search(_atsp_matrix(I)), m, start)
         transform = "atsp-2n"
-    return _result(A, t, avoid, s, cap_used, feasible, transform, t0)
+    return _result(A, t, avoid, s, cap_used, exact, feasible, transform, t0)
+
+
+def _atsp_matrix(I: NDArray[np.uint16]) -> NDArray[np.uint16]:
+    """Jonker and Volgenant's symmetric ``(2m, 2m)`` matrix of the asymmetric ``I (m, m)``."""
+    m = I.shape[0]
+    S = np.full((2 * m, 2 * m), PENALTY_INT, dtype=np.uint16)
+    ii = np.arange(m)
+    S[ii, ii + m] = S[ii + m, ii] = 0
+    I32 = I.astype(np.int32)
+    cross = np.where(I32 < PENALTY_INT, I32 + ATSP_M, PENALTY_INT)
+    cross = np.minimum(cross, PENALTY_INT).astype(np.uint16)
+    S[m:, :m] = cross  # out_i -> in_j costs A[i, j]
+    S[:m, m:] = cross.T
+    np.fill_diagonal(S[m:, :m], 0)
+    np.fill_diagonal(S[:m, m:], 0)
+    np.fill_diagonal(S, 0)
+    return S
 
 
 def _read_atsp(t2: NDArray[np.intp], m: int, start: int) -> tuple[NDArray[np.intp], bool]:
@@ -271,9 +352,8 @@ def _cost(A: NDArray[np.float64], t: NDArray[np.intp], avoid) -> tuple[int, floa
     return bad, float(np.where(np.isfinite(c), c, 0.0).sum())
 
 
-def _result(A, t, avoid, s, cap, feasible, transform, t0) -> EngineResult:
+def _result(A, t, avoid, s, cap, exact, feasible, transform, t0) -> EngineResult:
     a, b = t, np.roll(t, -1)
-    exact = len(t) <= 3 or (s == 1.0 and not np.isfinite(cap) and _integral(A))
     clip, av, pen = _edge_flags(A, avoid, cap, a, b)
     cost = float(A[a, b].sum()) if len(t) > 1 else 0.0
     return EngineResult(
@@ -281,7 +361,7 @@ def _result(A, t, avoid, s, cap, feasible, transform, t0) -> EngineResult:
         cost=cost,
         scale=float(s),
         cap=float(cap),
-        rounding_bound=0.0 if exact else len(t) / (2 * s),
+        rounding_bound=0.0 if exact or len(t) <= 3 else len(t) / (2 * s),
         clipped_edges=clip,
         avoided_edges=av,
         penalty_edges=pen,
@@ -291,24 +371,30 @@ def _result(A, t, avoid, s, cap, feasible, transform, t0) -> EngineResult:
     )
 
 
-def _integral(A: NDArray[np.float64]) -> bool:
-    f = A[np.isfinite(A)]
-    return bool(np.all(f == np.rint(f)))
-
-
 def solve_fast_tsp(
     A: NDArray[np.float64],
     start: int,
     *,
     seconds: float | None = None,
     avoid: NDArray[np.bool_] | None = None,
+    threads: int | None = None,
 ) -> EngineResult:
     """:func:`fast_tsp_tour` with the default clipping, re-solved once without clipping when
-    the returned tour uses a clipped edge (so the rounding bound holds for the returned order)."""
-    res = fast_tsp_tour(A, start, seconds=seconds, avoid=avoid)
+    the returned tour uses a clipped edge (so the rounding bound holds for the returned order).
+
+    ``seconds`` is the budget of the whole call (None: :func:`default_seconds`); the re-solve
+    gets what is left of it but at least ``RESOLVE_FRACTION`` of it, so in that (rare) case the
+    call may take up to ``1 + RESOLVE_FRACTION`` times the budget; ``seconds`` of the result
+    counts both solves.
+    """
+    t0 = time.perf_counter()
+    res = fast_tsp_tour(A, start, seconds=seconds, avoid=avoid, threads=threads)
     if res.clipped_edges:
         log.info("fast-tsp: %d clipped edges used; re-solving unclipped", res.clipped_edges)
         finite = np.isfinite(A) if avoid is None else np.isfinite(A) & ~avoid
         top = float(A[finite].max()) if finite.any() else 1.0
-        res = fast_tsp_tour(A, start, seconds=seconds, avoid=avoid, cap=top)
+        budget = default_seconds(A.shape[0]) if seconds is None else float(seconds)
+        left = max(RESOLVE_FRACTION * budget, budget - (time.perf_counter() - t0))
+        res = fast_tsp_tour(A, start, seconds=left, avoid=avoid, cap=top, threads=threads)
+        res = replace(res, seconds=time.perf_counter() - t0)
     return res
