@@ -48,6 +48,9 @@ NO_POSE = "no_pose"
 DEFAULT_SINGULAR_DEG = 5.0
 #: default floor-grid spacing for the base search (mm)
 DEFAULT_STEP = 250.0
+#: default pedestal heights (mm above the floor) and yaws added to the facing one (deg)
+DEFAULT_HEIGHTS = (0.0, 400.0, 800.0)
+DEFAULT_EXTRA_YAWS = (-30.0, 30.0)
 
 
 def base_pose(x: float, y: float, z: float, yaw_deg: float) -> NDArray[np.float64]:
@@ -103,16 +106,30 @@ class BaseSearch:
     step
         mm between candidate positions.
     extra_yaws
-        Degrees added to the facing yaw, each a further candidate (default none).
+        Degrees added to the facing yaw, each a further candidate (default
+        :data:`DEFAULT_EXTRA_YAWS`).
     half_width
         mm: half the floor grid's side, about the welds' centre (default: the arm's reach).
+    heights
+        mm: pedestal heights tried at every floor position (the base at ``floor_z + h``; the
+        pedestal is the base column's extension down to the floor). Default
+        :data:`DEFAULT_HEIGHTS`. Not used with ``line`` (its points are the base).
     """
 
     floor_z: float | None = None
     line: tuple[tuple[float, float, float], tuple[float, float, float]] | None = None
     step: float = DEFAULT_STEP
-    extra_yaws: tuple[float, ...] = ()
+    extra_yaws: tuple[float, ...] = DEFAULT_EXTRA_YAWS
     half_width: float | None = None
+    heights: tuple[float, ...] = DEFAULT_HEIGHTS
+
+    def __post_init__(self) -> None:
+        h = np.asarray(self.heights, dtype=np.float64)
+        if h.ndim != 1 or len(h) == 0 or not np.all(np.isfinite(h)) or np.any(h < 0):
+            raise InputError(
+                f"pedestal heights must be finite numbers >= 0 mm, got {self.heights!r}",
+                field="heights",
+            )
 
 
 @dataclass(frozen=True)
@@ -195,6 +212,7 @@ def candidate_bases(
         a, b = (np.asarray(p, dtype=np.float64) for p in opts.line)
         k = max(2, int(math.ceil(np.linalg.norm(b - a) / opts.step)) + 1)
         pts = a + np.linspace(0.0, 1.0, k)[:, None] * (b - a)
+        pts = pts[_column_free(robot, pts, part)]
     else:
         z = opts.floor_z
         if z is None:
@@ -202,12 +220,14 @@ def candidate_bases(
         hw = opts.half_width if opts.half_width is not None else arm_reach(robot) + robot.opw.a1
         g = np.arange(-hw, hw + 1e-9, opts.step)
         X, Y = np.meshgrid(centre[0] + g, centre[1] + g, indexing="ij")
-        pts = np.c_[X.ravel(), Y.ravel(), np.full(X.size, z)]
+        pts = np.concatenate(
+            [np.c_[X.ravel(), Y.ravel(), np.full(X.size, z + h)] for h in opts.heights]
+        )
         # the wrist centre must be within the arm's reach of the A2 axis for some weld
         wc = T_flange[:, :3, 3]
         d = np.linalg.norm(wc[None] - (pts + [0.0, 0.0, robot.opw.c1])[:, None], axis=2).min(axis=1)
         pts = pts[d <= arm_reach(robot) + robot.opw.a1 + robot.opw.c4]
-    pts = pts[_column_free(robot, pts, part)]
+        pts = pts[_column_free(robot, pts, part, floor=z)]
     yaws = []
     for p in pts:
         face = math.degrees(math.atan2(centre[1] - p[1], centre[0] - p[0]))
@@ -217,9 +237,11 @@ def candidate_bases(
     return np.array([base_pose(*p, yaw) for p, yaw in yaws])
 
 
-def _column_free(robot: Robot, pts: NDArray[np.float64], part: object | None) -> NDArray[np.bool_]:
-    """``(k,) bool``: the capsule about A1 (floor to the A2 axis) of a base at each point is clear
-    of the part (module docstring)."""
+def _column_free(
+    robot: Robot, pts: NDArray[np.float64], part: object | None, floor: float | None = None
+) -> NDArray[np.bool_]:
+    """``(k,) bool``: the capsule about A1 (from ``floor``, default the base itself: a pedestal
+    below it, to the A2 axis) of a base at each point is clear of the part (module docstring)."""
     if part is None or len(pts) == 0:
         return np.ones(len(pts), dtype=bool)
     from weldplan.geometry.distance import SurfaceDistance
@@ -227,12 +249,17 @@ def _column_free(robot: Robot, pts: NDArray[np.float64], part: object | None) ->
     radius = 0.0
     for lk in robot.links[:2]:
         radius = max(radius, float(np.linalg.norm(lk.vertices[:, :2], axis=1).max()))
-    h = robot.opw.c1
-    ts = np.linspace(0.0, h, max(2, int(math.ceil(h / (radius / 2))) + 1))
-    probe = pts[:, None, :] + np.c_[np.zeros((len(ts), 2)), ts][None]
-    d = SurfaceDistance(part)(probe.reshape(-1, 3)).reshape(len(pts), len(ts))
+    lo = pts[:, 2] if floor is None else np.minimum(pts[:, 2], floor)
+    top = pts[:, 2] + robot.opw.c1
+    n_t = max(2, int(math.ceil(float((top - lo).max()) / (radius / 2))) + 1)
+    ts = np.linspace(0.0, 1.0, n_t)
+    zs = lo[:, None] + ts[None] * (top - lo)[:, None]  # (k, n_t)
+    probe = np.concatenate(
+        [np.broadcast_to(pts[:, None, :2], (len(pts), n_t, 2)), zs[..., None]], axis=2
+    )
+    d = SurfaceDistance(part)(probe.reshape(-1, 3)).reshape(len(pts), n_t)
     # points of the column lie within radius + half the probe spacing of a probe
-    return d.min(axis=1) > radius + (ts[1] - ts[0]) / 2
+    return d.min(axis=1) > radius + (top - lo) / (n_t - 1) / 2
 
 
 def search_base(
