@@ -68,7 +68,8 @@ def test_a_blocked_joint_motion_is_replanned_around_the_plate(robot):
     plate = _plate(flange, 1, size=160.0)
     chk = RobotCollision(robot, plate, arc_torch(), TORCH_TCP)
     assert not chk.motion_free(qa, qb)
-    det = Detour(robot, chk, np.zeros((0, 4, 4)), TORCH_TCP, 5.0, "rrtconnect", 10.0, 3)
+    # no tucked-arm shortcut: OMPL plans it
+    det = Detour(robot, chk, np.zeros((0, 4, 4)), TORCH_TCP, 5.0, "rrtconnect", 10.0, 3, tuck=())
     path = det.transfer(qa, qb)
     assert path is not None and len(path) >= 3
     np.testing.assert_array_equal(path[0], qa)
@@ -78,6 +79,11 @@ def test_a_blocked_joint_motion_is_replanned_around_the_plate(robot):
         assert all(chk.state_free(a + t * (b - a)) for t in np.linspace(0.0, 1.0, 200))
     again = det.transfer(qa, qb)
     np.testing.assert_array_equal(again, path)
+    # the tucked arm (A2 -90, A3 90 deg) lifts the torch over the plate: three straight motions
+    tucked = Detour(robot, chk, np.zeros((0, 4, 4)), TORCH_TCP, 5.0, "rrtconnect", 10.0, 3)
+    P = tucked.transfer(qa, qb)
+    assert P is not None and len(P) == 4 and chk.path_hits(P) == []
+    np.testing.assert_allclose(np.degrees(P[1:3, 1:3]), [[-90.0, 90.0]] * 2)
 
 
 def test_a_weld_blocked_on_every_branch_is_reported_with_its_link(robot):

@@ -13,7 +13,9 @@ blocked, the leg becomes a detour:
    with the zone exempt, the electrode caps may slide along the sheet while they leave it
    sideways (a real servo gun opens first); the tool stage narrows its exemption further;
 2. *transfer*: from ``a``'s retract configuration to ``b``'s approach configuration (its retract
-   pose), straight in joint space when that is free, else planned in joint space by OMPL
+   pose), straight in joint space when that is free, else through a tucked arm (A2, A3 set to
+   :data:`TUCK_A2_A3`: fold at ``a``, turn folded, unfold at ``b``, three straight joint
+   motions), else planned in joint space by OMPL
    (:func:`weldplan.motion.sampling.plan_rn`, ``rrtconnect``) with the whole tool and every link
    checked by :class:`~weldplan.robot.collision.RobotCollision` (states and motions);
 3. *approach*: ``b``'s approach configuration to ``b``'s, contact zone exempt.
@@ -51,6 +53,12 @@ RETRACT_MM = (60.0, 150.0)
 #: first (a torch), then sideways (a C-gun straddles its sheet: its fixed electrode, ahead of the
 #: TCP, would hit the sheet on a retract along the axis)
 RETRACT_DIRS = ((2, -1.0), (0, -1.0), (0, 1.0), (1, -1.0), (1, 1.0))
+
+
+#: deg: (A2, A3) of the tucked arm a transfer may pass through (KUKA convention: A2 = -90 deg the
+#: upper arm upright, A3 = 90 deg the forearm level; -120/120 keeps the wrist lower and nearer
+#: the base): the arm folds there, A1 and the wrist turn folded, and it unfolds at the goal
+TUCK_A2_A3 = ((-90.0, 90.0), (-120.0, 120.0))
 
 
 @dataclass
@@ -93,6 +101,7 @@ class Detour:
     planner: str
     time_s: float
     rng: int | None
+    tuck: tuple[tuple[float, float], ...] = TUCK_A2_A3
 
     def offset(self, q: NDArray, T: NDArray, branch: int, move: NDArray) -> NDArray | None:
         """The configuration of pose ``T`` moved by ``move (3,)`` mm (part frame, orientation
@@ -121,9 +130,17 @@ class Detour:
         return None
 
     def transfer(self, qa: NDArray, qb: NDArray) -> NDArray | None:
-        """``(p, 6)`` rad from ``qa`` to ``qb`` (ends included), whole tool and links free."""
+        """``(p, 6)`` rad from ``qa`` to ``qb`` (ends included), whole tool and links free:
+        straight, else through a tucked arm (``tuck``, default :data:`TUCK_A2_A3`), else OMPL."""
         if self.checker.motion_free(qa, qb):
             return np.vstack([qa, qb])
+        for a2, a3 in self.tuck:
+            P = np.array([qa, qa, qb, qb])
+            P[1:3, 1:3] = np.radians([a2, a3])
+            if not self.robot.in_limits(P[1:3]).all():
+                continue
+            if all(self.checker.motion_free(x, y) for x, y in zip(P[:-1], P[1:], strict=True)):
+                return P
         from weldplan.motion.sampling import plan_rn
 
         res = plan_rn(
