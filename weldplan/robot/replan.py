@@ -29,8 +29,8 @@ retract/approach are checked with the contact zone exempt; those of the transfer
 (``zone`` in the result). The caller checks the assembled path again (the verification).
 
 The head (route rows before the first served weld) and the tail (after the last) are the route's
-own rows; a blocked tail is replaced by a retract past the last served weld (subdivided for the
-welds after it) when that is free.
+own rows; a blocked tail is replaced by the retract from the last served weld (subdivided, one
+point per route row after it, the last the retract configuration).
 """
 
 from __future__ import annotations
@@ -47,8 +47,8 @@ from weldplan.robot.reach import COLLISION, OK, usable
 
 log = logging.getLogger(__name__)
 
-#: mm: retract distances tried, in order
-RETRACT_MM = (60.0, 150.0)
+#: mm: retract distances tried, in order (the longer first: it leaves the transfer more room)
+RETRACT_MM = (150.0, 60.0)
 #: retract directions tried, in order, as (axis of the TCP frame, sign): back along the TCP axis
 #: first (a torch), then sideways (a C-gun straddles its sheet: its fixed electrode, ahead of the
 #: TCP, would hit the sheet on a retract along the axis)
@@ -282,19 +282,13 @@ def _tail(det: Detour, out: JointPath, q: NDArray, ex: NDArray, branch: NDArray,
             out.add(q[i], i, bool(ex[i]), int(branch[i]))
         return
     got = det.retract(q[ia], det.T_tcp[ia], int(branch[ia]))
-    # a retract, then the rest of the route's rows as points on a retract twice as long
-    far = None
-    if got is not None:
-        ra, move = got
-        r2 = det.offset(ra, det.T_tcp[ia], int(branch[ia]), 2.0 * move)
-        if r2 is not None and det.checker.state_free(r2) and det.checker.motion_free(ra, r2):
-            far = r2
-    if far is None:
+    if got is None:
         for i in range(ia + 1, m):  # nothing better: the route's own rows (the check reports)
             out.add(q[i], i, bool(ex[i]), int(branch[i]))
         return
-    P = subdivide(np.vstack([ra, far]), m - 1 - ia)  # at least one point per remaining row
-    out.zone[-1] = True
-    out.add(P[0], ia, False, int(branch[ia]), zone=False)
-    for j, i in enumerate(range(ia + 1, m)):  # points of the checked motion ra -> far
-        out.add(P[1 + j], i, False, int(branch[ia]), zone=False)
+    # the rest of the route's rows as points on the retract from the last served weld (a motion
+    # retract() checked), the last of them the retract configuration itself
+    P = subdivide(np.vstack([q[ia], got[0]]), m - 2 - ia)[1:]
+    pb = det.robot.branch_of(P)
+    for j, i in enumerate(range(ia + 1, m)):
+        out.add(P[j], i, False, int(pb[j]))
