@@ -131,3 +131,17 @@ def test_base_search_climbs_a_pedestal_when_the_floor_is_too_low(robot):
     assert pl.xyz_yaw()[2] == pytest.approx(800.0)
     with pytest.raises(ValueError, match="heights"):
         BaseSearch(heights=(-5.0,))
+
+
+def test_sight_clear_sees_a_wall_between_the_shoulder_and_the_wrist(robot):
+    from weldplan.geometry.distance import SurfaceDistance
+    from weldplan.robot.reach import sight_clear
+
+    T = np.eye(4)[None].copy()
+    T[0, :3, :3] = DOWN
+    T[0, :3, 3] = [2000.0, 0.0, 1500.0]  # flange pose; wrist centre 215 mm above it
+    bases = np.array([base_pose(0.0, 0.0, 0.0, 0.0), base_pose(0.0, 0.0, 0.0, 90.0)])
+    wall = _plate([1000.0, 0.0, 1000.0], 0, size=600.0)  # across the chord, x = 1000
+    aside = _plate([1000.0, 2000.0, 1000.0], 0, size=600.0)
+    assert not sight_clear(robot, bases, T, SurfaceDistance(wall)).any()
+    assert sight_clear(robot, bases, T, SurfaceDistance(aside)).all()

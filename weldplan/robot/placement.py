@@ -32,7 +32,7 @@ from weldplan.robot.reach import OK, BaseSearch, Placement, search_base, usable
 log = logging.getLogger(__name__)
 
 #: kinematically best candidates re-ranked by the collision test at the welds
-POOL = 24
+POOL = 48
 
 
 def free_branches(

@@ -22,7 +22,10 @@ usable, then by the smallest over those welds of the best manipulability over th
 branches (:meth:`~weldplan.robot.model.Robot.manipulability`); the best one wins. Candidates
 stand at every pedestal height (:attr:`BaseSearch.heights`) and yaw (the facing one plus
 :attr:`BaseSearch.extra_yaws`); with more than :data:`SCORE_WELDS` welds a first pass on that many
-evenly spread welds keeps the best :data:`PRESELECT` for the full score.
+evenly spread welds keeps the best :data:`PRESELECT` for the full score. With a part, a weld
+counts for a candidate only where the chord from its shoulder to the weld's wrist centre misses
+the part (:func:`sight_clear`, a proxy for the arm passing through the body; when it rules out
+every candidate, reach alone counts).
 """
 
 from __future__ import annotations
@@ -149,7 +152,8 @@ class Placement:
     base
         ``(4, 4)`` mm, part frame.
     n_usable
-        Welds with a usable branch from it (of ``n_welds``).
+        Welds with a usable branch from it (of ``n_welds``; with a part, only those whose
+        shoulder-wrist chord misses it: :func:`sight_clear`).
     min_manipulability
         The smallest, over those welds, of the best manipulability of their usable branches.
     candidates
@@ -182,15 +186,19 @@ def score_bases(
     T_flange: NDArray[np.float64],
     bases: NDArray[np.float64],
     singular_deg: float = DEFAULT_SINGULAR_DEG,
+    clear: NDArray[np.bool_] | None = None,
 ) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
     """Per candidate base ``(c, 4, 4)``: welds usable ``(c,)`` and smallest best manipulability
     ``(c,)`` over flange poses ``(n, 4, 4)`` (mm, part frame). Manipulability is computed only
-    for the candidates that reach the most welds (the others cannot win)."""
+    for the candidates that reach the most welds (the others cannot win). ``clear (c, n)``: a
+    weld counts only where it is True (:func:`sight_clear`)."""
     n, c = len(T_flange), len(bases)
     at_origin = robot.with_base(np.eye(4))
     Tb = np.linalg.inv(bases)[:, None] @ T_flange[None]  # (c, n, 4, 4) in each base's frame
     br_all = at_origin.ik_all(Tb.reshape(-1, 4, 4))
     u_all = usable(br_all, singular_deg).reshape(c, n, -1)
+    if clear is not None:
+        u_all &= clear[:, :, None]
     counts = u_all.any(axis=2).sum(axis=1).astype(np.int64)
     q_all = br_all.q.reshape(c, n, -1, 6)
     mins = np.full(c, -np.inf)
@@ -206,6 +214,29 @@ def score_bases(
         np.maximum.at(best, idx[:, 0], m)
         mins[i] = float(best[u.any(axis=1)].min())
     return counts, mins
+
+
+def sight_clear(
+    robot: Robot, bases: NDArray[np.float64], T_flange: NDArray[np.float64], distance: object
+) -> NDArray[np.bool_]:
+    """``(c, n) bool``: the segment from each base's shoulder (the A2 axis, turned towards the
+    weld) to each weld pose's wrist centre (``c4`` behind the flange) crosses no part triangle
+    (open3d ray cast through ``distance``, a :class:`~weldplan.geometry.distance.SurfaceDistance`).
+    A ranking proxy, not a check: the upper arm and forearm lie about that chord, so a part
+    across it usually means a link through the part."""
+    p = robot.opw
+    wc = T_flange[:, :3, 3] - p.c4 * T_flange[:, :3, 2]  # (n, 3)
+    z = bases[:, :3, 2]  # (c, 3)
+    o = bases[:, :3, 3] + p.c1 * z
+    d = wc[None] - o[:, None]  # (c, n, 3)
+    h = d - np.einsum("cni,ci->cn", d, z)[..., None] * z[:, None]
+    h /= np.maximum(np.linalg.norm(h, axis=2, keepdims=True), 1e-9)
+    sh = o[:, None] + p.a1 * h
+    seg = wc[None] - sh
+    L = np.linalg.norm(seg, axis=2)
+    u = seg / np.maximum(L, 1e-9)[..., None]
+    hit = distance.first_hit(sh.reshape(-1, 3), u.reshape(-1, 3))  # type: ignore[attr-defined]
+    return hit.reshape(L.shape) >= L
 
 
 def candidate_bases(
@@ -311,12 +342,25 @@ def search_base(
     bases = candidate_bases(robot, T, part, opts)
     if len(bases) == 0:
         raise PlanningError("no base candidate is clear of the part within reach of the welds")
+    dist = None
+    if part is not None:
+        from weldplan.geometry.distance import SurfaceDistance
+
+        dist = SurfaceDistance(part)
+
+    def score(T_: NDArray[np.float64], b: NDArray[np.float64]) -> tuple[NDArray, NDArray]:
+        clear = None if dist is None else sight_clear(robot, b, T_, dist)
+        counts, mins = score_bases(robot, T_, b, singular_deg, clear)
+        if clear is not None and counts.max() == 0:  # the proxy rules all out: reach alone
+            counts, mins = score_bases(robot, T_, b, singular_deg)
+        return counts, mins
+
     if len(T) > SCORE_WELDS and len(bases) > PRESELECT:
         # a first pass on evenly spread welds keeps the candidates worth scoring on all of them
         sub = T[np.linspace(0, len(T) - 1, SCORE_WELDS).round().astype(np.int64)]
-        c_sub, m_sub = score_bases(robot, sub, bases, singular_deg)
+        c_sub, m_sub = score(sub, bases)
         bases = bases[np.lexsort((-m_sub, -c_sub))[:PRESELECT]]
-    counts, mins = score_bases(robot, T, bases, singular_deg)
+    counts, mins = score(T, bases)
     if counts.max() == 0:
         raise PlanningError(
             f"no base among {len(bases)} candidates reaches any weld: widen the search"
