@@ -171,9 +171,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     try:
-        out = measure(
-            args.n, args.robot_base, args.cache, args.search_step, args.tool, args.replan
-        )
+        out = measure(args.n, args.robot_base, args.cache, args.search_step, args.tool, args.replan)
     except WeldplanError as exc:
         print(f"error: {exc}")
         return 2

@@ -7,12 +7,15 @@
     rr = plan_robot_route(route, poses, robot, flange_tcp=flange_tcp, part=cell.part, tool=gun)
 
 Steps: TCP poses of every route waypoint (weld poses, slerped between them) -> flange poses ->
-base given or searched (:mod:`weldplan.robot.reach`) -> one IK solution per waypoint, continuous
-(:mod:`weldplan.robot.configs`) -> robot + tool against the part along the joint path
-(:mod:`weldplan.robot.collision`) -> a blocked leg re-planned in joint space with OMPL
-(:func:`weldplan.motion.sampling.plan_rn`) between the waypoints after and before its welds ->
-verification that shares nothing with the planner: FK of the URDF chain at every exact row equals
-the route's TCP pose, and the collision check of the final path.
+base given or searched (:mod:`weldplan.robot.placement`, :mod:`weldplan.robot.reach`) -> at each
+weld, the usable IK branches on which no link and no part of the tool outside its contact zone
+touches the part (a weld with none: ``collision``, the body in ``detail``) -> one IK solution per
+waypoint, continuous (:mod:`weldplan.robot.configs`) -> robot + tool against the part along the
+joint path (:mod:`weldplan.robot.collision`) -> blocked legs detoured through retract poses, in
+joint space (straight, tucked arm, or OMPL :func:`weldplan.motion.sampling.plan_rn`), a weld whose
+leg has no detour dropped with its reason (:mod:`weldplan.robot.replan`) -> verification that
+shares nothing with the planner: FK of the URDF chain at every exact row equals the route's TCP
+pose, and the collision check of the final path.
 """
 
 from __future__ import annotations
@@ -173,28 +176,9 @@ def plan_robot_route(
     rb = robot.with_base(placement.base)
     if checker is not None:
         checker = checker.with_robot(rb)
-    detail = [""] * len(rows)
-    if checker is not None:  # every usable branch of each weld pose, checked (tool included)
-        mask, blame = free_branches(rb, checker, T_fl[rows], singular_deg)
-        for k, b in enumerate(blame):
-            if b is not None:
-                detail[k] = f"{b} touches the part at the weld pose on every usable branch"
-    allowed = None
-    if mask is not None:
-        allowed = np.ones((len(T_fl), 8), dtype=bool)
-        allowed[rows] = mask
-    try:
-        q, branch, exact, row_status = joint_path(
-            rb, T_fl, singular_deg=singular_deg, flip_penalty=flip_penalty, allowed=allowed
-        )
-    except PlanningError:
-        if checker is not None and any(detail):
-            raise PlanningError(
-                f"every weld the robot reaches collides at its pose ({detail[0] or ''})"
-            ) from None
-        raise InputError(
-            _nothing_reached(rb, T_fl, rows, placement, singular_deg), field="--robot-base"
-        ) from None
+    q, branch, exact, row_status, detail = _joint_route(
+        rb, checker, T_fl, rows, mask, placement, singular_deg, flip_penalty
+    )
     t_ik = time.perf_counter() - t0
     status = [str(row_status[r]) for r in rows]
     stats: dict[str, Any] = {
@@ -309,6 +293,45 @@ def _collision_stage(
         for h in hits
     ]
     return q, row, exact, branch, replanned
+
+
+def _joint_route(
+    rb: Robot,
+    checker: RobotCollision | None,
+    T_fl: NDArray,
+    rows: NDArray,
+    mask: NDArray | None,
+    placement: Placement,
+    singular_deg: float,
+    flip_penalty: float,
+) -> tuple[NDArray, NDArray, NDArray, NDArray, list[str]]:
+    """:func:`~weldplan.robot.configs.joint_path` with, at the welds, only the branches free of
+    the part (every usable branch checked, tool included, when there is a checker; else the
+    search's mask); plus each weld's detail (the body blocking all its branches)."""
+    detail = [""] * len(rows)
+    if checker is not None:  # every usable branch of each weld pose, checked (tool included)
+        mask, blame = free_branches(rb, checker, T_fl[rows], singular_deg)
+        for k, b in enumerate(blame):
+            if b is not None:
+                detail[k] = f"{b} touches the part at the weld pose on every usable branch"
+    allowed = None
+    if mask is not None:
+        allowed = np.ones((len(T_fl), 8), dtype=bool)
+        allowed[rows] = mask
+    try:
+        q, branch, exact, row_status = joint_path(
+            rb, T_fl, singular_deg=singular_deg, flip_penalty=flip_penalty, allowed=allowed
+        )
+    except PlanningError:
+        if checker is not None and any(detail):
+            raise PlanningError(
+                "every weld the robot reaches collides at its pose (first: "
+                f"{next(d for d in detail if d)})"
+            ) from None
+        raise InputError(
+            _nothing_reached(rb, T_fl, rows, placement, singular_deg), field="--robot-base"
+        ) from None
+    return q, branch, exact, row_status, detail
 
 
 def _contact_radius(contact_radius: float | None, poses: Any) -> float:
