@@ -282,7 +282,8 @@ def test_search_along_a_line_finds_a_base_that_reaches_every_weld(robot):
 
     T = tcp_waypoint_poses(route, poses)[weld_rows(route)] @ np.linalg.inv(TORCH_TCP)
     line = ((-3000.0, -1000.0, -700.0), (-500.0, -1000.0, -700.0))
-    pl = search_base(robot, T, box_part(), BaseSearch(line=line, step=100.0), top=3)[0]
+    opts = BaseSearch(line=line, step=100.0, extra_yaws=())
+    pl = search_base(robot, T, box_part(), opts, top=3)[0]
     assert pl.n_usable == 3 and pl.searched
     x, y, z, yaw = pl.xyz_yaw()
     assert y == pytest.approx(-1000.0) and z == pytest.approx(-700.0)

@@ -15,14 +15,15 @@ shortcut shared with any planner:
    distance to joint j's axis over the whole motion (:func:`sphere_rates`); a static bound per
    body (chain offsets plus the body's extent) caps it and sets the number of samples.
 2. *Spheres.* Each body is covered by spheres (its triangles grouped by a grid on their centroids,
-   each group inside one sphere), and by one bounding sphere checked first. At every sample each
-   sphere's centre distance to the part (exact point-triangle distance, open3d) must exceed its
-   radius plus half its motion between samples plus :data:`MIN_GAP_MM`: then no point of it comes
-   closer than :data:`MIN_GAP_MM` to the part on the whole motion.
+   each group inside one sphere), and by one bounding sphere checked first. At every sample the
+   bounding sphere's (else, at that sample, each cover sphere's) centre distance to the part
+   (exact point-triangle distance, open3d) must exceed its radius plus half its motion between
+   samples plus :data:`MIN_GAP_MM`: then no point of it comes closer than :data:`MIN_GAP_MM` to
+   the part over the half intervals on both sides of the sample, so over the whole motion.
 3. *FCL.* The triangles of the spheres that fail, together, are advanced along the motion with
-   python-fcl against the part's triangles within their reach on that motion (conservative
-   advancement: from a configuration at distance ``d`` they cannot touch the part before they
-   have moved ``d``; collide at every step). Closer than :data:`MIN_GAP_MM` counts as a
+   python-fcl against the part, when any of it lies within their reach on that motion
+   (conservative advancement: from a configuration at distance ``d`` they cannot touch the part
+   before they have moved ``d``; collide at every step). Closer than :data:`MIN_GAP_MM` counts as a
    collision.
 
 The part is a surface (sheet metal): a body wholly inside a closed solid is not seen here.
@@ -31,6 +32,7 @@ Robot self-collision and the floor are not checked.
 
 from __future__ import annotations
 
+import copy
 import logging
 from dataclasses import dataclass, field
 
@@ -213,9 +215,6 @@ class RobotCollision:
         self.part = part
         self.distance = SurfaceDistance(part)
         self.part_obj = fcl.CollisionObject(bvh(part.vertices, part.faces), fcl.Transform())
-        tri = np.asarray(part.vertices, dtype=np.float64)[np.asarray(part.faces)]
-        self._tri_centre = (tri.min(axis=1) + tri.max(axis=1)) / 2
-        self._tri_radius = np.linalg.norm(tri - self._tri_centre[:, None], axis=2).max(axis=1)
         self.flange_tcp = np.eye(4) if flange_tcp is None else np.asarray(flange_tcp, float)
         links = [self._body(lk.name, lk.index, lk.vertices, lk.faces) for lk in robot.links]
         self.zone_bodies = list(links)
@@ -227,6 +226,13 @@ class RobotCollision:
                 self._body("tool", 6, self._on_link6(vz), fz, TOOL_SPHERE_CELL_MM)
             )
         self.radii_zone = self._motion_radii(self.zone_bodies)
+
+    def with_robot(self, robot: Robot) -> RobotCollision:
+        """The same checker for ``robot`` at another base (part structures and link covers are
+        shared: they do not depend on the base)."""
+        other = copy.copy(self)
+        other.robot = robot
+        return other
 
     def _on_link6(self, v: NDArray[np.float64]) -> NDArray[np.float64]:
         """Tool vertices (TCP frame, mm) in the last link's frame."""
@@ -272,6 +278,37 @@ class RobotCollision:
             if fcl.collide(body.obj, self.part_obj, fcl.CollisionRequest(), fcl.CollisionResult()):
                 return False
         return True
+
+    def states_blocked(
+        self, Q: ArrayLike, *, zone: bool = True, tool: bool = True
+    ) -> list[str | None]:
+        """Per configuration of ``Q (n, 6)`` rad: the first body (link name or ``tool``) that
+        touches the part (FCL collide), ``None`` where none does (``tool=False``: links only).
+
+        Broad phase, vectorised: a body whose bounding sphere is farther from the part than its
+        radius (exact point-surface distance, open3d) cannot touch it; FCL judges the rest.
+        """
+        Q = np.asarray(Q, dtype=np.float64).reshape(-1, 6)
+        out: list[str | None] = [None] * len(Q)
+        if len(Q) == 0:
+            return out
+        bodies = self.zone_bodies if zone else self.bodies
+        if not tool:
+            bodies = [b for b in bodies if b.name != "tool"]
+        F = self.robot.link_frames(Q)  # (n, 7, 4, 4)
+        c = np.stack(
+            [F[:, b.frame, :3, :3] @ b.centre + F[:, b.frame, :3, 3] for b in bodies], axis=1
+        )  # (n, b, 3)
+        radius = np.array([b.radius for b in bodies])
+        near = self.distance(c.reshape(-1, 3)).reshape(len(Q), -1) <= radius + 1e-3
+        for i, b in np.argwhere(near):
+            if out[i] is not None:
+                continue
+            body = bodies[b]
+            body.obj.setTransform(_fcl_tf(F[i, body.frame]))
+            if fcl.collide(body.obj, self.part_obj, fcl.CollisionRequest(), fcl.CollisionResult()):
+                out[i] = body.name
+        return out
 
     def body_distance(self, body: Body, F: NDArray[np.float64]) -> float:
         """mm: FCL distance of ``body`` at link frames ``F (7, 4, 4)`` to the part; 0 on contact."""
@@ -341,10 +378,12 @@ class RobotCollision:
             # the body's bounding sphere first, its cover only where that is not enough
             c0 = Fb[:, :3, :3] @ body.centre + Fb[:, :3, 3]
             near = self.distance(c0) - body.radius - delta / 2 - MIN_GAP_MM <= 1e-3
-            near_seg = np.unique(owner[near])
-            if len(near_seg) == 0:
+            # a sample whose bounding sphere is clear covers the half intervals on both sides of
+            # it; only the others need the cover
+            pick = np.flatnonzero(near)
+            if len(pick) == 0:
                 continue
-            pick = np.flatnonzero(np.isin(owner, near_seg))
+            near_seg = np.unique(owner[pick])
             Fp = Fb[pick]
             c = np.einsum("nij,sj->nsi", Fp[:, :3, :3], body.centres) + Fp[:, None, :3, 3]
             d = self.distance(c.reshape(-1, 3)).reshape(len(pick), -1)
@@ -398,22 +437,17 @@ class RobotCollision:
     def _near_part(
         self, qa: NDArray, body: Body, spheres: NDArray[np.int64], rates: NDArray[np.float64]
     ) -> fcl.CollisionObject | None:
-        """An FCL object of the part's triangles that the spheres can reach on the motion: a
-        point of sphere ``i`` stays within ``r_i + rates_i`` of its start centre, so a triangle
-        whose bounding sphere is farther than that (plus :data:`MIN_GAP_MM`) from every start
-        centre can neither be touched nor come within the gap; ``None`` when none is left."""
+        """The part's FCL object when the spheres can reach it on the motion, else ``None``: a
+        point of sphere ``i`` stays within ``r_i + rates_i`` of its start centre, so when every
+        start centre is farther than that (plus :data:`MIN_GAP_MM`) from the part (exact
+        distance, open3d) nothing can touch it. The whole part's BVH is used (a BVH per cropped
+        part cost more to build than it saved)."""
         F = self.robot.link_frames(qa)[0, body.frame]
         c = body.centres[spheres] @ F[:3, :3].T + F[:3, 3]
         reach = body.radii[spheres] + rates + MIN_GAP_MM
-        near = np.zeros(len(self._tri_centre), dtype=bool)
-        for ci, ri in zip(c, reach, strict=True):
-            near |= np.linalg.norm(self._tri_centre - ci, axis=1) <= ri + self._tri_radius
-        if not near.any():
+        if np.all(self.distance(c) > reach + 1e-3):
             return None
-        f = np.asarray(self.part.faces)[near]
-        used, inv = np.unique(f, return_inverse=True)
-        sub = bvh(np.asarray(self.part.vertices)[used], inv.reshape(-1, 3))
-        return fcl.CollisionObject(sub, fcl.Transform())
+        return self.part_obj
 
     def motion_free(self, qa: ArrayLike, qb: ArrayLike, *, zone: bool = False) -> bool:
         """Whether the joint-space motion ``qa -> qb`` (ends included) is free."""

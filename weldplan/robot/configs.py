@@ -37,6 +37,7 @@ from numpy.typing import ArrayLike, NDArray
 from weldplan.robot.ik import IKBranches
 from weldplan.robot.model import Robot
 from weldplan.robot.reach import (
+    COLLISION,
     DEFAULT_SINGULAR_DEG,
     NO_POSE,
     OK,
@@ -87,6 +88,10 @@ class RobotRoute:
         Legs re-planned in joint space (their index in the route).
     stats
         Figures of the run (seconds, counts, verification).
+    detail
+        Per weld: what blocks it when its status is ``collision`` (the body, link name or
+        ``tool``, and where: at the weld pose on every branch, or on the leg to it after the
+        re-plan failed), else ``""``.
     """
 
     robot: str
@@ -103,6 +108,7 @@ class RobotRoute:
     flips: tuple[int, ...] = ()
     replanned: tuple[int, ...] = ()
     stats: dict[str, Any] = field(default_factory=dict)
+    detail: tuple[str, ...] = ()
 
     @property
     def weld_branch(self) -> NDArray[np.int64]:
@@ -140,6 +146,7 @@ class RobotRoute:
             "flips": list(self.flips),
             "replanned": list(self.replanned),
             "stats": self.stats,
+            "detail": list(self.detail),
         }
 
     @classmethod
@@ -159,6 +166,7 @@ class RobotRoute:
             flips=tuple(int(i) for i in d.get("flips", ())),
             replanned=tuple(int(i) for i in d.get("replanned", ())),
             stats=dict(d.get("stats", {})),
+            detail=tuple(d.get("detail", ())),
         )
 
     def to_json(self, indent: int | None = 1) -> str:
@@ -260,8 +268,13 @@ def joint_path(
     *,
     singular_deg: float = DEFAULT_SINGULAR_DEG,
     flip_penalty: float = FLIP_PENALTY_S,
+    allowed: ArrayLike | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.bool_], NDArray[np.str_]]:
     """Joint vectors for flange poses ``(m, 4, 4)`` mm (part frame; NaN rows: no pose).
+
+    ``allowed``: ``(m, 8) bool``, the branches a caller lets each row use besides the usable
+    ones (the robot check's collision-free branches at the welds); a row whose usable branches
+    it all removes gets :data:`~weldplan.robot.reach.COLLISION`.
 
     Returns
     -------
@@ -285,6 +298,10 @@ def joint_path(
     ok = usable(br, singular_deg) & has_pose[:, None]
     status = classify(br, singular_deg).astype(object)
     status[~has_pose] = NO_POSE
+    if allowed is not None:
+        kept = ok & np.asarray(allowed, dtype=bool).reshape(m, 8)
+        status[ok.any(axis=1) & ~kept.any(axis=1)] = COLLISION
+        ok = kept
     Q, brn, valid = turn_variants(br, robot.lower, robot.upper, ok)
     choice = choose_configurations(Q, brn, valid, robot.velocity, flip_penalty=flip_penalty)
     solved = choice >= 0

@@ -7,17 +7,19 @@
     rr = plan_robot_route(route, poses, robot, flange_tcp=flange_tcp, part=cell.part, tool=gun)
 
 Steps: TCP poses of every route waypoint (weld poses, slerped between them) -> flange poses ->
-base given or searched (:mod:`weldplan.robot.reach`) -> one IK solution per waypoint, continuous
-(:mod:`weldplan.robot.configs`) -> robot + tool against the part along the joint path
-(:mod:`weldplan.robot.collision`) -> a blocked leg re-planned in joint space with OMPL
-(:func:`weldplan.motion.sampling.plan_rn`) between the waypoints after and before its welds ->
-verification that shares nothing with the planner: FK of the URDF chain at every exact row equals
-the route's TCP pose, and the collision check of the final path.
+base given or searched (:mod:`weldplan.robot.placement`, :mod:`weldplan.robot.reach`) -> at each
+weld, the usable IK branches on which no link and no part of the tool outside its contact zone
+touches the part (a weld with none: ``collision``, the body in ``detail``) -> one IK solution per
+waypoint, continuous (:mod:`weldplan.robot.configs`) -> robot + tool against the part along the
+joint path (:mod:`weldplan.robot.collision`) -> blocked legs detoured through retract poses, in
+joint space (straight, tucked arm, or OMPL :func:`weldplan.motion.sampling.plan_rn`), a weld whose
+leg has no detour dropped with its reason (:mod:`weldplan.robot.replan`) -> verification that
+shares nothing with the planner: FK of the URDF chain at every exact row equals the route's TCP
+pose, and the collision check of the final path.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 import time
 from os import PathLike
@@ -31,6 +33,7 @@ from weldplan.errors import ConfigError, InputError, PlanningError
 from weldplan.robot.collision import Hit, RobotCollision
 from weldplan.robot.configs import FLIP_PENALTY_S, RobotRoute, joint_path
 from weldplan.robot.model import Robot
+from weldplan.robot.placement import free_branches, place
 from weldplan.robot.reach import (
     COLLISION,
     DEFAULT_SINGULAR_DEG,
@@ -39,8 +42,8 @@ from weldplan.robot.reach import (
     BaseSearch,
     Placement,
     classify,
-    search_base,
 )
+from weldplan.robot.replan import Detour, assemble
 from weldplan.robot.urdf import chain_transform
 
 log = logging.getLogger(__name__)
@@ -162,24 +165,22 @@ def plan_robot_route(
     from weldplan.tool.route_frames import weld_rows
 
     rows = weld_rows(route)
-    placement, solved = _place(
-        robot, T_fl, rows, part, base, search, singular_deg, flip_penalty, search_top
+    zone_r = _contact_radius(contact_radius, poses)
+    checker = (
+        RobotCollision(robot, part, tool, F, contact_radius=zone_r) if check_collision else None
+    )
+    checker_for = None if checker is None else checker.with_robot
+    placement, mask = place(
+        robot, T_fl, rows, part, base, search, checker_for, singular_deg, flip_penalty, search_top
     )
     rb = robot.with_base(placement.base)
-    if solved is not None:
-        q, branch, exact, row_status = solved
-    else:
-        try:
-            q, branch, exact, row_status = joint_path(
-                rb, T_fl, singular_deg=singular_deg, flip_penalty=flip_penalty
-            )
-        except PlanningError:
-            raise InputError(
-                _nothing_reached(rb, T_fl, rows, placement, singular_deg), field="--robot-base"
-            ) from None
+    if checker is not None:
+        checker = checker.with_robot(rb)
+    q, branch, exact, row_status, detail = _joint_route(
+        rb, checker, T_fl, rows, mask, placement, singular_deg, flip_penalty
+    )
     t_ik = time.perf_counter() - t0
     status = [str(row_status[r]) for r in rows]
-    row = np.arange(len(q), dtype=np.int64)
     stats: dict[str, Any] = {
         "placement": {
             "base_xyz_yaw": list(placement.xyz_yaw()),
@@ -197,26 +198,13 @@ def plan_robot_route(
         },
     }
     replanned: list[int] = []
-    if check_collision:
+    row = np.arange(len(q), dtype=np.int64)
+    if checker is not None:
+        det = Detour(rb, checker, T_tcp, F, singular_deg, planner, replan_time_s, rng)
         q, row, exact, branch, replanned = _collision_stage(
-            rb,
-            part,
-            tool,
-            F,
-            _contact_radius(contact_radius, poses),
-            q,
-            row,
-            exact,
-            branch,
-            rows,
-            status,
-            stats,
-            replan=replan,
-            planner=planner,
-            time_s=replan_time_s,
-            rng=rng,
+            det, q, exact, branch, rows, status, detail, tuple(route.order), stats, replan=replan
         )
-    weld_index = np.array([int(np.flatnonzero(row == r)[0]) for r in rows], dtype=np.int64)
+    weld_index = np.array([_weld_row(row, exact, r) for r in rows], dtype=np.int64)
     err_mm, err_deg = _pose_errors(rb, q, exact, T_fl, row)
     stats["fk_max_error_mm"] = err_mm
     stats["fk_max_error_deg"] = err_deg
@@ -247,6 +235,7 @@ def plan_robot_route(
         flips=tuple(flips),
         replanned=tuple(replanned),
         stats=stats,
+        detail=tuple(detail),
     )
     log.info(
         "robot route: %d/%d welds ok, %d flips, %d legs re-planned, %.1f s",
@@ -260,43 +249,38 @@ def plan_robot_route(
 
 
 def _collision_stage(
-    rb: Robot,
-    part: Any,
-    tool: Any,
-    F: NDArray,
-    contact_radius: float,
+    det: Detour,
     q: NDArray,
-    row: NDArray,
     exact: NDArray,
     branch: NDArray,
     rows: NDArray,
     status: list[str],
+    detail: list[str],
+    ids: tuple[str, ...],
     stats: dict[str, Any],
     *,
     replan: bool,
-    planner: str,
-    time_s: float,
-    rng: int | None,
 ) -> tuple[NDArray, NDArray, NDArray, NDArray, list[int]]:
-    """Check the joint path, re-plan blocked legs, check the final path again; welds charged
-    with a remaining blocked motion get :data:`COLLISION` in ``status`` (in place), and the
-    figures go to ``stats``."""
+    """Check the joint path, detour blocked legs (:func:`weldplan.robot.replan.assemble`), check
+    the final path again; welds charged with a remaining blocked motion get :data:`COLLISION` in
+    ``status`` (in place), and the figures go to ``stats``."""
     t1 = time.perf_counter()
-    checker = RobotCollision(rb, part, tool, F, contact_radius=contact_radius)
-    zone = _zone_motions(row, rows)
-    hits = checker.path_hits(q, zone)
+    row = np.arange(len(q), dtype=np.int64)
+    zone = np.ones(max(len(q) - 1, 0), dtype=bool)
+    hits = det.checker.path_hits(q, zone)
     stats["first_check_hits"] = len(hits)
+    stats["first_check_bodies"] = sorted({h.body for h in hits})
     replanned: list[int] = []
     if hits and replan:
-        q, row, exact, branch, replanned = _replan(
-            rb, checker, q, row, exact, branch, rows, hits, planner, time_s, rng
+        q, row, exact, branch, zone, replanned = assemble(
+            det, q, exact, branch, rows, status, detail, ids
         )
-        zone = _zone_motions(row, rows)
-        hits = checker.path_hits(q, zone)  # the verification of the final path
+        hits = det.checker.path_hits(q, zone)  # the verification of the final path
     for h in hits:
-        k = _blamed_weld(h, row, rows, zone)
+        k = _blamed_weld(h, row, rows)
         if k is not None and status[k] == OK:
             status[k] = COLLISION
+            detail[k] = f"{h.body} on the motion at joint row {h.segment} (not re-planned)"
     stats["seconds_collision"] = round(time.perf_counter() - t1, 3)
     stats["collision_free"] = not hits
     stats["hits"] = [
@@ -311,52 +295,51 @@ def _collision_stage(
     return q, row, exact, branch, replanned
 
 
+def _joint_route(
+    rb: Robot,
+    checker: RobotCollision | None,
+    T_fl: NDArray,
+    rows: NDArray,
+    mask: NDArray | None,
+    placement: Placement,
+    singular_deg: float,
+    flip_penalty: float,
+) -> tuple[NDArray, NDArray, NDArray, NDArray, list[str]]:
+    """:func:`~weldplan.robot.configs.joint_path` with, at the welds, only the branches free of
+    the part (every usable branch checked, tool included, when there is a checker; else the
+    search's mask); plus each weld's detail (the body blocking all its branches)."""
+    detail = [""] * len(rows)
+    if checker is not None:  # every usable branch of each weld pose, checked (tool included)
+        mask, blame = free_branches(rb, checker, T_fl[rows], singular_deg)
+        for k, b in enumerate(blame):
+            if b is not None:
+                detail[k] = f"{b} touches the part at the weld pose on every usable branch"
+    allowed = None
+    if mask is not None:
+        allowed = np.ones((len(T_fl), 8), dtype=bool)
+        allowed[rows] = mask
+    try:
+        q, branch, exact, row_status = joint_path(
+            rb, T_fl, singular_deg=singular_deg, flip_penalty=flip_penalty, allowed=allowed
+        )
+    except PlanningError:
+        if checker is not None and any(detail):
+            raise PlanningError(
+                "every weld the robot reaches collides at its pose (first: "
+                f"{next(d for d in detail if d)})"
+            ) from None
+        raise InputError(
+            _nothing_reached(rb, T_fl, rows, placement, singular_deg), field="--robot-base"
+        ) from None
+    return q, branch, exact, row_status, detail
+
+
 def _contact_radius(contact_radius: float | None, poses: Any) -> float:
     if contact_radius is not None:
         return float(contact_radius)
     from weldplan.tool.poses import DEFAULT_CONTACT_RADIUS
 
     return float(getattr(poses, "settings", {}).get("contact_radius", DEFAULT_CONTACT_RADIUS))
-
-
-def _place(
-    robot: Robot,
-    T_fl: NDArray[np.float64],
-    rows: NDArray[np.int64],
-    part: Any,
-    base: ArrayLike | None,
-    search: BaseSearch | None,
-    singular_deg: float,
-    flip_penalty: float,
-    top: int,
-) -> tuple[Placement, tuple[Any, ...] | None]:
-    """The base: given, the robot's own, or the best of ``search_base``'s ``top`` candidates
-    re-scored along the whole route (most welds ok, then the largest smallest manipulability of
-    the chosen configurations over every solved waypoint); with that candidate's joint path."""
-    T_weld = T_fl[rows]
-    if base is not None or search is None:
-        B = robot.base if base is None else np.asarray(base, dtype=np.float64)
-        return Placement(B, -1, len(T_weld), float("nan"), 0, False), None
-    ok = np.all(np.isfinite(T_weld), axis=(1, 2))
-    cands = search_base(robot, T_weld[ok], part, search, singular_deg=singular_deg, top=top)
-    best: tuple[tuple[int, float], Placement, tuple[Any, ...]] | None = None
-    for pl in cands:
-        rb = robot.with_base(pl.base)
-        try:
-            path = joint_path(rb, T_fl, singular_deg=singular_deg, flip_penalty=flip_penalty)
-        except PlanningError:
-            continue
-        q, _, exact, status = path
-        n_ok = int(sum(status[r] == OK for r in rows))
-        m = float(rb.manipulability(q[exact]).min()) if exact.any() else -np.inf
-        key = (n_ok, m)
-        if best is None or key > best[0]:
-            best = (key, dataclasses.replace(pl, min_manipulability=m), path)
-    if best is None:
-        raise PlanningError(
-            _nothing_reached(robot.with_base(cands[0].base), T_fl, rows, cands[0], singular_deg)
-        )
-    return best[1], best[2]
 
 
 def _nothing_reached(
@@ -375,10 +358,11 @@ def _nothing_reached(
     )
 
 
-def _zone_motions(row: NDArray[np.int64], weld_rows: NDArray[np.int64]) -> NDArray[np.bool_]:
-    """``(k - 1,) bool``: the motions checked with the tool's contact zone exempt: all of them
-    (module docstring of :mod:`weldplan.robot.collision`)."""
-    return np.ones(max(len(row) - 1, 0), dtype=bool)
+def _weld_row(row: NDArray[np.int64], exact: NDArray[np.bool_], r: int) -> int:
+    """The joint row of route row ``r``: its exact one, else the first labelled ``r``."""
+    on = np.flatnonzero(row == r)
+    at = on[exact[on]]
+    return int(at[0] if len(at) else on[0])
 
 
 def _pose_errors(
@@ -395,9 +379,7 @@ def _pose_errors(
     return float(dp.max()), float(ang.max())
 
 
-def _blamed_weld(
-    hit: Hit, row: NDArray[np.int64], rows: NDArray[np.int64], zone: NDArray[np.bool_]
-) -> int | None:
+def _blamed_weld(hit: Hit, row: NDArray[np.int64], rows: NDArray[np.int64]) -> int | None:
     """The weld a blocked motion is charged to: the weld it leaves or reaches when it has one as
     an end (the nearer end when both), else the weld its leg leads to."""
     a, b = int(row[hit.segment]), int(row[hit.segment + 1])
@@ -408,82 +390,3 @@ def _blamed_weld(
         return int(at_b[0])
     k = int(np.searchsorted(rows, b, side="left"))
     return k if k < len(rows) else None
-
-
-def _index(row: NDArray[np.int64], r: int, *, first: bool) -> int:
-    """The first (or last) position of route row ``r`` in ``row``."""
-    at = np.flatnonzero(row == r)
-    return int(at[0] if first else at[-1])
-
-
-def _replan(
-    robot: Robot,
-    checker: RobotCollision,
-    q: NDArray,
-    row: NDArray,
-    exact: NDArray,
-    branch: NDArray,
-    rows: NDArray,
-    hits: list[Hit],
-    planner: str,
-    time_s: float,
-    rng: int | None,
-) -> tuple[NDArray, NDArray, NDArray, NDArray, list[int]]:
-    """Re-plan every leg with a blocked inner motion in joint space (module docstring)."""
-    from weldplan.motion.sampling import plan_rn
-
-    legs = sorted({int(np.searchsorted(rows, row[h.segment + 1], side="left")) - 1 for h in hits})
-    done: list[int] = []
-    pieces_q, pieces_row, pieces_exact, pieces_branch = [], [], [], []
-    cut = 0
-    for k in legs:
-        if k < 0 or k + 1 >= len(rows):
-            continue
-        # from the waypoints after and before the welds when they are free, else the welds
-        a, b = int(rows[k]) + 1, int(rows[k + 1]) - 1
-        ia, ib = _index(row, a, first=True), _index(row, b, first=False)
-        if b <= a or not (
-            checker.state_free(q[ia], zone=True) and checker.state_free(q[ib], zone=True)
-        ):
-            a, b = int(rows[k]), int(rows[k + 1])
-            ia, ib = _index(row, a, first=True), _index(row, b, first=False)
-        if not any(ia <= h.segment < ib for h in hits):
-            continue  # only the approach or retract is blocked: nothing to re-plan
-        if not (checker.state_free(q[ia], zone=True) and checker.state_free(q[ib], zone=True)):
-            log.info("leg %d: a weld's own configuration collides; not re-planned", k)
-            continue
-        res = plan_rn(
-            q[ia],
-            q[ib],
-            robot.lower,
-            robot.upper,
-            lambda x: checker.state_free(x, zone=True),
-            motion_valid=lambda x, y: checker.motion_free(x, y, zone=True),
-            planner=planner,
-            time_s=time_s,
-            seed=rng,
-        )
-        log.info("leg %d re-planned in joint space: %s", k, res.status)
-        if not res.solved:
-            continue
-        vias = np.asarray(res.points)[1:-1]
-        pieces_q += [q[cut : ia + 1], vias]
-        pieces_row += [row[cut : ia + 1], np.full(len(vias), a, dtype=np.int64)]
-        pieces_exact += [exact[cut : ia + 1], np.zeros(len(vias), dtype=bool)]
-        pieces_branch += [
-            branch[cut : ia + 1],
-            robot.branch_of(vias) if len(vias) else np.zeros(0, dtype=np.int64),
-        ]
-        cut = ib
-        done.append(k)
-    pieces_q.append(q[cut:])
-    pieces_row.append(row[cut:])
-    pieces_exact.append(exact[cut:])
-    pieces_branch.append(branch[cut:])
-    return (
-        np.concatenate(pieces_q),
-        np.concatenate(pieces_row),
-        np.concatenate(pieces_exact),
-        np.concatenate(pieces_branch),
-        done,
-    )

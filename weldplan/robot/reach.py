@@ -19,7 +19,13 @@ range; more yaws on request). Candidates whose base column would stand in the pa
 (a capsule about A1 from the floor to the A2 axis, radius the base's and A1 link's extent,
 checked by exact point-surface distance). A candidate is scored by the number of welds it makes
 usable, then by the smallest over those welds of the best manipulability over their usable
-branches (:meth:`~weldplan.robot.model.Robot.manipulability`); the best one wins.
+branches (:meth:`~weldplan.robot.model.Robot.manipulability`); the best one wins. Candidates
+stand at every pedestal height (:attr:`BaseSearch.heights`) and yaw (the facing one plus
+:attr:`BaseSearch.extra_yaws`); with more than :data:`SCORE_WELDS` welds a first pass on that many
+evenly spread welds keeps the best :data:`PRESELECT` for the full score. With a part, a weld
+counts for a candidate only where the chord from its shoulder to the weld's wrist centre misses
+the part (:func:`sight_clear`, a proxy for the arm passing through the body; when it rules out
+every candidate, reach alone counts).
 """
 
 from __future__ import annotations
@@ -48,6 +54,14 @@ NO_POSE = "no_pose"
 DEFAULT_SINGULAR_DEG = 5.0
 #: default floor-grid spacing for the base search (mm)
 DEFAULT_STEP = 250.0
+#: default pedestal heights (mm above the floor) and yaws added to the facing one (deg)
+DEFAULT_HEIGHTS = (0.0, 400.0, 800.0)
+DEFAULT_EXTRA_YAWS = (-30.0, 30.0)
+#: with more welds than this, candidates are first scored on this many evenly spread welds and
+#: only the best :data:`PRESELECT` are scored on all of them (the IK of every candidate at every
+#: weld was most of a 200-weld search)
+SCORE_WELDS = 48
+PRESELECT = 256
 
 
 def base_pose(x: float, y: float, z: float, yaw_deg: float) -> NDArray[np.float64]:
@@ -103,16 +117,30 @@ class BaseSearch:
     step
         mm between candidate positions.
     extra_yaws
-        Degrees added to the facing yaw, each a further candidate (default none).
+        Degrees added to the facing yaw, each a further candidate (default
+        :data:`DEFAULT_EXTRA_YAWS`).
     half_width
         mm: half the floor grid's side, about the welds' centre (default: the arm's reach).
+    heights
+        mm: pedestal heights tried at every floor position (the base at ``floor_z + h``; the
+        pedestal is the base column's extension down to the floor). Default
+        :data:`DEFAULT_HEIGHTS`. Not used with ``line`` (its points are the base).
     """
 
     floor_z: float | None = None
     line: tuple[tuple[float, float, float], tuple[float, float, float]] | None = None
     step: float = DEFAULT_STEP
-    extra_yaws: tuple[float, ...] = ()
+    extra_yaws: tuple[float, ...] = DEFAULT_EXTRA_YAWS
     half_width: float | None = None
+    heights: tuple[float, ...] = DEFAULT_HEIGHTS
+
+    def __post_init__(self) -> None:
+        h = np.asarray(self.heights, dtype=np.float64)
+        if h.ndim != 1 or len(h) == 0 or not np.all(np.isfinite(h)) or np.any(h < 0):
+            raise InputError(
+                f"pedestal heights must be finite numbers >= 0 mm, got {self.heights!r}",
+                field="heights",
+            )
 
 
 @dataclass(frozen=True)
@@ -124,7 +152,8 @@ class Placement:
     base
         ``(4, 4)`` mm, part frame.
     n_usable
-        Welds with a usable branch from it (of ``n_welds``).
+        Welds with a usable branch from it (of ``n_welds``; with a part, only those whose
+        shoulder-wrist chord misses it: :func:`sight_clear`).
     min_manipulability
         The smallest, over those welds, of the best manipulability of their usable branches.
     candidates
@@ -157,15 +186,19 @@ def score_bases(
     T_flange: NDArray[np.float64],
     bases: NDArray[np.float64],
     singular_deg: float = DEFAULT_SINGULAR_DEG,
+    clear: NDArray[np.bool_] | None = None,
 ) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
     """Per candidate base ``(c, 4, 4)``: welds usable ``(c,)`` and smallest best manipulability
     ``(c,)`` over flange poses ``(n, 4, 4)`` (mm, part frame). Manipulability is computed only
-    for the candidates that reach the most welds (the others cannot win)."""
+    for the candidates that reach the most welds (the others cannot win). ``clear (c, n)``: a
+    weld counts only where it is True (:func:`sight_clear`)."""
     n, c = len(T_flange), len(bases)
     at_origin = robot.with_base(np.eye(4))
     Tb = np.linalg.inv(bases)[:, None] @ T_flange[None]  # (c, n, 4, 4) in each base's frame
     br_all = at_origin.ik_all(Tb.reshape(-1, 4, 4))
     u_all = usable(br_all, singular_deg).reshape(c, n, -1)
+    if clear is not None:
+        u_all &= clear[:, :, None]
     counts = u_all.any(axis=2).sum(axis=1).astype(np.int64)
     q_all = br_all.q.reshape(c, n, -1, 6)
     mins = np.full(c, -np.inf)
@@ -183,6 +216,29 @@ def score_bases(
     return counts, mins
 
 
+def sight_clear(
+    robot: Robot, bases: NDArray[np.float64], T_flange: NDArray[np.float64], distance: object
+) -> NDArray[np.bool_]:
+    """``(c, n) bool``: the segment from each base's shoulder (the A2 axis, turned towards the
+    weld) to each weld pose's wrist centre (``c4`` behind the flange) crosses no part triangle
+    (open3d ray cast through ``distance``, a :class:`~weldplan.geometry.distance.SurfaceDistance`).
+    A ranking proxy, not a check: the upper arm and forearm lie about that chord, so a part
+    across it usually means a link through the part."""
+    p = robot.opw
+    wc = T_flange[:, :3, 3] - p.c4 * T_flange[:, :3, 2]  # (n, 3)
+    z = bases[:, :3, 2]  # (c, 3)
+    o = bases[:, :3, 3] + p.c1 * z
+    d = wc[None] - o[:, None]  # (c, n, 3)
+    h = d - np.einsum("cni,ci->cn", d, z)[..., None] * z[:, None]
+    h /= np.maximum(np.linalg.norm(h, axis=2, keepdims=True), 1e-9)
+    sh = o[:, None] + p.a1 * h
+    seg = wc[None] - sh
+    L = np.linalg.norm(seg, axis=2)
+    u = seg / np.maximum(L, 1e-9)[..., None]
+    hit = distance.first_hit(sh.reshape(-1, 3), u.reshape(-1, 3))  # type: ignore[attr-defined]
+    return hit.reshape(L.shape) >= L
+
+
 def candidate_bases(
     robot: Robot,
     T_flange: NDArray[np.float64],
@@ -195,6 +251,7 @@ def candidate_bases(
         a, b = (np.asarray(p, dtype=np.float64) for p in opts.line)
         k = max(2, int(math.ceil(np.linalg.norm(b - a) / opts.step)) + 1)
         pts = a + np.linspace(0.0, 1.0, k)[:, None] * (b - a)
+        pts = pts[_column_free(robot, pts, part)]
     else:
         z = opts.floor_z
         if z is None:
@@ -202,12 +259,14 @@ def candidate_bases(
         hw = opts.half_width if opts.half_width is not None else arm_reach(robot) + robot.opw.a1
         g = np.arange(-hw, hw + 1e-9, opts.step)
         X, Y = np.meshgrid(centre[0] + g, centre[1] + g, indexing="ij")
-        pts = np.c_[X.ravel(), Y.ravel(), np.full(X.size, z)]
+        pts = np.concatenate(
+            [np.c_[X.ravel(), Y.ravel(), np.full(X.size, z + h)] for h in opts.heights]
+        )
         # the wrist centre must be within the arm's reach of the A2 axis for some weld
         wc = T_flange[:, :3, 3]
         d = np.linalg.norm(wc[None] - (pts + [0.0, 0.0, robot.opw.c1])[:, None], axis=2).min(axis=1)
         pts = pts[d <= arm_reach(robot) + robot.opw.a1 + robot.opw.c4]
-    pts = pts[_column_free(robot, pts, part)]
+        pts = pts[_column_free(robot, pts, part, floor=z)]
     yaws = []
     for p in pts:
         face = math.degrees(math.atan2(centre[1] - p[1], centre[0] - p[0]))
@@ -217,9 +276,11 @@ def candidate_bases(
     return np.array([base_pose(*p, yaw) for p, yaw in yaws])
 
 
-def _column_free(robot: Robot, pts: NDArray[np.float64], part: object | None) -> NDArray[np.bool_]:
-    """``(k,) bool``: the capsule about A1 (floor to the A2 axis) of a base at each point is clear
-    of the part (module docstring)."""
+def _column_free(
+    robot: Robot, pts: NDArray[np.float64], part: object | None, floor: float | None = None
+) -> NDArray[np.bool_]:
+    """``(k,) bool``: the capsule about A1 (from ``floor``, default the base itself: a pedestal
+    below it, to the A2 axis) of a base at each point is clear of the part (module docstring)."""
     if part is None or len(pts) == 0:
         return np.ones(len(pts), dtype=bool)
     from weldplan.geometry.distance import SurfaceDistance
@@ -227,12 +288,17 @@ def _column_free(robot: Robot, pts: NDArray[np.float64], part: object | None) ->
     radius = 0.0
     for lk in robot.links[:2]:
         radius = max(radius, float(np.linalg.norm(lk.vertices[:, :2], axis=1).max()))
-    h = robot.opw.c1
-    ts = np.linspace(0.0, h, max(2, int(math.ceil(h / (radius / 2))) + 1))
-    probe = pts[:, None, :] + np.c_[np.zeros((len(ts), 2)), ts][None]
-    d = SurfaceDistance(part)(probe.reshape(-1, 3)).reshape(len(pts), len(ts))
+    lo = pts[:, 2] if floor is None else np.minimum(pts[:, 2], floor)
+    top = pts[:, 2] + robot.opw.c1
+    n_t = max(2, int(math.ceil(float((top - lo).max()) / (radius / 2))) + 1)
+    ts = np.linspace(0.0, 1.0, n_t)
+    zs = lo[:, None] + ts[None] * (top - lo)[:, None]  # (k, n_t)
+    probe = np.concatenate(
+        [np.broadcast_to(pts[:, None, :2], (len(pts), n_t, 2)), zs[..., None]], axis=2
+    )
+    d = SurfaceDistance(part)(probe.reshape(-1, 3)).reshape(len(pts), n_t)
     # points of the column lie within radius + half the probe spacing of a probe
-    return d.min(axis=1) > radius + (ts[1] - ts[0]) / 2
+    return d.min(axis=1) > radius + (top - lo) / (n_t - 1) / 2
 
 
 def search_base(
@@ -276,7 +342,25 @@ def search_base(
     bases = candidate_bases(robot, T, part, opts)
     if len(bases) == 0:
         raise PlanningError("no base candidate is clear of the part within reach of the welds")
-    counts, mins = score_bases(robot, T, bases, singular_deg)
+    dist = None
+    if part is not None:
+        from weldplan.geometry.distance import SurfaceDistance
+
+        dist = SurfaceDistance(part)
+
+    def score(T_: NDArray[np.float64], b: NDArray[np.float64]) -> tuple[NDArray, NDArray]:
+        clear = None if dist is None else sight_clear(robot, b, T_, dist)
+        counts, mins = score_bases(robot, T_, b, singular_deg, clear)
+        if clear is not None and counts.max() == 0:  # the proxy rules all out: reach alone
+            counts, mins = score_bases(robot, T_, b, singular_deg)
+        return counts, mins
+
+    if len(T) > SCORE_WELDS and len(bases) > PRESELECT:
+        # a first pass on evenly spread welds keeps the candidates worth scoring on all of them
+        sub = T[np.linspace(0, len(T) - 1, SCORE_WELDS).round().astype(np.int64)]
+        c_sub, m_sub = score(sub, bases)
+        bases = bases[np.lexsort((-m_sub, -c_sub))[:PRESELECT]]
+    counts, mins = score(T, bases)
     if counts.max() == 0:
         raise PlanningError(
             f"no base among {len(bases)} candidates reaches any weld: widen the search"

@@ -1,0 +1,147 @@
+"""Blocked legs detoured in joint space, welds blocked on every branch, pedestal heights."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+
+from tests.conftest import require_shared
+from tests.route_fixtures import box_part, box_route
+from weldplan.errors import PlanningError
+from weldplan.robot import load_robot
+from weldplan.robot.collision import RobotCollision
+from weldplan.robot.configs import RobotRoute
+from weldplan.robot.plan import plan_robot_route
+from weldplan.robot.reach import BaseSearch, arm_reach, base_pose, search_base
+from weldplan.robot.replan import Detour, subdivide
+from weldplan.tool import arc_torch
+from weldplan.tool.result import WeldPose, WeldPoses
+from weldplan.tool.route_frames import weld_rows
+
+#: the straight arc torch: TCP 425 mm out along the flange's z axis
+TORCH_TCP = np.eye(4)
+TORCH_TCP[2, 3] = 425.0
+BOX_BASE = base_pose(-1800.0, 0.0, -700.0, 0.0)
+DOWN = np.diag([1.0, -1.0, -1.0])  # TCP z pointing down
+
+
+@pytest.fixture(scope="module")
+def robot():
+    d = require_shared("robots", "kuka_kr150r3100_2")
+    return load_robot(d / "kr150r3100_2.urdf")
+
+
+def _down_poses(route) -> WeldPoses:
+    q_down = (0.0, 1.0, 0.0, 0.0)  # 180 deg about x: TCP z -> -z
+    poses = []
+    for jid in route.order:
+        p = route.joint_xyz[route.joint_ids.index(jid)]
+        poses.append(WeldPose(jid, "ok", tuple(p), (0.0, 0.0, -1.0), q_down, 0.0, 0.0, 0.0, 1))
+    return WeldPoses(tuple(poses), tool="arc torch", total_rotation=0.0)
+
+
+def _plate(centre, normal_axis, size=300.0, thickness=2.0):
+    ext = [size, size, size]
+    ext[normal_axis] = thickness
+    return trimesh.creation.box(ext).apply_translation(centre)
+
+
+def test_subdivide_adds_points_on_the_polyline_only():
+    P = np.array([[0.0] * 6, [1.0] + [0.0] * 5, [1.0, 3.0, 0, 0, 0, 0]])
+    S = subdivide(P, 4)
+    assert len(S) - 2 >= 4
+    # every added point lies on a segment of P; the ends are P's
+    np.testing.assert_array_equal(S[0], P[0])
+    np.testing.assert_array_equal(S[-1], P[-1])
+    seg_len = np.linalg.norm(np.diff(S, axis=0), axis=1).sum()
+    assert seg_len == pytest.approx(np.linalg.norm(np.diff(P, axis=0), axis=1).sum())
+
+
+def test_a_blocked_joint_motion_is_replanned_around_the_plate(robot):
+    """A1 sweeps the torch through a plate; the seeded rrtconnect detour is free under an
+    independent dense FCL sampling of the whole tool and links, and the same seed repeats it."""
+    qm = np.array([0.0, -1.2, 1.2, 0.0, 0.8, 0.0])
+    qa, qb = qm.copy(), qm.copy()
+    qa[0], qb[0] = -0.3, 0.3
+    flange = robot.fk(qm)[0, :3, 3]
+    plate = _plate(flange, 1, size=160.0)
+    chk = RobotCollision(robot, plate, arc_torch(), TORCH_TCP)
+    assert not chk.motion_free(qa, qb)
+    # no tucked-arm shortcut: OMPL plans it
+    det = Detour(robot, chk, np.zeros((0, 4, 4)), TORCH_TCP, 5.0, "rrtconnect", 10.0, 3, tuck=())
+    path = det.transfer(qa, qb)
+    assert path is not None and len(path) >= 3
+    np.testing.assert_array_equal(path[0], qa)
+    np.testing.assert_array_equal(path[-1], qb)
+    assert chk.path_hits(path) == []
+    for a, b in zip(path[:-1], path[1:], strict=True):
+        assert all(chk.state_free(a + t * (b - a)) for t in np.linspace(0.0, 1.0, 200))
+    again = det.transfer(qa, qb)
+    np.testing.assert_array_equal(again, path)
+    # the tucked arm (A2 -90, A3 90 deg) lifts the torch over the plate: three straight motions
+    tucked = Detour(robot, chk, np.zeros((0, 4, 4)), TORCH_TCP, 5.0, "rrtconnect", 10.0, 3)
+    P = tucked.transfer(qa, qb)
+    assert P is not None and len(P) == 4 and chk.path_hits(P) == []
+    np.testing.assert_allclose(np.degrees(P[1:3, 1:3]), [[-90.0, 90.0]] * 2)
+
+
+def test_a_weld_blocked_on_every_branch_is_reported_with_its_link(robot):
+    """A plate across the flange's place at weld B: every branch puts the wrist there."""
+    route = box_route()
+    poses = _down_poses(route)
+    B = route.joint_xyz[route.joint_ids.index("B")]
+    flange_b = B + [0.0, 0.0, 425.0 + 40.0]  # 40 mm above the flange face: inside link_6's reach
+    part = trimesh.util.concatenate([box_part(), _plate(flange_b, 2, size=120.0)])
+    rr = plan_robot_route(
+        route,
+        poses,
+        robot,
+        flange_tcp=TORCH_TCP,
+        part=part,
+        tool=arc_torch(),
+        base=BOX_BASE,
+        replan=False,
+    )
+    k = rr.weld_ids.index("B")
+    assert rr.status[k] == "collision"
+    assert rr.detail[k].startswith("link_") and "every usable branch" in rr.detail[k]
+    # the body it names does touch the part on every usable branch at that pose
+    rb = robot.with_base(BOX_BASE)
+    sol = rb.ik(np.block([[DOWN, B[:, None]], [np.zeros((1, 3)), 1.0]]) @ np.linalg.inv(TORCH_TCP))
+    chk = RobotCollision(rb, part, arc_torch(), TORCH_TCP)
+    assert len(sol) > 0 and not any(chk.state_free(q, zone=True) for q in sol.q)
+    # B is not welded: no exact row stands for it
+    assert not rr.exact[rr.row == weld_rows(route)[k]].any()
+    assert RobotRoute.from_json(rr.to_json()).detail == rr.detail
+
+
+def test_base_search_climbs_a_pedestal_when_the_floor_is_too_low(robot):
+    """Welds so high that no floor base reaches them: the search takes the pedestal height."""
+    H = arm_reach(robot) + 100.0  # TCP height: the wrist centre is c4 + 425 mm above it
+    xyz = np.array([[0.0, 0.0, H], [120.0, 0.0, H], [0.0, 120.0, H]])
+    T = np.tile(np.eye(4), (3, 1, 1))
+    T[:, :3, :3] = DOWN
+    T[:, :3, 3] = xyz
+    T_fl = T @ np.linalg.inv(TORCH_TCP)
+    with pytest.raises(PlanningError):
+        search_base(robot, T_fl, None, BaseSearch(floor_z=0.0, heights=(0.0,)))
+    pl = search_base(robot, T_fl, None, BaseSearch(floor_z=0.0, heights=(0.0, 800.0)))[0]
+    assert pl.n_usable == 3
+    assert pl.xyz_yaw()[2] == pytest.approx(800.0)
+    with pytest.raises(ValueError, match="heights"):
+        BaseSearch(heights=(-5.0,))
+
+
+def test_sight_clear_sees_a_wall_between_the_shoulder_and_the_wrist(robot):
+    from weldplan.geometry.distance import SurfaceDistance
+    from weldplan.robot.reach import sight_clear
+
+    T = np.eye(4)[None].copy()
+    T[0, :3, :3] = DOWN
+    T[0, :3, 3] = [2000.0, 0.0, 1500.0]  # flange pose; wrist centre 215 mm above it
+    bases = np.array([base_pose(0.0, 0.0, 0.0, 0.0), base_pose(0.0, 0.0, 0.0, 90.0)])
+    wall = _plate([1000.0, 0.0, 1000.0], 0, size=600.0)  # across the chord, x = 1000
+    aside = _plate([1000.0, 2000.0, 1000.0], 0, size=600.0)
+    assert not sight_clear(robot, bases, T, SurfaceDistance(wall)).any()
+    assert sight_clear(robot, bases, T, SurfaceDistance(aside)).all()

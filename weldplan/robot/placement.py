@@ -1,0 +1,150 @@
+"""Choosing the robot base for a route: kinematics first, then collisions at the welds, then the
+whole route (:func:`place`, used by :func:`weldplan.robot.plan.plan_robot_route`).
+
+1. :func:`weldplan.robot.reach.search_base` ranks floor (or line) candidates, at every pedestal
+   height and yaw of its :class:`~weldplan.robot.reach.BaseSearch`, by the welds they make
+   usable (reach, limits, wrist singularity), then by manipulability; the best
+   :data:`POOL` go on.
+2. With a collision checker, each of those is re-ranked by the welds it serves *collision-free*:
+   a weld counts when at least one usable branch has no link touching the part at the weld pose
+   (:meth:`~weldplan.robot.collision.RobotCollision.states_blocked`, FCL judges). The tool is
+   left out of this ranking: at a weld it is where the weld pose puts it whatever the base, and
+   the tool stage verified it there; the final check of the route includes it.
+3. The best ``top`` are solved along the whole route (:func:`~weldplan.robot.configs.joint_path`
+   with the collision-free branches at the welds) and ranked by welds ok, then the smallest
+   manipulability of the chosen configurations over every solved waypoint.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from weldplan.errors import PlanningError
+from weldplan.robot.configs import joint_path
+from weldplan.robot.model import Robot
+from weldplan.robot.reach import OK, BaseSearch, Placement, search_base, usable
+
+log = logging.getLogger(__name__)
+
+#: kinematically best candidates re-ranked by the collision test at the welds
+POOL = 48
+
+
+def free_branches(
+    robot: Robot,
+    checker: Any,
+    T_weld: NDArray[np.float64],
+    singular_deg: float,
+    *,
+    tool: bool = True,
+) -> tuple[NDArray[np.bool_], list[str | None]]:
+    """The usable IK branches of each weld pose that do not touch the part.
+
+    Parameters
+    ----------
+    robot
+        The robot at its base.
+    checker
+        A :class:`~weldplan.robot.collision.RobotCollision` for that base.
+    T_weld
+        ``(n, 4, 4)`` mm: flange poses (NaN: no pose).
+    tool
+        Check the tool (minus its contact zone) as well as the links.
+
+    Returns
+    -------
+    free, blame
+        ``(n, 8) bool``; per weld the body that blocks its first usable branch (``None`` when a
+        branch is free or none is usable).
+    """
+    has = np.all(np.isfinite(T_weld), axis=(1, 2))
+    br = robot.ik_all(np.where(has[:, None, None], T_weld, np.eye(4)))
+    ok = usable(br, singular_deg) & has[:, None]
+    idx = np.argwhere(ok)
+    blocked = checker.states_blocked(br.q[idx[:, 0], idx[:, 1]], zone=True, tool=tool)
+    free = np.zeros_like(ok)
+    blame: list[str | None] = [None] * len(T_weld)
+    for (i, j), b in zip(idx, blocked, strict=True):
+        if b is None:
+            free[i, j] = True
+        elif blame[i] is None:
+            blame[i] = b
+    for i in np.flatnonzero(free.any(axis=1)):
+        blame[i] = None
+    return free, blame
+
+
+def place(
+    robot: Robot,
+    T_fl: NDArray[np.float64],
+    rows: NDArray[np.int64],
+    part: Any,
+    base: ArrayLike | None,
+    search: BaseSearch | None,
+    checker_for: Any,
+    singular_deg: float,
+    flip_penalty: float,
+    top: int,
+) -> tuple[Placement, NDArray[np.bool_] | None]:
+    """The base (given, the robot's own, or searched: module docstring) and, for a searched one,
+    the allowed-branch mask of its weld rows (``None`` for a given base: the caller computes it).
+
+    ``checker_for(robot_at_base)`` builds the collision checker (``None``: no collision test).
+    """
+    T_weld = T_fl[rows]
+    if base is not None or search is None:
+        B = robot.base if base is None else np.asarray(base, dtype=np.float64)
+        return Placement(B, -1, len(T_weld), float("nan"), 0, False), None
+    ok = np.all(np.isfinite(T_weld), axis=(1, 2))
+    pool = POOL if checker_for is not None else top
+    cands = search_base(robot, T_weld[ok], part, search, singular_deg=singular_deg, top=pool)
+    masks: list[NDArray[np.bool_] | None] = [None] * len(cands)
+    if checker_for is not None:
+        keys = []
+        for c, pl in enumerate(cands):
+            rb = robot.with_base(pl.base)
+            free, _ = free_branches(rb, checker_for(rb), T_weld, singular_deg, tool=False)
+            masks[c] = free
+            keys.append((int(free.any(axis=1).sum()), pl.min_manipulability))
+        order = sorted(range(len(cands)), key=lambda c: keys[c], reverse=True)[:top]
+        log.info(
+            "base search: %d candidates re-ranked by collisions at the welds; best serves %d/%d",
+            len(cands),
+            keys[order[0]][0],
+            len(T_weld),
+        )
+        cands = [cands[c] for c in order]
+        masks = [masks[c] for c in order]
+    best: tuple[tuple[int, float], Placement, NDArray[np.bool_] | None] | None = None
+    for pl, mask in zip(cands, masks, strict=True):
+        rb = robot.with_base(pl.base)
+        allowed = _allowed(len(T_fl), rows, mask)
+        try:
+            q, _, exact, status = joint_path(
+                rb, T_fl, singular_deg=singular_deg, flip_penalty=flip_penalty, allowed=allowed
+            )
+        except PlanningError:
+            continue
+        n_ok = int(sum(status[r] == OK for r in rows))
+        m = float(rb.manipulability(q[exact]).min()) if exact.any() else -np.inf
+        if best is None or (n_ok, m) > best[0]:
+            best = ((n_ok, m), dataclasses.replace(pl, min_manipulability=m), mask)
+    if best is None:
+        raise PlanningError(
+            f"no base among the {len(cands)} best candidates reaches a weld collision-free"
+        )
+    return best[1], best[2]
+
+
+def _allowed(m: int, rows: NDArray[np.int64], mask: NDArray[np.bool_] | None) -> NDArray | None:
+    """``(m, 8) bool``: every branch allowed except at the weld rows, where ``mask`` says."""
+    if mask is None:
+        return None
+    allowed = np.ones((m, 8), dtype=bool)
+    allowed[rows] = mask
+    return allowed

@@ -1,0 +1,294 @@
+"""Blocked legs of a joint route: detours through retract poses, re-planned with OMPL.
+
+:func:`assemble` walks the welds the robot serves (status ``ok``) in route order. The leg from
+one served weld ``a`` to the next ``b`` is first the route's own: its waypoints' configurations,
+checked with the tool's contact zone exempt (the TCP is on the verified route). When that is
+blocked, the leg becomes a detour:
+
+1. *retract*: from ``a``'s configuration to ``a``'s pose moved ``d`` mm (orientation kept)
+   back along its TCP axis or, failing that, sideways along its x or y axis
+   (:data:`RETRACT_DIRS` x :data:`RETRACT_MM`, the first that works), on the same IK branch and
+   the turn nearest ``a``'s; that motion checked with the contact zone exempt, the retract
+   configuration with the *whole* tool. Deviation from the tool stage's retract (issue 16):
+   with the zone exempt, the electrode caps may slide along the sheet while they leave it
+   sideways (a real servo gun opens first); the tool stage narrows its exemption further;
+2. *transfer*: from ``a``'s retract configuration to ``b``'s approach configuration (its retract
+   pose), straight in joint space when that is free, else through a tucked arm (A2, A3 set to
+   :data:`TUCK_A2_A3`: fold at ``a``, turn folded, unfold at ``b``, three straight joint
+   motions), else planned in joint space by OMPL
+   (:func:`weldplan.motion.sampling.plan_rn`, ``rrtconnect``) with the whole tool and every link
+   checked by :class:`~weldplan.robot.collision.RobotCollision` (states and motions);
+3. *approach*: ``b``'s approach configuration to ``b``'s, contact zone exempt.
+
+When no detour is found, ``b`` is dropped (status ``collision``, its ``detail`` naming the body
+that blocked the leg) and the next served weld is tried from ``a``. Welds the path passes
+without serving keep a row on it that is not exact (the program passes them without welding):
+the detour's joint polyline is subdivided where it has fewer inner rows than such welds (points
+on its own segments: the motion is unchanged). The motions of the route's own legs and of the
+retract/approach are checked with the contact zone exempt; those of the transfer are not
+(``zone`` in the result). The caller checks the assembled path again (the verification).
+
+The head (route rows before the first served weld) and the tail (after the last) are the route's
+own rows; a blocked tail is replaced by the retract from the last served weld (subdivided, one
+point per route row after it, the last the retract configuration).
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from weldplan.robot.collision import RobotCollision
+from weldplan.robot.model import Robot
+from weldplan.robot.reach import COLLISION, OK, usable
+
+log = logging.getLogger(__name__)
+
+#: mm: retract distances tried, in order (the longer first: it leaves the transfer more room)
+RETRACT_MM = (150.0, 60.0)
+#: retract directions tried, in order, as (axis of the TCP frame, sign): back along the TCP axis
+#: first (a torch), then sideways (a C-gun straddles its sheet: its fixed electrode, ahead of the
+#: TCP, would hit the sheet on a retract along the axis)
+RETRACT_DIRS = ((2, -1.0), (0, -1.0), (0, 1.0), (1, -1.0), (1, 1.0))
+
+
+#: deg: (A2, A3) of the tucked arm a transfer may pass through (KUKA convention: A2 = -90 deg the
+#: upper arm upright, A3 = 90 deg the forearm level; -120/120 keeps the wrist lower and nearer
+#: the base): the arm folds there, A1 and the wrist turn folded, and it unfolds at the goal
+TUCK_A2_A3 = ((-90.0, 90.0), (-120.0, 120.0))
+
+
+@dataclass
+class JointPath:
+    """A joint route being assembled: rows and, per row, the zone flag of the motion leaving it."""
+
+    q: list[NDArray[np.float64]] = field(default_factory=list)
+    row: list[int] = field(default_factory=list)
+    exact: list[bool] = field(default_factory=list)
+    branch: list[int] = field(default_factory=list)
+    zone: list[bool] = field(default_factory=list)
+
+    def add(self, q: NDArray, row: int, exact: bool, branch: int, zone: bool = True) -> None:
+        self.q.append(np.asarray(q, dtype=np.float64))
+        self.row.append(int(row))
+        self.exact.append(bool(exact))
+        self.branch.append(int(branch))
+        self.zone.append(bool(zone))
+
+    def arrays(self) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
+        """``q (k, 6)``, ``row (k,)``, ``exact (k,)``, ``branch (k,)``, ``zone (k - 1,)``."""
+        return (
+            np.array(self.q).reshape(-1, 6),
+            np.array(self.row, dtype=np.int64),
+            np.array(self.exact, dtype=bool),
+            np.array(self.branch, dtype=np.int64),
+            np.array(self.zone[:-1], dtype=bool),
+        )
+
+
+@dataclass(frozen=True)
+class Detour:
+    """What :func:`assemble` needs besides the joint route (see the module docstring)."""
+
+    robot: Robot
+    checker: RobotCollision
+    T_tcp: NDArray[np.float64]  # (m, 4, 4) mm: the route's TCP poses
+    flange_tcp: NDArray[np.float64]  # (4, 4) mm
+    singular_deg: float
+    planner: str
+    time_s: float
+    rng: int | None
+    tuck: tuple[tuple[float, float], ...] = TUCK_A2_A3
+
+    def offset(self, q: NDArray, T: NDArray, branch: int, move: NDArray) -> NDArray | None:
+        """The configuration of pose ``T`` moved by ``move (3,)`` mm (part frame, orientation
+        kept) on branch ``branch``, at the turn nearest ``q``; ``None`` when not usable."""
+        Tr = T.copy()
+        Tr[:3, 3] = T[:3, 3] + move
+        br = self.robot.ik_all(Tr @ np.linalg.inv(self.flange_tcp))
+        if branch < 0 or not usable(br, self.singular_deg)[0, branch]:
+            return None
+        qr = q + np.angle(np.exp(1j * (br.q[0, branch] - q)))  # the turn nearest q
+        return qr if self.robot.in_limits(qr[None])[0] else br.q[0, branch]
+
+    def retract(self, q: NDArray, T: NDArray, branch: int) -> tuple[NDArray, NDArray] | None:
+        """The first retract of :data:`RETRACT_DIRS` x :data:`RETRACT_MM` from configuration ``q``
+        at TCP pose ``T`` that works (module docstring): ``(q_retract, move (3,) mm)``."""
+        for axis, sign in RETRACT_DIRS:
+            for d in RETRACT_MM:
+                move = sign * d * T[:3, axis]
+                qr = self.offset(q, T, branch, move)
+                if (
+                    qr is not None
+                    and self.checker.state_free(qr)
+                    and self.checker.motion_free(q, qr, zone=True)
+                ):
+                    return qr, move
+        return None
+
+    def transfer(self, qa: NDArray, qb: NDArray) -> NDArray | None:
+        """``(p, 6)`` rad from ``qa`` to ``qb`` (ends included), whole tool and links free:
+        straight, else through a tucked arm (``tuck``, default :data:`TUCK_A2_A3`), else OMPL."""
+        if self.checker.motion_free(qa, qb):
+            return np.vstack([qa, qb])
+        for a2, a3 in self.tuck:
+            P = np.array([qa, qa, qb, qb])
+            P[1:3, 1:3] = np.radians([a2, a3])
+            if not self.robot.in_limits(P[1:3]).all():
+                continue
+            if all(self.checker.motion_free(x, y) for x, y in zip(P[:-1], P[1:], strict=True)):
+                return P
+        from weldplan.motion.sampling import plan_rn
+
+        res = plan_rn(
+            qa,
+            qb,
+            self.robot.lower,
+            self.robot.upper,
+            self.checker.state_free,
+            motion_valid=self.checker.motion_free,
+            planner=self.planner,
+            time_s=self.time_s,
+            seed=self.rng,
+        )
+        log.info("joint-space transfer: %s", res.status)
+        return np.asarray(res.points, dtype=np.float64) if res.solved else None
+
+
+def subdivide(P: NDArray[np.float64], inner: int) -> NDArray[np.float64]:
+    """``P (p, 6)`` with points added on its longest segments (halving them) until it has at
+    least ``inner`` rows strictly between its ends; the polyline itself is unchanged."""
+    P = np.asarray(P, dtype=np.float64)
+    while len(P) - 2 < inner:
+        seg = np.linalg.norm(np.diff(P, axis=0), axis=1)
+        i = int(np.argmax(seg))
+        P = np.insert(P, i + 1, (P[i] + P[i + 1]) / 2, axis=0)
+    return P
+
+
+def assemble(
+    det: Detour,
+    q: NDArray[np.float64],
+    exact: NDArray[np.bool_],
+    branch: NDArray[np.int64],
+    rows: NDArray[np.int64],
+    status: list[str],
+    detail: list[str],
+    ids: tuple[str, ...],
+) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray, list[int]]:
+    """The joint route with blocked legs detoured (module docstring).
+
+    Parameters
+    ----------
+    q, exact, branch
+        ``(m, 6)`` rad, ``(m,)``, ``(m,)``: one row per route waypoint.
+    rows
+        ``(n,)``: the route rows of the welds, in route order.
+    status, detail
+        Per weld; updated in place for the welds dropped.
+    ids
+        The welds' ids (for the details).
+
+    Returns
+    -------
+    q, row, exact, branch, zone, replanned
+        The assembled route (``zone (k - 1,)`` per motion) and the legs detoured (the position
+        in ``rows`` of the weld each leaves).
+    """
+    served = [k for k in range(len(rows)) if status[k] == OK]
+    out = JointPath()
+    served_exact = np.zeros(len(q), dtype=bool)
+    served_exact[rows[served]] = True
+    # a weld row that is not served is passed, never exact
+    ex = exact & (served_exact | ~np.isin(np.arange(len(q)), rows))
+    if not served:
+        for i in range(len(q)):
+            out.add(q[i], i, bool(ex[i]), int(branch[i]))
+        return (*out.arrays(), [])
+    for i in range(int(rows[served[0]]) + 1):
+        out.add(q[i], i, bool(ex[i]), int(branch[i]))
+    replanned: list[int] = []
+    a = served[0]
+    for b in served[1:]:
+        ia, ib = int(rows[a]), int(rows[b])
+        hits = det.checker.path_hits(q[ia : ib + 1], np.ones(ib - ia, dtype=bool), first_only=True)
+        if not hits:
+            for i in range(ia + 1, ib + 1):
+                out.add(q[i], i, bool(ex[i]), int(branch[i]))
+            a = b
+            continue
+        path = _detour(det, q, branch, ia, ib)
+        if path is None:
+            status[b] = COLLISION
+            detail[b] = (
+                f"{hits[0].body} on the leg from weld {ids[a]}; no detour through retract "
+                "poses found"
+            )
+            log.info("weld %s dropped: %s", ids[b], detail[b])
+            continue
+        _add_detour(out, det.robot, path, ia, ib, rows, q, branch)
+        replanned.append(a)
+        a = b
+    _tail(det, out, q, ex, branch, int(rows[a]))
+    return (*out.arrays(), replanned)
+
+
+def _detour(det: Detour, q: NDArray, branch: NDArray, ia: int, ib: int) -> NDArray | None:
+    """``[retract_a, ..., approach_b]`` (rad), else ``None``."""
+    ra = det.retract(q[ia], det.T_tcp[ia], int(branch[ia]))
+    rb = None if ra is None else det.retract(q[ib], det.T_tcp[ib], int(branch[ib]))
+    if ra is None or rb is None:
+        return None
+    return det.transfer(ra[0], rb[0])
+
+
+def _add_detour(
+    out: JointPath,
+    robot: Robot,
+    path: NDArray,
+    ia: int,
+    ib: int,
+    rows: NDArray[np.int64],
+    q: NDArray,
+    branch: NDArray,
+) -> None:
+    """Rows of a detour from the weld at route row ``ia`` to the one at ``ib``: the retract
+    (labelled ``ia``), inner points (labelled ``ia``, then one per weld passed between), the
+    approach (labelled ``ib``) and the weld ``ib`` itself."""
+    passed = [int(r) for r in rows if ia < r < ib]
+    P = subdivide(path, len(passed))
+    pb = robot.branch_of(P)
+    labels = [ia] * len(P)
+    labels[-1] = ib
+    for j, r in enumerate(passed):  # the last inner points stand for the welds passed
+        labels[len(P) - 1 - len(passed) + j] = r
+    out.zone[-1] = True  # weld -> retract: contact zone exempt
+    for p, lab, b in zip(P, labels, pb, strict=True):
+        out.add(p, lab, False, int(b), zone=False)
+    out.zone[-1] = True  # approach -> weld
+    out.add(q[ib], ib, True, int(branch[ib]))
+
+
+def _tail(det: Detour, out: JointPath, q: NDArray, ex: NDArray, branch: NDArray, ia: int) -> None:
+    """The route's rows after the last served weld (module docstring)."""
+    m = len(q)
+    if ia + 1 >= m:
+        return
+    if not det.checker.path_hits(q[ia:], np.ones(m - 1 - ia, dtype=bool), first_only=True):
+        for i in range(ia + 1, m):
+            out.add(q[i], i, bool(ex[i]), int(branch[i]))
+        return
+    got = det.retract(q[ia], det.T_tcp[ia], int(branch[ia]))
+    if got is None:
+        for i in range(ia + 1, m):  # nothing better: the route's own rows (the check reports)
+            out.add(q[i], i, bool(ex[i]), int(branch[i]))
+        return
+    # the rest of the route's rows as points on the retract from the last served weld (a motion
+    # retract() checked), the last of them the retract configuration itself
+    P = subdivide(np.vstack([q[ia], got[0]]), m - 2 - ia)[1:]
+    pb = det.robot.branch_of(P)
+    for j, i in enumerate(range(ia + 1, m)):
+        out.add(P[j], i, False, int(pb[j]))
