@@ -278,39 +278,23 @@ def solve_sequence(
         tour, params = _fast_tsp(red, left, av, pp, gen)
         name = "fast-tsp"
     else:
-        Ap, _ = penalised(red.A)
-        if av is not None:
-            Ap = Ap + np.where(av, _avoid_penalty(Ap, av), 0.0)
-        if initial is not None:
-            init = np.asarray(initial, dtype=np.intp).reshape(-1)
-            if not np.array_equal(np.sort(init), np.arange(n)):
-                raise ValueError(f"initial must be a permutation of 0..{n - 1}")
-            tour = red.to_tour(init)
-            method = "warm"
-        elif method == "pso":
-            res = tsp_pso(Ap, red.start, pso, gen, callback)
-            tour, history, evaluations = res.tour, res.history, res.evaluations
-            params["pso"] = pso.to_dict()
-        else:
-            tour = nearest_neighbour_tour(Ap, red.start)
-        name = method
-        if polish:
-            start_cost = order_cost(C, red.to_order(tour), closed)
-            if time_budget is not None:
-                left = max(0.0, time_budget - (time.perf_counter() - t0))
-                pp = replace(pp, time_budget=left)
-            tour, _, stats = polish_tour(Ap, tour, pp, gen)
-            params["polish"] = pp.to_dict()
-            params["polish_stats"] = stats
-            name += "+polish"
+        tour, name, history, evaluations, start_cost = _heuristic(
+            C,
+            red,
+            method,
+            closed,
+            initial,
+            av,
+            polish,
+            pso,
+            pp,
+            gen,
+            callback,
+            params,
+            None if time_budget is None else t0 + time_budget,
+        )
     if name != "exact" and not np.isfinite(order_cost(red.A, tour, True)):
-        if red.m <= EXACT_MAX_NODES + 1:
-            tour, best = held_karp_tour(red.A, red.start)
-            if not np.isfinite(best):
-                raise _no_finite_order(red, exact=True)
-            name = "exact"
-        else:
-            raise _no_finite_order(red, exact=False)
+        tour, name = _exact_fallback(red)
     order = red.to_order(tour)
     total = order_cost(C, order, closed)
     if av is not None:
@@ -331,6 +315,57 @@ def solve_sequence(
         start_cost=start_cost,
         params=params,
     )
+
+
+def _heuristic(
+    C, red, method, closed, initial, av, polish, pso, pp, gen, callback, params, deadline
+):
+    """The paper's swarm (or nearest neighbour, or a warm start), then the polish.
+
+    Returns ``(tour, name, history, evaluations, start_cost)`` on the reduced matrix; fills
+    ``params`` with the swarm's and the polish's settings. ``deadline``: the
+    ``time.perf_counter()`` at which the whole solve's budget ends (None: no budget); the
+    polish gets what the swarm leaves of it.
+    """
+    n = C.shape[0]
+    history: tuple[float, ...] = ()
+    evaluations = 0
+    start_cost: float | None = None
+    Ap, _ = penalised(red.A)
+    if av is not None:
+        Ap = Ap + np.where(av, _avoid_penalty(Ap, av), 0.0)
+    if initial is not None:
+        init = np.asarray(initial, dtype=np.intp).reshape(-1)
+        if not np.array_equal(np.sort(init), np.arange(n)):
+            raise ValueError(f"initial must be a permutation of 0..{n - 1}")
+        tour = red.to_tour(init)
+        method = "warm"
+    elif method == "pso":
+        res = tsp_pso(Ap, red.start, pso, gen, callback)
+        tour, history, evaluations = res.tour, res.history, res.evaluations
+        params["pso"] = pso.to_dict()
+    else:
+        tour = nearest_neighbour_tour(Ap, red.start)
+    name = method
+    if polish:
+        start_cost = order_cost(C, red.to_order(tour), closed)
+        if deadline is not None:
+            pp = replace(pp, time_budget=max(0.0, deadline - time.perf_counter()))
+        tour, _, stats = polish_tour(Ap, tour, pp, gen)
+        params["polish"] = pp.to_dict()
+        params["polish_stats"] = stats
+        name += "+polish"
+    return tour, name, history, evaluations, start_cost
+
+
+def _exact_fallback(red):
+    """A heuristic order of infinite cost: settle it exactly where Held-Karp can, else fail."""
+    if red.m <= EXACT_MAX_NODES + 1:
+        tour, best = held_karp_tour(red.A, red.start)
+        if np.isfinite(best):
+            return tour, "exact"
+        raise _no_finite_order(red, exact=True)
+    raise _no_finite_order(red, exact=False)
 
 
 def _reduced_avoid(avoid: ArrayLike | None, n: int, m: int) -> NDArray[np.bool_] | None:
