@@ -51,7 +51,7 @@ import trimesh
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from weldplan.tool.model import ZONE_EDGE_MM, Tool, bvh
+from weldplan.tool.model import Tool, bvh, outside_sphere
 
 log = logging.getLogger(__name__)
 
@@ -119,56 +119,6 @@ def tool_zone(tool: Tool, radius: float) -> tuple[NDArray[np.float64], NDArray[n
     return tool.vertices[used], inv.reshape(-1, 3).astype(np.int64)
 
 
-def _reaching(tri: NDArray[np.float64], c: NDArray[np.float64], radius: float) -> NDArray[np.bool_]:
-    """``(m,) bool``: triangles ``(m, 3, 3)`` whose closest point to ``c`` lies within ``radius``
-    (a large triangle can cover the sphere with all its vertices outside)."""
-    edge = np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2).max(axis=1)
-    vmin = np.linalg.norm(tri - c, axis=2).min(axis=1)
-    out = np.zeros(len(tri), dtype=bool)
-    cand = np.flatnonzero(vmin < radius + edge)  # every point of a triangle is within its
-    if len(cand):  # longest edge of a vertex: a cheap superset first
-        cp = trimesh.triangles.closest_point(tri[cand], np.repeat(c[None], len(cand), axis=0))
-        out[cand] = np.linalg.norm(cp - c, axis=1) < radius
-    return out
-
-
-def outside_sphere(
-    vertices: ArrayLike, faces: ArrayLike, centre: ArrayLike, radius: float
-) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
-    """A mesh minus its parts inside the sphere of ``radius`` mm about ``centre (3,)``.
-
-    The triangles that reach into the sphere (:func:`_reaching`) are subdivided (trimesh
-    midpoint subdivision) until those still reaching in have their longest edge below
-    :data:`~weldplan.tool.model.ZONE_EDGE_MM`; then the triangles wholly inside are dropped. The
-    result covers every point of the mesh outside the sphere and reaches at most
-    ``ZONE_EDGE_MM`` into it (conservative). Only the reaching triangles are subdivided.
-    """
-    v = np.asarray(vertices, dtype=np.float64)
-    f = np.asarray(faces, dtype=np.int64)
-    c = np.asarray(centre, dtype=np.float64).reshape(3)
-    if radius <= 0 or len(f) == 0:
-        return v.copy(), f.copy()
-    near = _reaching(v[f], c, radius)
-    keep_f = f[~near]
-    nv, nf = v, f[near]
-    for _ in range(64):
-        tri = nv[nf]
-        inside = np.linalg.norm(tri - c, axis=2).max(axis=1) < radius
-        reach = _reaching(tri, c, radius) & ~inside
-        edges = np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2).max(axis=1)
-        coarse = np.flatnonzero(reach & (edges > ZONE_EDGE_MM))
-        if len(coarse) == 0:
-            nf = nf[~inside]
-            break
-        nv, nf = trimesh.remesh.subdivide(nv, nf, face_index=coarse)
-    # nv extends v (subdivision appends vertices), so the far faces keep their indices
-    allf = np.concatenate([keep_f, nf])
-    used = np.unique(allf)
-    remap = np.full(len(nv), -1, dtype=np.int64)
-    remap[used] = np.arange(len(used))
-    return nv[used], remap[allf]
-
-
 @dataclass(frozen=True)
 class SweepCheck:
     """Outcome of one motion's check.
@@ -187,6 +137,8 @@ class SweepCheck:
         mm: the motion bound ``L``.
     out_of_budget
         The caller's cap or deadline (:meth:`SweepChecker.check`) stopped the check.
+    min_step
+        mm: the checker's least step away from a weld pose (a slack below it blocks there).
     """
 
     ok: bool
@@ -195,13 +147,19 @@ class SweepCheck:
     blocked_at: float = float("nan")
     bound: float = 0.0
     out_of_budget: bool = False
+    min_step: float = 0.0
 
     def describe(self) -> str:
         if self.ok:
             return f"free ({self.samples} samples, least slack {self.min_slack:.1f} mm)"
         if self.out_of_budget:
             return f"not shown free at {100 * self.blocked_at:.0f} %: the caller's budget ran out"
-        how = "collides or lacks clearance" if self.min_slack < 0 else "grazes: sample budget spent"
+        if self.min_slack < 0:
+            how = "collides or lacks clearance"
+        elif self.min_slack < self.min_step:
+            how = f"within {self.min_step:g} mm of lacking clearance away from a weld pose"
+        else:
+            how = "grazes: sample budget spent"
         return f"blocked at {100 * self.blocked_at:.0f} % of the motion ({how})"
 
 
@@ -436,7 +394,7 @@ class SweepChecker:
                 break
         n = first - budget[0]
         ok = math.isnan(blocked)
-        return SweepCheck(ok, n, smin[0], blocked, L, out_of_budget=late[0])
+        return SweepCheck(ok, n, smin[0], blocked, L, late[0], self.min_step)
 
 
 def max_samples(bound: float, min_step: float) -> int:

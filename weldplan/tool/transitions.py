@@ -160,6 +160,7 @@ class TransitionPlanner:
         self.se3_runs: list[dict[str, Any]] = []
         self._axial: dict[str, tuple[NDArray | None, tuple[str, ...], str]] = {}
         self._sides: dict[str, tuple[NDArray | None, tuple[str, ...], str]] = {}
+        self._lifts: dict[tuple[str, float], tuple[NDArray, str]] = {}
 
     def _motions(
         self,
@@ -209,24 +210,50 @@ class TransitionPlanner:
                 self._axial[w.id] = self._try(w, [cand])
         return self._axial[w.id]
 
+    def _lift(self, w: Any, lift: float) -> tuple[NDArray, str]:
+        """Weld ``w``'s pose and the pose ``lift`` mm back along its TCP axis ``(2, 3)``, and why
+        that motion is blocked ('' when free; cached per weld and lift; only w's zone exempt,
+        stricter than a transition's two zones; lowering is the same swept set)."""
+        key = (w.id, float(lift))
+        if key not in self._lifts:
+            p = np.asarray(w.position, dtype=np.float64)
+            q = np.asarray(w.quaternion, dtype=np.float64)
+            P = np.array([p, p - lift * quat_to_matrix(q)[:, 2]])
+            ok, _, why = self._motions(P, np.array([q, q]), p[None], True)
+            self._lifts[key] = (P, "" if ok else why)
+        return self._lifts[key]
+
     def _side(self, w: Any) -> tuple[NDArray | None, tuple[str, ...], str]:
         """Weld ``w``'s side exits (cached): a lift of :data:`SIDE_LIFTS` mm along the axis, a
         side exit of ``side_exit`` mm along TCP -x, +x, -y or +y, and the rest of the retract
-        (a C-gun leaves the flange it straddles sideways, its jaws opened round the sheet)."""
+        (a C-gun leaves the flange it straddles sideways, its jaws opened round the sheet). A
+        blocked lift is tried once, not once per direction."""
         if w.id not in self._sides:
             p = np.asarray(w.position, dtype=np.float64)
-            R = quat_to_matrix(np.asarray(w.quaternion, dtype=np.float64))
+            q = np.asarray(w.quaternion, dtype=np.float64)
+            R = quat_to_matrix(q)
             back = -self.retract * R[:, 2]
             dirs = (("-x", -R[:, 0]), ("+x", R[:, 0]), ("-y", -R[:, 1]), ("+y", R[:, 1]))
-            cands = []
+            fails: list[str] = []
+            found: tuple[NDArray | None, tuple[str, ...], str] | None = None
             for lift in SIDE_LIFTS:
-                up = p - min(lift, self.retract) * R[:, 2]
+                lift = min(lift, self.retract)
+                (_, up), why = self._lift(w, lift)
+                if why:
+                    fails.append(f"lift {lift:g}: lift {why}")
+                    continue
                 for name, d in dirs:
                     side = self.side_exit * d
-                    cands.append(([p, up, up + side, p + side + back],
-                                  ("lift", f"exit {name}", "retract"),
-                                  f"lift {min(lift, self.retract):g} exit {name}"))  # fmt: skip
-            self._sides[w.id] = self._try(w, cands)
+                    P = np.array([up, up + side, p + side + back])
+                    ok, k, why = self._motions(P, np.repeat(q[None], 3, axis=0), p[None])
+                    if ok:
+                        found = (np.vstack([p, P]), ("lift", f"exit {name}", "retract"), "")
+                        break
+                    kind = (f"exit {name}", "retract")[k]
+                    fails.append(f"lift {lift:g} exit {name}: {kind} {why}")
+                if found is not None:
+                    break
+            self._sides[w.id] = found or (None, (), "; ".join(fails))
         return self._sides[w.id]
 
     def _joined(
@@ -249,17 +276,30 @@ class TransitionPlanner:
         exempt, as for every motion: the tool keeps the clearance from the sheet it straddles)."""
         pa, pb = (np.asarray(w.position, dtype=np.float64) for w in (a, b))
         qa, qb = (np.asarray(w.quaternion, dtype=np.float64) for w in (a, b))
-        za, zb = quat_to_matrix(qa)[:, 2], quat_to_matrix(qb)[:, 2]
         exempt = np.array([pa, pb])
         Q = np.array([qa, qa, qb, qb])
         fails = []
         for lift in SLIDE_LIFTS:
-            P = np.array([pa, pa - lift * za, pb - lift * zb, pb])
-            ok, k, why = self._motions(P, Q, exempt, True, True)
+            (_, ua), why_a = self._lift(a, lift)
+            (_, ub), why_b = self._lift(b, lift) if not why_a else ((pb, pb), "")
+            if why_a or why_b:
+                fails.append(f"lift {lift:g}: " + (f"lift off {a.id} {why_a}" if why_a
+                                                   else f"lower onto {b.id} {why_b}"))  # fmt: skip
+                continue
+            ok, _, why = self._motions(np.array([ua, ub]), Q[1:3], exempt)
             if ok:
-                return P, Q, ""
-            fails.append(f"lift {lift:g}: {('lift', 'slide', 'lower')[k]} {why}")
+                return np.array([pa, ua, ub, pb]), Q, ""
+            fails.append(f"lift {lift:g}: slide {why}")
         return None, None, "; ".join(fails)
+
+    def _clear_point(self, w: Any) -> NDArray | None:
+        """``(2, 3)``: weld ``w`` and its first free lift of :data:`SLIDE_LIFTS` (checked by the
+        slides already), or ``None``: where an SE(3) re-plan without exits starts or ends."""
+        for lift in SLIDE_LIFTS:
+            P, why = self._lift(w, lift)
+            if not why:
+                return P
+        return None
 
     def plan(self, a: Any, b: Any) -> Transition:
         """The transition from weld pose ``a`` to ``b`` (:class:`~weldplan.tool.result.WeldPose`,
@@ -313,6 +353,10 @@ class TransitionPlanner:
         shown = shown or (np.array([pa, pb]), np.array([qa, qb]), ("move",))
         if not self.se3:
             return done(*shown, BLOCKED)
+        if ends is None:  # no clear exits: from the lifted poses where the lifts are free
+            ca, cb = self._clear_point(a), self._clear_point(b)
+            if ca is not None and cb is not None:
+                ends, legs = (ca[-1], cb[-1]), (ca, ("lift",), cb, ("lift",))
         return self._replan(a, b, ends, legs, tried, done, shown)
 
     def _leave(self, w: Any) -> tuple[NDArray | None, tuple[str, ...], str]:
