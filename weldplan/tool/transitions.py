@@ -53,6 +53,7 @@ from weldplan.tool.model import Tool
 from weldplan.tool.result import WeldPoses
 from weldplan.tool.sweep import DEFAULT_MIN_STEP, SweepChecker, quat_to_matrix
 from weldplan.tool.transit import BLOCKED, DIRECT, REPLANNED, ToolPath, Transition
+from weldplan.tool.transit_workers import run_chunks
 
 log = logging.getLogger(__name__)
 
@@ -85,7 +86,9 @@ def _se3_box(a: NDArray, b: NDArray, part: trimesh.Trimesh, pad: float) -> tuple
 class TransitionPlanner:
     """Plans :class:`Transition` s between weld poses with one :class:`SweepChecker`.
 
-    The exits tried, in this order (module docstring), the first free one taken:
+    The exits tried, in this order (module docstring), the first free one taken (a tool that
+    straddles the sheet, :attr:`~weldplan.tool.model.Tool.straddles`, tries the slide first:
+    its axial retract would pull its jaw behind the sheet through it):
 
     1. ``axial``: retract along a's TCP axis, move, approach along b's axis;
     2. ``slide``: lift off the sheet by one of :data:`SLIDE_LIFTS` mm, slide to b's lifted pose,
@@ -319,6 +322,14 @@ class TransitionPlanner:
             reason = "; ".join(tried)
             return Transition(a.id, b.id, P, Q, kinds, status, reason, self.samples - n0)
 
+        # a tool that straddles the sheet (a C-gun) slides first: its axial retract pulls the
+        # jaw behind the sheet through it, so trying that first costs a check per weld
+        slide_first = self.slide and self.tool.straddles
+        if slide_first:
+            P, Q, why = self._slide(a, b)
+            if P is not None:
+                return done(P, Q, ("lift", "slide", "lower"), DIRECT)
+            tried.append(f"slide: {why}")
         la, ka, why_a = self._leave_axial(a)
         lb, kb, why_b = self._leave_axial(b) if la is not None else (None, (), "")
         if la is not None and lb is not None:
@@ -331,7 +342,7 @@ class TransitionPlanner:
         else:
             tried.append(f"axial: leaving {a.id}: {why_a}" if la is None
                          else f"axial: reaching {b.id}: {why_b}")  # fmt: skip
-        if self.slide:
+        if self.slide and not slide_first:
             P, Q, why = self._slide(a, b)
             if P is not None:
                 return done(P, Q, ("lift", "slide", "lower"), DIRECT)
@@ -473,6 +484,16 @@ def _entering(kind: str) -> str:
     return kind.replace("retract", "approach").replace("exit", "enter")
 
 
+def _plan_run(
+    pairs: list[tuple[Any, Any]], part: trimesh.Trimesh, tool: Tool, kw: dict[str, Any]
+) -> tuple[list[Transition], int, list[dict[str, Any]], int]:
+    """One run of consecutive transitions with its own planner: the transitions, the samples,
+    the SE(3) runs' counts and the crops built."""
+    tp = TransitionPlanner(part, tool, **kw)
+    out = [tp.plan(a, b) for a, b in pairs]
+    return out, tp.samples, tp.se3_runs, tp.checker.crops_built
+
+
 def plan_transitions(
     part: trimesh.Trimesh,
     tool: Tool,
@@ -489,6 +510,7 @@ def plan_transitions(
     slide: bool = True,
     se3_samples: int | None = None,
     stats: dict[str, Any] | None = None,
+    workers: int = 1,
 ) -> ToolPath:
     """The whole tool's transitions through the welds with a pose (module docstring).
 
@@ -506,6 +528,10 @@ def plan_transitions(
         :class:`TransitionPlanner`.
     stats
         Extra figures to record (the ordering's costs).
+    workers
+        Processes to plan in (:func:`weldplan.tool.transit_workers.run_chunks`: runs of
+        consecutive transitions, each with its own planner; the same answers but for the
+        SE(3) re-plans' clock).
 
     Returns
     -------
@@ -519,14 +545,16 @@ def plan_transitions(
         raise ValueError("the order must visit exactly the welds that have a pose")
     clearance = float(poses.settings["clearance"])
     radius = float(poses.settings["contact_radius"])
-    tp = TransitionPlanner(
-        part, tool, clearance=clearance, contact_radius=radius, retract=retract, se3=se3,
-        planner=planner, time_s=time_s, seed=seed, rot_weight=rot_weight, side_exit=side_exit,
-        slide=slide, se3_samples=se3_samples,
+    kw = dict(
+        clearance=clearance, contact_radius=radius, retract=retract, se3=se3, planner=planner,
+        time_s=time_s, seed=seed, rot_weight=rot_weight, side_exit=side_exit, slide=slide,
+        se3_samples=se3_samples,
     )  # fmt: skip
-    transitions = tuple(
-        tp.plan(poses[a], poses[b]) for a, b in zip(order[:-1], order[1:], strict=True)
-    )
+    pairs = [(poses[a], poses[b]) for a, b in zip(order[:-1], order[1:], strict=True)]
+    runs = run_chunks(_plan_run, pairs, (part, tool, kw), workers)
+    transitions = tuple(t for run in runs for t in run[0])
+    samples = sum(run[1] for run in runs)
+    se3_runs = [r for run in runs for r in run[2]]
     result = ToolPath(
         order=tuple(order),
         transitions=transitions,
@@ -537,7 +565,7 @@ def plan_transitions(
             "slide": slide,
             "slide_lifts": list(SLIDE_LIFTS),
             "se3_samples": se3_samples,
-            "se3_motion_cap": tp.se3_motion_cap,
+            "se3_motion_cap": DEFAULT_SE3_MOTION_CAP,
             "clearance": clearance,
             "contact_radius": radius,
             "rot_weight": rot_weight,
@@ -545,13 +573,14 @@ def plan_transitions(
             "planner": planner,
             "time_s": time_s,
             "seed": seed,
-            "min_step": tp.checker.min_step,
+            "min_step": DEFAULT_MIN_STEP,
+            "workers": workers,
         },
         stats={
             **(stats or {}),
-            "samples": tp.samples,
-            "crops_built": tp.checker.crops_built,
-            "se3_runs": tp.se3_runs,
+            "samples": samples,
+            "crops_built": sum(run[3] for run in runs),
+            "se3_runs": se3_runs,
             "total_s": time.perf_counter() - t0,
         },
     )

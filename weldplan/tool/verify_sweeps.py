@@ -219,34 +219,20 @@ def _end_mismatch(t: Any, poses: WeldPoses) -> str:
     return ""
 
 
-def verify_sweeps(
-    path: ToolPath,
+def _check_free(
+    transitions: list[Any],
     poses: WeldPoses,
     part: trimesh.Trimesh,
     tool: Tool,
-    *,
-    spacing: float = DEFAULT_SPACING,
-) -> SweepsVerification:
-    """Re-check every free transition of ``path`` for the swept ``tool`` (module docstring).
-
-    The clearance and the contact radius are the poses' settings (what the pose search and the
-    planner used).
-    """
+    spacing: float,
+) -> tuple[list[tuple[str, str]], int]:
+    """The failures among the free ``transitions`` (name, why) and the samples taken, with
+    fresh models built here (one process's share of :func:`verify_sweeps`)."""
     clearance = float(poses.settings["clearance"])
     radius = float(poses.settings["contact_radius"])
-    failures: list[tuple[str, str]] = []
-    ok_ids = sorted(p.id for p in poses.poses if p.ok)
-    if sorted(path.order) != ok_ids:
-        failures.append(("order", "the tool path does not visit exactly the welds with a pose"))
     sw = _Sweeps(part, tool, clearance, radius)
-    checked = 0
-    blocked = []
-    for t in path.transitions:
-        name = f"{t.from_id}->{t.to_id}"
-        if not t.free:
-            blocked.append(name)
-            continue
-        checked += 1
+    failures: list[tuple[str, str]] = []
+    for t in transitions:
         why = _end_mismatch(t, poses)
         Q = t.quaternions
         if not why and np.any(np.abs(np.linalg.norm(Q, axis=1) - 1.0) > 1e-6):
@@ -260,11 +246,42 @@ def verify_sweeps(
                     why = f"motion {k} ({t.kinds[k]}): {why}"
                     break
         if why:
-            failures.append((name, why))
+            failures.append((f"{t.from_id}->{t.to_id}", why))
+    return failures, sw.samples
+
+
+def verify_sweeps(
+    path: ToolPath,
+    poses: WeldPoses,
+    part: trimesh.Trimesh,
+    tool: Tool,
+    *,
+    spacing: float = DEFAULT_SPACING,
+    workers: int = 1,
+) -> SweepsVerification:
+    """Re-check every free transition of ``path`` for the swept ``tool`` (module docstring).
+
+    The clearance and the contact radius are the poses' settings (what the pose search and the
+    planner used). ``workers > 1`` splits the transitions into that many runs of consecutive
+    ones, each checked in its own process with its own fresh models
+    (:func:`weldplan.tool.transit_workers.run_chunks`); the answer is the same.
+    """
+    from weldplan.tool.transit_workers import run_chunks
+
+    failures: list[tuple[str, str]] = []
+    ok_ids = sorted(p.id for p in poses.poses if p.ok)
+    if sorted(path.order) != ok_ids:
+        failures.append(("order", "the tool path does not visit exactly the welds with a pose"))
+    free = [t for t in path.transitions if t.free]
+    blocked = [f"{t.from_id}->{t.to_id}" for t in path.transitions if not t.free]
+    samples = 0
+    for fails, n in run_chunks(_check_free, free, (poses, part, tool, spacing), workers):
+        failures += fails
+        samples += n
     return SweepsVerification(
         ok=not failures,
-        checked=checked,
-        samples=sw.samples,
+        checked=len(free),
+        samples=samples,
         blocked=tuple(blocked),
         failures=tuple(failures),
     )
