@@ -346,14 +346,19 @@ class SweepChecker:
         docstring) on :meth:`slack`. ``exempt (m, 3)``: the weld spots whose zones apply.
         ``soft``: whether the advancement from the start (from the end) may take steps shorter
         than ``min_step`` over its first ``max(contact_radius, 10 min_step)`` mm of tool motion
-        (a weld pose's slack may be small); elsewhere a slack below ``min_step`` blocks the
-        motion at once (fail fast: OMPL asks about many motions).
+        (a weld pose's slack may be small; a motion that short from a weld pose is soft at both
+        ends); elsewhere a slack below ``min_step`` blocks the motion at once (fail fast: OMPL
+        asks about many motions). Softness changes only where the check gives up early, never
+        what it shows: a passed motion keeps the clearance throughout.
 
         ``cap`` (samples) and ``deadline`` (a :func:`time.perf_counter` value) bound the check's
         own work: when either is spent before the motion is shown free, the motion is reported
         not free (``out_of_budget``), never free. The SE(3) re-plan uses them so that its time
         budget holds for the gun (one motion of a large turn may ask for thousands of samples)."""
         L = motion_bound(p0, q0, p1, q1, self.reach)
+        soft_range = max(self.contact_radius, 10 * self.min_step)
+        if L <= soft_range and any(soft):  # a short motion off a weld pose lies wholly in its
+            soft = (True, True)  # soft range: its far end may have a small slack too
         budget = [max_samples(L, self.min_step)]
         smin = [math.inf]
         focused = self._inside(p0, p1)
@@ -380,9 +385,7 @@ class SweepChecker:
             s = start
             while True:
                 v = slack_at(s)
-                soft_here = may and abs(s - start) * L <= max(
-                    self.contact_radius, 10 * self.min_step
-                )
+                soft_here = may and abs(s - start) * L <= soft_range
                 short = v < self.min_step and not soft_here
                 if v < 0 or (v == 0 and L > 0) or budget[0] < 0 or (short and L > 0):
                     blocked = s
