@@ -3,6 +3,7 @@ the independent re-check, the tool-aware order."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -234,6 +235,11 @@ def test_slide_along_one_flange_where_the_fork_cannot_retract():
     assert path.by_via() == {"axial": 0, "slide": 1, "side": 0, "se3": 0, "blocked": 0}
     v = verify_sweeps(path, poses, sheet, fork)
     assert v.ok and v.checked == 1, v.describe()
+    # a tool that straddles the sheet slides first: the same path, nothing tried before it
+    gun = dataclasses.replace(fork, straddles=True, _cache={})
+    (g,) = plan_transitions(sheet, gun, poses, retract=50.0, se3=False).transitions
+    np.testing.assert_array_equal(g.positions, t.positions)
+    assert g.via == "slide" and g.reason == ""
 
 
 def test_a_blocked_transition_lists_every_exit_tried():

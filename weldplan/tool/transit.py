@@ -63,7 +63,9 @@ class Transition:
     status
         :data:`DIRECT`, :data:`REPLANNED` or :data:`BLOCKED`.
     reason
-        For a re-planned or blocked transition: what blocked the direct one (and OMPL's status).
+        The exits tried before the one taken (all of them for a blocked transition) and where
+        each was blocked, and OMPL's status and counts for an SE(3) re-plan; empty when the
+        first exit tried was free.
     samples
         FCL distance samples the planner's swept check took.
     """

@@ -402,9 +402,9 @@ class TransitionPlanner:
             sp = np.concatenate([la[:-1], sp, lb[::-1][1:]])
             sq = np.concatenate([[qa] * (len(la) - 1), sq, [qb] * (len(lb) - 1)])
             skinds = (*ka, *skinds, *(_entering(k) for k in reversed(kb)))
-        # the planner's answer, checked again (the whole path: the ends are known free)
-        soft = legs is None
-        ok3, k3, why3 = self._motions(path[:, :3], path[:, 3:], exempt, soft, soft)
+        # the planner's answer, checked again (the whole path: the ends are known free; soft at
+        # the ends as OMPL's checks were: softness changes only where a check gives up early)
+        ok3, k3, why3 = self._motions(path[:, :3], path[:, 3:], exempt, True, True)
         if not ok3:
             tried.append(f"SE(3) path motion {k3} {why3}")
             return done(sp, sq, skinds, BLOCKED)
