@@ -232,9 +232,8 @@ def plan_tool_path(
         side_exit=args.side_exit,
         slide=getattr(args, "slide", True),
         stats=stats,
-        workers=max(1, int(getattr(args, "jobs", 1) or 1)),
     )
-    return path, verify_sweeps(path, poses, part, tool, workers=path.settings["workers"])
+    return path, verify_sweeps(path, poses, part, tool)
 
 
 def transition_rows(route: Any, check: Any) -> list[tuple[str, str]]:
