@@ -3,6 +3,7 @@ the independent re-check, the tool-aware order."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -15,7 +16,7 @@ from weldplan.tool.result import OK, quat_wxyz
 from weldplan.tool.sweep import SweepChecker, interpolate, motion_bound, outside_sphere
 from weldplan.tool.tool_order import tool_leg_costs, tool_order
 from weldplan.tool.transit import BLOCKED, DIRECT, ToolPath, Transition
-from weldplan.tool.transitions import plan_transitions
+from weldplan.tool.transitions import SLIDE_LIFTS, TransitionPlanner, plan_transitions
 from weldplan.tool.verify_sweeps import verify_sweeps
 
 
@@ -118,12 +119,16 @@ def test_retract_is_free_for_a_stick_and_blocked_for_a_fork_that_straddles_the_s
     assert t.length == pytest.approx(50 + 200 + 50)
     v = verify_sweeps(path, poses, sheet, _stick())
     assert v.ok and v.checked == 1, v.describe()
-    fork = plan_transitions(sheet, _fork(), poses, retract=50.0, se3=False, side_exit=0.0)
+    fork = plan_transitions(
+        sheet, _fork(), poses, retract=50.0, se3=False, side_exit=0.0, slide=False
+    )
     (tf,) = fork.transitions
     assert tf.status == BLOCKED and "retract" in tf.reason
     assert verify_sweeps(fork, poses, sheet, _fork()).blocked == ("a->b",)
     # sideways, the fork's jaw comes off the sheet past its edge (x = 60): towards TCP +x only
-    side = plan_transitions(sheet, _fork(), poses, retract=50.0, se3=False, side_exit=120.0)
+    side = plan_transitions(
+        sheet, _fork(), poses, retract=50.0, se3=False, side_exit=120.0, slide=False
+    )
     (ts,) = side.transitions
     assert ts.status == DIRECT and ts.kinds[:3] == ("lift", "exit +x", "retract"), ts.kinds
     assert ts.kinds[-3:] == ("approach", "enter +x", "lift")
@@ -209,3 +214,99 @@ def test_a_blocked_move_is_replanned_in_se3_and_the_recheck_agrees():
     assert t.length > 300.0
     v = verify_sweeps(path, poses, part, stick)
     assert v.ok and v.checked == 1, v.describe()
+
+
+def test_slide_along_one_flange_where_the_fork_cannot_retract():
+    # a 2 mm flange whose free edge is at x = 60; the fork straddles it (jaw 28 mm under it,
+    # arm beyond the edge): the axial retract pulls the jaw through the sheet, the slide does not
+    sheet = _box((400, 400, 2), (-140, 0, -1))
+    poses = _poses([("a", (30, -100, 0)), ("b", (30, 100, 0))], DOWN)
+    fork = _fork()
+    path = plan_transitions(sheet, fork, poses, retract=50.0, se3=False)
+    (t,) = path.transitions
+    assert t.status == DIRECT and t.kinds == ("lift", "slide", "lower") and t.via == "slide"
+    lift = SLIDE_LIFTS[0]
+    np.testing.assert_allclose(
+        t.positions, [[30, -100, 0], [30, -100, lift], [30, 100, lift], [30, 100, 0]]
+    )
+    assert t.length == pytest.approx(2 * lift + 200.0)
+    assert t.rotation == pytest.approx(0.0)
+    assert "axial: leaving a: retract" in t.reason  # what was tried first
+    assert path.by_via() == {"axial": 0, "slide": 1, "side": 0, "se3": 0, "blocked": 0}
+    v = verify_sweeps(path, poses, sheet, fork)
+    assert v.ok and v.checked == 1, v.describe()
+    # a tool that straddles the sheet slides first: the same path, nothing tried before it
+    gun = dataclasses.replace(fork, straddles=True, _cache={})
+    (g,) = plan_transitions(sheet, gun, poses, retract=50.0, se3=False).transitions
+    np.testing.assert_array_equal(g.positions, t.positions)
+    assert g.via == "slide" and g.reason == ""
+
+
+def test_a_blocked_transition_lists_every_exit_tried():
+    # a rib 60 mm high stands across the flange between the welds: no slide passes it, no 50 mm
+    # retract point clears it; every exit is named in the reason
+    sheet = _box((400, 400, 2), (-140, 0, -1))
+    rib = _box((560, 4, 60), (-60, 0, 30))  # beyond the edge too: no way round it
+    part = trimesh.util.concatenate([sheet, rib])
+    poses = _poses([("a", (30, -100, 0)), ("b", (30, 100, 0))], DOWN)
+    path = plan_transitions(part, _fork(), poses, retract=50.0, se3=False, side_exit=120.0)
+    (t,) = path.transitions
+    assert t.status == BLOCKED and t.via == "blocked"
+    assert "axial: leaving a: retract: retract blocked" in t.reason
+    for lift in SLIDE_LIFTS:
+        assert f"lift {lift:g}: slide blocked" in t.reason, t.reason
+    assert "side: move blocked" in t.reason, t.reason
+
+
+def test_a_motion_check_stops_at_its_cap_and_says_so():
+    plate = _box((400, 400, 2), (0, 0, -1))
+    chk = SweepChecker(plate, _stick(), clearance=5.0, contact_radius=0.0)
+    q = _q(DOWN)
+    free = chk.check([-150, 0, 6], q, [150, 0, 6], q)
+    assert free.ok and free.samples > 5
+    capped = chk.check([-150, 0, 6], q, [150, 0, 6], q, cap=5)
+    assert not capped.ok and capped.out_of_budget and capped.samples == 5
+    assert "budget ran out" in capped.describe()
+
+
+def test_the_se3_budget_is_a_budget():
+    pytest.importorskip("ompl")
+    sheet = _box((400, 400, 2), (0, 0, -1))
+    wall = _box((400, 4, 80), (0, 0, 40))
+    part = trimesh.util.concatenate([sheet, wall])
+    poses = _poses([("a", (0, -100, 0)), ("b", (0, 100, 0))], DOWN)
+    stick = _stick(100.0)
+    tp = TransitionPlanner(
+        part, stick, clearance=5.0, contact_radius=20.0, retract=50.0, time_s=60.0, seed=1,
+        se3_samples=40, slide=False,
+    )  # fmt: skip
+    t = tp.plan(poses["a"], poses["b"])
+    (run,) = tp.se3_runs
+    # the states and motions OMPL asked about took at most the 40 samples (a motion is cut
+    # short at what is left); once spent, OMPL is stopped and the transition reported blocked
+    assert run["samples"] <= 40 and run["motions"] > 0
+    assert t.status == BLOCKED and "refused: budget spent" in t.reason
+    # the same seed with room to work solves it, and the counts are reproducible
+    tp2 = TransitionPlanner(
+        part, stick, clearance=5.0, contact_radius=20.0, retract=50.0, time_s=60.0, seed=1,
+        se3_samples=20_000, slide=False,
+    )  # fmt: skip
+    assert tp2.plan(poses["a"], poses["b"]).status == "replanned"
+    assert tp2.se3_runs[0]["samples"] <= 20_000
+
+
+def test_two_worker_processes_give_the_same_transitions_and_recheck():
+    sheet = _box((400, 400, 2), (-140, 0, -1))
+    poses = _poses([("a", (30, -100, 0)), ("b", (30, 0, 0)), ("c", (30, 100, 0))], DOWN)
+    fork = _fork()
+    one = plan_transitions(sheet, fork, poses, se3=False)
+    two = plan_transitions(sheet, fork, poses, se3=False, workers=2)
+    assert [t.kinds for t in two.transitions] == [t.kinds for t in one.transitions]
+    for s, t in zip(one.transitions, two.transitions, strict=True):
+        np.testing.assert_array_equal(s.positions, t.positions)
+    # the middle weld's lift is checked once in each process that meets it
+    assert two.stats["samples"] >= one.stats["samples"]
+    v1 = verify_sweeps(one, poses, sheet, fork)
+    v2 = verify_sweeps(two, poses, sheet, fork, workers=2)
+    assert v1.ok and v2.ok and v1.checked == v2.checked == 2
+    assert v1.samples == v2.samples  # each transition re-checked once, the same way

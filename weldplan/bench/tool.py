@@ -5,10 +5,16 @@ planning time on 2 cores. For each station, from one run:
 
 - point tip: building the cell and planning the verified point-tip route (``plan_route``);
 - gun: the same plus the pose search (:func:`~weldplan.tool.poses.plan_weld_poses`, which
-  re-checks every chosen pose) and the independent re-check of all poses
-  (:func:`~weldplan.tool.verify_poses.verify_poses`), what ``weldplan plan --tool`` runs;
+  re-checks every chosen pose), the independent re-check of all poses
+  (:func:`~weldplan.tool.verify_poses.verify_poses`), the order on the tool's costs
+  (:func:`~weldplan.tool.tool_order.tool_order`), the transitions of the swept gun
+  (:func:`~weldplan.tool.transitions.plan_transitions`) and their independent re-check
+  (:func:`~weldplan.tool.verify_sweeps.verify_sweeps`): what ``weldplan plan --tool`` runs
+  (``--no-transitions``: the poses only);
 - the ratio of the two, welds with a verified pose / total (and how many of those are turned
-  over), the total orientation change along the route, the stages of the pose search.
+  over), transitions free / total by how they go (axial retract, slide along the flange, side
+  exit, SE(3) re-plan), the tool path's length and orientation change against the point-tip
+  route's length and the orientation change of its welds' poses in the point-tip order.
 
 car2 is ``../shared/data/bodies/car2.obj`` scaled to 4500 mm with the committed synthetic
 stations ``assets/car2/car2_synthetic_{50,200}.csv`` (docs/bench-scale.md). Writes ``tool.md``
@@ -25,7 +31,10 @@ import time
 from pathlib import Path
 from typing import Any
 
-HELP = "gun pose search vs point-tip planning time (target <= 2x on car2 200), reach per station"
+HELP = (
+    "gun poses and transitions vs point-tip planning time (target <= 2x on car2 200), "
+    "reach per station"
+)
 
 ROOT = Path(__file__).resolve().parents[2]
 #: the car2 body in the shared data (../shared/data relative to the repository root)
@@ -51,6 +60,19 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="check against one BVH of the whole part instead of a crop per weld",
     )
     p.add_argument("--json", action="store_true", help="also write each station's poses JSON")
+    p.add_argument(
+        "--no-transitions", action="store_true", help="time the poses only (no transitions)"
+    )
+    p.add_argument(
+        "--se3-time", type=float, default=3.0, help="OMPL seconds per blocked transition (0: off)"
+    )
+    p.add_argument(
+        "--workers",
+        type=int,
+        default=1,
+        help="processes for the transitions and their re-check (default 1, as the point-tip "
+        "planning here runs in one)",
+    )
 
 
 def _load() -> str:
@@ -89,12 +111,14 @@ def _station(name: str, gun: Any, args: argparse.Namespace) -> dict[str, Any]:
     t2 = time.perf_counter()
     ver = verify_poses(poses, cell.part, gun)
     t_verify = time.perf_counter() - t2
-    gun_s = t_point + t_poses + t_verify
+    tr = {} if args.no_transitions else _transitions(cell, route, poses, gun, args)
+    gun_s = t_point + t_poses + t_verify + tr.get("transitions_s", 0.0) + tr.get("sweeps_s", 0.0)
     misses = [p.miss for p in poses.poses if not p.ok and p.miss is not None]
     if args.json:
         out = Path(args.out)
         (out / f"tool-{name}.json").write_text(poses.to_json(), encoding="utf-8")
     return {
+        **tr,
         "name": name,
         "n": len(poses.poses),
         "ok": poses.n_ok,
@@ -114,6 +138,47 @@ def _station(name: str, gun: Any, args: argparse.Namespace) -> dict[str, Any]:
     }
 
 
+def _transitions(cell: Any, route: Any, poses: Any, gun: Any, args: Any) -> dict[str, Any]:
+    """Order, transitions and their re-check for one station (timed together)."""
+    from weldplan.tool.tool_order import DEFAULT_ROT_WEIGHT, tool_order
+    from weldplan.tool.transitions import DEFAULT_RETRACT, plan_transitions
+    from weldplan.tool.verify_sweeps import verify_sweeps
+
+    t0 = time.perf_counter()
+    order, costs = tool_order(poses, DEFAULT_RETRACT, DEFAULT_ROT_WEIGHT, rng=0)
+    path = plan_transitions(
+        cell.part, gun, poses, order=order, se3=args.se3_time > 0,
+        time_s=max(args.se3_time, 1e-3), seed=0, stats=costs, workers=args.workers,
+    )  # fmt: skip
+    t1 = time.perf_counter()
+    sweeps = verify_sweeps(path, poses, cell.part, gun, workers=args.workers)
+    t2 = time.perf_counter()
+    free = [t for t in path.transitions if t.free]
+    return {
+        "transitions": len(path.transitions),
+        "via": path.by_via(),
+        "free_length": sum(t.length for t in free),
+        "free_rotation": sum(t.rotation for t in free),
+        "blocked": [f"{t.from_id}->{t.to_id}: {t.reason}" for t in path.blocked],
+        "sweeps": f"{'ok' if sweeps.ok else 'FAILED'} ({sweeps.checked})",
+        "point_length": route.length,
+        "transitions_s": t1 - t0,
+        "sweeps_s": t2 - t1,
+    }
+
+
+def _transition_row(r: dict[str, Any]) -> str:
+    v = r["via"]
+    n = r["transitions"]
+    return (
+        f"| {r['name']} | {r['ok']} / {r['n']} | {n - v['blocked']} / {n} | {v['axial']} "
+        f"| {v['slide']} | {v['side']} | {v['se3']} | {r['free_length']:.1f} "
+        f"| {r['free_rotation']:.1f} | {r['point_length']:.1f} | {r['rotation']:.1f} "
+        f"| {r['sweeps']} | {r['poses_s'] + r['verify_s']:.1f} | {r['transitions_s']:.1f} "
+        f"| {r['sweeps_s']:.1f} |"
+    )
+
+
 def run(args: argparse.Namespace) -> int:
     from weldplan.tool import shared_spot_gun
 
@@ -129,13 +194,15 @@ def run(args: argparse.Namespace) -> int:
         f"triangles, reach {gun.reach:.0f} mm; {side}; {part}.",
         f"Target: gun / point tip <= {TARGET_RATIO:g} on car2_200 (issue 16).",
         "",
-        "| station | welds ok / total (turned over) | point tip s | gun s (poses + re-check) "
+        "| station | welds ok / total (turned over) | point tip s | gun s (poses + re-check; "
+        "with transitions: + transitions + their re-check) "
         "| ratio | rotation deg | re-check | pose stages s: setup, crop, collide, choose, miss "
         "| load before / after |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
     print("\n".join(lines), flush=True)
-    notes = []
+    notes: list[str] = []
+    rows: list[str] = []
     for name in args.stations.split(","):
         r = _station(name.strip(), gun, args)
         s = r["stats"]
@@ -143,19 +210,42 @@ def run(args: argparse.Namespace) -> int:
             f"{s.get(k, float('nan')):.1f}"
             for k in ("setup_s", "broad_phase_s", "collide_s", "choose_s", "miss_s")
         )
+        parts = [r["poses_s"], r["verify_s"]] + (
+            [r["transitions_s"], r["sweeps_s"]] if "via" in r else []
+        )
         row = (
             f"| {r['name']} | {r['ok']} / {r['n']} ({r['flipped']}) | {r['point_s']:.1f} "
-            f"| {r['gun_s']:.1f} ({r['poses_s']:.1f} + {r['verify_s']:.1f}) | {r['ratio']:.2f} "
+            f"| {r['gun_s']:.1f} ({' + '.join(f'{x:.1f}' for x in parts)}) | {r['ratio']:.2f} "
             f"| {r['rotation']:.1f} | {r['verified']} | {stages} | {r['load']} |"
         )
         lines.append(row)
         print(row, flush=True)
+        if "via" in r:
+            rows.append(_transition_row(r))
+            notes += [f"- {r['name']} blocked {b}" for b in r["blocked"]]
         notes.append(
             f"- {r['name']}: {r['n'] - r['ok']} misses: {r['misses_ahead']} hit ahead of the TCP "
             f"(fixed electrode / lower arm: structure behind the sheet), {r['misses_short']} only "
             f"short of the clearance, {r['no_miss']} without a miss (must be 0); "
             f"{s['collision_queries']} collide, {s['distance_queries']} distance queries"
         )
+    if rows:
+        head = [
+            "",
+            "Transitions (shared gun, tool order, retract 50 mm, slide lifts 4/10/20 mm, side exit "
+            f"250 mm, SE(3) {args.se3_time:g} s each, {args.workers} process(es)): free / total "
+            "by how they go; the free "
+            "transitions' TCP length and rotation against the point-tip route's length and its "
+            "welds' poses' rotation in the point-tip order; seconds for poses (+ re-check), "
+            "transitions, their re-check.",
+            "",
+            "| station | welds ok | transitions free / total | axial | slide | side | SE(3) "
+            "| tool path mm | tool rotation deg | point-tip mm | point-order rotation deg "
+            "| re-check | poses s | transitions s | re-check s |",
+            "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        ]
+        lines += head + rows
+        print("\n".join(head + rows))
     lines += [""] + notes
     print("\n".join(notes))
     (out / "tool.md").write_text("\n".join(lines) + "\n", encoding="utf-8")

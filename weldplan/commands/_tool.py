@@ -99,7 +99,8 @@ def _seconds(text: str) -> float:
 
 
 def add_transition_arguments(p: argparse.ArgumentParser) -> None:
-    """``--retract``, ``--rot-weight``, ``--tool-order``, ``--se3-time`` (the transitions)."""
+    """``--retract``, ``--side-exit``, ``--no-slide``, ``--rot-weight``, ``--tool-order``,
+    ``--se3-time`` (the transitions)."""
     p.add_argument(
         "--retract",
         metavar="MM",
@@ -115,6 +116,13 @@ def add_transition_arguments(p: argparse.ArgumentParser) -> None:
         default=250.0,
         help="with --tool: where the axial retract is blocked, try leaving sideways by this many "
         "mm first (a C-gun round a flange; default 250, 0: never)",
+    )
+    p.add_argument(
+        "--no-slide",
+        dest="slide",
+        action="store_false",
+        help="with --tool: never slide between welds (lift 4-20 mm off the sheet, slide, lower: "
+        "a C-gun stays straddled over the flange; tried after the axial retract by default)",
     )
     p.add_argument(
         "--rot-weight",
@@ -222,6 +230,7 @@ def plan_tool_path(
         seed=seed,
         rot_weight=max(args.rot_weight, 1.0),
         side_exit=args.side_exit,
+        slide=getattr(args, "slide", True),
         stats=stats,
     )
     return path, verify_sweeps(path, poses, part, tool)
@@ -242,8 +251,9 @@ def transition_rows(route: Any, check: Any) -> list[tuple[str, str]]:
     rows = [
         (
             "tool transitions",
-            f"{n - len(path.blocked)} / {n} free for the swept tool, {path.n_replanned} "
-            f"re-planned in SE(3); retract {path.settings['retract']:g} mm, side exit "
+            f"{n - len(path.blocked)} / {n} free for the swept tool ("
+            + ", ".join(f"{k} {v}" for k, v in path.by_via().items() if k != "blocked")
+            + f"); retract {path.settings['retract']:g} mm, side exit "
             f"{path.settings.get('side_exit', 0):g} mm"
             + (f"; re-checked: {sweeps.describe()}" if sweeps is not None else ""),
         ),

@@ -230,8 +230,11 @@ def _solve(
     simplify: bool,
     measure: Callable[[NDArray[np.float64]], float],
     dim: int,
+    stop: Callable[[], bool] | None = None,
 ) -> SampledPath:
-    """Run ``planner`` on the prepared SimpleSetup ``ss`` and read the path back."""
+    """Run ``planner`` on the prepared SimpleSetup ``ss`` and read the path back; it stops at
+    ``time_s`` seconds or, with ``stop``, as soon as ``stop()`` is true (OMPL asks between its
+    own steps)."""
     ob, og, ou = _import_ompl()
     si = ss.getSpaceInformation()
     if motion_valid is None:
@@ -250,7 +253,14 @@ def _solve(
     try:
         if ompl_seed is not None:
             ou.RNG.setSeed(ompl_seed)
-        status = ss.solve(float(time_s))
+        if stop is None:
+            status = ss.solve(float(time_s))
+        else:
+            ptc = ob.plannerOrTerminationCondition(
+                ob.timedPlannerTerminationCondition(float(time_s)),
+                ob.PlannerTerminationCondition(lambda: bool(stop())),
+            )
+            status = ss.solve(ptc)
         solved = bool(ss.haveExactSolutionPath())
         simplified = False
         if solved and simplify:
@@ -440,6 +450,7 @@ def plan_se3(
     time_s: float = 1.0,
     seed: int | np.random.Generator | None = None,
     simplify: bool = True,
+    stop: Callable[[], bool] | None = None,
 ) -> SampledPath:
     """Plan a rigid-body path (a torch or a gun) between two poses with OMPL in SE(3).
 
@@ -463,6 +474,9 @@ def plan_se3(
         SO(3) distance is half the rotation angle, so its subspace weight is ``2 rot_weight``.)
     resolution, planner, time_s, seed, simplify
         As in :func:`plan_rn`.
+    stop
+        ``stop() -> bool``: the planner also stops as soon as this is true (a caller's own
+        budget, e.g. of collision samples), besides ``time_s``.
 
     Returns
     -------
@@ -526,4 +540,5 @@ def plan_se3(
         simplify=simplify,
         measure=lambda pts: se3_length(pts, rot_weight),
         dim=7,
+        stop=stop,
     )

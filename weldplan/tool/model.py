@@ -129,12 +129,12 @@ class Tool:
     def outside_zone(self, radius: float) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
         """The tool minus its part inside the contact zone (:meth:`in_zone`, radius in mm).
 
-        Triangles wholly inside the zone are dropped (the zone is convex: a sphere, or a sphere
-        cut to a cone of at most 90 deg, so a triangle whose corners are inside is inside);
-        triangles crossing its surface are subdivided (midpoint subdivision, trimesh) until their
-        longest edge is below :data:`ZONE_EDGE_MM`, then those wholly inside are dropped. What
-        remains covers every point of the tool outside the zone, and reaches at most
-        ``ZONE_EDGE_MM`` into it: a check of this mesh against the whole part is the check of
+        :func:`outside_sphere` with the zone (the sphere, or a sphere cut to a cone of at most
+        90 deg: convex, so a triangle whose corners are inside is inside): triangles reaching
+        into the sphere are subdivided (midpoint subdivision, trimesh) until their longest edge
+        is below :data:`ZONE_EDGE_MM`, then those wholly inside are dropped. What remains
+        covers every point of the tool outside the zone, and reaches at most ``ZONE_EDGE_MM``
+        into it: a check of this mesh against the whole part is the check of
         the whole tool against the part, except contact inside the zone (conservative by at most
         ``ZONE_EDGE_MM``).
 
@@ -143,7 +143,8 @@ class Tool:
         vertices, faces
             ``(k, 3) float`` mm (TCP frame) and ``(j, 3) int``; a fresh computation (not cached).
         """
-        return tool_outside_zone(self.vertices, self.faces, lambda v: self.in_zone(v, radius))
+        cone = None if self.tip_cone is None else (lambda v: self.in_zone(v, radius))
+        return outside_sphere(self.vertices, self.faces, np.zeros(3), radius, cone)
 
     def fcl_model(self, radius: float) -> tuple[fcl.BVHModel, NDArray[np.float64]]:
         """A python-fcl BVH of :meth:`outside_zone` (cached per radius and zone) and its
@@ -181,33 +182,73 @@ def bvh(vertices: ArrayLike, faces: ArrayLike) -> fcl.BVHModel:
     return model
 
 
-def tool_outside_zone(
-    vertices: NDArray[np.float64],
-    faces: NDArray[np.int64],
-    in_zone: Callable[[NDArray[np.float64]], NDArray[np.bool_]],
+def _reaching(tri: NDArray[np.float64], c: NDArray[np.float64], radius: float) -> NDArray[np.bool_]:
+    """``(m,) bool``: triangles ``(m, 3, 3)`` whose closest point to ``c`` lies within ``radius``
+    (a large triangle can cover the sphere with all its vertices outside)."""
+    edge = np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2).max(axis=1)
+    vmin = np.linalg.norm(tri - c, axis=2).min(axis=1)
+    out = np.zeros(len(tri), dtype=bool)
+    cand = np.flatnonzero(vmin < radius + edge)  # every point of a triangle is within its
+    if len(cand):  # longest edge of a vertex: a cheap superset first
+        cp = trimesh.triangles.closest_point(tri[cand], np.repeat(c[None], len(cand), axis=0))
+        out[cand] = np.linalg.norm(cp - c, axis=1) < radius
+    return out
+
+
+def outside_sphere(
+    vertices: ArrayLike,
+    faces: ArrayLike,
+    centre: ArrayLike,
+    radius: float,
+    in_zone: Callable[[NDArray[np.float64]], NDArray[np.bool_]] | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
-    """See :meth:`Tool.outside_zone`: a mesh minus its triangles inside a convex zone given by
-    ``in_zone ((k, 3) mm) -> (k,) bool``."""
+    """A mesh minus its parts inside a zone: the sphere of ``radius`` mm about ``centre (3,)``,
+    or the convex part of it that ``in_zone ((k, 3) mm) -> (k,) bool`` says (a tool's tip cone).
+
+    The triangles that reach into the sphere (:func:`_reaching`: by their closest point, so a
+    large triangle covering the sphere with all its corners outside counts) are subdivided
+    (trimesh midpoint subdivision) until those still reaching in have their longest edge below
+    :data:`ZONE_EDGE_MM`; then the triangles wholly inside the zone (all corners in it: the zone
+    is convex) are dropped. The result covers every point of the mesh outside the zone and
+    reaches at most ``ZONE_EDGE_MM`` into it (conservative). Only the reaching triangles are
+    subdivided. One function for the tool's zone (:meth:`Tool.outside_zone`) and the part's
+    zone about a weld spot (:mod:`weldplan.tool.sweep`).
+
+    Returns
+    -------
+    vertices, faces
+        ``(k, 3) float`` mm and ``(j, 3) int``.
+    """
     v = np.asarray(vertices, dtype=np.float64)
     f = np.asarray(faces, dtype=np.int64)
+    c = np.asarray(centre, dtype=np.float64).reshape(3)
+    if radius <= 0 or len(f) == 0:
+        return v.copy(), f.copy()
+
+    def inside(tri: NDArray[np.float64]) -> NDArray[np.bool_]:
+        if in_zone is None:
+            return np.linalg.norm(tri - c, axis=2).max(axis=1) < radius
+        return in_zone(tri.reshape(-1, 3) - c).reshape(-1, 3).all(axis=1)
+
+    near = _reaching(v[f], c, radius)
+    keep_f = f[~near]
+    nv, nf = v, f[near]
     for _ in range(64):
-        inside = in_zone(v)
-        tri_in = inside[f]
-        keep = ~tri_in.all(axis=1)
-        f = f[keep]
-        crossing = tri_in[keep].any(axis=1)
-        if not crossing.any():
-            break
-        tri = v[f[crossing]]
+        tri = nv[nf]
+        whole = inside(tri)
+        reach = _reaching(tri, c, radius) & ~whole
         edges = np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2).max(axis=1)
-        coarse = np.flatnonzero(crossing)[edges > ZONE_EDGE_MM]
+        coarse = np.flatnonzero(reach & (edges > ZONE_EDGE_MM))
         if len(coarse) == 0:
+            nf = nf[~whole]
             break
-        v, f = trimesh.remesh.subdivide(v, f, face_index=coarse)
-    used = np.unique(f)
-    remap = np.full(len(v), -1, dtype=np.int64)
+        nv, nf = trimesh.remesh.subdivide(nv, nf, face_index=coarse)
+    # nv extends v (subdivision appends vertices), so the far faces keep their indices
+    allf = np.concatenate([keep_f, nf])
+    used = np.unique(allf)
+    remap = np.full(len(nv), -1, dtype=np.int64)
     remap[used] = np.arange(len(used))
-    return v[used], remap[f]
+    return nv[used], remap[allf]
 
 
 # --------------------------------------------------------------------------------------------

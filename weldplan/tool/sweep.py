@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import logging
 import math
+import time
 from dataclasses import dataclass
 from typing import Any
 
@@ -50,13 +51,16 @@ import trimesh
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from weldplan.tool.model import ZONE_EDGE_MM, Tool, bvh
+from weldplan.tool.model import Tool, bvh, outside_sphere
 
 log = logging.getLogger(__name__)
 
 #: mm: a motion of bound ``L`` may take at most ``2 (L / min_step + 1)`` samples (conservative
 #: advancement along a motion that grazes the part would never end)
 DEFAULT_MIN_STEP = 0.5
+#: mm: the zone's distance to the part outside a spot's sphere is measured up to this much
+#: (:meth:`SweepChecker.slack`); the zone needs only not touch, so a cap costs only step length
+ZONE_CAP_MM = 30.0
 
 
 def quat_to_matrix(q: ArrayLike) -> NDArray[np.float64]:
@@ -115,56 +119,6 @@ def tool_zone(tool: Tool, radius: float) -> tuple[NDArray[np.float64], NDArray[n
     return tool.vertices[used], inv.reshape(-1, 3).astype(np.int64)
 
 
-def _reaching(tri: NDArray[np.float64], c: NDArray[np.float64], radius: float) -> NDArray[np.bool_]:
-    """``(m,) bool``: triangles ``(m, 3, 3)`` whose closest point to ``c`` lies within ``radius``
-    (a large triangle can cover the sphere with all its vertices outside)."""
-    edge = np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2).max(axis=1)
-    vmin = np.linalg.norm(tri - c, axis=2).min(axis=1)
-    out = np.zeros(len(tri), dtype=bool)
-    cand = np.flatnonzero(vmin < radius + edge)  # every point of a triangle is within its
-    if len(cand):  # longest edge of a vertex: a cheap superset first
-        cp = trimesh.triangles.closest_point(tri[cand], np.repeat(c[None], len(cand), axis=0))
-        out[cand] = np.linalg.norm(cp - c, axis=1) < radius
-    return out
-
-
-def outside_sphere(
-    vertices: ArrayLike, faces: ArrayLike, centre: ArrayLike, radius: float
-) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
-    """A mesh minus its parts inside the sphere of ``radius`` mm about ``centre (3,)``.
-
-    The triangles that reach into the sphere (:func:`_reaching`) are subdivided (trimesh
-    midpoint subdivision) until those still reaching in have their longest edge below
-    :data:`~weldplan.tool.model.ZONE_EDGE_MM`; then the triangles wholly inside are dropped. The
-    result covers every point of the mesh outside the sphere and reaches at most
-    ``ZONE_EDGE_MM`` into it (conservative). Only the reaching triangles are subdivided.
-    """
-    v = np.asarray(vertices, dtype=np.float64)
-    f = np.asarray(faces, dtype=np.int64)
-    c = np.asarray(centre, dtype=np.float64).reshape(3)
-    if radius <= 0 or len(f) == 0:
-        return v.copy(), f.copy()
-    near = _reaching(v[f], c, radius)
-    keep_f = f[~near]
-    nv, nf = v, f[near]
-    for _ in range(64):
-        tri = nv[nf]
-        inside = np.linalg.norm(tri - c, axis=2).max(axis=1) < radius
-        reach = _reaching(tri, c, radius) & ~inside
-        edges = np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2).max(axis=1)
-        coarse = np.flatnonzero(reach & (edges > ZONE_EDGE_MM))
-        if len(coarse) == 0:
-            nf = nf[~inside]
-            break
-        nv, nf = trimesh.remesh.subdivide(nv, nf, face_index=coarse)
-    # nv extends v (subdivision appends vertices), so the far faces keep their indices
-    allf = np.concatenate([keep_f, nf])
-    used = np.unique(allf)
-    remap = np.full(len(nv), -1, dtype=np.int64)
-    remap[used] = np.arange(len(used))
-    return nv[used], remap[allf]
-
-
 @dataclass(frozen=True)
 class SweepCheck:
     """Outcome of one motion's check.
@@ -181,6 +135,10 @@ class SweepCheck:
         The motion parameter in [0, 1] where the check stopped (NaN when ``ok``).
     bound
         mm: the motion bound ``L``.
+    out_of_budget
+        The caller's cap or deadline (:meth:`SweepChecker.check`) stopped the check.
+    min_step
+        mm: the checker's least step away from a weld pose (a slack below it blocks there).
     """
 
     ok: bool
@@ -188,11 +146,20 @@ class SweepCheck:
     min_slack: float
     blocked_at: float = float("nan")
     bound: float = 0.0
+    out_of_budget: bool = False
+    min_step: float = 0.0
 
     def describe(self) -> str:
         if self.ok:
             return f"free ({self.samples} samples, least slack {self.min_slack:.1f} mm)"
-        how = "collides or lacks clearance" if self.min_slack < 0 else "grazes: sample budget spent"
+        if self.out_of_budget:
+            return f"not shown free at {100 * self.blocked_at:.0f} %: the caller's budget ran out"
+        if self.min_slack < 0:
+            how = "collides or lacks clearance"
+        elif self.min_slack < self.min_step:
+            how = f"within {self.min_step:g} mm of lacking clearance away from a weld pose"
+        else:
+            how = "grazes: sample budget spent"
         return f"blocked at {100 * self.blocked_at:.0f} % of the motion ({how})"
 
 
@@ -239,41 +206,125 @@ class SweepChecker:
         self._outside = fcl.CollisionObject(bvh(v, f), fcl.Transform())
         zv, zf = tool_zone(tool, self.contact_radius)
         self._zone = None if len(zf) == 0 else fcl.CollisionObject(bvh(zv, zf), fcl.Transform())
-        self._cut: dict[tuple[float, ...], fcl.CollisionObject] = {}
+        #: mm: the zone's reach from the TCP, and the radius of the part kept about a spot
+        self.zone_reach = float(np.linalg.norm(zv, axis=1).max()) if len(zf) else 0.0
+        self.cut_radius = 2 * self.zone_reach + self.contact_radius + ZONE_CAP_MM
+        self._cut: dict[tuple[float, ...], fcl.CollisionObject | None] = {}
+        tri = np.asarray(part.triangles)
+        self._tri_lo, self._tri_hi = tri.min(axis=1), tri.max(axis=1)
+        #: the focus (:meth:`focus`): TCP box ``(lo, hi)``, its crop object and faces, a key
+        self._focus: tuple[NDArray, NDArray, fcl.CollisionObject | None, NDArray, int] | None = None
+        self._n_focus = 0
+        #: crops built by :meth:`focus`
+        self.crops_built = 0
 
-    def _part_cut(self, spot: NDArray[np.float64]) -> fcl.CollisionObject:
-        """A BVH of the part outside the zone about one weld spot (cached per spot)."""
+    def focus(self, lo: ArrayLike, hi: ArrayLike) -> None:
+        """Check motions whose TCP stays in the box ``[lo, hi] (3,)`` mm against only the part's
+        triangles whose bounding boxes come within ``reach + clearance + min_step`` of the box.
+
+        No other triangle can come within the clearance of the tool while its TCP is in the box
+        (every tool point lies within ``reach`` of the TCP), so a motion inside the box is free
+        against the crop exactly when it is free against the whole part, and its slack there is
+        the slack that counts (the farther triangles only add slack beyond the clearance).
+        Motions with an end outside the box (the box is convex: a motion with both ends in it
+        stays in it) are checked against the whole part, so the focus never changes an answer:
+        it only makes FCL's distance queries cheaper. A box inside the current focus keeps it.
+        """
+        lo = np.asarray(lo, dtype=np.float64).reshape(3)
+        hi = np.asarray(hi, dtype=np.float64).reshape(3)
+        f = self._focus
+        if f is not None and np.all(lo >= f[0]) and np.all(hi <= f[1]):
+            return
+        pad = self.reach + self.clearance + self.min_step
+        gap = np.maximum(self._tri_lo - hi - pad, 0) + np.maximum(lo - pad - self._tri_hi, 0)
+        near = np.flatnonzero(~gap.any(axis=1))
+        faces = np.asarray(self.part.faces)[near]
+        obj = None
+        if len(near):
+            obj = fcl.CollisionObject(bvh(self.part.vertices, faces), fcl.Transform())
+        self._n_focus += 1
+        self.crops_built += 1
+        self._focus = (lo, hi, obj, faces, self._n_focus)
+
+    def _inside(self, *points: ArrayLike) -> bool:
+        f = self._focus
+        return f is not None and all(
+            bool(np.all(np.asarray(p) >= f[0]) and np.all(np.asarray(p) <= f[1])) for p in points
+        )
+
+    def _part_cut(self, spot: NDArray[np.float64]) -> fcl.CollisionObject | None:
+        """A BVH of the part near one weld spot, outside its zone: the triangles whose bounding
+        boxes come within :attr:`cut_radius` of the spot, cut by :func:`outside_sphere`
+        (cached per spot; ``None`` when nothing is left). :meth:`slack` says why near is enough."""
         key = tuple(np.round(spot, 9).tolist())
         if key not in self._cut:
-            v, f = outside_sphere(self.part.vertices, self.part.faces, spot, self.contact_radius)
-            self._cut[key] = fcl.CollisionObject(bvh(v, f), fcl.Transform())
+            gap = np.maximum(self._tri_lo - spot, 0) + np.maximum(spot - self._tri_hi, 0)
+            near = np.einsum("ij,ij->i", gap, gap) <= self.cut_radius**2
+            faces = np.asarray(self.part.faces)[near]
+            v, f = outside_sphere(self.part.vertices, faces, spot, self.contact_radius)
+            self._cut[key] = (
+                None if len(f) == 0 else fcl.CollisionObject(bvh(v, f), fcl.Transform())
+            )
         return self._cut[key]
 
-    def slack(self, p: ArrayLike, R: ArrayLike, exempt: ArrayLike | None = None) -> float:
+    def slack(
+        self,
+        p: ArrayLike,
+        R: ArrayLike,
+        exempt: ArrayLike | None = None,
+        focused: bool | None = None,
+    ) -> float:
         """mm by which the tool at TCP ``p (3,)``, ``R (3, 3)`` clears what it must (negative: it
         does not): the distance to the part less the clearance; with ``exempt (m, 3)`` weld spots,
         the least of (tool outside its zone to the whole part) less the clearance and (tool in
-        its zone to the part outside the spots' zones), which need only not touch."""
-        tf = fcl.Transform(np.asarray(R, dtype=np.float64), np.asarray(p, dtype=np.float64))
+        its zone to the part outside the spots' zones), which need only not touch.
+        ``focused``: measure against the focus' crop (:meth:`focus`; default: when ``p`` lies in
+        its box); a crop with nothing in it means nothing within reach (``inf``).
+
+        The zone's distance ``dz`` is a lower bound, found cheaply (``rz`` the zone's reach from
+        the TCP, ``r`` the contact radius, ``M`` = :data:`ZONE_CAP_MM`):
+
+        * the zone's distance to the whole part (or the crop) first: when it is not below the
+          outside's slack, no exemption can change the least of the two;
+        * for a spot ``e`` with ``|p - e| >= rz + r`` the zone cannot reach into e's sphere, so
+          its distance to the part outside that sphere is at least its distance to the part;
+        * else every point of the zone lies within ``2 rz + r`` of ``e``, so the part beyond
+          ``cut_radius = 2 rz + r + M`` of ``e`` is at least ``M`` away: the distance to the part
+          near ``e`` outside its sphere (:meth:`_part_cut`), capped at ``M``, is a lower bound.
+        """
+        p = np.asarray(p, dtype=np.float64)
+        if focused is None:
+            focused = self._inside(p)
+        part = self._focus[2] if focused and self._focus is not None else self._part
+        if part is None:
+            return math.inf
+        tf = fcl.Transform(np.asarray(R, dtype=np.float64), p)
         req = fcl.DistanceRequest()
         ex = None if exempt is None else np.asarray(exempt, dtype=np.float64).reshape(-1, 3)
         if ex is None or len(ex) == 0:
             self._whole.setTransform(tf)
-            d = float(fcl.distance(self._whole, self._part, req, fcl.DistanceResult()))
+            d = float(fcl.distance(self._whole, part, req, fcl.DistanceResult()))
             return d - self.clearance
         self._outside.setTransform(tf)
-        d = float(fcl.distance(self._outside, self._part, req, fcl.DistanceResult()))
+        d = float(fcl.distance(self._outside, part, req, fcl.DistanceResult()))
         slack = d - self.clearance
-        if self._zone is not None:
-            # the part outside every zone is a subset of the part outside each one, so the
-            # largest distance to those is a lower bound of the distance that counts
-            self._zone.setTransform(tf)
-            dz = max(
-                float(fcl.distance(self._zone, self._part_cut(e), req, fcl.DistanceResult()))
-                for e in ex
-            )
-            slack = min(slack, dz)
-        return slack
+        if self._zone is None:
+            return slack
+        self._zone.setTransform(tf)
+        dz_all = float(fcl.distance(self._zone, part, req, fcl.DistanceResult()))
+        if dz_all >= slack:
+            return slack
+        # the part outside every zone is a subset of the part outside each one, so the
+        # largest lower bound of the distances to those is a lower bound of the one that counts
+        dz = dz_all
+        for e in ex:
+            if np.linalg.norm(p - e) >= self.zone_reach + self.contact_radius:
+                continue  # dz_all already bounds it
+            cut = self._part_cut(e)
+            de = math.inf if cut is None else float(
+                fcl.distance(self._zone, cut, req, fcl.DistanceResult()))  # fmt: skip
+            dz = max(dz, min(de, ZONE_CAP_MM))
+        return min(slack, dz)
 
     def state_ok(self, p: ArrayLike, q: ArrayLike, exempt: ArrayLike | None = None) -> bool:
         """Whether one pose (TCP ``p (3,)`` mm, ``q`` wxyz) clears (:meth:`slack` >= 0)."""
@@ -287,20 +338,42 @@ class SweepChecker:
         q1: ArrayLike,
         exempt: ArrayLike | None = None,
         soft: tuple[bool, bool] = (True, True),
+        *,
+        cap: int | None = None,
+        deadline: float | None = None,
     ) -> SweepCheck:
         """Check the motion ``(p0, q0) -> (p1, q1)`` by conservative advancement (module
         docstring) on :meth:`slack`. ``exempt (m, 3)``: the weld spots whose zones apply.
         ``soft``: whether the advancement from the start (from the end) may take steps shorter
         than ``min_step`` over its first ``max(contact_radius, 10 min_step)`` mm of tool motion
-        (a weld pose's slack may be small); elsewhere a slack below ``min_step`` blocks the
-        motion at once (fail fast: OMPL asks about many motions)."""
+        (a weld pose's slack may be small; a motion that short from a weld pose is soft at both
+        ends); elsewhere a slack below ``min_step`` blocks the motion at once (fail fast: OMPL
+        asks about many motions). Softness changes only where the check gives up early, never
+        what it shows: a passed motion keeps the clearance throughout.
+
+        ``cap`` (samples) and ``deadline`` (a :func:`time.perf_counter` value) bound the check's
+        own work: when either is spent before the motion is shown free, the motion is reported
+        not free (``out_of_budget``), never free. The SE(3) re-plan uses them so that its time
+        budget holds for the gun (one motion of a large turn may ask for thousands of samples)."""
         L = motion_bound(p0, q0, p1, q1, self.reach)
+        soft_range = max(self.contact_radius, 10 * self.min_step)
+        if L <= soft_range and any(soft):  # a short motion off a weld pose lies wholly in its
+            soft = (True, True)  # soft range: its far end may have a small slack too
         budget = [max_samples(L, self.min_step)]
         smin = [math.inf]
+        focused = self._inside(p0, p1)
+        late = [False]
+        first = budget[0]
 
         def slack_at(s: float) -> float:
+            spent = first - budget[0]
+            if (cap is not None and spent >= cap) or (
+                deadline is not None and time.perf_counter() > deadline
+            ):
+                late[0] = True
+                return -math.inf
             pos, rot = interpolate(p0, q0, p1, q1, [s])
-            v = self.slack(pos[0], rot[0], exempt)
+            v = self.slack(pos[0], rot[0], exempt, focused)
             budget[0] -= 1
             smin[0] = min(smin[0], v)
             return v
@@ -312,9 +385,7 @@ class SweepChecker:
             s = start
             while True:
                 v = slack_at(s)
-                soft_here = may and abs(s - start) * L <= max(
-                    self.contact_radius, 10 * self.min_step
-                )
+                soft_here = may and abs(s - start) * L <= soft_range
                 short = v < self.min_step and not soft_here
                 if v < 0 or (v == 0 and L > 0) or budget[0] < 0 or (short and L > 0):
                     blocked = s
@@ -324,9 +395,9 @@ class SweepChecker:
                 s = s + sign * min(v / L, sign * (stop - s))
             if not math.isnan(blocked):
                 break
-        n = max_samples(L, self.min_step) - budget[0]
+        n = first - budget[0]
         ok = math.isnan(blocked)
-        return SweepCheck(ok, n, smin[0], blocked, L)
+        return SweepCheck(ok, n, smin[0], blocked, L, late[0], self.min_step)
 
 
 def max_samples(bound: float, min_step: float) -> int:

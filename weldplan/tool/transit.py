@@ -27,6 +27,9 @@ REPLANNED = "replanned"
 BLOCKED = "blocked"
 #: statuses of a transition whose every motion passed the planner's swept-tool check
 FREE_STATUSES = (DIRECT, REPLANNED)
+#: how a free transition leaves and reaches its welds (:attr:`Transition.via`): retract along
+#: the axis, slide along the flange, side exit, SE(3) re-plan
+VIAS = ("axial", "slide", "side", "se3")
 
 
 def path_length(positions: NDArray[np.float64]) -> float:
@@ -60,7 +63,9 @@ class Transition:
     status
         :data:`DIRECT`, :data:`REPLANNED` or :data:`BLOCKED`.
     reason
-        For a re-planned or blocked transition: what blocked the direct one (and OMPL's status).
+        The exits tried before the one taken (all of them for a blocked transition) and where
+        each was blocked, and OMPL's status and counts for an SE(3) re-plan; empty when the
+        first exit tried was free.
     samples
         FCL distance samples the planner's swept check took.
     """
@@ -91,6 +96,21 @@ class Transition:
     @property
     def free(self) -> bool:
         return self.status in FREE_STATUSES
+
+    @property
+    def via(self) -> str:
+        """How the tool goes (:data:`VIAS`, from the motions' kinds), ``"blocked"`` when not
+        free: ``"se3"`` re-planned, ``"slide"`` along the flange, ``"side"`` when a weld is left
+        or reached by a side exit, else ``"axial"``."""
+        if not self.free:
+            return "blocked"
+        if self.status == REPLANNED:
+            return "se3"
+        if "slide" in self.kinds:
+            return "slide"
+        if any(k.startswith(("exit ", "enter ")) for k in self.kinds):
+            return "side"
+        return "axial"
 
     @property
     def length(self) -> float:
@@ -178,6 +198,13 @@ class ToolPath:
     def blocked(self) -> tuple[Transition, ...]:
         return tuple(t for t in self.transitions if not t.free)
 
+    def by_via(self) -> dict[str, int]:
+        """Transitions per :attr:`Transition.via` (every kind of :data:`VIAS` and ``blocked``)."""
+        counts = dict.fromkeys((*VIAS, "blocked"), 0)
+        for t in self.transitions:
+            counts[t.via] += 1
+        return counts
+
     def waypoints(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """``(m, 3)`` positions and ``(m, 4)`` quaternions of the whole path (shared weld poses
         not repeated)."""
@@ -189,9 +216,11 @@ class ToolPath:
 
     def summary(self) -> str:
         n = len(self.transitions)
+        via = self.by_via()
         text = (
             f"{n - len(self.blocked)} / {n} transitions free for the swept tool "
-            f"({self.n_replanned} re-planned in SE(3)); TCP path {self.length:.1f} mm, "
+            f"(axial {via['axial']}, slide {via['slide']}, side {via['side']}, re-planned in "
+            f"SE(3) {via['se3']}); TCP path {self.length:.1f} mm, "
             f"orientation change {self.rotation:.1f} deg"
         )
         for t in self.blocked:

@@ -1,24 +1,39 @@
-"""Transitions with the whole tool (issue 16, item 3): retract, move, approach; SE(3) where blocked.
+"""Transitions with the whole tool (issue 16, item 3): axial, slide, side exit; SE(3) where blocked.
 
-For consecutive welds ``a -> b`` (both with a verified pose, in the tool's order) the direct
-transition is three motions (:mod:`weldplan.tool.sweep`'s motion model: straight TCP segment,
-slerped orientation):
+For consecutive welds ``a -> b`` (both with a verified pose, in the tool's order) the planner
+tries, in order, and takes the first whose every motion is free (:mod:`weldplan.tool.sweep`'s
+motion model: straight TCP segment, slerped orientation; :class:`TransitionPlanner`):
 
-1. ``retract``: from the pose at ``a`` back ``retract`` mm along its TCP axis (orientation kept);
-2. ``move``: from that retract point to ``b``'s, the orientation slerped from ``a``'s to ``b``'s;
-3. ``approach``: along ``b``'s TCP axis onto its spot.
+1. **axial**: ``retract`` mm back along a's TCP axis (orientation kept), ``move`` to b's retract
+   point (orientation slerped), ``approach`` along b's axis;
+2. **slide**: ``lift`` off a's sheet by one of :data:`SLIDE_LIFTS` mm along its axis, ``slide``
+   to b's spot lifted as much along b's axis (orientation slerped), ``lower`` onto b. A C-gun
+   welding a row of spots on one flange stays straddled over it: the sheet passes through its
+   opening (46.5 mm between the shared gun's electrode faces; a lift of 20 mm leaves the
+   moving electrode ~19 mm off the sheet and the fixed one ~27 mm less the sheet's thickness
+   off its far side). The slide is checked like every motion, and **conservatively**: the
+   contact zone does not follow the TCP; only the zones about ``a`` and ``b`` are exempt, so
+   away from the two spots the whole gun, electrodes included, keeps the clearance from the
+   sheet it straddles. A slide passes only where the opening holds the sheet plus twice the
+   clearance; an electrode that must rub along the sheet is not accepted;
+3. **side**: a weld whose axial retract is blocked (a C-gun's fixed electrode, behind the sheet,
+   would be pulled through it) is left by a lift of :data:`SIDE_LIFTS` mm, a side exit of
+   ``side_exit`` mm along TCP -x, +x, -y or +y, and the rest of the retract; the move joins the
+   two welds' exits (an axial retract where it is free);
+4. **SE(3)**: OMPL (:func:`weldplan.motion.sampling.plan_se3`) between the clear points when
+   both welds have one and the move between them is blocked, else between the weld poses; its
+   states and motions judged by the same swept check within a budget that holds
+   (:meth:`TransitionPlanner._se3`), and the path it returns checked again motion by motion.
 
-Each motion is checked for the swept tool by :class:`~weldplan.tool.sweep.SweepChecker`
-(conservative advancement on FCL distances: the tool keeps the clearance along the whole motion,
-with the contact zones of ``a`` and ``b`` exempt as that module defines). When a motion is
-blocked the transition is re-planned in SE(3) with OMPL
-(:func:`weldplan.motion.sampling.plan_se3`): between the retract points when both retracts are
-free, else between the weld poses themselves; OMPL's states are checked with the same checker
-and its motions with the same swept check, and the path it returns is checked again motion by
-motion before it is accepted. A transition with no free motion is reported :data:`BLOCKED` with
-the reason; it is never silently repaired.
+A transition none of these frees is reported :data:`~weldplan.tool.transit.BLOCKED`, its reason
+listing every exit tried and where it was blocked; it is never silently repaired.
 
-Deviation from a single "TCP path": the move between retract points is the straight segment, not
+Each weld's axial and side exits are checked once (with only its own contact zone exempt,
+stricter than a transition's two zones) and reused by the transitions into and out of it. The
+checker is focused on the part near the two welds (:meth:`~weldplan.tool.sweep.SweepChecker.focus`:
+the same answers, cheaper distance queries).
+
+Deviation from a single "TCP path": the move between clear points is the straight segment, not
 the point-tip route's leg (whose vias were planned for a 5 mm sphere and say nothing about the
 gun); where the straight move is blocked, OMPL plans the whole tool.
 """
@@ -38,6 +53,7 @@ from weldplan.tool.model import Tool
 from weldplan.tool.result import WeldPoses
 from weldplan.tool.sweep import DEFAULT_MIN_STEP, SweepChecker, quat_to_matrix
 from weldplan.tool.transit import BLOCKED, DIRECT, REPLANNED, ToolPath, Transition
+from weldplan.tool.transit_workers import run_chunks
 
 log = logging.getLogger(__name__)
 
@@ -45,13 +61,19 @@ log = logging.getLogger(__name__)
 DEFAULT_RETRACT = 50.0
 #: default OMPL planner for blocked transitions (stops at its first solution, then simplified)
 DEFAULT_SE3_PLANNER = "rrtconnect"
-#: mm: lifts along the TCP axis tried before a side exit (:meth:`TransitionPlanner._leave`)
+#: mm: lifts along the TCP axis tried before a side exit (:meth:`TransitionPlanner._side`)
 SIDE_LIFTS = (5.0, 10.0, 20.0)
+#: mm: lifts off the sheet tried for a slide, the middle of the shared gun's 46.5 mm opening
+#: first (0.8 to 47.3 mm ahead of the TCP), then nearer either electrode
+SLIDE_LIFTS = (4.0, 10.0, 20.0)
 #: mm: default side exit when the axial retract is blocked (a C-gun's jaws round a flange: the
 #: shared gun's C back stands 231 mm from its electrode axis)
 DEFAULT_SIDE_EXIT = 250.0
 #: default seconds OMPL may spend on one transition
 DEFAULT_SE3_TIME = 5.0
+#: FCL samples one motion of an SE(3) re-plan may take (a conservative advancement that needs
+#: more grazes the part, or turns a 0.7 m gun far; OMPL tries a shorter motion instead)
+DEFAULT_SE3_MOTION_CAP = 200
 
 
 def _se3_box(a: NDArray, b: NDArray, part: trimesh.Trimesh, pad: float) -> tuple[NDArray, NDArray]:
@@ -64,6 +86,21 @@ def _se3_box(a: NDArray, b: NDArray, part: trimesh.Trimesh, pad: float) -> tuple
 class TransitionPlanner:
     """Plans :class:`Transition` s between weld poses with one :class:`SweepChecker`.
 
+    The exits tried, in this order (module docstring), the first free one taken (a tool that
+    straddles the sheet, :attr:`~weldplan.tool.model.Tool.straddles`, tries the slide first:
+    its axial retract would pull its jaw behind the sheet through it):
+
+    1. ``axial``: retract along a's TCP axis, move, approach along b's axis;
+    2. ``slide``: lift off the sheet by one of :data:`SLIDE_LIFTS` mm, slide to b's lifted pose,
+       lower onto b (a C-gun stays straddled over the flange it welds);
+    3. ``side``: leave each weld sideways (a lift, a side exit along TCP -x, +x, -y or +y, the rest
+       of the retract; :meth:`_side`), move, enter the same way;
+    4. ``se3``: OMPL between the clear points (or the weld poses), within its budget.
+
+    Every motion of every exit passes the same swept check (:class:`SweepChecker`); a weld's
+    axial and side exits are checked once and reused by both its transitions. A blocked
+    transition's reason lists every exit tried and why it failed.
+
     Parameters
     ----------
     part, tool
@@ -73,12 +110,18 @@ class TransitionPlanner:
     retract
         mm along the TCP axis (0: no retract/approach motions, the move starts at the spot).
     side_exit
-        mm: when the axial retract is blocked, try leaving sideways by this much first
-        (:meth:`_leave`; 0: never).
+        mm: when the axial retract is blocked, try leaving sideways by this much (0: never).
+    slide
+        Try the slide (:data:`SLIDE_LIFTS`) before the side exits.
     se3
         Re-plan blocked transitions with OMPL (needs ``weldplan[ompl]``).
     planner, time_s, seed, rot_weight
         OMPL's planner, seconds per transition, seed and metric weight (mm per rad).
+    se3_samples
+        FCL distance samples one SE(3) re-plan may take in all (``None``: no cap but the time):
+        its state and motion checks answer "not free" once it is spent, so OMPL stops.
+    se3_motion_cap
+        Samples one motion of an SE(3) re-plan may take (a longer motion is "not free").
     """
 
     def __init__(
@@ -96,6 +139,9 @@ class TransitionPlanner:
         rot_weight: float = 200.0,
         min_step: float = DEFAULT_MIN_STEP,
         side_exit: float = DEFAULT_SIDE_EXIT,
+        slide: bool = True,
+        se3_samples: int | None = None,
+        se3_motion_cap: int = DEFAULT_SE3_MOTION_CAP,
     ) -> None:
         if not (np.isfinite(retract) and retract >= 0):
             raise InputError(f"must be a finite number of mm >= 0, got {retract}", field="retract")
@@ -108,8 +154,16 @@ class TransitionPlanner:
         self.seed = seed
         self.rot_weight = float(rot_weight)
         self.side_exit = float(side_exit)
+        self.slide = slide
+        self.se3_samples = se3_samples
+        self.se3_motion_cap = int(se3_motion_cap)
         self.checker = SweepChecker(part, tool, clearance, contact_radius, min_step=min_step)
         self.samples = 0
+        #: per SE(3) re-plan: states and motions asked, motions refused for the budget, samples
+        self.se3_runs: list[dict[str, Any]] = []
+        self._axial: dict[str, tuple[NDArray | None, tuple[str, ...], str]] = {}
+        self._sides: dict[str, tuple[NDArray | None, tuple[str, ...], str]] = {}
+        self._lifts: dict[tuple[str, float], tuple[NDArray, str]] = {}
 
     def _motions(
         self,
@@ -130,125 +184,314 @@ class TransitionPlanner:
                 return False, k, out.describe()
         return True, -1, ""
 
-    def _leave(self, w: Any, exempt: NDArray) -> tuple[NDArray | None, tuple[str, ...], str]:
-        """Positions from weld ``w``'s pose to a clear point, its orientation kept: the retract
-        along the TCP axis; when that is blocked and ``side_exit > 0``, a lift of
-        :data:`SIDE_LIFTS` mm along the axis, a side exit of ``side_exit`` mm along TCP -x, +x,
-        -y or +y, and the rest of the retract (a C-gun leaves the flange it straddles sideways,
-        its jaws opened round the sheet). ``None`` and why when all are blocked.
-        The same positions, reversed, are the approach (the same swept set)."""
+    def _try(
+        self, w: Any, cands: list[tuple[list[NDArray], tuple[str, ...], str]]
+    ) -> tuple[NDArray | None, tuple[str, ...], str]:
+        """The first candidate exit from weld ``w`` whose motions are all free (orientation
+        kept, ``w``'s zone exempt), or ``None`` and why each one failed."""
         p = np.asarray(w.position, dtype=np.float64)
         q = np.asarray(w.quaternion, dtype=np.float64)
-        if self.retract <= 0:
-            return p[None], (), ""
-        R = quat_to_matrix(q)
-        back = -self.retract * R[:, 2]
-        cands: list[tuple[list[NDArray], tuple[str, ...]]] = [([p, p + back], ("retract",))]
-        z = R[:, 2]
-        dirs = (("-x", -R[:, 0]), ("+x", R[:, 0]), ("-y", -R[:, 1]), ("+y", R[:, 1]))
-        for lift in SIDE_LIFTS if self.side_exit > 0 else ():
-            lift = min(lift, self.retract)
-            for name, d in dirs:
-                up = p - lift * z
-                side = up + self.side_exit * d
-                pts = [p, up, side, p + self.side_exit * d + back]
-                cands.append((pts, ("lift", f"exit {name}", "retract")))
-        first = ""
-        for pts, kinds in cands:
+        fails = []
+        for pts, kinds, label in cands:
             P = np.array(pts)
-            ok, k, why = self._motions(P, np.repeat(q[None], len(P), axis=0), exempt, True)
+            ok, k, why = self._motions(P, np.repeat(q[None], len(P), axis=0), p[None], True)
             if ok:
                 return P, kinds, ""
-            first = first or f"{kinds[k]} {why}"
-        return None, (), first
+            fails.append(f"{label}: {kinds[k]} {why}")
+        return None, (), "; ".join(fails)
 
-    def plan(self, a: Any, b: Any) -> Transition:
-        """The transition from weld pose ``a`` to ``b`` (:class:`~weldplan.tool.result.WeldPose`,
-        both ok)."""
-        n0 = self.samples
+    def _leave_axial(self, w: Any) -> tuple[NDArray | None, tuple[str, ...], str]:
+        """Weld ``w``'s retract along its TCP axis (cached per weld; the approach is the same
+        positions reversed, the same swept set)."""
+        if w.id not in self._axial:
+            p = np.asarray(w.position, dtype=np.float64)
+            if self.retract <= 0:
+                self._axial[w.id] = (p[None], (), "")
+            else:
+                z = quat_to_matrix(np.asarray(w.quaternion, dtype=np.float64))[:, 2]
+                cand = ([p, p - self.retract * z], ("retract",), "retract")
+                self._axial[w.id] = self._try(w, [cand])
+        return self._axial[w.id]
+
+    def _lift(self, w: Any, lift: float) -> tuple[NDArray, str]:
+        """Weld ``w``'s pose and the pose ``lift`` mm back along its TCP axis ``(2, 3)``, and why
+        that motion is blocked ('' when free; cached per weld and lift; only w's zone exempt,
+        stricter than a transition's two zones; lowering is the same swept set)."""
+        key = (w.id, float(lift))
+        if key not in self._lifts:
+            p = np.asarray(w.position, dtype=np.float64)
+            q = np.asarray(w.quaternion, dtype=np.float64)
+            P = np.array([p, p - lift * quat_to_matrix(q)[:, 2]])
+            ok, _, why = self._motions(P, np.array([q, q]), p[None], True)
+            self._lifts[key] = (P, "" if ok else why)
+        return self._lifts[key]
+
+    def _side(self, w: Any) -> tuple[NDArray | None, tuple[str, ...], str]:
+        """Weld ``w``'s side exits (cached): a lift of :data:`SIDE_LIFTS` mm along the axis, a
+        side exit of ``side_exit`` mm along TCP -x, +x, -y or +y, and the rest of the retract
+        (a C-gun leaves the flange it straddles sideways, its jaws opened round the sheet). A
+        blocked lift is tried once, not once per direction."""
+        if w.id not in self._sides:
+            p = np.asarray(w.position, dtype=np.float64)
+            q = np.asarray(w.quaternion, dtype=np.float64)
+            R = quat_to_matrix(q)
+            back = -self.retract * R[:, 2]
+            dirs = (("-x", -R[:, 0]), ("+x", R[:, 0]), ("-y", -R[:, 1]), ("+y", R[:, 1]))
+            fails: list[str] = []
+            found: tuple[NDArray | None, tuple[str, ...], str] | None = None
+            for lift in SIDE_LIFTS:
+                lift = min(lift, self.retract)
+                (_, up), why = self._lift(w, lift)
+                if why:
+                    fails.append(f"lift {lift:g}: lift {why}")
+                    continue
+                for name, d in dirs:
+                    side = self.side_exit * d
+                    P = np.array([up, up + side, p + side + back])
+                    ok, k, why = self._motions(P, np.repeat(q[None], 3, axis=0), p[None])
+                    if ok:
+                        found = (np.vstack([p, P]), ("lift", f"exit {name}", "retract"), "")
+                        break
+                    kind = (f"exit {name}", "retract")[k]
+                    fails.append(f"lift {lift:g} exit {name}: {kind} {why}")
+                if found is not None:
+                    break
+            self._sides[w.id] = found or (None, (), "; ".join(fails))
+        return self._sides[w.id]
+
+    def _joined(
+        self, a: Any, b: Any, la: NDArray, ka: tuple[str, ...], lb: NDArray, kb: tuple[str, ...]
+    ) -> tuple[NDArray, NDArray, tuple[str, ...], bool, str]:
+        """a's exit, the move between the clear points, b's exit reversed; whether the move is
+        free and why not."""
+        qa, qb = (np.asarray(w.quaternion, dtype=np.float64) for w in (a, b))
+        exempt = np.array([a.position, b.position], dtype=np.float64)
+        P = np.concatenate([la, lb[::-1]])
+        Q = np.array([qa] * len(la) + [qb] * len(lb))
+        enter = tuple(_entering(k) for k in reversed(kb))
+        i = len(la) - 1
+        ok, _, why = self._motions(P[i : i + 2], Q[i : i + 2], exempt)
+        return P, Q, (*ka, "move", *enter), ok, why
+
+    def _slide(self, a: Any, b: Any) -> tuple[NDArray | None, NDArray | None, str]:
+        """Lift off a's sheet, slide to b's lifted pose, lower onto b: the first of
+        :data:`SLIDE_LIFTS` whose three motions are free (the contact zones of a and b only are
+        exempt, as for every motion: the tool keeps the clearance from the sheet it straddles)."""
         pa, pb = (np.asarray(w.position, dtype=np.float64) for w in (a, b))
         qa, qb = (np.asarray(w.quaternion, dtype=np.float64) for w in (a, b))
         exempt = np.array([pa, pb])
-        la, ka, why_a = self._leave(a, exempt)
-        lb, kb, why_b = self._leave(b, exempt)
-        enter = tuple(
-            k.replace("retract", "approach").replace("exit", "enter") for k in reversed(kb)
-        )
-        if la is not None and lb is not None:
-            P = np.concatenate([la, lb[::-1]])
-            Q = np.array([qa] * len(la) + [qb] * len(lb))
-            kinds = ka + ("move",) + enter
-            ok, _, why = self._motions(P[len(la) - 1 : len(la) + 1], Q[len(la) - 1 : len(la) + 1],
-                                       exempt)  # fmt: skip
+        Q = np.array([qa, qa, qb, qb])
+        fails = []
+        for lift in SLIDE_LIFTS:
+            (_, ua), why_a = self._lift(a, lift)
+            (_, ub), why_b = self._lift(b, lift) if not why_a else ((pb, pb), "")
+            if why_a or why_b:
+                fails.append(f"lift {lift:g}: " + (f"lift off {a.id} {why_a}" if why_a
+                                                   else f"lower onto {b.id} {why_b}"))  # fmt: skip
+                continue
+            ok, _, why = self._motions(np.array([ua, ub]), Q[1:3], exempt)
             if ok:
-                return Transition(a.id, b.id, P, Q, kinds, DIRECT, "", self.samples - n0)
-            reason = f"move {why}"
+                return np.array([pa, ua, ub, pb]), Q, ""
+            fails.append(f"lift {lift:g}: slide {why}")
+        return None, None, "; ".join(fails)
+
+    def _clear_point(self, w: Any) -> NDArray | None:
+        """``(2, 3)``: weld ``w`` and its first free lift of :data:`SLIDE_LIFTS` (checked by the
+        slides already), or ``None``: where an SE(3) re-plan without exits starts or ends."""
+        for lift in SLIDE_LIFTS:
+            P, why = self._lift(w, lift)
+            if not why:
+                return P
+        return None
+
+    def plan(self, a: Any, b: Any) -> Transition:
+        """The transition from weld pose ``a`` to ``b`` (:class:`~weldplan.tool.result.WeldPose`,
+        both ok): the first free exit of the class docstring, or blocked with every exit's
+        failure in the reason."""
+        n0 = self.samples
+        pa, pb = (np.asarray(w.position, dtype=np.float64) for w in (a, b))
+        qa, qb = (np.asarray(w.quaternion, dtype=np.float64) for w in (a, b))
+        pad = self.retract + self.side_exit + max(SIDE_LIFTS + SLIDE_LIFTS) + 1.0
+        self.checker.focus(np.minimum(pa, pb) - pad, np.maximum(pa, pb) + pad)
+        tried: list[str] = []
+        ends: tuple[NDArray, NDArray] | None = None  # clear points of a and b for SE(3)
+        legs: tuple[NDArray, tuple[str, ...], NDArray, tuple[str, ...]] | None = None
+        shown: tuple[NDArray, NDArray, tuple[str, ...]] | None = None
+
+        def done(P: NDArray, Q: NDArray, kinds: tuple[str, ...], status: str) -> Transition:
+            reason = "; ".join(tried)
+            return Transition(a.id, b.id, P, Q, kinds, status, reason, self.samples - n0)
+
+        # a tool that straddles the sheet (a C-gun) slides first: its axial retract pulls the
+        # jaw behind the sheet through it, so trying that first costs a check per weld
+        slide_first = self.slide and self.tool.straddles
+        if slide_first:
+            P, Q, why = self._slide(a, b)
+            if P is not None:
+                return done(P, Q, ("lift", "slide", "lower"), DIRECT)
+            tried.append(f"slide: {why}")
+        la, ka, why_a = self._leave_axial(a)
+        lb, kb, why_b = self._leave_axial(b) if la is not None else (None, (), "")
+        if la is not None and lb is not None:
+            P, Q, kinds, ok, why = self._joined(a, b, la, ka, lb, kb)
+            if ok:
+                return done(P, Q, kinds, DIRECT)
+            tried.append(f"axial: move {why}")
+            shown = shown or (P, Q, kinds)
+            ends, legs = (la[-1], lb[-1]), (la, ka, lb, kb)
         else:
-            P, Q, kinds = np.array([pa, pb]), np.array([qa, qb]), ("move",)
-            reason = f"leaving {a.id}: {why_a}" if la is None else f"reaching {b.id}: {why_b}"
+            tried.append(f"axial: leaving {a.id}: {why_a}" if la is None
+                         else f"axial: reaching {b.id}: {why_b}")  # fmt: skip
+        if self.slide and not slide_first:
+            P, Q, why = self._slide(a, b)
+            if P is not None:
+                return done(P, Q, ("lift", "slide", "lower"), DIRECT)
+            tried.append(f"slide: {why}")
+        if self.side_exit > 0 and self.retract > 0 and legs is None:
+            sa, ska, why_a = self._leave(a)
+            sb, skb, why_b = self._leave(b) if sa is not None else (None, (), "")
+            if sa is not None and sb is not None:
+                P, Q, kinds, ok, why = self._joined(a, b, sa, ska, sb, skb)
+                if ok:
+                    return done(P, Q, kinds, DIRECT)
+                tried.append(f"side: move {why}")
+                shown = shown or (P, Q, kinds)
+                ends, legs = (sa[-1], sb[-1]), (sa, ska, sb, skb)
+            elif sa is None or sb is None:
+                w, why = (a, why_a) if sa is None else (b, why_b)
+                tried.append(f"side: {'leaving' if w is a else 'reaching'} {w.id}: {why}")
+        # a blocked transition shows its first joined path tried, else the spot-to-spot segment
+        shown = shown or (np.array([pa, pb]), np.array([qa, qb]), ("move",))
         if not self.se3:
-            return Transition(a.id, b.id, P, Q, kinds, BLOCKED, reason, self.samples - n0)
-        # re-plan between the clear points when both ends have one, else between the welds
-        ends = la is not None and lb is not None
-        start, goal = ((la[-1], qa), (lb[-1], qb)) if ends else ((pa, qa), (pb, qb))
+            return done(*shown, BLOCKED)
+        if ends is None:  # no clear exits: from the lifted poses where the lifts are free
+            ca, cb = self._clear_point(a), self._clear_point(b)
+            if ca is not None and cb is not None:
+                ends, legs = (ca[-1], cb[-1]), (ca, ("lift",), cb, ("lift",))
+        return self._replan(a, b, ends, legs, tried, done, shown)
+
+    def _leave(self, w: Any) -> tuple[NDArray | None, tuple[str, ...], str]:
+        """Weld ``w``'s axial retract when free, else its first free side exit (both cached)."""
+        out = self._leave_axial(w)
+        return out if out[0] is not None else self._side(w)
+
+    def _replan(
+        self,
+        a: Any,
+        b: Any,
+        ends: tuple[NDArray, NDArray] | None,
+        legs: tuple[NDArray, tuple[str, ...], NDArray, tuple[str, ...]] | None,
+        tried: list[str],
+        done: Any,
+        fallback: tuple[NDArray, NDArray, tuple[str, ...]],
+    ) -> Transition:
+        """OMPL in SE(3) between the clear points ``ends`` (both weld exits free, the move
+        blocked) or else between the weld poses; its path checked again motion by motion."""
+        pa, pb = (np.asarray(w.position, dtype=np.float64) for w in (a, b))
+        qa, qb = (np.asarray(w.quaternion, dtype=np.float64) for w in (a, b))
+        exempt = np.array([pa, pb])
+        start, goal = ((ends[0], qa), (ends[1], qb)) if ends is not None else ((pa, qa), (pb, qb))
         path, status = self._se3(start, goal, exempt)
         if path is None:
-            return Transition(
-                a.id, b.id, P, Q, kinds, BLOCKED, f"{reason}; SE(3): {status}", self.samples - n0
-            )
+            tried.append(f"SE(3): {status}")
+            return done(*fallback, BLOCKED)
         sp, sq = path[:, :3], path[:, 3:]
         skinds: tuple[str, ...] = ("se3",) * (len(path) - 1)
-        if ends:
-            assert la is not None and lb is not None
+        if legs is not None:
+            la, ka, lb, kb = legs
             sp = np.concatenate([la[:-1], sp, lb[::-1][1:]])
             sq = np.concatenate([[qa] * (len(la) - 1), sq, [qb] * (len(lb) - 1)])
-            skinds = ka + skinds + enter
-        # the planner's answer, checked again (the whole path: the ends are known free)
-        ok3, k3, why3 = self._motions(path[:, :3], path[:, 3:], exempt, not ends, not ends)
+            skinds = (*ka, *skinds, *(_entering(k) for k in reversed(kb)))
+        # the planner's answer, checked again (the whole path: the ends are known free; soft at
+        # the ends as OMPL's checks were: softness changes only where a check gives up early)
+        ok3, k3, why3 = self._motions(path[:, :3], path[:, 3:], exempt, True, True)
         if not ok3:
-            return Transition(
-                a.id, b.id, sp, sq, skinds, BLOCKED,
-                f"{reason}; SE(3) path motion {k3} {why3}", self.samples - n0,
-            )  # fmt: skip
-        return Transition(
-            a.id, b.id, sp, sq, skinds, REPLANNED, f"{reason}; SE(3): {status}", self.samples - n0
-        )
+            tried.append(f"SE(3) path motion {k3} {why3}")
+            return done(sp, sq, skinds, BLOCKED)
+        tried.append(f"SE(3): {status}")
+        return done(sp, sq, skinds, REPLANNED)
 
     def _se3(
         self, start: tuple[NDArray, NDArray], goal: tuple[NDArray, NDArray], exempt: NDArray
     ) -> tuple[NDArray | None, str]:
-        """OMPL's SE(3) path ``(n, 7)`` between two poses, or ``None`` and why not."""
+        """OMPL's SE(3) path ``(n, 7)`` between two poses, or ``None`` and why not.
+
+        The budget holds: every state and motion check after ``time_s`` seconds, or after
+        ``se3_samples`` FCL samples, answers "not free" at once, one motion may take at most
+        ``se3_motion_cap`` samples, and OMPL is told to stop (its termination condition asks
+        between its steps)."""
         try:
             from weldplan.motion.sampling import plan_se3
         except ImportError as exc:  # the wrapper or OMPL itself is missing
             return None, f"SE(3) re-planning unavailable ({exc})"
         check = self.checker
+        run = {"states": 0, "motions": 0, "refused": 0, "samples": 0}
+        self.se3_runs.append(run)
+        deadline = time.perf_counter() + self.time_s
+        cap = self.se3_samples
+
+        def spent() -> bool:
+            return (cap is not None and run["samples"] >= cap) or time.perf_counter() > deadline
 
         def is_valid(p: NDArray, q: NDArray) -> bool:
+            run["states"] += 1
+            if spent():
+                run["refused"] += 1
+                return False
+            run["samples"] += 1
+            self.samples += 1
             return check.state_ok(p, q, exempt)
 
         ends = np.array([np.r_[start[0], start[1]], np.r_[goal[0], goal[1]]])
 
         def motion_valid(s: NDArray, t: NDArray) -> bool:
+            run["motions"] += 1
+            if spent():
+                run["refused"] += 1
+                return False
             soft = (
                 any(np.allclose(s, e) for e in ends),
                 any(np.allclose(t, e) for e in ends),
             )
-            out = check.check(s[:3], s[3:], t[:3], t[3:], exempt, soft)
+            left = self.se3_motion_cap if cap is None else min(
+                self.se3_motion_cap, cap - run["samples"])  # fmt: skip
+            out = check.check(s[:3], s[3:], t[:3], t[3:], exempt, soft, cap=left,
+                              deadline=deadline)  # fmt: skip
+            run["samples"] += out.samples
             self.samples += out.samples
+            run["refused"] += out.out_of_budget
             return out.ok
 
-        if not (is_valid(*start) and is_valid(*goal)):
+        if not (check.state_ok(*start, exempt) and check.state_ok(*goal, exempt)):
             return None, "an end pose of the re-plan is not free"
         lo, hi = _se3_box(start[0], goal[0], self.part, pad=self.tool.reach)
         res = plan_se3(
             start[0], start[1], goal[0], goal[1], lo, hi, is_valid,
             motion_valid=motion_valid, rot_weight=self.rot_weight, planner=self.planner,
-            time_s=self.time_s, seed=self.seed, simplify=True,
+            time_s=self.time_s, seed=self.seed, simplify=True, stop=spent,
         )  # fmt: skip
+        tally = (
+            f"{run['states']} states, {run['motions']} motions checked ({run['refused']} "
+            f"refused: budget spent), {run['samples']} samples"
+        )
         if not res.solved:
-            return None, f"{res.planner}: {res.status}"
-        return np.asarray(res.points, dtype=np.float64), f"{res.planner}: {res.status}"
+            return None, f"{res.planner}: {res.status}; {tally}"
+        return np.asarray(res.points, dtype=np.float64), f"{res.planner}: {res.status}; {tally}"
+
+
+def _entering(kind: str) -> str:
+    """The name of a leaving motion run backwards (a retract is an approach, an exit an entry)."""
+    return kind.replace("retract", "approach").replace("exit", "enter")
+
+
+def _plan_run(
+    pairs: list[tuple[Any, Any]], part: trimesh.Trimesh, tool: Tool, kw: dict[str, Any]
+) -> tuple[list[Transition], int, list[dict[str, Any]], int]:
+    """One run of consecutive transitions with its own planner: the transitions, the samples,
+    the SE(3) runs' counts and the crops built."""
+    tp = TransitionPlanner(part, tool, **kw)
+    out = [tp.plan(a, b) for a, b in pairs]
+    return out, tp.samples, tp.se3_runs, tp.checker.crops_built
 
 
 def plan_transitions(
@@ -264,7 +507,10 @@ def plan_transitions(
     seed: int | None = 0,
     rot_weight: float = 200.0,
     side_exit: float = DEFAULT_SIDE_EXIT,
+    slide: bool = True,
+    se3_samples: int | None = None,
     stats: dict[str, Any] | None = None,
+    workers: int = 1,
 ) -> ToolPath:
     """The whole tool's transitions through the welds with a pose (module docstring).
 
@@ -278,10 +524,14 @@ def plan_transitions(
     order
         The welds' visiting order (ids with a pose); default the poses' own order
         (:func:`weldplan.tool.tool_order.tool_order` gives the tool-aware one).
-    retract, se3, planner, time_s, seed, rot_weight, side_exit
+    retract, se3, planner, time_s, seed, rot_weight, side_exit, slide, se3_samples
         :class:`TransitionPlanner`.
     stats
         Extra figures to record (the ordering's costs).
+    workers
+        Processes to plan in (:func:`weldplan.tool.transit_workers.run_chunks`: runs of
+        consecutive transitions, each with its own planner; the same answers but for the
+        SE(3) re-plans' clock).
 
     Returns
     -------
@@ -295,13 +545,16 @@ def plan_transitions(
         raise ValueError("the order must visit exactly the welds that have a pose")
     clearance = float(poses.settings["clearance"])
     radius = float(poses.settings["contact_radius"])
-    tp = TransitionPlanner(
-        part, tool, clearance=clearance, contact_radius=radius, retract=retract, se3=se3,
-        planner=planner, time_s=time_s, seed=seed, rot_weight=rot_weight, side_exit=side_exit,
+    kw = dict(
+        clearance=clearance, contact_radius=radius, retract=retract, se3=se3, planner=planner,
+        time_s=time_s, seed=seed, rot_weight=rot_weight, side_exit=side_exit, slide=slide,
+        se3_samples=se3_samples,
     )  # fmt: skip
-    transitions = tuple(
-        tp.plan(poses[a], poses[b]) for a, b in zip(order[:-1], order[1:], strict=True)
-    )
+    pairs = [(poses[a], poses[b]) for a, b in zip(order[:-1], order[1:], strict=True)]
+    runs = run_chunks(_plan_run, pairs, (part, tool, kw), workers)
+    transitions = tuple(t for run in runs for t in run[0])
+    samples = sum(run[1] for run in runs)
+    se3_runs = [r for run in runs for r in run[2]]
     result = ToolPath(
         order=tuple(order),
         transitions=transitions,
@@ -309,6 +562,10 @@ def plan_transitions(
         settings={
             "retract": retract,
             "side_exit": side_exit,
+            "slide": slide,
+            "slide_lifts": list(SLIDE_LIFTS),
+            "se3_samples": se3_samples,
+            "se3_motion_cap": DEFAULT_SE3_MOTION_CAP,
             "clearance": clearance,
             "contact_radius": radius,
             "rot_weight": rot_weight,
@@ -316,9 +573,16 @@ def plan_transitions(
             "planner": planner,
             "time_s": time_s,
             "seed": seed,
-            "min_step": tp.checker.min_step,
+            "min_step": DEFAULT_MIN_STEP,
+            "workers": workers,
         },
-        stats={**(stats or {}), "samples": tp.samples, "total_s": time.perf_counter() - t0},
+        stats={
+            **(stats or {}),
+            "samples": samples,
+            "crops_built": sum(run[3] for run in runs),
+            "se3_runs": se3_runs,
+            "total_s": time.perf_counter() - t0,
+        },
     )
     log.info("%s (%.1f s)", result.summary().splitlines()[0], result.stats["total_s"])
     return result

@@ -80,7 +80,26 @@ class SweepsVerification:
 
 
 class _Sweeps:
-    """Fresh FCL models for the re-check (never shared with the planner)."""
+    """Fresh FCL models for the re-check (never shared with the planner).
+
+    Two exact reductions keep the distance queries small, derived here on their own:
+
+    * **crop per transition** (:meth:`crop`): a tool point lies within ``reach`` of the TCP and
+      the TCP stays in the bounding box of the transition's waypoints (straight segments), so a
+      part triangle whose bounding box is farther than ``reach + clearance + 1`` mm from that
+      box never comes within the clearance of the tool: the distances that matter are the same
+      against the crop;
+    * **the zone's part per spot** (:meth:`_cut`): the zone's distance counts only where it is
+      below the outside's slack. Where the TCP is at least ``zone_reach + radius`` from a spot,
+      the zone cannot enter that spot's sphere, so its distance to the part outside the sphere
+      is at least its distance to the (cropped) part. Nearer, every zone point lies within
+      ``2 zone_reach + radius`` of the spot, so the part beyond ``2 zone_reach + radius + CAP``
+      of it is at least ``CAP`` away: the distance to the part near the spot, outside its
+      sphere, capped at ``CAP``, is a lower bound.
+    """
+
+    #: mm: the cap of the zone distance near a spot (above)
+    CAP = 25.0
 
     def __init__(self, part: trimesh.Trimesh, tool: Tool, clearance: float, radius: float):
         self.part = part
@@ -97,34 +116,60 @@ class _Sweeps:
         edge = np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2).max(axis=1)
         zone = np.linalg.norm(tri, axis=2).min(axis=1) <= radius + edge
         self.zone = fcl.CollisionObject(bvh(V, F[zone]), fcl.Transform()) if zone.any() else None
-        self.part_obj = fcl.CollisionObject(
-            bvh(np.asarray(part.vertices), np.asarray(part.faces)), fcl.Transform()
-        )
-        self.cuts: dict[tuple[float, ...], fcl.CollisionObject] = {}
+        used = np.unique(F[zone])
+        self.zone_reach = float(np.linalg.norm(V[used], axis=1).max()) if zone.any() else 0.0
+        PT = np.asarray(part.triangles)
+        self.lo, self.hi = PT.min(axis=1), PT.max(axis=1)
+        self.part_obj: fcl.CollisionObject | None = None
+        self.cuts: dict[tuple[float, ...], fcl.CollisionObject | None] = {}
         self.samples = 0
 
-    def _cut(self, spot: NDArray) -> fcl.CollisionObject:
+    def _near(self, lo: NDArray, hi: NDArray, pad: float) -> NDArray[np.int64]:
+        """The part's faces whose bounding boxes come within ``pad`` of the box ``[lo, hi]``."""
+        gap = np.maximum(self.lo - hi, 0) + np.maximum(lo - self.hi, 0)
+        return np.asarray(self.part.faces)[np.einsum("ij,ij->i", gap, gap) <= pad * pad]
+
+    def crop(self, positions: NDArray) -> None:
+        """Check the next transition (its TCP waypoints ``(k, 3)``) against the part near it."""
+        f = self._near(
+            positions.min(axis=0), positions.max(axis=0), self.reach + self.clearance + 1
+        )
+        self.part_obj = None if len(f) == 0 else fcl.CollisionObject(
+            bvh(self.part.vertices, f), fcl.Transform())  # fmt: skip
+
+    def _cut(self, spot: NDArray) -> fcl.CollisionObject | None:
         key = tuple(spot.tolist())
         if key not in self.cuts:
-            v, f = outside_sphere(self.part.vertices, self.part.faces, spot, self.radius)
-            self.cuts[key] = fcl.CollisionObject(bvh(v, f), fcl.Transform())
+            f = self._near(spot, spot, 2 * self.zone_reach + self.radius + self.CAP)
+            v, f = outside_sphere(self.part.vertices, f, spot, self.radius)
+            self.cuts[key] = None if len(f) == 0 else fcl.CollisionObject(
+                bvh(v, f), fcl.Transform())  # fmt: skip
         return self.cuts[key]
 
     def slack(self, R: NDArray, p: NDArray, spots: NDArray) -> float:
         self.samples += 1
+        if self.part_obj is None:
+            return math.inf
         tf = fcl.Transform(R, p)
         self.outside.setTransform(tf)
         d = fcl.distance(self.outside, self.part_obj, fcl.DistanceRequest(), fcl.DistanceResult())
         s = float(d) - self.clearance
-        if self.zone is not None:
-            self.zone.setTransform(tf)
-            dz = max(
-                float(fcl.distance(self.zone, self._cut(e), fcl.DistanceRequest(),
-                                   fcl.DistanceResult()))
-                for e in spots
-            )  # fmt: skip
-            s = min(s, dz)
-        return s
+        if self.zone is None:
+            return s
+        self.zone.setTransform(tf)
+        dz = float(fcl.distance(self.zone, self.part_obj, fcl.DistanceRequest(),
+                                fcl.DistanceResult()))  # fmt: skip
+        if dz >= s:
+            return s
+        best = dz
+        for e in spots:
+            if float(np.linalg.norm(p - e)) >= self.zone_reach + self.radius:
+                continue
+            cut = self._cut(e)
+            req, res = fcl.DistanceRequest(), fcl.DistanceResult()
+            de = math.inf if cut is None else float(fcl.distance(self.zone, cut, req, res))
+            best = max(best, min(de, self.CAP))
+        return min(s, best)
 
     def motion(self, p0, q0, p1, q1, spots: NDArray, spacing: float) -> str:
         """'' when the motion keeps the slack >= 0 throughout, else why not."""
@@ -174,6 +219,37 @@ def _end_mismatch(t: Any, poses: WeldPoses) -> str:
     return ""
 
 
+def _check_free(
+    transitions: list[Any],
+    poses: WeldPoses,
+    part: trimesh.Trimesh,
+    tool: Tool,
+    spacing: float,
+) -> tuple[list[tuple[str, str]], int]:
+    """The failures among the free ``transitions`` (name, why) and the samples taken, with
+    fresh models built here (one process's share of :func:`verify_sweeps`)."""
+    clearance = float(poses.settings["clearance"])
+    radius = float(poses.settings["contact_radius"])
+    sw = _Sweeps(part, tool, clearance, radius)
+    failures: list[tuple[str, str]] = []
+    for t in transitions:
+        why = _end_mismatch(t, poses)
+        Q = t.quaternions
+        if not why and np.any(np.abs(np.linalg.norm(Q, axis=1) - 1.0) > 1e-6):
+            why = "a quaternion is not a unit quaternion"
+        if not why:
+            spots = np.array([poses[t.from_id].position, poses[t.to_id].position], dtype=float)
+            sw.crop(np.asarray(t.positions, dtype=np.float64))
+            for k in range(len(t.positions) - 1):
+                why = sw.motion(t.positions[k], Q[k], t.positions[k + 1], Q[k + 1], spots, spacing)
+                if why:
+                    why = f"motion {k} ({t.kinds[k]}): {why}"
+                    break
+        if why:
+            failures.append((f"{t.from_id}->{t.to_id}", why))
+    return failures, sw.samples
+
+
 def verify_sweeps(
     path: ToolPath,
     poses: WeldPoses,
@@ -181,44 +257,31 @@ def verify_sweeps(
     tool: Tool,
     *,
     spacing: float = DEFAULT_SPACING,
+    workers: int = 1,
 ) -> SweepsVerification:
     """Re-check every free transition of ``path`` for the swept ``tool`` (module docstring).
 
     The clearance and the contact radius are the poses' settings (what the pose search and the
-    planner used).
+    planner used). ``workers > 1`` splits the transitions into that many runs of consecutive
+    ones, each checked in its own process with its own fresh models
+    (:func:`weldplan.tool.transit_workers.run_chunks`); the answer is the same.
     """
-    clearance = float(poses.settings["clearance"])
-    radius = float(poses.settings["contact_radius"])
+    from weldplan.tool.transit_workers import run_chunks
+
     failures: list[tuple[str, str]] = []
     ok_ids = sorted(p.id for p in poses.poses if p.ok)
     if sorted(path.order) != ok_ids:
         failures.append(("order", "the tool path does not visit exactly the welds with a pose"))
-    sw = _Sweeps(part, tool, clearance, radius)
-    checked = 0
-    blocked = []
-    for t in path.transitions:
-        name = f"{t.from_id}->{t.to_id}"
-        if not t.free:
-            blocked.append(name)
-            continue
-        checked += 1
-        why = _end_mismatch(t, poses)
-        Q = t.quaternions
-        if not why and np.any(np.abs(np.linalg.norm(Q, axis=1) - 1.0) > 1e-6):
-            why = "a quaternion is not a unit quaternion"
-        if not why:
-            spots = np.array([poses[t.from_id].position, poses[t.to_id].position], dtype=float)
-            for k in range(len(t.positions) - 1):
-                why = sw.motion(t.positions[k], Q[k], t.positions[k + 1], Q[k + 1], spots, spacing)
-                if why:
-                    why = f"motion {k} ({t.kinds[k]}): {why}"
-                    break
-        if why:
-            failures.append((name, why))
+    free = [t for t in path.transitions if t.free]
+    blocked = [f"{t.from_id}->{t.to_id}" for t in path.transitions if not t.free]
+    samples = 0
+    for fails, n in run_chunks(_check_free, free, (poses, part, tool, spacing), workers):
+        failures += fails
+        samples += n
     return SweepsVerification(
         ok=not failures,
-        checked=checked,
-        samples=sw.samples,
+        checked=len(free),
+        samples=samples,
         blocked=tuple(blocked),
         failures=tuple(failures),
     )
