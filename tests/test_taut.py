@@ -69,9 +69,7 @@ def test_shortest_path_around_a_cylinder(cylinder: CollisionModel) -> None:
     lo = around(30.0 * math.cos(math.pi / 128) + R, 100.0)
     hi = around(30.0 + R, 100.0)
     joint = refine_path(P, cylinder, R, check=fcl(cylinder), final_check=fcl(cylinder))
-    sweeps = refine_path(
-        P, cylinder, R, check=fcl(cylinder), final_check=fcl(cylinder), taut=False
-    )
+    sweeps = refine_path(P, cylinder, R, check=fcl(cylinder), final_check=fcl(cylinder), taut=False)
     assert joint.refined, joint.status
     assert lo - 1e-6 <= joint.length <= hi * 1.001, (joint.length, lo, hi)
     assert joint.length < sweeps.length
