@@ -87,8 +87,8 @@ MAX_ROUNDS = 30
 SOLVER_TOL = 1e-8
 #: contacts are merged when they agree to this fraction of the radius (on the same segment)
 _MERGE = 0.05
-#: finite-difference step of the distance gradient, in radii, for obstacles without
-#: ``closest_points``
+#: finite-difference step of the distance gradient for obstacles without ``closest_points``,
+#: as a fraction of the largest distance queried (at least 1 unit)
 _FD_STEP = 1e-3
 
 
