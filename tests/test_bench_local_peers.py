@@ -85,6 +85,7 @@ def test_bench_local_peers_end_to_end(box_cell, tmp_path: Path, monkeypatch) -> 
         "SO-ACO (paper)",
         "SO-ACO + refine",
         "exact (A* + SO)",
+        "exact + refine, sweeps",
         "exact + refine (default)",
         "OMPL BIT* 0.05 s",
         "OMPL BIT* 0.2 s",
@@ -99,6 +100,7 @@ def test_bench_local_peers_end_to_end(box_cell, tmp_path: Path, monkeypatch) -> 
         assert runs["SO-ACO + refine"]["length"] <= runs["SO-ACO (paper)"]["length"] + 1e-9
         exact = runs["exact (A* + SO)"]["length"]
         assert runs["exact + refine (default)"]["length"] <= exact + 1e-9
+        assert runs["exact + refine, sweeps"]["length"] <= exact + 1e-9
     md = (tmp_path / "local-peers.md").read_text()
     assert "| exact + refine (default) | 2/2 |" in md and "Reference: OMPL BIT* 0.2 s" in md
     assert "## Targets" in md and "load average" in md

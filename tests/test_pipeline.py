@@ -200,7 +200,9 @@ def test_demo_so_aco_pso_within_2_percent_of_exact_held_karp(demo):
     assert verify_route(fast, demo.part, joints=demo.joints).ok
     assert verify_route(exact, demo.part, joints=demo.joints).ok
     assert fast.lower_bound == pytest.approx(595.10, abs=0.01)  # DESIGN.md, Held-Karp
-    assert exact.lower_bound <= exact.length <= fast.length * (1 + 1e-9)
+    # both planners' legs go through the same refinement, which stops when a round gains less
+    # than 1e-4 of the length (weldplan.weld.taut): refined legs agree to that, not to rounding
+    assert exact.lower_bound <= exact.length <= fast.length * (1 + 1e-4)
     assert fast.length <= 1.02 * exact.length
 
 

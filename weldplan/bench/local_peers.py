@@ -166,17 +166,21 @@ def blocked_pairs(cell: Any, limit: int | None) -> list[tuple[int, int]]:
 
 #: the column of weldplan's default pipeline (``weldplan plan``: exact + the refinement)
 DEFAULT_COLUMN = "exact + refine (default)"
+#: the same with the refinement's vertex stage as one-vertex sweeps (the default until the joint
+#: vertex optimisation, :mod:`weldplan.weld.taut`)
+SWEEPS_COLUMN = "exact + refine, sweeps"
 
 
-def _refine_hook() -> Callable[[Any, Any], Any]:
+def _refine_hook(taut: bool = True) -> Callable[[Any, Any], Any]:
     """``refine(cell, local_path) -> LocalPath``: the pipeline's own continuous refinement
     (:func:`weldplan.weld.refine.refine_local_path`, python-fcl checks) applied to a planned
-    pair, with its CPU time added."""
+    pair, with its CPU time added; ``taut=False``: its vertex stage as one-vertex sweeps (the
+    refinement before the joint vertex optimisation)."""
     from weldplan.weld.refine import refine_local_path
 
     def refine(cell: Any, lp: Any) -> Any:
         c0 = time.process_time()
-        out = refine_local_path(cell, lp)
+        out = refine_local_path(cell, lp, taut=taut)
         if out is lp:
             return lp
         return replace(out, cpu_seconds=lp.cpu_seconds + time.process_time() - c0)
@@ -190,12 +194,14 @@ def planners(budgets: list[float], ompl: list[str]) -> dict[str, Callable[..., A
     from weldplan.weld.local import plan_pair
 
     refine = _refine_hook()
+    sweeps = _refine_hook(taut=False)
     cols: dict[str, Callable[..., Any]] = {
         "SO-ACO (paper)": lambda c, i, j, s, ch: plan_pair(c, i, j, method="so-aco", rng=s),
         "SO-ACO + refine": lambda c, i, j, s, ch: refine(
             c, plan_pair(c, i, j, method="so-aco", rng=s)
         ),
         "exact (A* + SO)": lambda c, i, j, s, ch: plan_pair(c, i, j, method="exact"),
+        SWEEPS_COLUMN: lambda c, i, j, s, ch: sweeps(c, plan_pair(c, i, j, method="exact")),
         DEFAULT_COLUMN: lambda c, i, j, s, ch: refine(c, plan_pair(c, i, j, method="exact")),
     }
     label = {"bitstar": "BIT*", "rrtstar": "RRT*"}
@@ -391,7 +397,9 @@ def run(args: argparse.Namespace) -> int:
             "wall_s": time.perf_counter() - t0,
             "refine_note": (
                 "+ refine: weldplan.weld.refine.refine_local_path (the pipeline's continuous "
-                "refinement, FCL-checked) applied to that planner's path."
+                "refinement, FCL-checked: shortcuts, then the joint vertex optimisation) applied "
+                "to that planner's path; 'refine, sweeps': the same with one-vertex sweeps "
+                "instead of the joint optimisation (the refinement as it was)."
             ),
         }
         (out / "local-peers.md").write_text(markdown(records, summary, ref, fast, meta))

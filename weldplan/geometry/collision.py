@@ -287,6 +287,11 @@ class CollisionModel:
             return self.segment_free(P[0], P[0], radius)
         return bool(np.all(self.segments_free(P[:-1], P[1:], radius, method=method)))
 
+    def closest_points(self, points: ArrayLike) -> NDArray[np.float64]:
+        """``(n, 3) float``: the point of the part's surface (mm) nearest each point ``(n, 3)``
+        (open3d, single precision; see :class:`SurfaceDistance`)."""
+        return self.distance.closest_points(points)
+
     def clearance(self, points: ArrayLike, *, method: str = "auto") -> NDArray[np.float64]:
         """``(n,) float``: distance (mm) from each point ``(n, 3)`` to the part's surface.
 

@@ -66,6 +66,17 @@ class SurfaceDistance:
             out[start : start + CHUNK] = d.numpy()
         return out
 
+    def closest_points(self, points: ArrayLike) -> NDArray[np.float64]:
+        """``(n, 3) float``: the point of the mesh (mm) nearest each point ``(n, 3)`` (open3d,
+        single precision: about :attr:`tolerance` mm off)."""
+        P = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+        out = np.empty_like(P)
+        for start in range(0, len(P), CHUNK):
+            chunk = (P[start : start + CHUNK] - self.shift).astype(np.float32)
+            hit = self._scene.compute_closest_points(self._o3d.core.Tensor(chunk))
+            out[start : start + CHUNK] = hit["points"].numpy().astype(np.float64) + self.shift
+        return out
+
     def first_hit(self, origins: ArrayLike, directions: ArrayLike) -> NDArray[np.float64]:
         """``(n,) float``: distance (mm) along each unit ray to the first triangle it crosses.
 

@@ -213,7 +213,11 @@ def _grid_route(
 
 
 def _refine_inner(
-    inner: NDArray[np.float64], collision: CollisionModel, checks: _Checks, clearance: float
+    inner: NDArray[np.float64],
+    collision: CollisionModel,
+    checks: _Checks,
+    clearance: float,
+    prm: LocalParams,
 ) -> tuple[NDArray[np.float64], bool]:
     """:func:`weldplan.weld.refine.refine_path` on the path between the virtual joints, its
     checks and final check through python-fcl (counted in ``checks``)."""
@@ -223,6 +227,7 @@ def _refine_inner(
         inner, collision, clearance,
         check=lambda A, B, rad: checks.many(A, B, rad),
         final_check=lambda A, B, rad: checks.many(A, B, rad),
+        taut=prm.refine_taut, time_budget=prm.refine_budget,
     )  # fmt: skip
     if not rp.refined:
         log.debug("refinement kept the grid path: %s", rp.status)
@@ -354,7 +359,7 @@ def plan_local_path(
     so_length = polyline_length(inner)
     refined = False
     if prm.refine:
-        inner, refined = _refine_inner(inner, collision, checks, grid.clearance)
+        inner, refined = _refine_inner(inner, collision, checks, grid.clearance, prm)
     return done(
         points=_assemble(start_xyz, inner, goal_xyz),
         inner_length=polyline_length(inner),

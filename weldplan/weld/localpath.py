@@ -14,7 +14,14 @@ from numpy.typing import NDArray
 from weldplan.errors import PlanningError
 from weldplan.optim.discrete.aco_grid import AntColonyParams
 
-__all__ = ["MAX_SEARCH_VOXELS", "METHODS", "LocalParams", "LocalPath", "SearchLimitError"]
+__all__ = [
+    "MAX_SEARCH_VOXELS",
+    "METHODS",
+    "REFINE_BUDGET",
+    "LocalParams",
+    "LocalPath",
+    "SearchLimitError",
+]
 
 #: the local planners by name
 METHODS = ("so-aco", "aco", "exact")
@@ -24,6 +31,11 @@ METHODS = ("so-aco", "aco", "exact")
 #: heuristic per move, tabu lists), so 2 M voxels keep one pair near 0.5 GB; a box of 2 M voxels
 #: is a cube of 126 voxels (630 mm at 5 mm)
 MAX_SEARCH_VOXELS = 2_000_000
+
+#: default wall-time cap (s) on the continuous refinement of one pair
+#: (:attr:`LocalParams.refine_budget`): the bench's 32 blocked pairs take 0.01-0.25 s of CPU
+#: each for the whole refinement, so the cap only bounds outliers on large stations
+REFINE_BUDGET = 0.5
 
 
 class SearchLimitError(PlanningError):
@@ -64,6 +76,14 @@ class LocalParams:
         Run the continuous refinement (:mod:`weldplan.weld.refine`) on the path between the
         virtual joints. Off here (the paper's planners as printed); the planning pipeline turns
         it on (:data:`weldplan.weld.pipeline.DEFAULT_ACO`).
+    refine_taut
+        The refinement's second stage is the joint vertex optimisation
+        (:mod:`weldplan.weld.taut`, the default); False: the one-vertex sweeps
+        (:func:`weldplan.weld.refine.tighten_path`), as before.
+    refine_budget
+        Seconds of wall time the refinement of one pair may take (its vertex optimisation stops
+        between rounds; what it has is checked and kept); ``None``: no cap. Typical pairs take
+        0.01-0.1 s; the cap bounds the few that take longer on large stations.
     connectivity
         Lattice of the exact baseline (26; 6 gives the ants' lattice).
     corner_cutting
@@ -97,6 +117,8 @@ class LocalParams:
     max_so_passes: int = 100
     max_repairs: int | None = None
     refine: bool = False
+    refine_taut: bool = True
+    refine_budget: float | None = REFINE_BUDGET
     connectivity: int = 26
     corner_cutting: bool = False
     crop_margin: float | None = 50.0
@@ -110,6 +132,8 @@ class LocalParams:
             raise ValueError(f"max_search_voxels must be positive, got {self.max_search_voxels}")
         if self.max_repairs is not None and self.max_repairs < 0:
             raise ValueError(f"max_repairs must be >= 0 or None, got {self.max_repairs}")
+        if self.refine_budget is not None and not self.refine_budget >= 0:
+            raise ValueError(f"refine_budget must be >= 0 s or None, got {self.refine_budget}")
         if self.crop_margin is not None and not self.crop_margin >= 0:
             raise ValueError(f"crop_margin must be >= 0 mm, got {self.crop_margin}")
 
