@@ -7,6 +7,7 @@ import pytest
 import trimesh
 
 from tests.conftest import require_shared
+from tests.robot_helpers import BOX_BASE, TORCH_TCP, down_poses, make_plate
 from tests.route_fixtures import box_part, box_route
 from weldplan.errors import PlanningError
 from weldplan.robot import load_robot
@@ -16,13 +17,8 @@ from weldplan.robot.plan import plan_robot_route
 from weldplan.robot.reach import BaseSearch, arm_reach, base_pose, search_base
 from weldplan.robot.replan import Detour, subdivide
 from weldplan.tool import arc_torch
-from weldplan.tool.result import WeldPose, WeldPoses
 from weldplan.tool.route_frames import weld_rows
 
-#: the straight arc torch: TCP 425 mm out along the flange's z axis
-TORCH_TCP = np.eye(4)
-TORCH_TCP[2, 3] = 425.0
-BOX_BASE = base_pose(-1800.0, 0.0, -700.0, 0.0)
 DOWN = np.diag([1.0, -1.0, -1.0])  # TCP z pointing down
 
 
@@ -30,21 +26,6 @@ DOWN = np.diag([1.0, -1.0, -1.0])  # TCP z pointing down
 def robot():
     d = require_shared("robots", "kuka_kr150r3100_2")
     return load_robot(d / "kr150r3100_2.urdf")
-
-
-def _down_poses(route) -> WeldPoses:
-    q_down = (0.0, 1.0, 0.0, 0.0)  # 180 deg about x: TCP z -> -z
-    poses = []
-    for jid in route.order:
-        p = route.joint_xyz[route.joint_ids.index(jid)]
-        poses.append(WeldPose(jid, "ok", tuple(p), (0.0, 0.0, -1.0), q_down, 0.0, 0.0, 0.0, 1))
-    return WeldPoses(tuple(poses), tool="arc torch", total_rotation=0.0)
-
-
-def _plate(centre, normal_axis, size=300.0, thickness=2.0):
-    ext = [size, size, size]
-    ext[normal_axis] = thickness
-    return trimesh.creation.box(ext).apply_translation(centre)
 
 
 def test_subdivide_adds_points_on_the_polyline_only():
@@ -65,7 +46,7 @@ def test_a_blocked_joint_motion_is_replanned_around_the_plate(robot):
     qa, qb = qm.copy(), qm.copy()
     qa[0], qb[0] = -0.3, 0.3
     flange = robot.fk(qm)[0, :3, 3]
-    plate = _plate(flange, 1, size=160.0)
+    plate = make_plate(flange, 1, size=160.0)
     chk = RobotCollision(robot, plate, arc_torch(), TORCH_TCP)
     assert not chk.motion_free(qa, qb)
     # no tucked-arm shortcut: OMPL plans it
@@ -89,10 +70,10 @@ def test_a_blocked_joint_motion_is_replanned_around_the_plate(robot):
 def test_a_weld_blocked_on_every_branch_is_reported_with_its_link(robot):
     """A plate across the flange's place at weld B: every branch puts the wrist there."""
     route = box_route()
-    poses = _down_poses(route)
+    poses = down_poses(route)
     B = route.joint_xyz[route.joint_ids.index("B")]
     flange_b = B + [0.0, 0.0, 425.0 + 40.0]  # 40 mm above the flange face: inside link_6's reach
-    part = trimesh.util.concatenate([box_part(), _plate(flange_b, 2, size=120.0)])
+    part = trimesh.util.concatenate([box_part(), make_plate(flange_b, 2, size=120.0)])
     rr = plan_robot_route(
         route,
         poses,
@@ -141,7 +122,7 @@ def test_sight_clear_sees_a_wall_between_the_shoulder_and_the_wrist(robot):
     T[0, :3, :3] = DOWN
     T[0, :3, 3] = [2000.0, 0.0, 1500.0]  # flange pose; wrist centre 215 mm above it
     bases = np.array([base_pose(0.0, 0.0, 0.0, 0.0), base_pose(0.0, 0.0, 0.0, 90.0)])
-    wall = _plate([1000.0, 0.0, 1000.0], 0, size=600.0)  # across the chord, x = 1000
-    aside = _plate([1000.0, 2000.0, 1000.0], 0, size=600.0)
+    wall = make_plate([1000.0, 0.0, 1000.0], 0, size=600.0)  # across the chord, x = 1000
+    aside = make_plate([1000.0, 2000.0, 1000.0], 0, size=600.0)
     assert not sight_clear(robot, bases, T, SurfaceDistance(wall)).any()
     assert sight_clear(robot, bases, T, SurfaceDistance(aside)).all()

@@ -10,6 +10,7 @@ import pytest
 import trimesh
 
 from tests.conftest import require_shared
+from tests.robot_helpers import BOX_BASE, TORCH_TCP, down_poses, make_plate
 from tests.route_fixtures import box_part, box_route
 from weldplan.errors import InputError, PlanningError
 from weldplan.robot import load_robot
@@ -36,29 +37,12 @@ from weldplan.robot.reach import (
     usable,
 )
 from weldplan.tool import arc_torch
-from weldplan.tool.result import WeldPose, WeldPoses
-
-#: the arc torch of :func:`arc_torch` (straight): TCP 425 mm out along the flange's z axis
-TORCH_TCP = np.eye(4)
-TORCH_TCP[2, 3] = 425.0
-#: a base 1.8 m from the box scene of route_fixtures, 0.7 m below its floor plate
-BOX_BASE = base_pose(-1800.0, 0.0, -700.0, 0.0)
 
 
 @pytest.fixture(scope="module")
 def robot():
     d = require_shared("robots", "kuka_kr150r3100_2")
     return load_robot(d / "kr150r3100_2.urdf")
-
-
-def _down_poses(route) -> WeldPoses:
-    """Every weld of the box route welded from above (TCP z = -z), spin 0."""
-    q_down = (0.0, 1.0, 0.0, 0.0)  # 180 deg about x: TCP z -> -z
-    poses = []
-    for jid in route.order:
-        p = route.joint_xyz[route.joint_ids.index(jid)]
-        poses.append(WeldPose(jid, OK, tuple(p), (0.0, 0.0, -1.0), q_down, 0.0, 0.0, 0.0, 1))
-    return WeldPoses(tuple(poses), tool="arc torch", total_rotation=0.0)
 
 
 # ------------------------------------------------------------------------------ reach
@@ -176,24 +160,18 @@ def test_joint_path_along_a_line_keeps_one_branch(robot):
 # ------------------------------------------------------------------------------ collision
 
 
-def _plate(centre, normal_axis, size=300.0, thickness=2.0):
-    ext = [size, size, size]
-    ext[normal_axis] = thickness
-    return trimesh.creation.box(ext).apply_translation(centre)
-
-
 def test_motion_through_a_thin_plate_is_caught(robot):
     qm = np.array([0.0, -1.2, 1.2, 0.0, 0.8, 0.0])
     qa, qb = qm.copy(), qm.copy()
     qa[0], qb[0] = -0.3, 0.3  # A1 sweeps the flange through the plane y = 0
     flange = robot.fk(qm)[0, :3, 3]
-    plate = _plate(flange + [0.0, 0.0, 0.0], 1, size=120.0)
+    plate = make_plate(flange + [0.0, 0.0, 0.0], 1, size=120.0)
     chk = RobotCollision(robot, plate, arc_torch(), TORCH_TCP)
     assert chk.state_free(qa) and chk.state_free(qb)
     assert not chk.state_free(qm)
     hits = chk.path_hits(np.stack([qa, qb]))
     assert len(hits) == 1 and 0.2 < hits[0].t < 0.8
-    away = _plate(flange + [0.0, 2500.0, 0.0], 1, size=120.0)
+    away = make_plate(flange + [0.0, 2500.0, 0.0], 1, size=120.0)
     assert RobotCollision(robot, away, arc_torch(), TORCH_TCP).path_hits(np.stack([qa, qb])) == []
 
 
@@ -204,8 +182,8 @@ def test_free_verdicts_hold_under_dense_sampling(robot):
     flange = robot.fk(q0)[0, :3, 3]
     part = trimesh.util.concatenate(
         [
-            _plate(flange + [0.0, 300.0, -200.0], 1, size=250.0),
-            _plate(flange + [200.0, -250.0, 100.0], 0, size=250.0),
+            make_plate(flange + [0.0, 300.0, -200.0], 1, size=250.0),
+            make_plate(flange + [200.0, -250.0, 100.0], 0, size=250.0),
         ]
     )
     chk = RobotCollision(robot, part, arc_torch(), TORCH_TCP)
@@ -230,7 +208,7 @@ def test_free_verdicts_hold_under_dense_sampling(robot):
 
 def test_plan_robot_route_on_the_box_scene(robot):
     route = box_route()
-    poses = _down_poses(route)
+    poses = down_poses(route)
     part = box_part()
     rr = plan_robot_route(
         route, poses, robot, flange_tcp=TORCH_TCP, part=part, tool=arc_torch(), base=BOX_BASE
@@ -263,7 +241,7 @@ def test_a_base_that_reaches_nothing_is_one_line_naming_the_field(robot):
     with pytest.raises(InputError) as ei:
         plan_robot_route(
             route,
-            _down_poses(route),
+            down_poses(route),
             robot,
             flange_tcp=TORCH_TCP,
             part=box_part(),
@@ -276,7 +254,7 @@ def test_a_base_that_reaches_nothing_is_one_line_naming_the_field(robot):
 
 def test_search_along_a_line_finds_a_base_that_reaches_every_weld(robot):
     route = box_route()
-    poses = _down_poses(route)
+    poses = down_poses(route)
     from weldplan.robot.plan import tcp_waypoint_poses
     from weldplan.tool.route_frames import weld_rows
 
