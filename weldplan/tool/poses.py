@@ -24,7 +24,9 @@ order so that the summed rotation between consecutive welds is least
 that chain and reported with their closest miss. Every chosen pose is re-checked by
 :class:`~weldplan.tool.verify_poses.PoseChecker` (fresh FCL models of the whole part and tool)
 before it is reported ok; a pose that fails is dropped from its weld's candidates and the choice
-is made again.
+is made again. An optional acceptance test (``accept``: an exit exists, the robot reaches the
+pose) then judges the picks, and a vetoed pick is dropped the same way, as a preference
+(:mod:`weldplan.tool.pose_choice`).
 """
 
 from __future__ import annotations
@@ -41,12 +43,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from weldplan.errors import InputError
 from weldplan.tool.model import Tool
-from weldplan.tool.orient import (
-    candidate_rotations,
-    least_rotation_choice,
-    local_candidates,
-    rotation_angles,
-)
+from weldplan.tool.orient import candidate_rotations, local_candidates
+from weldplan.tool.pose_choice import DEFAULT_MAX_VETOES, Accept, ChoiceState, choose
 from weldplan.tool.pose_search import PoseSearch
 from weldplan.tool.result import NO_FREE_POSE, OK, Miss, WeldPose, WeldPoses, quat_wxyz
 from weldplan.tool.verify_poses import PoseChecker
@@ -144,6 +142,8 @@ def plan_weld_poses(
     clearance: float | None = None,
     both_sides: bool | None = None,
     crop: bool = True,
+    accept: Accept | None = None,
+    max_vetoes: int = DEFAULT_MAX_VETOES,
 ) -> WeldPoses:
     """A verified collision-free tool pose for every weld, or its closest miss (module docstring).
 
@@ -173,6 +173,13 @@ def plan_weld_poses(
         Check against a BVH per weld of the part cropped to the tool's reach (default), or
         against one BVH of the whole part (:class:`~weldplan.tool.pose_search.PoseSearch`; the
         same answers).
+    accept, max_vetoes
+        An acceptance test of the picks beyond being free (an exit exists, the robot reaches
+        it): ``accept(i, T)`` gets weld ``i`` (route order) and its TCP pose ``T (4, 4)`` mm and
+        returns ``None`` or the reason it vetoes the pose. A preference: a weld whose free
+        candidates are all vetoed, or that took ``max_vetoes`` vetoes, keeps its least-rotation
+        free pose with the reasons in :attr:`~weldplan.tool.result.WeldPose.note`
+        (:mod:`weldplan.tool.pose_choice`).
 
     Returns
     -------
@@ -216,17 +223,25 @@ def plan_weld_poses(
     dists, allowed, over = table.dists, table.allowed, table.over
     t_choose = time.perf_counter()
     checker = PoseChecker(part, tool, contact_radius, clearance)
-    state = _ChoiceState(dists.shape)
-    choice, total = _choose(welds, dists, allowed, rots, quats, search, objs, checker, state)
+    state = ChoiceState(dists.shape)
+
+    def pick() -> tuple[dict[int, int], float]:
+        return choose(
+            welds.xyz, welds.ids, dists, allowed, rots, quats, search, objs, checker, state,
+            accept=accept, max_vetoes=max_vetoes,
+        )  # fmt: skip
+
+    choice, total = pick()
     turn = [i for i in range(n) if both_sides and i not in choice and not allowed[i, over].any()]
     for i in turn:  # free of collision on the approach side, but short of the clearance
         table.turn_over(i)
     if turn:
-        choice, total = _choose(welds, dists, allowed, rots, quats, search, objs, checker, state)
+        choice, total = pick()
     t_miss = time.perf_counter()
     misses = {i: table.miss(i, near[i][1], params) for i in range(n) if i not in choice}
     dists[~allowed] = 0.0  # not tried: counted as not free below
-    poses = _assemble(welds, axes, dists, quats, params, choice, misses)
+    notes = {i: _veto_note(r) for i, r in state.veto_reasons.items() if i in state.exhausted}
+    poses = _assemble(welds, axes, dists, quats, params, choice, misses, notes)
     elapsed = time.perf_counter() - t0
     result = WeldPoses(
         poses=poses,
@@ -247,6 +262,7 @@ def plan_weld_poses(
             "collision_queries": int(allowed.sum()),
             "turned_over_tried": int(allowed[:, over].any(axis=1).sum()),
             **state.counts,
+            "accept_exhausted": len(state.exhausted),
             "crops_built": search.crops_built,
             "setup_s": round(t_near - t0, 3),
             "broad_phase_s": round(t_collide - t_near, 3),
@@ -315,14 +331,16 @@ def _assemble(
     params: NDArray,
     choice: dict[int, int],
     misses: dict[int, Miss],
+    notes: dict[int, str],
 ) -> tuple[WeldPose, ...]:
-    """One :class:`WeldPose` per weld from the chosen candidates and the misses."""
+    """One :class:`WeldPose` per weld from the chosen candidates, the misses and the notes."""
     poses: list[WeldPose] = []
     for i, wid in enumerate(welds.ids):
         base = {
             "id": wid,
             "position": tuple(float(v) for v in welds.xyz[i]),
             "n_collision_free": int(np.sum(dists[i] != 0)),
+            "note": notes.get(i, ""),
         }
         if i in choice:
             k = choice[i]
@@ -352,124 +370,8 @@ def _assemble(
     return tuple(poses)
 
 
-def _first_free(
-    i: int,
-    ref: NDArray[np.float64],
-    dists: NDArray[np.float64],
-    allowed: NDArray[np.bool_],
-    rots: NDArray[np.float64],
-    quats: NDArray[np.float64],
-    search: PoseSearch,
-    obj: fcl.CollisionObject | None,
-    p: NDArray[np.float64],
-) -> int:
-    """Measure weld ``i``'s unmeasured candidates in order of their summed rotation to ``ref
-    (r, 4)`` (the neighbours' current picks) until one keeps the clearance; returns the count.
-
-    The order only decides which measurements come first: the DP that runs next still sees every
-    candidate not known to fail, so the final choice is the same optimum (see :func:`_choose`).
-    """
-    todo = np.flatnonzero(np.isnan(dists[i]) & allowed[i])
-    cost = rotation_angles(quats[i, todo], ref).sum(axis=1)
-    for n, k in enumerate(todo[np.argsort(cost, kind="stable")], start=1):
-        dists[i, k] = search.distance(obj, p, rots[i, k])
-        if dists[i, k] >= search.clearance:
-            return n
-    return len(todo)
-
-
-class _ChoiceState:
-    """What :func:`_choose` learns that stays true across calls: poses the re-check rejected or
-    passed, and counts."""
-
-    def __init__(self, shape: tuple[int, int]) -> None:
-        self.rejected = np.zeros(shape, dtype=bool)
-        self.passed: set[tuple[int, int]] = set()
-        self.counts = {"distance_queries": 0, "recheck_rejected": 0, "choice_rounds": 0}
-        self._angles: dict[tuple[int, int], tuple[NDArray, NDArray, NDArray]] = {}
-
-    def angles(
-        self, quats: NDArray, i: int, ci: NDArray[np.int64], j: int, cj: NDArray[np.int64]
-    ) -> NDArray[np.float64]:
-        """``(len(ci), len(cj))`` degrees between candidates ``ci`` of weld ``i`` and ``cj`` of
-        weld ``j``, cut from a matrix cached per pair of welds (the DP's rounds shrink the
-        candidate sets; the angles do not change)."""
-        hit = self._angles.get((i, j))
-        if hit is None or not (np.isin(ci, hit[0]).all() and np.isin(cj, hit[1]).all()):
-            hit = (ci, cj, rotation_angles(quats[i, ci], quats[j, cj]))
-            self._angles[(i, j)] = hit
-        a, b, m = hit
-        return m[np.ix_(np.searchsorted(a, ci), np.searchsorted(b, cj))]
-
-
-def _choose(
-    welds: _Welds,
-    dists: NDArray[np.float64],
-    allowed: NDArray[np.bool_],
-    rots: NDArray[np.float64],
-    quats: NDArray[np.float64],
-    search: PoseSearch,
-    objs: list[fcl.CollisionObject | None],
-    checker: PoseChecker,
-    state: _ChoiceState,
-) -> tuple[dict[int, int], float]:
-    """The least-rotation choice over the free candidates, measuring clearances lazily.
-
-    ``dists (n, c)`` holds 0 for colliding candidates and NaN where the clearance is not measured
-    yet; it is filled in place. Only ``allowed (n, c)`` candidates take part. The DP runs over
-    every candidate not known to fail; each chosen candidate whose clearance is unknown is
-    measured, and a weld whose choice falls short has its other candidates measured, least
-    rotation from its neighbours' picks first, up to the first that keeps the clearance
-    (:func:`_first_free`), before the DP runs again. When every chosen candidate is known to be
-    free, each passes the independent re-check or is dropped and the DP runs again. The answer
-    is the DP's optimum over the truly free candidates: every candidate it picks has been
-    measured, and the candidates it passed over can only make the optimum over a superset no
-    worse. Every round that does not return measures or rejects at least one candidate, so the
-    rounds are at most twice the candidates.
-
-    Returns the chosen candidate per weld index (welds with none free are absent) and the summed
-    rotation (deg); counts (distance queries, candidates the re-check rejected) go to ``state``.
-    """
-    clearance = search.clearance
-    counts = state.counts
-    for _ in range(2 * dists.size + 1):
-        counts["choice_rounds"] += 1
-        ok = allowed & ~state.rejected & ~(dists == 0) & ~(dists < clearance)  # NaN: kept
-        welds_ok = [i for i in range(len(dists)) if ok[i].any()]
-        cand = [np.flatnonzero(ok[i]) for i in welds_ok]
-        pick, total = least_rotation_choice(
-            [quats[i, c] for i, c in zip(welds_ok, cand, strict=True)],
-            lambda k, w=welds_ok, c=cand: state.angles(quats, w[k - 1], c[k - 1], w[k], c[k]),
-        )
-        choice = {i: int(c[j]) for i, c, j in zip(welds_ok, cand, pick, strict=True)}
-        short = []
-        for i, k in choice.items():
-            if np.isnan(dists[i, k]):
-                dists[i, k] = search.distance(objs[i], welds.xyz[i], rots[i, k])
-                counts["distance_queries"] += 1
-                if dists[i, k] < clearance:
-                    short.append(i)
-        if short:
-            chain = list(choice)  # the welds with a pick, in route order
-            for i in short:
-                j = chain.index(i)
-                nbrs = [chain[m] for m in (j - 1, j + 1) if 0 <= m < len(chain)]
-                ref = quats[nbrs, [choice[m] for m in nbrs]] if nbrs else quats[i, [choice[i]]]
-                counts["distance_queries"] += _first_free(
-                    i, ref, dists, allowed, rots, quats, search, objs[i], welds.xyz[i]
-                )
-            continue
-        bad = False
-        for i, k in choice.items():
-            if (i, k) in state.passed:
-                continue
-            out = checker.check(welds.xyz[i], quats[i, k])
-            if out.ok:
-                state.passed.add((i, k))
-            else:
-                log.warning("weld %s: the re-check rejected a pose: %s", welds.ids[i], out.reason)
-                state.rejected[i, k] = bad = True
-                counts["recheck_rejected"] += 1
-        if not bad:
-            return choice, total
-    raise RuntimeError("the pose choice did not settle: the re-check keeps rejecting poses (a bug)")
+def _veto_note(reasons: list[str]) -> str:
+    """A weld's note when the acceptance test was lifted for it: how many free poses it vetoed,
+    and the first reason."""
+    n = len(reasons)
+    return f"{n} free pose{'s' if n > 1 else ''} vetoed ({reasons[0]}); kept the least-rotation one"

@@ -129,6 +129,9 @@ class WeldPose:
     flipped
         The pose is the tool turned over, approaching from the other side of the sheet (a tool
         that straddles the sheet, :attr:`weldplan.tool.model.Tool.straddles`).
+    note
+        Why an ok pose is second best: every free candidate failed the search's acceptance test
+        (no exit, out of the robot's reach; :mod:`weldplan.tool.pose_choice`); empty otherwise.
     """
 
     id: str
@@ -142,6 +145,7 @@ class WeldPose:
     n_collision_free: int = 0
     miss: Miss | None = None
     flipped: bool = False
+    note: str = ""
 
     @property
     def ok(self) -> bool:
@@ -166,6 +170,7 @@ class WeldPose:
             "n_collision_free": self.n_collision_free,
             "miss": None if self.miss is None else self.miss.to_dict(),
             "flipped": self.flipped,
+            "note": self.note,
         }
 
     @classmethod
@@ -183,6 +188,7 @@ class WeldPose:
             n_collision_free=int(d.get("n_collision_free", 0)),
             miss=None if d.get("miss") is None else Miss.from_dict(d["miss"]),
             flipped=bool(d.get("flipped", False)),
+            note=str(d.get("note", "")),
         )
 
 
@@ -241,6 +247,8 @@ class WeldPoses:
         for p in self.poses:
             if not p.ok and p.miss is not None:
                 lines.append(f"  weld {p.id}: no free pose; {p.miss.describe()}")
+            elif p.ok and p.note:
+                lines.append(f"  weld {p.id}: {p.note}")
         return "\n".join(lines)
 
     def to_dict(self) -> dict[str, Any]:

@@ -1,0 +1,242 @@
+"""The least-rotation choice of one pose per weld among the free candidates, with an optional
+acceptance test that knows what comes after the weld.
+
+:func:`choose` runs the dynamic programme of :func:`~weldplan.tool.orient.least_rotation_choice`
+over the candidates not known to fail, measuring clearances lazily (:func:`_first_free`), and
+re-checks every pick independently (:class:`~weldplan.tool.verify_poses.PoseChecker`).
+
+**Acceptance** (``accept``): a free pose can still be a poor one: no exit may leave it (the gun
+cannot retract, slide or step sideways off the weld), or the robot cannot reach it (joint limit,
+links in the part). ``accept(i, T)`` judges weld ``i``'s pick with TCP pose ``T (4, 4)`` (mm,
+part frame) after it has passed the re-check, and returns ``None`` to accept it or a short reason
+to veto it. A vetoed candidate leaves its weld's set and the choice is made again, so the answer
+is the least-rotation choice over the free *accepted* candidates. The test is a preference, not a
+constraint: a weld whose free candidates are all vetoed, or that reaches ``max_vetoes`` vetoes,
+is **exhausted**: its vetoes are lifted, it takes the least-rotation free pose as without the
+test, and the reasons are kept (:attr:`ChoiceState.veto_reasons`) for its report. ``accept`` is
+called only on picks (never on every candidate) and at most once per candidate.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+
+import fcl
+import numpy as np
+from numpy.typing import NDArray
+
+from weldplan.tool.orient import least_rotation_choice, rotation_angles
+from weldplan.tool.pose_search import PoseSearch
+from weldplan.tool.verify_poses import PoseChecker
+
+log = logging.getLogger(__name__)
+
+#: ``accept(i, T)``: ``None`` accepts weld ``i``'s candidate with TCP pose ``T (4, 4)`` mm, a
+#: string vetoes it and says why
+Accept = Callable[[int, NDArray[np.float64]], "str | None"]
+
+#: vetoes a weld may take before the test is lifted for it (each costs one more DP round)
+DEFAULT_MAX_VETOES = 12
+
+
+def _first_free(
+    i: int,
+    ref: NDArray[np.float64],
+    dists: NDArray[np.float64],
+    allowed: NDArray[np.bool_],
+    rots: NDArray[np.float64],
+    quats: NDArray[np.float64],
+    search: PoseSearch,
+    obj: fcl.CollisionObject | None,
+    p: NDArray[np.float64],
+) -> int:
+    """Measure weld ``i``'s unmeasured candidates in order of their summed rotation to ``ref
+    (r, 4)`` (the neighbours' current picks) until one keeps the clearance; returns the count.
+
+    The order only decides which measurements come first: the DP that runs next still sees every
+    candidate not known to fail, so the final choice is the same optimum (see :func:`choose`).
+    """
+    todo = np.flatnonzero(np.isnan(dists[i]) & allowed[i])
+    cost = rotation_angles(quats[i, todo], ref).sum(axis=1)
+    for n, k in enumerate(todo[np.argsort(cost, kind="stable")], start=1):
+        dists[i, k] = search.distance(obj, p, rots[i, k])
+        if dists[i, k] >= search.clearance:
+            return n
+    return len(todo)
+
+
+class ChoiceState:
+    """What :func:`choose` learns that stays true across calls: poses the re-check rejected or
+    passed, the acceptance test's verdicts, and counts."""
+
+    def __init__(self, shape: tuple[int, int]) -> None:
+        self.rejected = np.zeros(shape, dtype=bool)
+        self.passed: set[tuple[int, int]] = set()
+        #: candidates the acceptance test vetoed (lifted for exhausted welds)
+        self.vetoed = np.zeros(shape, dtype=bool)
+        #: candidates the acceptance test accepted
+        self.accepted: set[tuple[int, int]] = set()
+        #: weld -> the reasons its vetoed candidates were given, in the order tried
+        self.veto_reasons: dict[int, list[str]] = {}
+        #: welds for which the test was lifted (every free candidate vetoed, or too many vetoes)
+        self.exhausted: set[int] = set()
+        self.counts = {
+            "distance_queries": 0,
+            "recheck_rejected": 0,
+            "choice_rounds": 0,
+            "accept_calls": 0,
+            "vetoed": 0,
+        }
+        self._angles: dict[tuple[int, int], tuple[NDArray, NDArray, NDArray]] = {}
+
+    def angles(
+        self, quats: NDArray, i: int, ci: NDArray[np.int64], j: int, cj: NDArray[np.int64]
+    ) -> NDArray[np.float64]:
+        """``(len(ci), len(cj))`` degrees between candidates ``ci`` of weld ``i`` and ``cj`` of
+        weld ``j``, cut from a matrix cached per pair of welds (the DP's rounds shrink the
+        candidate sets; the angles do not change)."""
+        hit = self._angles.get((i, j))
+        if hit is None or not (np.isin(ci, hit[0]).all() and np.isin(cj, hit[1]).all()):
+            hit = (ci, cj, rotation_angles(quats[i, ci], quats[j, cj]))
+            self._angles[(i, j)] = hit
+        a, b, m = hit
+        return m[np.ix_(np.searchsorted(a, ci), np.searchsorted(b, cj))]
+
+    def exhaust(self, i: int) -> None:
+        """Lift the acceptance test for weld ``i``."""
+        self.exhausted.add(i)
+        self.vetoed[i] = False
+
+
+def _pose(p: NDArray[np.float64], R: NDArray[np.float64]) -> NDArray[np.float64]:
+    T = np.eye(4)
+    T[:3, :3] = R
+    T[:3, 3] = p
+    return T
+
+
+def _judge(
+    choice: dict[int, int],
+    xyz: NDArray[np.float64],
+    rots: NDArray[np.float64],
+    accept: Accept,
+    state: ChoiceState,
+    max_vetoes: int,
+) -> bool:
+    """Run ``accept`` on the picks it has not judged; True when any was vetoed."""
+    vetoed = False
+    for i, k in choice.items():
+        if i in state.exhausted or (i, k) in state.accepted:
+            continue
+        state.counts["accept_calls"] += 1
+        reason = accept(i, _pose(xyz[i], rots[i, k]))
+        if reason is None:
+            state.accepted.add((i, k))
+            continue
+        state.counts["vetoed"] += 1
+        state.vetoed[i, k] = vetoed = True
+        reasons = state.veto_reasons.setdefault(i, [])
+        reasons.append(str(reason))
+        if len(reasons) >= max_vetoes:
+            state.exhaust(i)
+    return vetoed
+
+
+def choose(
+    xyz: NDArray[np.float64],
+    ids: tuple[str, ...] | list[str],
+    dists: NDArray[np.float64],
+    allowed: NDArray[np.bool_],
+    rots: NDArray[np.float64],
+    quats: NDArray[np.float64],
+    search: PoseSearch,
+    objs: list[fcl.CollisionObject | None],
+    checker: PoseChecker,
+    state: ChoiceState,
+    *,
+    accept: Accept | None = None,
+    max_vetoes: int = DEFAULT_MAX_VETOES,
+) -> tuple[dict[int, int], float]:
+    """The least-rotation choice over the free (and accepted) candidates, measuring clearances
+    lazily.
+
+    ``xyz (n, 3)`` mm: the weld spots; ``ids``: their names (for the log). ``dists (n, c)``
+    holds 0 for colliding candidates and NaN where the clearance is not measured yet; it is
+    filled in place. Only ``allowed (n, c)`` candidates take part. The DP runs over every
+    candidate not known to fail; each chosen candidate whose clearance is unknown is measured,
+    and a weld whose choice falls short has its other candidates measured, least rotation from
+    its neighbours' picks first, up to the first that keeps the clearance (:func:`_first_free`),
+    before the DP runs again. When every chosen candidate is known to be free, each passes the
+    independent re-check or is dropped and the DP runs again; then each must pass ``accept``
+    (module docstring) or is vetoed and the DP runs again. The answer is the DP's optimum over
+    the truly free, accepted candidates (exhausted welds: over their free ones): every candidate
+    it picks has been measured, and the candidates it passed over can only make the optimum over
+    a superset no worse. Every round that does not return measures, rejects or vetoes at least
+    one candidate, so the rounds are bounded.
+
+    Returns the chosen candidate per weld index (welds with none free are absent) and the summed
+    rotation (deg); counts go to ``state``.
+    """
+    clearance = search.clearance
+    counts = state.counts
+    for _ in range(3 * dists.size + 1):
+        counts["choice_rounds"] += 1
+        free = allowed & ~state.rejected & ~(dists == 0) & ~(dists < clearance)  # NaN: kept
+        for i in np.flatnonzero(free.any(axis=1) & ~(free & ~state.vetoed).any(axis=1)):
+            state.exhaust(int(i))  # every candidate left was vetoed: lift the test
+        ok = free & ~state.vetoed
+        welds_ok = [i for i in range(len(dists)) if ok[i].any()]
+        cand = [np.flatnonzero(ok[i]) for i in welds_ok]
+        pick, total = least_rotation_choice(
+            [quats[i, c] for i, c in zip(welds_ok, cand, strict=True)],
+            lambda k, w=welds_ok, c=cand: state.angles(quats, w[k - 1], c[k - 1], w[k], c[k]),
+        )
+        choice = {i: int(c[j]) for i, c, j in zip(welds_ok, cand, pick, strict=True)}
+        short = []
+        for i, k in choice.items():
+            if np.isnan(dists[i, k]):
+                dists[i, k] = search.distance(objs[i], xyz[i], rots[i, k])
+                counts["distance_queries"] += 1
+                if dists[i, k] < clearance:
+                    short.append(i)
+        if short:
+            chain = list(choice)  # the welds with a pick, in route order
+            for i in short:
+                j = chain.index(i)
+                nbrs = [chain[m] for m in (j - 1, j + 1) if 0 <= m < len(chain)]
+                ref = quats[nbrs, [choice[m] for m in nbrs]] if nbrs else quats[i, [choice[i]]]
+                counts["distance_queries"] += _first_free(
+                    i, ref, dists, allowed, rots, quats, search, objs[i], xyz[i]
+                )
+            continue
+        if _recheck(choice, xyz, ids, quats, checker, state):
+            continue
+        if accept is not None and _judge(choice, xyz, rots, accept, state, max_vetoes):
+            continue
+        return choice, total
+    raise RuntimeError("the pose choice did not settle: the re-check keeps rejecting poses (a bug)")
+
+
+def _recheck(
+    choice: dict[int, int],
+    xyz: NDArray[np.float64],
+    ids: tuple[str, ...] | list[str],
+    quats: NDArray[np.float64],
+    checker: PoseChecker,
+    state: ChoiceState,
+) -> bool:
+    """Re-check the picks not yet passed; True when any was rejected (dropped for good)."""
+    bad = False
+    for i, k in choice.items():
+        if (i, k) in state.passed:
+            continue
+        out = checker.check(xyz[i], quats[i, k])
+        if out.ok:
+            state.passed.add((i, k))
+        else:
+            log.warning("weld %s: the re-check rejected a pose: %s", ids[i], out.reason)
+            state.rejected[i, k] = True
+            state.counts["recheck_rejected"] += 1
+            bad = True
+    return bad
