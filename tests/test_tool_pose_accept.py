@@ -90,3 +90,23 @@ def test_accept_sees_the_tcp_pose_of_the_pick():
     np.testing.assert_allclose(T[:3, 3], p.position)
     np.testing.assert_allclose(T[:3, :3], p.rotation(), atol=1e-9)
     np.testing.assert_allclose(T[3], [0, 0, 0, 1])
+
+
+def test_all_of_vetoes_with_the_first_test_that_vetoes_and_skips_the_rest():
+    from weldplan.tool.pose_choice import all_of
+
+    calls: list[str] = []
+
+    def t(name: str, verdict: str | None):
+        def f(i: int, T: np.ndarray) -> str | None:
+            calls.append(name)
+            return verdict
+
+        return f
+
+    assert all_of() is None and all_of(None, None) is None
+    one = t("x", None)
+    assert all_of(None, one) is one
+    both = all_of(t("a", None), None, t("b", "no exit"), t("c", "unreached"))
+    assert both(0, np.eye(4)) == "no exit" and calls == ["a", "b"]
+    assert all_of(t("a", None), t("b", None))(0, np.eye(4)) is None

@@ -240,3 +240,22 @@ def _recheck(
             state.counts["recheck_rejected"] += 1
             bad = True
     return bad
+
+
+def all_of(*tests: Accept | None) -> Accept | None:
+    """One acceptance test that vetoes with the first of ``tests`` that vetoes (``None``s are
+    skipped; put the cheap tests first). ``None`` when no test is given."""
+    kept = [t for t in tests if t is not None]
+    if not kept:
+        return None
+    if len(kept) == 1:
+        return kept[0]
+
+    def accept(i: int, T: NDArray[np.float64]) -> str | None:
+        for t in kept:
+            reason = t(i, T)
+            if reason is not None:
+                return reason
+        return None
+
+    return accept
