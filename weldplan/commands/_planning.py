@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import dataclasses
 import logging
 import sys
 import time
@@ -44,6 +45,13 @@ __all__ = [
 ]
 
 log = logging.getLogger(__name__)
+
+#: ``--smooth`` with ``--tool`` or ``--robot`` (docs/smooth-paths.md): what the later stages read
+SMOOTH_WITH_TOOL_WARNING = (
+    "--smooth with --tool/--robot: the tool poses, tool transitions, robot route, robot "
+    "program and the 3D pages follow the polyline, not the smooth path; only the route "
+    "CSV/JSON (and a post without --robot) carry the smooth waypoints"
+)
 
 
 def _local_workers(args: argparse.Namespace) -> int:
@@ -111,6 +119,9 @@ def run_planning(
     config = config_from_args(args)
     tool = tool_from_args(args)  # a bad --tool fails before the (slow) cell is built
     robot = robot_from_args(args)  # so does a bad --robot
+    warnings = run_warnings(args)
+    for w in warnings:
+        print(f"weldplan: warning: {w}", file=sys.stderr)
     if joint_points is not None:
         _check_size(args, config, joint_points())
     bars = ProgressBars(enabled=False if args.quiet else None)
@@ -138,24 +149,12 @@ def run_planning(
     if not report.ok:
         print(f"weldplan: {report.describe()}; nothing written", file=sys.stderr)
         return 1
-    extra_rows: list[tuple[str, str]] = []
-    texts: dict[str, str] = {}
-    robot_partial = False
-    if tool is not None:
-        staged = _pose_stage(args, cell, route, tool, bars, times)
-        if staged is None:
-            return 1
-        route, extra_rows = staged
-    if robot is not None:
-        from weldplan.commands._robot import robot_stage
-
-        with bars.stage("robot") as st:
-            stage = robot_stage(args, cell, route, tool[0], robot, outputs)  # type: ignore[index]
-        times["robot"] = st.seconds
-        extra_rows += stage.rows
-        texts = stage.texts
-        route = stage.route  # with the robot route, for the JSON
-        robot_partial = bool(stage.skipped)
+    staged = _tool_robot_stages(args, cell, route, tool, robot, outputs, bars, times)
+    if staged is None:
+        return 1
+    route, extra_rows, texts, robot_skipped = staged
+    if warnings:
+        route = with_warnings(route, warnings)
 
     with bars.stage("export") as st:
         _write(args, outputs, route, cell, None if tool is None else tool[0], texts)
@@ -171,12 +170,70 @@ def run_planning(
             )
         )
     code = _partial_code(route)
-    if robot_partial and code == 0:
+    if robot_skipped and code == 0:
         from weldplan.errors import EXIT_PARTIAL
 
-        print(f"weldplan: {len(stage.skipped)} weld(s) not in the robot program", file=sys.stderr)
+        print(f"weldplan: {len(robot_skipped)} weld(s) not in the robot program", file=sys.stderr)
         code = EXIT_PARTIAL
     return code
+
+
+def run_warnings(args: argparse.Namespace) -> list[str]:
+    """What the run says before it starts, on stderr, and records in the route JSON
+    (``settings["warnings"]``): options whose combination does less than a reader expects."""
+    out = []
+    if getattr(args, "smooth", False) and (
+        getattr(args, "tool", None) or getattr(args, "robot", None)
+    ):
+        out.append(SMOOTH_WITH_TOOL_WARNING)
+    return out
+
+
+def with_warnings(route: Any, warnings: list[str]) -> Any:
+    """``route`` with ``warnings`` added to ``settings["warnings"]`` (a new Route)."""
+    settings = dict(route.settings)
+    settings["warnings"] = [*settings.get("warnings", []), *warnings]
+    return dataclasses.replace(route, settings=settings)
+
+
+def _tool_robot_stages(
+    args: argparse.Namespace,
+    cell: Any,
+    route: Any,
+    tool: tuple[Any, dict[str, Any]] | None,
+    robot: Any,
+    outputs: dict[str, Path],
+    bars: ProgressBars,
+    times: dict[str, float],
+) -> tuple[Any, list[tuple[str, str]], dict[str, str], tuple[str, ...]] | None:
+    """The weld poses (with a tool) and the robot stage (with a robot) on the verified route.
+
+    Returns
+    -------
+    route, rows, texts, skipped
+        The route carrying what the stages added, their summary rows, the texts the robot
+        stage rendered (programs, trajectory), the welds the robot program leaves out; ``None``
+        when the poses fail their re-check (said on stderr).
+    """
+    extra_rows: list[tuple[str, str]] = []
+    texts: dict[str, str] = {}
+    skipped: tuple[str, ...] = ()
+    if tool is not None:
+        staged = _pose_stage(args, cell, route, tool, bars, times)
+        if staged is None:
+            return None
+        route, extra_rows = staged
+    if robot is not None:
+        from weldplan.commands._robot import robot_stage
+
+        with bars.stage("robot") as st:
+            stage = robot_stage(args, cell, route, tool[0], robot, outputs)  # type: ignore[index]
+        times["robot"] = st.seconds
+        extra_rows += stage.rows
+        texts = stage.texts
+        route = stage.route  # with the robot route, for the JSON
+        skipped = tuple(stage.skipped)
+    return route, extra_rows, texts, skipped
 
 
 def _pose_stage(
