@@ -136,12 +136,18 @@ def _add_run_arguments(p: argparse.ArgumentParser) -> None:
 
 def positive_mm(text: str) -> float:
     """argparse type: a positive, finite number of millimetres."""
+    return _positive(text, "mm")
+
+
+def _positive(text: str, unit: str) -> float:
+    """``float(text)`` when it is a positive, finite number, else an argparse error naming
+    ``unit``."""
     try:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not (value > 0 and value < float("inf")):
-        raise argparse.ArgumentTypeError(f"must be a positive number of mm, got {text!r}")
+    if not (0 < value < float("inf")):
+        raise argparse.ArgumentTypeError(f"must be a positive number of {unit}, got {text!r}")
     return value
 
 
@@ -162,13 +168,7 @@ def seed_type(text: str) -> int:
 
 def positive_gb(text: str) -> float:
     """argparse type: a positive, finite number of GB."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not (0 < value < float("inf")):
-        raise argparse.ArgumentTypeError(f"must be a positive number of GB, got {text!r}")
-    return value
+    return _positive(text, "GB")
 
 
 def _post_names() -> list[str]:
