@@ -469,7 +469,13 @@ def _fixed_pose(joints: list[UrdfJoint], link: str, path: Path) -> NDArray | Non
 def _acceleration(acceleration: float | ArrayLike | None, velocity: NDArray) -> NDArray:
     if acceleration is None:
         return velocity / DEFAULT_RAMP_S
-    a = np.broadcast_to(np.asarray(acceleration, dtype=np.float64), (6,)).copy()
+    try:
+        a = np.broadcast_to(np.asarray(acceleration, dtype=np.float64), (6,)).copy()
+    except (TypeError, ValueError):
+        raise InputError(
+            f"acceleration limits must be one value or six (rad/s^2), got {acceleration!r}",
+            field="acceleration",
+        ) from None
     if not np.all(np.isfinite(a) & (a > 0)):
         raise InputError(
             f"acceleration limits must be positive and finite, got {a.tolist()}",
