@@ -240,3 +240,10 @@ def test_shared_gun_flange_tcp(robot):
     np.testing.assert_allclose(F[:3, 3], [-0.43, 0.0, 679.36], atol=1e-3)
     np.testing.assert_allclose(F[:3, :3], np.eye(3), atol=1e-5)  # the URDF's 1.5708 ~ pi/2
     np.testing.assert_allclose(robot.mount[:3, 0], [0, 0, 1], atol=1e-9)  # flange x = tool0 z
+
+
+@pytest.mark.parametrize("acc", [[1.0, 2.0], "fast", [[1.0] * 6] * 2])
+def test_acceleration_of_the_wrong_shape_is_an_input_error(kuka_dir, acc):
+    with pytest.raises(InputError, match="one value or six") as ei:
+        load_robot(kuka_dir / "kr150r3100_2.urdf", acceleration=acc)
+    assert ei.value.field == "acceleration"

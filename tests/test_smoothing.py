@@ -12,7 +12,7 @@ import trimesh
 
 from tests.cli_helpers import one_line_error, run_cli
 from tests.route_fixtures import CLEARANCE, VIRTUAL, box_part, box_route, write_box_station
-from weldplan.errors import ConfigError
+from weldplan.errors import EXIT_PARTIAL, ConfigError
 from weldplan.geometry.collision import CollisionModel
 from weldplan.geometry.smooth import smooth_path
 from weldplan.io.export import read_route, render_post, route_rows, to_csv_text, write_json
@@ -185,3 +185,38 @@ def test_the_least_curved_of_the_parameterisations_is_kept() -> None:
     kappas = {a: smooth_path(mid, m, 5.0, alpha=a).max_curvature for a in (0.5, 1.0)}
     assert fig["max_curvature"] == min(kappas.values())
     assert kappas[1.0] < kappas[0.5]
+
+
+def test_smooth_with_a_tool_or_robot_is_warned_once() -> None:
+    from argparse import Namespace
+
+    from weldplan.commands._planning import SMOOTH_WITH_TOOL_WARNING, run_warnings
+
+    assert run_warnings(Namespace(smooth=True, tool=None, robot=None)) == []
+    assert run_warnings(Namespace(smooth=False, tool="t.urdf", robot="r.urdf")) == []
+    assert run_warnings(Namespace(smooth=True, tool="t.urdf", robot=None)) == [
+        SMOOTH_WITH_TOOL_WARNING
+    ]
+    assert run_warnings(Namespace(smooth=True, tool=None, robot="r.urdf")) == [
+        SMOOTH_WITH_TOOL_WARNING
+    ]
+
+
+def test_cli_smooth_with_a_tool_warns_on_stderr_and_in_the_json(tmp_path, capsys) -> None:
+    from weldplan.commands._planning import SMOOTH_WITH_TOOL_WARNING
+    from weldplan.tool import arc_torch
+
+    _, mesh, joints = write_box_station(tmp_path)
+    arc_torch(stickout=3).mesh.export(tmp_path / "torch.stl")
+    js = tmp_path / "route.json"
+    argv = ["plan", str(mesh), str(joints), "-o", str(tmp_path / "route.csv"), "--quiet",
+            "--json", str(js), "--smooth", "--tool", str(tmp_path / "torch.stl"),
+            "--tcp", "0,0,0,0,0,0"]  # fmt: skip
+    assert run_cli(argv) in (0, EXIT_PARTIAL)
+    err = capsys.readouterr().err
+    warned = [line for line in err.splitlines() if "--smooth" in line]
+    assert warned == [f"weldplan: warning: {SMOOTH_WITH_TOOL_WARNING}"]
+    assert "Traceback" not in err
+    data = json.loads(js.read_text())
+    assert data["settings"]["smooth"] is True
+    assert data["settings"]["warnings"] == [SMOOTH_WITH_TOOL_WARNING]

@@ -48,10 +48,7 @@ def _timed(f, *a, **k):
 
 
 def run(args: argparse.Namespace) -> int:
-    from weldplan.viz.viewer import static_html
     from weldplan.weld.cell import demo_cell
-    from weldplan.weld.pipeline import PlanConfig, plan_route
-    from weldplan.weld.verify import verify_route
 
     runs = 2 if args.quick else max(1, args.runs)
     out = Path(args.out)
@@ -59,7 +56,26 @@ def run(args: argparse.Namespace) -> int:
     load_before = _load()
 
     cell, t_cell = _timed(demo_cell)
-    configs = {
+    configs = _configs()
+    rows = []
+    results = {}
+    for name, cfg in configs.items():
+        seeds = [0] if cfg.planner == "exact" and cfg.sequencer == "exact" else range(runs)
+        row, results[name] = _run_config(name, cell, cfg, seeds, t_cell)
+        rows.append(row)
+    cli_s = None if args.quick else _cli_seconds()
+    text = _report(list(results.values()), rows, load_before, t_cell, cli_s)
+    (out / "route.md").write_text(text)
+    print(text)
+    return 0
+
+
+def _configs() -> dict:
+    """The three pipelines of the table, by name: the paper's, the paper's with every blocked
+    pair planned, and the exact one (the first and the last are compared)."""
+    from weldplan.weld.pipeline import PlanConfig
+
+    return {
         "SO-ACO N=M=10 + TSP-PSO (paper) + polish": PlanConfig(
             planner="so-aco", sequencer="pso", aco={"n_iterations": 10, "n_ants": 10}
         ),
@@ -68,57 +84,72 @@ def run(args: argparse.Namespace) -> int:
         ),
         "exact grid search + Held-Karp": PlanConfig(planner="exact", sequencer="exact"),
     }
-    rows = []
-    results = {}
-    for name, cfg in configs.items():
-        seeds = [0] if cfg.planner == "exact" and cfg.sequencer == "exact" else range(runs)
-        lengths, inner, plan_s, verify_s, html_s, planned, ok = [], [], [], [], [], [], True
-        route = None
-        for seed in seeds:
-            route, tp = _timed(plan_route, cell, config=cfg, rng=seed)
-            rep, tv = _timed(verify_route, route, cell.part, joints=cell.joints)
-            _, th = _timed(static_html, route, cell.part)
-            ok &= rep.ok
-            lengths.append(route.length)
-            inner.append(route.inner_length)
-            plan_s.append(tp)
-            verify_s.append(tv)
-            html_s.append(th)
-            planned.append(route.stats["pairs_planned"])
-        results[name] = (np.array(lengths), route, np.array(inner))
-        e2e = t_cell + np.array(plan_s) + np.array(verify_s) + np.array(html_s)
-        rows.append(
-            (
-                name,
-                len(lengths),
-                f"{np.mean(lengths):.2f} [{np.min(lengths):.2f}, {np.max(lengths):.2f}]",
-                f"{np.mean(inner):.2f} [{np.min(inner):.2f}, {np.max(inner):.2f}]",
-                f"{np.mean(plan_s):.2f}",
-                f"{np.mean(verify_s):.2f}",
-                f"{np.mean(html_s):.2f}",
-                f"{np.mean(e2e):.2f} (max {np.max(e2e):.2f})",
-                f"{np.mean(planned):.1f} of {route.stats['pairs_blocked']}",
-                "yes" if ok else "NO",
-                "-".join(route.order),
-            )
+
+
+def _run_config(name: str, cell, cfg, seeds, t_cell: float) -> tuple[tuple, tuple]:
+    """Plan, verify and render the demo with ``cfg`` once per seed.
+
+    Returns
+    -------
+    row, result
+        The table row (lengths mm, mean timings s, pairs planned, verified, last order) and
+        ``(lengths (runs,) mm, the last route, lengths between virtual joints (runs,) mm)``.
+    """
+    from weldplan.viz.viewer import static_html
+    from weldplan.weld.pipeline import plan_route
+    from weldplan.weld.verify import verify_route
+
+    lengths, inner, plan_s, verify_s, html_s, planned, ok = [], [], [], [], [], [], True
+    route = None
+    for seed in seeds:
+        route, tp = _timed(plan_route, cell, config=cfg, rng=seed)
+        rep, tv = _timed(verify_route, route, cell.part, joints=cell.joints)
+        _, th = _timed(static_html, route, cell.part)
+        ok &= rep.ok
+        lengths.append(route.length)
+        inner.append(route.inner_length)
+        plan_s.append(tp)
+        verify_s.append(tv)
+        html_s.append(th)
+        planned.append(route.stats["pairs_planned"])
+    e2e = t_cell + np.array(plan_s) + np.array(verify_s) + np.array(html_s)
+    row = (
+        name,
+        len(lengths),
+        f"{np.mean(lengths):.2f} [{np.min(lengths):.2f}, {np.max(lengths):.2f}]",
+        f"{np.mean(inner):.2f} [{np.min(inner):.2f}, {np.max(inner):.2f}]",
+        f"{np.mean(plan_s):.2f}",
+        f"{np.mean(verify_s):.2f}",
+        f"{np.mean(html_s):.2f}",
+        f"{np.mean(e2e):.2f} (max {np.max(e2e):.2f})",
+        f"{np.mean(planned):.1f} of {route.stats['pairs_blocked']}",
+        "yes" if ok else "NO",
+        "-".join(route.order),
+    )
+    return row, (np.array(lengths), route, np.array(inner))
+
+
+def _cli_seconds() -> float:
+    """Wall seconds of ``weldplan demo --quiet`` in a new process, in a scratch folder."""
+    with tempfile.TemporaryDirectory() as tmp:
+        t = time.perf_counter()
+        subprocess.run(
+            [sys.executable, "-m", "weldplan", "demo", "--quiet"],
+            cwd=tmp,
+            check=True,
+            env={**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])},
         )
+        return time.perf_counter() - t
 
-    cli_s = None
-    if not args.quick:
-        with tempfile.TemporaryDirectory() as tmp:
-            t = time.perf_counter()
-            subprocess.run(
-                [sys.executable, "-m", "weldplan", "demo", "--quiet"],
-                cwd=tmp,
-                check=True,
-                env={**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])},
-            )
-            cli_s = time.perf_counter() - t
 
-    names = list(configs)
-    so, exact = results[names[0]][0], results[names[2]][0]
-    so_in, exact_in = results[names[0]][2], results[names[2]][2]
-    lb = results[names[2]][1].lower_bound
+def _report(
+    results: list[tuple], rows: list[tuple], load_before: str, t_cell: float, cli_s: float | None
+) -> str:
+    """``route.md``: the table and the comparisons of the paper's pipeline (``results[0]``)
+    with the exact one (``results[2]``), the bound and the paper."""
+    so, exact = results[0][0], results[2][0]
+    so_in, exact_in = results[0][2], results[2][2]
+    lb = results[2][1].lower_bound
     paper_gap = 100 * (PAPER_ROUTE_MM / PAPER_LOWER_BOUND_MM - 1)
     lines = [
         "# Demo cell end to end (weldplan bench route)",
@@ -151,7 +182,4 @@ def run(args: argparse.Namespace) -> int:
             f"- `weldplan demo` as a user runs it (new process: imports, cell, plan, verify, "
             f"route.csv + route.html): {cli_s:.2f} s wall"
         )
-    text = "\n".join(lines) + "\n"
-    (out / "route.md").write_text(text)
-    print(text)
-    return 0
+    return "\n".join(lines) + "\n"

@@ -255,68 +255,10 @@ def run(args: argparse.Namespace) -> int:
         return run_body(args, mesh, out, before, run_child)
     rows, raw = [], {}
     for n in sizes:
-        joints = str(ASSETS / f"car2_synthetic_{n}.csv")
         reference = args.reference if n <= args.reference_max else "none"
-        code = _CHILD.format(
-            mesh=mesh,
-            joints=joints,
-            k=args.candidates,
-            radius=args.candidate_radius,
-            seq=args.sequencer,
-            sbud=args.sequence_budget,
-            jobs=args.jobs,
-            reference=reference,
-        )
-        r = run_child(code)
+        r = run_child(_size_code(args, mesh, n, reference))
         raw[n] = r
-        if "error" in r:
-            rows.append(
-                [n, f"{r['cell']:.1f}", "", "", "", "", f"failed after {r['plan']:.1f}",
-                 f"{max(r['peak_mib'], r['child_peak_mib']):.0f}", r["error"], "", "", "no",
-                 f"{_load(r['load_before'])} / {_load(r['load_after'])}"]
-            )  # fmt: skip
-            continue
-        s = r["stats"]
-        ratio = r["length"] / r["ref_length"] if r["ref_length"] == r["ref_length"] else None
-        rows.append(
-            [
-                n,
-                f"{r['cell']:.1f}",
-                f"{r['seconds']['straight']:.1f}",
-                f"{r['seconds']['local']:.1f}",
-                f"{r['seconds']['sequence']:.1f}",
-                f"{r['verify']:.1f}",
-                f"**{r['total']:.1f}**",
-                f"{max(r['peak_mib'], r['child_peak_mib']):.0f}",
-                f"{s['pairs_checked']} / {s['pairs_straight']} / {s['pairs_planned']}"
-                + (f" ({s['pairs_failed']} failed)" if s.get("pairs_failed") else ""),
-                f"{r['length']:.0f}",
-                "-" if ratio is None else f"{ratio:.4f}",
-                "yes" if r["ok"] else f"no ({r['violations']})",
-                f"{_load(r['load_before'])} / {_load(r['load_after'])}",
-            ]
-        )
-        if ratio is not None:
-            rs = r["ref_stats"]
-            how = "lazy, serial" if reference == "lazy" else f"all searched, {args.jobs} workers"
-            rows.append(
-                [
-                    f"{n} (ref: {how})",
-                    "",
-                    "",
-                    "",
-                    "",
-                    "",
-                    f"plan {r['ref_plan']:.1f}",
-                    "",
-                    f"{rs['pairs_checked']} / {rs['pairs_straight']} / {rs['pairs_planned']}"
-                    + (f" ({rs['pairs_failed']} failed)" if rs.get("pairs_failed") else ""),
-                    f"{r['ref_length']:.0f}",
-                    "1",
-                    "yes" if r["ref_ok"] else "no",
-                    f"- / {_load(r['load_ref'])}",
-                ]
-            )
+        rows += _size_rows(args, n, reference, r)
     thr = None
     if args.throughput_only or 200 in sizes or not sizes:
         code = _THROUGHPUT.format(
@@ -336,68 +278,145 @@ def run(args: argparse.Namespace) -> int:
         "",
     ]
     if rows:
-        md += [
-            f"Candidates k = {args.candidates} (radius {args.candidate_radius} mm), "
-            f"{args.jobs} worker processes, sequencer "
-            f"{args.sequencer}, local planner {default_planner()} (the pipeline's default), "
-            "seed 0. Seconds are wall clock; memory is "
-            "the peak RSS of the run's process or of its largest worker (MiB). Pairs: checked "
-            "straight / free / searched. Length ratio: against the reference route "
-            f"(--reference {args.reference}), same seed. Load: 1/5/15-minute load average "
-            "before / after the run.",
-            "",
-            table(
-                [
-                    "joints",
-                    "cell s",
-                    "straight s",
-                    "local s",
-                    "sequence s",
-                    "verify s",
-                    "total s",
-                    "peak MiB",
-                    "pairs chk/free/searched",
-                    "length mm",
-                    "len / ref",
-                    "verified",
-                    "load",
-                ],
-                rows,
-            ),
-            "",
-        ]
+        md += _sizes_table(args, rows)
     if thr is not None:
-        runs = thr["runs"]
-        base = runs[0]
-        md += [
-            f"Pair-planning throughput (200-joint set, {thr['pairs']} blocked candidate pairs, "
-            f"planner {thr['planner']}, the pipeline's default `PlanConfig().planner`; CPU "
-            "seconds of the planning process or of the pool's workers, "
-            "worker start-up excluded from the wall time but included in the pool's CPU "
-            "seconds: imports, cell unpickling and collision model in each worker):",
-            "",
-            table(
-                ["workers", "wall s", "speed-up", "CPU s", "CPU / first", "same paths", "load"],
-                [
-                    [
-                        r["workers"],
-                        f"{r['wall']:.2f}",
-                        f"**{base['wall'] / r['wall']:.2f}x**",
-                        f"{r['cpu']:.2f}",
-                        f"{r['cpu'] / base['cpu']:.2f}" if base["cpu"] else "-",
-                        r["same"],
-                        f"{_load(r['load_before'])} / {_load(r['load_after'])}",
-                    ]
-                    for r in runs
-                ],
-            ),
-            "",
-            "The wall speed-up is bound by the cores free on the machine: compare it with the "
-            "load average beside it (on 2 cores, a load of 1 already leaves one core to share).",
-            "",
-        ]
+        md += _throughput_table(thr)
     (out / "scale.md").write_text("\n".join(md), encoding="utf-8")
     (out / "scale.json").write_text(json.dumps(raw, indent=1), encoding="utf-8")
     print("\n".join(md))  # noqa: T201
     print(f"wrote {out / 'scale.md'} ({time.strftime('%H:%M:%S')})")  # noqa: T201
     return 0
+
+
+def _size_code(args: argparse.Namespace, mesh: str, n: int, reference: str) -> str:
+    """The child program of the end-to-end run on the ``n``-joint set."""
+    return _CHILD.format(
+        mesh=mesh,
+        joints=str(ASSETS / f"car2_synthetic_{n}.csv"),
+        k=args.candidates,
+        radius=args.candidate_radius,
+        seq=args.sequencer,
+        sbud=args.sequence_budget,
+        jobs=args.jobs,
+        reference=reference,
+    )
+
+
+def _size_rows(args: argparse.Namespace, n: int, reference: str, r: dict) -> list[list]:
+    """The table rows of one size from its child's result ``r``: the run (or its failure) and,
+    when a reference ran, the reference's row."""
+    if "error" in r:
+        return [
+            [n, f"{r['cell']:.1f}", "", "", "", "", f"failed after {r['plan']:.1f}",
+             f"{max(r['peak_mib'], r['child_peak_mib']):.0f}", r["error"], "", "", "no",
+             f"{_load(r['load_before'])} / {_load(r['load_after'])}"]
+        ]  # fmt: skip
+    s = r["stats"]
+    ratio = r["length"] / r["ref_length"] if r["ref_length"] == r["ref_length"] else None
+    rows = [
+        [
+            n,
+            f"{r['cell']:.1f}",
+            f"{r['seconds']['straight']:.1f}",
+            f"{r['seconds']['local']:.1f}",
+            f"{r['seconds']['sequence']:.1f}",
+            f"{r['verify']:.1f}",
+            f"**{r['total']:.1f}**",
+            f"{max(r['peak_mib'], r['child_peak_mib']):.0f}",
+            f"{s['pairs_checked']} / {s['pairs_straight']} / {s['pairs_planned']}"
+            + (f" ({s['pairs_failed']} failed)" if s.get("pairs_failed") else ""),
+            f"{r['length']:.0f}",
+            "-" if ratio is None else f"{ratio:.4f}",
+            "yes" if r["ok"] else f"no ({r['violations']})",
+            f"{_load(r['load_before'])} / {_load(r['load_after'])}",
+        ]
+    ]
+    if ratio is not None:
+        rs = r["ref_stats"]
+        how = "lazy, serial" if reference == "lazy" else f"all searched, {args.jobs} workers"
+        rows.append(
+            [
+                f"{n} (ref: {how})",
+                "",
+                "",
+                "",
+                "",
+                "",
+                f"plan {r['ref_plan']:.1f}",
+                "",
+                f"{rs['pairs_checked']} / {rs['pairs_straight']} / {rs['pairs_planned']}"
+                + (f" ({rs['pairs_failed']} failed)" if rs.get("pairs_failed") else ""),
+                f"{r['ref_length']:.0f}",
+                "1",
+                "yes" if r["ref_ok"] else "no",
+                f"- / {_load(r['load_ref'])}",
+            ]
+        )
+    return rows
+
+
+def _sizes_table(args: argparse.Namespace, rows: list[list]) -> list[str]:
+    """``scale.md``'s end-to-end table with the paragraph that says how it was measured."""
+    return [
+        f"Candidates k = {args.candidates} (radius {args.candidate_radius} mm), "
+        f"{args.jobs} worker processes, sequencer "
+        f"{args.sequencer}, local planner {default_planner()} (the pipeline's default), "
+        "seed 0. Seconds are wall clock; memory is "
+        "the peak RSS of the run's process or of its largest worker (MiB). Pairs: checked "
+        "straight / free / searched. Length ratio: against the reference route "
+        f"(--reference {args.reference}), same seed. Load: 1/5/15-minute load average "
+        "before / after the run.",
+        "",
+        table(
+            [
+                "joints",
+                "cell s",
+                "straight s",
+                "local s",
+                "sequence s",
+                "verify s",
+                "total s",
+                "peak MiB",
+                "pairs chk/free/searched",
+                "length mm",
+                "len / ref",
+                "verified",
+                "load",
+            ],
+            rows,
+        ),
+        "",
+    ]
+
+
+def _throughput_table(thr: dict) -> list[str]:
+    """``scale.md``'s pair-planning throughput table from the throughput child's result."""
+    runs = thr["runs"]
+    base = runs[0]
+    return [
+        f"Pair-planning throughput (200-joint set, {thr['pairs']} blocked candidate pairs, "
+        f"planner {thr['planner']}, the pipeline's default `PlanConfig().planner`; CPU "
+        "seconds of the planning process or of the pool's workers, "
+        "worker start-up excluded from the wall time but included in the pool's CPU "
+        "seconds: imports, cell unpickling and collision model in each worker):",
+        "",
+        table(
+            ["workers", "wall s", "speed-up", "CPU s", "CPU / first", "same paths", "load"],
+            [
+                [
+                    r["workers"],
+                    f"{r['wall']:.2f}",
+                    f"**{base['wall'] / r['wall']:.2f}x**",
+                    f"{r['cpu']:.2f}",
+                    f"{r['cpu'] / base['cpu']:.2f}" if base["cpu"] else "-",
+                    r["same"],
+                    f"{_load(r['load_before'])} / {_load(r['load_after'])}",
+                ]
+                for r in runs
+            ],
+        ),
+        "",
+        "The wall speed-up is bound by the cores free on the machine: compare it with the "
+        "load average beside it (on 2 cores, a load of 1 already leaves one core to share).",
+        "",
+    ]

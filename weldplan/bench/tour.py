@@ -71,83 +71,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _table4(args: argparse.Namespace, out: Path) -> list[str]:
     from weldplan.bench.common import table
-    from weldplan.planar.multigoal import build_tour_graph, polish_order
-    from weldplan.planar.tour_anyangle import build_anyangle_graph
-    from weldplan.planar.tour_planner import ground_truth, plan_tour
-    from weldplan.viz.tour import plot_tour
 
     lines = ["## Paper 002 Table 4: ordering the targets (random keys) on each scenario's mesh", ""]
     rows = []
     for name, task in _tasks(args.maps):
-        g = build_tour_graph(task)
-        aa = build_anyangle_graph(task)
-        mk = {"graph": g, "anyangle": aa, "metric": "mesh"}  # Table 4 is over mesh costs
-        t0 = time.perf_counter()
-        gt_order, opt, gt_method = ground_truth(g)
-        gt_s = time.perf_counter() - t0
-        paths = {}
-        ex = plan_tour(task, "exact", optimum=opt, **mk)
-        paths[f"exact ({ex.smooth_length:.1f})"] = ex.points_array
-
-        def row(
-            label: str,
-            L,
-            S,
-            T,
-            gaps,
-            free: int,
-            n: int,
-            C=(np.nan,),
-            name: str = name,
-            opt: float = opt,
-        ) -> list[str]:
-            return [name, label, f"{opt:.1f}", f"{np.mean(L):.1f}", f"{np.mean(S):.1f}",
-                    f"{np.mean(T):.3f}",
-                    f"{np.mean(C):.3f}",
-                    f"{100 * np.mean(gaps):.2f} %", f"{100 * np.max(gaps):.2f} %",
-                    f"{free}/{n}"]  # fmt: skip
-
-        for label, algo, two, pol, budget in TABLE4_ALGOS:
-            pop, iters = budget or (args.pop, args.iters)
-            rs = [
-                plan_tour(task, algo, optimum=opt, rng=s, two_opt=two, polish=pol,
-                          pop_size=pop, max_iter=iters, **mk)
-                for s in range(args.runs)
-            ]  # fmt: skip
-            L = np.array([r.length for r in rs])
-            S = np.array([r.smooth_length for r in rs])
-            free = sum(r.collision_free for r in rs)
-            if pol:  # the as-printed row from the same runs: the optimiser's own order
-                rows.append(row(f"ISMA as printed ({pop}x{iters})",
-                                [r.optimizer_length for r in rs], [float("nan")],
-                                [r.seconds - r.polish_seconds for r in rs],
-                                [r.optimizer_gap for r in rs], 0, 0,
-                                [r.optimizer_cpu_seconds for r in rs]))  # fmt: skip
-                rows[-1][4] = rows[-1][-1] = "-"
-            rows.append(row(f"{label} ({pop}x{iters})", L, S, [r.seconds for r in rs],
-                            [r.gap for r in rs], free, len(rs),
-                            [r.cpu_seconds for r in rs]))  # fmt: skip
-            best = rs[int(np.argmin(L))]
-            paths[f"{label} ({best.smooth_length:.1f})"] = best.points_array
-        # the polish alone, from a random order: what the optimiser adds to it
-        pl, pt, pc = [], [], []
-        for s in range(args.runs):
-            r0 = np.random.default_rng(s)
-            t0, c0 = time.perf_counter(), time.process_time()
-            _, length = polish_order(g.dist, r0.permutation(len(task.goals)) + 1, r0)
-            pt.append(time.perf_counter() - t0)
-            pc.append(time.process_time() - c0)
-            pl.append(length)
-        rows.append(row("polish alone (random order)", pl, [float("nan")], pt,
-                        np.array(pl) / opt - 1.0, 0, 0, pc))  # fmt: skip
-        rows[-1][4] = rows[-1][-1] = "-"
-        free1 = "1/1" if ex.collision_free else "0/1"
-        rows.append([name, f"sequencer ({gt_method})", f"{opt:.1f}", f"{opt:.1f}",
-                     f"{ex.smooth_length:.1f}",
-                     f"{gt_s:.3f}", "-", "0.00 %", "0.00 %", free1])  # fmt: skip
-        shown = g.mesh if g.mesh.n_nodes < 20000 else None
-        plot_tour(task, paths, out / f"tour-{name}.png", mesh=shown,
-                  title=f"{name}: {len(task.goals)} targets, ground truth {opt:.1f}")  # fmt: skip
+        rows += _table4_scenario(args, name, task, out)
     lines.append(
         table(
             [
@@ -175,6 +103,88 @@ def _table4(args: argparse.Namespace, out: Path) -> list[str]:
               "target: the polished row within 2 % of the ground truth in at most 1 s."
               ]  # fmt: skip
     return lines
+
+
+def _row4(
+    name: str, opt: float, label: str, L, S, T, gaps, free: int, n: int, C=(np.nan,)
+) -> list[str]:
+    """One Table 4 row: means of tour ``L``, smoothed ``S`` lengths, wall ``T`` and CPU ``C``
+    seconds, mean and worst ``gaps`` to the ground truth ``opt``, ``free`` of ``n`` free."""
+    return [name, label, f"{opt:.1f}", f"{np.mean(L):.1f}", f"{np.mean(S):.1f}",
+            f"{np.mean(T):.3f}",
+            f"{np.mean(C):.3f}",
+            f"{100 * np.mean(gaps):.2f} %", f"{100 * np.max(gaps):.2f} %",
+            f"{free}/{n}"]  # fmt: skip
+
+
+def _table4_scenario(args: argparse.Namespace, name: str, task, out: Path) -> list[list[str]]:
+    """Table 4's rows of one scenario (the optimisers, the polish alone, the sequencer), and
+    its plot ``tour-NAME.png`` in ``out`` of the exact tour and each optimiser's best."""
+    from weldplan.planar.multigoal import build_tour_graph
+    from weldplan.planar.tour_anyangle import build_anyangle_graph
+    from weldplan.planar.tour_planner import ground_truth, plan_tour
+    from weldplan.viz.tour import plot_tour
+
+    g = build_tour_graph(task)
+    aa = build_anyangle_graph(task)
+    mk = {"graph": g, "anyangle": aa, "metric": "mesh"}  # Table 4 is over mesh costs
+    t0 = time.perf_counter()
+    gt_order, opt, gt_method = ground_truth(g)
+    gt_s = time.perf_counter() - t0
+    paths = {}
+    ex = plan_tour(task, "exact", optimum=opt, **mk)
+    paths[f"exact ({ex.smooth_length:.1f})"] = ex.points_array
+    rows = []
+    for label, algo, two, pol, budget in TABLE4_ALGOS:
+        pop, iters = budget or (args.pop, args.iters)
+        rs = [
+            plan_tour(task, algo, optimum=opt, rng=s, two_opt=two, polish=pol,
+                      pop_size=pop, max_iter=iters, **mk)
+            for s in range(args.runs)
+        ]  # fmt: skip
+        L = np.array([r.length for r in rs])
+        S = np.array([r.smooth_length for r in rs])
+        free = sum(r.collision_free for r in rs)
+        if pol:  # the as-printed row from the same runs: the optimiser's own order
+            rows.append(_row4(name, opt, f"ISMA as printed ({pop}x{iters})",
+                              [r.optimizer_length for r in rs], [float("nan")],
+                              [r.seconds - r.polish_seconds for r in rs],
+                              [r.optimizer_gap for r in rs], 0, 0,
+                              [r.optimizer_cpu_seconds for r in rs]))  # fmt: skip
+            rows[-1][4] = rows[-1][-1] = "-"
+        rows.append(_row4(name, opt, f"{label} ({pop}x{iters})", L, S, [r.seconds for r in rs],
+                          [r.gap for r in rs], free, len(rs),
+                          [r.cpu_seconds for r in rs]))  # fmt: skip
+        best = rs[int(np.argmin(L))]
+        paths[f"{label} ({best.smooth_length:.1f})"] = best.points_array
+    rows.append(_polish_alone_row(args.runs, name, task, g, opt))
+    free1 = "1/1" if ex.collision_free else "0/1"
+    rows.append([name, f"sequencer ({gt_method})", f"{opt:.1f}", f"{opt:.1f}",
+                 f"{ex.smooth_length:.1f}",
+                 f"{gt_s:.3f}", "-", "0.00 %", "0.00 %", free1])  # fmt: skip
+    shown = g.mesh if g.mesh.n_nodes < 20000 else None
+    plot_tour(task, paths, out / f"tour-{name}.png", mesh=shown,
+              title=f"{name}: {len(task.goals)} targets, ground truth {opt:.1f}")  # fmt: skip
+    return rows
+
+
+def _polish_alone_row(runs: int, name: str, task, g, opt: float) -> list[str]:
+    """The sequencer's polish alone from a random order (seeds ``0..runs-1``): what the
+    optimiser adds to it."""
+    from weldplan.planar.multigoal import polish_order
+
+    pl, pt, pc = [], [], []
+    for s in range(runs):
+        r0 = np.random.default_rng(s)
+        t0, c0 = time.perf_counter(), time.process_time()
+        _, length = polish_order(g.dist, r0.permutation(len(task.goals)) + 1, r0)
+        pt.append(time.perf_counter() - t0)
+        pc.append(time.process_time() - c0)
+        pl.append(length)
+    row = _row4(name, opt, "polish alone (random order)", pl, [float("nan")], pt,
+                np.array(pl) / opt - 1.0, 0, 0, pc)  # fmt: skip
+    row[4] = row[-1] = "-"
+    return row
 
 
 def _tasks(maps: str = ",".join(MAPS)) -> list:

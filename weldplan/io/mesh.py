@@ -121,41 +121,16 @@ def load_part(
         scale = _positive(scale, "scale", "scale must be a positive number", path)
     if length is not None:
         length = _positive(length, "length", "length must be a positive number of mm", path)
-    if not path.exists():
-        raise InputError("mesh file not found", path=path)
-    if path.is_dir():
-        raise InputError("expected a mesh file, got a directory", path=path)
-    if path.suffix.lower() not in MESH_SUFFIXES:
-        raise InputError(
-            f"unsupported mesh format {path.suffix!r}; use one of {', '.join(MESH_SUFFIXES)}",
-            path=path,
-        )
+    _check_mesh_path(path)
     raw = _as_single_mesh(_load(path, process=False), path)
     _check_finite(raw, path)
     factor *= 1.0 if scale is None else float(scale)
     raw_max = float(np.abs(raw.vertices).max(initial=0.0))
     if length is None:  # before trimesh's processing overflows on such coordinates
         _check_magnitude(raw_max * factor, path, units, scale, length)
-    mesh = _as_single_mesh(_load(path, process=True), path)
-    mesh, repairs = clean_mesh_report(mesh)
-    if len(mesh.faces) == 0:
-        raise InputError("mesh has no non-degenerate triangles", path=path)
-    if repairs["degenerate_faces"] or repairs["duplicate_faces"]:
-        log.warning(
-            "%s: removed %d degenerate (zero-area) and %d duplicate faces",
-            path,
-            repairs["degenerate_faces"],
-            repairs["duplicate_faces"],
-        )
+    mesh, repairs = _load_clean(path)
     if length is not None:
-        extent = float(np.max(mesh.extents)) * factor
-        if not (np.isfinite(extent) and extent > 0):
-            raise InputError(
-                f"cannot scale to length {length:g} mm: the part's extent is {extent:g}",
-                path=path,
-                field="length",
-            )
-        factor *= float(length) / extent
+        factor *= _length_factor(mesh, factor, length, path)
     _check_magnitude(raw_max * factor, path, units, scale, length)
     if factor != 1.0:
         mesh.apply_scale(factor)
@@ -174,6 +149,49 @@ def load_part(
         np.round(mesh.extents, 2),
     )
     return mesh
+
+
+def _check_mesh_path(path: Path) -> None:
+    """InputError unless ``path`` is an existing file with a suffix in :data:`MESH_SUFFIXES`."""
+    if not path.exists():
+        raise InputError("mesh file not found", path=path)
+    if path.is_dir():
+        raise InputError("expected a mesh file, got a directory", path=path)
+    if path.suffix.lower() not in MESH_SUFFIXES:
+        raise InputError(
+            f"unsupported mesh format {path.suffix!r}; use one of {', '.join(MESH_SUFFIXES)}",
+            path=path,
+        )
+
+
+def _load_clean(path: Path) -> tuple[trimesh.Trimesh, dict[str, int]]:
+    """The file processed by trimesh and cleaned (:func:`clean_mesh_report`), in file units,
+    with the removals logged as a warning; InputError when no triangle is left."""
+    mesh = _as_single_mesh(_load(path, process=True), path)
+    mesh, repairs = clean_mesh_report(mesh)
+    if len(mesh.faces) == 0:
+        raise InputError("mesh has no non-degenerate triangles", path=path)
+    if repairs["degenerate_faces"] or repairs["duplicate_faces"]:
+        log.warning(
+            "%s: removed %d degenerate (zero-area) and %d duplicate faces",
+            path,
+            repairs["degenerate_faces"],
+            repairs["duplicate_faces"],
+        )
+    return mesh, repairs
+
+
+def _length_factor(mesh: trimesh.Trimesh, factor: float, length: float, path: Path) -> float:
+    """The extra factor that makes the largest extent of ``mesh`` (file units, times ``factor``
+    mm per unit) ``length`` mm; InputError when that extent is zero or not finite."""
+    extent = float(np.max(mesh.extents)) * factor
+    if not (np.isfinite(extent) and extent > 0):
+        raise InputError(
+            f"cannot scale to length {length:g} mm: the part's extent is {extent:g}",
+            path=path,
+            field="length",
+        )
+    return float(length) / extent
 
 
 def _positive(value: object, field: str, message: str, path: Path) -> float:

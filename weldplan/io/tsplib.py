@@ -22,7 +22,7 @@ Node numbers in files are 1-based; everything returned here is 0-based.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
 
@@ -152,6 +152,18 @@ def _expected_count(n: int, fmt: str) -> int:
     return n * (n + 1) // 2 if "DIAG" in fmt else n * (n - 1) // 2
 
 
+@dataclass
+class _Sections:
+    """What :func:`_parse_sections` collects from a TSPLIB file, before any checks of meaning."""
+
+    header: dict[str, str] = field(default_factory=dict)
+    #: 1-based node number -> its 2 or 3 coordinates
+    coords: dict[int, list[float]] = field(default_factory=dict)
+    weights: list[float] = field(default_factory=list)
+    #: the line of ``EDGE_WEIGHT_SECTION`` (0 when absent), for error messages
+    weights_line: int = 0
+
+
 def read_tsplib(path: str | PathLike[str]) -> TSPLIBProblem:
     """Read a TSPLIB ``.tsp`` / ``.atsp`` file.
 
@@ -165,55 +177,11 @@ def read_tsplib(path: str | PathLike[str]) -> TSPLIBProblem:
         lines = p.read_text().splitlines()
     except OSError as e:
         raise InputError(f"cannot read TSPLIB file: {e.strerror}", path=p) from e
-    header: dict[str, str] = {}
-    coords: dict[int, list[float]] = {}
-    weights: list[float] = []
-    weights_line = 0
-    section = None
-    for ln, raw in enumerate(lines, start=1):
-        line = raw.strip()
-        if not line:
-            continue
-        if line == "EOF":
-            break
-        key = line.split(":")[0].strip().upper() if ":" in line else line.split()[0].upper()
-        if key.endswith("_SECTION"):
-            section = key
-            if key == "EDGE_WEIGHT_SECTION":
-                weights_line = ln
-            continue
-        if ":" in line:
-            k, _, val = line.partition(":")
-            header[k.strip().upper()] = val.strip()
-            section = None
-            continue
-        if section in ("NODE_COORD_SECTION", "DISPLAY_DATA_SECTION"):
-            parts = line.split()
-            try:
-                idx = int(parts[0])
-                xyz = [float(s) for s in parts[1:]]
-            except ValueError:
-                raise InputError(
-                    f"bad coordinate line {line!r}", path=p, line=ln, field=section
-                ) from None
-            if len(xyz) not in (2, 3):
-                raise InputError("expected 2 or 3 coordinates", path=p, line=ln, field=section)
-            if section == "NODE_COORD_SECTION" or idx not in coords:
-                coords[idx] = xyz
-        elif section == "EDGE_WEIGHT_SECTION":
-            try:
-                weights.extend(float(s) for s in line.split())
-            except ValueError:
-                raise InputError(
-                    f"bad weight line {line!r}", path=p, line=ln, field=section
-                ) from None
-        elif section is not None:
-            continue  # sections we do not need (FIXED_EDGES, DEMAND, ...)
-        else:
-            raise InputError(f"unexpected line {line!r}", path=p, line=ln)
-    for field in ("DIMENSION", "EDGE_WEIGHT_TYPE"):
-        if field not in header:
-            raise InputError("missing header field", path=p, field=field)
+    s = _parse_sections(lines, p)
+    header = s.header
+    for name in ("DIMENSION", "EDGE_WEIGHT_TYPE"):
+        if name not in header:
+            raise InputError("missing header field", path=p, field=name)
     try:
         n = int(header["DIMENSION"])
     except ValueError:
@@ -221,27 +189,10 @@ def read_tsplib(path: str | PathLike[str]) -> TSPLIBProblem:
             f"not an integer: {header['DIMENSION']!r}", path=p, field="DIMENSION"
         ) from None
     kind = header["EDGE_WEIGHT_TYPE"].upper()
-    xy = None
-    if coords:
-        if sorted(coords) != list(range(1, n + 1)):
-            raise InputError(
-                f"node numbers must be 1..{n}, got {len(coords)} nodes", path=p, field="NODE_COORD"
-            )
-        xy = np.array([coords[i] for i in range(1, n + 1)], dtype=np.float64)
+    xy = _node_coords(s.coords, n, p)
     W = None
     if kind == "EXPLICIT":
-        fmt = header.get("EDGE_WEIGHT_FORMAT", "").upper()
-        if fmt not in MATRIX_FORMATS:
-            raise InputError(f"unsupported format {fmt!r}", path=p, field="EDGE_WEIGHT_FORMAT")
-        need = _expected_count(n, fmt)
-        if len(weights) != need:
-            raise InputError(
-                f"{fmt} of dimension {n} needs {need} weights, found {len(weights)}",
-                path=p,
-                line=weights_line or None,
-                field="EDGE_WEIGHT_SECTION",
-            )
-        W = _explicit(weights, n, fmt)
+        W = _edge_weights(s, n, p)
     elif kind in COORD_TYPES:
         if xy is None:
             raise InputError(f"{kind} needs a NODE_COORD_SECTION", path=p, field="NODE_COORD")
@@ -257,6 +208,87 @@ def read_tsplib(path: str | PathLike[str]) -> TSPLIBProblem:
         weights=W,
         path=str(p),
     )
+
+
+def _parse_sections(lines: list[str], p: Path) -> _Sections:
+    """The header fields, node coordinates and edge weights of a TSPLIB file's lines.
+
+    ``DISPLAY_DATA_SECTION`` coordinates fill in nodes ``NODE_COORD_SECTION`` did not give;
+    sections weldplan does not need (``FIXED_EDGES``, ``DEMAND``, ...) are skipped. Reading
+    stops at ``EOF``. InputError (file, line, section) on a malformed number or a line outside
+    any section that is not a ``KEY: value`` header.
+    """
+    s = _Sections()
+    section = None
+    for ln, raw in enumerate(lines, start=1):
+        line = raw.strip()
+        if not line:
+            continue
+        if line == "EOF":
+            break
+        key = line.split(":")[0].strip().upper() if ":" in line else line.split()[0].upper()
+        if key.endswith("_SECTION"):
+            section = key
+            if key == "EDGE_WEIGHT_SECTION":
+                s.weights_line = ln
+            continue
+        if ":" in line:
+            k, _, val = line.partition(":")
+            s.header[k.strip().upper()] = val.strip()
+            section = None
+            continue
+        if section in ("NODE_COORD_SECTION", "DISPLAY_DATA_SECTION"):
+            parts = line.split()
+            try:
+                idx = int(parts[0])
+                xyz = [float(v) for v in parts[1:]]
+            except ValueError:
+                raise InputError(
+                    f"bad coordinate line {line!r}", path=p, line=ln, field=section
+                ) from None
+            if len(xyz) not in (2, 3):
+                raise InputError("expected 2 or 3 coordinates", path=p, line=ln, field=section)
+            if section == "NODE_COORD_SECTION" or idx not in s.coords:
+                s.coords[idx] = xyz
+        elif section == "EDGE_WEIGHT_SECTION":
+            try:
+                s.weights.extend(float(v) for v in line.split())
+            except ValueError:
+                raise InputError(
+                    f"bad weight line {line!r}", path=p, line=ln, field=section
+                ) from None
+        elif section is not None:
+            continue  # sections we do not need (FIXED_EDGES, DEMAND, ...)
+        else:
+            raise InputError(f"unexpected line {line!r}", path=p, line=ln)
+    return s
+
+
+def _node_coords(coords: dict[int, list[float]], n: int, p: Path) -> NDArray[np.float64] | None:
+    """``(n, 2|3) float`` coordinates of nodes 1..n in order, or None when the file had none."""
+    if not coords:
+        return None
+    if sorted(coords) != list(range(1, n + 1)):
+        raise InputError(
+            f"node numbers must be 1..{n}, got {len(coords)} nodes", path=p, field="NODE_COORD"
+        )
+    return np.array([coords[i] for i in range(1, n + 1)], dtype=np.float64)
+
+
+def _edge_weights(s: _Sections, n: int, p: Path) -> NDArray[np.float64]:
+    """The ``(n, n)`` matrix of an ``EXPLICIT`` instance, after checking its format and count."""
+    fmt = s.header.get("EDGE_WEIGHT_FORMAT", "").upper()
+    if fmt not in MATRIX_FORMATS:
+        raise InputError(f"unsupported format {fmt!r}", path=p, field="EDGE_WEIGHT_FORMAT")
+    need = _expected_count(n, fmt)
+    if len(s.weights) != need:
+        raise InputError(
+            f"{fmt} of dimension {n} needs {need} weights, found {len(s.weights)}",
+            path=p,
+            line=s.weights_line or None,
+            field="EDGE_WEIGHT_SECTION",
+        )
+    return _explicit(s.weights, n, fmt)
 
 
 def read_tour(path: str | PathLike[str]) -> NDArray[np.intp]:

@@ -499,8 +499,34 @@ def plan_se3(
     _check_common(planner, time_s, resolution)
     if not (np.isfinite(rot_weight) and rot_weight > 0):
         raise SamplingArgumentError(f"rot_weight must be a positive mm per rad, got {rot_weight}")
-    ob, og, _ = _import_ompl()
+    ss, read = _se3_setup(lo, hi, rot_weight, is_valid, np.r_[p0, q0], np.r_[p1, q1])
+    return _solve(
+        ss,
+        read=read,
+        motion_valid=motion_valid,
+        resolution=resolution,
+        planner=planner,
+        time_s=time_s,
+        seed=seed,
+        simplify=simplify,
+        measure=lambda pts: se3_length(pts, rot_weight),
+        dim=7,
+        stop=stop,
+    )
 
+
+def _se3_setup(
+    lo: NDArray[np.float64],
+    hi: NDArray[np.float64],
+    rot_weight: float,
+    is_valid: Callable[[NDArray[np.float64], NDArray[np.float64]], bool],
+    start: NDArray[np.float64],
+    goal: NDArray[np.float64],
+) -> tuple[Any, Callable[[Any], NDArray[np.float64]]]:
+    """OMPL's SE(3) problem of :func:`plan_se3`: the SimpleSetup (position box ``lo``..``hi``
+    mm, SO(3) subspace weight ``2 rot_weight``, ``is_valid`` as state checker, start and goal
+    rows ``(7,)`` = ``x, y, z, qw, qx, qy, qz``) and ``read(state) -> (7,)``, its inverse."""
+    ob, og, _ = _import_ompl()
     space = ob.SE3StateSpace()
     bounds = ob.RealVectorBounds(3)
     for i in range(3):
@@ -523,22 +549,9 @@ def plan_se3(
     ss.setStateValidityChecker(state_valid)
     a = space.allocState()
     b = space.allocState()
-    for st, p, q in ((a, p0, q0), (b, p1, q1)):
-        st.setXYZ(float(p[0]), float(p[1]), float(p[2]))
+    for st, row in ((a, start), (b, goal)):
+        st.setXYZ(float(row[0]), float(row[1]), float(row[2]))
         r = st.rotation()
-        r.w, r.x, r.y, r.z = (float(v) for v in q)
+        r.w, r.x, r.y, r.z = (float(v) for v in row[3:])
     ss.setStartAndGoalStates(a, b)
-
-    return _solve(
-        ss,
-        read=read,
-        motion_valid=motion_valid,
-        resolution=resolution,
-        planner=planner,
-        time_s=time_s,
-        seed=seed,
-        simplify=simplify,
-        measure=lambda pts: se3_length(pts, rot_weight),
-        dim=7,
-        stop=stop,
-    )
+    return ss, read

@@ -345,6 +345,42 @@ def load_robot(
     """
     path = Path(urdf)
     root, text, joints = parse_urdf(path)
+    tip = _tip_link(joints, tip, path)
+    moving, origins, tip_T = _arm_chain(joints, tip, path)
+    limits = np.array([joint_limits(root, text, j, path) for j in moving])
+    lower, upper, velocity = limits.T
+    acc = _acceleration(acceleration, velocity)
+    mount = _flange_mount(joints, tip, path)
+    params = _opw_params(opw, path)
+    link_root = moving[0].parent
+    geometry = [link_geometry(root, link_root, path)] + [
+        link_geometry(root, j.child, path) for j in moving
+    ]
+    robot = Robot(
+        name=root.get("name", path.stem),
+        joint_names=tuple(j.name for j in moving),
+        lower=lower,
+        upper=upper,
+        velocity=velocity,
+        acceleration=acc,
+        base=_check_base(base),
+        origins=origins,
+        axes=np.array([j.axis for j in moving]),
+        tip=tip_T,
+        mount=mount,
+        opw=params,
+        source=str(path),
+        link_names=tuple(g.name for g in geometry),
+        _geometry=tuple(geometry),
+    )
+    _check_opw(robot, path)
+    log.debug("robot %s: joints %s, OPW from %s", robot.name, robot.joint_names, params.source)
+    return robot
+
+
+def _tip_link(joints: list[UrdfJoint], tip: str | None, path: Path) -> str:
+    """The flange link: ``tip`` when given, else ``tool0`` when the URDF has it, else the last
+    movable joint's child (else the last leaf); InputError when no joint has it as child."""
     children = {j.child for j in joints}
     parents = {j.parent for j in joints}
     if tip is None:
@@ -355,6 +391,21 @@ def load_robot(
             tip = movable[-1].child if movable else (leaves[-1] if leaves else "")
     if tip not in children:
         raise InputError(f"no link named {tip!r}", path=path, field="tip")
+    return tip
+
+
+def _arm_chain(
+    joints: list[UrdfJoint], tip: str, path: Path
+) -> tuple[list[UrdfJoint], NDArray[np.float64], NDArray[np.float64]]:
+    """The six revolute joints from the root to ``tip``, with fixed joints folded away.
+
+    Returns
+    -------
+    moving, origins, tip
+        The six joints; ``(6, 4, 4)`` mm each one's origin with the fixed joints before it
+        folded in; ``(4, 4)`` mm the fixed joints after the sixth (the flange in its child).
+        InputError unless exactly six movable joints, all revolute, lie on the chain.
+    """
     ch = chain(joints, tip, path)
     while ch and ch[0].kind == "fixed":  # the base is the first movable joint's parent link
         ch = ch[1:]
@@ -374,16 +425,25 @@ def load_robot(
         else:
             origins.append(pending @ j.origin)
             pending = np.eye(4)
-    tip_T = pending
-    limits = np.array([joint_limits(root, text, j, path) for j in moving])
-    lower, upper, velocity = limits.T
-    acc = _acceleration(acceleration, velocity)
+    return moving, np.array(origins), pending
+
+
+def _flange_mount(joints: list[UrdfJoint], tip: str, path: Path) -> NDArray[np.float64]:
+    """``(4, 4)`` mm: the ROS-Industrial ``flange`` link in the ``tip`` frame when the URDF has
+    one other than the tip (both reached through fixed joints), else the identity."""
     mount = np.eye(4)
-    if "flange" in children and "flange" != tip:
+    if "flange" in {j.child for j in joints} and "flange" != tip:
         T_tip = _fixed_pose(joints, tip, path)
         T_fl = _fixed_pose(joints, "flange", path)
         if T_tip is not None and T_fl is not None:
             mount = np.linalg.solve(T_tip, T_fl)
+    return mount
+
+
+def _opw_params(
+    opw: str | PathLike[str] | Mapping[str, Any] | OPWParams | None, path: Path
+) -> OPWParams:
+    """The OPW parameters given, or ``opw_parameters.yaml`` beside the URDF ``path``."""
     if opw is None:
         opw = path.parent / "opw_parameters.yaml"
         if not Path(opw).is_file():
@@ -392,31 +452,7 @@ def load_robot(
                 path=path,
                 field="opw",
             )
-    params = opw if isinstance(opw, OPWParams) else load_opw(opw)
-    link_root = moving[0].parent
-    geometry = [link_geometry(root, link_root, path)] + [
-        link_geometry(root, j.child, path) for j in moving
-    ]
-    robot = Robot(
-        name=root.get("name", path.stem),
-        joint_names=tuple(j.name for j in moving),
-        lower=lower,
-        upper=upper,
-        velocity=velocity,
-        acceleration=acc,
-        base=_check_base(base),
-        origins=np.array(origins),
-        axes=np.array([j.axis for j in moving]),
-        tip=tip_T,
-        mount=mount,
-        opw=params,
-        source=str(path),
-        link_names=tuple(g.name for g in geometry),
-        _geometry=tuple(geometry),
-    )
-    _check_opw(robot, path)
-    log.debug("robot %s: joints %s, OPW from %s", robot.name, robot.joint_names, params.source)
-    return robot
+    return opw if isinstance(opw, OPWParams) else load_opw(opw)
 
 
 def _fixed_pose(joints: list[UrdfJoint], link: str, path: Path) -> NDArray | None:
@@ -433,7 +469,13 @@ def _fixed_pose(joints: list[UrdfJoint], link: str, path: Path) -> NDArray | Non
 def _acceleration(acceleration: float | ArrayLike | None, velocity: NDArray) -> NDArray:
     if acceleration is None:
         return velocity / DEFAULT_RAMP_S
-    a = np.broadcast_to(np.asarray(acceleration, dtype=np.float64), (6,)).copy()
+    try:
+        a = np.broadcast_to(np.asarray(acceleration, dtype=np.float64), (6,)).copy()
+    except (TypeError, ValueError):
+        raise InputError(
+            f"acceleration limits must be one value or six (rad/s^2), got {acceleration!r}",
+            field="acceleration",
+        ) from None
     if not np.all(np.isfinite(a) & (a > 0)):
         raise InputError(
             f"acceleration limits must be positive and finite, got {a.tolist()}",

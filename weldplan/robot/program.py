@@ -218,12 +218,8 @@ def robot_program(
         raise ConfigError(f"moves must be 'linear' or 'joint', got {moves!r}", field="moves")
     rows = route_rows(route)
     n = len(rows)
-    Q = np.asarray(q, dtype=np.float64).reshape(-1, 6)
+    Q, R, X = _joint_rows(q, row, exact, n)
     k = len(Q)
-    R = np.arange(k, dtype=np.int64) if row is None else np.asarray(row, dtype=np.int64)
-    X = np.ones(k, dtype=bool) if exact is None else np.asarray(exact, dtype=bool)
-    if len(R) != k or len(X) != k or (k and (R.min() < 0 or R.max() >= n)):
-        raise PlanningError(f"{k} joint rows do not map onto a route of {n} waypoints")
     at = _exact_index(R, X, n)  # route row -> joint row (-1: not served)
     Tft = np.asarray(T_flange_tcp, dtype=np.float64).reshape(4, 4)
     poses = robot.fk(Q) @ Tft  # (k, 4, 4) TCP in the part frame
@@ -237,18 +233,10 @@ def robot_program(
             checker = _checker(robot, part, tool, Tft, contact_radius)
         linear = _linear_moves(robot, Tft, Q, X, order, line_tolerance, checker)
     c = route_clearance(route, clearance)
-    # a via may fly by only between two linear moves (the blend argument is for lines)
-    nxt = np.concatenate([linear[1:], [False]])
-    cand = [kd == "via" and a and b for kd, a, b in zip(kinds, linear, nxt, strict=True)]
-    radii = allowed_radii(poses[order, :3, 3], cand, part, c)
+    radii = _blend_radii(poses[order, :3, 3], kinds, linear, part, c)
     off = 1 if framed else 0
     stops = radii[off : off + k] < RAPID_ZONES["z0"]
-    weld_rows = [j for j, r in enumerate(rows) if r["kind"] == "weld"]
-    missing = [j for j in weld_rows if not np.any(R == j)]
-    if missing:
-        raise PlanningError(f"the joint route has no row for the weld at route row {missing[0]}")
-    welds = at[[j for j in weld_rows if at[j] >= 0]]
-    skipped = [str(rows[j]["joint_id"]) for j in weld_rows if at[j] < 0]
+    welds, skipped = _served_welds(rows, R, at)
 
     timing = time_route(
         Q,
@@ -267,7 +255,24 @@ def robot_program(
     cst = constant_speed_time(pts, len(welds), speed=tcp_speed, weld_time=timing.weld_time)
     if skipped:
         log.warning("the program passes %d weld(s) without welding: %s", len(skipped), skipped)
-    program = RobotProgram(
+    notes = _notes(route, len(targets), timing, cst, tcp_speed, c, moves, skipped)
+    program = _program(name, robot, targets, Tft, tool_mass, tool_cog, timing.weld_time, notes)
+    return ProgramBuild(program, timing, cst, float(tcp_speed), dev, tuple(skipped))
+
+
+def _program(
+    name: str,
+    robot: Any,
+    targets: list[Target],
+    Tft: NDArray[np.float64],
+    tool_mass: float,
+    tool_cog: ArrayLike,
+    weld_time: float,
+    notes: tuple[str, ...],
+) -> RobotProgram:
+    """The :class:`RobotProgram` of ``targets``: the tool frame ``Tft (4, 4)`` mm and load (kg,
+    ``(3,)`` mm), the work object = the part frame in the robot base frame."""
+    return RobotProgram(
         name=name,
         robot=robot.name,
         joint_names=tuple(robot.joint_names),
@@ -276,10 +281,48 @@ def robot_program(
         tool_mass=float(tool_mass),
         tool_cog=np.asarray(tool_cog, dtype=np.float64).reshape(3),
         part_frame=np.linalg.inv(robot.base),
-        weld_time=timing.weld_time,
-        notes=_notes(route, len(targets), timing, cst, tcp_speed, c, moves, skipped),
+        weld_time=weld_time,
+        notes=notes,
     )
-    return ProgramBuild(program, timing, cst, float(tcp_speed), dev, tuple(skipped))
+
+
+def _joint_rows(
+    q: ArrayLike, row: ArrayLike | None, exact: ArrayLike | None, n: int
+) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.bool_]]:
+    """``(Q (k, 6) rad, row (k,), exact (k,))`` of the joint route, with the defaults of
+    :func:`robot_program`; PlanningError when they do not map onto ``n`` route rows."""
+    Q = np.asarray(q, dtype=np.float64).reshape(-1, 6)
+    k = len(Q)
+    R = np.arange(k, dtype=np.int64) if row is None else np.asarray(row, dtype=np.int64)
+    X = np.ones(k, dtype=bool) if exact is None else np.asarray(exact, dtype=bool)
+    if len(R) != k or len(X) != k or (k and (R.min() < 0 or R.max() >= n)):
+        raise PlanningError(f"{k} joint rows do not map onto a route of {n} waypoints")
+    return Q, R, X
+
+
+def _blend_radii(
+    points: NDArray[np.float64], kinds: list[str], linear: NDArray[np.bool_], part: Any, c: float
+) -> NDArray[np.float64]:
+    """Blend radius (mm) of every program target at ``points (m, 3)``: a via point may fly by
+    only between two linear moves (the blend argument of :mod:`weldplan.io.blending` is for
+    lines), within its free margin at clearance ``c`` mm."""
+    nxt = np.concatenate([linear[1:], [False]])
+    cand = [kd == "via" and a and b for kd, a, b in zip(kinds, linear, nxt, strict=True)]
+    return allowed_radii(points, cand, part, c)
+
+
+def _served_welds(
+    rows: list[dict], R: NDArray[np.int64], at: NDArray[np.int64]
+) -> tuple[NDArray[np.int64], list[str]]:
+    """The joint rows where the robot welds, and the ids of the welds it passes without
+    welding (no exact joint row); PlanningError for a weld with no joint row at all."""
+    weld_rows = [j for j, r in enumerate(rows) if r["kind"] == "weld"]
+    missing = [j for j in weld_rows if not np.any(R == j)]
+    if missing:
+        raise PlanningError(f"the joint route has no row for the weld at route row {missing[0]}")
+    welds = at[[j for j in weld_rows if at[j] >= 0]]
+    skipped = [str(rows[j]["joint_id"]) for j in weld_rows if at[j] < 0]
+    return welds, skipped
 
 
 def _check_rows(poses: NDArray, pts: NDArray, at: NDArray[np.int64]) -> None:

@@ -310,16 +310,8 @@ def time_route(
     PlanningError
         toppra fails on a segment.
     """
-    q = np.asarray(q, dtype=np.float64)
-    if q.ndim != 2 or len(q) == 0 or not np.all(np.isfinite(q)):
-        raise ConfigError("q must be a finite (n, d) array of joint values", field="q")
+    q, vel, acc, wt = _check_route_args(q, velocity, acceleration, weld_time, tolerance, dt)
     n, d = q.shape
-    vel, acc = check_limits(velocity, acceleration)
-    if len(vel) != d:
-        raise ConfigError(f"{len(vel)} joint limits for {d} joints", field="velocity")
-    wt = check_weld_time(weld_time)
-    if not (math.isfinite(tolerance) and tolerance > 0 and math.isfinite(dt) and dt > 0):
-        raise ConfigError("tolerance and dt must be finite and > 0", field="tolerance")
     welds = np.asarray(weld_rows, dtype=np.int64).reshape(-1)
     stop = np.zeros(n, bool) if stops is None else np.asarray(stops, dtype=bool).copy()
     stop[welds] = True
@@ -338,25 +330,18 @@ def time_route(
             ts.append(np.array([now]))
             steps.append(np.array([a]))
             qs.append(q[a : a + 1])
-        seg_q = q[a : b + 1]
-        if np.all(np.abs(np.diff(seg_q, axis=0)) == 0):
+        sampled = _sample_segment(q, int(a), int(b), vel, acc, tolerance, dt)
+        if sampled is None:  # the robot does not move between the two stops
             row_t[a + 1 : b + 1] = now
             segments.append(Segment(int(a), int(b), 0.0, 0.0, 0))
             continue
-        keep = np.concatenate([[True], np.any(np.diff(seg_q, axis=0) != 0, axis=1)])
-        at, arrive, dev, inserted = _time_segment(seg_q[keep], vel, acc, tolerance)
-        rows_kept = np.arange(a, b + 1)[keep]
-        rows = np.arange(a + 1, b + 1)  # a row equal to the one before it arrives with it
-        row_t[a + 1 : b + 1] = now + arrive[np.searchsorted(rows_kept, rows, side="right") - 1]
-        dur = float(arrive[-1])
-        grid_t = np.unique(np.concatenate([np.arange(dt, dur, dt), arrive[1:]]))
-        grid_t = grid_t[grid_t > 0]
+        arrive_rows, grid_t, grid_steps, grid_q, seg = sampled
+        row_t[a + 1 : b + 1] = now + arrive_rows
         ts.append(now + grid_t)
-        steps.append(rows_kept[np.searchsorted(arrive, grid_t - 1e-12)])
-        qs.append(at(grid_t).reshape(-1, d))
-        qs[-1][-1] = q[b]  # the stop itself, exactly
-        now += dur
-        segments.append(Segment(int(a), int(b), dur, dev, inserted))
+        steps.append(grid_steps)
+        qs.append(grid_q)
+        now += seg.duration
+        segments.append(seg)
     last = int(stop_rows[-1])
     if last in dwell and wt > 0:
         now += wt
@@ -377,6 +362,68 @@ def time_route(
     return TimedTrajectory(
         names, row_t, stop, welds, wt, tuple(segments), out_t, np.concatenate(steps), out_q
     )
+
+
+def _check_route_args(
+    q: ArrayLike,
+    velocity: ArrayLike,
+    acceleration: ArrayLike,
+    weld_time: float,
+    tolerance: float,
+    dt: float,
+) -> tuple[NDArray[np.float64], NDArray, NDArray, float]:
+    """:func:`time_route`'s arguments checked: ``(q (n, d), velocity (d,), acceleration (d,),
+    weld time)``; ConfigError on anything not finite and positive (``q``: not finite)."""
+    q = np.asarray(q, dtype=np.float64)
+    if q.ndim != 2 or len(q) == 0 or not np.all(np.isfinite(q)):
+        raise ConfigError("q must be a finite (n, d) array of joint values", field="q")
+    vel, acc = check_limits(velocity, acceleration)
+    if len(vel) != q.shape[1]:
+        raise ConfigError(f"{len(vel)} joint limits for {q.shape[1]} joints", field="velocity")
+    wt = check_weld_time(weld_time)
+    if not (math.isfinite(tolerance) and tolerance > 0 and math.isfinite(dt) and dt > 0):
+        raise ConfigError("tolerance and dt must be finite and > 0", field="tolerance")
+    return q, vel, acc, wt
+
+
+def _sample_segment(
+    q: NDArray[np.float64],
+    a: int,
+    b: int,
+    velocity: NDArray,
+    acceleration: NDArray,
+    tolerance: float,
+    dt: float,
+) -> tuple[NDArray, NDArray, NDArray, NDArray, Segment] | None:
+    """The rest-to-rest segment from stop row ``a`` to stop row ``b`` of ``q (n, d)``, timed
+    and sampled every ``dt`` s; None when the robot does not move between them.
+
+    Rows equal to the row before them are dropped before timing (they arrive with it).
+
+    Returns
+    -------
+    arrive_rows, t, steps, q, segment
+        ``(b - a,)`` s arrival time of rows ``a + 1 .. b`` after leaving ``a``; ``(m,)`` s
+        sample times after leaving ``a`` (every ``dt`` and every arrival, the last = the
+        duration); ``(m,)`` the row each sample is on its way from; ``(m, d)`` rad the
+        samples, the last exactly ``q[b]``; the :class:`Segment`.
+    """
+    d = q.shape[1]
+    seg_q = q[a : b + 1]
+    if np.all(np.abs(np.diff(seg_q, axis=0)) == 0):
+        return None
+    keep = np.concatenate([[True], np.any(np.diff(seg_q, axis=0) != 0, axis=1)])
+    at, arrive, dev, inserted = _time_segment(seg_q[keep], velocity, acceleration, tolerance)
+    rows_kept = np.arange(a, b + 1)[keep]
+    rows = np.arange(a + 1, b + 1)  # a row equal to the one before it arrives with it
+    arrive_rows = arrive[np.searchsorted(rows_kept, rows, side="right") - 1]
+    dur = float(arrive[-1])
+    grid_t = np.unique(np.concatenate([np.arange(dt, dur, dt), arrive[1:]]))
+    grid_t = grid_t[grid_t > 0]
+    grid_steps = rows_kept[np.searchsorted(arrive, grid_t - 1e-12)]
+    grid_q = at(grid_t).reshape(-1, d)
+    grid_q[-1] = q[b]  # the stop itself, exactly
+    return arrive_rows, grid_t, grid_steps, grid_q, Segment(a, b, dur, dev, inserted)
 
 
 def constant_speed_time(
