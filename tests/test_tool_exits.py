@@ -133,3 +133,31 @@ def test_the_transitions_reuse_the_exits_the_test_checked():
     with pytest.raises(ValueError, match="part or tool"):
         plan_transitions(part, other, poses, retract=50.0, side_exit=0.0, se3=False,
                          reuse=planner)  # fmt: skip
+
+
+def test_the_tool_order_prices_a_weld_left_by_a_lift_at_the_lift():
+    from weldplan.tool.exits import leave_distances
+    from weldplan.tool.tool_order import tool_leg_costs
+
+    plate, gun = _box((600, 600, 2), (0, 0, -1)), _stick(straddles=True)
+    welds = Joints(ids=["a", "b", "c"], xyz=[[0, 0, 0], [150, 0, 0], [0, 120, 0]],
+                   directions=[[0, 0, 1.0]] * 3)  # fmt: skip
+    planner = TransitionPlanner(plate, gun, clearance=5.0, contact_radius=20.0, se3=False)
+    poses = plan_weld_poses(plate, welds, gun, accept=ExitTest(planner, welds.ids))
+    assert all(p.ok and not p.flipped and p.tilt == 0.0 for p in poses.poses)
+    # a C-gun leaves each weld by the first slide lift (4 mm), found by the test and cached
+    leave = leave_distances(planner, poses)
+    assert leave == {"a": 4.0, "b": 4.0, "c": 4.0}
+    ids = ["a", "b", "c"]
+    _, axial, _ = tool_leg_costs(poses, ids, 50.0, 200.0)
+    _, lifted, _ = tool_leg_costs(poses, ids, 50.0, 200.0, {"a": 4.0, "b": 4.0})
+    # same orientation everywhere: the retract points are the spots moved alike
+    assert axial[0, 1] == pytest.approx(150.0 + 100.0)
+    assert lifted[0, 1] == pytest.approx(150.0 + 8.0)
+    assert (
+        lifted[0, 2]
+        == pytest.approx(lifted[2, 0])
+        == pytest.approx(
+            np.hypot(120.0, 46.0) + 54.0  # a lifted 4 mm, c retracted 50 mm
+        )
+    )

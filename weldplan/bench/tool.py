@@ -79,6 +79,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="the exits the exit test counts, in the order tried (weldplan.tool.exits)",
     )
     p.add_argument(
+        "--order-axial",
+        action="store_true",
+        help="price every leg of the tool order as the axial retract, also where the exit test "
+        "found a lift (the estimate before the exit test)",
+    )
+    p.add_argument(
         "--workers",
         type=int,
         default=1,
@@ -181,7 +187,12 @@ def _transitions(
     from weldplan.tool.verify_sweeps import verify_sweeps
 
     t0 = time.perf_counter()
-    order, costs = tool_order(poses, DEFAULT_RETRACT, DEFAULT_ROT_WEIGHT, rng=0)
+    leave = None
+    if reuse is not None and not args.order_axial:
+        from weldplan.tool.exits import leave_distances
+
+        leave = leave_distances(reuse, poses)
+    order, costs = tool_order(poses, DEFAULT_RETRACT, DEFAULT_ROT_WEIGHT, rng=0, leave=leave)
     path = plan_transitions(
         cell.part, gun, poses, order=order, se3=args.se3_time > 0,
         time_s=max(args.se3_time, 1e-3), seed=0, stats=costs, workers=args.workers,
@@ -269,7 +280,7 @@ def run(args: argparse.Namespace) -> int:
             + (
                 f"; exit test: {s['exit_calls']} picks judged, {s['exit_vetoes']} vetoed, "
                 f"{s['exit_samples']} samples, {s['accept_exhausted']} welds kept a pose "
-                "without an exit"
+                f"without an exit; vetoes by weld {s['exit_vetoed']}"
                 if "exit_calls" in s
                 else "; no exit test"
             )

@@ -266,7 +266,12 @@ def plan_tool_path(
     from weldplan.tool.transitions import plan_transitions
     from weldplan.tool.verify_sweeps import verify_sweeps
 
-    order, stats = tool_order(poses, args.retract, args.rot_weight, rng=seed)
+    leave = None
+    if reuse is not None:  # a weld the exit test left by a lift is priced at the lift (a slide)
+        from weldplan.tool.exits import leave_distances
+
+        leave = leave_distances(reuse, poses)
+    order, stats = tool_order(poses, args.retract, args.rot_weight, rng=seed, leave=leave)
     if args.tool_order == "route":
         order = [p.id for p in poses.poses if p.ok]
     stats["order_from"] = args.tool_order

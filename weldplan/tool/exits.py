@@ -79,6 +79,8 @@ class ExitTest:
     ----------
     calls, vetoes, samples
         Poses judged, poses vetoed, and the FCL samples the judging took.
+    vetoed
+        ``weld id -> poses of that weld vetoed``.
     how
         ``weld id -> exit`` of the last pose of that weld the test accepted.
     """
@@ -96,6 +98,7 @@ class ExitTest:
         self.vetoes = 0
         self.samples = 0
         self.how: dict[str, str] = {}
+        self.vetoed: dict[str, int] = {}
 
     def __call__(self, i: int, T: NDArray[np.float64]) -> str | None:
         T = np.asarray(T, dtype=np.float64)
@@ -109,10 +112,24 @@ class ExitTest:
             self.how[w.id] = how
             return None
         self.vetoes += 1
+        self.vetoed[w.id] = self.vetoed.get(w.id, 0) + 1
         log.debug("weld %s: no exit: %s", w.id, how)
         return f"no exit: {how}"
 
     def stats(self) -> dict[str, Any]:
         """The test's counts, for a result's stats."""
         return {"exit_calls": self.calls, "exit_vetoes": self.vetoes,
-                "exit_samples": self.samples}  # fmt: skip
+                "exit_samples": self.samples, "exit_vetoed": dict(self.vetoed)}  # fmt: skip
+
+
+def leave_distances(planner: TransitionPlanner, poses: Any) -> dict[str, float]:
+    """``weld id -> mm``: the lift each ok pose of ``poses`` is left by where its first free exit
+    (:meth:`~weldplan.tool.transitions.TransitionPlanner.exit_free`, cached for the poses the
+    test judged) is a lift, for the tool order's leg costs (:mod:`weldplan.tool.tool_order`)."""
+    out: dict[str, float] = {}
+    for p in poses.poses:
+        if p.ok:
+            ok, how = planner.exit_free(p)
+            if ok and how.startswith("lift "):
+                out[p.id] = float(how.split()[1])
+    return out
