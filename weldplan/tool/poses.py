@@ -9,8 +9,9 @@ to ``cone`` degrees, ``azimuths`` directions per ring), :mod:`weldplan.tool.orie
 A tool that straddles the sheet (a C-gun, :attr:`~weldplan.tool.model.Tool.straddles`) may also
 weld a spot **turned over**, the approach axis reversed: the electrodes clamp the sheet, so
 either side is a legitimate approach. The turned-over candidates are tried only for a weld with
-no free candidate on the approach side (the joints CSV's side stays the first choice, and the
-choice among welds free on that side is what it was without turning over).
+no free candidate on the approach side, or none the acceptance test accepts there (the joints
+CSV's side stays the first choice, and the choice among welds free and accepted on that side is
+what it was without turning over; :func:`_turn_over`).
 
 A candidate is free when the tool **minus its part inside the contact zone** (the sphere of
 ``contact_radius`` mm about the TCP, i.e. about the weld spot, cut to the tool's tip cone for an
