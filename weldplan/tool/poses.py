@@ -288,9 +288,9 @@ def _turn_over(
     :meth:`_Table.check`; or they fall short of the clearance) or when the acceptance test was
     lifted for it (every free approach-side candidate vetoed, or ``max_vetoes`` reached): the test
     is put back on it (:meth:`ChoiceState.reopen`) over its turned-over candidates only, the
-    approach side counting as not accepted. A weld whose turned-over
-    candidates are all vetoed too keeps its least-rotation approach-side pose, as without the
-    test (the joints CSV's side stays the first choice): its turned-over candidates are withdrawn.
+    approach side counting as not accepted. A weld whose turned-over candidates are all vetoed
+    too keeps its least-rotation approach-side pose, as without the test (the joints CSV's side
+    stays the first choice): its turned-over candidates are withdrawn.
     """
     over, allowed = table.over, table.allowed
     short = [i for i in range(len(allowed)) if i not in choice and not allowed[i, over].any()]
