@@ -55,6 +55,16 @@ def test_plan_with_tool_reports_the_weld_without_a_pose_and_exits_partial(planne
     miss = poses["E"].miss
     assert miss is not None and (miss.contacts > 0 or miss.distance < 5.0)
     assert poses["E"].quaternion is None
+    # the exit test judged the picks (on by default): every ok weld at least once
+    assert poses.stats["exit_calls"] >= 4 and isinstance(poses.stats["exit_vetoed"], dict)
+
+
+def test_no_exit_check_turns_the_exit_test_off():
+    from weldplan.cli import build_parser
+
+    base = ["plan", "b.stl", "j.csv", "-o", "r.csv", "--tool", "t.stl"]
+    assert build_parser().parse_args(base).exit_check is True
+    assert build_parser().parse_args([*base, "--no-exit-check"]).exit_check is False
 
 
 def test_plan_with_tool_csv_has_orientations_at_every_waypoint(planned):

@@ -25,6 +25,7 @@ whatever machine runs it; the load average is recorded beside them.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import platform
 import time
@@ -67,6 +68,23 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "--se3-time", type=float, default=3.0, help="OMPL seconds per blocked transition (0: off)"
     )
     p.add_argument(
+        "--no-exit-check",
+        dest="exit_check",
+        action="store_false",
+        help="choose the poses without the exit test (weldplan.tool.exits; the choice before it)",
+    )
+    p.add_argument(
+        "--exits",
+        default="lift,axial,side",
+        help="the exits the exit test counts, in the order tried (weldplan.tool.exits)",
+    )
+    p.add_argument(
+        "--order-axial",
+        action="store_true",
+        help="price every leg of the tool order as the axial retract, also where the exit test "
+        "found a lift (the estimate before the exit test)",
+    )
+    p.add_argument(
         "--workers",
         type=int,
         default=1,
@@ -104,14 +122,18 @@ def _station(name: str, gun: Any, args: argparse.Namespace) -> dict[str, Any]:
     route = weldplan.plan_route(cell, rng=0)
     t_point = time.perf_counter() - t0
     t1 = time.perf_counter()
+    exits = _exit_test(cell, route, gun, args)
     poses = plan_weld_poses(
-        cell, route, gun, both_sides=not args.one_side, crop=not args.whole_part
+        cell, route, gun, both_sides=not args.one_side, crop=not args.whole_part, accept=exits
     )
+    if exits is not None:
+        poses = dataclasses.replace(poses, stats={**poses.stats, **exits.stats()})
     t_poses = time.perf_counter() - t1
     t2 = time.perf_counter()
     ver = verify_poses(poses, cell.part, gun)
     t_verify = time.perf_counter() - t2
-    tr = {} if args.no_transitions else _transitions(cell, route, poses, gun, args)
+    reuse = None if exits is None else exits.planner
+    tr = {} if args.no_transitions else _transitions(cell, route, poses, gun, args, reuse)
     gun_s = t_point + t_poses + t_verify + tr.get("transitions_s", 0.0) + tr.get("sweeps_s", 0.0)
     misses = [p.miss for p in poses.poses if not p.ok and p.miss is not None]
     if args.json:
@@ -134,21 +156,47 @@ def _station(name: str, gun: Any, args: argparse.Namespace) -> dict[str, Any]:
         "gun_s": gun_s,
         "ratio": gun_s / t_point,
         "stats": poses.stats,
+        "notes": [(p.id, p.note) for p in poses.poses if p.note],
         "load": f"{load0} / {_load()}",
     }
 
 
-def _transitions(cell: Any, route: Any, poses: Any, gun: Any, args: Any) -> dict[str, Any]:
-    """Order, transitions and their re-check for one station (timed together)."""
+def _exit_test(cell: Any, route: Any, gun: Any, args: Any) -> Any:
+    """The exit test (:class:`~weldplan.tool.exits.ExitTest`) with the planner the transitions
+    use (same settings: :func:`_transitions`), or ``None`` with ``--no-exit-check``."""
+    if not args.exit_check:
+        return None
+    from weldplan.tool.exits import ExitTest
+    from weldplan.tool.poses import DEFAULT_CONTACT_RADIUS
+    from weldplan.tool.transitions import TransitionPlanner
+
+    planner = TransitionPlanner(
+        cell.part, gun, clearance=float(cell.clearance), contact_radius=DEFAULT_CONTACT_RADIUS,
+        se3=args.se3_time > 0, time_s=max(args.se3_time, 1e-3), seed=0,
+    )  # fmt: skip
+    return ExitTest(planner, route.order, tuple(e.strip() for e in args.exits.split(",")))
+
+
+def _transitions(
+    cell: Any, route: Any, poses: Any, gun: Any, args: Any, reuse: Any = None
+) -> dict[str, Any]:
+    """Order, transitions and their re-check for one station (timed together); ``reuse``: the
+    exit test's planner (one process only)."""
     from weldplan.tool.tool_order import DEFAULT_ROT_WEIGHT, tool_order
     from weldplan.tool.transitions import DEFAULT_RETRACT, plan_transitions
     from weldplan.tool.verify_sweeps import verify_sweeps
 
     t0 = time.perf_counter()
-    order, costs = tool_order(poses, DEFAULT_RETRACT, DEFAULT_ROT_WEIGHT, rng=0)
+    leave = None
+    if reuse is not None and not args.order_axial:
+        from weldplan.tool.exits import leave_distances
+
+        leave = leave_distances(reuse, poses)
+    order, costs = tool_order(poses, DEFAULT_RETRACT, DEFAULT_ROT_WEIGHT, rng=0, leave=leave)
     path = plan_transitions(
         cell.part, gun, poses, order=order, se3=args.se3_time > 0,
         time_s=max(args.se3_time, 1e-3), seed=0, stats=costs, workers=args.workers,
+        reuse=reuse if args.workers == 1 else None,
     )  # fmt: skip
     t1 = time.perf_counter()
     sweeps = verify_sweeps(path, poses, cell.part, gun, workers=args.workers)
@@ -186,6 +234,7 @@ def run(args: argparse.Namespace) -> int:
     out.mkdir(parents=True, exist_ok=True)
     gun = shared_spot_gun()
     side = "one side" if args.one_side else "both sides (turned over where needed)"
+    side += f"; exit test: {args.exits}" if args.exit_check else "; no exit test"
     part = "whole-part BVH" if args.whole_part else "part cropped per weld"
     lines = [
         "# weldplan bench tool",
@@ -228,7 +277,15 @@ def run(args: argparse.Namespace) -> int:
             f"(fixed electrode / lower arm: structure behind the sheet), {r['misses_short']} only "
             f"short of the clearance, {r['no_miss']} without a miss (must be 0); "
             f"{s['collision_queries']} collide, {s['distance_queries']} distance queries"
+            + (
+                f"; exit test: {s['exit_calls']} picks judged, {s['exit_vetoes']} vetoed, "
+                f"{s['exit_samples']} samples, {s['accept_exhausted']} welds kept a pose "
+                f"without an exit; vetoes by weld {s['exit_vetoed']}"
+                if "exit_calls" in s
+                else "; no exit test"
+            )
         )
+        notes += [f"- {r['name']} weld {w}: {note}" for w, note in r["notes"]]
     if rows:
         head = [
             "",

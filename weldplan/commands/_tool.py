@@ -100,7 +100,7 @@ def _seconds(text: str) -> float:
 
 def add_transition_arguments(p: argparse.ArgumentParser) -> None:
     """``--retract``, ``--side-exit``, ``--no-slide``, ``--rot-weight``, ``--tool-order``,
-    ``--se3-time`` (the transitions)."""
+    ``--no-exit-check``, ``--se3-time`` (the transitions)."""
     p.add_argument(
         "--retract",
         metavar="MM",
@@ -140,6 +140,13 @@ def add_transition_arguments(p: argparse.ArgumentParser) -> None:
         "route's order",
     )
     p.add_argument(
+        "--no-exit-check",
+        dest="exit_check",
+        action="store_false",
+        help="with --tool: choose each weld's pose without asking whether the tool can leave it "
+        "(a lift off the sheet, the axial retract or a side exit; on by default, docs/tool.md)",
+    )
+    p.add_argument(
         "--se3-time",
         metavar="S",
         type=_seconds,
@@ -162,9 +169,19 @@ def tool_from_args(args: argparse.Namespace) -> tuple[Any, dict[str, Any]] | Non
 
 
 def plan_poses(
-    args: argparse.Namespace, cell: Any, route: Any, tool: Any, prov: dict[str, Any]
+    args: argparse.Namespace,
+    cell: Any,
+    route: Any,
+    tool: Any,
+    prov: dict[str, Any],
+    accept: Any = None,
 ) -> tuple[Any, Any]:
     """The pose stage: plan the poses in route order and re-check them independently.
+
+    ``accept(i, T)`` (optional, :mod:`weldplan.tool.pose_choice`): the caller's acceptance test
+    (the robot's reach), run before the exit test (:class:`weldplan.tool.exits.ExitTest`, off
+    with ``--no-exit-check``); the exit test's transition planner then plans the transitions,
+    reusing the exits it checked.
 
     Returns
     -------
@@ -174,15 +191,32 @@ def plan_poses(
         ``check.ok`` is false.
     """
     from weldplan.tool import plan_weld_poses, verify_poses
+    from weldplan.tool.pose_choice import all_of
 
+    seed = getattr(args, "seed", None)
+    exits = None
+    if getattr(args, "exit_check", True):
+        from weldplan.tool.exits import ExitTest
+        from weldplan.tool.transitions import TransitionPlanner
+
+        planner = TransitionPlanner(
+            cell.part, tool, clearance=float(cell.clearance), contact_radius=args.contact_radius,
+            **transition_settings(args, seed),
+        )  # fmt: skip
+        exits = ExitTest(planner, route.order)
     poses = plan_weld_poses(
-        cell, route, tool, cone=args.tool_cone, contact_radius=args.contact_radius
-    )
+        cell, route, tool, cone=args.tool_cone, contact_radius=args.contact_radius,
+        accept=all_of(accept, exits),
+    )  # fmt: skip
+    if exits is not None:
+        poses = dataclasses.replace(poses, stats={**poses.stats, **exits.stats()})
     check = verify_poses(poses, cell.part, tool)
     data: dict[str, Any] = {"provenance": prov, "poses": poses.to_dict()}
     if not check.ok:
         return dataclasses.replace(route, tool=data), check
-    path, sweeps = plan_tool_path(args, cell.part, tool, poses, seed=getattr(args, "seed", None))
+    path, sweeps = plan_tool_path(
+        args, cell.part, tool, poses, seed=seed, reuse=None if exits is None else exits.planner
+    )
     data["transitions"] = path.to_dict()
     both = ToolChecks(
         ok=sweeps.ok,
@@ -203,36 +237,48 @@ class ToolChecks:
     sweeps: Any = None
 
 
+def transition_settings(args: argparse.Namespace, seed: int | None) -> dict[str, Any]:
+    """The transition planner's settings from the options (one place for the exit test's
+    planner and :func:`plan_tool_path`, which must agree)."""
+    return dict(
+        retract=args.retract, se3=args.se3_time > 0, time_s=max(args.se3_time, 1e-3), seed=seed,
+        rot_weight=max(args.rot_weight, 1.0), side_exit=args.side_exit,
+        slide=getattr(args, "slide", True),
+    )  # fmt: skip
+
+
 def plan_tool_path(
-    args: argparse.Namespace, part: Any, tool: Any, poses: Any, *, seed: int | None = None
+    args: argparse.Namespace,
+    part: Any,
+    tool: Any,
+    poses: Any,
+    *,
+    seed: int | None = None,
+    reuse: Any = None,
 ) -> tuple[Any, Any]:
     """Order the welds on the tool's costs, plan the transitions, re-check them independently.
 
-    Returns the :class:`~weldplan.tool.transit.ToolPath` and its
+    ``reuse``: the exit test's :class:`~weldplan.tool.transitions.TransitionPlanner` (its checked
+    exits are kept). Returns the :class:`~weldplan.tool.transit.ToolPath` and its
     :class:`~weldplan.tool.verify_sweeps.SweepsVerification`.
     """
     from weldplan.tool.tool_order import tool_order
     from weldplan.tool.transitions import plan_transitions
     from weldplan.tool.verify_sweeps import verify_sweeps
 
-    order, stats = tool_order(poses, args.retract, args.rot_weight, rng=seed)
+    leave = None
+    if reuse is not None:  # a weld the exit test left by a lift is priced at the lift (a slide)
+        from weldplan.tool.exits import leave_distances
+
+        leave = leave_distances(reuse, poses)
+    order, stats = tool_order(poses, args.retract, args.rot_weight, rng=seed, leave=leave)
     if args.tool_order == "route":
         order = [p.id for p in poses.poses if p.ok]
     stats["order_from"] = args.tool_order
     path = plan_transitions(
-        part,
-        tool,
-        poses,
-        order=order,
-        retract=args.retract,
-        se3=args.se3_time > 0,
-        time_s=max(args.se3_time, 1e-3),
-        seed=seed,
-        rot_weight=max(args.rot_weight, 1.0),
-        side_exit=args.side_exit,
-        slide=getattr(args, "slide", True),
-        stats=stats,
-    )
+        part, tool, poses, order=order, stats=stats, reuse=reuse,
+        **transition_settings(args, seed),
+    )  # fmt: skip
     return path, verify_sweeps(path, poses, part, tool)
 
 

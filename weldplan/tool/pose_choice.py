@@ -88,6 +88,9 @@ class ChoiceState:
             "accept_calls": 0,
             "vetoed": 0,
         }
+        #: weld -> vetoes it had when it was reopened (its budget counts from there)
+        self.veto_base: dict[int, int] = {}
+        self._lifted: dict[int, NDArray[np.bool_]] = {}
         self._angles: dict[tuple[int, int], tuple[NDArray, NDArray, NDArray]] = {}
 
     def angles(
@@ -106,7 +109,16 @@ class ChoiceState:
     def exhaust(self, i: int) -> None:
         """Lift the acceptance test for weld ``i``."""
         self.exhausted.add(i)
+        self._lifted[i] = self.vetoed[i] | self._lifted.get(i, False)
         self.vetoed[i] = False
+
+    def reopen(self, i: int) -> None:
+        """Put the acceptance test back on exhausted weld ``i`` (more candidates joined it: a
+        C-gun's turned-over poses): its vetoes return and it may take ``max_vetoes`` more."""
+        self.exhausted.discard(i)
+        if i in self._lifted:
+            self.vetoed[i] |= self._lifted.pop(i)
+        self.veto_base[i] = len(self.veto_reasons.get(i, []))
 
 
 def _pose(p: NDArray[np.float64], R: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -138,7 +150,7 @@ def _judge(
         state.vetoed[i, k] = vetoed = True
         reasons = state.veto_reasons.setdefault(i, [])
         reasons.append(str(reason))
-        if len(reasons) >= max_vetoes:
+        if len(reasons) - state.veto_base.get(i, 0) >= max_vetoes:
             state.exhaust(i)
     return vetoed
 

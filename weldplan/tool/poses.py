@@ -9,8 +9,9 @@ to ``cone`` degrees, ``azimuths`` directions per ring), :mod:`weldplan.tool.orie
 A tool that straddles the sheet (a C-gun, :attr:`~weldplan.tool.model.Tool.straddles`) may also
 weld a spot **turned over**, the approach axis reversed: the electrodes clamp the sheet, so
 either side is a legitimate approach. The turned-over candidates are tried only for a weld with
-no free candidate on the approach side (the joints CSV's side stays the first choice, and the
-choice among welds free on that side is what it was without turning over).
+no free candidate on the approach side, or none the acceptance test accepts there (the joints
+CSV's side stays the first choice, and the choice among welds free and accepted on that side is
+what it was without turning over; :func:`_turn_over`).
 
 A candidate is free when the tool **minus its part inside the contact zone** (the sphere of
 ``contact_radius`` mm about the TCP, i.e. about the weld spot, cut to the tool's tip cone for an
@@ -33,6 +34,7 @@ from __future__ import annotations
 
 import logging
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -232,14 +234,11 @@ def plan_weld_poses(
         )  # fmt: skip
 
     choice, total = pick()
-    turn = [i for i in range(n) if both_sides and i not in choice and not allowed[i, over].any()]
-    for i in turn:  # free of collision on the approach side, but short of the clearance
-        table.turn_over(i)
-    if turn:
-        choice, total = pick()
+    if both_sides:
+        choice, total = _turn_over(table, state, choice, total, pick)
     t_miss = time.perf_counter()
     misses = {i: table.miss(i, near[i][1], params) for i in range(n) if i not in choice}
-    dists[~allowed] = 0.0  # not tried: counted as not free below
+    dists[~table.tried] = 0.0  # not tried: counted as not free below
     notes = {i: _veto_note(r) for i, r in state.veto_reasons.items() if i in state.exhausted}
     poses = _assemble(welds, axes, dists, quats, params, choice, misses, notes)
     elapsed = time.perf_counter() - t0
@@ -259,8 +258,8 @@ def plan_weld_poses(
         },
         stats={
             "candidates_per_weld": c,
-            "collision_queries": int(allowed.sum()),
-            "turned_over_tried": int(allowed[:, over].any(axis=1).sum()),
+            "collision_queries": int(table.tried.sum()),
+            "turned_over_tried": int(table.tried[:, over].any(axis=1).sum()),
             **state.counts,
             "accept_exhausted": len(state.exhausted),
             "crops_built": search.crops_built,
@@ -274,6 +273,40 @@ def plan_weld_poses(
     )
     log.info("%s (%.1f s)", result.summary().splitlines()[0], elapsed)
     return result
+
+
+def _turn_over(
+    table: _Table,
+    state: ChoiceState,
+    choice: dict[int, int],
+    total: float,
+    pick: Callable[[], tuple[dict[int, int], float]],
+) -> tuple[dict[int, int], float]:
+    """Try the turned-over candidates of the welds that need them and choose again.
+
+    A weld needs them when no approach-side candidate is free (they collide: tried already by
+    :meth:`_Table.check`; or they fall short of the clearance) or when the acceptance test was
+    lifted for it (every free approach-side candidate vetoed, or ``max_vetoes`` reached): the test
+    is put back on it (:meth:`ChoiceState.reopen`) over its turned-over candidates only, the
+    approach side counting as not accepted. A weld whose turned-over candidates are all vetoed
+    too keeps its least-rotation approach-side pose, as without the test (the joints CSV's side
+    stays the first choice): its turned-over candidates are withdrawn.
+    """
+    over, allowed = table.over, table.allowed
+    short = [i for i in range(len(allowed)) if i not in choice and not allowed[i, over].any()]
+    vetoed = sorted(i for i in state.exhausted if not allowed[i, over].any())
+    for i in short + vetoed:
+        table.turn_over(i)
+    for i in vetoed:  # the test again, over the turned-over candidates only
+        state.reopen(i)
+        state.vetoed[i, ~over] = True
+    if not (short or vetoed):
+        return choice, total
+    choice, total = pick()
+    back = [i for i in vetoed if i in state.exhausted]
+    for i in back:
+        allowed[i, over] = False  # still counted as tried (table.tried)
+    return pick() if back else (choice, total)
 
 
 class _Table:
@@ -295,12 +328,15 @@ class _Table:
         self.search, self.objs, self.xyz, self.rots, self.over = search, objs, xyz, rots, over
         self.dists = np.full(rots.shape[:2], np.nan)
         self.allowed = np.tile(~over, (len(xyz), 1))
+        #: the candidates collided (``allowed`` less those withdrawn again)
+        self.tried = self.allowed.copy()
 
     def _collide(self, i: int, which: NDArray[np.bool_]) -> None:
         hit = self.search.collides(self.objs[i], self.xyz[i], self.rots[i, which])
         far = self.objs[i] is None or self.search.clearance == 0
         self.dists[i, which] = np.where(hit, 0.0, np.inf if far else np.nan)
         self.allowed[i, which] = True
+        self.tried[i, which] = True
 
     def check(self, i: int, both_sides: bool) -> None:
         """Collide weld ``i``'s approach-side candidates, and its turned-over ones too when

@@ -7,7 +7,10 @@ The estimated cost of that transition is its TCP length plus a weight on its rot
 
     c_ij = 2 retract + |r_i - r_j| + w angle(q_i, q_j)          (mm; w in mm per rad)
 
-the length and rotation of the direct transition. It is a lower bound-like estimate: a
+the length and rotation of the direct transition. A weld left by a lift instead (a C-gun whose
+exit is a slide along the flange, ``leave``: :func:`weldplan.tool.exits.leave_distances`) has
+its own distance ``d_i`` in place of ``retract``: ``c_ij = d_i + d_j + |r_i - r_j| + w angle``
+with ``r_i = p_i - d_i z_i``. It is a lower bound-like estimate: a
 transition re-planned in SE(3) is longer. The order is the open path of least total cost over
 the welds with a pose (:func:`weldplan.optim.discrete.sequence.solve_sequence`: exact up to its
 exact limit, fast-tsp above). The poses are those chosen along the point-tip order
@@ -17,6 +20,7 @@ exact limit, fast-tsp above). The poses are those chosen along the point-tip ord
 from __future__ import annotations
 
 import logging
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -32,26 +36,36 @@ log = logging.getLogger(__name__)
 DEFAULT_ROT_WEIGHT = 200.0
 
 
-def retract_points(poses: WeldPoses, ids: list[str], retract: float) -> NDArray[np.float64]:
-    """``(n, 3)`` mm: each weld's retract point ``p - retract z`` (z the TCP axis of its pose)."""
+def retract_points(
+    poses: WeldPoses, ids: list[str], retract: float | NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """``(n, 3)`` mm: each weld's retract point ``p - retract z`` (z the TCP axis of its pose;
+    ``retract`` mm, one for all or ``(n,)``)."""
     P = np.array([poses[i].position for i in ids], dtype=np.float64)
     Q = np.array([poses[i].quaternion for i in ids], dtype=np.float64)
-    return P - retract * quat_to_matrix(Q)[:, :, 2]
+    d = np.broadcast_to(np.asarray(retract, dtype=np.float64), (len(ids),))
+    return P - d[:, None] * quat_to_matrix(Q)[:, :, 2]
 
 
 def tool_leg_costs(
-    poses: WeldPoses, ids: list[str], retract: float, rot_weight: float
+    poses: WeldPoses,
+    ids: list[str],
+    retract: float,
+    rot_weight: float,
+    leave: Mapping[str, float] | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    """The estimated tool costs between the welds ``ids`` (all with a pose), module docstring.
+    """The estimated tool costs between the welds ``ids`` (all with a pose), module docstring;
+    ``leave``: weld id -> mm it is left by along its axis when not ``retract`` (a lift).
 
     Returns
     -------
     cost, length, angle
         ``(n, n)`` mm, ``(n, n)`` mm of TCP path, ``(n, n)`` rad of rotation.
     """
-    R = retract_points(poses, ids, retract)
+    d = np.array([(leave or {}).get(i, retract) for i in ids], dtype=np.float64)
+    R = retract_points(poses, ids, d)
     Q = np.array([poses[i].quaternion for i in ids], dtype=np.float64)
-    length = np.linalg.norm(R[:, None, :] - R[None, :, :], axis=2) + 2.0 * retract
+    length = np.linalg.norm(R[:, None, :] - R[None, :, :], axis=2) + d[:, None] + d[None, :]
     angle = 2.0 * np.arccos(np.clip(np.abs(Q @ Q.T), 0.0, 1.0))
     np.fill_diagonal(length, 0.0)
     np.fill_diagonal(angle, 0.0)
@@ -69,6 +83,7 @@ def tool_order(
     rot_weight: float = DEFAULT_ROT_WEIGHT,
     *,
     rng: Any = None,
+    leave: Mapping[str, float] | None = None,
 ) -> tuple[list[str], dict[str, Any]]:
     """The order of the welds with a pose that minimises the tool costs (module docstring).
 
@@ -82,6 +97,9 @@ def tool_order(
         mm per rad.
     rng
         Seed for the sequencer (used above its exact limit).
+    leave
+        Weld id -> mm it is left by along its axis where that is not ``retract`` (a lift:
+        :func:`weldplan.tool.exits.leave_distances`).
 
     Returns
     -------
@@ -95,7 +113,8 @@ def tool_order(
     stats: dict[str, Any] = {"rot_weight": rot_weight}
     if len(ids) < 3:
         return ids, stats
-    cost, length, angle = tool_leg_costs(poses, ids, retract, rot_weight)
+    cost, length, angle = tool_leg_costs(poses, ids, retract, rot_weight, leave)
+    stats["lifted"] = sum(i in (leave or {}) for i in ids)
     point = list(range(len(ids)))
     seq = solve_sequence(cost, rng=rng)
     order = [int(k) for k in seq.order]

@@ -161,9 +161,10 @@ class TransitionPlanner:
         self.samples = 0
         #: per SE(3) re-plan: states and motions asked, motions refused for the budget, samples
         self.se3_runs: list[dict[str, Any]] = []
-        self._axial: dict[str, tuple[NDArray | None, tuple[str, ...], str]] = {}
-        self._sides: dict[str, tuple[NDArray | None, tuple[str, ...], str]] = {}
-        self._lifts: dict[tuple[str, float], tuple[NDArray, str]] = {}
+        # per weld pose (:func:`_pose_key`: a weld's candidate poses each have their own entry)
+        self._axial: dict[tuple[Any, ...], tuple[NDArray | None, tuple[str, ...], str]] = {}
+        self._sides: dict[tuple[Any, ...], tuple[NDArray | None, tuple[str, ...], str]] = {}
+        self._lifts: dict[tuple[Any, ...], tuple[NDArray, str]] = {}
 
     def _motions(
         self,
@@ -203,21 +204,22 @@ class TransitionPlanner:
     def _leave_axial(self, w: Any) -> tuple[NDArray | None, tuple[str, ...], str]:
         """Weld ``w``'s retract along its TCP axis (cached per weld; the approach is the same
         positions reversed, the same swept set)."""
-        if w.id not in self._axial:
+        key = _pose_key(w)
+        if key not in self._axial:
             p = np.asarray(w.position, dtype=np.float64)
             if self.retract <= 0:
-                self._axial[w.id] = (p[None], (), "")
+                self._axial[key] = (p[None], (), "")
             else:
                 z = quat_to_matrix(np.asarray(w.quaternion, dtype=np.float64))[:, 2]
                 cand = ([p, p - self.retract * z], ("retract",), "retract")
-                self._axial[w.id] = self._try(w, [cand])
-        return self._axial[w.id]
+                self._axial[key] = self._try(w, [cand])
+        return self._axial[key]
 
     def _lift(self, w: Any, lift: float) -> tuple[NDArray, str]:
         """Weld ``w``'s pose and the pose ``lift`` mm back along its TCP axis ``(2, 3)``, and why
         that motion is blocked ('' when free; cached per weld and lift; only w's zone exempt,
         stricter than a transition's two zones; lowering is the same swept set)."""
-        key = (w.id, float(lift))
+        key = (*_pose_key(w), float(lift))
         if key not in self._lifts:
             p = np.asarray(w.position, dtype=np.float64)
             q = np.asarray(w.quaternion, dtype=np.float64)
@@ -231,7 +233,8 @@ class TransitionPlanner:
         side exit of ``side_exit`` mm along TCP -x, +x, -y or +y, and the rest of the retract
         (a C-gun leaves the flange it straddles sideways, its jaws opened round the sheet). A
         blocked lift is tried once, not once per direction."""
-        if w.id not in self._sides:
+        key = _pose_key(w)
+        if key not in self._sides:
             p = np.asarray(w.position, dtype=np.float64)
             q = np.asarray(w.quaternion, dtype=np.float64)
             R = quat_to_matrix(q)
@@ -256,8 +259,8 @@ class TransitionPlanner:
                     fails.append(f"lift {lift:g} exit {name}: {kind} {why}")
                 if found is not None:
                     break
-            self._sides[w.id] = found or (None, (), "; ".join(fails))
-        return self._sides[w.id]
+            self._sides[key] = found or (None, (), "; ".join(fails))
+        return self._sides[key]
 
     def _joined(
         self, a: Any, b: Any, la: NDArray, ka: tuple[str, ...], lb: NDArray, kb: tuple[str, ...]
@@ -375,6 +378,42 @@ class TransitionPlanner:
         out = self._leave_axial(w)
         return out if out[0] is not None else self._side(w)
 
+    def exit_free(
+        self, w: Any, kinds: tuple[str, ...] = ("lift", "axial", "side")
+    ) -> tuple[bool, str]:
+        """Whether the tool can leave weld pose ``w`` (and, the same swept set reversed, approach
+        it) by one of ``kinds``, cheapest first: ``(True, how)`` or ``(False, why each failed)``.
+
+        ``lift``: one of :data:`SLIDE_LIFTS` off the sheet (only a tool that
+        :attr:`~weldplan.tool.model.Tool.straddles` it, with the slide on: the start of a slide,
+        or of an SE(3) re-plan from the lifted pose); ``axial``: the retract; ``side``: a side
+        exit (:meth:`_side`). Each is checked with only ``w``'s zone exempt and cached per pose,
+        so the transitions into and out of ``w`` reuse the answer (:meth:`plan`).
+        ``w`` needs ``id``, ``position`` (mm) and ``quaternion`` (qw, qx, qy, qz).
+        """
+        p = np.asarray(w.position, dtype=np.float64)
+        pad = self.retract + self.side_exit + max(SIDE_LIFTS + SLIDE_LIFTS) + 1.0
+        self.checker.focus(p - pad, p + pad)
+        fails: list[str] = []
+        for kind in kinds:
+            if kind == "lift" and self.slide and self.tool.straddles:
+                for lift in SLIDE_LIFTS:
+                    _, why = self._lift(w, lift)
+                    if not why:
+                        return True, f"lift {lift:g}"
+                    fails.append(f"lift {lift:g}: {why}")
+            elif kind == "axial":
+                la, _, why = self._leave_axial(w)
+                if la is not None:
+                    return True, "axial retract"
+                fails.append(f"axial {why}")
+            elif kind == "side" and self.side_exit > 0 and self.retract > 0:
+                sa, how, why = self._side(w)
+                if sa is not None:
+                    return True, f"side {how[1]}"
+                fails.append(f"side: {why}")
+        return False, "; ".join(fails) or "no exit tried"
+
     def _replan(
         self,
         a: Any,
@@ -479,6 +518,16 @@ class TransitionPlanner:
         return np.asarray(res.points, dtype=np.float64), f"{res.planner}: {res.status}; {tally}"
 
 
+def _pose_key(w: Any) -> tuple[Any, ...]:
+    """The cache key of a weld pose: its id, position and quaternion (rounded to 1e-9: the same
+    pose rebuilt from a 4x4 matrix hits the entry its :class:`WeldPose` made)."""
+    return (
+        str(w.id),
+        *np.round(np.asarray(w.position, dtype=np.float64), 9).tolist(),
+        *np.round(np.asarray(w.quaternion, dtype=np.float64), 9).tolist(),
+    )
+
+
 def _entering(kind: str) -> str:
     """The name of a leaving motion run backwards (a retract is an approach, an exit an entry)."""
     return kind.replace("retract", "approach").replace("exit", "enter")
@@ -492,6 +541,25 @@ def _plan_run(
     tp = TransitionPlanner(part, tool, **kw)
     out = [tp.plan(a, b) for a, b in pairs]
     return out, tp.samples, tp.se3_runs, tp.checker.crops_built
+
+
+def _same_settings(
+    tp: TransitionPlanner, part: trimesh.Trimesh, tool: Tool, kw: dict[str, Any], workers: int
+) -> None:
+    """Refuse a planner whose part, tool or settings differ from the call's (``ValueError``)."""
+    have = {
+        "clearance": tp.checker.clearance, "contact_radius": tp.checker.contact_radius,
+        "retract": tp.retract, "se3": tp.se3, "planner": tp.planner, "time_s": tp.time_s,
+        "seed": tp.seed, "rot_weight": tp.rot_weight, "side_exit": tp.side_exit,
+        "slide": tp.slide, "se3_samples": tp.se3_samples,
+    }  # fmt: skip
+    diff = [k for k, v in have.items() if v != kw[k]]
+    if tp.part is not part or tp.tool is not tool:
+        diff.insert(0, "part or tool")
+    if workers != 1:
+        diff.append("workers (a given planner plans in one process)")
+    if diff:
+        raise ValueError(f"the planner's settings differ from this call's: {', '.join(diff)}")
 
 
 def plan_transitions(
@@ -511,6 +579,7 @@ def plan_transitions(
     se3_samples: int | None = None,
     stats: dict[str, Any] | None = None,
     workers: int = 1,
+    reuse: TransitionPlanner | None = None,
 ) -> ToolPath:
     """The whole tool's transitions through the welds with a pose (module docstring).
 
@@ -532,6 +601,10 @@ def plan_transitions(
         Processes to plan in (:func:`weldplan.tool.transit_workers.run_chunks`: runs of
         consecutive transitions, each with its own planner; the same answers but for the
         SE(3) re-plans' clock).
+    reuse
+        A :class:`TransitionPlanner` to plan with, keeping the exits it has checked already
+        (the pose search's exit test, :mod:`weldplan.tool.exits`, reuses its cache here). Its
+        settings must be those of this call (``ValueError`` otherwise); one process only.
 
     Returns
     -------
@@ -551,7 +624,14 @@ def plan_transitions(
         se3_samples=se3_samples,
     )  # fmt: skip
     pairs = [(poses[a], poses[b]) for a, b in zip(order[:-1], order[1:], strict=True)]
-    runs = run_chunks(_plan_run, pairs, (part, tool, kw), workers)
+    if reuse is not None:
+        _same_settings(reuse, part, tool, kw, workers)
+        n0, c0, r0 = reuse.samples, reuse.checker.crops_built, len(reuse.se3_runs)
+        out = [reuse.plan(a, b) for a, b in pairs]
+        runs = [(out, reuse.samples - n0, reuse.se3_runs[r0:],
+                 reuse.checker.crops_built - c0)]  # fmt: skip
+    else:
+        runs = run_chunks(_plan_run, pairs, (part, tool, kw), workers)
     transitions = tuple(t for run in runs for t in run[0])
     samples = sum(run[1] for run in runs)
     se3_runs = [r for run in runs for r in run[2]]
