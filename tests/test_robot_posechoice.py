@@ -1,0 +1,134 @@
+"""The robot's reach test in the pose choice (weldplan.robot.posechoice, issue 17): the robot
+vetoes gun poses it cannot take (joint limits, out of reach, a link in the part) and the pose
+choice takes the least-rotation pose among those it can."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+import trimesh
+from scipy.spatial.transform import Rotation
+
+from tests.robot_fixtures import shared_robot
+from tests.robot_helpers import TORCH_TCP, down_poses
+from tests.route_fixtures import box_part, box_route
+from weldplan.io.joints import Joints
+from weldplan.robot.collision import RobotCollision
+from weldplan.robot.posechoice import ReachTest, place_for_poses
+from weldplan.robot.reach import BaseSearch, base_pose
+from weldplan.tool import arc_torch, plan_weld_poses, verify_poses
+from weldplan.tool.orient import candidate_rotations, local_candidates
+
+#: the robot 1.5 m behind the welds, 0.5 m below the plate: the torch reaches them from above
+BASE = base_pose(-1500.0, 0.0, -500.0, 0.0)
+#: A1 kept in front (a fence behind the robot), A4 and A6 narrowed (a dress pack that must not
+#: wind): from above, only a torch spun 90 deg about its axis is inside them (A6 = 90 deg on the
+#: only branch with A1 and A4 in +-90; spin 270 would need A1 = 180, over the shoulder)
+NARROW_DEG = {0: (-90.0, 90.0), 3: (-90.0, 90.0), 5: (80.0, 100.0)}
+DOWN = np.diag([1.0, -1.0, -1.0])  # TCP z straight down, spin 0
+
+
+def _plate() -> trimesh.Trimesh:
+    return trimesh.creation.box((600, 600, 2)).apply_translation((0, 0, -1))
+
+
+def _welds() -> Joints:
+    return Joints(ids=["a", "b"], xyz=[[0, 0, 0], [100, 50, 0]], directions=[[0, 0, 1.0]] * 2)
+
+
+def _narrow(robot):
+    lo, hi = np.degrees(robot.lower), np.degrees(robot.upper)
+    for j, (a, b) in NARROW_DEG.items():
+        lo[j], hi[j] = a, b
+    return dataclasses.replace(robot, lower=np.radians(lo), upper=np.radians(hi))
+
+
+def _tcp(p, R=DOWN) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, :3] = R
+    T[:3, 3] = p
+    return T
+
+
+def test_the_least_rotation_pose_out_of_the_limits_gives_way_to_the_reachable_one():
+    robot = _narrow(shared_robot().with_base(BASE))
+    plate, torch = _plate(), arc_torch(bend_angle=0.0)
+    opts = {"cone": 0.0, "spin_step": 15.0}
+    plain = plan_weld_poses(plate, _welds(), torch, **opts)
+    assert [p.spin for p in plain.poses] == [0.0, 0.0]  # spin 0 first among equals
+    test = ReachTest(robot, TORCH_TCP)
+    # the exact answer, independently: of the 24 spins of a weld from above, only 90 deg
+    # passes (IK of each spin; the limits decide)
+    local, params = local_candidates(0.0, 7.5, 15.0, 8)
+    R = candidate_rotations(np.array([[0.0, 0.0, -1.0]]), local)[0]
+    verdicts = test.verdicts(np.stack([_tcp((0, 0, 0), r) for r in R]))
+    assert [s for s, v in zip(params[:, 0], verdicts, strict=True) if v is None] == [90.0]
+    assert verdicts[0].startswith("joint_limit A6 ")
+
+    poses = plan_weld_poses(plate, _welds(), torch, **opts, accept=ReachTest(robot, TORCH_TCP),
+                            max_vetoes=24)  # fmt: skip
+    assert [p.spin for p in poses.poses] == [90.0, 90.0]
+    assert [p.tilt for p in poses.poses] == [0.0, 0.0] and not any(p.note for p in poses.poses)
+    assert poses.total_rotation == pytest.approx(0.0, abs=1e-9)
+    assert poses.stats["accept_exhausted"] == 0 and poses.stats["vetoed"] >= 2
+    assert verify_poses(poses, plate, torch).ok
+    # the chosen poses are reached: FK of a usable IK solution is the flange pose
+    for p in poses.poses:
+        T = poses_tcp(p) @ np.linalg.inv(TORCH_TCP)
+        sol = robot.ik(T)
+        assert len(sol) and robot.in_limits(sol.q).any()
+        assert np.allclose(robot.fk(sol.q[robot.in_limits(sol.q)])[0], T, atol=1e-6)
+
+
+def poses_tcp(p) -> np.ndarray:
+    w, x, y, z = p.quaternion
+    return _tcp(p.position, Rotation.from_quat([x, y, z, w]).as_matrix())
+
+
+def test_the_reasons_name_the_cause():
+    robot = shared_robot().with_base(BASE)
+    box = trimesh.creation.box((150, 150, 150)).apply_translation((-570, 0, 1070))
+    part = trimesh.util.concatenate([_plate(), box])  # a block over the forearm's way
+    free = ReachTest(robot, TORCH_TCP, RobotCollision(robot, _plate(), None, TORCH_TCP))
+    blocked = ReachTest(robot, TORCH_TCP, RobotCollision(robot, part, None, TORCH_TCP))
+    narrow = ReachTest(_narrow(robot), TORCH_TCP)
+    here, far = _tcp((0, 0, 0)), _tcp((3000, 0, 0))
+    assert free.verdicts(np.stack([here, far])) == [None, "out_of_reach"]
+    assert blocked(0, here) == "link_3 in the part"
+    spun = _tcp((0, 0, 0), DOWN @ Rotation.from_euler("z", 30, degrees=True).as_matrix())
+    assert narrow(0, spun) == "joint_limit A6 150 deg (limits 80..100)"
+    assert (free.calls, blocked.calls, narrow.calls) == (2, 1, 1)
+    assert free.vetoes == {"out_of_reach": 1} and blocked.vetoes == {"link_3": 1}
+
+
+def test_a_weld_whose_every_pose_puts_the_arm_in_the_part_keeps_its_pose_with_a_note():
+    robot = shared_robot().with_base(BASE)
+    box = trimesh.creation.box((150, 150, 150)).apply_translation((-570, 0, 1070))
+    part = trimesh.util.concatenate([_plate(), box])
+    torch = arc_torch(bend_angle=0.0)
+    test = ReachTest(robot, TORCH_TCP, RobotCollision(robot, part, None, TORCH_TCP))
+    plain = plan_weld_poses(part, _welds(), torch, cone=0.0, spin_step=30.0)
+    poses = plan_weld_poses(part, _welds(), torch, cone=0.0, spin_step=30.0, accept=test,
+                            max_vetoes=3)  # fmt: skip
+    # a spin does not move the forearm: every pose is vetoed, the least-rotation one is kept
+    assert [p.quaternion for p in poses.poses] == [p.quaternion for p in plain.poses]
+    assert all(p.note.startswith("3 free poses vetoed (link_3 in the part)") for p in poses.poses)
+    assert test.vetoes == {"link_3": 6}
+
+
+def test_the_base_is_searched_for_the_first_pass_poses_and_serves_them():
+    robot = shared_robot()
+    route = box_route(directions=True)
+    poses = down_poses(route)
+    part = box_part()
+    checker = RobotCollision(robot, part, None, TORCH_TCP)
+    pl = place_for_poses(
+        robot, route, poses, TORCH_TCP, part, checker, BaseSearch(step=500.0, extra_yaws=())
+    )
+    assert pl.searched and pl.candidates > 0
+    rb = robot.with_base(pl.base)
+    test = ReachTest(rb, TORCH_TCP, checker.with_robot(rb))
+    T = np.stack([poses_tcp(p) for p in poses.poses])
+    assert test.verdicts(T) == [None] * len(T)
