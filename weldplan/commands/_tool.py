@@ -162,9 +162,17 @@ def tool_from_args(args: argparse.Namespace) -> tuple[Any, dict[str, Any]] | Non
 
 
 def plan_poses(
-    args: argparse.Namespace, cell: Any, route: Any, tool: Any, prov: dict[str, Any]
+    args: argparse.Namespace,
+    cell: Any,
+    route: Any,
+    tool: Any,
+    prov: dict[str, Any],
+    accept: Any = None,
 ) -> tuple[Any, Any]:
     """The pose stage: plan the poses in route order and re-check them independently.
+
+    ``accept``: the pose choice's acceptance test (:mod:`weldplan.tool.pose_choice`; the
+    robot's reach, :func:`weldplan.commands._robot.pose_acceptance`), or ``None``.
 
     Returns
     -------
@@ -176,7 +184,7 @@ def plan_poses(
     from weldplan.tool import plan_weld_poses, verify_poses
 
     poses = plan_weld_poses(
-        cell, route, tool, cone=args.tool_cone, contact_radius=args.contact_radius
+        cell, route, tool, cone=args.tool_cone, contact_radius=args.contact_radius, accept=accept
     )
     check = verify_poses(poses, cell.part, tool)
     data: dict[str, Any] = {"provenance": prov, "poses": poses.to_dict()}
