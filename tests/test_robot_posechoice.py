@@ -132,3 +132,24 @@ def test_the_base_is_searched_for_the_first_pass_poses_and_serves_them():
     test = ReachTest(rb, TORCH_TCP, checker.with_robot(rb))
     T = np.stack([poses_tcp(p) for p in poses.poses])
     assert test.verdicts(T) == [None] * len(T)
+
+
+def test_a_tool_that_straddles_is_turned_over_when_the_test_vetoes_its_approach_side():
+    plate, torch = _plate(), arc_torch(bend_angle=0.0)
+
+    def from_below(i: int, T: np.ndarray) -> str | None:  # the robot stands under the plate
+        return "joint_limit A5" if T[2, 2] < 0 else None
+
+    opts = {"cone": 0.0, "spin_step": 30.0, "both_sides": True}
+    plain = plan_weld_poses(plate, _welds(), torch, **opts)
+    assert not any(p.flipped for p in plain.poses)  # the approach side first
+    poses = plan_weld_poses(plate, _welds(), torch, **opts, accept=from_below, max_vetoes=12)
+    # 12 spins from above, all vetoed: the test is lifted, then put back on the turned-over
+    # candidates, and the first of those (spin 0, from below) passes at both welds
+    assert [(p.flipped, p.spin, p.note) for p in poses.poses] == [(True, 0.0, "")] * 2
+    assert poses.stats["vetoed"] == 24 and poses.stats["accept_exhausted"] == 0
+    assert poses.total_rotation == pytest.approx(0.0, abs=1e-9)
+    assert verify_poses(poses, plate, torch).ok
+    # without both sides, the weld keeps its approach-side pose with the note
+    kept = plan_weld_poses(plate, _welds(), torch, cone=0.0, spin_step=30.0, accept=from_below)
+    assert all(not p.flipped and p.note.startswith("12 free poses vetoed") for p in kept.poses)

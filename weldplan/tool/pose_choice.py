@@ -89,6 +89,10 @@ class ChoiceState:
             "vetoed": 0,
         }
         self._angles: dict[tuple[int, int], tuple[NDArray, NDArray, NDArray]] = {}
+        #: weld -> its vetoes when the test was lifted (restored by :meth:`retry`)
+        self._lifted: dict[int, NDArray[np.bool_]] = {}
+        #: weld -> vetoes taken before its last :meth:`retry` (not counted against max_vetoes)
+        self.veto_base: dict[int, int] = {}
 
     def angles(
         self, quats: NDArray, i: int, ci: NDArray[np.int64], j: int, cj: NDArray[np.int64]
@@ -106,7 +110,15 @@ class ChoiceState:
     def exhaust(self, i: int) -> None:
         """Lift the acceptance test for weld ``i``."""
         self.exhausted.add(i)
+        self._lifted[i] = self.vetoed[i].copy()
         self.vetoed[i] = False
+
+    def retry(self, i: int) -> None:
+        """Put the acceptance test back on exhausted weld ``i`` (its vetoes restored, a fresh
+        count of ``max_vetoes``): it has new candidates to judge (turned over)."""
+        self.exhausted.discard(i)
+        self.vetoed[i] |= self._lifted.pop(i, np.zeros_like(self.vetoed[i]))
+        self.veto_base[i] = len(self.veto_reasons.get(i, []))
 
 
 def _pose(p: NDArray[np.float64], R: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -138,7 +150,7 @@ def _judge(
         state.vetoed[i, k] = vetoed = True
         reasons = state.veto_reasons.setdefault(i, [])
         reasons.append(str(reason))
-        if len(reasons) >= max_vetoes:
+        if len(reasons) - state.veto_base.get(i, 0) >= max_vetoes:
             state.exhaust(i)
     return vetoed
 

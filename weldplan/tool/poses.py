@@ -9,8 +9,10 @@ to ``cone`` degrees, ``azimuths`` directions per ring), :mod:`weldplan.tool.orie
 A tool that straddles the sheet (a C-gun, :attr:`~weldplan.tool.model.Tool.straddles`) may also
 weld a spot **turned over**, the approach axis reversed: the electrodes clamp the sheet, so
 either side is a legitimate approach. The turned-over candidates are tried only for a weld with
-no free candidate on the approach side (the joints CSV's side stays the first choice, and the
-choice among welds free on that side is what it was without turning over).
+no free candidate on the approach side, or for which the acceptance test (below) was lifted
+(its free ones all vetoed, or ``max_vetoes`` reached: the test then judges the turned-over ones
+too) (the joints CSV's side stays the first choice, and the choice among welds free and
+accepted on that side is what it was without turning over).
 
 A candidate is free when the tool **minus its part inside the contact zone** (the sphere of
 ``contact_radius`` mm about the TCP, i.e. about the weld spot, cut to the tool's tip cone for an
@@ -235,6 +237,11 @@ def plan_weld_poses(
     turn = [i for i in range(n) if both_sides and i not in choice and not allowed[i, over].any()]
     for i in turn:  # free of collision on the approach side, but short of the clearance
         table.turn_over(i)
+    vetoed = [i for i in sorted(state.exhausted) if both_sides and not allowed[i, over].any()]
+    for i in vetoed:  # every free pose on the approach side vetoed: the test judges turned over
+        table.turn_over(i)
+        state.retry(i)
+    turn += vetoed
     if turn:
         choice, total = pick()
     t_miss = time.perf_counter()
