@@ -20,6 +20,7 @@ from weldplan.robot.posechoice import ReachTest, place_for_poses
 from weldplan.robot.reach import BaseSearch, base_pose
 from weldplan.tool import arc_torch, plan_weld_poses, verify_poses
 from weldplan.tool.orient import candidate_rotations, local_candidates
+from weldplan.tool.pose_choice import all_of
 
 #: the robot 1.5 m behind the welds, 0.5 m below the plate: the torch reaches them from above
 BASE = base_pose(-1500.0, 0.0, -500.0, 0.0)
@@ -67,12 +68,15 @@ def test_the_least_rotation_pose_out_of_the_limits_gives_way_to_the_reachable_on
     assert [s for s, v in zip(params[:, 0], verdicts, strict=True) if v is None] == [90.0]
     assert verdicts[0].startswith("joint_limit A6 ")
 
-    poses = plan_weld_poses(plate, _welds(), torch, **opts, accept=ReachTest(robot, TORCH_TCP),
-                            max_vetoes=24)  # fmt: skip
+    # composed with a test that passes everything (all_of keeps the batch judgment)
+    accept = all_of(lambda i, T: None, ReachTest(robot, TORCH_TCP))
+    poses = plan_weld_poses(plate, _welds(), torch, **opts, accept=accept)
     assert [p.spin for p in poses.poses] == [90.0, 90.0]
     assert [p.tilt for p in poses.poses] == [0.0, 0.0] and not any(p.note for p in poses.poses)
     assert poses.total_rotation == pytest.approx(0.0, abs=1e-9)
-    assert poses.stats["accept_exhausted"] == 0 and poses.stats["vetoed"] >= 2
+    # one pick vetoed per weld, then its 23 other spins judged at once: 22 vetoed
+    assert poses.stats["accept_exhausted"] == 0 and poses.stats["vetoed"] == 2
+    assert poses.stats["batch_judged"] == 46 and poses.stats["batch_vetoed"] == 44
     assert verify_poses(poses, plate, torch).ok
     # the chosen poses are reached: FK of a usable IK solution is the flange pose
     for p in poses.poses:
@@ -110,12 +114,12 @@ def test_a_weld_whose_every_pose_puts_the_arm_in_the_part_keeps_its_pose_with_a_
     torch = arc_torch(bend_angle=0.0)
     test = ReachTest(robot, TORCH_TCP, RobotCollision(robot, part, None, TORCH_TCP))
     plain = plan_weld_poses(part, _welds(), torch, cone=0.0, spin_step=30.0)
-    poses = plan_weld_poses(part, _welds(), torch, cone=0.0, spin_step=30.0, accept=test,
-                            max_vetoes=3)  # fmt: skip
-    # a spin does not move the forearm: every pose is vetoed, the least-rotation one is kept
+    poses = plan_weld_poses(part, _welds(), torch, cone=0.0, spin_step=30.0, accept=test)
+    # a spin does not move the forearm: every pose is vetoed (the pick, then the other 11 at
+    # once), the least-rotation one is kept
     assert [p.quaternion for p in poses.poses] == [p.quaternion for p in plain.poses]
-    assert all(p.note.startswith("3 free poses vetoed (link_3 in the part)") for p in poses.poses)
-    assert test.vetoes == {"link_3": 6}
+    assert all(p.note.startswith("12 free poses vetoed (link_3 in the part)") for p in poses.poses)
+    assert test.vetoes == {"link_3": 24} and poses.stats["vetoed"] == 2
 
 
 def test_the_base_is_searched_for_the_first_pass_poses_and_serves_them():

@@ -1,7 +1,11 @@
 """The robot options of ``plan`` and ``demo`` and the robot stage of a planning run (issue 17).
 
 With ``--robot URDF`` (and a URDF ``--tool``: its root link is mounted on the robot's flange), a
-planning run, after the route and the weld poses were verified, runs :func:`robot_stage`:
+planning run chooses the weld poses with the robot's reach test (:func:`pose_acceptance`, from
+``--robot-base`` or from a base searched on the poses chosen without it, then kept: a gun pose
+the robot cannot take on a usable branch with its links clear of the part gives way to the next
+least-rotation free pose; :mod:`weldplan.robot.posechoice`) and, after the route and the weld
+poses were verified, runs :func:`robot_stage`:
 
 1. the joint route (:func:`weldplan.robot.plan.plan_robot_route`: base given by
    ``--robot-base`` or searched, one continuous IK branch, robot + tool collision check,
