@@ -62,8 +62,15 @@ def straight_route(joints, approach_mm: float = APPROACH_MM):
     )
 
 
-def station(n: int, cache: Path | None, tool_name: str = "gun"):
-    """``(part, route, poses, tool)`` of the ``n``-joint car2 station (module docstring)."""
+def station(
+    n: int,
+    cache: Path | None,
+    tool_name: str = "gun",
+    cone: float = POSE_CONE,
+    spin_step: float = POSE_SPIN_STEP,
+):
+    """``(part, route, poses, tool)`` of the ``n``-joint car2 station (module docstring); the
+    gun-pose search over ``cone`` and ``spin_step`` degrees."""
     from weldplan.tool import WeldPoses, arc_torch, plan_weld_poses, shared_spot_gun
     from weldplan.weld.synthetic import car2_joints, car2_part
 
@@ -71,12 +78,13 @@ def station(n: int, cache: Path | None, tool_name: str = "gun"):
     joints = car2_joints(n, mesh=part)
     route = straight_route(joints)
     gun = shared_spot_gun() if tool_name == "gun" else arc_torch(bend_angle=0.0)
-    f = None if cache is None else cache / f"car2_{n}_{tool_name}_poses.json"
+    alt = "" if (cone, spin_step) == (POSE_CONE, POSE_SPIN_STEP) else f"_c{cone:g}_s{spin_step:g}"
+    f = None if cache is None else cache / f"car2_{n}_{tool_name}{alt}_poses.json"
     if f is not None and f.is_file():
         poses = WeldPoses.from_json(f.read_text())
     else:
         t = time.perf_counter()
-        poses = plan_weld_poses(part, route, gun, cone=POSE_CONE, spin_step=POSE_SPIN_STEP)
+        poses = plan_weld_poses(part, route, gun, cone=cone, spin_step=spin_step)
         log.info("gun poses for %d spots: %.1f s", n, time.perf_counter() - t)
         if f is not None:
             f.parent.mkdir(parents=True, exist_ok=True)
@@ -97,6 +105,8 @@ def measure(
     tool_name: str = "gun",
     replan: bool = False,
     reach_poses: bool = False,
+    cone: float = POSE_CONE,
+    spin_step: float = POSE_SPIN_STEP,
 ) -> dict:
     from weldplan.robot import load_robot
     from weldplan.robot.plan import plan_robot_route, tool_flange_tcp
@@ -105,7 +115,7 @@ def measure(
     from weldplan.weld.synthetic import CAR2
 
     robot_dir = Path(CAR2).parents[1] / "robots" / "kuka_kr150r3100_2"
-    part, route, poses, gun = station(n, cache, tool_name)
+    part, route, poses, gun = station(n, cache, tool_name, cone, spin_step)
     robot = load_robot(robot_dir / "kr150r3100_2.urdf")
     if tool_name == "gun":
         F = tool_flange_tcp(robot, SHARED_GUN_DIR / "spot_welding_gun.urdf", "nozzle_tip")
@@ -114,7 +124,9 @@ def measure(
         F[2, 3] = TORCH_REACH_MM
     reach: dict = {}
     if reach_poses:
-        poses, base_T, reach = _reach_poses(robot, F, part, route, poses, gun, base, search_step)
+        poses, base_T, reach = _reach_poses(
+            robot, F, part, route, poses, gun, base, search_step, cone, spin_step
+        )
         kw: dict = {"base": base_T}
     else:
         kw = {"base": parse_base(base)} if base else {"search": BaseSearch(step=search_step)}
@@ -155,7 +167,7 @@ def measure(
     }
 
 
-def _reach_poses(robot, F, part, route, poses, gun, base, search_step) -> tuple:
+def _reach_poses(robot, F, part, route, poses, gun, base, search_step, cone, spin_step) -> tuple:
     """The gun poses re-chosen with the robot's reach test (:mod:`weldplan.robot.posechoice`)
     at ``base``, or at the base searched for the first-pass ``poses``: ``(poses, base (4, 4),
     figures)``."""
@@ -176,7 +188,7 @@ def _reach_poses(robot, F, part, route, poses, gun, base, search_step) -> tuple:
     t1 = time.perf_counter()
     rb = robot.with_base(B)
     test = ReachTest(rb, F, checker.with_robot(rb))
-    again = plan_weld_poses(part, route, gun, cone=POSE_CONE, spin_step=POSE_SPIN_STEP, accept=test)
+    again = plan_weld_poses(part, route, gun, cone=cone, spin_step=spin_step, accept=test)
     t2 = time.perf_counter()
     figures = {
         "base_searched": not base,
@@ -207,6 +219,18 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "the issue's timed target)",
     )
     p.add_argument(
+        "--pose-cone",
+        type=float,
+        default=POSE_CONE,
+        help=f"tilt cone of the gun-pose search, deg (default {POSE_CONE:g}; plan's is 15)",
+    )
+    p.add_argument(
+        "--pose-spin",
+        type=float,
+        default=POSE_SPIN_STEP,
+        help=f"spin step of the gun-pose search, deg (default {POSE_SPIN_STEP:g}; plan's is 15)",
+    )
+    p.add_argument(
         "--reach-poses",
         action="store_true",
         help="re-choose the gun poses with the robot's reach test first (the base searched for "
@@ -224,7 +248,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         out = measure(
             args.n, args.robot_base, args.cache, args.search_step, args.tool, args.replan,
-            args.reach_poses,
+            args.reach_poses, args.pose_cone, args.pose_spin,
         )  # fmt: skip
     except WeldplanError as exc:
         print(f"error: {exc}")
