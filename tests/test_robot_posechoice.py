@@ -157,3 +157,25 @@ def test_a_tool_that_straddles_is_turned_over_when_the_test_vetoes_its_approach_
     # without both sides, the weld keeps its approach-side pose with the note
     kept = plan_weld_poses(plate, _welds(), torch, cone=0.0, spin_step=30.0, accept=from_below)
     assert all(not p.flipped and p.note.startswith("12 free poses vetoed") for p in kept.poses)
+
+
+def test_plan_with_a_robot_base_judges_the_poses_from_it(tmp_path, capsys):
+    import json
+
+    from tests.cli_helpers import run_cli
+    from tests.route_fixtures import write_box_station
+    from tests.test_robot_cli import _robot_urdf, _torch_urdf
+
+    _, mesh, joints = write_box_station(tmp_path)
+    argv = [
+        "plan", str(mesh), str(joints), "--margin", "50", "-o", str(tmp_path / "r.csv"),
+        "--json", str(tmp_path / "r.json"), "--tool", str(_torch_urdf(tmp_path)),
+        "--robot", str(_robot_urdf()), "--robot-base=-1800,0,-700,0",
+    ]  # fmt: skip
+    assert run_cli(argv) == 0
+    out = capsys.readouterr().out
+    row = next(line for line in out.splitlines() if line.startswith("robot reach test"))
+    # the four welds' least-rotation poses are reached from that base: judged once, none vetoed
+    assert "4 gun pose(s) judged, 0 vetoed; base given" in row
+    poses = json.loads((tmp_path / "r.json").read_text())["tool"]["poses"]
+    assert poses["stats"]["accept_calls"] == 4 and not any(p["note"] for p in poses["poses"])

@@ -11,7 +11,12 @@ usable branch **no link touches the part** at that configuration
 (:meth:`weldplan.robot.collision.RobotCollision.states_blocked`, FCL judges). The tool is left
 out: the tool stage has checked it at the pose, minus its contact zone, before ``accept`` runs.
 A veto names its cause: ``out_of_reach``, ``joint_limit A5 165 deg (limits -125..125)``,
-``singular``, ``link_3 in the part``. The test is a preference of the pose choice, not a
+``singular``, ``link_3 in the part``. :meth:`ReachTest.verdicts` judges many poses in one
+call (one IK for all, one FCL pass over their usable branches): the pose choice uses it to veto
+the rest of a weld's candidates at once when its pick is vetoed (batch vetoes,
+:mod:`weldplan.tool.pose_choice`), and a C-gun whose approach side is all vetoed is then tried
+turned over (the demo's welds 13 and 15: every approach-side pose needs A5 141-160 deg from the
+searched base, turned over 47-61 deg). The test is a preference of the pose choice, not a
 verification: the robot route (:func:`weldplan.robot.plan.plan_robot_route`) re-checks the links
 and the tool on every branch it uses, and the whole joint path.
 
