@@ -62,8 +62,15 @@ def straight_route(joints, approach_mm: float = APPROACH_MM):
     )
 
 
-def station(n: int, cache: Path | None, tool_name: str = "gun"):
-    """``(part, route, poses, tool)`` of the ``n``-joint car2 station (module docstring)."""
+def station(
+    n: int,
+    cache: Path | None,
+    tool_name: str = "gun",
+    cone: float = POSE_CONE,
+    spin_step: float = POSE_SPIN_STEP,
+):
+    """``(part, route, poses, tool)`` of the ``n``-joint car2 station (module docstring); the
+    gun-pose search over ``cone`` and ``spin_step`` degrees."""
     from weldplan.tool import WeldPoses, arc_torch, plan_weld_poses, shared_spot_gun
     from weldplan.weld.synthetic import car2_joints, car2_part
 
@@ -71,12 +78,13 @@ def station(n: int, cache: Path | None, tool_name: str = "gun"):
     joints = car2_joints(n, mesh=part)
     route = straight_route(joints)
     gun = shared_spot_gun() if tool_name == "gun" else arc_torch(bend_angle=0.0)
-    f = None if cache is None else cache / f"car2_{n}_{tool_name}_poses.json"
+    alt = "" if (cone, spin_step) == (POSE_CONE, POSE_SPIN_STEP) else f"_c{cone:g}_s{spin_step:g}"
+    f = None if cache is None else cache / f"car2_{n}_{tool_name}{alt}_poses.json"
     if f is not None and f.is_file():
         poses = WeldPoses.from_json(f.read_text())
     else:
         t = time.perf_counter()
-        poses = plan_weld_poses(part, route, gun, cone=POSE_CONE, spin_step=POSE_SPIN_STEP)
+        poses = plan_weld_poses(part, route, gun, cone=cone, spin_step=spin_step)
         log.info("gun poses for %d spots: %.1f s", n, time.perf_counter() - t)
         if f is not None:
             f.parent.mkdir(parents=True, exist_ok=True)
@@ -96,6 +104,9 @@ def measure(
     search_step: float,
     tool_name: str = "gun",
     replan: bool = False,
+    reach_poses: bool = False,
+    cone: float = POSE_CONE,
+    spin_step: float = POSE_SPIN_STEP,
 ) -> dict:
     from weldplan.robot import load_robot
     from weldplan.robot.plan import plan_robot_route, tool_flange_tcp
@@ -104,16 +115,23 @@ def measure(
     from weldplan.weld.synthetic import CAR2
 
     robot_dir = Path(CAR2).parents[1] / "robots" / "kuka_kr150r3100_2"
-    part, route, poses, gun = station(n, cache, tool_name)
+    part, route, poses, gun = station(n, cache, tool_name, cone, spin_step)
     robot = load_robot(robot_dir / "kr150r3100_2.urdf")
     if tool_name == "gun":
         F = tool_flange_tcp(robot, SHARED_GUN_DIR / "spot_welding_gun.urdf", "nozzle_tip")
     else:
         F = np.eye(4)
         F[2, 3] = TORCH_REACH_MM
+    reach: dict = {}
+    if reach_poses:
+        poses, base_T, reach = _reach_poses(
+            robot, F, part, route, poses, gun, base, search_step, cone, spin_step
+        )
+        kw: dict = {"base": base_T}
+    else:
+        kw = {"base": parse_base(base)} if base else {"search": BaseSearch(step=search_step)}
     t0 = time.perf_counter()
     c0 = time.process_time()
-    kw = {"base": parse_base(base)} if base else {"search": BaseSearch(step=search_step)}
     rr = plan_robot_route(
         route, poses, robot, flange_tcp=F, part=part, tool=gun, replan=replan, **kw
     )
@@ -134,7 +152,9 @@ def measure(
         "flips": len(rr.flips),
         "waypoints": len(rr.q),
         "base_xyz_yaw": [round(v, 1) for v in rr.stats["placement"]["base_xyz_yaw"]],
-        "base_searched": rr.stats["placement"]["searched"],
+        "base_searched": rr.stats["placement"]["searched"] or bool(reach.get("base_searched")),
+        # --reach-poses: the gun poses re-chosen with the robot's reach test at the base
+        **({"reach_poses": reach} if reach else {}),
         "seconds_total": round(total, 2),
         # CPU seconds of this process (all its threads): the wall time's share of a loaded box
         "cpu_seconds_total": round(cpu, 2),
@@ -145,6 +165,43 @@ def measure(
         "fk_max_error_mm": rr.stats["fk_max_error_mm"],
         "load_average": os.getloadavg(),
     }
+
+
+def _reach_poses(robot, F, part, route, poses, gun, base, search_step, cone, spin_step) -> tuple:
+    """The gun poses re-chosen with the robot's reach test (:mod:`weldplan.robot.posechoice`)
+    at ``base``, or at the base searched for the first-pass ``poses``: ``(poses, base (4, 4),
+    figures)``."""
+    from weldplan.robot.collision import RobotCollision
+    from weldplan.robot.posechoice import ReachTest, place_for_poses
+    from weldplan.robot.reach import BaseSearch, parse_base
+    from weldplan.tool import plan_weld_poses
+
+    t0 = time.perf_counter()
+    zone = float(poses.settings.get("contact_radius", 20.0))
+    checker = RobotCollision(robot, part, None, F, contact_radius=zone)
+    if base:
+        B = parse_base(base)
+    else:
+        B = place_for_poses(
+            robot, route, poses, F, part, checker, BaseSearch(step=search_step)
+        ).base
+    t1 = time.perf_counter()
+    rb = robot.with_base(B)
+    test = ReachTest(rb, F, checker.with_robot(rb))
+    again = plan_weld_poses(part, route, gun, cone=cone, spin_step=spin_step, accept=test)
+    t2 = time.perf_counter()
+    figures = {
+        "base_searched": not base,
+        "seconds_base_search": round(t1 - t0, 2),
+        "seconds_poses_with_test": round(t2 - t1, 2),
+        "poses_judged": test.calls,
+        "vetoes": dict(test.vetoes),
+        "welds_exhausted": again.stats["accept_exhausted"],
+        "poses_changed": sum(
+            a.quaternion != b.quaternion for a, b in zip(poses.poses, again.poses, strict=True)
+        ),
+    }
+    return again, B, figures
 
 
 HELP = "IK, branch choice and robot collision on a car2 station (issue 17 target: 200 joints, 30 s)"
@@ -162,6 +219,24 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "the issue's timed target)",
     )
     p.add_argument(
+        "--pose-cone",
+        type=float,
+        default=POSE_CONE,
+        help=f"tilt cone of the gun-pose search, deg (default {POSE_CONE:g}; plan's is 15)",
+    )
+    p.add_argument(
+        "--pose-spin",
+        type=float,
+        default=POSE_SPIN_STEP,
+        help=f"spin step of the gun-pose search, deg (default {POSE_SPIN_STEP:g}; plan's is 15)",
+    )
+    p.add_argument(
+        "--reach-poses",
+        action="store_true",
+        help="re-choose the gun poses with the robot's reach test first (the base searched for "
+        "the first-pass poses, or --robot-base), as plan --robot does; timed apart",
+    )
+    p.add_argument(
         "--tool",
         choices=("gun", "torch"),
         default="gun",
@@ -171,7 +246,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     try:
-        out = measure(args.n, args.robot_base, args.cache, args.search_step, args.tool, args.replan)
+        out = measure(
+            args.n, args.robot_base, args.cache, args.search_step, args.tool, args.replan,
+            args.reach_poses, args.pose_cone, args.pose_spin,
+        )  # fmt: skip
     except WeldplanError as exc:
         print(f"error: {exc}")
         return 2

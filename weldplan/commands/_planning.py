@@ -218,8 +218,13 @@ def _tool_robot_stages(
     extra_rows: list[tuple[str, str]] = []
     texts: dict[str, str] = {}
     skipped: tuple[str, ...] = ()
+    reach = None
+    if robot is not None:  # the robot's reach test for the weld poses
+        from weldplan.commands._robot import pose_acceptance
+
+        reach = pose_acceptance(args, cell, route, tool[0], robot)  # type: ignore[index]
     if tool is not None:
-        staged = _pose_stage(args, cell, route, tool, bars, times)
+        staged = _pose_stage(args, cell, route, tool, bars, times, reach and reach.accept)
         if staged is None:
             return None
         route, extra_rows = staged
@@ -227,7 +232,7 @@ def _tool_robot_stages(
         from weldplan.commands._robot import robot_stage
 
         with bars.stage("robot") as st:
-            stage = robot_stage(args, cell, route, tool[0], robot, outputs)  # type: ignore[index]
+            stage = robot_stage(args, cell, route, tool[0], robot, outputs, reach)  # type: ignore[index]
         times["robot"] = st.seconds
         extra_rows += stage.rows
         texts = stage.texts
@@ -243,13 +248,14 @@ def _pose_stage(
     tool: tuple[Any, dict[str, Any]],
     bars: ProgressBars,
     times: dict[str, float],
+    accept: Any = None,
 ) -> tuple[Any, list[tuple[str, str]]] | None:
     """The weld poses and their independent re-check; ``None`` (said on stderr) when the re-check
     fails, else the route carrying the poses and the summary rows."""
     from weldplan.commands._tool import plan_poses, pose_rows
 
     with bars.stage("poses") as st:
-        route, check = plan_poses(args, cell, route, *tool)
+        route, check = plan_poses(args, cell, route, *tool, accept=accept)
     times["poses"] = st.seconds
     if not check.ok:
         print(

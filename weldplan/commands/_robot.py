@@ -1,7 +1,11 @@
 """The robot options of ``plan`` and ``demo`` and the robot stage of a planning run (issue 17).
 
 With ``--robot URDF`` (and a URDF ``--tool``: its root link is mounted on the robot's flange), a
-planning run, after the route and the weld poses were verified, runs :func:`robot_stage`:
+planning run chooses the weld poses with the robot's reach test (:func:`pose_acceptance`, from
+``--robot-base`` or from a base searched on the poses chosen without it, then kept: a gun pose
+the robot cannot take on a usable branch with its links clear of the part gives way to the next
+least-rotation free pose; :mod:`weldplan.robot.posechoice`) and, after the route and the weld
+poses were verified, runs :func:`robot_stage`:
 
 1. the joint route (:func:`weldplan.robot.plan.plan_robot_route`: base given by
    ``--robot-base`` or searched, one continuous IK branch, robot + tool collision check,
@@ -23,6 +27,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import logging
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -32,6 +37,8 @@ import numpy as np
 
 from weldplan.commands._robot_cost import cost_rows, flange_tcp, is_urdf, tool_load
 from weldplan.errors import InputError, PlanningError, WeldplanError
+
+log = logging.getLogger(__name__)
 
 #: the round trip of an emitted program must close within these (mm, deg): the issue's target
 CHECK_MM = 0.01
@@ -155,6 +162,58 @@ def robot_from_args(args: argparse.Namespace) -> Any:
 
 
 @dataclass(frozen=True, eq=False)
+class RobotAcceptance:
+    """The robot's side of the pose stage (:func:`pose_acceptance`)."""
+
+    #: the pose choice's acceptance test (:class:`weldplan.robot.posechoice.ReachTest`)
+    accept: Any
+    #: the robot at the base the test judges from
+    robot: Any
+    #: the base searched on the first-pass poses; ``None`` when it was given (``--robot-base``,
+    #: or fixed by ``--cost time``)
+    placement: Any = None
+    #: s spent on the first-pass poses and the base search
+    seconds: float = 0.0
+
+
+def pose_acceptance(
+    args: argparse.Namespace, cell: Any, route: Any, tool: Any, robot: Any
+) -> RobotAcceptance | None:
+    """The robot's reach test for the weld poses (:mod:`weldplan.robot.posechoice`), from the
+    base the robot stage will use: ``--robot-base`` (or the one ``--cost time`` fixed), else the
+    base searched for the tool stage's poses chosen without the robot (a first pass of the pose
+    choice; :func:`weldplan.robot.posechoice.place_for_poses`). ``None`` (logged) when no base
+    candidate serves a weld: the robot stage then searches as without the test."""
+    import time
+
+    from weldplan.robot.collision import RobotCollision
+    from weldplan.robot.posechoice import ReachTest, place_for_poses
+    from weldplan.tool import plan_weld_poses
+
+    t0 = time.perf_counter()
+    F = flange_tcp(args, robot)
+    checker = RobotCollision(robot, cell.part, None, F, contact_radius=args.contact_radius)
+    placement = None
+    if not _base_fixed(args):
+        first = plan_weld_poses(
+            cell, route, tool, cone=args.tool_cone, contact_radius=args.contact_radius
+        )
+        try:
+            placement = place_for_poses(robot, route, first, F, cell.part, checker)
+        except PlanningError as exc:
+            log.warning("robot reach test skipped: no base for the first-pass poses (%s)", exc)
+            return None
+        robot = robot.with_base(placement.base)
+    test = ReachTest(robot, F, checker.with_robot(robot))
+    return RobotAcceptance(test, robot, placement, time.perf_counter() - t0)
+
+
+def _base_fixed(args: argparse.Namespace) -> bool:
+    """With ``--cost time`` the base was fixed (given or searched) before the order."""
+    return args.robot_base is not None or getattr(args, "cost", "length") == "time"
+
+
+@dataclass(frozen=True, eq=False)
 class RobotStage:
     """What the robot stage hands to the writer and the summary."""
 
@@ -167,10 +226,18 @@ class RobotStage:
 
 
 def robot_stage(
-    args: argparse.Namespace, cell: Any, route: Any, tool: Any, robot: Any, outputs: dict
+    args: argparse.Namespace,
+    cell: Any,
+    route: Any,
+    tool: Any,
+    robot: Any,
+    outputs: dict,
+    reach: RobotAcceptance | None = None,
 ) -> RobotStage:
     """Steps 1-4 of the module docstring. Raises :class:`PlanningError` when a weld cannot be
-    served or the emitted program does not close its FK round trip."""
+    served or the emitted program does not close its FK round trip. ``reach``: the pose stage's
+    robot test (:func:`pose_acceptance`); its base, when it searched one, is kept (the poses
+    were chosen for it)."""
     from weldplan.robot.plan import plan_robot_route
     from weldplan.robot.program import robot_program
     from weldplan.robot.reach import BaseSearch
@@ -179,8 +246,9 @@ def robot_stage(
 
     poses = route_poses(route)
     Tft = flange_tcp(args, robot)
-    # with --cost time the base was fixed (given or searched) before the order
-    given = args.robot_base is not None or getattr(args, "cost", "length") == "time"
+    given = _base_fixed(args) or (reach is not None and reach.placement is not None)
+    if reach is not None:
+        robot = reach.robot
     rr = plan_robot_route(
         route,
         poses,
@@ -192,6 +260,10 @@ def robot_stage(
         search=None if given else BaseSearch(),
         rng=args.seed,
     )
+    if reach is not None and reach.placement is not None:  # searched, before the poses
+        rr.stats["placement"].update(
+            searched=True, candidates=reach.placement.candidates, on="first-pass poses"
+        )
     if rr.stats.get("collision_free") is False:
         hits = rr.stats.get("hits") or []
         raise PlanningError(
@@ -232,7 +304,7 @@ def robot_stage(
             rb, build.timing, rr.flange_tcp, part=cell.part, tool=tool,
             route_points=route.waypoints(),
         )  # fmt: skip
-    rows = _rows(rr, build) + cost_rows(route, build.timing.total)
+    rows = _rows(rr, build) + _reach_rows(reach) + cost_rows(route, build.timing.total)
     route = attach_robot_route(
         route, rr, urdf=args.robot, contact_radius=poses_contact_radius(route)
     )
@@ -293,8 +365,8 @@ def _rows(rr: Any, build: Any) -> list[tuple[str, str]]:
     x, y, z, yaw = rr.stats.get("placement", {}).get("base_xyz_yaw", [math.nan] * 4)
     legs = tt.leg_times()
     miss = [
-        (f"  weld {w}", f"not welded: {s.replace('_', ' ')}")
-        for w, s in zip(rr.weld_ids, rr.status, strict=True)
+        (f"  weld {w}", f"not welded: {s.replace('_', ' ')}" + (f"; {d}" if d else ""))
+        for w, s, d in zip(rr.weld_ids, rr.status, rr.detail or [""] * len(rr.status), strict=True)
         if s != "ok"
     ]
     return [
@@ -321,4 +393,21 @@ def _rows(rr: Any, build: Any) -> list[tuple[str, str]]:
             f"within {tt.deviation:.1e} rad of the joint path, its TCP up to "
             f"{build.tcp_deviation:.2f} mm off the linear moves' lines",
         ),
+    ]
+
+
+def _reach_rows(reach: RobotAcceptance | None) -> list[tuple[str, str]]:
+    """The summary row of the robot's reach test in the pose choice."""
+    if reach is None:
+        return []
+    t = reach.accept
+    why = ", ".join(f"{k} {v}" for k, v in t.vetoes.most_common())
+    base = "searched on the poses chosen without the robot" if reach.placement else "given"
+    return [
+        (
+            "robot reach test",
+            f"{t.calls} gun pose(s) judged, {sum(t.vetoes.values())} vetoed"
+            + (f" ({why})" if why else "")
+            + f"; base {base} ({reach.seconds:.1f} s)",
+        )
     ]

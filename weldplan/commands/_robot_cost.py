@@ -8,6 +8,15 @@ the order), the base is ``--robot-base`` or searched from those poses
 come from :mod:`weldplan.robot.legtime`. After the route: :func:`with_time_stats` writes the
 order's seconds and the proved bound into ``Route.stats``; the robot stage adds the timed cycle.
 
+The poses are planned twice with ``--cost time``, and the first result is not handed to the pose
+stage, on purpose: the least-rotation choice minimises the rotation between *consecutive* welds,
+so its answer depends on the order (file order here, the route's order in the pose stage), and
+the pose stage also applies the robot's reach test at this base
+(:func:`weldplan.commands._robot.pose_acceptance`). Checked on the demo with the shared gun: all
+15 poses differ between the two orders (summed rotation 318.8 deg over the file order, 473.2 deg
+over the route's order). Only the tool's collision table could be shared; it is internal to
+:func:`weldplan.tool.plan_weld_poses`.
+
 The tool (:func:`flange_tcp`, :func:`tool_load`): a URDF tool's root link is its mounting frame
 (:func:`weldplan.robot.plan.tool_flange_tcp`, mass and centre of gravity from ``<inertial>``);
 a mesh tool (``--tool gun.stl --tcp x,y,z,rx,ry,rz``) is mounted by its mesh frame in the same

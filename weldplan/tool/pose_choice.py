@@ -15,6 +15,16 @@ constraint: a weld whose free candidates are all vetoed, or that reaches ``max_v
 is **exhausted**: its vetoes are lifted, it takes the least-rotation free pose as without the
 test, and the reasons are kept (:attr:`ChoiceState.veto_reasons`) for its report. ``accept`` is
 called only on picks (never on every candidate) and at most once per candidate.
+
+**Batch vetoes** (optional): a test that is cheap on many poses at once (the robot's reach: one
+vectorised IK) may carry ``accept.verdicts(T (m, 4, 4)) -> list[str | None]``. When a weld's
+pick is vetoed for the first time, every other candidate of that weld still in the running is
+judged by it in one call, and those it vetoes leave the weld's set at once (without a DP round
+each, and without counting against ``max_vetoes``); those it passes are still judged by
+``accept`` when picked. Without it a weld whose first few hundred least-rotation poses all fail
+(the demo's welds 13 and 15: every approach-side pose needs A5 > 125 deg) would only take
+``max_vetoes`` of them before the test is lifted. :func:`all_of` keeps the ``verdicts`` of the
+tests that have one (a veto of any test is a veto of all).
 """
 
 from __future__ import annotations
@@ -87,11 +97,15 @@ class ChoiceState:
             "choice_rounds": 0,
             "accept_calls": 0,
             "vetoed": 0,
+            "batch_judged": 0,
+            "batch_vetoed": 0,
         }
         #: weld -> vetoes it had when it was reopened (its budget counts from there)
         self.veto_base: dict[int, int] = {}
         self._lifted: dict[int, NDArray[np.bool_]] = {}
         self._angles: dict[tuple[int, int], tuple[NDArray, NDArray, NDArray]] = {}
+        #: welds whose candidates ``accept.verdicts`` has judged in one batch (module docstring)
+        self.batched: set[int] = set()
 
     def angles(
         self, quats: NDArray, i: int, ci: NDArray[np.int64], j: int, cj: NDArray[np.int64]
@@ -119,6 +133,7 @@ class ChoiceState:
         if i in self._lifted:
             self.vetoed[i] |= self._lifted.pop(i)
         self.veto_base[i] = len(self.veto_reasons.get(i, []))
+        self.batched.discard(i)
 
 
 def _pose(p: NDArray[np.float64], R: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -128,6 +143,33 @@ def _pose(p: NDArray[np.float64], R: NDArray[np.float64]) -> NDArray[np.float64]
     return T
 
 
+def _batch(
+    i: int,
+    live: NDArray[np.bool_],
+    xyz: NDArray[np.float64],
+    rots: NDArray[np.float64],
+    verdicts: Callable[[NDArray[np.float64]], list],
+    state: ChoiceState,
+) -> None:
+    """Judge weld ``i``'s candidates still in the running (``live (c,)``) with
+    ``accept.verdicts`` in one call; veto those it vetoes (module docstring)."""
+    state.batched.add(i)
+    cand = np.flatnonzero(live & ~state.vetoed[i])
+    if len(cand) == 0:
+        return
+    T = np.tile(np.eye(4), (len(cand), 1, 1))
+    T[:, :3, :3] = rots[i, cand]
+    T[:, :3, 3] = xyz[i]
+    out = verdicts(T)
+    bad = cand[[r is not None for r in out]]
+    state.vetoed[i, bad] = True
+    # kept for the weld's note, not counted against max_vetoes
+    state.veto_reasons.setdefault(i, []).extend(str(r) for r in out if r is not None)
+    state.veto_base[i] = state.veto_base.get(i, 0) + len(bad)
+    state.counts["batch_judged"] += len(cand)
+    state.counts["batch_vetoed"] += len(bad)
+
+
 def _judge(
     choice: dict[int, int],
     xyz: NDArray[np.float64],
@@ -135,9 +177,12 @@ def _judge(
     accept: Accept,
     state: ChoiceState,
     max_vetoes: int,
+    live: NDArray[np.bool_],
 ) -> bool:
-    """Run ``accept`` on the picks it has not judged; True when any was vetoed."""
+    """Run ``accept`` on the picks it has not judged; True when any was vetoed. ``live (n, c)``:
+    the candidates still in the running (for a batch, module docstring)."""
     vetoed = False
+    verdicts = getattr(accept, "verdicts", None)
     for i, k in choice.items():
         if i in state.exhausted or (i, k) in state.accepted:
             continue
@@ -152,6 +197,8 @@ def _judge(
         reasons.append(str(reason))
         if len(reasons) - state.veto_base.get(i, 0) >= max_vetoes:
             state.exhaust(i)
+        elif verdicts is not None and i not in state.batched:
+            _batch(i, live[i], xyz, rots, verdicts, state)
     return vetoed
 
 
@@ -224,7 +271,8 @@ def choose(
             continue
         if _recheck(choice, xyz, ids, quats, checker, state):
             continue
-        if accept is not None and _judge(choice, xyz, rots, accept, state, max_vetoes):
+        live = allowed & ~state.rejected & ~(dists < clearance)  # NaN: kept
+        if accept is not None and _judge(choice, xyz, rots, accept, state, max_vetoes, live):
             continue
         return choice, total
     raise RuntimeError("the pose choice did not settle: the re-check keeps rejecting poses (a bug)")
@@ -270,4 +318,18 @@ def all_of(*tests: Accept | None) -> Accept | None:
                 return reason
         return None
 
+    batch = [v for v in (getattr(t, "verdicts", None) for t in kept) if v is not None]
+    if batch:
+
+        def verdicts(T: NDArray[np.float64]) -> list[str | None]:
+            out: list[str | None] = [None] * len(T)
+            for v in batch:
+                todo = [k for k, r in enumerate(out) if r is None]
+                if not todo:
+                    break
+                for k, r in zip(todo, v(T[todo]), strict=True):
+                    out[k] = r
+            return out
+
+        accept.verdicts = verdicts  # type: ignore[attr-defined]
     return accept
