@@ -33,3 +33,13 @@ def test_the_bound_never_exceeds_the_exact_distance_and_clear_matches_open3d():
     np.testing.assert_array_equal(bound.clear(P, need), exact > need)
     # far points are decided by the table or the box alone: open3d is asked for few of them
     assert np.mean(low > need) > 0.5
+
+
+def test_the_table_is_filled_only_where_it_is_asked():
+    part = _part()
+    dist = SurfaceDistance(part)
+    bound = DistanceBound(dist, *part.bounds, max_nodes=200_000)
+    assert not bound._done.any()
+    P = part.bounds[0] + np.random.default_rng(1).uniform(0.0, 30.0, (50, 3))
+    np.testing.assert_array_equal(bound.clear(P, 10.0), dist(P) > 10.0)
+    assert 0 < bound._done.sum() < bound._done.size / 4

@@ -18,8 +18,10 @@ therefore the same as asking open3d for every point (up to the round-off both ca
 cheaper; nothing is approximated.
 
 The table covers the part's box padded by :data:`PAD_MM` with at most :data:`MAX_NODES` nodes
-(the cell grows for large parts: 5.6 mm on the demo part, about 23 mm on a car body), computed
-once per part in chunks by open3d.
+(the cell grows for large parts: 5.6 mm on the demo part, 24 mm on the 4.5 m car body). It is
+filled lazily, in blocks of :data:`BLOCK` ^ 3 nodes, the first time a query falls in a block
+(open3d on the whole table cost 8 s on the demo part, 21 s on the car body at load 10; a robot
+works in a small part of it).
 """
 
 from __future__ import annotations
@@ -42,6 +44,8 @@ PAD_MM = 200.0
 MAX_NODES = 1_500_000
 #: mm: the finest cell
 MIN_CELL_MM = 5.0
+#: nodes along each edge of a block of the table computed at once
+BLOCK = 16
 
 
 class DistanceBound:
@@ -77,9 +81,8 @@ class DistanceBound:
         self.origin = g0
         self.cell = cell
         self.shape = tuple(int(k) for k in n)
-        axes = [g0[i] + cell * np.arange(n[i]) for i in range(3)]
-        nodes = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
-        self.table = distance(nodes).astype(np.float32).reshape(self.shape)
+        self.table = np.full(self.shape, np.nan, dtype=np.float32)
+        self._done = np.zeros(tuple(-(-n // BLOCK)), dtype=bool)
         self.tol = float(getattr(distance, "tolerance", 0.0)) + 1e-3
         log.debug("distance table %s nodes at %.1f mm", self.shape, cell)
 
@@ -88,10 +91,30 @@ class DistanceBound:
         P = np.asarray(points, dtype=np.float64).reshape(-1, 3)
         idx = np.rint((P - self.origin) / self.cell).astype(np.int64)
         np.clip(idx, 0, np.array(self.shape) - 1, out=idx)
+        self._fill(idx)
         g = self.origin + idx * self.cell
         grid = self.table[idx[:, 0], idx[:, 1], idx[:, 2]] - np.linalg.norm(P - g, axis=1)
         box = np.linalg.norm(np.maximum(np.maximum(self.lo - P, P - self.hi), 0.0), axis=1)
         return np.maximum(grid, box) - self.tol
+
+    def _fill(self, idx: NDArray[np.int64]) -> None:
+        """Compute the blocks of the table that the nodes ``idx (n, 3)`` fall in, where not yet
+        done."""
+        b = idx // BLOCK
+        new = ~self._done[b[:, 0], b[:, 1], b[:, 2]]
+        if not new.any():
+            return
+        nb = np.array(self._done.shape)
+        flat = np.unique(np.ravel_multi_index(tuple(b[new].T), tuple(nb)))
+        todo = np.stack(np.unravel_index(flat, tuple(nb)), axis=1)
+        span = np.arange(BLOCK)
+        local = np.stack(np.meshgrid(span, span, span, indexing="ij"), axis=-1).reshape(-1, 3)
+        nodes = (todo[:, None, :] * BLOCK + local[None]).reshape(-1, 3)
+        nodes = nodes[np.all(nodes < np.array(self.shape), axis=1)]
+        self.table[nodes[:, 0], nodes[:, 1], nodes[:, 2]] = self.distance(
+            self.origin + nodes * self.cell
+        )
+        self._done[todo[:, 0], todo[:, 1], todo[:, 2]] = True
 
     def clear(self, points: ArrayLike, need: ArrayLike) -> NDArray[np.bool_]:
         """``(n,) bool``: whether each point ``(n, 3)`` is farther than ``need`` (mm, scalar or
