@@ -67,6 +67,24 @@ def test_a_blocked_joint_motion_is_replanned_around_the_plate(robot):
     np.testing.assert_allclose(np.degrees(P[1:3, 1:3]), [[-90.0, 90.0]] * 2)
 
 
+def test_a_starved_transfer_gets_one_longer_retry_within_the_route_budget(robot):
+    """The first OMPL run has no time to solve; the retry (next seed, its own budget) does, and
+    a route whose retry budget is spent gets none."""
+    qm = np.array([0.0, -1.2, 1.2, 0.0, 0.8, 0.0])
+    qa, qb = qm.copy(), qm.copy()
+    qa[0], qb[0] = -0.3, 0.3
+    plate = make_plate(robot.fk(qm)[0, :3, 3], 1, size=160.0)
+    chk = RobotCollision(robot, plate, arc_torch(), TORCH_TCP)
+    args = (robot, chk, np.zeros((0, 4, 4)), TORCH_TCP, 5.0, "rrtconnect", 1e-4, 3)
+    det = Detour(*args, tuck=(), retry_time_s=10.0)
+    path = det.transfer(qa, qb)
+    assert path is not None and chk.path_hits(path) == []
+    assert det.ompl["runs"] == 2 and det.ompl["retries"] == 1 and det.ompl["solved"] == 1
+    spent = Detour(*args, tuck=(), retry_time_s=10.0, retry_total_s=0.0)
+    assert spent.transfer(qa, qb) is None
+    assert spent.ompl["runs"] == 1 and spent.ompl["solved"] == 0
+
+
 def test_a_weld_blocked_on_every_branch_is_reported_with_its_link(robot):
     """A plate across the flange's place at weld B: every branch puts the wrist there."""
     route = box_route()

@@ -20,6 +20,9 @@ shortcut shared with any planner:
    (exact point-triangle distance, open3d) must exceed its radius plus half its motion between
    samples plus :data:`MIN_GAP_MM`: then no point of it comes closer than :data:`MIN_GAP_MM` to
    the part over the half intervals on both sides of the sample, so over the whole motion.
+   Whether a centre is that far is answered by the part's distance table where its
+   Lipschitz lower bound decides, by open3d's exact distance elsewhere
+   (:class:`~weldplan.robot.distbound.DistanceBound`: the same answers, several times cheaper).
 3. *FCL.* The triangles of the spheres that fail, together, are advanced along the motion with
    python-fcl against the part, when any of it lies within their reach on that motion
    (conservative advancement: from a configuration at distance ``d`` they cannot touch the part
@@ -41,6 +44,7 @@ import numpy as np
 import trimesh
 from numpy.typing import ArrayLike, NDArray
 
+from weldplan.robot.distbound import DistanceBound
 from weldplan.robot.model import Robot
 from weldplan.tool.model import Tool, bvh
 
@@ -214,6 +218,7 @@ class RobotCollision:
         self.robot = robot
         self.part = part
         self.distance = SurfaceDistance(part)
+        self._bound: DistanceBound | None = None
         self.part_obj = fcl.CollisionObject(bvh(part.vertices, part.faces), fcl.Transform())
         self.flange_tcp = np.eye(4) if flange_tcp is None else np.asarray(flange_tcp, float)
         links = [self._body(lk.name, lk.index, lk.vertices, lk.faces) for lk in robot.links]
@@ -226,6 +231,15 @@ class RobotCollision:
                 self._body("tool", 6, self._on_link6(vz), fz, TOOL_SPHERE_CELL_MM)
             )
         self.radii_zone = self._motion_radii(self.zone_bodies)
+
+    @property
+    def bound(self) -> DistanceBound:
+        """The part's distance table (:class:`~weldplan.robot.distbound.DistanceBound`, built on
+        first use and shared by :meth:`with_robot` copies made after that)."""
+        if self._bound is None:
+            lo, hi = np.asarray(self.part.bounds, dtype=np.float64)
+            self._bound = DistanceBound(self.distance, lo, hi)
+        return self._bound
 
     def with_robot(self, robot: Robot) -> RobotCollision:
         """The same checker for ``robot`` at another base (part structures and link covers are
@@ -273,7 +287,12 @@ class RobotCollision:
     def state_free(self, q: ArrayLike, *, zone: bool = False) -> bool:
         """Whether no body (FCL collide) touches the part at configuration ``q (6,)`` rad."""
         F = self.robot.link_frames(np.asarray(q, dtype=np.float64))[0]
-        for body in self.zone_bodies if zone else self.bodies:
+        bodies = self.zone_bodies if zone else self.bodies
+        c = np.array([F[b.frame, :3, :3] @ b.centre + F[b.frame, :3, 3] for b in bodies])
+        clear = self.bound.clear(c, np.array([b.radius for b in bodies]) + 1e-3)
+        for body, far in zip(bodies, clear, strict=True):
+            if far:  # its bounding sphere does not reach the part
+                continue
             body.obj.setTransform(_fcl_tf(F[body.frame]))
             if fcl.collide(body.obj, self.part_obj, fcl.CollisionRequest(), fcl.CollisionResult()):
                 return False
@@ -300,7 +319,8 @@ class RobotCollision:
             [F[:, b.frame, :3, :3] @ b.centre + F[:, b.frame, :3, 3] for b in bodies], axis=1
         )  # (n, b, 3)
         radius = np.array([b.radius for b in bodies])
-        near = self.distance(c.reshape(-1, 3)).reshape(len(Q), -1) <= radius + 1e-3
+        need = np.broadcast_to(radius + 1e-3, c.shape[:2]).ravel()
+        near = ~self.bound.clear(c.reshape(-1, 3), need).reshape(len(Q), -1)
         for i, b in np.argwhere(near):
             if out[i] is not None:
                 continue
@@ -377,7 +397,7 @@ class RobotCollision:
             delta = D[owner, b] / (n[owner] - 1)  # (N,) mm a point moves between samples
             # the body's bounding sphere first, its cover only where that is not enough
             c0 = Fb[:, :3, :3] @ body.centre + Fb[:, :3, 3]
-            near = self.distance(c0) - body.radius - delta / 2 - MIN_GAP_MM <= 1e-3
+            near = ~self.bound.clear(c0, body.radius + delta / 2 + MIN_GAP_MM + 1e-3)
             # a sample whose bounding sphere is clear covers the half intervals on both sides of
             # it; only the others need the cover
             pick = np.flatnonzero(near)
@@ -385,8 +405,7 @@ class RobotCollision:
                 continue
             near_seg = np.unique(owner[pick])
             Fp = Fb[pick]
-            c = np.einsum("nij,sj->nsi", Fp[:, :3, :3], body.centres) + Fp[:, None, :3, 3]
-            d = self.distance(c.reshape(-1, 3)).reshape(len(pick), -1)
+            c = body.centres @ np.swapaxes(Fp[:, :3, :3], 1, 2) + Fp[:, None, :3, 3]
             # each sphere's own motion bound, no larger than the body's
             first = np.searchsorted(owner, near_seg)  # the t = 0 sample of each near motion
             dq = np.abs(Q[seg[near_seg] + 1] - Q[seg[near_seg]])
@@ -394,7 +413,8 @@ class RobotCollision:
             rates = np.minimum(rates, D[near_seg, b][:, None])  # (near motions, spheres)
             k = np.searchsorted(near_seg, owner[pick])
             step = rates[k] / (n[owner[pick]] - 1)[:, None]
-            bad = d - body.radii[None] - step / 2 - MIN_GAP_MM <= 1e-3
+            need = body.radii[None] + step / 2 + MIN_GAP_MM + 1e-3
+            bad = ~self.bound.clear(c.reshape(-1, 3), need.ravel()).reshape(need.shape)
             rows = np.flatnonzero(bad.any(axis=1))
             for s_i in np.unique(owner[pick][rows]):
                 spheres = np.flatnonzero(bad[owner[pick] == s_i].any(axis=0))
@@ -445,7 +465,7 @@ class RobotCollision:
         F = self.robot.link_frames(qa)[0, body.frame]
         c = body.centres[spheres] @ F[:3, :3].T + F[:3, 3]
         reach = body.radii[spheres] + rates + MIN_GAP_MM
-        if np.all(self.distance(c) > reach + 1e-3):
+        if np.all(self.bound.clear(c, reach + 1e-3)):
             return None
         return self.part_obj
 

@@ -276,6 +276,7 @@ def _collision_stage(
             det, q, exact, branch, rows, status, detail, ids
         )
         hits = det.checker.path_hits(q, zone)  # the verification of the final path
+        stats["ompl"] = dict(det.ompl)  # joint-space transfers: runs, retries, solved, s
     for h in hits:
         k = _blamed_weld(h, row, rows)
         if k is not None and status[k] == OK:

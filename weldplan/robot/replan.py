@@ -17,7 +17,10 @@ blocked, the leg becomes a detour:
    :data:`TUCK_A2_A3`: fold at ``a``, turn folded, unfold at ``b``, three straight joint
    motions), else planned in joint space by OMPL
    (:func:`weldplan.motion.sampling.plan_rn`, ``rrtconnect``) with the whole tool and every link
-   checked by :class:`~weldplan.robot.collision.RobotCollision` (states and motions);
+   checked by :class:`~weldplan.robot.collision.RobotCollision` (states and motions): one run of
+   ``time_s`` and, when that does not solve it, one retry of :data:`RETRY_TIME_S` with the next
+   seed, while the route's retries stay within :data:`RETRY_TOTAL_S` (rrtconnect stops at its
+   first solution, so only a leg that needs the time spends it);
 3. *approach*: ``b``'s approach configuration to ``b``'s, contact zone exempt.
 
 When no detour is found, ``b`` is dropped (status ``collision``, its ``detail`` naming the body
@@ -59,6 +62,12 @@ RETRACT_DIRS = ((2, -1.0), (0, -1.0), (0, 1.0), (1, -1.0), (1, 1.0))
 #: upper arm upright, A3 = 90 deg the forearm level; -120/120 keeps the wrist lower and nearer
 #: the base): the arm folds there, A1 and the wrist turn folded, and it unfolds at the goal
 TUCK_A2_A3 = ((-90.0, 90.0), (-120.0, 120.0))
+
+#: s: a transfer OMPL did not solve in its first budget gets one more run of this long (another
+#: seed): rrtconnect stops at its first solution, so only the legs that need it pay for it
+RETRY_TIME_S = 30.0
+#: s: the most all the retries of one route may take together (then a leg gets one run only)
+RETRY_TOTAL_S = 120.0
 
 
 @dataclass
@@ -102,6 +111,10 @@ class Detour:
     time_s: float
     rng: int | None
     tuck: tuple[tuple[float, float], ...] = TUCK_A2_A3
+    retry_time_s: float = RETRY_TIME_S
+    retry_total_s: float = RETRY_TOTAL_S
+    #: figures of the transfers planned with OMPL (runs, solved, retries, seconds)
+    ompl: dict[str, float] = field(default_factory=dict, compare=False)
 
     def offset(self, q: NDArray, T: NDArray, branch: int, move: NDArray) -> NDArray | None:
         """The configuration of pose ``T`` moved by ``move (3,)`` mm (part frame, orientation
@@ -141,21 +154,42 @@ class Detour:
                 continue
             if all(self.checker.motion_free(x, y) for x, y in zip(P[:-1], P[1:], strict=True)):
                 return P
+        return self._ompl(qa, qb)
+
+    def _ompl(self, qa: NDArray, qb: NDArray) -> NDArray | None:
+        """OMPL in joint space (:func:`~weldplan.motion.sampling.plan_rn`), ``time_s``; when that
+        is not enough, one more run of ``retry_time_s`` with the next seed while the route's
+        retries have spent less than ``retry_total_s``."""
         from weldplan.motion.sampling import plan_rn
 
-        res = plan_rn(
-            qa,
-            qb,
-            self.robot.lower,
-            self.robot.upper,
-            self.checker.state_free,
-            motion_valid=self.checker.motion_free,
-            planner=self.planner,
-            time_s=self.time_s,
-            seed=self.rng,
-        )
-        log.info("joint-space transfer: %s", res.status)
-        return np.asarray(res.points, dtype=np.float64) if res.solved else None
+        runs = [(self.time_s, self.rng)]
+        if self.retry_time_s > 0:
+            runs.append((self.retry_time_s, None if self.rng is None else self.rng + 1))
+        for k, (t, seed) in enumerate(runs):
+            if k and self.ompl.get("retry_s", 0.0) >= self.retry_total_s:
+                log.info(
+                    "joint-space transfer: no retry (%.0f s of retries spent)", self.retry_total_s
+                )
+                break
+            res = plan_rn(
+                qa,
+                qb,
+                self.robot.lower,
+                self.robot.upper,
+                self.checker.state_free,
+                motion_valid=self.checker.motion_free,
+                planner=self.planner,
+                time_s=t,
+                seed=seed,
+            )
+            log.info("joint-space transfer%s: %s", " (retry)" if k else "", res.status)
+            for key, v in (("runs", 1), ("retries", k), ("solved", res.solved), ("s", res.time_s)):
+                self.ompl[key] = self.ompl.get(key, 0) + float(v)
+            if k:
+                self.ompl["retry_s"] = self.ompl.get("retry_s", 0.0) + res.time_s
+            if res.solved:
+                return np.asarray(res.points, dtype=np.float64)
+        return None
 
 
 def subdivide(P: NDArray[np.float64], inner: int) -> NDArray[np.float64]:
