@@ -256,14 +256,15 @@ def plan_tool_path(
     seed: int | None = None,
     reuse: Any = None,
 ) -> tuple[Any, Any]:
-    """Order the welds on the tool's costs, plan the transitions, re-check them independently.
+    """Order the welds on the tool's costs and plan the transitions, re-ordering round blocked
+    pairs (:func:`weldplan.tool.reorder.plan_ordered_transitions`; ``--tool-order route``
+    keeps the route's order), then re-check them independently.
 
     ``reuse``: the exit test's :class:`~weldplan.tool.transitions.TransitionPlanner` (its checked
     exits are kept). Returns the :class:`~weldplan.tool.transit.ToolPath` and its
     :class:`~weldplan.tool.verify_sweeps.SweepsVerification`.
     """
-    from weldplan.tool.tool_order import tool_order
-    from weldplan.tool.transitions import plan_transitions
+    from weldplan.tool.reorder import plan_ordered_transitions
     from weldplan.tool.verify_sweeps import verify_sweeps
 
     leave = None
@@ -271,13 +272,11 @@ def plan_tool_path(
         from weldplan.tool.exits import leave_distances
 
         leave = leave_distances(reuse, poses)
-    order, stats = tool_order(poses, args.retract, args.rot_weight, rng=seed, leave=leave)
-    if args.tool_order == "route":
-        order = [p.id for p in poses.poses if p.ok]
-    stats["order_from"] = args.tool_order
-    path = plan_transitions(
-        part, tool, poses, order=order, stats=stats, reuse=reuse,
-        **transition_settings(args, seed),
+    kw = transition_settings(args, seed)
+    path = plan_ordered_transitions(
+        part, tool, poses, rot_weight=args.rot_weight, leave=leave,
+        keep_order=args.tool_order == "route", reuse=reuse,
+        **{k: v for k, v in kw.items() if k != "rot_weight"},
     )  # fmt: skip
     return path, verify_sweeps(path, poses, part, tool)
 

@@ -15,12 +15,17 @@ transition re-planned in SE(3) is longer. The order is the open path of least to
 the welds with a pose (:func:`weldplan.optim.discrete.sequence.solve_sequence`: exact up to its
 exact limit, fast-tsp above). The poses are those chosen along the point-tip order
 (:func:`weldplan.tool.poses.plan_weld_poses`); they are not re-chosen for the new order.
+
+Pairs whose transition was found blocked (``forbid``: the transition planner tried every exit
+and, where allowed, SE(3)) cost :data:`FORBID_MM` more in both directions, so the next order
+avoids them where any order can (:func:`weldplan.commands._tool.plan_tool_path` re-orders until
+no new pair is blocked).
 """
 
 from __future__ import annotations
 
 import logging
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping
 from typing import Any
 
 import numpy as np
@@ -34,6 +39,9 @@ log = logging.getLogger(__name__)
 #: mm per rad: default weight of the orientation change in the leg costs (a turn of 1 rad costs
 #: as much as 200 mm of TCP travel: about what a 0.7 m gun's far end sweeps through)
 DEFAULT_ROT_WEIGHT = 200.0
+#: mm added to the cost of a pair whose transition was found blocked (either direction): more
+#: than any route of free transitions costs, so an order avoids the pair wherever one can
+FORBID_MM = 1e7
 
 
 def retract_points(
@@ -84,6 +92,7 @@ def tool_order(
     *,
     rng: Any = None,
     leave: Mapping[str, float] | None = None,
+    forbid: Collection[tuple[str, str]] = (),
 ) -> tuple[list[str], dict[str, Any]]:
     """The order of the welds with a pose that minimises the tool costs (module docstring).
 
@@ -100,6 +109,9 @@ def tool_order(
     leave
         Weld id -> mm it is left by along its axis where that is not ``retract`` (a lift:
         :func:`weldplan.tool.exits.leave_distances`).
+    forbid
+        ``(from_id, to_id)`` pairs whose transition was found blocked: each costs
+        :data:`FORBID_MM` more, in both directions.
 
     Returns
     -------
@@ -115,10 +127,17 @@ def tool_order(
         return ids, stats
     cost, length, angle = tool_leg_costs(poses, ids, retract, rot_weight, leave)
     stats["lifted"] = sum(i in (leave or {}) for i in ids)
+    priced = cost.copy()  # the costs the sequencer sees: blocked pairs priced out
+    where = {w: k for k, w in enumerate(ids)}
+    for a, b in forbid:
+        if a in where and b in where:
+            priced[where[a], where[b]] += FORBID_MM
+            priced[where[b], where[a]] += FORBID_MM
+    stats["forbidden_pairs"] = len(forbid)
     point = list(range(len(ids)))
-    seq = solve_sequence(cost, rng=rng)
+    seq = solve_sequence(priced, rng=rng)
     order = [int(k) for k in seq.order]
-    if order_cost(cost, order) > order_cost(cost, point):  # never worse than the point-tip order
+    if order_cost(priced, order) > order_cost(priced, point):  # never worse than the point-tip
         order = point
     for name, o in (("point_order", point), ("tool_order", order)):
         stats[name] = {
