@@ -141,7 +141,7 @@ class _Sweeps:
         key = tuple(spot.tolist())
         if key not in self.cuts:
             f = self._near(spot, spot, 2 * self.zone_reach + self.radius + self.CAP)
-            v, f = outside_sphere(self.part.vertices, f, spot, self.radius)
+            v, f = outside_sphere(self.part.vertices, f, spot, self.radius, bisect=True)
             self.cuts[key] = None if len(f) == 0 else fcl.CollisionObject(
                 bvh(v, f), fcl.Transform())  # fmt: skip
         return self.cuts[key]
