@@ -92,3 +92,36 @@ def test_bisected_cut_keeps_the_guarantee_with_far_fewer_triangles(centre):
         )
         assert dist.max() < 1e-6
     assert len(bis[1]) * 3 < len(mid[1])
+
+
+def test_the_probe_taken_with_the_collision_queries_gives_the_same_miss():
+    from weldplan.tool import arc_torch
+    from weldplan.tool.orient import candidate_rotations, local_candidates
+    from weldplan.tool.pose_search import MISS_PROBE_CONTACTS, PoseSearch, probe_positions
+
+    # a plate, and a small block through which the nozzle's wall passes at some tilts: few
+    # triangle pairs touch, and how many depends on the candidate
+    part = trimesh.util.concatenate(
+        [
+            trimesh.creation.box((300, 300, 2)).apply_translation((0, 0, -1)),
+            trimesh.creation.box((6, 6, 6)).apply_translation((12.5, 0, 40)),
+        ]
+    )
+    search = PoseSearch(part, arc_torch(bend_angle=0.0), 10.0, 5.0)
+    p = np.zeros(3)
+    obj, index = search.part_near(p)
+    local, params = local_candidates(15.0, 7.5, 15.0, 8)
+    rots = candidate_rotations(np.array([[0.0, 0.0, -1.0]]), local)[0]
+    hit = search.collides(obj, p, rots)
+    rots = rots[hit]  # the miss is asked of candidates none of which is free
+    params = np.column_stack([params, np.zeros(len(params))])[hit]
+    probe = np.zeros(len(rots), dtype=bool)
+    probe[probe_positions(len(rots))] = True
+    counts = search.touching(obj, p, rots, probe)
+    assert len(rots) > 20 and (counts > 0).all()
+    asked = search._touching(obj, p, rots[probe], MISS_PROBE_CONTACTS)
+    assert np.array_equal(counts[probe], asked) and len(set(asked.tolist())) > 2
+    dist = np.zeros(len(rots))
+    plain = search.miss(obj, index, p, rots, dist, params)
+    folded = search.miss(obj, index, p, rots, dist, params, np.where(probe, counts, -1))
+    assert folded == plain

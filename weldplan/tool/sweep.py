@@ -261,9 +261,7 @@ class SweepChecker:
             gap = np.maximum(self._tri_lo - spot, 0) + np.maximum(spot - self._tri_hi, 0)
             near = np.einsum("ij,ij->i", gap, gap) <= self.cut_radius**2
             faces = np.asarray(self.part.faces)[near]
-            v, f = outside_sphere(
-                self.part.vertices, faces, spot, self.contact_radius, bisect=True
-            )
+            v, f = outside_sphere(self.part.vertices, faces, spot, self.contact_radius, bisect=True)
             self._cut[key] = (
                 None if len(f) == 0 else fcl.CollisionObject(bvh(v, f), fcl.Transform())
             )
