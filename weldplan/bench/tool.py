@@ -68,6 +68,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--se3-time", type=float, default=3.0, help="OMPL seconds per blocked transition (0: off)"
     )
+    p.add_argument(
+        "--workers",
+        type=int,
+        default=1,
+        help="processes for the transitions and their re-check (default 1, as the point-tip "
+        "planning here runs in one)",
+    )
 
 
 def _load() -> str:
@@ -145,10 +152,10 @@ def _transitions(cell: Any, route: Any, poses: Any, gun: Any, args: Any) -> dict
     order, costs = tool_order(poses, DEFAULT_RETRACT, DEFAULT_ROT_WEIGHT, rng=0)
     path = plan_transitions(
         cell.part, gun, poses, order=order, se3=args.se3_time > 0,
-        time_s=max(args.se3_time, 1e-3), seed=0, stats=costs,
+        time_s=max(args.se3_time, 1e-3), seed=0, stats=costs, workers=args.workers,
     )  # fmt: skip
     t1 = time.perf_counter()
-    sweeps = verify_sweeps(path, poses, cell.part, gun)
+    sweeps = verify_sweeps(path, poses, cell.part, gun, workers=args.workers)
     t2 = time.perf_counter()
     free = [t for t in path.transitions if t.free]
     return {
@@ -230,7 +237,7 @@ def run(args: argparse.Namespace) -> int:
         head = [
             "",
             "Transitions (shared gun, tool order, retract 50 mm, slide lifts 4/10/20 mm, side exit "
-            f"250 mm, SE(3) {args.se3_time:g} s each, one process): free / total "
+            f"250 mm, SE(3) {args.se3_time:g} s each, {args.workers} process(es)): free / total "
             "by how they go; the free "
             "transitions' TCP length and rotation against the point-tip route's length and its "
             "welds' poses' rotation in the point-tip order; seconds for poses (+ re-check), "

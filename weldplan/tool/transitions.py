@@ -53,6 +53,7 @@ from weldplan.tool.model import Tool
 from weldplan.tool.result import WeldPoses
 from weldplan.tool.sweep import DEFAULT_MIN_STEP, SweepChecker, quat_to_matrix
 from weldplan.tool.transit import BLOCKED, DIRECT, REPLANNED, ToolPath, Transition
+from weldplan.tool.transit_workers import run_chunks
 
 log = logging.getLogger(__name__)
 
@@ -483,6 +484,16 @@ def _entering(kind: str) -> str:
     return kind.replace("retract", "approach").replace("exit", "enter")
 
 
+def _plan_run(
+    pairs: list[tuple[Any, Any]], part: trimesh.Trimesh, tool: Tool, kw: dict[str, Any]
+) -> tuple[list[Transition], int, list[dict[str, Any]], int]:
+    """One run of consecutive transitions with its own planner: the transitions, the samples,
+    the SE(3) runs' counts and the crops built."""
+    tp = TransitionPlanner(part, tool, **kw)
+    out = [tp.plan(a, b) for a, b in pairs]
+    return out, tp.samples, tp.se3_runs, tp.checker.crops_built
+
+
 def plan_transitions(
     part: trimesh.Trimesh,
     tool: Tool,
@@ -499,6 +510,7 @@ def plan_transitions(
     slide: bool = True,
     se3_samples: int | None = None,
     stats: dict[str, Any] | None = None,
+    workers: int = 1,
 ) -> ToolPath:
     """The whole tool's transitions through the welds with a pose (module docstring).
 
@@ -516,6 +528,11 @@ def plan_transitions(
         :class:`TransitionPlanner`.
     stats
         Extra figures to record (the ordering's costs).
+    workers
+        Processes to plan in (:func:`weldplan.tool.transit_workers.run_chunks`: runs of
+        consecutive transitions, each with its own planner; the same answers but for the
+        SE(3) re-plans' clock).
+
     Returns
     -------
     ToolPath
@@ -533,10 +550,11 @@ def plan_transitions(
         time_s=time_s, seed=seed, rot_weight=rot_weight, side_exit=side_exit, slide=slide,
         se3_samples=se3_samples,
     )  # fmt: skip
-    tp = TransitionPlanner(part, tool, **kw)  # type: ignore[arg-type]
-    transitions = tuple(
-        tp.plan(poses[a], poses[b]) for a, b in zip(order[:-1], order[1:], strict=True)
-    )
+    pairs = [(poses[a], poses[b]) for a, b in zip(order[:-1], order[1:], strict=True)]
+    runs = run_chunks(_plan_run, pairs, (part, tool, kw), workers)
+    transitions = tuple(t for run in runs for t in run[0])
+    samples = sum(run[1] for run in runs)
+    se3_runs = [r for run in runs for r in run[2]]
     result = ToolPath(
         order=tuple(order),
         transitions=transitions,
@@ -556,12 +574,13 @@ def plan_transitions(
             "time_s": time_s,
             "seed": seed,
             "min_step": DEFAULT_MIN_STEP,
+            "workers": workers,
         },
         stats={
             **(stats or {}),
-            "samples": tp.samples,
-            "crops_built": tp.checker.crops_built,
-            "se3_runs": tp.se3_runs,
+            "samples": samples,
+            "crops_built": sum(run[3] for run in runs),
+            "se3_runs": se3_runs,
             "total_s": time.perf_counter() - t0,
         },
     )
