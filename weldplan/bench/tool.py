@@ -19,7 +19,9 @@ planning time on 2 cores. For each station, from one run:
 car2 is ``../shared/data/bodies/car2.obj`` scaled to 4500 mm with the committed synthetic
 stations ``assets/car2/car2_synthetic_{50,200}.csv`` (docs/bench-scale.md). Writes ``tool.md``
 into ``--out`` (and each station's poses as JSON with ``--json``). Timings are wall clock on
-whatever machine runs it; the load average is recorded beside them.
+whatever machine runs it; the load average is recorded beside them, and the process's CPU
+seconds (``time.process_time``: less sensitive to other sessions on a shared machine; the gun's
+include the point tip's and the tool order's) with their ratio.
 """
 
 from __future__ import annotations
@@ -117,10 +119,10 @@ def _station(name: str, gun: Any, args: argparse.Namespace) -> dict[str, Any]:
     from weldplan.tool import plan_weld_poses, verify_poses
 
     load0 = _load()
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     cell = _cell(name)
     route = weldplan.plan_route(cell, rng=0)
-    t_point = time.perf_counter() - t0
+    t_point, c_point = time.perf_counter() - t0, time.process_time() - c0
     t1 = time.perf_counter()
     exits = _exit_test(cell, route, gun, args)
     poses = plan_weld_poses(
@@ -135,6 +137,7 @@ def _station(name: str, gun: Any, args: argparse.Namespace) -> dict[str, Any]:
     reuse = None if exits is None else exits.planner
     tr = {} if args.no_transitions else _transitions(cell, route, poses, gun, args, reuse)
     gun_s = t_point + t_poses + t_verify + tr.get("transitions_s", 0.0) + tr.get("sweeps_s", 0.0)
+    c_gun = time.process_time() - c0  # everything since the point tip's start, CPU
     misses = [p.miss for p in poses.poses if not p.ok and p.miss is not None]
     if args.json:
         out = Path(args.out)
@@ -155,6 +158,7 @@ def _station(name: str, gun: Any, args: argparse.Namespace) -> dict[str, Any]:
         "verify_s": t_verify,
         "gun_s": gun_s,
         "ratio": gun_s / t_point,
+        "cpu": f"{c_point:.1f} / {c_gun:.1f} ({c_gun / c_point:.2f})",
         "stats": poses.stats,
         "notes": [(p.id, p.note) for p in poses.poses if p.note],
         "load": f"{load0} / {_load()}",
@@ -246,8 +250,8 @@ def run(args: argparse.Namespace) -> int:
         "| station | welds ok / total (turned over) | point tip s | gun s (poses + re-check; "
         "with transitions: + transitions + their re-check) "
         "| ratio | rotation deg | re-check | pose stages s: setup, crop, collide, choose, miss "
-        "| load before / after |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| CPU s point tip / gun (ratio) | load before / after |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     print("\n".join(lines), flush=True)
     notes: list[str] = []
@@ -265,7 +269,7 @@ def run(args: argparse.Namespace) -> int:
         row = (
             f"| {r['name']} | {r['ok']} / {r['n']} ({r['flipped']}) | {r['point_s']:.1f} "
             f"| {r['gun_s']:.1f} ({' + '.join(f'{x:.1f}' for x in parts)}) | {r['ratio']:.2f} "
-            f"| {r['rotation']:.1f} | {r['verified']} | {stages} | {r['load']} |"
+            f"| {r['rotation']:.1f} | {r['verified']} | {stages} | {r['cpu']} | {r['load']} |"
         )
         lines.append(row)
         print(row, flush=True)

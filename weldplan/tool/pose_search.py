@@ -51,6 +51,12 @@ MISS_SHORTLIST = 4
 CROP_SHARE_MM = 100.0
 
 
+def probe_positions(n: int) -> NDArray[np.int64]:
+    """The positions among ``n`` candidates that the closest-miss probe looks at: up to
+    :data:`MISS_PROBES`, evenly spread."""
+    return np.unique(np.linspace(0, n - 1, min(n, MISS_PROBES)).astype(np.int64))
+
+
 class PoseSearch:
     """The cached FCL objects of one pose search.
 
@@ -129,6 +135,24 @@ class PoseSearch:
         with the TCP at ``p`` (one python-fcl ``collide`` each, the tool's BVH moved)."""
         return self._touching(part_obj, p, Rs, 1) > 0
 
+    def touching(
+        self,
+        part_obj: fcl.CollisionObject | None,
+        p: NDArray,
+        Rs: NDArray,
+        probe: NDArray[np.bool_],
+    ) -> NDArray[np.int64]:
+        """``(c,) int``: :meth:`collides` and the closest-miss probe at once. Where ``probe (c,)``
+        is set, the triangle pairs touching counted up to :data:`MISS_PROBE_CONTACTS` (what
+        :meth:`miss` ranks by, so it need not ask again: pass them as its ``known``); elsewhere
+        1 where the tool collides, else 0. On car2 175 of 200 welds have no free candidate, and
+        a probe folded into the collision query spares one yes/no query per probe."""
+        out = np.zeros(len(Rs), dtype=np.int64)
+        probe = np.asarray(probe, dtype=bool)
+        out[~probe] = self._touching(part_obj, p, Rs[~probe], 1)
+        out[probe] = self._touching(part_obj, p, Rs[probe], MISS_PROBE_CONTACTS)
+        return out
+
     def _touching(
         self, part_obj: fcl.CollisionObject | None, p: NDArray, Rs: NDArray, cap: int
     ) -> NDArray[np.int64]:
@@ -159,12 +183,14 @@ class PoseSearch:
         Rs: NDArray,
         dist: NDArray,
         params: NDArray,
+        known: NDArray[np.int64] | None = None,
     ) -> Miss:
         """The closest miss among candidates none of which is free (module docstring).
 
         ``index`` maps the part object's triangles to the part's (:meth:`part_near`); ``dist
         (c,)`` holds each candidate's distance (0 where it collides); ``params (c, 4)`` each
-        candidate's spin, tilt, azimuth (deg) and whether it is turned over (1.0).
+        candidate's spin, tilt, azimuth (deg) and whether it is turned over (1.0); ``known
+        (c,)`` the probe's counts already taken (:meth:`touching`; -1 where not), not asked again.
         """
         if np.any(dist > 0):  # clearance shortfalls: the largest distance
             k = int(np.argmax(dist))
@@ -174,8 +200,10 @@ class PoseSearch:
             d = fcl.distance(self.tool_obj, part_obj, req_d, res)
             pt = (np.asarray(res.nearest_points[0]) - p) @ Rs[k]  # world -> TCP frame
             return _miss(params[k], float(d), 0.0, 0, pt, self.tool)
-        probed = np.unique(np.linspace(0, len(Rs) - 1, min(len(Rs), MISS_PROBES)).astype(int))
-        touching = self._touching(part_obj, p, Rs[probed], MISS_PROBE_CONTACTS)
+        probed = probe_positions(len(Rs))
+        touching = np.full(len(probed), -1) if known is None else np.asarray(known)[probed]
+        ask = touching < 0
+        touching[ask] = self._touching(part_obj, p, Rs[probed[ask]], MISS_PROBE_CONTACTS)
         shortlist = probed[np.argsort(touching, kind="stable")[:MISS_SHORTLIST]]
         verts = np.asarray(self.part.vertices)
         faces = np.asarray(self.part.faces)

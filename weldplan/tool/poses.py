@@ -47,7 +47,7 @@ from weldplan.errors import InputError
 from weldplan.tool.model import Tool
 from weldplan.tool.orient import candidate_rotations, local_candidates
 from weldplan.tool.pose_choice import DEFAULT_MAX_VETOES, Accept, ChoiceState, choose
-from weldplan.tool.pose_search import PoseSearch
+from weldplan.tool.pose_search import PoseSearch, probe_positions
 from weldplan.tool.result import NO_FREE_POSE, OK, Miss, WeldPose, WeldPoses, quat_wxyz
 from weldplan.tool.verify_poses import PoseChecker
 
@@ -330,9 +330,16 @@ class _Table:
         self.allowed = np.tile(~over, (len(xyz), 1))
         #: the candidates collided (``allowed`` less those withdrawn again)
         self.tried = self.allowed.copy()
+        # the closest-miss probe's counts, taken with the collision queries (-1: not taken)
+        self.touch = np.full(rots.shape[:2], -1, dtype=np.int64)
+        self.probe = np.zeros(rots.shape[1], dtype=bool)
+        self.probe[probe_positions(rots.shape[1])] = True
 
     def _collide(self, i: int, which: NDArray[np.bool_]) -> None:
-        hit = self.search.collides(self.objs[i], self.xyz[i], self.rots[i, which])
+        probe = self.probe[which]
+        count = self.search.touching(self.objs[i], self.xyz[i], self.rots[i, which], probe)
+        self.touch[i, np.flatnonzero(which)[probe]] = count[probe]
+        hit = count > 0
         far = self.objs[i] is None or self.search.clearance == 0
         self.dists[i, which] = np.where(hit, 0.0, np.inf if far else np.nan)
         self.allowed[i, which] = True
@@ -355,8 +362,9 @@ class _Table:
         for k in mine[np.isnan(self.dists[i, mine])]:
             self.dists[i, k] = self.search.distance(self.objs[i], self.xyz[i], self.rots[i, k])
         return self.search.miss(
-            self.objs[i], index, self.xyz[i], self.rots[i, mine], self.dists[i, mine], params[mine]
-        )
+            self.objs[i], index, self.xyz[i], self.rots[i, mine], self.dists[i, mine],
+            params[mine], self.touch[i, mine],
+        )  # fmt: skip
 
 
 def _assemble(

@@ -42,6 +42,7 @@ from __future__ import annotations
 import logging
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -89,14 +90,26 @@ def interpolate(
     positions, rotations
         ``(k, 3)`` mm and ``(k, 3, 3)``.
     """
-    s = np.atleast_1d(np.asarray(s, dtype=np.float64))
+    return _interpolator(p0, q0, p1, q1)(s)
+
+
+def _interpolator(
+    p0: ArrayLike, q0: ArrayLike, p1: ArrayLike, q1: ArrayLike
+) -> Callable[[ArrayLike], tuple[NDArray[np.float64], NDArray[np.float64]]]:
+    """:func:`interpolate` for one motion, its end rotations set up once (a check asks for one
+    pose at a time; the same arithmetic, so the same poses)."""
     a, b = np.asarray(p0, dtype=np.float64), np.asarray(p1, dtype=np.float64)
-    pos = a + s[:, None] * (b - a)
     ra = Rotation.from_quat(np.roll(np.asarray(q0, dtype=np.float64), -1))
     rb = Rotation.from_quat(np.roll(np.asarray(q1, dtype=np.float64), -1))
     rel = (ra.inv() * rb).as_rotvec()  # the shortest rotation from a to b, in a's frame
-    rots = (ra * Rotation.from_rotvec(s[:, None] * rel[None, :])).as_matrix()
-    return pos, rots
+
+    def at(s: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        s = np.atleast_1d(np.asarray(s, dtype=np.float64))
+        pos = a + s[:, None] * (b - a)
+        rots = (ra * Rotation.from_rotvec(s[:, None] * rel[None, :])).as_matrix()
+        return pos, rots
+
+    return at
 
 
 def motion_bound(p0: ArrayLike, q0: ArrayLike, p1: ArrayLike, q1: ArrayLike, reach: float) -> float:
@@ -198,10 +211,9 @@ class SweepChecker:
         self.contact_radius = float(contact_radius)
         self.min_step = float(min_step)
         self.reach = tool.reach
-        self._part = fcl.CollisionObject(
-            bvh(np.asarray(part.vertices), np.asarray(part.faces)), fcl.Transform()
-        )
-        self._whole = fcl.CollisionObject(bvh(tool.vertices, tool.faces), fcl.Transform())
+        # the whole part and the whole tool are built when first asked for (:meth:`_model`):
+        # a focused planner whose motions all exempt a weld may need neither
+        self._models: dict[str, fcl.CollisionObject] = {}
         v, f = tool.outside_zone(self.contact_radius)
         self._outside = fcl.CollisionObject(bvh(v, f), fcl.Transform())
         zv, zf = tool_zone(tool, self.contact_radius)
@@ -217,6 +229,15 @@ class SweepChecker:
         self._n_focus = 0
         #: crops built by :meth:`focus`
         self.crops_built = 0
+
+    def _model(self, name: str) -> fcl.CollisionObject:
+        """The python-fcl object of the whole ``"part"`` or the whole ``"tool"``, built once."""
+        if name not in self._models:
+            mesh = self.part if name == "part" else self.tool
+            self._models[name] = fcl.CollisionObject(
+                bvh(np.asarray(mesh.vertices), np.asarray(mesh.faces)), fcl.Transform()
+            )
+        return self._models[name]
 
     def focus(self, lo: ArrayLike, hi: ArrayLike) -> None:
         """Check motions whose TCP stays in the box ``[lo, hi] (3,)`` mm against only the part's
@@ -261,7 +282,7 @@ class SweepChecker:
             gap = np.maximum(self._tri_lo - spot, 0) + np.maximum(spot - self._tri_hi, 0)
             near = np.einsum("ij,ij->i", gap, gap) <= self.cut_radius**2
             faces = np.asarray(self.part.faces)[near]
-            v, f = outside_sphere(self.part.vertices, faces, spot, self.contact_radius)
+            v, f = outside_sphere(self.part.vertices, faces, spot, self.contact_radius, bisect=True)
             self._cut[key] = (
                 None if len(f) == 0 else fcl.CollisionObject(bvh(v, f), fcl.Transform())
             )
@@ -295,15 +316,16 @@ class SweepChecker:
         p = np.asarray(p, dtype=np.float64)
         if focused is None:
             focused = self._inside(p)
-        part = self._focus[2] if focused and self._focus is not None else self._part
+        part = self._focus[2] if focused and self._focus is not None else self._model("part")
         if part is None:
             return math.inf
         tf = fcl.Transform(np.asarray(R, dtype=np.float64), p)
         req = fcl.DistanceRequest()
         ex = None if exempt is None else np.asarray(exempt, dtype=np.float64).reshape(-1, 3)
         if ex is None or len(ex) == 0:
-            self._whole.setTransform(tf)
-            d = float(fcl.distance(self._whole, part, req, fcl.DistanceResult()))
+            whole = self._model("tool")
+            whole.setTransform(tf)
+            d = float(fcl.distance(whole, part, req, fcl.DistanceResult()))
             return d - self.clearance
         self._outside.setTransform(tf)
         d = float(fcl.distance(self._outside, part, req, fcl.DistanceResult()))
@@ -364,6 +386,7 @@ class SweepChecker:
         focused = self._inside(p0, p1)
         late = [False]
         first = budget[0]
+        pose_at = _interpolator(p0, q0, p1, q1)
 
         def slack_at(s: float) -> float:
             spent = first - budget[0]
@@ -372,7 +395,7 @@ class SweepChecker:
             ):
                 late[0] = True
                 return -math.inf
-            pos, rot = interpolate(p0, q0, p1, q1, [s])
+            pos, rot = pose_at([s])
             v = self.slack(pos[0], rot[0], exempt, focused)
             budget[0] -= 1
             smin[0] = min(smin[0], v)

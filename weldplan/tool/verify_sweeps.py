@@ -108,7 +108,6 @@ class _Sweeps:
         V = np.asarray(tool.vertices, dtype=np.float64)
         F = np.asarray(tool.faces, dtype=np.int64)
         self.reach = float(np.sqrt((V**2).sum(axis=1)).max())
-        self.whole = fcl.CollisionObject(bvh(V, F), fcl.Transform())
         ov, of = outside_sphere(V, F, np.zeros(3), radius)
         self.outside = fcl.CollisionObject(bvh(ov, of), fcl.Transform())
         # the tool inside its zone: every triangle with a vertex within radius + its longest edge
@@ -141,7 +140,7 @@ class _Sweeps:
         key = tuple(spot.tolist())
         if key not in self.cuts:
             f = self._near(spot, spot, 2 * self.zone_reach + self.radius + self.CAP)
-            v, f = outside_sphere(self.part.vertices, f, spot, self.radius)
+            v, f = outside_sphere(self.part.vertices, f, spot, self.radius, bisect=True)
             self.cuts[key] = None if len(f) == 0 else fcl.CollisionObject(
                 bvh(v, f), fcl.Transform())  # fmt: skip
         return self.cuts[key]
@@ -184,7 +183,9 @@ class _Sweeps:
             return self.slack(R, p0 + s * (p1 - p0), spots)
 
         grid = np.linspace(0.0, 1.0, n + 1)
-        vals = [at(s) for s in grid]
+        # the grid's orientations in one Slerp call (elementwise: those of at(s) one by one)
+        rots = slerp(grid).as_matrix()
+        vals = [self.slack(R, p0 + s * (p1 - p0), spots) for s, R in zip(grid, rots, strict=True)]
         if min(vals) < -TOLERANCE_MM:
             k = int(np.argmin(vals))
             return f"at {100 * grid[k]:.0f} % of a motion the tool lacks {-vals[k]:.2f} mm"
