@@ -75,3 +75,15 @@ def test_a_blocked_transition_reorders_the_welds_round_the_wall():
     )
     assert kept.order == ("a", "b", "c") and len(kept.blocked) == 1
     assert kept.stats["order_rounds"] == 1
+
+
+def test_the_planner_plans_a_pair_of_poses_once():
+    from weldplan.tool.transitions import TransitionPlanner
+
+    part, torch, poses = _walled_station()
+    tp = TransitionPlanner(part, torch, clearance=5.0, contact_radius=20.0, se3=False)
+    a, b, c = poses.poses
+    first = tp.plan(a, c)
+    n = tp.samples
+    assert n > 0 and tp.plan(a, c) is first and tp.samples == n
+    assert tp.plan(c, a) is not first and tp.samples > n  # the other direction is its own

@@ -293,20 +293,3 @@ def test_the_se3_budget_is_a_budget():
     )  # fmt: skip
     assert tp2.plan(poses["a"], poses["b"]).status == "replanned"
     assert tp2.se3_runs[0]["samples"] <= 20_000
-
-
-def test_two_worker_processes_give_the_same_transitions_and_recheck():
-    sheet = _box((400, 400, 2), (-140, 0, -1))
-    poses = _poses([("a", (30, -100, 0)), ("b", (30, 0, 0)), ("c", (30, 100, 0))], DOWN)
-    fork = _fork()
-    one = plan_transitions(sheet, fork, poses, se3=False)
-    two = plan_transitions(sheet, fork, poses, se3=False, workers=2)
-    assert [t.kinds for t in two.transitions] == [t.kinds for t in one.transitions]
-    for s, t in zip(one.transitions, two.transitions, strict=True):
-        np.testing.assert_array_equal(s.positions, t.positions)
-    # the middle weld's lift is checked once in each process that meets it
-    assert two.stats["samples"] >= one.stats["samples"]
-    v1 = verify_sweeps(one, poses, sheet, fork)
-    v2 = verify_sweeps(two, poses, sheet, fork, workers=2)
-    assert v1.ok and v2.ok and v1.checked == v2.checked == 2
-    assert v1.samples == v2.samples  # each transition re-checked once, the same way

@@ -86,13 +86,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="price every leg of the tool order as the axial retract, also where the exit test "
         "found a lift (the estimate before the exit test)",
     )
-    p.add_argument(
-        "--workers",
-        type=int,
-        default=1,
-        help="processes for the transitions and their re-check (default 1, as the point-tip "
-        "planning here runs in one)",
-    )
 
 
 def _load() -> str:
@@ -184,10 +177,11 @@ def _exit_test(cell: Any, route: Any, gun: Any, args: Any) -> Any:
 def _transitions(
     cell: Any, route: Any, poses: Any, gun: Any, args: Any, reuse: Any = None
 ) -> dict[str, Any]:
-    """Order, transitions and their re-check for one station (timed together); ``reuse``: the
-    exit test's planner (one process only)."""
-    from weldplan.tool.tool_order import DEFAULT_ROT_WEIGHT, tool_order
-    from weldplan.tool.transitions import DEFAULT_RETRACT, plan_transitions
+    """Order, transitions (re-ordered round blocked pairs, :mod:`weldplan.tool.reorder`) and
+    their re-check for one station (timed together); ``reuse``: the exit test's planner."""
+    from weldplan.tool.reorder import plan_ordered_transitions
+    from weldplan.tool.tool_order import DEFAULT_ROT_WEIGHT
+    from weldplan.tool.transitions import DEFAULT_RETRACT
     from weldplan.tool.verify_sweeps import verify_sweeps
 
     t0 = time.perf_counter()
@@ -196,14 +190,12 @@ def _transitions(
         from weldplan.tool.exits import leave_distances
 
         leave = leave_distances(reuse, poses)
-    order, costs = tool_order(poses, DEFAULT_RETRACT, DEFAULT_ROT_WEIGHT, rng=0, leave=leave)
-    path = plan_transitions(
-        cell.part, gun, poses, order=order, se3=args.se3_time > 0,
-        time_s=max(args.se3_time, 1e-3), seed=0, stats=costs, workers=args.workers,
-        reuse=reuse if args.workers == 1 else None,
+    path = plan_ordered_transitions(
+        cell.part, gun, poses, retract=DEFAULT_RETRACT, rot_weight=DEFAULT_ROT_WEIGHT, seed=0,
+        leave=leave, reuse=reuse, se3=args.se3_time > 0, time_s=max(args.se3_time, 1e-3),
     )  # fmt: skip
     t1 = time.perf_counter()
-    sweeps = verify_sweeps(path, poses, cell.part, gun, workers=args.workers)
+    sweeps = verify_sweeps(path, poses, cell.part, gun)
     t2 = time.perf_counter()
     free = [t for t in path.transitions if t.free]
     return {
@@ -212,6 +204,7 @@ def _transitions(
         "free_length": sum(t.length for t in free),
         "free_rotation": sum(t.rotation for t in free),
         "blocked": [f"{t.from_id}->{t.to_id}: {t.reason}" for t in path.blocked],
+        "order_rounds": path.stats.get("order_rounds", 1),
         "sweeps": f"{'ok' if sweeps.ok else 'FAILED'} ({sweeps.checked})",
         "point_length": route.length,
         "transitions_s": t1 - t0,
@@ -276,6 +269,10 @@ def run(args: argparse.Namespace) -> int:
         if "via" in r:
             rows.append(_transition_row(r))
             notes += [f"- {r['name']} blocked {b}" for b in r["blocked"]]
+            if r["order_rounds"] > 1:
+                notes.append(
+                    f"- {r['name']}: {r['order_rounds']} orders (re-ordered round blocked pairs)"
+                )
         notes.append(
             f"- {r['name']}: {r['n'] - r['ok']} misses: {r['misses_ahead']} hit ahead of the TCP "
             f"(fixed electrode / lower arm: structure behind the sheet), {r['misses_short']} only "
@@ -294,7 +291,7 @@ def run(args: argparse.Namespace) -> int:
         head = [
             "",
             "Transitions (shared gun, tool order, retract 50 mm, slide lifts 4/10/20 mm, side exit "
-            f"250 mm, SE(3) {args.se3_time:g} s each, {args.workers} process(es)): free / total "
+            f"250 mm, SE(3) {args.se3_time:g} s each, one process): free / total "
             "by how they go; the free "
             "transitions' TCP length and rotation against the point-tip route's length and its "
             "welds' poses' rotation in the point-tip order; seconds for poses (+ re-check), "

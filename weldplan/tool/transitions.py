@@ -53,7 +53,6 @@ from weldplan.tool.model import Tool
 from weldplan.tool.result import WeldPoses
 from weldplan.tool.sweep import DEFAULT_MIN_STEP, SweepChecker, quat_to_matrix
 from weldplan.tool.transit import BLOCKED, DIRECT, REPLANNED, ToolPath, Transition
-from weldplan.tool.transit_workers import run_chunks
 
 log = logging.getLogger(__name__)
 
@@ -165,6 +164,7 @@ class TransitionPlanner:
         self._axial: dict[tuple[Any, ...], tuple[NDArray | None, tuple[str, ...], str]] = {}
         self._sides: dict[tuple[Any, ...], tuple[NDArray | None, tuple[str, ...], str]] = {}
         self._lifts: dict[tuple[Any, ...], tuple[NDArray, str]] = {}
+        self._planned: dict[tuple[Any, ...], Transition] = {}
 
     def _motions(
         self,
@@ -310,7 +310,14 @@ class TransitionPlanner:
     def plan(self, a: Any, b: Any) -> Transition:
         """The transition from weld pose ``a`` to ``b`` (:class:`~weldplan.tool.result.WeldPose`,
         both ok): the first free exit of the class docstring, or blocked with every exit's
-        failure in the reason."""
+        failure in the reason. Planned once per pair of poses: asked again (a re-ordered route,
+        :mod:`weldplan.tool.reorder`), the planner returns the same transition."""
+        key = (_pose_key(a), _pose_key(b))
+        if key not in self._planned:
+            self._planned[key] = self._plan(a, b)
+        return self._planned[key]
+
+    def _plan(self, a: Any, b: Any) -> Transition:
         n0 = self.samples
         pa, pb = (np.asarray(w.position, dtype=np.float64) for w in (a, b))
         qa, qb = (np.asarray(w.quaternion, dtype=np.float64) for w in (a, b))
@@ -533,18 +540,8 @@ def _entering(kind: str) -> str:
     return kind.replace("retract", "approach").replace("exit", "enter")
 
 
-def _plan_run(
-    pairs: list[tuple[Any, Any]], part: trimesh.Trimesh, tool: Tool, kw: dict[str, Any]
-) -> tuple[list[Transition], int, list[dict[str, Any]], int]:
-    """One run of consecutive transitions with its own planner: the transitions, the samples,
-    the SE(3) runs' counts and the crops built."""
-    tp = TransitionPlanner(part, tool, **kw)
-    out = [tp.plan(a, b) for a, b in pairs]
-    return out, tp.samples, tp.se3_runs, tp.checker.crops_built
-
-
 def _same_settings(
-    tp: TransitionPlanner, part: trimesh.Trimesh, tool: Tool, kw: dict[str, Any], workers: int
+    tp: TransitionPlanner, part: trimesh.Trimesh, tool: Tool, kw: dict[str, Any]
 ) -> None:
     """Refuse a planner whose part, tool or settings differ from the call's (``ValueError``)."""
     have = {
@@ -556,8 +553,6 @@ def _same_settings(
     diff = [k for k, v in have.items() if v != kw[k]]
     if tp.part is not part or tp.tool is not tool:
         diff.insert(0, "part or tool")
-    if workers != 1:
-        diff.append("workers (a given planner plans in one process)")
     if diff:
         raise ValueError(f"the planner's settings differ from this call's: {', '.join(diff)}")
 
@@ -578,7 +573,6 @@ def plan_transitions(
     slide: bool = True,
     se3_samples: int | None = None,
     stats: dict[str, Any] | None = None,
-    workers: int = 1,
     reuse: TransitionPlanner | None = None,
 ) -> ToolPath:
     """The whole tool's transitions through the welds with a pose (module docstring).
@@ -597,14 +591,10 @@ def plan_transitions(
         :class:`TransitionPlanner`.
     stats
         Extra figures to record (the ordering's costs).
-    workers
-        Processes to plan in (:func:`weldplan.tool.transit_workers.run_chunks`: runs of
-        consecutive transitions, each with its own planner; the same answers but for the
-        SE(3) re-plans' clock).
     reuse
         A :class:`TransitionPlanner` to plan with, keeping the exits it has checked already
         (the pose search's exit test, :mod:`weldplan.tool.exits`, reuses its cache here). Its
-        settings must be those of this call (``ValueError`` otherwise); one process only.
+        settings must be those of this call (``ValueError`` otherwise).
 
     Returns
     -------
@@ -623,18 +613,13 @@ def plan_transitions(
         time_s=time_s, seed=seed, rot_weight=rot_weight, side_exit=side_exit, slide=slide,
         se3_samples=se3_samples,
     )  # fmt: skip
-    pairs = [(poses[a], poses[b]) for a, b in zip(order[:-1], order[1:], strict=True)]
     if reuse is not None:
-        _same_settings(reuse, part, tool, kw, workers)
-        n0, c0, r0 = reuse.samples, reuse.checker.crops_built, len(reuse.se3_runs)
-        out = [reuse.plan(a, b) for a, b in pairs]
-        runs = [(out, reuse.samples - n0, reuse.se3_runs[r0:],
-                 reuse.checker.crops_built - c0)]  # fmt: skip
-    else:
-        runs = run_chunks(_plan_run, pairs, (part, tool, kw), workers)
-    transitions = tuple(t for run in runs for t in run[0])
-    samples = sum(run[1] for run in runs)
-    se3_runs = [r for run in runs for r in run[2]]
+        _same_settings(reuse, part, tool, kw)
+    tp = reuse if reuse is not None else TransitionPlanner(part, tool, **kw)  # type: ignore[arg-type]
+    n0, c0, r0 = tp.samples, tp.checker.crops_built, len(tp.se3_runs)
+    transitions = tuple(
+        tp.plan(poses[a], poses[b]) for a, b in zip(order[:-1], order[1:], strict=True)
+    )
     result = ToolPath(
         order=tuple(order),
         transitions=transitions,
@@ -654,13 +639,12 @@ def plan_transitions(
             "time_s": time_s,
             "seed": seed,
             "min_step": DEFAULT_MIN_STEP,
-            "workers": workers,
         },
         stats={
             **(stats or {}),
-            "samples": samples,
-            "crops_built": sum(run[3] for run in runs),
-            "se3_runs": se3_runs,
+            "samples": tp.samples - n0,
+            "crops_built": tp.checker.crops_built - c0,
+            "se3_runs": tp.se3_runs[r0:],
             "total_s": time.perf_counter() - t0,
         },
     )

@@ -258,27 +258,20 @@ def verify_sweeps(
     tool: Tool,
     *,
     spacing: float = DEFAULT_SPACING,
-    workers: int = 1,
 ) -> SweepsVerification:
     """Re-check every free transition of ``path`` for the swept ``tool`` (module docstring).
 
     The clearance and the contact radius are the poses' settings (what the pose search and the
-    planner used). ``workers > 1`` splits the transitions into that many runs of consecutive
-    ones, each checked in its own process with its own fresh models
-    (:func:`weldplan.tool.transit_workers.run_chunks`); the answer is the same.
+    planner used).
     """
-    from weldplan.tool.transit_workers import run_chunks
-
     failures: list[tuple[str, str]] = []
     ok_ids = sorted(p.id for p in poses.poses if p.ok)
     if sorted(path.order) != ok_ids:
         failures.append(("order", "the tool path does not visit exactly the welds with a pose"))
     free = [t for t in path.transitions if t.free]
     blocked = [f"{t.from_id}->{t.to_id}" for t in path.transitions if not t.free]
-    samples = 0
-    for fails, n in run_chunks(_check_free, free, (poses, part, tool, spacing), workers):
-        failures += fails
-        samples += n
+    fails, samples = _check_free(free, poses, part, tool, spacing)
+    failures += fails
     return SweepsVerification(
         ok=not failures,
         checked=len(free),
