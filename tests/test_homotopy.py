@@ -12,7 +12,7 @@ from test_local import analytic_clearance
 
 from weldplan.geometry.collision import CollisionModel
 from weldplan.geometry.gridsearch import pad_free, shortest_grid_path
-from weldplan.weld.homotopy import corridor, second_class_wins
+from weldplan.weld.homotopy import CLASS_GAIN, corridor, second_class_wins
 from weldplan.weld.local import LocalParams, plan_local_path, polyline_length
 
 CLEARANCE = 5.0
@@ -75,6 +75,7 @@ def test_astar_takes_the_longer_class_and_the_second_class_stage_finds_the_short
     # the second route, outside the first's corridor, goes under the stem and refines to the
     # bottom's optimum, which is kept
     assert both.classes == 2 and both.second_class
+    assert both.evaluations > one.evaluations  # the second A* ran
     assert both.inner_length == pytest.approx(BOTTOM, rel=3e-3)
     assert both.inner_length < one.inner_length
     assert both.inner_length <= both.so_length
@@ -134,3 +135,21 @@ def test_trigger_and_parameters() -> None:
     for bad in ({"class_radius": 0.0}, {"class_slack": -0.1}, {"class_radius": math.nan}):
         with pytest.raises(ValueError):
             LocalParams.coerce(bad)
+
+
+def test_a_path_near_its_straight_segment_skips_the_second_search() -> None:
+    # a box 4.9 mm from the straight line S -> G blocks it at the 5 mm clearance by 0.1 mm; the
+    # refined path is within 0.1 % (CLASS_GAIN) of the straight segment, a lower bound of every
+    # class, so the second search is not run
+    cell = box_cell(
+        [(np.array([90.0, 4.9, -300.0]), np.array([110.0, 30.0, 300.0]))],
+        [-20.0, -80.0, -10.0],
+        [220.0, 70.0, 10.0],
+    )
+    lp = plan(cell, refine=True)
+    assert lp.success and lp.refined
+    assert 200.0 < lp.inner_length <= (1.0 + CLASS_GAIN) * 200.0
+    assert lp.classes == 1 and not lp.second_class
+    # no second A* ran: the same expansions as with the stage off
+    assert lp.evaluations == plan(cell, refine=True, second_class=False).evaluations
+    assert analytic_clearance(cell, lp.points, step=0.05) >= CLEARANCE - 1e-6

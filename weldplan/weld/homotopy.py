@@ -19,6 +19,8 @@ are on and the method is ``"exact"``):
 2. A* again on the same grid with the corridor closed (its voxels are forbidden, not
    obstacles), the same FCL check of kept lattice moves, repairs and secondary optimisation as
    the first route;
+0. skipped when the first refined path is within :data:`CLASS_GAIN` of the straight segment
+   between the virtual joints (a lower bound of every class);
 3. the *trigger*: the candidate is refined (under the same cap, ``refine_budget``) only when its
    length after the secondary optimisation is within ``class_slack`` of the first route's
    length after the secondary optimisation (the grid path's lengths are cheap to compare, the
@@ -48,10 +50,22 @@ from weldplan.geometry.gridsearch import PaddedGrid
 
 log = logging.getLogger(__name__)
 
-__all__ = ["CLASS_EXPANSIONS", "CLASS_RADIUS", "CLASS_SLACK", "corridor", "second_class_wins"]
+__all__ = [
+    "CLASS_EXPANSIONS",
+    "CLASS_GAIN",
+    "CLASS_RADIUS",
+    "CLASS_SLACK",
+    "corridor",
+    "second_class_wins",
+]
 
 #: default corridor radius around the first route (mm; 3 voxels at the 5 mm pitch)
 CLASS_RADIUS = 15.0
+#: the stage is skipped when the first refined path is at most this fraction longer than the
+#: straight segment between the virtual joints: no class can be shorter than that segment, so
+#: the second could gain at most this much (most blocked pairs of a large station only graze
+#: an edge)
+CLASS_GAIN = 0.001
 #: the second search gives up after ``a * e + b`` expansions, ``(a, b)`` these, ``e`` the
 #: first search's: a corridor across the straight line can make A* flood a large station
 #: (seconds on car2 Z3L), and a route that much longer on the lattice seldom refines shorter

@@ -55,7 +55,8 @@ the first route (``class_radius``, at most ``CLASS_EXPANSIONS`` expansions), the
 repairs and secondary optimisation; when that grid path is no longer than the first's
 (``class_slack``) it is refined under the same ``refine_budget`` and the shorter refined path is
 kept (``LocalPath.classes``, ``LocalPath.second_class``). It catches an obstacle passed on the
-side that is shorter on the lattice but longer in space.
+side that is shorter on the lattice but longer in space. It is skipped when the first refined
+path is within ``CLASS_GAIN`` (0.1 %) of the straight segment, the lower bound of every class.
 
 Lengths: ``LocalPath.inner_length`` is measured between the virtual joints, like the paper's
 Table 3 (the paper ignores the legs); ``LocalPath.length`` includes the legs.
@@ -78,6 +79,7 @@ from weldplan.geometry.grid import ObstacleGrid
 from weldplan.geometry.gridsearch import PaddedGrid, shortest_grid_path
 from weldplan.optim.discrete.aco_grid import AntColonyParams, ant_colony_grid
 from weldplan.random import RNGLike, as_generator, seed_of
+from weldplan.weld.homotopy import CLASS_GAIN
 from weldplan.weld.localpath import (
     MAX_SEARCH_VOXELS,
     METHODS,
@@ -375,7 +377,10 @@ def plan_local_path(
     classes, second = 1, False
     if prm.refine:
         inner, refined = _refine_inner(inner, collision, checks, grid.clearance, prm)
-        if prm.second_class and method == "exact" and route is not None:
+        # no path is shorter than the straight segment: when the refined path is within
+        # CLASS_GAIN of it, another class cannot gain more than that and is not searched
+        near = polyline_length(inner) <= (1.0 + CLASS_GAIN) * float(np.linalg.norm(vg - vs))
+        if prm.second_class and method == "exact" and route is not None and not near:
             alt = _second_class(
                 grid, pg, origin, s, g, route, so_length, polyline_length(inner), prm, checks,
                 gen, deadline, stats,
