@@ -85,8 +85,8 @@ def test_bench_local_peers_end_to_end(box_cell, tmp_path: Path, monkeypatch) -> 
         "SO-ACO (paper)",
         "SO-ACO + refine",
         "exact (A* + SO)",
-        "exact + refine, sweeps",
-        "exact + refine (default)",
+        "exact + refine, one class",
+        "exact + refine + 2nd class (default)",
         "OMPL BIT* 0.05 s",
         "OMPL BIT* 0.2 s",
     ]
@@ -99,8 +99,46 @@ def test_bench_local_peers_end_to_end(box_cell, tmp_path: Path, monkeypatch) -> 
         runs = r["runs"]
         assert runs["SO-ACO + refine"]["length"] <= runs["SO-ACO (paper)"]["length"] + 1e-9
         exact = runs["exact (A* + SO)"]["length"]
-        assert runs["exact + refine (default)"]["length"] <= exact + 1e-9
-        assert runs["exact + refine, sweeps"]["length"] <= exact + 1e-9
+        one = runs["exact + refine, one class"]["length"]
+        assert one <= exact + 1e-9
+        # the second class is kept only when it refines shorter
+        assert runs["exact + refine + 2nd class (default)"]["length"] <= one + 1e-9
     md = (tmp_path / "local-peers.md").read_text()
-    assert "| exact + refine (default) | 2/2 |" in md and "Reference: OMPL BIT* 0.2 s" in md
+    assert "| exact + refine + 2nd class (default) | 2/2 |" in md
+    assert "Reference: OMPL BIT* 0.2 s" in md
     assert "## Targets" in md and "load average" in md
+
+
+def test_bench_local_peers_every_pair_in_two_processes(box_cell, tmp_path: Path, monkeypatch):
+    # the workers are forked after the patch, so they build the same box cell
+    monkeypatch.setattr(local_peers, "build_cells", lambda spec, size: [("box", box_cell)])
+    common = ["bench", "local", "--peers", "--pairs", "all", "--budgets", "0.05"]
+    common += ["--ompl-planners", "bitstar", "--ours", "exact,default"]
+    runs = {}
+    for jobs in (1, 2):
+        out = tmp_path / f"jobs{jobs}"
+        assert main([*common, "--jobs", str(jobs), "--out", str(out)]) == 0
+        runs[jobs] = json.loads((out / "local-peers.json").read_text())
+    for data in runs.values():
+        assert [r["pair"] for r in data["records"]] == [
+            [["A", "B", "C", "D"][i], ["A", "B", "C", "D"][j]] for i, j in BLOCKED
+        ]
+        assert list(data["records"][0]["runs"]) == [
+            "exact (A* + SO)",
+            "exact + refine + 2nd class (default)",
+            "OMPL BIT* 0.05 s",
+        ]
+    # our planners are deterministic: the same lengths in one process or two
+    for a, b in zip(runs[1]["records"], runs[2]["records"], strict=True):
+        for col in ("exact (A* + SO)", "exact + refine + 2nd class (default)"):
+            assert a["runs"][col]["length"] == pytest.approx(b["runs"][col]["length"], abs=1e-9)
+    assert runs[2]["meta"]["jobs"] == 2 and runs[2]["meta"]["pairs_limit"] is None
+
+
+@pytest.mark.parametrize(
+    "bad", [["--pairs", "0"], ["--pairs", "some"], ["--ours", "nope"], ["--jobs", "0"]]
+)
+def test_bench_local_peers_rejects_bad_options(bad, tmp_path: Path, capsys) -> None:
+    rc = main(["bench", "local", "--peers", *bad, "--out", str(tmp_path)])
+    assert rc != 0
+    assert "Traceback" not in capsys.readouterr().err

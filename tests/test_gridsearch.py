@@ -118,6 +118,45 @@ def test_blocked_edges_are_avoided() -> None:
     )
 
 
+@pytest.mark.parametrize("connectivity", [6, 26])
+@pytest.mark.parametrize("seed", range(4))
+def test_forbidden_voxels_are_obstacles_to_the_search(connectivity: int, seed: int) -> None:
+    # with corner cutting allowed, forbidding voxels is the same as making them obstacles
+    rng = np.random.default_rng(10 + seed)
+    free = random_free(rng, p_obstacle=0.2)
+    cells = np.argwhere(free)
+    s, g = cells[rng.choice(len(cells), 2, replace=False)]
+    ban = free & (rng.random(free.shape) < 0.2)
+    ban[tuple(s)] = ban[tuple(g)] = False
+    moves = neighbour_offsets(connectivity)
+    expected = brute_dijkstra(free & ~ban, s, g, moves.tolist())
+    pg = pad_free(free)
+    r = shortest_grid_path(
+        pg, s, g, connectivity=connectivity, pitch=5.0, forbidden=pg.flat(np.argwhere(ban))
+    )
+    if math.isinf(expected):
+        assert not r.success
+        return
+    assert r.length == pytest.approx(5.0 * expected, abs=1e-9)
+    assert not ban[tuple(r.path.T)].any()
+    # the forbidden set is the call's own: the same grid searched again without it is unchanged
+    plain = shortest_grid_path(pg, s, g, connectivity=connectivity, pitch=5.0)
+    assert plain.length == pytest.approx(5.0 * brute_dijkstra(free, s, g, moves.tolist()))
+    with pytest.raises(ValueError, match="forbidden"):
+        shortest_grid_path(pg, s, g, connectivity=connectivity, forbidden=[int(pg.flat(s))])
+
+
+def test_expansion_cap_stops_the_search_deterministically() -> None:
+    free, s, g = wall_grid()
+    full = shortest_grid_path(free, s, g, connectivity=26)
+    assert full.success
+    same = shortest_grid_path(free, s, g, connectivity=26, max_expansions=full.expansions)
+    assert same.length == full.length and same.expansions == full.expansions
+    short = shortest_grid_path(free, s, g, connectivity=26, max_expansions=full.expansions - 1)
+    assert not short.success and short.reason == "expansion cap reached"
+    assert short.expansions == full.expansions - 1
+
+
 def test_start_on_obstacle_is_an_error() -> None:
     free = np.ones((3, 3, 3), dtype=bool)
     free[1, 1, 1] = False

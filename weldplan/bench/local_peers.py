@@ -3,13 +3,17 @@
 Issue 15 item 5. On each cell, every pair of joints whose straight segment between the virtual
 joints is blocked (the FCL capsule at the clearance) is planned by
 
-- ours: SO-ACO as the paper prints it (``plan_pair(method="so-aco")``) and exact (26-connected A*
-  + the secondary optimisation, ``method="exact"``), each alone and followed by the continuous
-  refinement (:func:`weldplan.weld.refine.refine_local_path`); "exact + refine" is the default
-  pipeline of ``weldplan plan``;
+- ours (``--ours``): SO-ACO as the paper prints it (``plan_pair(method="so-aco")``), alone and
+  followed by the continuous refinement (:func:`weldplan.weld.refine.refine_local_path`); exact
+  (26-connected A* + the secondary optimisation, ``method="exact"``) alone, with the refinement
+  on one grid route ("one class"), and with the refinement and the second-class stage
+  (:mod:`weldplan.weld.homotopy`), the local stage of ``weldplan plan`` (the default column);
 - OMPL (:mod:`weldplan.motion.local`): BIT* and RRT* for each of ``--budgets`` seconds, then
   OMPL's simplifier, with weldplan's own FCL checks as the validity checker (the sphere at the
   clearance + closed-solid test for states, the ``method="fcl"`` capsule for motions);
+
+``--pairs all`` (the default) measures every blocked pair, ``--pairs N`` at most N a cell;
+``--jobs N`` shares the pairs among N processes (give each a core: OMPL's budgets are wall time).
 
 Every length is the inner length between the two virtual joints (the same for every planner).
 Per pair, the best known length is the shortest successful path any planner found; the issue's
@@ -63,7 +67,24 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="--peers: OMPL time budgets in s, comma-separated (0.1,1,10)",
     )
     parser.add_argument(
-        "--pairs", type=int, default=None, help="--peers: at most this many blocked pairs a cell"
+        "--pairs",
+        default="all",
+        help="--peers: 'all' (default: every blocked pair) or at most this many blocked pairs a "
+        "cell, spread evenly over its list",
+    )
+    parser.add_argument(
+        "--ours",
+        default=",".join(OURS_DEFAULT),
+        help="--peers: our columns, comma-separated, of "
+        + ", ".join(OURS)
+        + f" ({','.join(OURS_DEFAULT)})",
+    )
+    parser.add_argument(
+        "--jobs",
+        type=int,
+        default=1,
+        help="--peers: worker processes, pairs shared among them (1). OMPL's budgets are wall "
+        "time: give each job a core of its own",
     )
     parser.add_argument(
         "--cells",
@@ -164,11 +185,25 @@ def blocked_pairs(cell: Any, limit: int | None) -> list[tuple[int, int]]:
 # --------------------------------------------------------------------------- planners
 
 
-#: the column of weldplan's default pipeline (``weldplan plan``: exact + the refinement)
-DEFAULT_COLUMN = "exact + refine (default)"
-#: the same with the refinement's vertex stage as one-vertex sweeps (the default until the joint
+#: the column of weldplan's default pipeline (``weldplan plan``'s local stage: exact A* + SO,
+#: the refinement and the second-class stage, :mod:`weldplan.weld.homotopy`)
+DEFAULT_COLUMN = "exact + refine + 2nd class (default)"
+#: the same with one grid route only (the default before the second-class stage)
+ONE_CLASS_COLUMN = "exact + refine, one class"
+#: one class, the refinement's vertex stage as one-vertex sweeps (the default until the joint
 #: vertex optimisation, :mod:`weldplan.weld.taut`)
 SWEEPS_COLUMN = "exact + refine, sweeps"
+#: ``--ours`` key -> column
+OURS = {
+    "paper": "SO-ACO (paper)",
+    "paper+refine": "SO-ACO + refine",
+    "exact": "exact (A* + SO)",
+    "sweeps": SWEEPS_COLUMN,
+    "one-class": ONE_CLASS_COLUMN,
+    "default": DEFAULT_COLUMN,
+}
+#: the columns of ours measured unless ``--ours`` says otherwise
+OURS_DEFAULT = ("paper", "paper+refine", "exact", "one-class", "default")
 
 
 def _refine_hook(taut: bool = True) -> Callable[[Any, Any], Any]:
@@ -188,22 +223,35 @@ def _refine_hook(taut: bool = True) -> Callable[[Any, Any], Any]:
     return refine
 
 
-def planners(budgets: list[float], ompl: list[str]) -> dict[str, Callable[..., Any]]:
-    """Column name -> ``f(cell, i, j, seed, checks) -> LocalPath``."""
+def planners(
+    budgets: list[float], ompl: list[str], ours: list[str] | None = None
+) -> dict[str, Callable[..., Any]]:
+    """Column name -> ``f(cell, i, j, seed, checks) -> LocalPath``; ``ours``: keys of
+    :data:`OURS` (default :data:`OURS_DEFAULT`), then the OMPL columns.
+
+    The default column is the pipeline's own local stage (``plan_pair(method="exact",
+    params={"refine": True})``: A* + SO, the refinement, the second-class stage, all inside one
+    timed call); "one class" the same with ``second_class=False``.
+    """
     from weldplan.motion.local import plan_pair_ompl
     from weldplan.weld.local import plan_pair
 
     refine = _refine_hook()
     sweeps = _refine_hook(taut=False)
-    cols: dict[str, Callable[..., Any]] = {
-        "SO-ACO (paper)": lambda c, i, j, s, ch: plan_pair(c, i, j, method="so-aco", rng=s),
-        "SO-ACO + refine": lambda c, i, j, s, ch: refine(
+    one = {"refine": True, "second_class": False}
+    every: dict[str, Callable[..., Any]] = {
+        "paper": lambda c, i, j, s, ch: plan_pair(c, i, j, method="so-aco", rng=s),
+        "paper+refine": lambda c, i, j, s, ch: refine(
             c, plan_pair(c, i, j, method="so-aco", rng=s)
         ),
-        "exact (A* + SO)": lambda c, i, j, s, ch: plan_pair(c, i, j, method="exact"),
-        SWEEPS_COLUMN: lambda c, i, j, s, ch: sweeps(c, plan_pair(c, i, j, method="exact")),
-        DEFAULT_COLUMN: lambda c, i, j, s, ch: refine(c, plan_pair(c, i, j, method="exact")),
+        "exact": lambda c, i, j, s, ch: plan_pair(c, i, j, method="exact"),
+        "sweeps": lambda c, i, j, s, ch: sweeps(c, plan_pair(c, i, j, method="exact")),
+        "one-class": lambda c, i, j, s, ch: plan_pair(c, i, j, method="exact", params=one),
+        "default": lambda c, i, j, s, ch: plan_pair(
+            c, i, j, method="exact", params={"refine": True}
+        ),
     }
+    cols = {OURS[k]: every[k] for k in (OURS_DEFAULT if ours is None else ours)}
     label = {"bitstar": "BIT*", "rrtstar": "RRT*"}
     for name in ompl:
         for b in budgets:
@@ -213,46 +261,75 @@ def planners(budgets: list[float], ompl: list[str]) -> dict[str, Callable[..., A
     return cols
 
 
-def _measure(
-    cells: list[tuple[str, Any]],
-    limit: int | None,
-    cols: dict[str, Callable[..., Any]],
-    seed: int,
-) -> list[dict[str, Any]]:
-    """One record per (cell, pair): every column's length, success, wall and CPU seconds."""
+def _measure_pair(
+    cname: str, cell: Any, i: int, j: int, cols: dict[str, Callable[..., Any]], seed: int,
+    checks: Any,
+) -> dict[str, Any]:  # fmt: skip
+    """One record: every column's length, success, wall and CPU seconds on pair ``(i, j)``."""
+    ids = [str(v) for v in cell.joints.ids]
+    rec: dict[str, Any] = {"cell": cname, "pair": [ids[i], ids[j]], "runs": {}}
+    for col, fn in cols.items():
+        try:
+            lp = fn(cell, i, j, seed, checks)
+            ok = bool(lp.success)
+            run = {
+                "length": float(lp.inner_length) if ok else None,
+                "success": ok,
+                "wall_s": float(lp.seconds),
+                "cpu_s": float(lp.cpu_seconds),
+                "reason": "" if ok else str(lp.reason),
+            }
+        except Exception as exc:  # a planner error is a failed pair in the table
+            run = {"length": None, "success": False, "wall_s": math.nan,
+                   "cpu_s": math.nan, "reason": f"{type(exc).__name__}: {exc}"}  # fmt: skip
+        rec["runs"][col] = run
+    done = [v["length"] for v in rec["runs"].values() if v["success"]]
+    rec["best"] = min(done) if done else None
+    short = " ".join(f"{v['length']:.1f}" if v["success"] else "FAIL" for v in rec["runs"].values())
+    print(f"  {cname} {ids[i]} -> {ids[j]}: {short}", flush=True)
+    return rec
+
+
+def _warm(cell: Any, pairs: list[tuple[int, int]]) -> None:
+    """Build a cell's per-grid caches (padded array, components, move tables, open3d scene)
+    once, untimed, as a pipeline that plans many pairs of one cell does."""
+    from weldplan.weld.local import plan_pair
+
+    if pairs:
+        plan_pair(cell, *pairs[0], method="exact", params={"refine": True})
+
+
+#: a worker process's cells, columns and checks (:func:`_init_worker`)
+_WORKER: dict[str, Any] = {}
+
+
+def _init_worker(spec: str, size: int, budgets: list[float], ompl: list[str],
+                 ours: list[str], limit: int | None) -> None:  # fmt: skip
     from weldplan.motion.local import TorchChecks
 
-    records = []
-    for cname, cell in cells:
+    cells = build_cells(spec, size)
+    for _, cell in cells:
+        _warm(cell, blocked_pairs(cell, limit))
+    _WORKER.update(
+        cells=cells, cols=planners(budgets, ompl, ours),
+        checks=[TorchChecks(cell) for _, cell in cells],
+    )  # fmt: skip
+
+
+def _work(task: tuple[int, int, int, int]) -> dict[str, Any]:
+    c, i, j, seed = task
+    cname, cell = _WORKER["cells"][c]
+    return _measure_pair(cname, cell, i, j, _WORKER["cols"], seed, _WORKER["checks"][c])
+
+
+def _tasks(cells: list[tuple[str, Any]], limit: int | None, seed: int) -> list[tuple[int, ...]]:
+    """``(cell index, i, j, seed)`` for every measured pair; seeds count up over the cells."""
+    tasks = []
+    for c, (cname, cell) in enumerate(cells):
         pairs = blocked_pairs(cell, limit)
-        ids = [str(v) for v in cell.joints.ids]
-        checks = TorchChecks(cell)
         print(f"{cname}: {cell.n_joints} joints, {len(pairs)} blocked pairs measured")
-        for k, (i, j) in enumerate(pairs):
-            rec: dict[str, Any] = {"cell": cname, "pair": [ids[i], ids[j]], "runs": {}}
-            for col, fn in cols.items():
-                try:
-                    lp = fn(cell, i, j, seed + k, checks)
-                    ok = bool(lp.success)
-                    run = {
-                        "length": float(lp.inner_length) if ok else None,
-                        "success": ok,
-                        "wall_s": float(lp.seconds),
-                        "cpu_s": float(lp.cpu_seconds),
-                        "reason": "" if ok else str(lp.reason),
-                    }
-                except Exception as exc:  # a planner error is a failed pair in the table
-                    run = {"length": None, "success": False, "wall_s": math.nan,
-                           "cpu_s": math.nan, "reason": f"{type(exc).__name__}: {exc}"}  # fmt: skip
-                rec["runs"][col] = run
-            done = [v["length"] for v in rec["runs"].values() if v["success"]]
-            rec["best"] = min(done) if done else None
-            records.append(rec)
-            short = " ".join(
-                f"{v['length']:.1f}" if v["success"] else "FAIL" for v in rec["runs"].values()
-            )
-            print(f"  {ids[i]} -> {ids[j]}: {short}")
-    return records
+        tasks += [(c, i, j, seed + len(tasks) + k) for k, (i, j) in enumerate(pairs)]
+    return tasks
 
 
 # --------------------------------------------------------------------------- summary
@@ -353,9 +430,22 @@ def markdown(
     return "\n".join(lines)
 
 
-def run(args: argparse.Namespace) -> int:
-    """Measure, print a line a pair, write ``local-peers.md`` and ``local-peers.json``."""
-    from weldplan.bench.common import conditions
+def _pairs_limit(text: str | int | None) -> int | None:
+    from weldplan.errors import ConfigError
+
+    if text is None or str(text).strip().lower() == "all":
+        return None
+    try:
+        n = int(text)
+    except ValueError:
+        n = 0
+    if n < 1:
+        raise ConfigError(f"--pairs must be 'all' or a positive integer, got {text!r}")
+    return n
+
+
+def _options(args: argparse.Namespace) -> tuple[list[float], list[str], list[str], int | None]:
+    """Validated ``--budgets``, ``--ompl-planners``, ``--ours`` and ``--pairs``."""
     from weldplan.errors import ConfigError
     from weldplan.motion.sampling import PLANNERS, ompl_available
 
@@ -366,45 +456,85 @@ def run(args: argparse.Namespace) -> int:
     bad = [p for p in ompl if p not in PLANNERS]
     if bad:
         raise ConfigError(f"unknown OMPL planner(s) {bad}; choose from {', '.join(PLANNERS)}")
-    if args.pairs is not None and args.pairs < 1:
-        raise ConfigError(f"--pairs must be a positive integer, got {args.pairs}")
+    ours = [k.strip() for k in getattr(args, "ours", ",".join(OURS_DEFAULT)).split(",")]
+    ours = [k for k in ours if k]
+    bad = [k for k in ours if k not in OURS]
+    if bad:
+        raise ConfigError(f"unknown --ours column(s) {bad}; choose from {', '.join(OURS)}")
+    if getattr(args, "jobs", 1) < 1:
+        raise ConfigError(f"--jobs must be a positive integer, got {args.jobs}")
+    return budgets, ompl, ours, _pairs_limit(args.pairs)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Measure, print a line a pair, write ``local-peers.md`` and ``local-peers.json``.
+
+    With ``--jobs N > 1`` the pairs are shared among N worker processes (each builds the cells
+    once); the report is written when every pair is done. With one job it is written after every
+    cell, so a long run that is stopped keeps what it measured.
+    """
+    from concurrent.futures import ProcessPoolExecutor
+
+    from weldplan.bench.common import conditions
+    from weldplan.motion.local import TorchChecks
+
+    budgets, ompl, ours, limit = _options(args)
+    jobs = int(getattr(args, "jobs", 1))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     before = conditions()
     t0 = time.perf_counter()
     cells = build_cells(args.cells, args.station_size)
-    cols = planners(budgets, ompl)
+    cols = planners(budgets, ompl, ours)
     names = list(cols)
     ref = f"OMPL BIT* {max(budgets):g} s" if "bitstar" in ompl else None
     fast = f"OMPL BIT* {min(budgets):g} s" if "bitstar" in ompl else None
-    records: list[dict[str, Any]] = []
-    for k, cell in enumerate(cells):
-        records += _measure([cell], args.pairs, cols, args.seed + len(records))
-        # written after every cell, so a long run that is stopped keeps what it measured
-        done = cells[: k + 1]
+    tasks = _tasks(cells, limit, args.seed)
+
+    def write(records: list[dict[str, Any]], upto: int) -> None:
+        done = cells[:upto]
         summary = {"all cells": summarise(records, names, ref)}
         for cname, _ in done:
             summary[cname] = summarise([r for r in records if r["cell"] == cname], names, ref)
         load = os.getloadavg()
         meta = {
             "cells": [c for c, _ in done],
-            "pairs_limit": args.pairs,
+            "pairs_limit": limit,
             "seed": args.seed,
             "budgets": budgets,
             "ompl_planners": ompl,
+            "jobs": jobs,
             "before": before,
             "load_after": f"{load[0]:.2f} {load[1]:.2f} {load[2]:.2f}",
             "wall_s": time.perf_counter() - t0,
-            "refine_note": (
-                "+ refine: weldplan.weld.refine.refine_local_path (the pipeline's continuous "
-                "refinement, FCL-checked: shortcuts, then the joint vertex optimisation) applied "
-                "to that planner's path; 'refine, sweeps': the same with one-vertex sweeps "
-                "instead of the joint optimisation (the refinement as it was)."
-            ),
+            "refine_note": REFINE_NOTE,
         }
         (out / "local-peers.md").write_text(markdown(records, summary, ref, fast, meta))
         (out / "local-peers.json").write_text(
             json.dumps({"meta": meta, "summary": summary, "records": records}, indent=1)
         )
+
+    records: list[dict[str, Any]] = []
+    if jobs > 1:
+        init = (args.cells, args.station_size, budgets, ompl, ours, limit)
+        with ProcessPoolExecutor(jobs, initializer=_init_worker, initargs=init) as pool:
+            records = list(pool.map(_work, tasks))
+        write(records, len(cells))
+    else:
+        for c, (cname, cell) in enumerate(cells):
+            mine = [t for t in tasks if t[0] == c]
+            _warm(cell, [(i, j) for _, i, j, _ in mine])
+            checks = TorchChecks(cell)
+            records += [_measure_pair(cname, cell, i, j, cols, sd, checks) for _, i, j, sd in mine]
+            write(records, c + 1)
     print(f"wrote {out / 'local-peers.md'}, {out / 'local-peers.json'}")
     return 0
+
+
+REFINE_NOTE = (
+    "+ refine: weldplan.weld.refine (the pipeline's continuous refinement, FCL-checked: "
+    "shortcuts, then the joint vertex optimisation); '+ 2nd class': the second-class stage "
+    "(weldplan.weld.homotopy: a second A* route outside the first's corridor, refined when its "
+    "grid path is within the slack, the shorter kept); 'one class': without it; 'sweeps': "
+    "one-vertex sweeps instead of the joint optimisation (the refinement as it was)."
+)

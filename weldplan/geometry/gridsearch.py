@@ -202,6 +202,8 @@ def shortest_grid_path(
     blocked_edges: Iterable[tuple[int, int]] | None = None,
     deadline: float | None = None,
     corner_cutting: bool = True,
+    forbidden: ArrayLike | None = None,
+    max_expansions: int | None = None,
 ) -> GridPathResult:
     """A* over the free voxels: the exact shortest lattice path from ``start`` to ``goal``.
 
@@ -224,6 +226,14 @@ def shortest_grid_path(
         When False, a diagonal move is allowed only if every voxel of the box it spans is free
         (the 2 face neighbours of an edge move, the 6 of a corner move): the usual rule that
         keeps a lattice path from slicing past an obstacle's edge between two free centres.
+    forbidden
+        Padded flat indices of free voxels the search must not enter (besides the obstacles),
+        e.g. the corridor of an earlier route when looking for another homotopy class
+        (:mod:`weldplan.weld.homotopy`). The move tables stay those of the free array: a
+        diagonal move may pass between two forbidden voxels (they are not obstacles).
+    max_expansions
+        Give up (``path=None``, reason "expansion cap reached") after this many expansions: a
+        deterministic bound on a search, unlike ``deadline``.
 
     Returns
     -------
@@ -254,7 +264,12 @@ def shortest_grid_path(
             per_grid[connectivity] = _move_tables(pg, moves, pairs)
         tables = per_grid[connectivity]
     h = _lattice_heuristic(pg, g, connectivity == 6)
-    best, parent, expansions, reason = _astar(free, s, g, h, pairs, tables, blocked, deadline)
+    banned = None if forbidden is None else np.asarray(forbidden, dtype=np.int64).ravel()
+    if banned is not None and (np.any(banned == s) or np.any(banned == g)):
+        raise ValueError("the start or goal voxel is forbidden")
+    best, parent, expansions, reason = _astar(
+        free, s, g, h, pairs, tables, blocked, deadline, banned, max_expansions
+    )
     if reason:
         return GridPathResult(None, math.inf, expansions, reason)
     flat = [g]
@@ -298,16 +313,23 @@ def _astar(
     tables: tuple[dict[int, list[tuple[int, float]]], array.array] | None,
     blocked: set[tuple[int, int]],
     deadline: float | None,
+    banned: NDArray[np.int64] | None = None,
+    cap: int | None = None,
 ) -> tuple[dict[int, float], dict[int, int], int, str]:
     """The A* loop over padded flat indices: ``(g-costs, parents, expansions, reason)``,
     ``reason`` empty when ``g`` was reached. ``pairs``: every (flat offset, cost) move;
-    ``tables``: :func:`_move_tables` (no corner cutting), ``None`` to allow every move."""
+    ``tables``: :func:`_move_tables` (no corner cutting), ``None`` to allow every move;
+    ``banned``: flat indices closed from the start; ``cap``: most expansions."""
     table, maskl = tables if tables is not None else (None, None)
+    if banned is not None and len(banned):
+        free = free.copy()
+        free[banned] = False
     ok = bytearray(free.tobytes())  # free and not yet closed
     mark = bytearray(len(free)) if blocked else b""  # endpoints of blocked moves
     for u, v in blocked:
         mark[u] = mark[v] = 1  # type: ignore[index]
     inf = math.inf
+    cap = -1 if cap is None else int(cap)
     best: dict[int, float] = {s: 0.0}
     parent: dict[int, int] = {s: -1}
     heap: list[tuple[float, float, int]] = [(h(s), 0.0, s)]
@@ -320,6 +342,8 @@ def _astar(
         if u == g:
             return best, parent, expansions, ""
         ok[u] = 0
+        if expansions == cap:
+            return best, parent, expansions, "expansion cap reached"
         expansions += 1
         if deadline is not None and not expansions & 1023 and time.perf_counter() > deadline:
             return best, parent, expansions, "time budget exhausted"

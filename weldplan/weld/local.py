@@ -49,6 +49,15 @@ the path between the virtual joints goes through :func:`weldplan.weld.refine.ref
 Off in :class:`LocalParams` so that the paper's pipeline and ``weldplan bench local`` stay as
 printed; on in the planning pipeline's defaults (``weldplan plan --no-refine`` turns it off).
 
+The second-class stage (``LocalParams.second_class``, on whenever the exact planner refines;
+weldplan's own, :mod:`weldplan.weld.homotopy`): A* runs a second time outside the corridor of
+the first route (``class_radius``, at most ``CLASS_EXPANSIONS`` expansions), the same FCL checks,
+repairs and secondary optimisation; when that grid path is no longer than the first's
+(``class_slack``) it is refined under the same ``refine_budget`` and the shorter refined path is
+kept (``LocalPath.classes``, ``LocalPath.second_class``). It catches an obstacle passed on the
+side that is shorter on the lattice but longer in space. It is skipped when the first refined
+path is within ``CLASS_GAIN`` (0.1 %) of the straight segment, the lower bound of every class.
+
 Lengths: ``LocalPath.inner_length`` is measured between the virtual joints, like the paper's
 Table 3 (the paper ignores the legs); ``LocalPath.length`` includes the legs.
 """
@@ -70,6 +79,7 @@ from weldplan.geometry.grid import ObstacleGrid
 from weldplan.geometry.gridsearch import PaddedGrid, shortest_grid_path
 from weldplan.optim.discrete.aco_grid import AntColonyParams, ant_colony_grid
 from weldplan.random import RNGLike, as_generator, seed_of
+from weldplan.weld.homotopy import CLASS_GAIN
 from weldplan.weld.localpath import (
     MAX_SEARCH_VOXELS,
     METHODS,
@@ -149,11 +159,15 @@ def _grid_route(
     deadline: float | None,
     callback: Callable[[int, float], None] | None,
     stats: dict[str, Any],
-) -> tuple[NDArray[np.float64] | None, float, int, str]:
+    forbidden: NDArray[np.int64] | None = None,
+    max_expansions: int | None = None,
+) -> tuple[NDArray[np.float64] | None, float, int, str, NDArray[np.int64] | None]:
     """Search, check the route with FCL, forbid the moves that graze, search again.
 
-    Returns ``(inner points or None, raw grid length, SO passes, reason)`` and fills ``stats``
-    (``iterations``, ``ants``, ``evaluations``, ``history``, ``repairs``).
+    Returns ``(inner points or None, raw grid length, SO passes, reason, lattice route)`` (the
+    route in ``pg``'s indices) and fills ``stats`` (``iterations``, ``ants``, ``evaluations``,
+    ``history``, ``repairs``). ``forbidden``: padded flat indices the exact search must not
+    enter (:func:`weldplan.weld.homotopy.corridor`); ``max_expansions``: its cap a search.
 
     A route fails when a lattice move between two free voxel centres grazes a sharp edge. Every
     move of a failing route is checked in one batch and every grazing one is forbidden (both
@@ -169,6 +183,7 @@ def _grid_route(
             r = shortest_grid_path(
                 pg, s - origin, g - origin, connectivity=conn, pitch=grid.pitch,
                 blocked_edges=blocked, deadline=deadline, corner_cutting=prm.corner_cutting,
+                forbidden=forbidden, max_expansions=max_expansions,
             )  # fmt: skip
             stats["evaluations"] += r.expansions
         else:
@@ -182,7 +197,7 @@ def _grid_route(
             stats["history"] = stats["history"] + r.best_history
         stats["repairs"] = repairs
         if not r.success:
-            return None, math.inf, 0, r.reason
+            return None, math.inf, 0, r.reason, None
         P = grid.index_to_world(r.path + origin)
         if method == "aco":
             bad = _bad_moves(P, checks.many)
@@ -195,16 +210,17 @@ def _grid_route(
             bad = [] if so.bad_segment is None else _bad_moves(P, checks.many) or [-1]
         if not bad:
             if so is None:
-                return P, r.length, 0, ""
-            return so.points, r.length, so.passes, ""
+                return P, r.length, 0, "", r.path
+            return so.points, r.length, so.passes, "", r.path
         if bad == [-1]:
-            return None, math.inf, 0, _FCL_EDGE
+            return None, math.inf, 0, _FCL_EDGE, None
         if repairs >= limit:
             return (
                 None,
                 math.inf,
                 0,
                 (f"grid routes kept grazing the part after {prm.max_repairs} repairs"),
+                None,
             )
         flat = pg.flat(r.path)
         blocked.update((int(flat[k]), int(flat[k + 1])) for k in bad)
@@ -351,15 +367,29 @@ def plan_local_path(
     pg, origin, search_voxels, search_boxes = _search_grid(grid, s, g, method, prm, label_conn)
     stats: dict[str, Any] = {"iterations": 0, "ants": 0, "evaluations": 0, "history": ()}
     stats.update(search_voxels=search_voxels, search_boxes=search_boxes, repairs=0)
-    inner, raw_len, so_passes, reason = _grid_route(
+    inner, raw_len, so_passes, reason, route = _grid_route(
         grid, pg, origin, s, g, method, prm, checks, gen, deadline, callback, stats
     )
     if inner is None:
         return done(inner_length=math.inf, reason=reason, **stats)
     so_length = polyline_length(inner)
     refined = False
+    classes, second = 1, False
     if prm.refine:
         inner, refined = _refine_inner(inner, collision, checks, grid.clearance, prm)
+        # no path is shorter than the straight segment: when the refined path is within
+        # CLASS_GAIN of it, another class cannot gain more than that and is not searched
+        near = polyline_length(inner) <= (1.0 + CLASS_GAIN) * float(np.linalg.norm(vg - vs))
+        if prm.second_class and method == "exact" and route is not None and not near:
+            alt = _second_class(
+                grid, pg, origin, s, g, route, so_length, polyline_length(inner), prm, checks,
+                gen, deadline, stats,
+            )  # fmt: skip
+            if alt is not None:
+                classes = 2
+                if alt[0] is not None:
+                    inner, raw_len, so_length, so_passes, refined = alt
+                    second = True
     return done(
         points=_assemble(start_xyz, inner, goal_xyz),
         inner_length=polyline_length(inner),
@@ -367,8 +397,61 @@ def plan_local_path(
         so_length=so_length,
         refined=refined,
         so_passes=so_passes,
+        classes=classes,
+        second_class=second,
         **stats,
     )
+
+
+def _second_class(
+    grid: ObstacleGrid,
+    pg: PaddedGrid,
+    origin: NDArray[np.int64],
+    s: NDArray[np.int64],
+    g: NDArray[np.int64],
+    route: NDArray[np.int64],
+    so_first: float,
+    best: float,
+    prm: LocalParams,
+    checks: _Checks,
+    gen: np.random.Generator,
+    deadline: float | None,
+    stats: dict[str, Any],
+) -> tuple[Any, ...] | None:
+    """The second-class stage (:mod:`weldplan.weld.homotopy`): A* outside the first route's
+    corridor, the same FCL checks and secondary optimisation, refined under the same cap when
+    the trigger fires.
+
+    Returns ``None`` when no candidate was refined; ``(None,)`` when one was and the first path
+    stays shorter; else ``(inner, raw length, SO length, SO passes, refined)`` of the candidate.
+    Adds the search's expansions and repairs to ``stats``.
+    """
+    from weldplan.weld.homotopy import CLASS_EXPANSIONS, corridor, second_class_wins
+
+    ban = corridor(pg, route, prm.class_radius, grid.pitch)
+    if len(ban) == 0:
+        return None
+    st: dict[str, Any] = {"iterations": 0, "ants": 0, "evaluations": 0, "history": ()}
+    cap = CLASS_EXPANSIONS[0] * stats["evaluations"] + CLASS_EXPANSIONS[1]
+    inner, raw, passes, reason, _ = _grid_route(
+        grid, pg, origin, s, g, "exact", prm, checks, gen, deadline, None, st, forbidden=ban,
+        max_expansions=cap,
+    )  # fmt: skip
+    stats["evaluations"] += st["evaluations"]
+    stats["repairs"] += st.get("repairs", 0)
+    if inner is None:
+        log.debug("no second-class route: %s", reason)
+        return None
+    so = polyline_length(inner)
+    if not second_class_wins(so_first, so, prm.class_slack):
+        return None
+    inner, refined = _refine_inner(inner, collision=checks.collision, checks=checks,
+                                   clearance=grid.clearance, prm=prm)  # fmt: skip
+    length = polyline_length(inner)
+    log.debug("second class: %.3f mm (first %.3f mm)", length, best)
+    if not length < best - 1e-6:
+        return (None,)
+    return inner, raw, so, passes, refined
 
 
 def plan_pair(

@@ -13,6 +13,7 @@ from numpy.typing import NDArray
 
 from weldplan.errors import PlanningError
 from weldplan.optim.discrete.aco_grid import AntColonyParams
+from weldplan.weld.homotopy import CLASS_RADIUS, CLASS_SLACK
 
 __all__ = [
     "MAX_SEARCH_VOXELS",
@@ -84,6 +85,21 @@ class LocalParams:
         Seconds of wall time the refinement of one pair may take (its vertex optimisation stops
         between rounds; what it has is checked and kept); ``None``: no cap. Typical pairs take
         0.01-0.1 s; the cap bounds the few that take longer on large stations.
+    second_class
+        With ``refine`` and the exact planner: the second-class stage
+        (:mod:`weldplan.weld.homotopy`): a second A* route outside the first route's corridor,
+        refined under the same ``refine_budget`` when its grid path is within ``class_slack`` of
+        the first's, the shorter refined path kept. On by default (it does nothing unless
+        ``refine`` is on); False: one route, as before. On the 151 blocked pairs of
+        ``weldplan bench local --peers`` it brought the max length from 1.018 to 1.006 x OMPL
+        BIT* 10 s; it costs about a quarter more CPU in a whole plan of car2's 200-joint
+        station, for no length there (docs/bench-local-peers.md).
+    class_radius
+        Radius of the first route's corridor that the second route may not enter (mm,
+        :data:`weldplan.weld.homotopy.CLASS_RADIUS`).
+    class_slack
+        The second candidate is refined when its length after the secondary optimisation is at
+        most ``1 + class_slack`` times the first's (:data:`weldplan.weld.homotopy.CLASS_SLACK`).
     connectivity
         Lattice of the exact baseline (26; 6 gives the ants' lattice).
     corner_cutting
@@ -119,6 +135,9 @@ class LocalParams:
     refine: bool = False
     refine_taut: bool = True
     refine_budget: float | None = REFINE_BUDGET
+    second_class: bool = True
+    class_radius: float = CLASS_RADIUS
+    class_slack: float = CLASS_SLACK
     connectivity: int = 26
     corner_cutting: bool = False
     crop_margin: float | None = 50.0
@@ -134,6 +153,12 @@ class LocalParams:
             raise ValueError(f"max_repairs must be >= 0 or None, got {self.max_repairs}")
         if self.refine_budget is not None and not self.refine_budget >= 0:
             raise ValueError(f"refine_budget must be >= 0 s or None, got {self.refine_budget}")
+        if not (math.isfinite(self.class_radius) and self.class_radius > 0):
+            raise ValueError(
+                f"class_radius must be a positive length (mm), got {self.class_radius}"
+            )
+        if not (math.isfinite(self.class_slack) and self.class_slack >= 0):
+            raise ValueError(f"class_slack must be a finite number >= 0, got {self.class_slack}")
         if self.crop_margin is not None and not self.crop_margin >= 0:
             raise ValueError(f"crop_margin must be >= 0 mm, got {self.crop_margin}")
 
@@ -225,6 +250,11 @@ class LocalPath:
         Boxes built before one connected the pair (0: the whole grid without cropping).
     history
         Best raw route length after each colony iteration (mm), for convergence plots.
+    classes
+        Grid routes refined and compared: 2 when the second-class stage
+        (:mod:`weldplan.weld.homotopy`) refined a candidate, else 1.
+    second_class
+        The path kept is the second-class candidate (it refined shorter than the first route).
     """
 
     points: NDArray[np.float64]
@@ -249,6 +279,8 @@ class LocalPath:
     search_voxels: int = 0
     search_boxes: int = 0
     history: tuple[float, ...] = ()
+    classes: int = 1
+    second_class: bool = False
 
     def __post_init__(self) -> None:
         pts = np.array(self.points, dtype=np.float64).reshape(-1, 3)
