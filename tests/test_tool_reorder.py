@@ -12,7 +12,7 @@ from weldplan.io.joints import Joints
 from weldplan.tool import arc_torch, plan_weld_poses
 from weldplan.tool.reorder import plan_ordered_transitions
 from weldplan.tool.result import OK, WeldPose, WeldPoses
-from weldplan.tool.tool_order import FORBID_MM, order_cost, tool_leg_costs, tool_order
+from weldplan.tool.tool_order import order_cost, tool_leg_costs, tool_order
 
 DOWN = (0.0, 1.0, 0.0, 0.0)  # TCP z along -z (qw, qx, qy, qz: 180 deg about x)
 
@@ -44,7 +44,26 @@ def test_tool_order_with_forbidden_pairs_is_the_best_order_that_avoids_them():
 
     best = min(order_cost(cost, [k[w] for w in p]) for p in itertools.permutations(ids) if ok(p))
     assert st["tool_order"]["cost"] == pytest.approx(best)  # exact: 6 welds, no penalty in it
-    assert st["tool_order"]["cost"] < FORBID_MM and st["forbidden_pairs"] == 2
+    assert st["forbidden_pairs"] == 2 and st["forbidden_used"] == 0
+
+
+def test_fast_tsp_avoids_forbidden_pairs_above_the_exact_size():
+    poses = _scattered_poses(18)  # above the exact solver's 13 nodes: fast-tsp
+    free, st0 = tool_order(poses, 50.0, 200.0, rng=0)
+    forbid = set(itertools.pairwise(free[::2])) | set(itertools.pairwise(free[:9]))
+    order, st = tool_order(poses, 50.0, 200.0, rng=0, forbid=forbid)
+    assert sorted(order) == sorted(free) and st["forbidden_used"] == 0
+    assert not {frozenset(p) for p in itertools.pairwise(order)} & {frozenset(p) for p in forbid}
+    assert st["tool_order"]["cost"] >= st0["tool_order"]["cost"] - 1e-9
+
+
+def test_a_weld_forbidden_with_every_other_still_gets_an_order():
+    poses = _scattered_poses(5)
+    ids = [p.id for p in poses.poses]
+    forbid = {("a", w) for w in ids[1:]}  # a cannot be joined to anything: no order avoids it
+    order, st = tool_order(poses, 50.0, 200.0, rng=0, forbid=forbid)
+    assert sorted(order) == ids and st["forbidden_used"] == 1
+    assert "a" in (order[0], order[-1])  # one forbidden pair, not two
 
 
 def _walled_station():

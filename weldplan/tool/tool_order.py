@@ -17,9 +17,9 @@ exact limit, fast-tsp above). The poses are those chosen along the point-tip ord
 (:func:`weldplan.tool.poses.plan_weld_poses`); they are not re-chosen for the new order.
 
 Pairs whose transition was found blocked (``forbid``: the transition planner tried every exit
-and, where allowed, SE(3)) cost :data:`FORBID_MM` more in both directions, so the next order
-avoids them where any order can (:func:`weldplan.commands._tool.plan_tool_path` re-orders until
-no new pair is blocked).
+and, where allowed, SE(3)) are avoided in both directions wherever an order can do without them
+(unreachable for the exact solver, priced above every other pair by fast-tsp);
+:mod:`weldplan.tool.reorder` re-orders until no new pair is blocked.
 """
 
 from __future__ import annotations
@@ -39,9 +39,6 @@ log = logging.getLogger(__name__)
 #: mm per rad: default weight of the orientation change in the leg costs (a turn of 1 rad costs
 #: as much as 200 mm of TCP travel: about what a 0.7 m gun's far end sweeps through)
 DEFAULT_ROT_WEIGHT = 200.0
-#: mm added to the cost of a pair whose transition was found blocked (either direction): more
-#: than any route of free transitions costs, so an order avoids the pair wherever one can
-FORBID_MM = 1e7
 
 
 def retract_points(
@@ -85,6 +82,23 @@ def order_cost(cost: NDArray[np.float64], order: list[int]) -> float:
     return float(sum(cost[a, b] for a, b in zip(order[:-1], order[1:], strict=True)))
 
 
+def _avoiding_order(cost: NDArray[np.float64], avoid: NDArray[np.bool_], rng: Any) -> list[int]:
+    """The least-cost open path that uses ``avoid`` pairs only where no order does without them:
+    exactly (those pairs unreachable; if no order is left, as if none were avoided) up to the
+    exact solver's size, else fast-tsp's own pricing of ``avoid`` above every other cost."""
+    from weldplan.errors import PlanningError
+    from weldplan.optim.discrete.sequence import EXACT_MAX_NODES, solve_sequence
+
+    if not avoid.any():
+        return [int(k) for k in solve_sequence(cost, rng=rng).order]
+    if len(cost) <= EXACT_MAX_NODES:
+        try:
+            return [int(k) for k in solve_sequence(np.where(avoid, np.inf, cost), rng=rng).order]
+        except PlanningError:
+            return [int(k) for k in solve_sequence(cost, rng=rng).order]
+    return [int(k) for k in solve_sequence(cost, rng=rng, avoid=avoid).order]
+
+
 def tool_order(
     poses: WeldPoses,
     retract: float,
@@ -110,8 +124,8 @@ def tool_order(
         Weld id -> mm it is left by along its axis where that is not ``retract`` (a lift:
         :func:`weldplan.tool.exits.leave_distances`).
     forbid
-        ``(from_id, to_id)`` pairs whose transition was found blocked: each costs
-        :data:`FORBID_MM` more, in both directions.
+        ``(from_id, to_id)`` pairs whose transition was found blocked: used (either way) only
+        where no order does without them.
 
     Returns
     -------
@@ -119,26 +133,27 @@ def tool_order(
         The weld ids in the new order, and the estimated costs (mm, mm, deg) of the point-tip
         order and of the new one.
     """
-    from weldplan.optim.discrete.sequence import solve_sequence
-
     ids = [p.id for p in poses.poses if p.ok]
     stats: dict[str, Any] = {"rot_weight": rot_weight}
     if len(ids) < 3:
         return ids, stats
     cost, length, angle = tool_leg_costs(poses, ids, retract, rot_weight, leave)
     stats["lifted"] = sum(i in (leave or {}) for i in ids)
-    priced = cost.copy()  # the costs the sequencer sees: blocked pairs priced out
+    avoid = np.zeros(cost.shape, dtype=bool)
     where = {w: k for k, w in enumerate(ids)}
     for a, b in forbid:
         if a in where and b in where:
-            priced[where[a], where[b]] += FORBID_MM
-            priced[where[b], where[a]] += FORBID_MM
+            avoid[where[a], where[b]] = avoid[where[b], where[a]] = True
     stats["forbidden_pairs"] = len(forbid)
     point = list(range(len(ids)))
-    seq = solve_sequence(priced, rng=rng)
-    order = [int(k) for k in seq.order]
-    if order_cost(priced, order) > order_cost(priced, point):  # never worse than the point-tip
+    order = _avoiding_order(cost, avoid, rng)
+
+    def key(o: list[int]) -> tuple[int, float]:  # pairs priced out first, then the cost
+        return sum(avoid[a, b] for a, b in zip(o[:-1], o[1:], strict=True)), order_cost(cost, o)
+
+    if key(order) > key(point):  # never worse than the point-tip order
         order = point
+    stats["forbidden_used"] = key(order)[0]
     for name, o in (("point_order", point), ("tool_order", order)):
         stats[name] = {
             "cost": order_cost(cost, o),
