@@ -33,7 +33,7 @@ METHODS = ("so-aco", "aco", "exact")
 #: is a cube of 126 voxels (630 mm at 5 mm)
 MAX_SEARCH_VOXELS = 2_000_000
 
-#: default wall-time cap (s) on the continuous refinement of one pair
+#: default CPU-time cap (s) on the continuous refinement of one pair
 #: (:attr:`LocalParams.refine_budget`): the bench's 32 blocked pairs take 0.01-0.25 s of CPU
 #: each for the whole refinement, so the cap only bounds outliers on large stations
 REFINE_BUDGET = 0.5
@@ -82,9 +82,11 @@ class LocalParams:
         (:mod:`weldplan.weld.taut`, the default); False: the one-vertex sweeps
         (:func:`weldplan.weld.refine.tighten_path`), as before.
     refine_budget
-        Seconds of wall time the refinement of one pair may take (its vertex optimisation stops
-        between rounds; what it has is checked and kept); ``None``: no cap. Typical pairs take
-        0.01-0.1 s; the cap bounds the few that take longer on large stations.
+        CPU seconds (of the planning thread, :func:`time.thread_time`) the refinement of one
+        pair may take (its vertex optimisation stops between rounds; what it has is checked and
+        kept); ``None``: no cap. Typical pairs take 0.01-0.1 s; the cap bounds the few that take
+        longer on large stations. CPU, not wall time, so that a loaded machine (or the other
+        workers of a parallel run) does not change the path.
     second_class
         With ``refine`` and the exact planner: the second-class stage
         (:mod:`weldplan.weld.homotopy`): a second A* route outside the first route's corridor,

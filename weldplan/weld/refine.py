@@ -349,7 +349,7 @@ def tighten_path(
                     P = P[~drop]
             if before - polyline_length(P) < tol:
                 break
-            if deadline is not None and time.perf_counter() > deadline:
+            if deadline is not None and time.thread_time() > deadline:
                 return P, sweeps
         if level == levels:
             break
@@ -412,8 +412,9 @@ def refine_path(
         ``final_check(A, B, radius) -> (m,) bool``, the check the result must pass at
         ``clearance``; default ``obstacle.segments_free``. The 3D planner passes python-fcl.
     time_budget
-        Seconds for the vertex optimisation (it stops between sweeps or rounds; the result is
-        still checked).
+        CPU seconds of the calling thread (:func:`time.thread_time`) for the vertex optimisation
+        (it stops between sweeps or rounds; the result is still checked). Not wall time: other
+        work on a loaded machine must not change the path.
     taut
         Stage 2 is the joint vertex optimisation (:func:`weldplan.weld.taut.tauten_path`: every
         vertex at once, by second-order cone programs; the default) instead of the one-vertex
@@ -459,13 +460,14 @@ def refine_path(
 
     if len(P) < 3:
         return result(P, L0, 0, False, "nothing to refine (fewer than 3 points)")
-    deadline = None if time_budget is None else t0 + float(time_budget)
+    c0 = time.thread_time()
+    deadline = None if time_budget is None else c0 + float(time_budget)
     S = shortcut_path(P, free)
     Ls = polyline_length(S)
     if taut:
         from weldplan.weld.taut import tauten_path
 
-        left = None if deadline is None else deadline - time.perf_counter()
+        left = None if deadline is None else deadline - time.thread_time()
         Q, sweeps = tauten_path(S, obstacle, float(clearance), free, margin=float(margin),
                                 time_budget=left)  # fmt: skip
         Q = _drop_straight(Q)

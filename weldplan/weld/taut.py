@@ -290,13 +290,13 @@ def tauten_path(
     level = radius + margin + PLANE_EXTRA * radius
     V = _densify(V, obstacle, radius)
     K, C = _contacts(V, obstacle, radius, SAMPLE_STEP * radius)
-    deadline = None if time_budget is None else time.perf_counter() + time_budget
+    deadline = None if time_budget is None else time.thread_time() + time_budget  # CPU s
     # contacts found where a round's path failed the check: kept for every later round
     Ks, Cs = np.zeros(0, dtype=np.int64), np.zeros((0, V.shape[1]))
     delta, L = TRUST0 * radius, polyline_length(V)
     rounds = 0
     while rounds < max_rounds and delta >= TRUST_MIN * radius:
-        if deadline is not None and time.perf_counter() >= deadline:
+        if deadline is not None and time.thread_time() >= deadline:
             break
         rounds += 1
         G, h = _planes(V, *_merge(K, C, Ks, Cs, radius), level, delta)
