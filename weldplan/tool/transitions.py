@@ -23,7 +23,7 @@ motion model: straight TCP segment, slerped orientation; :class:`TransitionPlann
 4. **SE(3)**: OMPL (:func:`weldplan.motion.sampling.plan_se3`) between the clear points when
    both welds have one and the move between them is blocked, else between the weld poses; its
    states and motions judged by the same swept check within a budget that holds
-   (:meth:`TransitionPlanner._se3`), and the path it returns checked again motion by motion.
+   (:mod:`weldplan.tool.se3_replan`), and the path it returns checked again motion by motion.
 
 A transition none of these frees is reported :data:`~weldplan.tool.transit.BLOCKED`, its reason
 listing every exit tried and where it was blocked; it is never silently repaired.
@@ -51,8 +51,9 @@ from numpy.typing import NDArray
 from weldplan.errors import InputError
 from weldplan.tool.model import Tool
 from weldplan.tool.result import WeldPoses
+from weldplan.tool.se3_replan import entering, replan
 from weldplan.tool.sweep import DEFAULT_MIN_STEP, SweepChecker, quat_to_matrix
-from weldplan.tool.transit import BLOCKED, DIRECT, REPLANNED, ToolPath, Transition
+from weldplan.tool.transit import BLOCKED, DIRECT, ToolPath, Transition
 
 log = logging.getLogger(__name__)
 
@@ -73,13 +74,6 @@ DEFAULT_SE3_TIME = 5.0
 #: FCL samples one motion of an SE(3) re-plan may take (a conservative advancement that needs
 #: more grazes the part, or turns a 0.7 m gun far; OMPL tries a shorter motion instead)
 DEFAULT_SE3_MOTION_CAP = 200
-
-
-def _se3_box(a: NDArray, b: NDArray, part: trimesh.Trimesh, pad: float) -> tuple[NDArray, NDArray]:
-    """The TCP position box of an SE(3) re-plan: the two ends and the part's box, padded."""
-    lo = np.minimum(np.minimum(a, b), np.asarray(part.bounds[0])) - pad
-    hi = np.maximum(np.maximum(a, b), np.asarray(part.bounds[1])) + pad
-    return lo, hi
 
 
 class TransitionPlanner:
@@ -271,7 +265,7 @@ class TransitionPlanner:
         exempt = np.array([a.position, b.position], dtype=np.float64)
         P = np.concatenate([la, lb[::-1]])
         Q = np.array([qa] * len(la) + [qb] * len(lb))
-        enter = tuple(_entering(k) for k in reversed(kb))
+        enter = tuple(entering(k) for k in reversed(kb))
         i = len(la) - 1
         ok, _, why = self._motions(P[i : i + 2], Q[i : i + 2], exempt)
         return P, Q, (*ka, "move", *enter), ok, why
@@ -335,41 +329,25 @@ class TransitionPlanner:
         # a tool that straddles the sheet (a C-gun) slides first: its axial retract pulls the
         # jaw behind the sheet through it, so trying that first costs a check per weld
         slide_first = self.slide and self.tool.straddles
-        if slide_first:
-            P, Q, why = self._slide(a, b)
-            if P is not None:
-                return done(P, Q, ("lift", "slide", "lower"), DIRECT)
-            tried.append(f"slide: {why}")
-        la, ka, why_a = self._leave_axial(a)
-        lb, kb, why_b = self._leave_axial(b) if la is not None else (None, (), "")
-        if la is not None and lb is not None:
-            P, Q, kinds, ok, why = self._joined(a, b, la, ka, lb, kb)
+        for kind in ("slide", "axial", "side") if slide_first else ("axial", "slide", "side"):
+            if kind == "slide":
+                if not self.slide:
+                    continue
+                P, Q, why = self._slide(a, b)
+                if P is not None:
+                    return done(P, Q, ("lift", "slide", "lower"), DIRECT)
+                tried.append(f"slide: {why}")
+                continue
+            if kind == "side" and not (self.side_exit > 0 and self.retract > 0 and legs is None):
+                continue
+            leave = self._leave_axial if kind == "axial" else self._leave
+            got = self._via(a, b, kind, leave, tried)
+            if got is None:
+                continue
+            P, Q, kinds, ok, ends, legs = got
             if ok:
                 return done(P, Q, kinds, DIRECT)
-            tried.append(f"axial: move {why}")
             shown = shown or (P, Q, kinds)
-            ends, legs = (la[-1], lb[-1]), (la, ka, lb, kb)
-        else:
-            tried.append(f"axial: leaving {a.id}: {why_a}" if la is None
-                         else f"axial: reaching {b.id}: {why_b}")  # fmt: skip
-        if self.slide and not slide_first:
-            P, Q, why = self._slide(a, b)
-            if P is not None:
-                return done(P, Q, ("lift", "slide", "lower"), DIRECT)
-            tried.append(f"slide: {why}")
-        if self.side_exit > 0 and self.retract > 0 and legs is None:
-            sa, ska, why_a = self._leave(a)
-            sb, skb, why_b = self._leave(b) if sa is not None else (None, (), "")
-            if sa is not None and sb is not None:
-                P, Q, kinds, ok, why = self._joined(a, b, sa, ska, sb, skb)
-                if ok:
-                    return done(P, Q, kinds, DIRECT)
-                tried.append(f"side: move {why}")
-                shown = shown or (P, Q, kinds)
-                ends, legs = (sa[-1], sb[-1]), (sa, ska, sb, skb)
-            elif sa is None or sb is None:
-                w, why = (a, why_a) if sa is None else (b, why_b)
-                tried.append(f"side: {'leaving' if w is a else 'reaching'} {w.id}: {why}")
         # a blocked transition shows its first joined path tried, else the spot-to-spot segment
         shown = shown or (np.array([pa, pb]), np.array([qa, qb]), ("move",))
         if not self.se3:
@@ -378,7 +356,23 @@ class TransitionPlanner:
             ca, cb = self._clear_point(a), self._clear_point(b)
             if ca is not None and cb is not None:
                 ends, legs = (ca[-1], cb[-1]), (ca, ("lift",), cb, ("lift",))
-        return self._replan(a, b, ends, legs, tried, done, shown)
+        return replan(self, a, b, ends, legs, tried, done, shown)
+
+    def _via(
+        self, a: Any, b: Any, label: str, leave: Any, tried: list[str]
+    ) -> tuple[NDArray, NDArray, tuple[str, ...], bool, Any, Any] | None:
+        """Both welds' exits by ``leave`` (axial or side), joined by the move: ``(P, Q, kinds,
+        free, ends, legs)``; ``None`` when an exit is blocked. Failures go to ``tried``."""
+        la, ka, why_a = leave(a)
+        lb, kb, why_b = leave(b) if la is not None else (None, (), "")
+        if la is None or lb is None:
+            w, why = (a, why_a) if la is None else (b, why_b)
+            tried.append(f"{label}: {'leaving' if w is a else 'reaching'} {w.id}: {why}")
+            return None
+        P, Q, kinds, ok, why = self._joined(a, b, la, ka, lb, kb)
+        if not ok:
+            tried.append(f"{label}: move {why}")
+        return P, Q, kinds, ok, (la[-1], lb[-1]), (la, ka, lb, kb)
 
     def _leave(self, w: Any) -> tuple[NDArray | None, tuple[str, ...], str]:
         """Weld ``w``'s axial retract when free, else its first free side exit (both cached)."""
@@ -421,109 +415,6 @@ class TransitionPlanner:
                 fails.append(f"side: {why}")
         return False, "; ".join(fails) or "no exit tried"
 
-    def _replan(
-        self,
-        a: Any,
-        b: Any,
-        ends: tuple[NDArray, NDArray] | None,
-        legs: tuple[NDArray, tuple[str, ...], NDArray, tuple[str, ...]] | None,
-        tried: list[str],
-        done: Any,
-        fallback: tuple[NDArray, NDArray, tuple[str, ...]],
-    ) -> Transition:
-        """OMPL in SE(3) between the clear points ``ends`` (both weld exits free, the move
-        blocked) or else between the weld poses; its path checked again motion by motion."""
-        pa, pb = (np.asarray(w.position, dtype=np.float64) for w in (a, b))
-        qa, qb = (np.asarray(w.quaternion, dtype=np.float64) for w in (a, b))
-        exempt = np.array([pa, pb])
-        start, goal = ((ends[0], qa), (ends[1], qb)) if ends is not None else ((pa, qa), (pb, qb))
-        path, status = self._se3(start, goal, exempt)
-        if path is None:
-            tried.append(f"SE(3): {status}")
-            return done(*fallback, BLOCKED)
-        sp, sq = path[:, :3], path[:, 3:]
-        skinds: tuple[str, ...] = ("se3",) * (len(path) - 1)
-        if legs is not None:
-            la, ka, lb, kb = legs
-            sp = np.concatenate([la[:-1], sp, lb[::-1][1:]])
-            sq = np.concatenate([[qa] * (len(la) - 1), sq, [qb] * (len(lb) - 1)])
-            skinds = (*ka, *skinds, *(_entering(k) for k in reversed(kb)))
-        # the planner's answer, checked again (the whole path: the ends are known free; soft at
-        # the ends as OMPL's checks were: softness changes only where a check gives up early)
-        ok3, k3, why3 = self._motions(path[:, :3], path[:, 3:], exempt, True, True)
-        if not ok3:
-            tried.append(f"SE(3) path motion {k3} {why3}")
-            return done(sp, sq, skinds, BLOCKED)
-        tried.append(f"SE(3): {status}")
-        return done(sp, sq, skinds, REPLANNED)
-
-    def _se3(
-        self, start: tuple[NDArray, NDArray], goal: tuple[NDArray, NDArray], exempt: NDArray
-    ) -> tuple[NDArray | None, str]:
-        """OMPL's SE(3) path ``(n, 7)`` between two poses, or ``None`` and why not.
-
-        The budget holds: every state and motion check after ``time_s`` seconds, or after
-        ``se3_samples`` FCL samples, answers "not free" at once, one motion may take at most
-        ``se3_motion_cap`` samples, and OMPL is told to stop (its termination condition asks
-        between its steps)."""
-        try:
-            from weldplan.motion.sampling import plan_se3
-        except ImportError as exc:  # the wrapper or OMPL itself is missing
-            return None, f"SE(3) re-planning unavailable ({exc})"
-        check = self.checker
-        run = {"states": 0, "motions": 0, "refused": 0, "samples": 0}
-        self.se3_runs.append(run)
-        deadline = time.perf_counter() + self.time_s
-        cap = self.se3_samples
-
-        def spent() -> bool:
-            return (cap is not None and run["samples"] >= cap) or time.perf_counter() > deadline
-
-        def is_valid(p: NDArray, q: NDArray) -> bool:
-            run["states"] += 1
-            if spent():
-                run["refused"] += 1
-                return False
-            run["samples"] += 1
-            self.samples += 1
-            return check.state_ok(p, q, exempt)
-
-        ends = np.array([np.r_[start[0], start[1]], np.r_[goal[0], goal[1]]])
-
-        def motion_valid(s: NDArray, t: NDArray) -> bool:
-            run["motions"] += 1
-            if spent():
-                run["refused"] += 1
-                return False
-            soft = (
-                any(np.allclose(s, e) for e in ends),
-                any(np.allclose(t, e) for e in ends),
-            )
-            left = self.se3_motion_cap if cap is None else min(
-                self.se3_motion_cap, cap - run["samples"])  # fmt: skip
-            out = check.check(s[:3], s[3:], t[:3], t[3:], exempt, soft, cap=left,
-                              deadline=deadline)  # fmt: skip
-            run["samples"] += out.samples
-            self.samples += out.samples
-            run["refused"] += out.out_of_budget
-            return out.ok
-
-        if not (check.state_ok(*start, exempt) and check.state_ok(*goal, exempt)):
-            return None, "an end pose of the re-plan is not free"
-        lo, hi = _se3_box(start[0], goal[0], self.part, pad=self.tool.reach)
-        res = plan_se3(
-            start[0], start[1], goal[0], goal[1], lo, hi, is_valid,
-            motion_valid=motion_valid, rot_weight=self.rot_weight, planner=self.planner,
-            time_s=self.time_s, seed=self.seed, simplify=True, stop=spent,
-        )  # fmt: skip
-        tally = (
-            f"{run['states']} states, {run['motions']} motions checked ({run['refused']} "
-            f"refused: budget spent), {run['samples']} samples"
-        )
-        if not res.solved:
-            return None, f"{res.planner}: {res.status}; {tally}"
-        return np.asarray(res.points, dtype=np.float64), f"{res.planner}: {res.status}; {tally}"
-
 
 def _pose_key(w: Any) -> tuple[Any, ...]:
     """The cache key of a weld pose: its id, position and quaternion (rounded to 1e-9: the same
@@ -533,11 +424,6 @@ def _pose_key(w: Any) -> tuple[Any, ...]:
         *np.round(np.asarray(w.position, dtype=np.float64), 9).tolist(),
         *np.round(np.asarray(w.quaternion, dtype=np.float64), 9).tolist(),
     )
-
-
-def _entering(kind: str) -> str:
-    """The name of a leaving motion run backwards (a retract is an approach, an exit an entry)."""
-    return kind.replace("retract", "approach").replace("exit", "enter")
 
 
 def _same_settings(

@@ -1,0 +1,136 @@
+"""SE(3) re-planning of a blocked transition with OMPL (:mod:`weldplan.tool.transitions`, exit 4).
+
+OMPL (:func:`weldplan.motion.sampling.plan_se3`) plans the whole tool between the two welds'
+clear points (both exits free, the move between them blocked) or else between the weld poses.
+Its states and motions are judged by the transition planner's own swept check
+(:class:`~weldplan.tool.sweep.SweepChecker`) within a budget that holds (:func:`se3_path`), and
+the path it returns is checked again, motion by motion, before it is taken.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import numpy as np
+import trimesh
+from numpy.typing import NDArray
+
+from weldplan.tool.transit import BLOCKED, REPLANNED, Transition
+
+
+def _se3_box(a: NDArray, b: NDArray, part: trimesh.Trimesh, pad: float) -> tuple[NDArray, NDArray]:
+    """The TCP position box of an SE(3) re-plan: the two ends and the part's box, padded."""
+    lo = np.minimum(np.minimum(a, b), np.asarray(part.bounds[0])) - pad
+    hi = np.maximum(np.maximum(a, b), np.asarray(part.bounds[1])) + pad
+    return lo, hi
+
+
+def entering(kind: str) -> str:
+    """The name of a leaving motion run backwards (a retract is an approach, an exit an entry)."""
+    return kind.replace("retract", "approach").replace("exit", "enter")
+
+
+def replan(
+    tp: Any,
+    a: Any,
+    b: Any,
+    ends: tuple[NDArray, NDArray] | None,
+    legs: tuple[NDArray, tuple[str, ...], NDArray, tuple[str, ...]] | None,
+    tried: list[str],
+    done: Any,
+    fallback: tuple[NDArray, NDArray, tuple[str, ...]],
+) -> Transition:
+    """OMPL in SE(3) between the clear points ``ends`` (both weld exits free, the move
+    blocked) or else between the weld poses; its path checked again motion by motion."""
+    pa, pb = (np.asarray(w.position, dtype=np.float64) for w in (a, b))
+    qa, qb = (np.asarray(w.quaternion, dtype=np.float64) for w in (a, b))
+    exempt = np.array([pa, pb])
+    start, goal = ((ends[0], qa), (ends[1], qb)) if ends is not None else ((pa, qa), (pb, qb))
+    path, status = se3_path(tp, start, goal, exempt)
+    if path is None:
+        tried.append(f"SE(3): {status}")
+        return done(*fallback, BLOCKED)
+    sp, sq = path[:, :3], path[:, 3:]
+    skinds: tuple[str, ...] = ("se3",) * (len(path) - 1)
+    if legs is not None:
+        la, ka, lb, kb = legs
+        sp = np.concatenate([la[:-1], sp, lb[::-1][1:]])
+        sq = np.concatenate([[qa] * (len(la) - 1), sq, [qb] * (len(lb) - 1)])
+        skinds = (*ka, *skinds, *(entering(k) for k in reversed(kb)))
+    # the planner's answer, checked again (the whole path: the ends are known free; soft at
+    # the ends as OMPL's checks were: softness changes only where a check gives up early)
+    ok3, k3, why3 = tp._motions(path[:, :3], path[:, 3:], exempt, True, True)
+    if not ok3:
+        tried.append(f"SE(3) path motion {k3} {why3}")
+        return done(sp, sq, skinds, BLOCKED)
+    tried.append(f"SE(3): {status}")
+    return done(sp, sq, skinds, REPLANNED)
+
+
+def se3_path(
+    tp: Any, start: tuple[NDArray, NDArray], goal: tuple[NDArray, NDArray], exempt: NDArray
+) -> tuple[NDArray | None, str]:
+    """OMPL's SE(3) path ``(n, 7)`` between two poses, or ``None`` and why not.
+
+    The budget holds: every state and motion check after ``time_s`` seconds, or after
+    ``se3_samples`` FCL samples, answers "not free" at once, one motion may take at most
+    ``se3_motion_cap`` samples, and OMPL is told to stop (its termination condition asks
+    between its steps)."""
+    try:
+        from weldplan.motion.sampling import plan_se3
+    except ImportError as exc:  # the wrapper or OMPL itself is missing
+        return None, f"SE(3) re-planning unavailable ({exc})"
+    check = tp.checker
+    run = {"states": 0, "motions": 0, "refused": 0, "samples": 0}
+    tp.se3_runs.append(run)
+    deadline = time.perf_counter() + tp.time_s
+    cap = tp.se3_samples
+
+    def spent() -> bool:
+        return (cap is not None and run["samples"] >= cap) or time.perf_counter() > deadline
+
+    def is_valid(p: NDArray, q: NDArray) -> bool:
+        run["states"] += 1
+        if spent():
+            run["refused"] += 1
+            return False
+        run["samples"] += 1
+        tp.samples += 1
+        return check.state_ok(p, q, exempt)
+
+    ends = np.array([np.r_[start[0], start[1]], np.r_[goal[0], goal[1]]])
+
+    def motion_valid(s: NDArray, t: NDArray) -> bool:
+        run["motions"] += 1
+        if spent():
+            run["refused"] += 1
+            return False
+        soft = (
+            any(np.allclose(s, e) for e in ends),
+            any(np.allclose(t, e) for e in ends),
+        )
+        left = tp.se3_motion_cap if cap is None else min(
+            tp.se3_motion_cap, cap - run["samples"])  # fmt: skip
+        out = check.check(s[:3], s[3:], t[:3], t[3:], exempt, soft, cap=left,
+                          deadline=deadline)  # fmt: skip
+        run["samples"] += out.samples
+        tp.samples += out.samples
+        run["refused"] += out.out_of_budget
+        return out.ok
+
+    if not (check.state_ok(*start, exempt) and check.state_ok(*goal, exempt)):
+        return None, "an end pose of the re-plan is not free"
+    lo, hi = _se3_box(start[0], goal[0], tp.part, pad=tp.tool.reach)
+    res = plan_se3(
+        start[0], start[1], goal[0], goal[1], lo, hi, is_valid,
+        motion_valid=motion_valid, rot_weight=tp.rot_weight, planner=tp.planner,
+        time_s=tp.time_s, seed=tp.seed, simplify=True, stop=spent,
+    )  # fmt: skip
+    tally = (
+        f"{run['states']} states, {run['motions']} motions checked ({run['refused']} "
+        f"refused: budget spent), {run['samples']} samples"
+    )
+    if not res.solved:
+        return None, f"{res.planner}: {res.status}; {tally}"
+    return np.asarray(res.points, dtype=np.float64), f"{res.planner}: {res.status}; {tally}"
