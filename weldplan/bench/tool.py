@@ -185,14 +185,10 @@ def _transitions(
     from weldplan.tool.verify_sweeps import verify_sweeps
 
     t0 = time.perf_counter()
-    leave = None
-    if reuse is not None and not args.order_axial:
-        from weldplan.tool.exits import leave_distances
-
-        leave = leave_distances(reuse, poses)
     path = plan_ordered_transitions(
         cell.part, gun, poses, retract=DEFAULT_RETRACT, rot_weight=DEFAULT_ROT_WEIGHT, seed=0,
-        leave=leave, reuse=reuse, se3=args.se3_time > 0, time_s=max(args.se3_time, 1e-3),
+        price_lifts=not args.order_axial, reuse=reuse, se3=args.se3_time > 0,
+        time_s=max(args.se3_time, 1e-3),
     )  # fmt: skip
     t1 = time.perf_counter()
     sweeps = verify_sweeps(path, poses, cell.part, gun)

@@ -267,14 +267,9 @@ def plan_tool_path(
     from weldplan.tool.reorder import plan_ordered_transitions
     from weldplan.tool.verify_sweeps import verify_sweeps
 
-    leave = None
-    if reuse is not None:  # a weld the exit test left by a lift is priced at the lift (a slide)
-        from weldplan.tool.exits import leave_distances
-
-        leave = leave_distances(reuse, poses)
     kw = transition_settings(args, seed)
     path = plan_ordered_transitions(
-        part, tool, poses, rot_weight=args.rot_weight, leave=leave,
+        part, tool, poses, rot_weight=args.rot_weight,
         keep_order=args.tool_order == "route", reuse=reuse,
         **{k: v for k, v in kw.items() if k != "rot_weight"},
     )  # fmt: skip

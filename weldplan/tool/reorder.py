@@ -13,7 +13,6 @@ always, and the caller re-checks the path independently
 from __future__ import annotations
 
 import logging
-from collections.abc import Mapping
 from typing import Any
 
 from weldplan.tool.result import WeldPoses
@@ -35,7 +34,7 @@ def plan_ordered_transitions(
     retract: float,
     rot_weight: float,
     seed: Any = None,
-    leave: Mapping[str, float] | None = None,
+    price_lifts: bool = True,
     keep_order: bool = False,
     rounds: int = REORDER_ROUNDS,
     reuse: Any = None,
@@ -48,9 +47,12 @@ def plan_ordered_transitions(
     ----------
     part, tool, poses
         As :func:`~weldplan.tool.transitions.plan_transitions`.
-    retract, rot_weight, leave
+    retract, rot_weight
         The order's leg costs (:func:`~weldplan.tool.tool_order.tool_order`; ``retract`` also
         goes to the transitions).
+    price_lifts
+        With ``reuse`` (the exit test's planner): a weld that planner leaves by a lift is priced
+        at the lift, not the axial retract (:func:`weldplan.tool.exits.leave_distances`).
     seed
         The sequencer's and OMPL's seed.
     keep_order
@@ -67,6 +69,11 @@ def plan_ordered_transitions(
         Its ``stats`` carry the order's estimated costs, ``order_rounds`` and
         ``forbidden_pairs`` (the pairs priced out when the kept order was made).
     """
+    leave = None
+    if reuse is not None and price_lifts:
+        from weldplan.tool.exits import leave_distances
+
+        leave = leave_distances(reuse, poses)
     forbid: set[tuple[str, str]] = set()
     best: ToolPath | None = None
     for k in range(1, max(int(rounds), 1) + 1):
