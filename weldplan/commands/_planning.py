@@ -81,6 +81,10 @@ def _outputs(args: argparse.Namespace) -> dict[str, Path]:
         raise WeldplanError("--post-file needs --post rapid|krl")
     if getattr(args, "robot", None) and args.post == "krl":  # KRL's data list beside the .src
         out["post_dat"] = out["post"].with_suffix(".dat")
+    if getattr(args, "tool_csv", None):
+        if not getattr(args, "tool", None):
+            raise WeldplanError("--tool-csv needs --tool")
+        out["tool_csv"] = Path(args.tool_csv)
     for kind in ("trajectory", "robot_html"):
         if getattr(args, kind, None):
             out[kind] = Path(getattr(args, kind))
@@ -345,6 +349,10 @@ def _write(
         texts["html"] = static_html(route, cell.part, tool=tool)
     if "post" in outputs and "post" not in (staged or {}):
         texts["post"] = render_post(route, args.post, cell)
+    if "tool_csv" in outputs:
+        from weldplan.tool.path_csv import route_tool_csv
+
+        texts["tool_csv"] = route_tool_csv(route)
     texts.update(staged or {})
     write_outputs({path: texts[kind] for kind, path in outputs.items()})
 

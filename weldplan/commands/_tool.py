@@ -91,6 +91,13 @@ def add_tool_arguments(p: argparse.ArgumentParser, *, search: bool = True) -> No
             help="the tool may touch the part only inside this sphere about the weld spot, mm "
             "(default 20: the electrode tip)",
         )
+        p.add_argument(
+            "--tool-csv",
+            metavar="F",
+            help="with --tool: also write the tool's verified path as CSV (the transitions in "
+            "the tool's order, one row per TCP pose with its quaternion: the motion the swept "
+            "check proved free; weldplan.tool.path_csv)",
+        )
         add_transition_arguments(p)
 
 

@@ -21,7 +21,9 @@ joint's unit approach direction as the joints CSV gave it
 the CSV gave none and always on via rows. Coordinates are mm. A route planned with a tool
 (``weldplan plan --tool``) has five more columns, ``qw,qx,qy,qz,status``: the TCP orientation
 (scalar-first quaternion of the TCP frame in the part frame) at every waypoint, slerped by arc
-length between the welds' poses, and the weld's pose status on weld rows (docs/tool.md). The
+length between the welds' poses, and the weld's pose status on weld rows (docs/tool.md); these
+orientations along the point-tip route are not checked for the swept tool: the tool's verified
+path is a file of its own (``--tool-csv``, :mod:`weldplan.tool.path_csv`). The
 robot posts point the tool's z axis (the torch axis, towards the work) against that direction,
 into the surface; they do not use the tool poses yet.
 
