@@ -99,6 +99,13 @@ class DistanceBound:
         box = np.linalg.norm(np.maximum(np.maximum(self.lo - P, P - self.hi), 0.0), axis=1)
         return np.maximum(grid, box) - self.tol
 
+    def fill_all(self) -> None:
+        """Compute the whole table now (a caller with a time budget, such as an SE(3) re-plan
+        whose queries roam the whole box, pays for it before its clock starts)."""
+        nb = np.array(self._done.shape)
+        blocks = np.stack(np.unravel_index(np.arange(int(np.prod(nb))), tuple(nb)), axis=1)
+        self._fill(blocks * BLOCK)
+
     def _fill(self, idx: NDArray[np.int64]) -> None:
         """Compute the blocks of the table that the nodes ``idx (n, 3)`` fall in, where not yet
         done."""
