@@ -67,7 +67,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "--no-transitions", action="store_true", help="time the poses only (no transitions)"
     )
     p.add_argument(
-        "--se3-time", type=float, default=3.0, help="OMPL seconds per blocked transition (0: off)"
+        "--se3-time",
+        type=float,
+        default=3.0,
+        help="OMPL CPU seconds per blocked transition (0: off)",
     )
     p.add_argument(
         "--no-exit-check",

@@ -151,7 +151,7 @@ def add_transition_arguments(p: argparse.ArgumentParser) -> None:
         metavar="S",
         type=_seconds,
         default=5.0,
-        help="with --tool: seconds OMPL may spend re-planning one blocked transition in SE(3) "
+        help="with --tool: CPU seconds OMPL may spend re-planning one blocked transition in SE(3) "
         "(default 5; 0: report blocked transitions without re-planning)",
     )
 

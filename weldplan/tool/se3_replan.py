@@ -22,7 +22,7 @@ from weldplan.tool.transit import BLOCKED, REPLANNED, Transition
 
 #: OMPL's own wall-clock limit, in units of the re-plan's CPU budget (a safety net only: the
 #: CPU budget, checked by every state and motion check and by OMPL between its steps, stops it)
-WALL_FACTOR = 4.0
+WALL_FACTOR = 10.0
 
 
 def _se3_box(a: NDArray, b: NDArray, part: trimesh.Trimesh, pad: float) -> tuple[NDArray, NDArray]:
