@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import logging
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -53,6 +54,9 @@ from weldplan.tool.model import Tool
 from weldplan.tool.sweep import _interpolator, tool_zone
 
 log = logging.getLogger(__name__)
+
+#: a motion's poses at parameters ``(k,)``: positions ``(k, 3)`` mm, rotations ``(k, 3, 3)``
+Interpolator = Callable[[ArrayLike], tuple[NDArray[np.float64], NDArray[np.float64]]]
 
 #: mm: the cells of the sphere tree, finest first (measured on the shared gun outside its zone:
 #: 6,665 spheres of median radius 9 mm at 10 mm, 1,002 at 25 mm, 191 at 60 mm)
@@ -250,7 +254,9 @@ class SweepBound:
         self.stats["motions_clear"] += 1
         return True
 
-    def _tree_clear(self, tree: SphereTree, need: float, at, dp: float, theta: float) -> bool:
+    def _tree_clear(
+        self, tree: SphereTree, need: float, at: Interpolator, dp: float, theta: float
+    ) -> bool:
         """One body's part of :meth:`motion_clear`: (interval, sphere) pairs proved coarse to
         fine, undecided intervals halved."""
         reach = np.linalg.norm(tree.centres[0], axis=1) + tree.radii[0]
@@ -282,7 +288,18 @@ class SweepBound:
             halvings += 1
         return True
 
-    def _pairs_clear(self, tree, level, sph, a, b, need, at, dp, theta) -> NDArray[np.bool_]:
+    def _pairs_clear(
+        self,
+        tree: SphereTree,
+        level: int,
+        sph: NDArray[np.int64],
+        a: NDArray[np.float64],
+        b: NDArray[np.float64],
+        need: float,
+        at: Interpolator,
+        dp: float,
+        theta: float,
+    ) -> NDArray[np.bool_]:
         """``(n,) bool``: whether sphere ``sph`` of ``level`` keeps ``need`` mm over ``[a, b]``
         (pairwise Lipschitz bound, module docstring)."""
         c = tree.centres[level][sph]

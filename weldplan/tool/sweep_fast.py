@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 import time
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -36,7 +37,7 @@ from weldplan.tool.sweep import (
     motion_bound,
     quat_to_matrix,
 )
-from weldplan.tool.sweep_bound import THETA_PAD, SweepBound
+from weldplan.tool.sweep_bound import THETA_PAD, Interpolator, SweepBound
 
 #: mm of tool motion between the poses at which a motion is first tested for contact
 TOUCH_GRID_MM = 5.0
@@ -118,7 +119,7 @@ class FastSweep:
                     late, blocked = True, s
                     break
                 soft_here = may and abs(s - start) * L <= soft_range
-                step = self._step(at(s), s, exempt, ex, dp, theta, soft_here, state)
+                step = self._step(at(s), exempt, ex, dp, theta, soft_here, state)
                 state["budget"] -= 1
                 if step is None or step[0] <= 0 or state["budget"] < 0:
                     blocked = s
@@ -140,7 +141,7 @@ class FastSweep:
             math.isnan(blocked), state["exact"], state["smin"], blocked, L, late, chk.min_step
         )
 
-    def _touch_at(self, at, L: float, focused: bool) -> float | None:
+    def _touch_at(self, at: Interpolator, L: float, focused: bool) -> float | None:
         """The first parameter, middle first and then halving the gaps (where a blocked motion
         is most often found), of a grid :data:`TOUCH_GRID_MM` of tool motion apart at which the
         tool outside its zone touches the part (FCL ``collide``); ``None``: no contact there,
@@ -155,7 +156,16 @@ class FastSweep:
                 return float(s[k])
         return None
 
-    def _step(self, pose, s, exempt, ex, dp, theta, soft_here, state):
+    def _step(
+        self,
+        pose: tuple[NDArray[np.float64], NDArray[np.float64]],
+        exempt: NDArray | None,
+        ex: bool,
+        dp: float,
+        theta: float,
+        soft_here: bool,
+        state: dict[str, Any],
+    ) -> tuple[float, float] | None:
         """At one sample: ``None`` when blocked (the exact check's rules on FCL's slack), else
         the parameter steps ``(with margin 0, with margin min_step)`` that keep the margin."""
         chk = self.checker
@@ -163,7 +173,7 @@ class FastSweep:
         margin = 0.0 if soft_here else chk.min_step
         sl, lever, open_lever = self.bound.spheres(P, R, ex, margin + FLOOR_MM)
         V = dp + theta * lever
-        steps = []
+        steps: list[float] = []
         exact = math.inf
         if open_lever >= 0:  # the bound does not decide: FCL's slack bounds every point
             state["exact"] += 1
@@ -178,7 +188,7 @@ class FastSweep:
             if open_lever >= 0:
                 t = min(t, (exact - m) / max(dp + theta * open_lever, 1e-12))
             steps.append(float(t))
-        return tuple(steps)
+        return steps[0], steps[1]
 
 
 def _bisection_order(n: int) -> NDArray[np.int64]:
