@@ -171,3 +171,29 @@ def test_on_the_demo_part_the_shared_gun_is_never_cleared_where_fcl_says_not():
             assert exact >= 0.0, (p, q, exact)
         assert fast.state_ok(p, q, spots) == (exact >= 0.0)
     assert cleared > 0.5 * free
+
+
+@pytest.mark.slow
+def test_on_the_demo_part_gun_motions_the_fast_check_passes_keep_the_clearance():
+    d = require_shared("tools", "spot_welding_gun")
+    gun = shared_spot_gun(d)
+    part = trimesh.load(DEMO_PART, force="mesh")
+    chk = SweepChecker(part, gun, clearance=5.0, contact_radius=20.0)
+    fast = FastSweep(chk, SweepBound(part, gun, 5.0, 20.0))
+    rng = np.random.default_rng(13)
+    spots = np.asarray(part.vertices[:2], dtype=np.float64)
+    passed = 0
+    for k in range(60):
+        p0 = rng.uniform(part.bounds[0] - 300, part.bounds[1] + 300)
+        q0 = np.roll(Rotation.random(random_state=100 + k).as_quat(), 1)
+        p1 = p0 + rng.normal(0.0, 80.0, 3)
+        turn = Rotation.from_rotvec(rng.normal(0.0, 0.2, 3))
+        q1 = np.roll((Rotation.from_quat(np.roll(q0, -1)) * turn).as_quat(), 1)
+        if not (fast.state_ok(p0, q0, spots) and fast.state_ok(p1, q1, spots)):
+            continue
+        if not fast.check(p0, q0, p1, q1, spots, (False, False)).ok:
+            continue
+        passed += 1
+        pos, rots = interpolate(p0, q0, p1, q1, np.linspace(0.0, 1.0, 21))
+        assert min(chk.slack(a, b, spots) for a, b in zip(pos, rots, strict=True)) >= 0.0
+    assert passed > 5

@@ -10,14 +10,17 @@ each sphere of the tool a slack ``sl_i`` (its centre's distance less its radius 
 keep), and its centre moves at most ``V_i = |dp| + theta |c_i|`` per unit of ``s``, so the sphere
 keeps ``sl_i - V_i |s' - s|`` at ``s'``. The finest spheres whose bound is below the floor are
 left to FCL: the exact slack ``v`` (:meth:`SweepChecker.slack`) bounds every tool point, which
-moves at most ``|dp| + theta (|c_i| + r_i)`` per unit of ``s``. The next sample is where the
-first of these could reach the margin: ``min_step`` away from a weld pose, 0 within the soft
-range of one (as the exact check's rules). A sample is blocked by the exact check's own rules on
-``v`` (negative, zero, or below ``min_step`` outside the soft range); the motion's sample budget
-is the exact check's. So a passed motion keeps the clearance everywhere, and at least
-``min_step`` of slack outside the soft ranges: the exact check, which the re-plan's path is
-given again (:func:`weldplan.tool.se3_replan.replan`), finds no sample below ``min_step`` there.
-Only the step lengths differ from the exact check's.
+moves at most ``|dp| + theta (|c_i| + r_i)`` per unit of ``s``, and no point more than the
+motion bound ``L``. The next sample is where the first of these could reach the margin
+(``min_step`` away from a weld pose, 0 within the soft range of one, as the exact check's
+rules), but never nearer than the exact check's own step ``v / L`` where FCL was asked (which
+keeps the clearance: a ``min_step`` margin held there made the advancement creep towards a dip
+below ``min_step`` without ever sampling it). A sample is blocked by the exact check's own rules
+on ``v`` (negative, zero, or below ``min_step`` outside the soft range); the motion's sample
+budget is the exact check's. So a passed motion keeps the clearance everywhere, as the exact
+check's do. Only the step lengths differ, so on a motion that grazes the part the two may
+disagree: the re-plan's path is given to the exact check again
+(:func:`weldplan.tool.se3_replan.replan`).
 """
 
 from __future__ import annotations
@@ -98,7 +101,10 @@ class FastSweep:
         if self.bound.motion_clear(p0, q0, p1, q1, ex, chk.min_step):
             return SweepCheck(True, 0, math.inf, bound=L, min_step=chk.min_step)
         at = _interpolator(p0, q0, p1, q1)
-        hit = self._touch_at(at, L, chk._inside(p0, p1))
+        # the checker's crop answers for the whole motion only when both ends lie in its box
+        # (the box is convex); a sample's own position in it is not enough for a step
+        focused = chk._inside(p0, p1)
+        hit = self._touch_at(at, L, focused)
         if hit is not None:  # the tool touches the part there: the exact check cannot pass it
             return SweepCheck(False, 0, -math.inf, hit, L, False, chk.min_step)
         soft_range = max(chk.contact_radius, 10 * chk.min_step)
@@ -119,7 +125,7 @@ class FastSweep:
                     late, blocked = True, s
                     break
                 soft_here = may and abs(s - start) * L <= soft_range
-                step = self._step(at(s), exempt, ex, dp, theta, soft_here, state)
+                step = self._step(at(s), exempt, ex, dp, theta, soft_here, state, focused)
                 state["budget"] -= 1
                 if step is None or step[0] <= 0 or state["budget"] < 0:
                     blocked = s
@@ -165,6 +171,7 @@ class FastSweep:
         theta: float,
         soft_here: bool,
         state: dict[str, Any],
+        focused: bool,
     ) -> tuple[float, float] | None:
         """At one sample: ``None`` when blocked (the exact check's rules on FCL's slack), else
         the parameter steps ``(with margin 0, with margin min_step)`` that keep the margin."""
@@ -177,17 +184,18 @@ class FastSweep:
         exact = math.inf
         if open_lever >= 0:  # the bound does not decide: FCL's slack bounds every point
             state["exact"] += 1
-            exact = chk.slack(P, R, exempt)
+            exact = chk.slack(P, R, exempt, focused)
             state["smin"] = min(state["smin"], exact)
             if exact < 0 or (exact == 0 and dp + theta > 0) or exact < margin:
                 return None
         else:
             state["smin"] = min(state["smin"], float(sl.min()))
         for m in (0.0, chk.min_step):
-            t = np.min((sl - m) / np.maximum(V, 1e-12), initial=math.inf)
-            if open_lever >= 0:
+            t = float(np.min((sl - m) / np.maximum(V, 1e-12), initial=math.inf))
+            if open_lever >= 0:  # FCL's slack also bounds every point, at the motion bound L
                 t = min(t, (exact - m) / max(dp + theta * open_lever, 1e-12))
-            steps.append(float(t))
+                t = max(t, exact / max(dp + theta * chk.reach, 1e-12))  # the exact check's step
+            steps.append(t)
         return steps[0], steps[1]
 
 
