@@ -290,7 +290,7 @@ def run(args: argparse.Namespace) -> int:
         head = [
             "",
             "Transitions (shared gun, tool order, retract 50 mm, slide lifts 4/10/20 mm, side exit "
-            f"250 mm, SE(3) {args.se3_time:g} s each, one process): free / total "
+            f"250 mm, SE(3) {args.se3_time:g} CPU s each, one process): free / total "
             "by how they go; the free "
             "transitions' TCP length and rotation against the point-tip route's length and its "
             "welds' poses' rotation in the point-tip order; seconds for poses (+ re-check), "
