@@ -69,8 +69,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--se3-time",
         type=float,
-        default=3.0,
-        help="OMPL CPU seconds per blocked transition (0: off)",
+        default=10.0,  # weldplan.tool.transitions.DEFAULT_SE3_TIME (not imported: fcl)
+        help="OMPL CPU seconds per blocked transition (default 10; 0: off)",
     )
     p.add_argument(
         "--no-exit-check",
