@@ -6,7 +6,7 @@ import numpy as np
 import trimesh
 
 from weldplan.geometry.distance import SurfaceDistance
-from weldplan.robot.distbound import DistanceBound
+from weldplan.geometry.distbound import DistanceBound
 
 
 def _part() -> trimesh.Trimesh:

@@ -67,7 +67,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "--no-transitions", action="store_true", help="time the poses only (no transitions)"
     )
     p.add_argument(
-        "--se3-time", type=float, default=3.0, help="OMPL seconds per blocked transition (0: off)"
+        "--se3-time",
+        type=float,
+        default=10.0,  # weldplan.tool.transitions.DEFAULT_SE3_TIME (not imported: fcl)
+        help="OMPL CPU seconds per blocked transition (default 10; 0: off)",
     )
     p.add_argument(
         "--no-exit-check",
@@ -287,7 +290,7 @@ def run(args: argparse.Namespace) -> int:
         head = [
             "",
             "Transitions (shared gun, tool order, retract 50 mm, slide lifts 4/10/20 mm, side exit "
-            f"250 mm, SE(3) {args.se3_time:g} s each, one process): free / total "
+            f"250 mm, SE(3) {args.se3_time:g} CPU s each, one process): free / total "
             "by how they go; the free "
             "transitions' TCP length and rotation against the point-tip route's length and its "
             "welds' poses' rotation in the point-tip order; seconds for poses (+ re-check), "

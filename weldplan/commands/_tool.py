@@ -157,9 +157,9 @@ def add_transition_arguments(p: argparse.ArgumentParser) -> None:
         "--se3-time",
         metavar="S",
         type=_seconds,
-        default=5.0,
-        help="with --tool: seconds OMPL may spend re-planning one blocked transition in SE(3) "
-        "(default 5; 0: report blocked transitions without re-planning)",
+        default=10.0,  # weldplan.tool.transitions.DEFAULT_SE3_TIME (not imported: fcl)
+        help="with --tool: CPU seconds OMPL may spend re-planning one blocked transition in SE(3) "
+        "(default 10; 0: report blocked transitions without re-planning)",
     )
 
 

@@ -231,10 +231,12 @@ def _solve(
     measure: Callable[[NDArray[np.float64]], float],
     dim: int,
     stop: Callable[[], bool] | None = None,
+    reach: float | None = None,
 ) -> SampledPath:
     """Run ``planner`` on the prepared SimpleSetup ``ss`` and read the path back; it stops at
     ``time_s`` seconds or, with ``stop``, as soon as ``stop()`` is true (OMPL asks between its
-    own steps)."""
+    own steps). ``reach``: the planner's ``range`` (the longest motion it adds in one step, in
+    the space's metric), where the planner has one; ``None``: OMPL's default."""
     ob, og, ou = _import_ompl()
     si = ss.getSpaceInformation()
     if motion_valid is None:
@@ -242,7 +244,10 @@ def _solve(
     else:
         si.setMotionValidator(_motion_validator(si, read, motion_valid))
     ss.setOptimizationObjective(ob.PathLengthOptimizationObjective(si))
-    ss.setPlanner(getattr(og, PLANNERS[planner])(si))
+    algo = getattr(og, PLANNERS[planner])(si)
+    if reach is not None and hasattr(algo, "setRange"):
+        algo.setRange(float(reach))
+    ss.setPlanner(algo)
 
     ompl_seed = _ompl_seed(seed)
     level = ou.getLogLevel()
@@ -451,6 +456,7 @@ def plan_se3(
     seed: int | np.random.Generator | None = None,
     simplify: bool = True,
     stop: Callable[[], bool] | None = None,
+    reach: float | None = None,
 ) -> SampledPath:
     """Plan a rigid-body path (a torch or a gun) between two poses with OMPL in SE(3).
 
@@ -477,6 +483,10 @@ def plan_se3(
     stop
         ``stop() -> bool``: the planner also stops as soon as this is true (a caller's own
         budget, e.g. of collision samples), besides ``time_s``.
+    reach
+        The planner's ``range`` where it has one (the longest motion one step adds, in the
+        metric's mm): shorter motions are cheaper to check and pass more often near the part.
+        ``None``: OMPL's default (a fifth of the space's extent).
 
     Returns
     -------
@@ -512,6 +522,7 @@ def plan_se3(
         measure=lambda pts: se3_length(pts, rot_weight),
         dim=7,
         stop=stop,
+        reach=reach,
     )
 
 

@@ -22,7 +22,7 @@ shortcut shared with any planner:
    the part over the half intervals on both sides of the sample, so over the whole motion.
    Whether a centre is that far is answered by the part's distance table where its
    Lipschitz lower bound decides, by open3d's exact distance elsewhere
-   (:class:`~weldplan.robot.distbound.DistanceBound`: the same answers, several times cheaper).
+   (:class:`~weldplan.geometry.distbound.DistanceBound`: the same answers, several times cheaper).
 3. *FCL.* The triangles of the spheres that fail, together, are advanced along the motion with
    python-fcl against the part, when any of it lies within their reach on that motion
    (conservative advancement: from a configuration at distance ``d`` they cannot touch the part
@@ -44,7 +44,8 @@ import numpy as np
 import trimesh
 from numpy.typing import ArrayLike, NDArray
 
-from weldplan.robot.distbound import DistanceBound
+from weldplan.geometry.distbound import DistanceBound
+from weldplan.geometry.spherecover import sphere_cover
 from weldplan.robot.model import Robot
 from weldplan.tool.model import Tool, bvh
 
@@ -116,30 +117,6 @@ class Hit:
     t: float
     body: str
     distance: float
-
-
-def sphere_cover(
-    vertices: NDArray[np.float64], faces: NDArray[np.int64], cell: float = SPHERE_CELL_MM
-) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
-    """Spheres ``(s, 3)`` centres, ``(s,)`` radii (mm) whose union holds every triangle: the
-    triangles are grouped by the grid cell of their centroid, each group's sphere is centred on
-    its vertices' bounding-box centre and reaches its farthest vertex (a ball is convex, so it
-    holds the triangles whose corners it holds). Also returns each triangle's sphere ``(m,)``."""
-    tri = vertices[faces]  # (m, 3, 3)
-    key = np.floor(tri.mean(axis=1) / cell).astype(np.int64)
-    _, group = np.unique(key, axis=0, return_inverse=True)
-    group = group.ravel()
-    g = int(group.max()) + 1
-    pts = tri.reshape(-1, 3)
-    pg = np.repeat(group, 3)
-    lo = np.full((g, 3), np.inf)
-    hi = np.full((g, 3), -np.inf)
-    np.minimum.at(lo, pg, pts)
-    np.maximum.at(hi, pg, pts)
-    centres = (lo + hi) / 2
-    r = np.zeros(g)
-    np.maximum.at(r, pg, np.linalg.norm(pts - centres[pg], axis=1))
-    return centres, r * (1 + 1e-9) + 1e-9, group.astype(np.int64)
 
 
 def _fcl_tf(T: NDArray[np.float64]) -> fcl.Transform:
@@ -234,7 +211,7 @@ class RobotCollision:
 
     @property
     def bound(self) -> DistanceBound:
-        """The part's distance table (:class:`~weldplan.robot.distbound.DistanceBound`, built on
+        """The part's distance table (:class:`~weldplan.geometry.distbound.DistanceBound`, built on
         first use and shared by :meth:`with_robot` copies made after that)."""
         if self._bound is None:
             lo, hi = np.asarray(self.part.bounds, dtype=np.float64)

@@ -348,6 +348,21 @@ class SweepChecker:
             dz = max(dz, min(de, ZONE_CAP_MM))
         return min(slack, dz)
 
+    def touches(self, p: ArrayLike, R: ArrayLike, focused: bool | None = None) -> bool:
+        """Whether the tool outside its zone touches the part at TCP ``p (3,)``, ``R (3, 3)``
+        (python-fcl ``collide``, about 40 times cheaper than ``distance`` on the gun near a
+        flange): then :meth:`slack` is negative, whatever spots are exempt. ``focused`` as in
+        :meth:`slack`. A fast way to show a pose or a motion blocked, never free."""
+        p = np.asarray(p, dtype=np.float64)
+        if focused is None:
+            focused = self._inside(p)
+        part = self._focus[2] if focused and self._focus is not None else self._model("part")
+        if part is None:
+            return False
+        self._outside.setTransform(fcl.Transform(np.asarray(R, dtype=np.float64), p))
+        req = fcl.CollisionRequest()
+        return bool(fcl.collide(self._outside, part, req, fcl.CollisionResult()))
+
     def state_ok(self, p: ArrayLike, q: ArrayLike, exempt: ArrayLike | None = None) -> bool:
         """Whether one pose (TCP ``p (3,)`` mm, ``q`` wxyz) clears (:meth:`slack` >= 0)."""
         return self.slack(p, quat_to_matrix(q), exempt) >= 0.0

@@ -53,6 +53,8 @@ from weldplan.tool.model import Tool
 from weldplan.tool.result import WeldPoses
 from weldplan.tool.se3_replan import entering, replan
 from weldplan.tool.sweep import DEFAULT_MIN_STEP, SweepChecker, quat_to_matrix
+from weldplan.tool.sweep_bound import SweepBound
+from weldplan.tool.sweep_fast import FastSweep
 from weldplan.tool.transit import BLOCKED, DIRECT, ToolPath, Transition
 
 log = logging.getLogger(__name__)
@@ -69,11 +71,17 @@ SLIDE_LIFTS = (4.0, 10.0, 20.0)
 #: mm: default side exit when the axial retract is blocked (a C-gun's jaws round a flange: the
 #: shared gun's C back stands 231 mm from its electrode axis)
 DEFAULT_SIDE_EXIT = 250.0
-#: default seconds OMPL may spend on one transition
-DEFAULT_SE3_TIME = 5.0
+#: default CPU seconds OMPL may spend on one transition (the CLI's and the bench's too): the
+#: demo's bridge between its two groups of gun poses took 10-30 CPU s with the sphere bound
+#: (session 5; it was 5 s of wall clock here, 3 in the bench, and never found)
+DEFAULT_SE3_TIME = 10.0
 #: FCL samples one motion of an SE(3) re-plan may take (a conservative advancement that needs
 #: more grazes the part, or turns a 0.7 m gun far; OMPL tries a shorter motion instead)
 DEFAULT_SE3_MOTION_CAP = 200
+#: the SE(3) planner's range (mm of the metric, ``rot_weight`` mm per rad): OMPL's default, a
+#: fifth of the space's extent, gave motions of 1-1.6 m of gun travel on the demo, each checked
+#: near a flange for hundreds of FCL samples and nearly always blocked
+DEFAULT_SE3_RANGE = 150.0
 
 
 class TransitionPlanner:
@@ -151,6 +159,9 @@ class TransitionPlanner:
         self.se3_samples = se3_samples
         self.se3_motion_cap = int(se3_motion_cap)
         self.checker = SweepChecker(part, tool, clearance, contact_radius, min_step=min_step)
+        self._fast: FastSweep | None = None
+        #: the SE(3) planner's range (:func:`weldplan.motion.sampling.plan_se3`'s ``reach``)
+        self.se3_range: float | None = DEFAULT_SE3_RANGE
         self.samples = 0
         #: per SE(3) re-plan: states and motions asked, motions refused for the budget, samples
         self.se3_runs: list[dict[str, Any]] = []
@@ -159,6 +170,17 @@ class TransitionPlanner:
         self._sides: dict[tuple[Any, ...], tuple[NDArray | None, tuple[str, ...], str]] = {}
         self._lifts: dict[tuple[Any, ...], tuple[NDArray, str]] = {}
         self._planned: dict[tuple[Any, ...], Transition] = {}
+
+    @property
+    def fast(self) -> FastSweep:
+        """The checker with the sphere bound first (:mod:`weldplan.tool.sweep_fast`), which the
+        SE(3) re-plan's states and motions ask; built at the first re-plan (car2 has none)."""
+        if self._fast is None:
+            c = self.checker
+            bound = SweepBound(self.part, self.tool, c.clearance, c.contact_radius)
+            bound.table.fill_all()  # before any re-plan's clock starts: OMPL roams the box
+            self._fast = FastSweep(c, bound)
+        return self._fast
 
     def _motions(
         self,
