@@ -9,9 +9,13 @@ poses were verified, runs :func:`robot_stage`:
 
 1. the joint route (:func:`weldplan.robot.plan.plan_robot_route`: base given by
    ``--robot-base`` or searched, one continuous IK branch, robot + tool collision check,
-   blocked legs re-planned in joint space). A path that still collides is an error; a weld the
-   robot cannot serve (no pose, out of reach, joint limit, singular) is passed without welding,
-   listed with its reason, and the run exits with :data:`~weldplan.errors.EXIT_PARTIAL`;
+   blocked legs re-planned in joint space). When the tool stage planned transitions, the robot
+   follows them: the welds in the tool's order, each leg the gun's TCP path as Cartesian steps
+   (:mod:`weldplan.robot.gunpath`), a leg the robot cannot follow detoured as any blocked leg;
+   the summary says which order the program follows and why, and how each leg goes. A path
+   that still collides is an error; a weld the robot cannot serve (no pose, out of reach,
+   joint limit, singular) is passed without welding, listed with its reason, and the run exits
+   with :data:`~weldplan.errors.EXIT_PARTIAL`;
 2. the program and its cycle time (:func:`weldplan.robot.program.robot_program`: toppra under the
    URDF velocities x ``--vel-scale`` and the robot's accelerations x ``--acc-scale``,
    ``--weld-time`` a spot; the same route at ``--tcp-speed`` beside it);
@@ -249,9 +253,11 @@ def robot_stage(
     given = _base_fixed(args) or (reach is not None and reach.placement is not None)
     if reach is not None:
         robot = reach.robot
+    gun = _gun_route(route, poses)  # None: the robot follows the point-tip route
+    follow = route if gun is None else gun.route
     rr = plan_robot_route(
-        route,
-        poses,
+        follow,
+        poses if gun is None else gun.poses,
         robot,
         flange_tcp=Tft,
         part=cell.part,
@@ -259,6 +265,8 @@ def robot_stage(
         base=robot.base if given else None,
         search=None if given else BaseSearch(),
         rng=args.seed,
+        tcp_poses=None if gun is None else gun.tcp,
+        zone=None if gun is None else gun.zone,
     )
     if reach is not None and reach.placement is not None:  # searched, before the poses
         rr.stats["placement"].update(
@@ -278,7 +286,7 @@ def robot_stage(
     mass, cog = tool_load(args, robot, tool, rr.flange_tcp)
     stem = Path(outputs.get("post", outputs["csv"])).stem
     build = robot_program(
-        route,
+        follow,
         rr.q,
         rb,
         rr.flange_tcp,
@@ -302,13 +310,63 @@ def robot_stage(
 
         texts["robot_html"] = robot_html(
             rb, build.timing, rr.flange_tcp, part=cell.part, tool=tool,
-            route_points=route.waypoints(),
+            route_points=follow.waypoints(),
         )  # fmt: skip
-    rows = _rows(rr, build) + _reach_rows(reach) + cost_rows(route, build.timing.total)
+    rows = _rows(rr, build) + _order_rows(route, gun, rr) + _reach_rows(reach)
+    rows += cost_rows(route, build.timing.total)
+    unposed = () if gun is None else tuple(i for i in route.order if i not in gun.route.order)
     route = attach_robot_route(
-        route, rr, urdf=args.robot, contact_radius=poses_contact_radius(route)
+        route, rr, urdf=args.robot, contact_radius=poses_contact_radius(route), gun=gun
     )
-    return RobotStage(rr, build, texts, rows, tuple(build.skipped), route)
+    return RobotStage(rr, build, texts, rows, (*build.skipped, *unposed), route)
+
+
+def _gun_route(route: Any, poses: Any) -> Any:
+    """The route along the tool stage's transitions, in its order
+    (:func:`weldplan.robot.gunpath.gun_route`); ``None`` when the route carries none."""
+    from weldplan.robot.gunpath import gun_route, tool_path_of
+    from weldplan.robot.routejson import poses_contact_radius
+
+    path = tool_path_of(route)
+    if path is None or not path.order:
+        return None
+    return gun_route(route, poses, path, contact_radius=poses_contact_radius(route))
+
+
+def _order_rows(route: Any, gun: Any, rr: Any) -> list[tuple[str, str]]:
+    """Summary rows: the order the program follows (and why, when it is not the point-tip
+    route's), how each leg between served welds goes, and the welds the tool never reaches."""
+    if gun is None:
+        return []
+    from collections import Counter
+
+    from weldplan.robot.gunpath import legs_taken
+
+    order = gun.route.order
+    pt = tuple(i for i in route.order if i in set(order))
+    why = (
+        "the tool stage's order, the same as the point-tip route's"
+        if pt == order
+        else f"the tool stage's order, not the point-tip route's ({'-'.join(pt)}): the gun's "
+        "transitions were planned and checked between consecutive welds of the tool order, "
+        "which avoids the pairs found blocked for the gun"
+    )
+    taken = Counter(legs_taken(gun.via, rr.status, rr.replanned))
+    gun_legs = {k[4:]: v for k, v in taken.items() if k.startswith("gun ")}
+    n_gun = sum(gun_legs.values())
+    legs = (
+        f"{n_gun} along the gun's transitions"
+        + (f" ({', '.join(f'{k} {v}' for k, v in gun_legs.items())})" if gun_legs else "")
+        + f", {taken['detour']} detoured (retract, joint-space transfer, approach), "
+        f"{taken['joint']} by one joint motion where the gun's transition is blocked"
+    )
+    rows = [("robot order", f"{'-'.join(order)}: {why}"), ("robot legs", legs)]
+    rows += [
+        (f"  weld {i}", "not welded: no tool pose (the tool never reaches it)")
+        for i in route.order
+        if i not in order
+    ]
+    return rows
 
 
 def _texts(args: argparse.Namespace, build: Any, rr: Any, rb: Any, outputs: dict) -> dict:

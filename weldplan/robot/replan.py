@@ -27,9 +27,11 @@ When no detour is found, ``b`` is dropped (status ``collision``, its ``detail`` 
 that blocked the leg) and the next served weld is tried from ``a``. Welds the path passes
 without serving keep a row on it that is not exact (the program passes them without welding):
 the detour's joint polyline is subdivided where it has fewer inner rows than such welds (points
-on its own segments: the motion is unchanged). The motions of the route's own legs and of the
-retract/approach are checked with the contact zone exempt; those of the transfer are not
-(``zone`` in the result). The caller checks the assembled path again (the verification).
+on its own segments: the motion is unchanged). The motions of the route's own legs are checked
+with the contact zone exempt where the caller says (``zone=``: every one on the point-tip route;
+only near the spots on a route along the gun's transitions, :mod:`weldplan.robot.gunpath`), those
+of the retract/approach with it exempt, those of the transfer without (``zone`` in the result).
+The caller checks the assembled path again (the verification).
 
 The head (route rows before the first served weld) and the tail (after the last) are the route's
 own rows; a blocked tail is replaced by the retract from the last served weld (subdivided, one
@@ -40,6 +42,7 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -215,6 +218,8 @@ def assemble(
     status: list[str],
     detail: list[str],
     ids: tuple[str, ...],
+    zone: NDArray[np.bool_] | None = None,
+    blocked: set[int] | None = None,
 ) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray, list[int]]:
     """The joint route with blocked legs detoured (module docstring).
 
@@ -228,6 +233,13 @@ def assemble(
         Per weld; updated in place for the welds dropped.
     ids
         The welds' ids (for the details).
+    zone
+        ``(m - 1,) bool``: the route's own motions on which the contact zone is exempt (default
+        every one; a route along the gun's transitions exempts it only near the spots).
+    blocked
+        The route's own motions the caller's check of ``q`` (same checker, same ``zone``) found
+        blocked, every one: a leg with none of them is not checked again. ``None``: each leg is
+        checked here.
 
     Returns
     -------
@@ -236,6 +248,8 @@ def assemble(
         in ``rows`` of the weld each leaves).
     """
     served = [k for k in range(len(rows)) if status[k] == OK]
+    own = np.ones(max(len(q) - 1, 0), dtype=bool) if zone is None else np.asarray(zone, bool)
+    own = np.append(own, True)  # own[i]: the motion leaving route row i (the last: none)
     out = JointPath()
     served_exact = np.zeros(len(q), dtype=bool)
     served_exact[rows[served]] = True
@@ -243,18 +257,19 @@ def assemble(
     ex = exact & (served_exact | ~np.isin(np.arange(len(q)), rows))
     if not served:
         for i in range(len(q)):
-            out.add(q[i], i, bool(ex[i]), int(branch[i]))
+            out.add(q[i], i, bool(ex[i]), int(branch[i]), bool(own[i]))
         return (*out.arrays(), [])
     for i in range(int(rows[served[0]]) + 1):
-        out.add(q[i], i, bool(ex[i]), int(branch[i]))
+        out.add(q[i], i, bool(ex[i]), int(branch[i]), bool(own[i]))
     replanned: list[int] = []
     a = served[0]
     for b in served[1:]:
         ia, ib = int(rows[a]), int(rows[b])
-        hits = det.checker.path_hits(q[ia : ib + 1], np.ones(ib - ia, dtype=bool), first_only=True)
+        hits = _leg_hits(det, q, own, ia, ib, blocked)
         if not hits:
+            out.zone[-1] = bool(own[ia])
             for i in range(ia + 1, ib + 1):
-                out.add(q[i], i, bool(ex[i]), int(branch[i]))
+                out.add(q[i], i, bool(ex[i]), int(branch[i]), bool(own[i]))
             a = b
             continue
         path = _detour(det, q, branch, ia, ib)
@@ -269,8 +284,21 @@ def assemble(
         _add_detour(out, det.robot, path, ia, ib, rows, q, branch)
         replanned.append(a)
         a = b
-    _tail(det, out, q, ex, branch, int(rows[a]))
+    _tail(det, out, q, ex, branch, int(rows[a]), own, blocked)
     return (*out.arrays(), replanned)
+
+
+def _leg_hits(
+    det: Detour, q: NDArray, own: NDArray, ia: int, ib: int, blocked: set[int] | None
+) -> list[Any]:
+    """The first blocked motion of the route's own rows ``ia..ib`` (``[]``: free), from the
+    caller's ``blocked`` motions when given, else checked here."""
+    if blocked is None:
+        return det.checker.path_hits(q[ia : ib + 1], own[ia:ib], first_only=True)
+    at = sorted(s for s in blocked if ia <= s < ib)
+    if not at:
+        return []
+    return det.checker.path_hits(q[at[0] : at[0] + 2], own[at[0] : at[0] + 1])
 
 
 def _detour(det: Detour, q: NDArray, branch: NDArray, ia: int, ib: int) -> NDArray | None:
@@ -309,19 +337,31 @@ def _add_detour(
     out.add(q[ib], ib, True, int(branch[ib]))
 
 
-def _tail(det: Detour, out: JointPath, q: NDArray, ex: NDArray, branch: NDArray, ia: int) -> None:
-    """The route's rows after the last served weld (module docstring)."""
+def _tail(
+    det: Detour,
+    out: JointPath,
+    q: NDArray,
+    ex: NDArray,
+    branch: NDArray,
+    ia: int,
+    own: NDArray[np.bool_],
+    blocked: set[int] | None = None,
+) -> None:
+    """The route's rows after the last served weld (module docstring); ``own[i]``: the contact
+    zone is exempt on the route's own motion leaving row ``i``."""
     m = len(q)
     if ia + 1 >= m:
         return
-    if not det.checker.path_hits(q[ia:], np.ones(m - 1 - ia, dtype=bool), first_only=True):
+    if not _leg_hits(det, q, own, ia, m - 1, blocked):
+        out.zone[-1] = bool(own[ia])
         for i in range(ia + 1, m):
-            out.add(q[i], i, bool(ex[i]), int(branch[i]))
+            out.add(q[i], i, bool(ex[i]), int(branch[i]), bool(own[i]))
         return
     got = det.retract(q[ia], det.T_tcp[ia], int(branch[ia]))
     if got is None:
+        out.zone[-1] = bool(own[ia])
         for i in range(ia + 1, m):  # nothing better: the route's own rows (the check reports)
-            out.add(q[i], i, bool(ex[i]), int(branch[i]))
+            out.add(q[i], i, bool(ex[i]), int(branch[i]), bool(own[i]))
         return
     # the rest of the route's rows as points on the retract from the last served weld (a motion
     # retract() checked), the last of them the retract configuration itself
