@@ -12,7 +12,8 @@ from scipy.spatial.transform import Rotation
 from tests.conftest import require_shared
 from tests.robot_helpers import BOX_BASE, TORCH_TCP, down_poses
 from tests.route_fixtures import IDS, SPOTS, box_part
-from weldplan.robot.gunpath import GunRoute, gun_route, legs_taken
+from weldplan.robot.gunpath import GunRoute, gun_exits, gun_route, legs_taken
+from weldplan.tool.route_frames import weld_rows
 from weldplan.tool.transit import BLOCKED, DIRECT, ToolPath, Transition
 from weldplan.weld.route import Leg, Route
 
@@ -119,3 +120,52 @@ def test_the_robot_serves_both_welds_only_along_the_gun_path():
 
 def robot_urdf():
     return require_shared("robots", "kuka_kr150r3100_2") / "kr150r3100_2.urdf"
+
+
+def test_the_gun_exits_are_the_motions_before_the_move_longest_first():
+    route, path = two_weld_route(), over_the_wall()
+    gr = gun_route(route, poses_for(route, path), path, contact_radius=20.0)
+    (a,) = gun_exits(path, "A", 20.0)
+    (b,) = gun_exits(path, "B", 20.0)
+    # A's: the 100 mm lift off A; B's: the lowering onto B, reversed (from B up)
+    np.testing.assert_allclose(a[0, :3, 3], SPOTS[0])
+    np.testing.assert_allclose(a[-1, :3, 3], SPOTS[0] + [0, 0, LIFT])
+    np.testing.assert_allclose(b[0, :3, 3], SPOTS[1])
+    np.testing.assert_allclose(b[-1, :3, 3], SPOTS[1] + [0, 0, LIFT])
+    assert np.linalg.norm(a[1, :3, 3] - a[0, :3, 3]) == pytest.approx(20.0)  # zone, then whole
+    rows = weld_rows(gr.route)
+    assert set(gr.exits) == {int(rows[0]), int(rows[1])}
+    # a short lift is left to the robot's own retracts; a blocked transition proves nothing
+    short = over_the_wall()
+    t = short.transitions[0]
+    P = np.array(t.positions)
+    P[1:3, 2] = 15.0
+    lifted = dataclasses.replace(short, transitions=(dataclasses.replace(t, positions=P),))
+    assert gun_exits(lifted, "A", 20.0) == ()
+    assert gun_exits(over_the_wall(BLOCKED), "A", 20.0) == ()
+
+
+@pytest.mark.slow
+def test_a_detour_leaves_a_weld_along_the_gun_exit_first():
+    """Detour.leave follows the gun's proven exit (IK step by step, same branch), every motion
+    free for the robot and torch; FK puts the TCP on the exit's poses."""
+    from weldplan.robot import load_robot
+    from weldplan.robot.collision import RobotCollision
+    from weldplan.robot.replan import Detour
+    from weldplan.tool import arc_torch
+
+    robot = load_robot(robot_urdf()).with_base(BOX_BASE)
+    route, path = two_weld_route(), over_the_wall()
+    gr = gun_route(route, poses_for(route, path), path, contact_radius=20.0)
+    chk = RobotCollision(robot, box_part(), arc_torch(), TORCH_TCP)
+    det = Detour(robot, chk, gr.tcp, TORCH_TCP, 5.0, "rrtconnect", 1.0, 0, exits=gr.exits)
+    sol = robot.ik(gr.tcp[0] @ np.linalg.inv(TORCH_TCP))
+    q0, br = sol.q[0], int(sol.branch[0])
+    P = det.leave(q0, 0, br)
+    assert P is not None and det.left_by == {"gun exit": 1}
+    T = robot.fk(P) @ TORCH_TCP
+    np.testing.assert_allclose(T[:, :3, 3], gr.exits[0][0][1:, :3, 3], atol=1e-6)
+    Q = np.vstack([q0, P])
+    zone = np.zeros(len(P), dtype=bool)
+    zone[0] = True  # the first step, within the contact radius of the spot
+    assert chk.path_hits(Q, zone) == []

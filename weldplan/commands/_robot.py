@@ -267,6 +267,7 @@ def robot_stage(
         rng=args.seed,
         tcp_poses=None if gun is None else gun.tcp,
         zone=None if gun is None else gun.zone,
+        exits=None if gun is None else gun.exits,
     )
     if reach is not None and reach.placement is not None:  # searched, before the poses
         rr.stats["placement"].update(

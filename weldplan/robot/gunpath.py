@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -66,6 +66,10 @@ class GunRoute:
         ``(m - 1,) bool``: the motions whose contact zone may be exempt.
     via
         Per leg, how the gun goes (:attr:`~weldplan.tool.transit.Transition.via`).
+    exits
+        Per route row of a weld, the TCP paths ``(k, 4, 4)`` leaving it that the gun stage
+        proved free (:func:`gun_exits`), longest first: a robot detour leaves and reaches the
+        weld along them before its own retracts (:meth:`weldplan.robot.replan.Detour.leave`).
     """
 
     route: Any
@@ -73,6 +77,7 @@ class GunRoute:
     tcp: NDArray[np.float64]
     zone: NDArray[np.bool_]
     via: tuple[str, ...]
+    exits: dict[int, tuple[NDArray[np.float64], ...]] = field(default_factory=dict)
 
     def quaternions(self) -> NDArray[np.float64]:
         """``(m, 4)``: the TCP orientations ``(qw, qx, qy, qz)``, ``qw >= 0``."""
@@ -123,6 +128,7 @@ def gun_route(
     """
     import dataclasses
 
+    from weldplan.tool.route_frames import weld_rows
     from weldplan.weld.route import Leg
 
     if not path.order:
@@ -148,7 +154,68 @@ def gun_route(
     T[:, :3, :3] = Rotation.from_quat(np.roll(Q, -1, axis=1)).as_matrix()
     T[:, :3, 3] = P
     zone = _zone_mask(gr, P, contact_radius)
-    return GunRoute(gr, gposes, T, zone, tuple(via))
+    rows = weld_rows(gr)
+    exits = {
+        int(rows[k]): gun_exits(path, w, contact_radius, step_mm, step_deg)
+        for k, w in enumerate(path.order)
+    }
+    return GunRoute(gr, gposes, T, zone, tuple(via), {r: e for r, e in exits.items() if e})
+
+
+#: kinds of a transition's motions that leave its first weld (its exit), and that reach its
+#: last one (its entry, reversed an exit): :mod:`weldplan.tool.transitions`
+LEAVING = ("lift", "retract")
+REACHING = ("lower", "lift", "approach")
+#: mm: an exit whose TCP path is not longer than this is left to the robot's own retracts
+#: (:data:`weldplan.robot.replan.RETRACT_MM` has the gun's 10 and 20 mm lifts along the axis)
+EXIT_MIN_MM = 40.0
+
+
+def gun_exits(
+    path: Any, weld: str, radius: float, step_mm: float = STEP_MM, step_deg: float = STEP_DEG
+) -> tuple[NDArray[np.float64], ...]:
+    """TCP paths ``(k, 4, 4)`` mm leaving ``weld`` that the gun stage proved free, longest
+    first, in IK steps (the first step ends within ``radius`` of the spot):
+
+    * of each free transition out of it, its motions before the move (a lift, a side exit and
+      its retract, an axial retract: kinds :data:`LEAVING` or ``exit ...``); of an SE(3)
+      re-plan, its first half;
+    * of each free transition into it, the same from its end, reversed.
+
+    Exits not longer than :data:`EXIT_MIN_MM` are left out (the robot's retracts try them).
+    """
+    out: dict[bytes, NDArray[np.float64]] = {}
+    for t in path.transitions:
+        if not t.free or weld not in (t.from_id, t.to_id):
+            continue
+        P, Q = np.asarray(t.positions), np.asarray(t.quaternions)
+        if t.to_id == weld:
+            P, Q, kinds = P[::-1], Q[::-1], t.kinds[::-1]
+            keep = REACHING
+        else:
+            kinds, keep = t.kinds, LEAVING
+        n = len(P) // 2 + 1 if t.status == "replanned" else _exit_points(kinds, keep)
+        P, Q = P[:n], Q[:n]
+        if len(P) < 2 or np.linalg.norm(np.diff(P, axis=0), axis=1).sum() <= EXIT_MIN_MM:
+            continue
+        P, Q = _steps(*_split_ends(P, Q, radius, ends=(0,)), step_mm, step_deg)
+        T = np.tile(np.eye(4), (len(P), 1, 1))
+        T[:, :3, :3] = Rotation.from_quat(np.roll(Q, -1, axis=1)).as_matrix()
+        T[:, :3, 3] = P
+        out.setdefault(np.round(P, 3).tobytes(), T)
+    length = {
+        k: float(np.linalg.norm(np.diff(T[:, :3, 3], axis=0), axis=1).sum()) for k, T in out.items()
+    }
+    return tuple(out[k] for k in sorted(out, key=lambda k: -length[k]))
+
+
+def _exit_points(kinds: tuple[str, ...], keep: tuple[str, ...]) -> int:
+    """The number of points of a transition's path before its first motion that is neither of
+    ``keep`` nor a side exit (``exit ...``, ``enter ...``): its exit, from its first point."""
+    for i, k in enumerate(kinds):
+        if not (k in keep or k.startswith(("exit ", "enter "))):
+            return i + 1
+    return len(kinds) + 1
 
 
 def _steps(
@@ -170,12 +237,15 @@ def _steps(
 
 
 def _split_ends(
-    P: NDArray[np.float64], Q: NDArray[np.float64], radius: float
+    P: NDArray[np.float64],
+    Q: NDArray[np.float64],
+    radius: float,
+    ends: tuple[int, ...] = (0, -1),
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """``P``, ``Q`` with a point added on the first and the last motion where the TCP is
-    ``radius`` from the spot (when that motion goes farther): the contact zone is exempt up to
-    there, and the rest of the motion is checked with the whole tool."""
-    for end in (0, -1):
+    """``P``, ``Q`` with a point added on the first and the last motion (``ends``) where the
+    TCP is ``radius`` from the spot (when that motion goes farther): the contact zone is exempt
+    up to there, and the rest of the motion is checked with the whole tool."""
+    for end in ends:
         i, j = (0, 1) if end == 0 else (len(P) - 1, len(P) - 2)
         d = float(np.linalg.norm(P[j] - P[i]))
         if radius <= 0 or d <= radius * (1 + 1e-9):

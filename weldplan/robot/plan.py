@@ -111,6 +111,7 @@ def plan_robot_route(
     search_top: int = SEARCH_TOP,
     tcp_poses: ArrayLike | None = None,
     zone: ArrayLike | None = None,
+    exits: dict[int, tuple[NDArray[np.float64], ...]] | None = None,
 ) -> RobotRoute:
     """The route in joint space, verified (module docstring).
 
@@ -152,6 +153,10 @@ def plan_robot_route(
         ``(m - 1,) bool``: the route's own motions on which the tool's contact zone is exempt
         (default: every one, the TCP is on the verified point-tip route); the others are checked
         with the whole tool.
+    exits
+        Per route row of a weld, TCP paths ``(k, 4, 4)`` mm leaving it that the tool stage
+        proved free (:attr:`weldplan.robot.gunpath.GunRoute.exits`): a detour leaves and reaches
+        the weld along them before it tries its own retracts.
 
     Raises
     ------
@@ -216,7 +221,9 @@ def plan_robot_route(
     replanned: list[int] = []
     row = np.arange(len(q), dtype=np.int64)
     if checker is not None:
-        det = Detour(rb, checker, T_tcp, F, singular_deg, planner, replan_time_s, rng)
+        det = Detour(
+            rb, checker, T_tcp, F, singular_deg, planner, replan_time_s, rng, exits=exits or {}
+        )
         q, row, exact, branch, replanned = _collision_stage(
             det, q, exact, branch, rows, status, detail, tuple(route.order), stats,
             replan=replan, zone=own_zone,
@@ -296,6 +303,7 @@ def _collision_stage(
         )  # fmt: skip
         hits = det.checker.path_hits(q, zone)  # the verification of the final path
         stats["ompl"] = dict(det.ompl)  # joint-space transfers: runs, retries, solved, s
+        stats["detour_ends"] = dict(det.left_by)  # welds left/reached by a gun exit, a retract
     for h in hits:
         k = _blamed_weld(h, row, rows)
         if k is not None and status[k] == OK:

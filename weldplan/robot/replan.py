@@ -5,6 +5,12 @@ one served weld ``a`` to the next ``b`` is first the route's own: its waypoints'
 checked with the tool's contact zone exempt (the TCP is on the verified route). When that is
 blocked, the leg becomes a detour:
 
+0. *gun exit*: when the caller gives the gun stage's proven exits of ``a``
+   (:attr:`Detour.exits`: a side exit and its retract, an axial retract, half an SE(3) re-plan;
+   :func:`weldplan.robot.gunpath.gun_exits`), ``a`` is first left along one of them, longest
+   first, by IK at each TCP step on ``a``'s branch (:meth:`Detour.follow`: the first motion
+   checked with the contact zone exempt, the rest and the end with the whole tool); ``b`` is
+   reached the same way reversed. Else:
 1. *retract*: from ``a``'s configuration to ``a``'s pose moved ``d`` mm (orientation kept)
    back along its TCP axis or, failing that, sideways along its x or y axis
    (:data:`RETRACT_DIRS` x :data:`RETRACT_MM`, the first that works), on the same IK branch and
@@ -119,8 +125,14 @@ class Detour:
     tuck: tuple[tuple[float, float], ...] = TUCK_A2_A3
     retry_time_s: float = RETRY_TIME_S
     retry_total_s: float = RETRY_TOTAL_S
+    #: per route row of a weld, TCP paths ``(k, 4, 4)`` mm that leave it (the first pose the
+    #: weld's own) which the gun stage proved free for the tool: tried before :meth:`retract`
+    #: (:func:`weldplan.robot.gunpath.gun_exits`)
+    exits: dict[int, tuple[NDArray[np.float64], ...]] = field(default_factory=dict)
     #: figures of the transfers planned with OMPL (runs, solved, retries, seconds)
     ompl: dict[str, float] = field(default_factory=dict, compare=False)
+    #: how each weld was left or reached by a detour: ``"gun exit"`` or ``"retract"``
+    left_by: dict[str, int] = field(default_factory=dict, compare=False)
 
     def offset(self, q: NDArray, T: NDArray, branch: int, move: NDArray) -> NDArray | None:
         """The configuration of pose ``T`` moved by ``move (3,)`` mm (part frame, orientation
@@ -147,6 +159,40 @@ class Detour:
                 ):
                     return qr, move
         return None
+
+    def leave(self, q: NDArray, row: int, branch: int) -> NDArray | None:
+        """``(p, 6)`` rad from the weld at route row ``row`` (configuration ``q``, not included)
+        to a clear configuration (the last row): along one of the gun's proven exits
+        (:attr:`exits`, :meth:`follow`), else by :meth:`retract`; ``None`` when neither works.
+        The same rows reversed approach the weld."""
+        for T in self.exits.get(row, ()):
+            P = self.follow(q, T, branch)
+            if P is not None:
+                self.left_by["gun exit"] = self.left_by.get("gun exit", 0) + 1
+                return P
+        got = self.retract(q, self.T_tcp[row], branch)
+        if got is None:
+            return None
+        self.left_by["retract"] = self.left_by.get("retract", 0) + 1
+        return got[0][None]
+
+    def follow(self, q: NDArray, T: NDArray, branch: int) -> NDArray | None:
+        """``(k - 1, 6)`` rad: IK along the TCP poses ``T[1:]`` (``T (k, 4, 4)`` mm, ``T[0]`` the
+        weld's) on ``branch``, each at the turn nearest the previous, from configuration ``q``;
+        the first motion checked with the contact zone exempt (the lift off the sheet), every
+        later one and the last configuration with the whole tool. ``None`` where a step is not
+        usable or a motion is blocked."""
+        out: list[NDArray] = []
+        prev = np.asarray(q, dtype=np.float64)
+        for Tk in T[1:]:
+            qk = self.offset(prev, Tk, branch, np.zeros(3))
+            if qk is None or not self.checker.motion_free(prev, qk, zone=not out):
+                return None
+            out.append(qk)
+            prev = qk
+        if not out or not self.checker.state_free(prev):
+            return None
+        return np.array(out)
 
     def transfer(self, qa: NDArray, qb: NDArray) -> NDArray | None:
         """``(p, 6)`` rad from ``qa`` to ``qb`` (ends included), whole tool and links free:
@@ -302,12 +348,15 @@ def _leg_hits(
 
 
 def _detour(det: Detour, q: NDArray, branch: NDArray, ia: int, ib: int) -> NDArray | None:
-    """``[retract_a, ..., approach_b]`` (rad), else ``None``."""
-    ra = det.retract(q[ia], det.T_tcp[ia], int(branch[ia]))
-    rb = None if ra is None else det.retract(q[ib], det.T_tcp[ib], int(branch[ib]))
-    if ra is None or rb is None:
+    """``[leave a ..., transfer ..., approach b ...]`` (rad), else ``None``."""
+    la = det.leave(q[ia], ia, int(branch[ia]))
+    lb = None if la is None else det.leave(q[ib], ib, int(branch[ib]))
+    if la is None or lb is None:
         return None
-    return det.transfer(ra[0], rb[0])
+    mid = det.transfer(la[-1], lb[-1])
+    if mid is None:
+        return None
+    return np.vstack([la[:-1], mid, lb[:-1][::-1]])
 
 
 def _add_detour(
