@@ -76,14 +76,18 @@ def test_cost_time_run_states_its_bound_in_seconds(time_run):
 def test_the_robot_route_round_trips_through_the_route_json(time_run):
     from weldplan.io.export import read_route
     from weldplan.robot.routejson import robot_route_of
+    from weldplan.weld.route import Route
 
     tmp, _, _, rc = time_run
     assert rc == 0
     route = read_route(tmp / "r.json")
     rr = robot_route_of(route)
     d = json.loads((tmp / "r.json").read_text())["tool"]["robot"]
-    assert rr.weld_ids == route.order and len(rr.status) == 4
-    assert rr.q.shape == (len(rr.row), 6) and rr.row.max() < len(route.waypoints())
+    # the robot follows the tool stage's order and transitions: its rows are that route's
+    followed = Route.from_dict(d["follows"]["route"])
+    assert rr.weld_ids == followed.order == tuple(d["follows"]["route"]["order"])
+    assert sorted(rr.weld_ids) == sorted(route.order) and len(rr.status) == 4
+    assert rr.q.shape == (len(rr.row), 6) and rr.row.max() < len(followed.waypoints())
     assert d["weld_branch"] == rr.weld_branch.tolist()
     np.testing.assert_array_equal(rr.q, np.asarray(d["q"]))
     # the trajectory replays the same joint route: its first row is the route's first row

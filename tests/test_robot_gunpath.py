@@ -4,6 +4,7 @@ IK steps, the contact zone only at the spots, and a scene only the gun's path se
 from __future__ import annotations
 
 import dataclasses
+import json
 
 import numpy as np
 import pytest
@@ -12,6 +13,7 @@ from scipy.spatial.transform import Rotation
 from tests.conftest import require_shared
 from tests.robot_helpers import BOX_BASE, TORCH_TCP, down_poses
 from tests.route_fixtures import IDS, SPOTS, box_part
+from weldplan.errors import InputError
 from weldplan.robot.gunpath import GunRoute, gun_exits, gun_route, legs_taken
 from weldplan.tool.route_frames import weld_rows
 from weldplan.tool.transit import BLOCKED, DIRECT, ToolPath, Transition
@@ -116,6 +118,11 @@ def test_the_robot_serves_both_welds_only_along_the_gun_path():
     carried = attach_robot_route(carried, rr, urdf=robot_urdf(), contact_radius=20.0, gun=gr)
     check = verify_robot_route(carried, rr, robot, part, torch)
     assert check.ok, check.describe()
+    # a followed route that does not weld B at B's pose is refused, whatever its FK says
+    bad = json.loads(json.dumps(carried.tool))
+    bad["robot"]["follows"]["quaternions"][-1] = list(Q_DOWN)
+    with pytest.raises(InputError, match="does not weld the route's welds at their poses"):
+        verify_robot_route(dataclasses.replace(carried, tool=bad), rr, robot, part, torch)
 
 
 def robot_urdf():

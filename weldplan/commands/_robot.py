@@ -334,14 +334,30 @@ def _gun_route(route: Any, poses: Any) -> Any:
     return gun_route(route, poses, path, contact_radius=poses_contact_radius(route))
 
 
+def _ends(rr: Any) -> str:
+    """How the detours left and reached their welds (``stats["detour_ends"]``), as
+    ``"; welds left or reached: 2 by a gun exit, 4 by a retract"``."""
+    ends = rr.stats.get("detour_ends") or {}
+    if not ends:
+        return ""
+    return "; welds left or reached: " + ", ".join(f"{v} by a {k}" for k, v in ends.items())
+
+
+def _legs(rr: Any, gun: Any) -> list[tuple[str, str, str]]:
+    """``(from, to, how)`` of each leg between consecutive served welds."""
+    from weldplan.robot.gunpath import legs_taken
+
+    served = [w for w, s in zip(rr.weld_ids, rr.status, strict=True) if s == "ok"]
+    taken = legs_taken(gun.via, rr.status, rr.replanned)
+    return [(a, b, k) for a, b, k in zip(served[:-1], served[1:], taken, strict=True)]
+
+
 def _order_rows(route: Any, gun: Any, rr: Any) -> list[tuple[str, str]]:
     """Summary rows: the order the program follows (and why, when it is not the point-tip
     route's), how each leg between served welds goes, and the welds the tool never reaches."""
     if gun is None:
         return []
     from collections import Counter
-
-    from weldplan.robot.gunpath import legs_taken
 
     order = gun.route.order
     pt = tuple(i for i in route.order if i in set(order))
@@ -352,14 +368,17 @@ def _order_rows(route: Any, gun: Any, rr: Any) -> list[tuple[str, str]]:
         "transitions were planned and checked between consecutive welds of the tool order, "
         "which avoids the pairs found blocked for the gun"
     )
-    taken = Counter(legs_taken(gun.via, rr.status, rr.replanned))
+    legs_by = _legs(rr, gun)
+    taken = Counter(k for _, _, k in legs_by)
     gun_legs = {k[4:]: v for k, v in taken.items() if k.startswith("gun ")}
-    n_gun = sum(gun_legs.values())
+    detoured = [f"{a}->{b}" for a, b, k in legs_by if k == "detour"]
     legs = (
-        f"{n_gun} along the gun's transitions"
+        f"{sum(gun_legs.values())} along the gun's transitions"
         + (f" ({', '.join(f'{k} {v}' for k, v in gun_legs.items())})" if gun_legs else "")
-        + f", {taken['detour']} detoured (retract, joint-space transfer, approach), "
-        f"{taken['joint']} by one joint motion where the gun's transition is blocked"
+        + f", {taken['detour']} detoured (leave, joint-space transfer, approach"
+        + (f": {', '.join(detoured)}" if detoured else "")
+        + _ends(rr)
+        + f"), {taken['joint']} by one joint motion where the gun's transition is blocked"
     )
     rows = [("robot order", f"{'-'.join(order)}: {why}"), ("robot legs", legs)]
     rows += [
