@@ -309,6 +309,9 @@ def _collision_stage(
         if k is not None and status[k] == OK:
             status[k] = COLLISION
             detail[k] = f"{h.body} on the motion at joint row {h.segment} (not re-planned)"
+    # the motions checked with the whole tool (the contact zone not exempt): verify --robot
+    # checks them the same way (weldplan.robot.routejson)
+    stats["whole_tool_motions"] = [int(i) for i in np.flatnonzero(~zone)]
     stats["seconds_collision"] = round(time.perf_counter() - t1, 3)
     stats["collision_free"] = not hits
     stats["hits"] = [

@@ -179,7 +179,7 @@ def verify_robot_route(
         stored = (route.tool or {}).get("robot", {}).get("contact_radius")
         contact_radius = stored if stored is not None else poses_contact_radius(route)
     checker = RobotCollision(rb, part, tool, rr.flange_tcp, contact_radius=float(contact_radius))
-    zone = np.ones(max(len(rr.q) - 1, 0), dtype=bool)  # as the robot route was checked
+    zone = _zone(rr)
     hits = checker.path_hits(rr.q, zone)
     ok = fk_mm <= FK_TOLERANCE_MM and fk_deg <= FK_TOLERANCE_DEG and bool(inside.all())
     ok = ok and not hits
@@ -191,6 +191,21 @@ def verify_robot_route(
         tuple((int(h.segment), str(h.body), float(h.distance)) for h in hits),
         len(rr.q),
     )
+
+
+def _zone(rr: Any) -> Any:
+    """``(k - 1,) bool``: the motions checked with the contact zone exempt, as the robot route
+    was checked: every one except those its planner says it checked with the whole tool
+    (``stats["whole_tool_motions"]``, a route along the gun's transitions); those are checked so
+    here too, so the re-check is never weaker than the planner's claim."""
+    zone = np.ones(max(len(rr.q) - 1, 0), dtype=bool)
+    whole = np.asarray((rr.stats or {}).get("whole_tool_motions") or [], dtype=np.int64)
+    if len(whole) and (whole.min() < 0 or whole.max() >= len(zone)):
+        raise InputError(
+            "the robot route's whole-tool motions are not its motions", field="tool.robot"
+        )
+    zone[whole] = False
+    return zone
 
 
 def _followed(route: Any) -> tuple[Any, Any] | None:
