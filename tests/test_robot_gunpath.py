@@ -176,3 +176,33 @@ def test_a_detour_leaves_a_weld_along_the_gun_exit_first():
     zone = np.zeros(len(P), dtype=bool)
     zone[0] = True  # the first step, within the contact radius of the spot
     assert chk.path_hits(Q, zone) == []
+
+
+@pytest.mark.slow
+def test_a_tail_retract_leaves_the_weld_with_the_contact_zone_exempt():
+    """The route after the last served weld is blocked (through the wall) and its motion off the
+    weld was to be checked with the whole tool (a gun leg away from the spots): the retract that
+    replaces it is checked from the weld with the zone exempt, as retract() proved it, and the
+    assembled tail passes the final check (regression: it kept the whole-tool flag, and the
+    final check refused the run)."""
+    from weldplan.robot import load_robot
+    from weldplan.robot.collision import RobotCollision
+    from weldplan.robot.replan import Detour, JointPath, _tail
+    from weldplan.tool import arc_torch
+
+    robot = load_robot(robot_urdf()).with_base(BOX_BASE)
+    route, path = two_weld_route(), over_the_wall(BLOCKED)
+    gr = gun_route(route, poses_for(route, path), path, contact_radius=20.0)
+    chk = RobotCollision(robot, box_part(), arc_torch(), TORCH_TCP)
+    det = Detour(robot, chk, gr.tcp, TORCH_TCP, 5.0, "rrtconnect", 1.0, 0)
+    sols = [robot.ik(T @ np.linalg.inv(TORCH_TCP)) for T in gr.tcp]
+    Q = np.array([s.q[0] for s in sols])
+    br = np.array([int(s.branch[0]) for s in sols])
+    own = np.append(gr.zone, True)
+    assert not own[0] and not chk.motion_free(Q[0], Q[1], zone=False)
+    out = JointPath()
+    out.add(Q[0], 0, True, int(br[0]), zone=bool(own[0]))
+    _tail(det, out, Q, np.array([True, True]), br, 0, own, blocked={0})
+    Qo, row, exact, _, zone = out.arrays()
+    assert zone[0] and list(row) == [0, 1] and not exact[1]
+    assert chk.path_hits(Qo, zone) == []

@@ -41,7 +41,8 @@ The caller checks the assembled path again (the verification).
 
 The head (route rows before the first served weld) and the tail (after the last) are the route's
 own rows; a blocked tail is replaced by the retract from the last served weld (subdivided, one
-point per route row after it, the last the retract configuration).
+point per route row after it, the last the retract configuration), or, with no retract, by the
+last served configuration held (the program ends at that weld).
 """
 
 from __future__ import annotations
@@ -407,10 +408,14 @@ def _tail(
             out.add(q[i], i, bool(ex[i]), int(branch[i]), bool(own[i]))
         return
     got = det.retract(q[ia], det.T_tcp[ia], int(branch[ia]))
+    out.zone[-1] = True  # weld -> retract (or no motion): contact zone exempt, as checked
     if got is None:
-        out.zone[-1] = bool(own[ia])
-        for i in range(ia + 1, m):  # nothing better: the route's own rows (the check reports)
-            out.add(q[i], i, bool(ex[i]), int(branch[i]), bool(own[i]))
+        # no way off the last served weld: the robot stays there (zero motions), the route's
+        # later welds are passed without welding; before, the route's own blocked rows were
+        # kept and the final check refused the whole route
+        log.info("no retract from the last served weld: the program ends there")
+        for i in range(ia + 1, m):
+            out.add(q[ia], i, False, int(branch[ia]))
         return
     # the rest of the route's rows as points on the retract from the last served weld (a motion
     # retract() checked), the last of them the retract configuration itself
