@@ -24,8 +24,8 @@ blocked, the leg becomes a detour:
    motions), else planned in joint space by OMPL
    (:func:`weldplan.motion.sampling.plan_rn`, ``rrtconnect``) with the whole tool and every link
    checked by :class:`~weldplan.robot.collision.RobotCollision` (states and motions): one run of
-   ``time_s`` and, when that does not solve it, one retry of :data:`RETRY_TIME_S` with the next
-   seed, while the route's retries stay within :data:`RETRY_TOTAL_S` (rrtconnect stops at its
+   ``time_s`` and, while that does not solve it, retries of :data:`RETRY_TIME_S` with the next
+   seeds, while the route's retries stay within :data:`RETRY_TOTAL_S` (rrtconnect stops at its
    first solution, so only a leg that needs the time spends it);
 3. *approach*: ``b``'s approach configuration to ``b``'s, contact zone exempt.
 
@@ -76,8 +76,9 @@ RETRACT_DIRS = ((2, -1.0), (0, -1.0), (0, 1.0), (1, -1.0), (1, 1.0))
 #: the base): the arm folds there, A1 and the wrist turn folded, and it unfolds at the goal
 TUCK_A2_A3 = ((-90.0, 90.0), (-120.0, 120.0))
 
-#: s: a transfer OMPL did not solve in its first budget gets one more run of this long (another
-#: seed): rrtconnect stops at its first solution, so only the legs that need it pay for it
+#: s: a transfer OMPL did not solve in its first budget gets more runs of this long (the next
+#: seeds) while the route's retries last: rrtconnect stops at its first solution, so only the
+#: legs that need it pay for it
 RETRY_TIME_S = 30.0
 #: s: the most all the retries of one route may take together (then a leg gets one run only)
 RETRY_TOTAL_S = 120.0
@@ -210,20 +211,22 @@ class Detour:
         return self._ompl(qa, qb)
 
     def _ompl(self, qa: NDArray, qb: NDArray) -> NDArray | None:
-        """OMPL in joint space (:func:`~weldplan.motion.sampling.plan_rn`), ``time_s``; when that
-        is not enough, one more run of ``retry_time_s`` with the next seed while the route's
-        retries have spent less than ``retry_total_s``."""
+        """OMPL in joint space (:func:`~weldplan.motion.sampling.plan_rn`), ``time_s``; while
+        that is not enough, more runs of ``retry_time_s`` with the next seeds as long as the
+        route's retries have spent less than ``retry_total_s`` (the first leg that needs them
+        may take them all: on a route along the gun's order, a leg that cannot be detoured is
+        a bridge between two groups of welds, and every later weld of the far group would be
+        tried from the same weld across the same gap)."""
         from weldplan.motion.sampling import plan_rn
 
-        runs = [(self.time_s, self.rng)]
-        if self.retry_time_s > 0:
-            runs.append((self.retry_time_s, None if self.rng is None else self.rng + 1))
-        for k, (t, seed) in enumerate(runs):
-            if k and self.ompl.get("retry_s", 0.0) >= self.retry_total_s:
-                log.info(
-                    "joint-space transfer: no retry (%.0f s of retries spent)", self.retry_total_s
-                )
-                break
+        k = 0
+        while True:
+            if k and (
+                self.retry_time_s <= 0 or self.ompl.get("retry_s", 0.0) >= self.retry_total_s
+            ):
+                if k == 1:
+                    log.info("joint-space transfer: no retry (%.0f s spent)", self.retry_total_s)
+                return None
             res = plan_rn(
                 qa,
                 qb,
@@ -232,17 +235,26 @@ class Detour:
                 self.checker.state_free,
                 motion_valid=self.checker.motion_free,
                 planner=self.planner,
-                time_s=t,
-                seed=seed,
+                time_s=self._run_time(k),
+                seed=None if self.rng is None else self.rng + k,
             )
-            log.info("joint-space transfer%s: %s", " (retry)" if k else "", res.status)
-            for key, v in (("runs", 1), ("retries", k), ("solved", res.solved), ("s", res.time_s)):
+            log.info("joint-space transfer%s: %s", f" (retry {k})" if k else "", res.status)
+            for key, v in (("runs", 1), ("retries", k > 0), ("solved", res.solved)):
                 self.ompl[key] = self.ompl.get(key, 0) + float(v)
+            self.ompl["s"] = self.ompl.get("s", 0.0) + res.time_s
             if k:
                 self.ompl["retry_s"] = self.ompl.get("retry_s", 0.0) + res.time_s
             if res.solved:
                 return np.asarray(res.points, dtype=np.float64)
-        return None
+            k += 1
+
+    def _run_time(self, k: int) -> float:
+        """s of OMPL run ``k`` of a transfer: the first ``time_s``, a retry ``retry_time_s`` or
+        what is left of the route's ``retry_total_s``, whichever is less."""
+        if not k:
+            return self.time_s
+        left = self.retry_total_s - self.ompl.get("retry_s", 0.0)
+        return max(min(self.retry_time_s, left), 1e-3)
 
 
 def subdivide(P: NDArray[np.float64], inner: int) -> NDArray[np.float64]:
