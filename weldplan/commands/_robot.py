@@ -242,43 +242,12 @@ def robot_stage(
     served or the emitted program does not close its FK round trip. ``reach``: the pose stage's
     robot test (:func:`pose_acceptance`); its base, when it searched one, is kept (the poses
     were chosen for it)."""
-    from weldplan.robot.plan import plan_robot_route
     from weldplan.robot.program import robot_program
-    from weldplan.robot.reach import BaseSearch
     from weldplan.robot.routejson import attach_robot_route, poses_contact_radius
-    from weldplan.tool.route_frames import route_poses
 
-    poses = route_poses(route)
-    Tft = flange_tcp(args, robot)
-    given = _base_fixed(args) or (reach is not None and reach.placement is not None)
+    rr, gun, follow = _joint_route(args, cell, route, tool, robot, reach)
     if reach is not None:
         robot = reach.robot
-    gun = _gun_route(route, poses)  # None: the robot follows the point-tip route
-    follow = route if gun is None else gun.route
-    rr = plan_robot_route(
-        follow,
-        poses if gun is None else gun.poses,
-        robot,
-        flange_tcp=Tft,
-        part=cell.part,
-        tool=tool,
-        base=robot.base if given else None,
-        search=None if given else BaseSearch(),
-        rng=args.seed,
-        tcp_poses=None if gun is None else gun.tcp,
-        zone=None if gun is None else gun.zone,
-        exits=None if gun is None else gun.exits,
-    )
-    if reach is not None and reach.placement is not None:  # searched, before the poses
-        rr.stats["placement"].update(
-            searched=True, candidates=reach.placement.candidates, on="first-pass poses"
-        )
-    if rr.stats.get("collision_free") is False:
-        hits = rr.stats.get("hits") or []
-        raise PlanningError(
-            f"the robot route still collides after re-planning ({len(hits)} hit(s), first: "
-            f"{hits[0] if hits else '?'}); nothing written"
-        )
     rb = dataclasses.replace(
         robot.with_base(rr.base),
         velocity=robot.velocity * args.vel_scale,
@@ -320,6 +289,54 @@ def robot_stage(
         route, rr, urdf=args.robot, contact_radius=poses_contact_radius(route), gun=gun
     )
     return RobotStage(rr, build, texts, rows, (*build.skipped, *unposed), route)
+
+
+def _joint_route(
+    args: argparse.Namespace,
+    cell: Any,
+    route: Any,
+    tool: Any,
+    robot: Any,
+    reach: RobotAcceptance | None,
+) -> tuple[Any, Any, Any]:
+    """Step 1: ``(robot route, gun route or None, the route followed)``; along the tool stage's
+    transitions when the route carries them (:func:`_gun_route`), else the point-tip route.
+    Raises :class:`PlanningError` when the path still collides."""
+    from weldplan.robot.plan import plan_robot_route
+    from weldplan.robot.reach import BaseSearch
+    from weldplan.tool.route_frames import route_poses
+
+    poses = route_poses(route)
+    given = _base_fixed(args) or (reach is not None and reach.placement is not None)
+    if reach is not None:
+        robot = reach.robot
+    gun = _gun_route(route, poses)  # None: the robot follows the point-tip route
+    follow = route if gun is None else gun.route
+    rr = plan_robot_route(
+        follow,
+        poses if gun is None else gun.poses,
+        robot,
+        flange_tcp=flange_tcp(args, robot),
+        part=cell.part,
+        tool=tool,
+        base=robot.base if given else None,
+        search=None if given else BaseSearch(),
+        rng=args.seed,
+        tcp_poses=None if gun is None else gun.tcp,
+        zone=None if gun is None else gun.zone,
+        exits=None if gun is None else gun.exits,
+    )
+    if reach is not None and reach.placement is not None:  # searched, before the poses
+        rr.stats["placement"].update(
+            searched=True, candidates=reach.placement.candidates, on="first-pass poses"
+        )
+    if rr.stats.get("collision_free") is False:
+        hits = rr.stats.get("hits") or []
+        raise PlanningError(
+            f"the robot route still collides after re-planning ({len(hits)} hit(s), first: "
+            f"{hits[0] if hits else '?'}); nothing written"
+        )
+    return rr, gun, follow
 
 
 def _gun_route(route: Any, poses: Any) -> Any:
