@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -76,14 +77,18 @@ def test_cost_time_run_states_its_bound_in_seconds(time_run):
 def test_the_robot_route_round_trips_through_the_route_json(time_run):
     from weldplan.io.export import read_route
     from weldplan.robot.routejson import robot_route_of
+    from weldplan.weld.route import Route
 
     tmp, _, _, rc = time_run
     assert rc == 0
     route = read_route(tmp / "r.json")
     rr = robot_route_of(route)
     d = json.loads((tmp / "r.json").read_text())["tool"]["robot"]
-    assert rr.weld_ids == route.order and len(rr.status) == 4
-    assert rr.q.shape == (len(rr.row), 6) and rr.row.max() < len(route.waypoints())
+    # the robot follows the tool stage's order and transitions: its rows are that route's
+    followed = Route.from_dict(d["follows"]["route"])
+    assert rr.weld_ids == followed.order == tuple(d["follows"]["route"]["order"])
+    assert sorted(rr.weld_ids) == sorted(route.order) and len(rr.status) == 4
+    assert rr.q.shape == (len(rr.row), 6) and rr.row.max() < len(followed.waypoints())
     assert d["weld_branch"] == rr.weld_branch.tolist()
     np.testing.assert_array_equal(rr.q, np.asarray(d["q"]))
     # the trajectory replays the same joint route: its first row is the route's first row
@@ -108,3 +113,25 @@ def test_verify_rechecks_the_robot_route_by_fk_and_collision(time_run, capsys):
         assert "robot route: FK misses the route" in line
         miss = line.split("misses the route by ")[1]
         assert float(miss.split(" mm, ")[0 if needle == "mm" else 1].split()[0]) > 0.01
+
+
+def test_the_summary_says_which_order_the_robot_follows_and_why(time_run):
+    from weldplan.commands._robot import _order_rows
+    from weldplan.io.export import read_route
+    from weldplan.robot.gunpath import gun_route, tool_path_of
+    from weldplan.robot.routejson import robot_route_of
+    from weldplan.tool.route_frames import route_poses
+
+    tmp, _, _, rc = time_run
+    assert rc == 0
+    route = read_route(tmp / "r.json")
+    rr = robot_route_of(route)
+    gun = gun_route(route, route_poses(route), tool_path_of(route), contact_radius=20.0)
+    rows = dict(_order_rows(route, gun, rr))
+    order = "-".join(rr.weld_ids)
+    assert rows["robot order"].startswith(f"{order}: the tool stage's order")
+    if rr.weld_ids != route.order:  # then the row says so, and why
+        assert f"not the point-tip route's ({'-'.join(route.order)})" in rows["robot order"]
+    n_legs = sum(s == "ok" for s in rr.status) - 1
+    m = re.match(r"(\d+) along .*?(\d+) detoured .*?(\d+) by one joint", rows["robot legs"])
+    assert m is not None and sum(int(g) for g in m.groups()) == n_legs

@@ -9,9 +9,13 @@ poses were verified, runs :func:`robot_stage`:
 
 1. the joint route (:func:`weldplan.robot.plan.plan_robot_route`: base given by
    ``--robot-base`` or searched, one continuous IK branch, robot + tool collision check,
-   blocked legs re-planned in joint space). A path that still collides is an error; a weld the
-   robot cannot serve (no pose, out of reach, joint limit, singular) is passed without welding,
-   listed with its reason, and the run exits with :data:`~weldplan.errors.EXIT_PARTIAL`;
+   blocked legs re-planned in joint space). When the tool stage planned transitions, the robot
+   follows them: the welds in the tool's order, each leg the gun's TCP path as Cartesian steps
+   (:mod:`weldplan.robot.gunpath`), a leg the robot cannot follow detoured as any blocked leg;
+   the summary says which order the program follows and why, and how each leg goes. A path
+   that still collides is an error; a weld the robot cannot serve (no pose, out of reach,
+   joint limit, singular) is passed without welding, listed with its reason, and the run exits
+   with :data:`~weldplan.errors.EXIT_PARTIAL`;
 2. the program and its cycle time (:func:`weldplan.robot.program.robot_program`: toppra under the
    URDF velocities x ``--vel-scale`` and the robot's accelerations x ``--acc-scale``,
    ``--weld-time`` a spot; the same route at ``--tcp-speed`` beside it);
@@ -238,38 +242,12 @@ def robot_stage(
     served or the emitted program does not close its FK round trip. ``reach``: the pose stage's
     robot test (:func:`pose_acceptance`); its base, when it searched one, is kept (the poses
     were chosen for it)."""
-    from weldplan.robot.plan import plan_robot_route
     from weldplan.robot.program import robot_program
-    from weldplan.robot.reach import BaseSearch
     from weldplan.robot.routejson import attach_robot_route, poses_contact_radius
-    from weldplan.tool.route_frames import route_poses
 
-    poses = route_poses(route)
-    Tft = flange_tcp(args, robot)
-    given = _base_fixed(args) or (reach is not None and reach.placement is not None)
+    rr, gun, follow = _joint_route(args, cell, route, tool, robot, reach)
     if reach is not None:
         robot = reach.robot
-    rr = plan_robot_route(
-        route,
-        poses,
-        robot,
-        flange_tcp=Tft,
-        part=cell.part,
-        tool=tool,
-        base=robot.base if given else None,
-        search=None if given else BaseSearch(),
-        rng=args.seed,
-    )
-    if reach is not None and reach.placement is not None:  # searched, before the poses
-        rr.stats["placement"].update(
-            searched=True, candidates=reach.placement.candidates, on="first-pass poses"
-        )
-    if rr.stats.get("collision_free") is False:
-        hits = rr.stats.get("hits") or []
-        raise PlanningError(
-            f"the robot route still collides after re-planning ({len(hits)} hit(s), first: "
-            f"{hits[0] if hits else '?'}); nothing written"
-        )
     rb = dataclasses.replace(
         robot.with_base(rr.base),
         velocity=robot.velocity * args.vel_scale,
@@ -278,7 +256,7 @@ def robot_stage(
     mass, cog = tool_load(args, robot, tool, rr.flange_tcp)
     stem = Path(outputs.get("post", outputs["csv"])).stem
     build = robot_program(
-        route,
+        follow,
         rr.q,
         rb,
         rr.flange_tcp,
@@ -302,13 +280,130 @@ def robot_stage(
 
         texts["robot_html"] = robot_html(
             rb, build.timing, rr.flange_tcp, part=cell.part, tool=tool,
-            route_points=route.waypoints(),
+            route_points=follow.waypoints(),
         )  # fmt: skip
-    rows = _rows(rr, build) + _reach_rows(reach) + cost_rows(route, build.timing.total)
+    rows = _rows(rr, build) + _order_rows(route, gun, rr) + _reach_rows(reach)
+    rows += cost_rows(route, build.timing.total)
+    unposed = () if gun is None else tuple(i for i in route.order if i not in gun.route.order)
     route = attach_robot_route(
-        route, rr, urdf=args.robot, contact_radius=poses_contact_radius(route)
+        route, rr, urdf=args.robot, contact_radius=poses_contact_radius(route), gun=gun
     )
-    return RobotStage(rr, build, texts, rows, tuple(build.skipped), route)
+    return RobotStage(rr, build, texts, rows, (*build.skipped, *unposed), route)
+
+
+def _joint_route(
+    args: argparse.Namespace,
+    cell: Any,
+    route: Any,
+    tool: Any,
+    robot: Any,
+    reach: RobotAcceptance | None,
+) -> tuple[Any, Any, Any]:
+    """Step 1: ``(robot route, gun route or None, the route followed)``; along the tool stage's
+    transitions when the route carries them (:func:`_gun_route`), else the point-tip route.
+    Raises :class:`PlanningError` when the path still collides."""
+    from weldplan.robot.plan import plan_robot_route
+    from weldplan.robot.reach import BaseSearch
+    from weldplan.tool.route_frames import route_poses
+
+    poses = route_poses(route)
+    given = _base_fixed(args) or (reach is not None and reach.placement is not None)
+    if reach is not None:
+        robot = reach.robot
+    gun = _gun_route(route, poses)  # None: the robot follows the point-tip route
+    follow = route if gun is None else gun.route
+    rr = plan_robot_route(
+        follow,
+        poses if gun is None else gun.poses,
+        robot,
+        flange_tcp=flange_tcp(args, robot),
+        part=cell.part,
+        tool=tool,
+        base=robot.base if given else None,
+        search=None if given else BaseSearch(),
+        rng=args.seed,
+        tcp_poses=None if gun is None else gun.tcp,
+        zone=None if gun is None else gun.zone,
+        exits=None if gun is None else gun.exits,
+    )
+    if reach is not None and reach.placement is not None:  # searched, before the poses
+        rr.stats["placement"].update(
+            searched=True, candidates=reach.placement.candidates, on="first-pass poses"
+        )
+    if rr.stats.get("collision_free") is False:
+        hits = rr.stats.get("hits") or []
+        raise PlanningError(
+            f"the robot route still collides after re-planning ({len(hits)} hit(s), first: "
+            f"{hits[0] if hits else '?'}); nothing written"
+        )
+    return rr, gun, follow
+
+
+def _gun_route(route: Any, poses: Any) -> Any:
+    """The route along the tool stage's transitions, in its order
+    (:func:`weldplan.robot.gunpath.gun_route`); ``None`` when the route carries none."""
+    from weldplan.robot.gunpath import gun_route, tool_path_of
+    from weldplan.robot.routejson import poses_contact_radius
+
+    path = tool_path_of(route)
+    if path is None or not path.order:
+        return None
+    return gun_route(route, poses, path, contact_radius=poses_contact_radius(route))
+
+
+def _ends(rr: Any) -> str:
+    """How the detours left and reached their welds (``stats["detour_ends"]``), as
+    ``"; welds left or reached: 2 by a gun exit, 4 by a retract"``."""
+    ends = rr.stats.get("detour_ends") or {}
+    if not ends:
+        return ""
+    return "; welds left or reached: " + ", ".join(f"{v} by a {k}" for k, v in ends.items())
+
+
+def _legs(rr: Any, gun: Any) -> list[tuple[str, str, str]]:
+    """``(from, to, how)`` of each leg between consecutive served welds."""
+    from weldplan.robot.gunpath import legs_taken
+
+    served = [w for w, s in zip(rr.weld_ids, rr.status, strict=True) if s == "ok"]
+    taken = legs_taken(gun.via, rr.status, rr.replanned)
+    return [(a, b, k) for a, b, k in zip(served[:-1], served[1:], taken, strict=True)]
+
+
+def _order_rows(route: Any, gun: Any, rr: Any) -> list[tuple[str, str]]:
+    """Summary rows: the order the program follows (and why, when it is not the point-tip
+    route's), how each leg between served welds goes, and the welds the tool never reaches."""
+    if gun is None:
+        return []
+    from collections import Counter
+
+    order = gun.route.order
+    pt = tuple(i for i in route.order if i in set(order))
+    why = (
+        "the tool stage's order, the same as the point-tip route's"
+        if pt == order
+        else f"the tool stage's order, not the point-tip route's ({'-'.join(pt)}): the gun's "
+        "transitions were planned and checked between consecutive welds of the tool order, "
+        "which avoids the pairs found blocked for the gun"
+    )
+    legs_by = _legs(rr, gun)
+    taken = Counter(k for _, _, k in legs_by)
+    gun_legs = {k[4:]: v for k, v in taken.items() if k.startswith("gun ")}
+    detoured = [f"{a}->{b}" for a, b, k in legs_by if k == "detour"]
+    legs = (
+        f"{sum(gun_legs.values())} along the gun's transitions"
+        + (f" ({', '.join(f'{k} {v}' for k, v in gun_legs.items())})" if gun_legs else "")
+        + f", {taken['detour']} detoured (leave, joint-space transfer, approach"
+        + (f": {', '.join(detoured)}" if detoured else "")
+        + _ends(rr)
+        + f"), {taken['joint']} by one joint motion where the gun's transition is blocked"
+    )
+    rows = [("robot order", f"{'-'.join(order)}: {why}"), ("robot legs", legs)]
+    rows += [
+        (f"  weld {i}", "not welded: no tool pose (the tool never reaches it)")
+        for i in route.order
+        if i not in order
+    ]
+    return rows
 
 
 def _texts(args: argparse.Namespace, build: Any, rr: Any, rb: Any, outputs: dict) -> dict:

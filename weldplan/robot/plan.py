@@ -6,7 +6,8 @@
     flange_tcp = tool_flange_tcp(robot, ".../spot_welding_gun.urdf", "nozzle_tip")
     rr = plan_robot_route(route, poses, robot, flange_tcp=flange_tcp, part=cell.part, tool=gun)
 
-Steps: TCP poses of every route waypoint (weld poses, slerped between them) -> flange poses ->
+Steps: TCP poses of every route waypoint (weld poses, slerped between them; or the caller's, as
+for a route along the gun's transitions, :mod:`weldplan.robot.gunpath`) -> flange poses ->
 base given or searched (:mod:`weldplan.robot.placement`, :mod:`weldplan.robot.reach`) -> at each
 weld, the usable IK branches on which no link and no part of the tool outside its contact zone
 touches the part (a weld with none: ``collision``, the body in ``detail``) -> one IK solution per
@@ -108,6 +109,9 @@ def plan_robot_route(
     replan_time_s: float = REPLAN_TIME_S,
     rng: int | None = 0,
     search_top: int = SEARCH_TOP,
+    tcp_poses: ArrayLike | None = None,
+    zone: ArrayLike | None = None,
+    exits: dict[int, tuple[NDArray[np.float64], ...]] | None = None,
 ) -> RobotRoute:
     """The route in joint space, verified (module docstring).
 
@@ -141,6 +145,18 @@ def plan_robot_route(
         OMPL planner name, its time limit per leg (s) and seed.
     search_top
         The best candidates of the base search re-scored along the whole route.
+    tcp_poses
+        ``(m, 4, 4)`` mm: the TCP pose at every route waypoint (default: the weld poses, slerped
+        between them by arc length); a route along the gun's transitions gives their own
+        (:mod:`weldplan.robot.gunpath`).
+    zone
+        ``(m - 1,) bool``: the route's own motions on which the tool's contact zone is exempt
+        (default: every one, the TCP is on the verified point-tip route); the others are checked
+        with the whole tool.
+    exits
+        Per route row of a weld, TCP paths ``(k, 4, 4)`` mm leaving it that the tool stage
+        proved free (:attr:`weldplan.robot.gunpath.GunRoute.exits`): a detour leaves and reaches
+        the weld along them before it tries its own retracts.
 
     Raises
     ------
@@ -160,7 +176,12 @@ def plan_robot_route(
     if check_collision and part is None:
         raise ConfigError("the collision check needs the part mesh", field="part")
     F = np.asarray(flange_tcp, dtype=np.float64).reshape(4, 4)
-    T_tcp = tcp_waypoint_poses(route, poses)
+    T_tcp = (
+        tcp_waypoint_poses(route, poses)
+        if tcp_poses is None
+        else np.asarray(tcp_poses, dtype=np.float64).reshape(-1, 4, 4)
+    )
+    own_zone = _own_zone(zone, len(T_tcp))
     T_fl = T_tcp @ np.linalg.inv(F)
     from weldplan.tool.route_frames import weld_rows
 
@@ -200,10 +221,13 @@ def plan_robot_route(
     replanned: list[int] = []
     row = np.arange(len(q), dtype=np.int64)
     if checker is not None:
-        det = Detour(rb, checker, T_tcp, F, singular_deg, planner, replan_time_s, rng)
-        q, row, exact, branch, replanned = _collision_stage(
-            det, q, exact, branch, rows, status, detail, tuple(route.order), stats, replan=replan
+        det = Detour(
+            rb, checker, T_tcp, F, singular_deg, planner, replan_time_s, rng, exits=exits or {}
         )
+        q, row, exact, branch, replanned = _collision_stage(
+            det, q, exact, branch, rows, status, detail, tuple(route.order), stats,
+            replan=replan, zone=own_zone,
+        )  # fmt: skip
     weld_index = np.array([_weld_row(row, exact, r) for r in rows], dtype=np.int64)
     err_mm, err_deg = _pose_errors(rb, q, exact, T_fl, row)
     stats["fk_max_error_mm"] = err_mm
@@ -260,28 +284,34 @@ def _collision_stage(
     stats: dict[str, Any],
     *,
     replan: bool,
+    zone: NDArray[np.bool_],
 ) -> tuple[NDArray, NDArray, NDArray, NDArray, list[int]]:
-    """Check the joint path, detour blocked legs (:func:`weldplan.robot.replan.assemble`), check
-    the final path again; welds charged with a remaining blocked motion get :data:`COLLISION` in
-    ``status`` (in place), and the figures go to ``stats``."""
+    """Check the joint path (``zone``: the motions whose contact zone is exempt), detour blocked
+    legs (:func:`weldplan.robot.replan.assemble`), check the final path again; welds charged with
+    a remaining blocked motion get :data:`COLLISION` in ``status`` (in place), and the figures go
+    to ``stats``."""
     t1 = time.perf_counter()
     row = np.arange(len(q), dtype=np.int64)
-    zone = np.ones(max(len(q) - 1, 0), dtype=bool)
     hits = det.checker.path_hits(q, zone)
     stats["first_check_hits"] = len(hits)
     stats["first_check_bodies"] = sorted({h.body for h in hits})
     replanned: list[int] = []
     if hits and replan:
         q, row, exact, branch, zone, replanned = assemble(
-            det, q, exact, branch, rows, status, detail, ids
-        )
+            det, q, exact, branch, rows, status, detail, ids, zone=zone,
+            blocked={h.segment for h in hits},
+        )  # fmt: skip
         hits = det.checker.path_hits(q, zone)  # the verification of the final path
         stats["ompl"] = dict(det.ompl)  # joint-space transfers: runs, retries, solved, s
+        stats["detour_ends"] = dict(det.left_by)  # welds left/reached by a gun exit, a retract
     for h in hits:
         k = _blamed_weld(h, row, rows)
         if k is not None and status[k] == OK:
             status[k] = COLLISION
             detail[k] = f"{h.body} on the motion at joint row {h.segment} (not re-planned)"
+    # the motions checked with the whole tool (the contact zone not exempt): verify --robot
+    # checks them the same way (weldplan.robot.routejson)
+    stats["whole_tool_motions"] = [int(i) for i in np.flatnonzero(~zone)]
     stats["seconds_collision"] = round(time.perf_counter() - t1, 3)
     stats["collision_free"] = not hits
     stats["hits"] = [
@@ -333,6 +363,16 @@ def _joint_route(
             _nothing_reached(rb, T_fl, rows, placement, singular_deg), field="--robot-base"
         ) from None
     return q, branch, exact, row_status, detail
+
+
+def _own_zone(zone: ArrayLike | None, m: int) -> NDArray[np.bool_]:
+    """``(m - 1,) bool``: the route's own motions whose contact zone is exempt (default all)."""
+    if zone is None:
+        return np.ones(max(m - 1, 0), dtype=bool)
+    z = np.asarray(zone, dtype=bool).reshape(-1)
+    if len(z) != max(m - 1, 0):
+        raise ConfigError(f"zone has {len(z)} motions, the route {max(m - 1, 0)}", field="zone")
+    return z
 
 
 def _contact_radius(contact_radius: float | None, poses: Any) -> float:

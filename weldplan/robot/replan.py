@@ -5,6 +5,12 @@ one served weld ``a`` to the next ``b`` is first the route's own: its waypoints'
 checked with the tool's contact zone exempt (the TCP is on the verified route). When that is
 blocked, the leg becomes a detour:
 
+0. *gun exit*: when the caller gives the gun stage's proven exits of ``a``
+   (:attr:`Detour.exits`: a side exit and its retract, an axial retract, half an SE(3) re-plan;
+   :func:`weldplan.robot.gunpath.gun_exits`), ``a`` is first left along one of them, longest
+   first, by IK at each TCP step on ``a``'s branch (:meth:`Detour.follow`: the first motion
+   checked with the contact zone exempt, the rest and the end with the whole tool); ``b`` is
+   reached the same way reversed. Else:
 1. *retract*: from ``a``'s configuration to ``a``'s pose moved ``d`` mm (orientation kept)
    back along its TCP axis or, failing that, sideways along its x or y axis
    (:data:`RETRACT_DIRS` x :data:`RETRACT_MM`, the first that works), on the same IK branch and
@@ -18,8 +24,8 @@ blocked, the leg becomes a detour:
    motions), else planned in joint space by OMPL
    (:func:`weldplan.motion.sampling.plan_rn`, ``rrtconnect``) with the whole tool and every link
    checked by :class:`~weldplan.robot.collision.RobotCollision` (states and motions): one run of
-   ``time_s`` and, when that does not solve it, one retry of :data:`RETRY_TIME_S` with the next
-   seed, while the route's retries stay within :data:`RETRY_TOTAL_S` (rrtconnect stops at its
+   ``time_s`` and, while that does not solve it, retries of :data:`RETRY_TIME_S` with the next
+   seeds, while the route's retries stay within :data:`RETRY_TOTAL_S` (rrtconnect stops at its
    first solution, so only a leg that needs the time spends it);
 3. *approach*: ``b``'s approach configuration to ``b``'s, contact zone exempt.
 
@@ -27,19 +33,23 @@ When no detour is found, ``b`` is dropped (status ``collision``, its ``detail`` 
 that blocked the leg) and the next served weld is tried from ``a``. Welds the path passes
 without serving keep a row on it that is not exact (the program passes them without welding):
 the detour's joint polyline is subdivided where it has fewer inner rows than such welds (points
-on its own segments: the motion is unchanged). The motions of the route's own legs and of the
-retract/approach are checked with the contact zone exempt; those of the transfer are not
-(``zone`` in the result). The caller checks the assembled path again (the verification).
+on its own segments: the motion is unchanged). The motions of the route's own legs are checked
+with the contact zone exempt where the caller says (``zone=``: every one on the point-tip route;
+only near the spots on a route along the gun's transitions, :mod:`weldplan.robot.gunpath`), those
+of the retract/approach with it exempt, those of the transfer without (``zone`` in the result).
+The caller checks the assembled path again (the verification).
 
 The head (route rows before the first served weld) and the tail (after the last) are the route's
 own rows; a blocked tail is replaced by the retract from the last served weld (subdivided, one
-point per route row after it, the last the retract configuration).
+point per route row after it, the last the retract configuration), or, with no retract, by the
+last served configuration held (the program ends at that weld).
 """
 
 from __future__ import annotations
 
 import logging
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -66,8 +76,9 @@ RETRACT_DIRS = ((2, -1.0), (0, -1.0), (0, 1.0), (1, -1.0), (1, 1.0))
 #: the base): the arm folds there, A1 and the wrist turn folded, and it unfolds at the goal
 TUCK_A2_A3 = ((-90.0, 90.0), (-120.0, 120.0))
 
-#: s: a transfer OMPL did not solve in its first budget gets one more run of this long (another
-#: seed): rrtconnect stops at its first solution, so only the legs that need it pay for it
+#: s: a transfer OMPL did not solve in its first budget gets more runs of this long (the next
+#: seeds) while the route's retries last: rrtconnect stops at its first solution, so only the
+#: legs that need it pay for it
 RETRY_TIME_S = 30.0
 #: s: the most all the retries of one route may take together (then a leg gets one run only)
 RETRY_TOTAL_S = 120.0
@@ -116,8 +127,14 @@ class Detour:
     tuck: tuple[tuple[float, float], ...] = TUCK_A2_A3
     retry_time_s: float = RETRY_TIME_S
     retry_total_s: float = RETRY_TOTAL_S
+    #: per route row of a weld, TCP paths ``(k, 4, 4)`` mm that leave it (the first pose the
+    #: weld's own) which the gun stage proved free for the tool: tried before :meth:`retract`
+    #: (:func:`weldplan.robot.gunpath.gun_exits`)
+    exits: dict[int, tuple[NDArray[np.float64], ...]] = field(default_factory=dict)
     #: figures of the transfers planned with OMPL (runs, solved, retries, seconds)
     ompl: dict[str, float] = field(default_factory=dict, compare=False)
+    #: how each weld was left or reached by a detour: ``"gun exit"`` or ``"retract"``
+    left_by: dict[str, int] = field(default_factory=dict, compare=False)
 
     def offset(self, q: NDArray, T: NDArray, branch: int, move: NDArray) -> NDArray | None:
         """The configuration of pose ``T`` moved by ``move (3,)`` mm (part frame, orientation
@@ -145,6 +162,40 @@ class Detour:
                     return qr, move
         return None
 
+    def leave(self, q: NDArray, row: int, branch: int) -> NDArray | None:
+        """``(p, 6)`` rad from the weld at route row ``row`` (configuration ``q``, not included)
+        to a clear configuration (the last row): along one of the gun's proven exits
+        (:attr:`exits`, :meth:`follow`), else by :meth:`retract`; ``None`` when neither works.
+        The same rows reversed approach the weld."""
+        for T in self.exits.get(row, ()):
+            P = self.follow(q, T, branch)
+            if P is not None:
+                self.left_by["gun exit"] = self.left_by.get("gun exit", 0) + 1
+                return P
+        got = self.retract(q, self.T_tcp[row], branch)
+        if got is None:
+            return None
+        self.left_by["retract"] = self.left_by.get("retract", 0) + 1
+        return got[0][None]
+
+    def follow(self, q: NDArray, T: NDArray, branch: int) -> NDArray | None:
+        """``(k - 1, 6)`` rad: IK along the TCP poses ``T[1:]`` (``T (k, 4, 4)`` mm, ``T[0]`` the
+        weld's) on ``branch``, each at the turn nearest the previous, from configuration ``q``;
+        the first motion checked with the contact zone exempt (the lift off the sheet), every
+        later one and the last configuration with the whole tool. ``None`` where a step is not
+        usable or a motion is blocked."""
+        out: list[NDArray] = []
+        prev = np.asarray(q, dtype=np.float64)
+        for Tk in T[1:]:
+            qk = self.offset(prev, Tk, branch, np.zeros(3))
+            if qk is None or not self.checker.motion_free(prev, qk, zone=not out):
+                return None
+            out.append(qk)
+            prev = qk
+        if not out or not self.checker.state_free(prev):
+            return None
+        return np.array(out)
+
     def transfer(self, qa: NDArray, qb: NDArray) -> NDArray | None:
         """``(p, 6)`` rad from ``qa`` to ``qb`` (ends included), whole tool and links free:
         straight, else through a tucked arm (``tuck``, default :data:`TUCK_A2_A3`), else OMPL."""
@@ -160,20 +211,22 @@ class Detour:
         return self._ompl(qa, qb)
 
     def _ompl(self, qa: NDArray, qb: NDArray) -> NDArray | None:
-        """OMPL in joint space (:func:`~weldplan.motion.sampling.plan_rn`), ``time_s``; when that
-        is not enough, one more run of ``retry_time_s`` with the next seed while the route's
-        retries have spent less than ``retry_total_s``."""
+        """OMPL in joint space (:func:`~weldplan.motion.sampling.plan_rn`), ``time_s``; while
+        that is not enough, more runs of ``retry_time_s`` with the next seeds as long as the
+        route's retries have spent less than ``retry_total_s`` (the first leg that needs them
+        may take them all: on a route along the gun's order, a leg that cannot be detoured is
+        a bridge between two groups of welds, and every later weld of the far group would be
+        tried from the same weld across the same gap)."""
         from weldplan.motion.sampling import plan_rn
 
-        runs = [(self.time_s, self.rng)]
-        if self.retry_time_s > 0:
-            runs.append((self.retry_time_s, None if self.rng is None else self.rng + 1))
-        for k, (t, seed) in enumerate(runs):
-            if k and self.ompl.get("retry_s", 0.0) >= self.retry_total_s:
-                log.info(
-                    "joint-space transfer: no retry (%.0f s of retries spent)", self.retry_total_s
-                )
-                break
+        k = 0
+        while True:
+            if k and (
+                self.retry_time_s <= 0 or self.ompl.get("retry_s", 0.0) >= self.retry_total_s
+            ):
+                if k == 1:
+                    log.info("joint-space transfer: no retry (%.0f s spent)", self.retry_total_s)
+                return None
             res = plan_rn(
                 qa,
                 qb,
@@ -182,17 +235,26 @@ class Detour:
                 self.checker.state_free,
                 motion_valid=self.checker.motion_free,
                 planner=self.planner,
-                time_s=t,
-                seed=seed,
+                time_s=self._run_time(k),
+                seed=None if self.rng is None else self.rng + k,
             )
-            log.info("joint-space transfer%s: %s", " (retry)" if k else "", res.status)
-            for key, v in (("runs", 1), ("retries", k), ("solved", res.solved), ("s", res.time_s)):
+            log.info("joint-space transfer%s: %s", f" (retry {k})" if k else "", res.status)
+            for key, v in (("runs", 1), ("retries", k > 0), ("solved", res.solved)):
                 self.ompl[key] = self.ompl.get(key, 0) + float(v)
+            self.ompl["s"] = self.ompl.get("s", 0.0) + res.time_s
             if k:
                 self.ompl["retry_s"] = self.ompl.get("retry_s", 0.0) + res.time_s
             if res.solved:
                 return np.asarray(res.points, dtype=np.float64)
-        return None
+            k += 1
+
+    def _run_time(self, k: int) -> float:
+        """s of OMPL run ``k`` of a transfer: the first ``time_s``, a retry ``retry_time_s`` or
+        what is left of the route's ``retry_total_s``, whichever is less."""
+        if not k:
+            return self.time_s
+        left = self.retry_total_s - self.ompl.get("retry_s", 0.0)
+        return max(min(self.retry_time_s, left), 1e-3)
 
 
 def subdivide(P: NDArray[np.float64], inner: int) -> NDArray[np.float64]:
@@ -215,6 +277,8 @@ def assemble(
     status: list[str],
     detail: list[str],
     ids: tuple[str, ...],
+    zone: NDArray[np.bool_] | None = None,
+    blocked: set[int] | None = None,
 ) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray, list[int]]:
     """The joint route with blocked legs detoured (module docstring).
 
@@ -228,6 +292,13 @@ def assemble(
         Per weld; updated in place for the welds dropped.
     ids
         The welds' ids (for the details).
+    zone
+        ``(m - 1,) bool``: the route's own motions on which the contact zone is exempt (default
+        every one; a route along the gun's transitions exempts it only near the spots).
+    blocked
+        The route's own motions the caller's check of ``q`` (same checker, same ``zone``) found
+        blocked, every one: a leg with none of them is not checked again. ``None``: each leg is
+        checked here.
 
     Returns
     -------
@@ -236,6 +307,8 @@ def assemble(
         in ``rows`` of the weld each leaves).
     """
     served = [k for k in range(len(rows)) if status[k] == OK]
+    own = np.ones(max(len(q) - 1, 0), dtype=bool) if zone is None else np.asarray(zone, bool)
+    own = np.append(own, True)  # own[i]: the motion leaving route row i (the last: none)
     out = JointPath()
     served_exact = np.zeros(len(q), dtype=bool)
     served_exact[rows[served]] = True
@@ -243,18 +316,19 @@ def assemble(
     ex = exact & (served_exact | ~np.isin(np.arange(len(q)), rows))
     if not served:
         for i in range(len(q)):
-            out.add(q[i], i, bool(ex[i]), int(branch[i]))
+            out.add(q[i], i, bool(ex[i]), int(branch[i]), bool(own[i]))
         return (*out.arrays(), [])
     for i in range(int(rows[served[0]]) + 1):
-        out.add(q[i], i, bool(ex[i]), int(branch[i]))
+        out.add(q[i], i, bool(ex[i]), int(branch[i]), bool(own[i]))
     replanned: list[int] = []
     a = served[0]
     for b in served[1:]:
         ia, ib = int(rows[a]), int(rows[b])
-        hits = det.checker.path_hits(q[ia : ib + 1], np.ones(ib - ia, dtype=bool), first_only=True)
+        hits = _leg_hits(det, q, own, ia, ib, blocked)
         if not hits:
+            out.zone[-1] = bool(own[ia])
             for i in range(ia + 1, ib + 1):
-                out.add(q[i], i, bool(ex[i]), int(branch[i]))
+                out.add(q[i], i, bool(ex[i]), int(branch[i]), bool(own[i]))
             a = b
             continue
         path = _detour(det, q, branch, ia, ib)
@@ -269,17 +343,33 @@ def assemble(
         _add_detour(out, det.robot, path, ia, ib, rows, q, branch)
         replanned.append(a)
         a = b
-    _tail(det, out, q, ex, branch, int(rows[a]))
+    _tail(det, out, q, ex, branch, int(rows[a]), own, blocked)
     return (*out.arrays(), replanned)
 
 
+def _leg_hits(
+    det: Detour, q: NDArray, own: NDArray, ia: int, ib: int, blocked: set[int] | None
+) -> list[Any]:
+    """The first blocked motion of the route's own rows ``ia..ib`` (``[]``: free), from the
+    caller's ``blocked`` motions when given, else checked here."""
+    if blocked is None:
+        return det.checker.path_hits(q[ia : ib + 1], own[ia:ib], first_only=True)
+    at = sorted(s for s in blocked if ia <= s < ib)
+    if not at:
+        return []
+    return det.checker.path_hits(q[at[0] : at[0] + 2], own[at[0] : at[0] + 1])
+
+
 def _detour(det: Detour, q: NDArray, branch: NDArray, ia: int, ib: int) -> NDArray | None:
-    """``[retract_a, ..., approach_b]`` (rad), else ``None``."""
-    ra = det.retract(q[ia], det.T_tcp[ia], int(branch[ia]))
-    rb = None if ra is None else det.retract(q[ib], det.T_tcp[ib], int(branch[ib]))
-    if ra is None or rb is None:
+    """``[leave a ..., transfer ..., approach b ...]`` (rad), else ``None``."""
+    la = det.leave(q[ia], ia, int(branch[ia]))
+    lb = None if la is None else det.leave(q[ib], ib, int(branch[ib]))
+    if la is None or lb is None:
         return None
-    return det.transfer(ra[0], rb[0])
+    mid = det.transfer(la[-1], lb[-1])
+    if mid is None:
+        return None
+    return np.vstack([la[:-1], mid, lb[:-1][::-1]])
 
 
 def _add_detour(
@@ -309,19 +399,35 @@ def _add_detour(
     out.add(q[ib], ib, True, int(branch[ib]))
 
 
-def _tail(det: Detour, out: JointPath, q: NDArray, ex: NDArray, branch: NDArray, ia: int) -> None:
-    """The route's rows after the last served weld (module docstring)."""
+def _tail(
+    det: Detour,
+    out: JointPath,
+    q: NDArray,
+    ex: NDArray,
+    branch: NDArray,
+    ia: int,
+    own: NDArray[np.bool_],
+    blocked: set[int] | None = None,
+) -> None:
+    """The route's rows after the last served weld (module docstring); ``own[i]``: the contact
+    zone is exempt on the route's own motion leaving row ``i``."""
     m = len(q)
     if ia + 1 >= m:
         return
-    if not det.checker.path_hits(q[ia:], np.ones(m - 1 - ia, dtype=bool), first_only=True):
+    if not _leg_hits(det, q, own, ia, m - 1, blocked):
+        out.zone[-1] = bool(own[ia])
         for i in range(ia + 1, m):
-            out.add(q[i], i, bool(ex[i]), int(branch[i]))
+            out.add(q[i], i, bool(ex[i]), int(branch[i]), bool(own[i]))
         return
     got = det.retract(q[ia], det.T_tcp[ia], int(branch[ia]))
+    out.zone[-1] = True  # weld -> retract (or no motion): contact zone exempt, as checked
     if got is None:
-        for i in range(ia + 1, m):  # nothing better: the route's own rows (the check reports)
-            out.add(q[i], i, bool(ex[i]), int(branch[i]))
+        # no way off the last served weld: the robot stays there (zero motions), the route's
+        # later welds are passed without welding; before, the route's own blocked rows were
+        # kept and the final check refused the whole route
+        log.info("no retract from the last served weld: the program ends there")
+        for i in range(ia + 1, m):
+            out.add(q[ia], i, False, int(branch[ia]))
         return
     # the rest of the route's rows as points on the retract from the last served weld (a motion
     # retract() checked), the last of them the retract configuration itself

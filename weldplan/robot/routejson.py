@@ -3,7 +3,10 @@
 ``weldplan plan --robot ... --json F`` writes the joint route the program was built from into the
 route's tool section (``route.tool["robot"]``: :meth:`~weldplan.robot.configs.RobotRoute.to_dict`
 with per waypoint row ``q``, ``row``, ``exact``, ``branch``; per weld ``weld_ids``, ``status``
-and ``weld_branch``; plus the robot file and its sha256, the contact radius of the check).
+and ``weld_branch``; plus the robot file and its sha256, the contact radius of the check; and,
+when the robot followed the gun's transitions, ``follows``: that route, its TCP orientations per
+waypoint, the motions whose contact zone was exempt, how each leg goes:
+:meth:`weldplan.robot.gunpath.GunRoute.to_dict`; the robot route's rows are then its rows).
 :func:`weldplan.io.export.read_route` reads it back with the rest of the route (the tool section
 is carried as it is); :func:`robot_route_of` turns it into a
 :class:`~weldplan.robot.configs.RobotRoute`.
@@ -11,8 +14,10 @@ is carried as it is); :func:`robot_route_of` turns it into a
 :func:`verify_robot_route` re-checks it with nothing from the planner but the joint values:
 forward kinematics of the URDF chain at every exact row puts the TCP on its route waypoint,
 turned as the route's weld poses say (slerped between welds; :data:`FK_TOLERANCE_MM`,
-:data:`FK_TOLERANCE_DEG`), every row is inside the joint limits, and the robot's links plus the
-tool are checked against the part along every joint-space motion
+:data:`FK_TOLERANCE_DEG`; a robot that followed the gun's transitions: on the route it followed,
+which must weld the route's welds with a pose, each at its spot and pose), every row is inside
+the joint limits, and the robot's links plus the tool are checked against the part along every
+joint-space motion
 (:class:`weldplan.robot.collision.RobotCollision`, the same proof the robot route was verified
 with: the contact zone about the TCP exempt, as the weld poses were verified).
 """
@@ -38,10 +43,17 @@ LIMIT_SLACK_RAD = 1e-9
 
 
 def attach_robot_route(
-    route: Any, rr: Any, *, urdf: str | PathLike[str], contact_radius: float | None = None
+    route: Any,
+    rr: Any,
+    *,
+    urdf: str | PathLike[str],
+    contact_radius: float | None = None,
+    gun: Any = None,
 ) -> Any:
     """``route`` with ``rr`` (a :class:`~weldplan.robot.configs.RobotRoute`) in
-    ``route.tool["robot"]`` (module docstring)."""
+    ``route.tool["robot"]`` (module docstring). ``gun``: the route along the gun's transitions
+    the robot followed (:class:`~weldplan.robot.gunpath.GunRoute`), stored as ``follows``; the
+    robot route's rows are then rows of that route."""
     import dataclasses
 
     from weldplan.io.mesh import file_sha256
@@ -51,6 +63,8 @@ def attach_robot_route(
     d["urdf"] = str(urdf)
     d["urdf_sha256"] = file_sha256(urdf)
     d["contact_radius"] = contact_radius
+    if gun is not None:
+        d["follows"] = gun.to_dict()
     tool = dict(route.tool)
     tool["robot"] = d
     return dataclasses.replace(route, tool=tool)
@@ -146,14 +160,18 @@ def verify_robot_route(
     from weldplan.robot.collision import RobotCollision
 
     rb = robot.with_base(rr.base)
-    pts = route.waypoints()
+    follows = _followed(route)
+    pts = route.waypoints() if follows is None else follows[0]
     if len(rr.row) and (rr.row.min() < 0 or rr.row.max() >= len(pts)):
         raise InputError("the robot route's rows are not rows of the route", field="tool.robot")
     ex = np.asarray(rr.exact, dtype=bool)
     tcp = rb.fk(rr.q[ex]) @ rr.flange_tcp
     err = np.linalg.norm(tcp[:, :3, 3] - pts[rr.row[ex]], axis=1)
     fk_mm = float(err.max()) if len(err) else 0.0
-    fk_deg = _angle_error(route, rr, tcp)
+    if follows is None:
+        fk_deg = _angle_error(route, rr, tcp)
+    else:
+        fk_deg = _angle_between(tcp, follows[1][rr.row[ex]])
     inside = np.all(
         (rr.q >= rb.lower - LIMIT_SLACK_RAD) & (rr.q <= rb.upper + LIMIT_SLACK_RAD), axis=1
     )
@@ -161,7 +179,7 @@ def verify_robot_route(
         stored = (route.tool or {}).get("robot", {}).get("contact_radius")
         contact_radius = stored if stored is not None else poses_contact_radius(route)
     checker = RobotCollision(rb, part, tool, rr.flange_tcp, contact_radius=float(contact_radius))
-    zone = np.ones(max(len(rr.q) - 1, 0), dtype=bool)  # as the robot route was checked
+    zone = _zone(rr)
     hits = checker.path_hits(rr.q, zone)
     ok = fk_mm <= FK_TOLERANCE_MM and fk_deg <= FK_TOLERANCE_DEG and bool(inside.all())
     ok = ok and not hits
@@ -173,6 +191,71 @@ def verify_robot_route(
         tuple((int(h.segment), str(h.body), float(h.distance)) for h in hits),
         len(rr.q),
     )
+
+
+def _zone(rr: Any) -> Any:
+    """``(k - 1,) bool``: the motions checked with the contact zone exempt, as the robot route
+    was checked: every one except those its planner says it checked with the whole tool
+    (``stats["whole_tool_motions"]``, a route along the gun's transitions); those are checked so
+    here too, so the re-check is never weaker than the planner's claim."""
+    zone = np.ones(max(len(rr.q) - 1, 0), dtype=bool)
+    whole = np.asarray((rr.stats or {}).get("whole_tool_motions") or [], dtype=np.int64)
+    if len(whole) and (whole.min() < 0 or whole.max() >= len(zone)):
+        raise InputError(
+            "the robot route's whole-tool motions are not its motions", field="tool.robot"
+        )
+    zone[whole] = False
+    return zone
+
+
+def _followed(route: Any) -> tuple[Any, Any] | None:
+    """``(points (m, 3) mm, quaternions (m, 4))`` of the route along the gun's transitions the
+    robot followed (``follows``), ``None`` when it followed the point-tip route.
+
+    Raises
+    ------
+    InputError
+        When that route does not weld exactly the route's welds that have a pose, each at its
+        spot with its pose's orientation (1e-6 mm, 1e-6 of a quaternion component): the robot
+        must weld at the verified poses, whatever it did between them.
+    """
+    from weldplan.tool.route_frames import route_poses, weld_rows
+    from weldplan.weld.route import Route
+
+    d = ((route.tool or {}).get("robot") or {}).get("follows")
+    if not d:
+        return None
+    try:
+        fr = Route.from_dict(d["route"])
+        Q = np.asarray(d["quaternions"], dtype=np.float64).reshape(-1, 4)
+    except (KeyError, TypeError, ValueError) as exc:
+        raise InputError(f"the robot's route is not valid ({exc})", field="tool.robot") from None
+    pts = fr.waypoints()
+    poses = route_poses(route)
+    want = [p for p in (poses.poses if poses else ()) if p.ok]
+    rows = weld_rows(fr)
+    good = len(Q) == len(pts) and sorted(fr.order) == sorted(p.id for p in want)
+    for p in want if good else ():
+        r = rows[fr.order.index(p.id)]
+        q = np.asarray(p.quaternion)
+        good &= bool(np.linalg.norm(pts[r] - np.asarray(p.position)) <= 1e-6)
+        good &= bool(min(np.abs(Q[r] - q).max(), np.abs(Q[r] + q).max()) <= 1e-6)
+    if not good:
+        raise InputError(
+            "the robot's route does not weld the route's welds at their poses", field="tool.robot"
+        )
+    return pts, Q
+
+
+def _angle_between(tcp: Any, quats: Any) -> float:
+    """deg: the largest angle between the frames ``tcp (e, 4, 4)`` and ``quats (e, 4)``."""
+    from scipy.spatial.transform import Rotation
+
+    if not len(tcp):
+        return 0.0
+    R = Rotation.from_quat(np.roll(np.asarray(quats), -1, axis=1)).as_matrix()
+    D = np.swapaxes(tcp[:, :3, :3], 1, 2) @ R
+    return float(np.degrees(Rotation.from_matrix(D).magnitude()).max())
 
 
 def poses_contact_radius(route: Any) -> float:
