@@ -218,7 +218,10 @@ class RobotCollision:
         self.robot = robot
         self.part = part
         self.distance = SurfaceDistance(part)
-        self._bound: DistanceBound | None = None
+        # the part's derived structures, shared with every with_robot copy (made before or after
+        # they are built): the distance table is filled lazily, and a table per copy refilled
+        # the same blocks once for each base candidate of a search
+        self._shared: dict[str, object] = {}
         self.part_obj = fcl.CollisionObject(bvh(part.vertices, part.faces), fcl.Transform())
         self.flange_tcp = np.eye(4) if flange_tcp is None else np.asarray(flange_tcp, float)
         links = [self._body(lk.name, lk.index, lk.vertices, lk.faces) for lk in robot.links]
@@ -235,11 +238,11 @@ class RobotCollision:
     @property
     def bound(self) -> DistanceBound:
         """The part's distance table (:class:`~weldplan.robot.distbound.DistanceBound`, built on
-        first use and shared by :meth:`with_robot` copies made after that)."""
-        if self._bound is None:
+        first use and shared by all :meth:`with_robot` copies)."""
+        if "bound" not in self._shared:
             lo, hi = np.asarray(self.part.bounds, dtype=np.float64)
-            self._bound = DistanceBound(self.distance, lo, hi)
-        return self._bound
+            self._shared["bound"] = DistanceBound(self.distance, lo, hi)
+        return self._shared["bound"]  # type: ignore[return-value]
 
     def with_robot(self, robot: Robot) -> RobotCollision:
         """The same checker for ``robot`` at another base (part structures and link covers are
