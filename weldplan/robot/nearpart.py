@@ -107,6 +107,8 @@ class AlongMotion:
         ``(k, 3)`` mm in the link's frame, ``(k,)`` mm: spheres that hold the body.
     rate
         mm: no point of the body moves more than this over the whole motion (``t`` 0 to 1).
+    crop
+        Ask crops; ``False``: the whole part (the same answers).
     """
 
     def __init__(
@@ -116,13 +118,15 @@ class AlongMotion:
         centres: NDArray[np.float64],
         radii: NDArray[np.float64],
         rate: float,
+        *,
+        crop: bool = True,
     ) -> None:
         self.crops = crops
         self.obj = obj
         self.centres = centres
         self.radii = radii
         self.rate = rate
-        self.target: fcl.CollisionObject | None = None
+        self.target: fcl.CollisionObject | None = None if crop else crops.whole
         self.t_c = 0.0
         self.margin = CROP_MARGIN_MM
 
