@@ -247,3 +247,33 @@ def test_acceleration_of_the_wrong_shape_is_an_input_error(kuka_dir, acc):
     with pytest.raises(InputError, match="one value or six") as ei:
         load_robot(kuka_dir / "kr150r3100_2.urdf", acceleration=acc)
     assert ei.value.field == "acceleration"
+
+
+def _wrap_three_turns(q, lower, upper):
+    """wrap_into_limits' definition: every value tried at -1, 0 and +1 turn."""
+    out = q.copy()
+    best = np.full(q.shape, np.inf)
+    for k in (0.0, -1.0, 1.0):
+        cand = q + 2 * np.pi * k
+        ok = (cand >= lower) & (cand <= upper) & (np.abs(cand) < best)
+        out = np.where(ok, cand, out)
+        best = np.where(ok, np.abs(cand), best)
+    return out
+
+
+def test_wrap_into_limits_is_the_three_turn_choice_to_the_bit():
+    from weldplan.robot.ik import wrap_into_limits
+
+    lower = np.radians([-185.0, -140.0, -120.0, -350.0, -125.0, -350.0])
+    upper = np.radians([185.0, -5.0, 168.0, 350.0, 125.0, 350.0])
+    rng = np.random.default_rng(5)
+    for scale in (np.pi, 2 * np.pi, 8.0):
+        q = rng.uniform(-scale, scale, (3000, 8, 6))
+        q[::7] = np.pi
+        q[::11] = -np.pi
+        q[::13] = -0.0
+        q[::17, :, 1] = -1.5 * np.pi  # an offset joint beyond -pi
+        q[::23] = np.nextafter(np.pi, 0.0)
+        got = wrap_into_limits(q, lower, upper)
+        want = _wrap_three_turns(q, lower, upper)
+        np.testing.assert_array_equal(got.view(np.int64), want.view(np.int64))

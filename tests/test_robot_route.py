@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 import trimesh
+from scipy.spatial.transform import Rotation
 
 from tests.conftest import require_shared
 from tests.robot_helpers import BOX_BASE, TORCH_TCP, down_poses, make_plate
@@ -32,6 +33,7 @@ from weldplan.robot.reach import (
     BaseSearch,
     base_pose,
     classify,
+    may_reach,
     parse_base,
     search_base,
     usable,
@@ -87,6 +89,19 @@ def test_real_poses_get_their_reason(robot):
     small = np.abs(np.nan_to_num(br.q[1, :, 4], nan=1.0)) < 0.011
     assert small.sum() == 2 and not u[1, small].any() and u[1, ~small & br.in_limits[1]].all()
     assert u[2].sum() == u[1].sum()
+
+
+def test_may_reach_rules_out_only_poses_without_a_branch(robot):
+    rng = np.random.default_rng(7)
+    T = np.tile(np.eye(4), (20_000, 1, 1))
+    T[:, :3, :3] = Rotation.random(len(T), random_state=rng).as_matrix()
+    T[:, :3, 3] = rng.uniform([-4500.0, -4500.0, -3000.0], [4500.0, 4500.0, 4500.0], (len(T), 3))
+    at0 = robot.with_base(np.eye(4))
+    maybe = may_reach(at0, T)
+    br = at0.ik_all(T)
+    assert not br.exists[~maybe].any()  # sound: nothing it rules out has a branch
+    assert br.extension[~maybe].max() < -0.99  # every one lies beyond the reach and the slack
+    assert 0.3 < np.mean(~maybe) and br.exists[maybe].any(axis=1).mean() > 0.5  # and it bites
 
 
 # ------------------------------------------------------------------------------ configs

@@ -49,6 +49,9 @@ WRIST = 4
 N_BRANCHES = 8
 #: mm per unit of the OPW yaml's lengths (metres, as ROS-Industrial writes them)
 OPW_YAML_MM = 1000.0
+#: rad: how far inside pi a joint value must be for :func:`wrap_into_limits` to keep its turn
+#: without trying the others (far above the round-off of ``q -+ 2 pi``)
+WRAP_SLACK = 1e-6
 #: the geometric parameters an OPW description needs
 OPW_KEYS = ("a1", "a2", "b", "c1", "c2", "c3", "c4")
 
@@ -247,15 +250,29 @@ def wrap_into_limits(
     q: NDArray[np.float64], lower: NDArray[np.float64], upper: NDArray[np.float64]
 ) -> NDArray[np.float64]:
     """``q (..., 6)`` with each joint moved by a multiple of 2 pi (-1, 0 or +1 turn) into
-    ``[lower, upper]`` where one fits, the smallest ``|q|`` first; unchanged where none does."""
-    out = q.copy()
-    best = np.full(q.shape, np.inf)
+    ``[lower, upper]`` where one fits, the smallest ``|q|`` first; unchanged where none does.
+
+    A value inside the limits with ``|q| < pi - WRAP_SLACK`` keeps its own turn (another is
+    farther from zero), so only the other values go through the three turns: the same results
+    as trying them on every value, at a fraction of the cost on the base search's 10^6 angles.
+    """
+    q = np.broadcast_to(q, np.broadcast_shapes(q.shape, np.shape(lower)))
+    own = q + 0.0  # the k = 0 candidate as the three-turn loop forms it (-0.0 becomes 0.0)
+    rest = ~((own >= lower) & (own <= upper) & (np.abs(q) < np.pi - WRAP_SLACK))
+    if not rest.any():
+        return own
+    lo = np.broadcast_to(lower, q.shape)[rest]
+    hi = np.broadcast_to(upper, q.shape)[rest]
+    x = q[rest]
+    sub = x.copy()
+    best = np.full(x.shape, np.inf)
     for k in (0.0, -1.0, 1.0):
-        cand = q + 2 * np.pi * k
-        ok = (cand >= lower) & (cand <= upper) & (np.abs(cand) < best)
-        out = np.where(ok, cand, out)
+        cand = x + 2 * np.pi * k
+        ok = (cand >= lo) & (cand <= hi) & (np.abs(cand) < best)
+        sub = np.where(ok, cand, sub)
         best = np.where(ok, np.abs(cand), best)
-    return out
+    own[rest] = sub
+    return own
 
 
 def solve(

@@ -62,6 +62,9 @@ DEFAULT_EXTRA_YAWS = (-30.0, 30.0)
 #: weld was most of a 200-weld search)
 SCORE_WELDS = 48
 PRESELECT = 256
+#: mm: how far beyond :func:`arm_reach` a wrist centre must lie for :func:`may_reach` to skip its
+#: IK (the solver's own out-of-reach test is exact; this only keeps round-off out of the way)
+REACH_SLACK_MM = 1.0
 
 
 def base_pose(x: float, y: float, z: float, yaw_deg: float) -> NDArray[np.float64]:
@@ -195,12 +198,16 @@ def score_bases(
     n, c = len(T_flange), len(bases)
     at_origin = robot.with_base(np.eye(4))
     Tb = np.linalg.inv(bases)[:, None] @ T_flange[None]  # (c, n, 4, 4) in each base's frame
-    br_all = at_origin.ik_all(Tb.reshape(-1, 4, 4))
-    u_all = usable(br_all, singular_deg).reshape(c, n, -1)
+    # IK only where the wrist centre may be in reach: elsewhere no branch exists
+    maybe = may_reach(robot, Tb)
+    at = np.full((c, n), -1, dtype=np.int64)
+    at[maybe] = np.arange(int(maybe.sum()))
+    br = at_origin.ik_all(Tb[maybe])
+    u_all = np.zeros((c, n, 8), dtype=bool)
+    u_all[maybe] = usable(br, singular_deg)
     if clear is not None:
         u_all &= clear[:, :, None]
     counts = u_all.any(axis=2).sum(axis=1).astype(np.int64)
-    q_all = br_all.q.reshape(c, n, -1, 6)
     mins = np.full(c, -np.inf)
     if n == 0 or c == 0:
         return counts, mins
@@ -209,11 +216,27 @@ def score_bases(
         if not u.any():
             continue
         idx = np.argwhere(u)
-        m = at_origin.manipulability(q_all[i][idx[:, 0], idx[:, 1]])
+        m = at_origin.manipulability(br.q[at[i, idx[:, 0]], idx[:, 1]])
         best = np.full(n, -np.inf)
         np.maximum.at(best, idx[:, 0], m)
         mins[i] = float(best[u.any(axis=1)].min())
     return counts, mins
+
+
+def may_reach(robot: Robot, T_base_flange: NDArray[np.float64]) -> NDArray[np.bool_]:
+    """``(...) bool``: whether the wrist centre of each flange pose ``(..., 4, 4)`` (mm, robot
+    base frame) may be within the arm's reach; ``False`` only where no IK branch can exist.
+
+    The A2 axis passes through a point on the circle of radius ``hypot(a1, b)`` at height
+    ``c1`` about A1, and the wrist centre (``c4`` behind the flange) stays within
+    :func:`arm_reach` of it: a wrist centre farther than that (plus :data:`REACH_SLACK_MM`)
+    from the whole circle is out of reach on every branch.
+    """
+    p = robot.opw
+    T = np.asarray(T_base_flange, dtype=np.float64)
+    wc = T[..., :3, 3] - p.c4 * T[..., :3, 2]
+    gap = np.hypot(np.hypot(wc[..., 0], wc[..., 1]) - math.hypot(p.a1, p.b), wc[..., 2] - p.c1)
+    return gap <= arm_reach(robot) + REACH_SLACK_MM
 
 
 def sight_clear(
