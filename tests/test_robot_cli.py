@@ -142,3 +142,28 @@ def test_plan_with_robot_refuses_a_base_that_reaches_nothing(tmp_path, capsys):
     line = one_line_error(capsys)
     assert "reaches none" in line and "--robot-base" in line
     assert not (tmp_path / "r.csv").exists() and not (tmp_path / "t.csv").exists()
+
+
+@pytest.mark.slow
+def test_plan_with_robot_that_serves_no_weld_is_one_line_naming_the_cause(tmp_path, capsys):
+    """car2's 50-spot station with the shared gun: 9 spots have a gun pose, and from the
+    searched base every usable branch of each puts link_3 in the body. The run says so in one
+    line (the base, the statuses, the first weld's cause) and writes nothing."""
+    from pathlib import Path
+
+    body = require_shared("bodies", "car2.obj")
+    joints = Path(__file__).resolve().parents[1] / "assets" / "car2" / "car2_synthetic_50.csv"
+    argv = [
+        "plan", str(body), str(joints), "--length", "4500", "--quiet",
+        "-o", str(tmp_path / "r.csv"), "--tool", str(_gun_urdf()), "--tcp", "nozzle_tip",
+        "--robot", str(_robot_urdf()), "--post", "krl",
+    ]  # fmt: skip
+    assert run_cli(argv) == 1
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    lines = [ln for ln in err.splitlines() if ln.strip() and not ln.startswith("WARNING")]
+    assert len(lines) == 1, err  # the station column's warning aside
+    line = lines[0]
+    assert "serves none of the 9 weld(s)" in line and "from its base (" in line
+    assert "collision (first weld" in line and "link_3" in line
+    assert not list(tmp_path.iterdir())

@@ -330,13 +330,43 @@ def _joint_route(
         rr.stats["placement"].update(
             searched=True, candidates=reach.placement.candidates, on="first-pass poses"
         )
+    if "ok" not in rr.status:
+        raise PlanningError(f"{_none_served(rr)}; nothing written")
     if rr.stats.get("collision_free") is False:
         hits = rr.stats.get("hits") or []
+        first = (
+            f"first: {hits[0]['body']} at motion {hits[0]['segment']}, t {hits[0]['t']:.2f}"
+            if hits and isinstance(hits[0], dict) and "body" in hits[0]
+            else f"first: {hits[0] if hits else '?'}"
+        )
         raise PlanningError(
-            f"the robot route still collides after re-planning ({len(hits)} hit(s), first: "
-            f"{hits[0] if hits else '?'}); nothing written"
+            f"the robot route still collides after re-planning ({len(hits)} hit(s), {first}); "
+            "nothing written"
         )
     return rr, gun, follow
+
+
+def _none_served(rr: Any) -> str:
+    """One line: the robot serves no weld from its base, and why each was left out (the
+    statuses counted, the first weld of each with its detail)."""
+    from collections import Counter
+
+    x, y, z = rr.base[:3, 3]
+    yaw = math.degrees(math.atan2(rr.base[1, 0], rr.base[0, 0]))
+    detail = dict(zip(rr.weld_ids, rr.detail or ("",) * len(rr.weld_ids), strict=True))
+    first: dict[str, str] = {}
+    for w, st in zip(rr.weld_ids, rr.status, strict=True):
+        first.setdefault(st, w)
+
+    def one(st: str, n: int) -> str:
+        w = first[st]
+        return f"{n} {st} (first weld {w}" + (f": {detail[w]})" if detail[w] else ")")
+
+    why = "; ".join(one(st, n) for st, n in Counter(rr.status).most_common())
+    return (
+        f"the robot serves none of the {len(rr.weld_ids)} weld(s) with a tool pose from its base "
+        f"({x:.0f}, {y:.0f}, {z:.0f}) mm, yaw {yaw:.1f} deg: {why}"
+    )
 
 
 def _gun_route(route: Any, poses: Any) -> Any:
