@@ -117,6 +117,22 @@ def test_tcp_outside_the_tool_is_a_one_line_error(tmp_path):
     _one_line(exc, "far.urdf", "joint 'nozzle_tip' origin")
 
 
+def test_arc_torch_mesh_with_its_wire_stickout_loads_and_a_far_tcp_is_refused(tmp_path):
+    """arc_torch()'s TCP is the wire tip, 15 mm beyond the nozzle's mouth and so 15 mm outside
+    its mesh's bounding box: the torch exported as a mesh loads with its own TCP (the CLI
+    refused it at a 5 mm margin, so the bench's torch could not be given as --tool torch.stl);
+    a TCP a tool length away is still an error."""
+    t = arc_torch(bend_angle=0.0)
+    assert t.vertices[:, 2].max() == pytest.approx(-15.0)  # the nozzle's mouth
+    t.mesh.export(tmp_path / "torch.stl")
+    got = tool_from_mesh(tmp_path / "torch.stl", "0,0,0,0,0,0")
+    np.testing.assert_allclose(got.extent, t.extent, atol=1e-3)
+    np.testing.assert_allclose(got.vertices.max(axis=0)[2], -15.0, atol=1e-3)
+    with pytest.raises(InputError) as exc:
+        tool_from_mesh(tmp_path / "torch.stl", "0,0,41,0,0,0")  # 56 mm beyond the mouth
+    _one_line(exc, "torch.stl", "field 'tcp'", "outside the tool")
+
+
 @pytest.mark.parametrize("cone", [None, 15.0])
 def test_outside_zone_covers_the_tool_outside_the_zone_and_little_inside(cone):
     tool = dataclasses.replace(arc_torch(), tip_cone=cone, _cache={})

@@ -41,8 +41,9 @@ UNITS: dict[str, float] = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4}
 MIN_EXTENT_MM = 20.0
 MAX_EXTENT_MM = 3000.0
 #: the TCP may lie at most this far (mm) outside the tool mesh's axis-aligned bounding box (an
-#: electrode tip or wire stick-out a little beyond the mesh)
-TCP_BOX_MARGIN_MM = 5.0
+#: electrode tip or wire stick-out beyond the mesh: arc_torch()'s default stick-out is 15 mm,
+#: MIG/MAG stick-outs run to about 25 mm; a TCP a tool length away is still refused)
+TCP_BOX_MARGIN_MM = 25.0
 #: triangles crossing the contact-zone sphere are subdivided until their longest edge is below
 #: this (mm), so at most this much of the tool inside the sphere is still checked (conservative)
 ZONE_EDGE_MM = 1.0
