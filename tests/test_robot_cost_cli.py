@@ -118,15 +118,15 @@ def test_verify_rechecks_the_robot_route_by_fk_and_collision(time_run, capsys):
 def test_the_summary_says_which_order_the_robot_follows_and_why(time_run):
     from weldplan.commands._robot import _order_rows
     from weldplan.io.export import read_route
-    from weldplan.robot.gunpath import gun_route, tool_path_of
+    from weldplan.robot.gunpath import gun_route
     from weldplan.robot.routejson import robot_route_of
-    from weldplan.tool.route_frames import route_poses
+    from weldplan.tool.route_frames import route_poses, route_tool_path
 
     tmp, _, _, rc = time_run
     assert rc == 0
     route = read_route(tmp / "r.json")
     rr = robot_route_of(route)
-    gun = gun_route(route, route_poses(route), tool_path_of(route), contact_radius=20.0)
+    gun = gun_route(route, route_poses(route), route_tool_path(route), contact_radius=20.0)
     rows = dict(_order_rows(route, gun, rr))
     order = "-".join(rr.weld_ids)
     assert rows["robot order"].startswith(f"{order}: the tool stage's order")

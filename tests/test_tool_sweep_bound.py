@@ -147,13 +147,20 @@ def test_only_se3_joins_two_welds_across_a_rib_and_the_recheck_agrees():
     assert v.ok and v.checked == 1, v.describe()
 
 
-@pytest.mark.slow
-def test_on_the_demo_part_the_shared_gun_is_never_cleared_where_fcl_says_not():
+@pytest.fixture(scope="module")
+def demo_gun():
+    """``(part, exact checker, fast check)`` of the shared gun on the demo part (built once: the
+    fast check's distance table is a cache of exact distances, so sharing it changes no answer)."""
     d = require_shared("tools", "spot_welding_gun")
     gun = shared_spot_gun(d)
     part = trimesh.load(DEMO_PART, force="mesh")
     chk = SweepChecker(part, gun, clearance=5.0, contact_radius=20.0)
-    fast = FastSweep(chk, SweepBound(part, gun, 5.0, 20.0))
+    return part, chk, FastSweep(chk, SweepBound(part, gun, 5.0, 20.0))
+
+
+@pytest.mark.slow
+def test_on_the_demo_part_the_shared_gun_is_never_cleared_where_fcl_says_not(demo_gun):
+    part, chk, fast = demo_gun
     rng = np.random.default_rng(5)
     # TCPs near the part's surface (where the gun works) and anywhere in its reach
     near, _ = trimesh.sample.sample_surface(part, 150, seed=1)
@@ -174,12 +181,8 @@ def test_on_the_demo_part_the_shared_gun_is_never_cleared_where_fcl_says_not():
 
 
 @pytest.mark.slow
-def test_on_the_demo_part_gun_motions_the_fast_check_passes_keep_the_clearance():
-    d = require_shared("tools", "spot_welding_gun")
-    gun = shared_spot_gun(d)
-    part = trimesh.load(DEMO_PART, force="mesh")
-    chk = SweepChecker(part, gun, clearance=5.0, contact_radius=20.0)
-    fast = FastSweep(chk, SweepBound(part, gun, 5.0, 20.0))
+def test_on_the_demo_part_gun_motions_the_fast_check_passes_keep_the_clearance(demo_gun):
+    part, chk, fast = demo_gun
     rng = np.random.default_rng(13)
     spots = np.asarray(part.vertices[:2], dtype=np.float64)
     passed = 0

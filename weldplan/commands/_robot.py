@@ -372,10 +372,11 @@ def _none_served(rr: Any) -> str:
 def _gun_route(route: Any, poses: Any) -> Any:
     """The route along the tool stage's transitions, in its order
     (:func:`weldplan.robot.gunpath.gun_route`); ``None`` when the route carries none."""
-    from weldplan.robot.gunpath import gun_route, tool_path_of
+    from weldplan.robot.gunpath import gun_route
     from weldplan.robot.routejson import poses_contact_radius
+    from weldplan.tool.route_frames import route_tool_path
 
-    path = tool_path_of(route)
+    path = route_tool_path(route)
     if path is None or not path.order:
         return None
     return gun_route(route, poses, path, contact_radius=poses_contact_radius(route))

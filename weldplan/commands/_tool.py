@@ -286,12 +286,11 @@ def plan_tool_path(
 def transition_rows(route: Any, check: Any) -> list[tuple[str, str]]:
     """Summary rows of the transitions: free / total, re-planned, length and rotation versus the
     point-tip order, and each blocked transition."""
-    from weldplan.tool.transit import ToolPath
+    from weldplan.tool.route_frames import route_tool_path
 
-    d = route.tool.get("transitions")
-    if not d:
+    path = route_tool_path(route)
+    if path is None:
         return []
-    path = ToolPath.from_dict(d)
     sweeps = getattr(check, "sweeps", None)
     n = len(path.transitions)
     est = path.stats.get("point_order")

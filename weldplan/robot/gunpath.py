@@ -94,14 +94,6 @@ class GunRoute:
         }
 
 
-def tool_path_of(route: Any) -> Any:
-    """The route's :class:`~weldplan.tool.transit.ToolPath`, ``None`` without transitions."""
-    from weldplan.tool.transit import ToolPath
-
-    d = (route.tool or {}).get("transitions")
-    return ToolPath.from_dict(d) if d else None
-
-
 def gun_route(
     route: Any,
     poses: Any,

@@ -90,6 +90,68 @@ def tcp_waypoint_poses(route: Any, poses: Any) -> NDArray[np.float64]:
     return T
 
 
+def _waypoint_frames(
+    route: Any, poses: Any, flange_tcp: ArrayLike, tcp_poses: ArrayLike | None
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """``(F (4, 4), T_tcp (m, 4, 4), T_flange (m, 4, 4))``: the flange -> TCP transform and the
+    TCP and flange frames at every waypoint (``tcp_poses`` given, or from the route's poses)."""
+    F = np.asarray(flange_tcp, dtype=np.float64).reshape(4, 4)
+    T_tcp = (
+        tcp_waypoint_poses(route, poses)
+        if tcp_poses is None
+        else np.asarray(tcp_poses, dtype=np.float64).reshape(-1, 4, 4)
+    )
+    return F, T_tcp, T_tcp @ np.linalg.inv(F)
+
+
+def _ik_stats(
+    placement: Any,
+    rb: Robot,
+    q: NDArray[np.float64],
+    exact: NDArray[np.bool_],
+    row_status: NDArray,
+    t_ik: float,
+) -> dict[str, Any]:
+    """The route's stats after IK and the branch choice (placement, manipulability, seconds,
+    waypoints unsolved by reason)."""
+    return {
+        "placement": {
+            "base_xyz_yaw": list(placement.xyz_yaw()),
+            "searched": placement.searched,
+            "candidates": placement.candidates,
+        },
+        # smallest manipulability (Robot.manipulability) over the solved waypoints
+        "min_manipulability": float(rb.manipulability(q[exact]).min()) if exact.any() else None,
+        "seconds_ik_configs": round(t_ik, 3),
+        "waypoints": len(q),
+        # waypoints whose joint vector is interpolated (no usable IK solution), by reason
+        "waypoints_unsolved": {
+            str(w): int(c)
+            for w, c in zip(*np.unique(row_status[~exact], return_counts=True), strict=True)
+        },
+    }
+
+
+def _check_fk(
+    rb: Robot,
+    q: NDArray[np.float64],
+    exact: NDArray[np.bool_],
+    T_fl: NDArray[np.float64],
+    row: NDArray[np.int64],
+    stats: dict[str, Any],
+) -> None:
+    """FK of every solved configuration against its pose, into ``stats``; a miss beyond
+    :data:`POSE_TOL_MM` / :data:`POSE_TOL_DEG` is a bug, not bad input (:class:`PlanningError`)."""
+    err_mm, err_deg = _pose_errors(rb, q, exact, T_fl, row)
+    stats["fk_max_error_mm"] = err_mm
+    stats["fk_max_error_deg"] = err_deg
+    if err_mm > POSE_TOL_MM or err_deg > POSE_TOL_DEG:
+        raise PlanningError(
+            f"FK of the chosen configurations misses the route poses by {err_mm:.3g} mm, "
+            f"{err_deg:.3g} deg"
+        )
+
+
 def plan_robot_route(
     route: Any,
     poses: Any,
@@ -175,14 +237,8 @@ def plan_robot_route(
         )
     if check_collision and part is None:
         raise ConfigError("the collision check needs the part mesh", field="part")
-    F = np.asarray(flange_tcp, dtype=np.float64).reshape(4, 4)
-    T_tcp = (
-        tcp_waypoint_poses(route, poses)
-        if tcp_poses is None
-        else np.asarray(tcp_poses, dtype=np.float64).reshape(-1, 4, 4)
-    )
+    F, T_tcp, T_fl = _waypoint_frames(route, poses, flange_tcp, tcp_poses)
     own_zone = _own_zone(zone, len(T_tcp))
-    T_fl = T_tcp @ np.linalg.inv(F)
     from weldplan.tool.route_frames import weld_rows
 
     rows = weld_rows(route)
@@ -200,24 +256,8 @@ def plan_robot_route(
     q, branch, exact, row_status, detail = _joint_route(
         rb, checker, T_fl, rows, mask, placement, singular_deg, flip_penalty
     )
-    t_ik = time.perf_counter() - t0
     status = [str(row_status[r]) for r in rows]
-    stats: dict[str, Any] = {
-        "placement": {
-            "base_xyz_yaw": list(placement.xyz_yaw()),
-            "searched": placement.searched,
-            "candidates": placement.candidates,
-        },
-        # smallest manipulability (Robot.manipulability) over the solved waypoints
-        "min_manipulability": float(rb.manipulability(q[exact]).min()) if exact.any() else None,
-        "seconds_ik_configs": round(t_ik, 3),
-        "waypoints": len(q),
-        # waypoints whose joint vector is interpolated (no usable IK solution), by reason
-        "waypoints_unsolved": {
-            str(w): int(c)
-            for w, c in zip(*np.unique(row_status[~exact], return_counts=True), strict=True)
-        },
-    }
+    stats = _ik_stats(placement, rb, q, exact, row_status, time.perf_counter() - t0)
     replanned: list[int] = []
     row = np.arange(len(q), dtype=np.int64)
     if checker is not None:
@@ -229,14 +269,7 @@ def plan_robot_route(
             replan=replan, zone=own_zone,
         )  # fmt: skip
     weld_index = np.array([_weld_row(row, exact, r) for r in rows], dtype=np.int64)
-    err_mm, err_deg = _pose_errors(rb, q, exact, T_fl, row)
-    stats["fk_max_error_mm"] = err_mm
-    stats["fk_max_error_deg"] = err_deg
-    if err_mm > POSE_TOL_MM or err_deg > POSE_TOL_DEG:
-        raise PlanningError(  # a bug, not bad input: FK must reproduce every solved pose
-            f"FK of the chosen configurations misses the route poses by {err_mm:.3g} mm, "
-            f"{err_deg:.3g} deg"
-        )
+    _check_fk(rb, q, exact, T_fl, row, stats)
     solved = branch >= 0
     flips = [
         int(i)

@@ -36,6 +36,7 @@ from typing import Any
 import numpy as np
 
 from weldplan.tool.result import WeldPoses
+from weldplan.tool.route_frames import route_tool_path
 from weldplan.tool.transit import ToolPath, Transition
 
 #: the columns, in order
@@ -128,8 +129,7 @@ def route_tool_csv(route: Any) -> str:
     ValueError
         When the route has no tool transitions (the poses were not all re-checked, or no tool).
     """
-    data = route.tool or {}
-    if not data.get("transitions"):
+    path = route_tool_path(route)
+    if path is None:
         raise ValueError("the route has no tool transitions to write")
-    path = ToolPath.from_dict(data["transitions"])
-    return tool_path_csv(path, WeldPoses.from_dict(data["poses"]))
+    return tool_path_csv(path, WeldPoses.from_dict(route.tool["poses"]))

@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation, Slerp
 
 from weldplan.tool.result import WeldPoses
+from weldplan.tool.transit import ToolPath
 from weldplan.weld.route import Route
 
 log = logging.getLogger(__name__)
@@ -51,6 +52,13 @@ def route_poses(route: Route) -> WeldPoses | None:
             f"the route visits {'-'.join(route.order)}"
         )
     return poses
+
+
+def route_tool_path(route: Route) -> ToolPath | None:
+    """The route's :class:`~weldplan.tool.transit.ToolPath` (``route.tool["transitions"]``),
+    ``None`` without transitions."""
+    d = route.tool.get("transitions") if route.tool else None
+    return ToolPath.from_dict(d) if d else None
 
 
 def waypoint_quaternions(route: Route, poses: WeldPoses) -> NDArray[np.float64]:

@@ -122,14 +122,6 @@ GUN_COLOR = 0x8E44AD
 BLOCKED_COLOR = 0xD000D0
 
 
-def tool_path_of(route: Route) -> Any:
-    """The route's :class:`~weldplan.tool.transit.ToolPath`, ``None`` without transitions."""
-    from weldplan.tool.transit import ToolPath
-
-    d = route.tool.get("transitions") if route.tool else None
-    return None if not d else ToolPath.from_dict(d)
-
-
 def keyframe_times(positions: NDArray[np.float64], quaternions: NDArray[np.float64],
                    reach: float) -> NDArray[np.float64]:  # fmt: skip
     """``(m,)`` from 0 to 1: each waypoint's share of the path, by the motion bound of each
@@ -151,7 +143,9 @@ def animate_tool(anim: Any, root: Any, route: Route, tool: Any, seconds: float, 
     """
     import meshcat.geometry as g
 
-    path = tool_path_of(route)
+    from weldplan.tool.route_frames import route_tool_path
+
+    path = route_tool_path(route)
     if path is None or not path.transitions:
         return False
     node = root["tool"]
