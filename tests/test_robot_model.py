@@ -118,6 +118,39 @@ def test_branch_bits_have_their_documented_meaning(robot):
     np.testing.assert_array_equal(robot.branch_of(sol.q), sol.branch)
 
 
+def test_branch_bits_from_joints_equal_the_ik_label(robot):
+    # over the whole joint range (A4 and A6 turn +-350 deg): the cheap label is the IK's own
+    rng = np.random.default_rng(11)
+    q = rng.uniform(robot.lower, robot.upper, (2000, 6))
+    np.testing.assert_array_equal(robot.branch_bits(q), robot.branch_of(q))
+
+
+@pytest.mark.parametrize("signs", [(1, 1, 1, 1, 1, 1), (-1, 1, -1, -1, -1, -1)])
+def test_branch_bits_label_each_solver_slot_under_signs_and_offsets(signs):
+    # the solver's own slots for arbitrary poses, with sign corrections and offsets on the
+    # joints that decide the bits (A2, A3, A5): the raw angles are recovered the solver's way
+    from py_opw_kinematics import RigidTransform
+
+    from weldplan.robot.ik import OPWParams, branch_bits
+
+    p = OPWParams(330.0, -115.0, 0.0, 645.0, 1350.0, 1420.0, 215.0,
+                  offsets=(0.1, -1.2, 0.4, 0.0, 0.3, 0.0), signs=signs)  # fmt: skip
+    solver = p.solver()
+    rng = np.random.default_rng(5)
+    poses = []
+    for _ in range(40):
+        T = np.eye(4)
+        T[:3, :3] = Rotation.random(random_state=rng).as_matrix()
+        T[:3, 3] = rng.uniform([-1500, -1500, 0], [1500, 1500, 2000])
+        poses.append(T)
+    res = solver.reach(RigidTransform.from_matrix(np.array(poses)), joint_limits=None)
+    q = np.asarray(res.joints, dtype=np.float64)  # (40, 8, 6), NaN where a slot does not exist
+    ok = np.all(np.isfinite(q), axis=2)
+    assert ok.sum() > 100
+    slots = np.broadcast_to(np.arange(8), ok.shape)[ok]
+    np.testing.assert_array_equal(branch_bits(p, q[ok]), slots)
+
+
 def test_jacobian_matches_finite_differences(robot):
     q = _random_q(robot, 5, seed=4)
     J = robot.jacobian(q)

@@ -41,7 +41,14 @@ import trimesh
 from numpy.typing import ArrayLike, NDArray
 
 from weldplan.errors import InputError
-from weldplan.robot.ik import IKBranches, IKSolutions, OPWParams, load_opw, solve
+from weldplan.robot.ik import (
+    IKBranches,
+    IKSolutions,
+    OPWParams,
+    branch_bits,
+    load_opw,
+    solve,
+)
 from weldplan.robot.urdf import UrdfJoint, chain, joint_limits, link_geometry, parse_urdf
 
 log = logging.getLogger(__name__)
@@ -252,6 +259,11 @@ class Robot:
         d = np.angle(np.exp(1j * (br.q - Q[:, None, :])))  # wrapped differences
         err = np.where(br.exists, np.abs(d).max(axis=2), np.inf)
         return np.argmin(err, axis=1).astype(np.int64)
+
+    def branch_bits(self, q: ArrayLike) -> NDArray[np.int64]:
+        """``(n,) int``: :meth:`branch_of` from the joint angles alone
+        (:func:`weldplan.robot.ik.branch_bits`: no FK or IK, for the planner's inner loops)."""
+        return branch_bits(self.opw, _as_q(q))
 
     def tool_transform(self, T_root_tcp: ArrayLike) -> NDArray[np.float64]:
         """``(4, 4)`` mm: flange -> TCP of a tool whose URDF root is its mounting frame, given the
