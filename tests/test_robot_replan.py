@@ -85,6 +85,37 @@ def test_a_starved_transfer_gets_one_longer_retry_within_the_route_budget(robot)
     assert spent.ompl["runs"] == 1 and spent.ompl["solved"] == 0
 
 
+def test_a_transfer_keeps_its_ends_ik_branch(robot):
+    """Arm reaching back over its shoulder (elbow and shoulder bits set, branch 3), A1 sweeping
+    the torch through a plate: the tucked arm (A3 at +90 deg) would pass it by flipping the
+    elbow and the shoulder; a transfer that keeps the branch refuses that and OMPL plans a path
+    on branch 3, judged by IK of FK (``branch_of``) every 2 % of every motion."""
+    qm = np.array([0.0, -1.9, -0.4, 0.0, 0.8, 0.0])
+    qa, qb = qm.copy(), qm.copy()
+    qa[0], qb[0] = -0.3, 0.3
+    assert robot.branch_of(np.array([qa, qb])).tolist() == [3, 3]
+    plate = make_plate(robot.fk(qm)[0, :3, 3], 1, size=160.0)
+    chk = RobotCollision(robot, plate, arc_torch(), TORCH_TCP)
+    assert not chk.motion_free(qa, qb)
+    t = np.linspace(0.0, 1.0, 51)[:, None]
+
+    def branches(P):
+        D = [a + t * (b - a) for a, b in zip(P[:-1], P[1:], strict=True)]
+        return set(robot.branch_of(np.vstack(D)))
+
+    args = (robot, chk, np.zeros((0, 4, 4)), TORCH_TCP, 5.0, "rrtconnect", 10.0, 3)
+    flips = Detour(*args, keep_branch=False).transfer(qa, qb)
+    assert flips is not None and branches(flips) > {3}  # the tuck: through other branches
+    det = Detour(*args)
+    kept = det.transfer(qa, qb)
+    assert kept is not None and branches(kept) == {3} and chk.path_hits(kept) == []
+    assert det.ompl["solved"] == 1
+    # a motion across A5 = 0 leaves the wrist's branch
+    qf = qa.copy()
+    qf[4] = -0.8
+    assert det.on_branch(qa, qb, 3) and not det.on_branch(qa, qf, 3)
+
+
 def test_a_weld_blocked_on_every_branch_is_reported_with_its_link(robot):
     """A plate across the flange's place at weld B: every branch puts the wrist there."""
     route = box_route()

@@ -328,6 +328,7 @@ def plan_rn(
     time_s: float = 1.0,
     seed: int | np.random.Generator | None = None,
     simplify: bool = True,
+    stop: Callable[[], bool] | None = None,
 ) -> SampledPath:
     """Plan a path from ``start`` to ``goal`` in the box ``[lower, upper]`` of R^d with OMPL.
 
@@ -356,6 +357,9 @@ def plan_rn(
     simplify
         Run OMPL's path simplifier to convergence (``simplifyMax``: shortcutting, vertex
         reduction, B-spline smoothing with validity checks) after planning.
+    stop
+        ``stop() -> bool``: planning also ends as soon as it is true (OMPL asks between its own
+        steps), e.g. a budget in CPU seconds; ``time_s`` stays the wall-clock limit.
 
     Returns
     -------
@@ -408,6 +412,7 @@ def plan_rn(
         simplify=simplify,
         measure=polyline_length,
         dim=d,
+        stop=stop,
     )
 
 

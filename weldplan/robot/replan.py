@@ -26,7 +26,12 @@ blocked, the leg becomes a detour:
    checked by :class:`~weldplan.robot.collision.RobotCollision` (states and motions): one run of
    ``time_s`` and, while that does not solve it, retries of :data:`RETRY_TIME_S` with the next
    seeds, while the route's retries stay within :data:`RETRY_TOTAL_S` (rrtconnect stops at its
-   first solution, so only a leg that needs the time spends it);
+   first solution, so only a leg that needs the time spends it); budgets in CPU seconds. When
+   both ends are on one IK branch (they are: the welds' branches are chosen continuous), every
+   step of the transfer stays on it (:meth:`Detour.on_branch`; tucks that would flip the elbow
+   or shoulder are skipped, OMPL's states and motions off the branch are invalid): a detour
+   passes no wrist, elbow or shoulder flip (before, car2_200's one OMPL detour passed A5
+   through 0 and back, two flips in the program);
 3. *approach*: ``b``'s approach configuration to ``b``'s, contact zone exempt.
 
 When no detour is found, ``b`` is dropped (status ``collision``, its ``detail`` naming the body
@@ -48,6 +53,7 @@ last served configuration held (the program ends at that weld).
 from __future__ import annotations
 
 import logging
+import time
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -82,6 +88,12 @@ TUCK_A2_A3 = ((-90.0, 90.0), (-120.0, 120.0))
 RETRY_TIME_S = 30.0
 #: s: the most all the retries of one route may take together (then a leg gets one run only)
 RETRY_TOTAL_S = 120.0
+#: OMPL's wall-clock limit of a transfer, in multiples of its CPU budget (a safety net: the
+#: budget itself is CPU seconds, :meth:`Detour._ompl`)
+WALL_FACTOR = 10.0
+#: configurations on a joint motion at which a transfer's IK branch is checked
+#: (:meth:`Detour.on_branch`)
+BRANCH_SAMPLES = 9
 
 
 @dataclass
@@ -135,6 +147,8 @@ class Detour:
     ompl: dict[str, float] = field(default_factory=dict, compare=False)
     #: how each weld was left or reached by a detour: ``"gun exit"`` or ``"retract"``
     left_by: dict[str, int] = field(default_factory=dict, compare=False)
+    #: a transfer between two configurations on one IK branch stays on it (:meth:`transfer`)
+    keep_branch: bool = True
 
     def offset(self, q: NDArray, T: NDArray, branch: int, move: NDArray) -> NDArray | None:
         """The configuration of pose ``T`` moved by ``move (3,)`` mm (part frame, orientation
@@ -198,26 +212,64 @@ class Detour:
 
     def transfer(self, qa: NDArray, qb: NDArray) -> NDArray | None:
         """``(p, 6)`` rad from ``qa`` to ``qb`` (ends included), whole tool and links free:
-        straight, else through a tucked arm (``tuck``, default :data:`TUCK_A2_A3`), else OMPL."""
-        if self.checker.motion_free(qa, qb):
+        straight, else through a tucked arm (``tuck``, default :data:`TUCK_A2_A3`), else OMPL.
+        With :attr:`keep_branch` and both ends on one IK branch, every step stays on it
+        (:meth:`on_branch`): the detour passes no wrist, elbow or shoulder flip."""
+        keep = self._kept_branch(qa, qb)
+        if self.on_branch(qa, qb, keep) and self.checker.motion_free(qa, qb):
             return np.vstack([qa, qb])
         for a2, a3 in self.tuck:
             P = np.array([qa, qa, qb, qb])
             P[1:3, 1:3] = np.radians([a2, a3])
             if not self.robot.in_limits(P[1:3]).all():
                 continue
-            if all(self.checker.motion_free(x, y) for x, y in zip(P[:-1], P[1:], strict=True)):
+            if all(
+                self.on_branch(x, y, keep) and self.checker.motion_free(x, y)
+                for x, y in zip(P[:-1], P[1:], strict=True)
+            ):
                 return P
-        return self._ompl(qa, qb)
+        return self._ompl(qa, qb, keep)
 
-    def _ompl(self, qa: NDArray, qb: NDArray) -> NDArray | None:
+    def _kept_branch(self, qa: NDArray, qb: NDArray) -> int | None:
+        """The IK branch a transfer ``qa -> qb`` keeps: both ends' when they share one and
+        :attr:`keep_branch` is set, else ``None`` (no constraint)."""
+        if not self.keep_branch:
+            return None
+        ba, bb = self.robot.branch_bits(np.array([qa, qb]))
+        return int(ba) if ba == bb else None
+
+    def on_branch(self, qa: NDArray, qb: NDArray, keep: int | None) -> bool:
+        """Whether the straight joint motion ``qa -> qb`` stays on branch ``keep`` (``None``:
+        any), judged at :data:`BRANCH_SAMPLES` evenly spaced configurations (ends included)
+        by :meth:`~weldplan.robot.model.Robot.branch_bits`. Exact for the wrist and elbow bits
+        (linear in A5, A3 between the ends); the shoulder bit, a sine of A2 and A3, could in
+        principle cross and come back between two samples, which the final flip count (IK of FK
+        at every row) would show."""
+        if keep is None:
+            return True
+        t = np.linspace(0.0, 1.0, BRANCH_SAMPLES)[:, None]
+        return bool(np.all(self.robot.branch_bits(qa + t * (qb - qa)) == keep))
+
+    def _ompl(self, qa: NDArray, qb: NDArray, keep: int | None = None) -> NDArray | None:
         """OMPL in joint space (:func:`~weldplan.motion.sampling.plan_rn`), ``time_s``; while
         that is not enough, more runs of ``retry_time_s`` with the next seeds as long as the
         route's retries have spent less than ``retry_total_s`` (the first leg that needs them
         may take them all: on a route along the gun's order, a leg that cannot be detoured is
         a bridge between two groups of welds, and every later weld of the far group would be
-        tried from the same weld across the same gap)."""
+        tried from the same weld across the same gap). The budgets are CPU seconds of this
+        process (:func:`time.process_time`), as the gun's SE(3) re-plan's: on a shared machine
+        a wall-clock limit gave OMPL anything from a fifth to all of it; OMPL's own wall-clock
+        limit is :data:`WALL_FACTOR` times the budget, a safety net. ``keep``: the states and
+        motions must stay on that IK branch (:meth:`on_branch`)."""
         from weldplan.motion.sampling import plan_rn
+
+        def valid(x: NDArray) -> bool:
+            return (keep is None or int(self.robot.branch_bits(x)[0]) == keep) and bool(
+                self.checker.state_free(x)
+            )
+
+        def motion(x: NDArray, y: NDArray) -> bool:
+            return self.on_branch(x, y, keep) and bool(self.checker.motion_free(x, y))
 
         k = 0
         while True:
@@ -227,30 +279,36 @@ class Detour:
                 if k == 1:
                     log.info("joint-space transfer: no retry (%.0f s spent)", self.retry_total_s)
                 return None
+            budget = self._run_time(k)
+            cpu0 = time.process_time()
+            deadline = cpu0 + budget
             res = plan_rn(
                 qa,
                 qb,
                 self.robot.lower,
                 self.robot.upper,
-                self.checker.state_free,
-                motion_valid=self.checker.motion_free,
+                valid,
+                motion_valid=motion,
                 planner=self.planner,
-                time_s=self._run_time(k),
+                time_s=WALL_FACTOR * budget,
                 seed=None if self.rng is None else self.rng + k,
+                stop=lambda: time.process_time() > deadline,  # noqa: B023 (called in this run)
             )
+            cpu = time.process_time() - cpu0
             log.info("joint-space transfer%s: %s", f" (retry {k})" if k else "", res.status)
             for key, v in (("runs", 1), ("retries", k > 0), ("solved", res.solved)):
                 self.ompl[key] = self.ompl.get(key, 0) + float(v)
-            self.ompl["s"] = self.ompl.get("s", 0.0) + res.time_s
+            self.ompl["s"] = self.ompl.get("s", 0.0) + cpu
+            self.ompl["wall_s"] = self.ompl.get("wall_s", 0.0) + res.time_s
             if k:
-                self.ompl["retry_s"] = self.ompl.get("retry_s", 0.0) + res.time_s
+                self.ompl["retry_s"] = self.ompl.get("retry_s", 0.0) + cpu
             if res.solved:
                 return np.asarray(res.points, dtype=np.float64)
             k += 1
 
     def _run_time(self, k: int) -> float:
-        """s of OMPL run ``k`` of a transfer: the first ``time_s``, a retry ``retry_time_s`` or
-        what is left of the route's ``retry_total_s``, whichever is less."""
+        """CPU s of OMPL run ``k`` of a transfer: the first ``time_s``, a retry
+        ``retry_time_s`` or what is left of the route's ``retry_total_s``, whichever is less."""
         if not k:
             return self.time_s
         left = self.retry_total_s - self.ompl.get("retry_s", 0.0)
