@@ -186,8 +186,9 @@ def test_a_tail_retract_leaves_the_weld_with_the_contact_zone_exempt():
     assembled tail passes the final check (regression: it kept the whole-tool flag, and the
     final check refused the run)."""
     from weldplan.robot import load_robot
+    from weldplan.robot.assemble import JointPath, _tail
     from weldplan.robot.collision import RobotCollision
-    from weldplan.robot.replan import Detour, JointPath, _tail
+    from weldplan.robot.replan import Detour
     from weldplan.tool import arc_torch
 
     robot = load_robot(robot_urdf()).with_base(BOX_BASE)

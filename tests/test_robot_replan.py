@@ -11,11 +11,12 @@ from tests.robot_helpers import BOX_BASE, TORCH_TCP, down_poses, make_plate
 from tests.route_fixtures import box_part, box_route
 from weldplan.errors import PlanningError
 from weldplan.robot import load_robot
+from weldplan.robot.assemble import subdivide
 from weldplan.robot.collision import RobotCollision
 from weldplan.robot.configs import RobotRoute
 from weldplan.robot.plan import plan_robot_route
 from weldplan.robot.reach import BaseSearch, arm_reach, base_pose, search_base
-from weldplan.robot.replan import Detour, subdivide
+from weldplan.robot.replan import Detour
 from weldplan.tool import arc_torch
 from weldplan.tool.route_frames import weld_rows
 

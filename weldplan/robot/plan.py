@@ -31,6 +31,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from weldplan.errors import ConfigError, InputError, PlanningError
+from weldplan.robot.assemble import assemble
 from weldplan.robot.collision import Hit, RobotCollision
 from weldplan.robot.configs import FLIP_PENALTY_S, RobotRoute, joint_path
 from weldplan.robot.model import Robot
@@ -44,7 +45,7 @@ from weldplan.robot.reach import (
     Placement,
     classify,
 )
-from weldplan.robot.replan import Detour, assemble
+from weldplan.robot.replan import Detour
 from weldplan.robot.urdf import chain_transform
 
 log = logging.getLogger(__name__)
@@ -320,7 +321,7 @@ def _collision_stage(
     zone: NDArray[np.bool_],
 ) -> tuple[NDArray, NDArray, NDArray, NDArray, list[int]]:
     """Check the joint path (``zone``: the motions whose contact zone is exempt), detour blocked
-    legs (:func:`weldplan.robot.replan.assemble`), check the final path again; welds charged with
+    legs (:func:`weldplan.robot.assemble.assemble`), check the final path again; welds charged with
     a remaining blocked motion get :data:`COLLISION` in ``status`` (in place), and the figures go
     to ``stats``."""
     t1 = time.perf_counter()

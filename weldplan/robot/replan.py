@@ -1,9 +1,8 @@
 """Blocked legs of a joint route: detours through retract poses, re-planned with OMPL.
 
-:func:`assemble` walks the welds the robot serves (status ``ok``) in route order. The leg from
-one served weld ``a`` to the next ``b`` is first the route's own: its waypoints' configurations,
-checked with the tool's contact zone exempt (the TCP is on the verified route). When that is
-blocked, the leg becomes a detour:
+:func:`weldplan.robot.assemble.assemble` walks the welds the robot serves in route order; where
+the route's own leg from one served weld ``a`` to the next ``b`` is blocked, it asks
+:class:`Detour` for a detour:
 
 0. *gun exit*: when the caller gives the gun stage's proven exits of ``a``
    (:attr:`Detour.exits`: a side exit and its retract, an axial retract, half an SE(3) re-plan;
@@ -34,20 +33,7 @@ blocked, the leg becomes a detour:
    through 0 and back, two flips in the program);
 3. *approach*: ``b``'s approach configuration to ``b``'s, contact zone exempt.
 
-When no detour is found, ``b`` is dropped (status ``collision``, its ``detail`` naming the body
-that blocked the leg) and the next served weld is tried from ``a``. Welds the path passes
-without serving keep a row on it that is not exact (the program passes them without welding):
-the detour's joint polyline is subdivided where it has fewer inner rows than such welds (points
-on its own segments: the motion is unchanged). The motions of the route's own legs are checked
-with the contact zone exempt where the caller says (``zone=``: every one on the point-tip route;
-only near the spots on a route along the gun's transitions, :mod:`weldplan.robot.gunpath`), those
-of the retract/approach with it exempt, those of the transfer without (``zone`` in the result).
-The caller checks the assembled path again (the verification).
-
-The head (route rows before the first served weld) and the tail (after the last) are the route's
-own rows; a blocked tail is replaced by the retract from the last served weld (subdivided, one
-point per route row after it, the last the retract configuration), or, with no retract, by the
-last served configuration held (the program ends at that weld).
+The walk over the welds that uses these detours is :mod:`weldplan.robot.assemble`.
 """
 
 from __future__ import annotations
@@ -55,14 +41,13 @@ from __future__ import annotations
 import logging
 import time
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from weldplan.robot.collision import RobotCollision
 from weldplan.robot.model import Robot
-from weldplan.robot.reach import COLLISION, OK, usable
+from weldplan.robot.reach import usable
 
 log = logging.getLogger(__name__)
 
@@ -94,34 +79,6 @@ WALL_FACTOR = 10.0
 #: configurations on a joint motion at which a transfer's IK branch is checked
 #: (:meth:`Detour.on_branch`)
 BRANCH_SAMPLES = 9
-
-
-@dataclass
-class JointPath:
-    """A joint route being assembled: rows and, per row, the zone flag of the motion leaving it."""
-
-    q: list[NDArray[np.float64]] = field(default_factory=list)
-    row: list[int] = field(default_factory=list)
-    exact: list[bool] = field(default_factory=list)
-    branch: list[int] = field(default_factory=list)
-    zone: list[bool] = field(default_factory=list)
-
-    def add(self, q: NDArray, row: int, exact: bool, branch: int, zone: bool = True) -> None:
-        self.q.append(np.asarray(q, dtype=np.float64))
-        self.row.append(int(row))
-        self.exact.append(bool(exact))
-        self.branch.append(int(branch))
-        self.zone.append(bool(zone))
-
-    def arrays(self) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
-        """``q (k, 6)``, ``row (k,)``, ``exact (k,)``, ``branch (k,)``, ``zone (k - 1,)``."""
-        return (
-            np.array(self.q).reshape(-1, 6),
-            np.array(self.row, dtype=np.int64),
-            np.array(self.exact, dtype=bool),
-            np.array(self.branch, dtype=np.int64),
-            np.array(self.zone[:-1], dtype=bool),
-        )
 
 
 @dataclass(frozen=True)
@@ -313,183 +270,3 @@ class Detour:
             return self.time_s
         left = self.retry_total_s - self.ompl.get("retry_s", 0.0)
         return max(min(self.retry_time_s, left), 1e-3)
-
-
-def subdivide(P: NDArray[np.float64], inner: int) -> NDArray[np.float64]:
-    """``P (p, 6)`` with points added on its longest segments (halving them) until it has at
-    least ``inner`` rows strictly between its ends; the polyline itself is unchanged."""
-    P = np.asarray(P, dtype=np.float64)
-    while len(P) - 2 < inner:
-        seg = np.linalg.norm(np.diff(P, axis=0), axis=1)
-        i = int(np.argmax(seg))
-        P = np.insert(P, i + 1, (P[i] + P[i + 1]) / 2, axis=0)
-    return P
-
-
-def assemble(
-    det: Detour,
-    q: NDArray[np.float64],
-    exact: NDArray[np.bool_],
-    branch: NDArray[np.int64],
-    rows: NDArray[np.int64],
-    status: list[str],
-    detail: list[str],
-    ids: tuple[str, ...],
-    zone: NDArray[np.bool_] | None = None,
-    blocked: set[int] | None = None,
-) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray, list[int]]:
-    """The joint route with blocked legs detoured (module docstring).
-
-    Parameters
-    ----------
-    q, exact, branch
-        ``(m, 6)`` rad, ``(m,)``, ``(m,)``: one row per route waypoint.
-    rows
-        ``(n,)``: the route rows of the welds, in route order.
-    status, detail
-        Per weld; updated in place for the welds dropped.
-    ids
-        The welds' ids (for the details).
-    zone
-        ``(m - 1,) bool``: the route's own motions on which the contact zone is exempt (default
-        every one; a route along the gun's transitions exempts it only near the spots).
-    blocked
-        The route's own motions the caller's check of ``q`` (same checker, same ``zone``) found
-        blocked, every one: a leg with none of them is not checked again. ``None``: each leg is
-        checked here.
-
-    Returns
-    -------
-    q, row, exact, branch, zone, replanned
-        The assembled route (``zone (k - 1,)`` per motion) and the legs detoured (the position
-        in ``rows`` of the weld each leaves).
-    """
-    served = [k for k in range(len(rows)) if status[k] == OK]
-    own = np.ones(max(len(q) - 1, 0), dtype=bool) if zone is None else np.asarray(zone, bool)
-    own = np.append(own, True)  # own[i]: the motion leaving route row i (the last: none)
-    out = JointPath()
-    served_exact = np.zeros(len(q), dtype=bool)
-    served_exact[rows[served]] = True
-    # a weld row that is not served is passed, never exact
-    ex = exact & (served_exact | ~np.isin(np.arange(len(q)), rows))
-    if not served:
-        for i in range(len(q)):
-            out.add(q[i], i, bool(ex[i]), int(branch[i]), bool(own[i]))
-        return (*out.arrays(), [])
-    for i in range(int(rows[served[0]]) + 1):
-        out.add(q[i], i, bool(ex[i]), int(branch[i]), bool(own[i]))
-    replanned: list[int] = []
-    a = served[0]
-    for b in served[1:]:
-        ia, ib = int(rows[a]), int(rows[b])
-        hits = _leg_hits(det, q, own, ia, ib, blocked)
-        if not hits:
-            out.zone[-1] = bool(own[ia])
-            for i in range(ia + 1, ib + 1):
-                out.add(q[i], i, bool(ex[i]), int(branch[i]), bool(own[i]))
-            a = b
-            continue
-        path = _detour(det, q, branch, ia, ib)
-        if path is None:
-            status[b] = COLLISION
-            detail[b] = (
-                f"{hits[0].body} on the leg from weld {ids[a]}; no detour through retract "
-                "poses found"
-            )
-            log.info("weld %s dropped: %s", ids[b], detail[b])
-            continue
-        _add_detour(out, det.robot, path, ia, ib, rows, q, branch)
-        replanned.append(a)
-        a = b
-    _tail(det, out, q, ex, branch, int(rows[a]), own, blocked)
-    return (*out.arrays(), replanned)
-
-
-def _leg_hits(
-    det: Detour, q: NDArray, own: NDArray, ia: int, ib: int, blocked: set[int] | None
-) -> list[Any]:
-    """The first blocked motion of the route's own rows ``ia..ib`` (``[]``: free), from the
-    caller's ``blocked`` motions when given, else checked here."""
-    if blocked is None:
-        return det.checker.path_hits(q[ia : ib + 1], own[ia:ib], first_only=True)
-    at = sorted(s for s in blocked if ia <= s < ib)
-    if not at:
-        return []
-    return det.checker.path_hits(q[at[0] : at[0] + 2], own[at[0] : at[0] + 1])
-
-
-def _detour(det: Detour, q: NDArray, branch: NDArray, ia: int, ib: int) -> NDArray | None:
-    """``[leave a ..., transfer ..., approach b ...]`` (rad), else ``None``."""
-    la = det.leave(q[ia], ia, int(branch[ia]))
-    lb = None if la is None else det.leave(q[ib], ib, int(branch[ib]))
-    if la is None or lb is None:
-        return None
-    mid = det.transfer(la[-1], lb[-1])
-    if mid is None:
-        return None
-    return np.vstack([la[:-1], mid, lb[:-1][::-1]])
-
-
-def _add_detour(
-    out: JointPath,
-    robot: Robot,
-    path: NDArray,
-    ia: int,
-    ib: int,
-    rows: NDArray[np.int64],
-    q: NDArray,
-    branch: NDArray,
-) -> None:
-    """Rows of a detour from the weld at route row ``ia`` to the one at ``ib``: the retract
-    (labelled ``ia``), inner points (labelled ``ia``, then one per weld passed between), the
-    approach (labelled ``ib``) and the weld ``ib`` itself."""
-    passed = [int(r) for r in rows if ia < r < ib]
-    P = subdivide(path, len(passed))
-    pb = robot.branch_of(P)
-    labels = [ia] * len(P)
-    labels[-1] = ib
-    for j, r in enumerate(passed):  # the last inner points stand for the welds passed
-        labels[len(P) - 1 - len(passed) + j] = r
-    out.zone[-1] = True  # weld -> retract: contact zone exempt
-    for p, lab, b in zip(P, labels, pb, strict=True):
-        out.add(p, lab, False, int(b), zone=False)
-    out.zone[-1] = True  # approach -> weld
-    out.add(q[ib], ib, True, int(branch[ib]))
-
-
-def _tail(
-    det: Detour,
-    out: JointPath,
-    q: NDArray,
-    ex: NDArray,
-    branch: NDArray,
-    ia: int,
-    own: NDArray[np.bool_],
-    blocked: set[int] | None = None,
-) -> None:
-    """The route's rows after the last served weld (module docstring); ``own[i]``: the contact
-    zone is exempt on the route's own motion leaving row ``i``."""
-    m = len(q)
-    if ia + 1 >= m:
-        return
-    if not _leg_hits(det, q, own, ia, m - 1, blocked):
-        out.zone[-1] = bool(own[ia])
-        for i in range(ia + 1, m):
-            out.add(q[i], i, bool(ex[i]), int(branch[i]), bool(own[i]))
-        return
-    got = det.retract(q[ia], det.T_tcp[ia], int(branch[ia]))
-    out.zone[-1] = True  # weld -> retract (or no motion): contact zone exempt, as checked
-    if got is None:
-        # no way off the last served weld: the robot stays there (zero motions), the route's
-        # later welds are passed without welding; before, the route's own blocked rows were
-        # kept and the final check refused the whole route
-        log.info("no retract from the last served weld: the program ends there")
-        for i in range(ia + 1, m):
-            out.add(q[ia], i, False, int(branch[ia]))
-        return
-    # the rest of the route's rows as points on the retract from the last served weld (a motion
-    # retract() checked), the last of them the retract configuration itself
-    P = subdivide(np.vstack([q[ia], got[0]]), m - 2 - ia)[1:]
-    pb = det.robot.branch_of(P)
-    for j, i in enumerate(range(ia + 1, m)):
-        out.add(P[j], i, False, int(pb[j]))

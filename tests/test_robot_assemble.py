@@ -1,0 +1,114 @@
+"""The walk over the served welds (:func:`weldplan.robot.assemble.assemble`): which welds it
+keeps when detours fail. The detours here are scripted (which transfers exist is the test's
+input); the geometry behind real detours is tested in test_robot_replan and test_robot_gunpath.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from weldplan.robot.assemble import TRAP_FAILS, assemble
+from weldplan.robot.reach import COLLISION, OK
+
+
+@dataclass
+class _Hit:
+    body: str = "link_5"
+    segment: int = 0
+
+
+class _EveryMotionBlocked:
+    """Every route motion is blocked: every leg between served welds needs a detour."""
+
+    def path_hits(self, q, zone=None, first_only=False):
+        return [_Hit()] if len(q) > 1 else []
+
+
+class _Branchless:
+    def branch_of(self, P):
+        return np.zeros(len(P), dtype=np.int64)
+
+
+@dataclass
+class ScriptedDetour:
+    """Each weld row ``r`` is left to the configuration ``q[r] + 0.5``; a transfer exists
+    unless it leaves a weld in ``traps`` or enters one in ``pockets``."""
+
+    q: np.ndarray
+    traps: set[int] = field(default_factory=set)
+    pockets: set[int] = field(default_factory=set)
+    tried: list[tuple[int, int]] = field(default_factory=list)
+    robot: _Branchless = field(default_factory=_Branchless)
+    checker: _EveryMotionBlocked = field(default_factory=_EveryMotionBlocked)
+
+    def leave(self, q, row, branch):
+        return (q + 0.5)[None]
+
+    def retract(self, q, T, branch):
+        return q + 0.5, np.zeros(3)
+
+    def transfer(self, qa, qb):
+        a, b = int(round(qa[0] - 0.5)), int(round(qb[0] - 0.5))
+        self.tried.append((a, b))
+        if a in self.traps or b in self.pockets:
+            return None
+        return np.vstack([qa, qb])
+
+    @property
+    def T_tcp(self):
+        return np.tile(np.eye(4), (len(self.q), 1, 1))
+
+
+def _walk(n, **kw):
+    q = np.zeros((n, 6))
+    q[:, 0] = np.arange(n)
+    det = ScriptedDetour(q, **kw)
+    rows = np.arange(n)
+    status = [OK] * n
+    detail = [""] * n
+    ids = tuple(f"W{i}" for i in range(n))
+    Q, row, exact, _, _, replanned = assemble(
+        det, q, np.ones(n, bool), np.zeros(n, np.int64), rows, status, detail, ids
+    )
+    assert np.all(np.diff(row) >= 0)  # the rows stay in route order, none twice as a weld
+    welded = [int(r) for r in row[exact]]
+    assert len(set(welded)) == len(welded)
+    return status, detail, welded, det, replanned
+
+
+def test_every_leg_detoured_serves_every_weld():
+    status, _, welded, _, replanned = _walk(6)
+    assert status == [OK] * 6 and welded == list(range(6)) and replanned == list(range(5))
+
+
+def test_a_weld_the_robot_cannot_go_on_from_is_dropped_not_every_weld_after_it():
+    # W2's exit leads nowhere: before, W3, W4 and W5 were each tried from W2 and dropped
+    assert TRAP_FAILS == 2
+    status, detail, welded, det, _ = _walk(6, traps={2})
+    assert welded == [0, 1, 3, 4, 5]
+    assert [k for k, s in enumerate(status) if s != OK] == [2]
+    assert detail[2].startswith("the robot cannot go on from this weld")
+    assert "W3, W4" in detail[2] and "W3 reached from weld W1" in detail[2]
+    # the two failures from W2, the trial from W1, then on from W3
+    assert det.tried == [(0, 1), (1, 2), (2, 3), (2, 4), (1, 3), (3, 4), (4, 5)]
+
+
+def test_welds_no_one_reaches_are_dropped_and_the_weld_before_them_kept():
+    # W3 and W4 cannot be entered from anywhere: W2 is tested as the trap, the trial from W1
+    # reaches neither, so W2 is put back and the walk goes on from it
+    status, detail, welded, det, replanned = _walk(7, pockets={3, 4})
+    assert welded == [0, 1, 2, 5, 6]
+    assert [status[k] for k in (3, 4)] == [COLLISION] * 2
+    assert all("on the leg from weld W2" in detail[k] for k in (3, 4))
+    assert det.tried == [(0, 1), (1, 2), (2, 3), (2, 4), (1, 3), (1, 4), (2, 5), (5, 6)]
+    assert replanned == [0, 1, 2, 5]
+
+
+def test_a_weld_is_tested_as_the_trap_once():
+    # W1 is a trap and W2..W4 are pockets: W1 is tested once (the trial from W0 fails: W2, W3
+    # are pockets) and kept; W4 is then dropped from W1 without a second test
+    status, _, welded, det, _ = _walk(6, traps={1}, pockets={2, 3, 4})
+    assert welded == [0, 1] and status[5] == COLLISION
+    assert det.tried.count((0, 2)) == 1 and (0, 4) not in det.tried

@@ -1,0 +1,361 @@
+"""The robot's joint route assembled: the welds it serves, in route order, joined by the
+route's own legs or by detours (:class:`weldplan.robot.replan.Detour`).
+
+:func:`assemble` walks the welds the robot serves (status ``ok``) in route order. The leg from
+one served weld ``a`` to the next ``b`` is first the route's own: its waypoints'
+configurations, checked with the tool's contact zone exempt (the TCP is on the verified route).
+When that is blocked, the leg becomes a detour: leave ``a`` (a gun exit or a retract), transfer,
+approach ``b`` (:mod:`weldplan.robot.replan`).
+
+When no detour is found, ``b`` is dropped (status ``collision``, its ``detail`` naming the body
+that blocked the leg) and the next served weld is tried from ``a``.
+
+*A weld the robot cannot go on from.* When :data:`TRAP_FAILS` welds in a row cannot be reached
+from ``a``, ``a`` itself may be the trap: its exit leads into a pocket no transfer leaves (on
+car2_200 with car2_50's base, one such weld cost all 106 welds tried after it, one OMPL run
+each, before the 15 min time-box). ``a`` is then set aside and those welds are tried again from
+the weld served before it: when one of them is reached, ``a`` is dropped (its ``detail`` says
+which welds it could not reach) and the rest are tried on from there; when none is, ``a`` is put
+back and they stay dropped. Each weld is put to this test once; the first served weld (no weld
+before it) never is. Welds the path passes
+without serving keep a row on it that is not exact (the program passes them without welding):
+the detour's joint polyline is subdivided where it has fewer inner rows than such welds (points
+on its own segments: the motion is unchanged). The motions of the route's own legs are checked
+with the contact zone exempt where the caller says (``zone=``: every one on the point-tip route;
+only near the spots on a route along the gun's transitions, :mod:`weldplan.robot.gunpath`), those
+of the retract/approach with it exempt, those of the transfer without (``zone`` in the result).
+The caller checks the assembled path again (the verification).
+
+The head (route rows before the first served weld) and the tail (after the last) are the route's
+own rows; a blocked tail is replaced by the retract from the last served weld (subdivided, one
+point per route row after it, the last the retract configuration), or, with no retract, by the
+last served configuration held (the program ends at that weld).
+"""
+
+from __future__ import annotations
+
+import logging
+from collections import deque
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from weldplan.robot.model import Robot
+from weldplan.robot.reach import COLLISION, OK
+from weldplan.robot.replan import Detour
+
+log = logging.getLogger(__name__)
+
+#: welds in a row not reached from one weld before that weld is tested as the trap (module
+#: docstring)
+TRAP_FAILS = 2
+
+#: a place in a :class:`JointPath` (its rows, the zone flag of its last row) and how many legs
+#: had been detoured then
+Mark = tuple[int, bool, int]
+
+
+@dataclass
+class JointPath:
+    """A joint route being assembled: rows and, per row, the zone flag of the motion leaving it."""
+
+    q: list[NDArray[np.float64]] = field(default_factory=list)
+    row: list[int] = field(default_factory=list)
+    exact: list[bool] = field(default_factory=list)
+    branch: list[int] = field(default_factory=list)
+    zone: list[bool] = field(default_factory=list)
+
+    def add(self, q: NDArray, row: int, exact: bool, branch: int, zone: bool = True) -> None:
+        self.q.append(np.asarray(q, dtype=np.float64))
+        self.row.append(int(row))
+        self.exact.append(bool(exact))
+        self.branch.append(int(branch))
+        self.zone.append(bool(zone))
+
+    def mark(self) -> tuple[int, bool]:
+        """Where the path ends now (:meth:`cut` returns to it)."""
+        return len(self.q), bool(self.zone[-1]) if self.zone else True
+
+    def cut(self, mark: tuple[int, bool]) -> tuple[Any, ...]:
+        """Remove every row after ``mark`` and return them (:meth:`paste` puts them back)."""
+        n, z = mark
+        names = ("q", "row", "exact", "branch", "zone")
+        saved = tuple(getattr(self, k)[n:] for k in names) + (self.zone[n - 1] if n else True,)
+        for k in names:
+            del getattr(self, k)[n:]
+        if n:
+            self.zone[n - 1] = z
+        return saved
+
+    def paste(self, saved: tuple[Any, ...]) -> None:
+        """Put back what :meth:`cut` removed (the path must end where it did then)."""
+        *lists, z = saved
+        if self.zone:
+            self.zone[-1] = z
+        for k, v in zip(("q", "row", "exact", "branch", "zone"), lists, strict=True):
+            getattr(self, k).extend(v)
+
+    def arrays(self) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
+        """``q (k, 6)``, ``row (k,)``, ``exact (k,)``, ``branch (k,)``, ``zone (k - 1,)``."""
+        return (
+            np.array(self.q).reshape(-1, 6),
+            np.array(self.row, dtype=np.int64),
+            np.array(self.exact, dtype=bool),
+            np.array(self.branch, dtype=np.int64),
+            np.array(self.zone[:-1], dtype=bool),
+        )
+
+
+def subdivide(P: NDArray[np.float64], inner: int) -> NDArray[np.float64]:
+    """``P (p, 6)`` with points added on its longest segments (halving them) until it has at
+    least ``inner`` rows strictly between its ends; the polyline itself is unchanged."""
+    P = np.asarray(P, dtype=np.float64)
+    while len(P) - 2 < inner:
+        seg = np.linalg.norm(np.diff(P, axis=0), axis=1)
+        i = int(np.argmax(seg))
+        P = np.insert(P, i + 1, (P[i] + P[i + 1]) / 2, axis=0)
+    return P
+
+
+def assemble(
+    det: Detour,
+    q: NDArray[np.float64],
+    exact: NDArray[np.bool_],
+    branch: NDArray[np.int64],
+    rows: NDArray[np.int64],
+    status: list[str],
+    detail: list[str],
+    ids: tuple[str, ...],
+    zone: NDArray[np.bool_] | None = None,
+    blocked: set[int] | None = None,
+) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray, list[int]]:
+    """The joint route with blocked legs detoured (module docstring).
+
+    Parameters
+    ----------
+    q, exact, branch
+        ``(m, 6)`` rad, ``(m,)``, ``(m,)``: one row per route waypoint.
+    rows
+        ``(n,)``: the route rows of the welds, in route order.
+    status, detail
+        Per weld; updated in place for the welds dropped.
+    ids
+        The welds' ids (for the details).
+    zone
+        ``(m - 1,) bool``: the route's own motions on which the contact zone is exempt (default
+        every one; a route along the gun's transitions exempts it only near the spots).
+    blocked
+        The route's own motions the caller's check of ``q`` (same checker, same ``zone``) found
+        blocked, every one: a leg with none of them is not checked again. ``None``: each leg is
+        checked here.
+
+    Returns
+    -------
+    q, row, exact, branch, zone, replanned
+        The assembled route (``zone (k - 1,)`` per motion) and the legs detoured (the position
+        in ``rows`` of the weld each leaves).
+    """
+    served = [k for k in range(len(rows)) if status[k] == OK]
+    own = np.ones(max(len(q) - 1, 0), dtype=bool) if zone is None else np.asarray(zone, bool)
+    own = np.append(own, True)  # own[i]: the motion leaving route row i (the last: none)
+    served_exact = np.zeros(len(q), dtype=bool)
+    served_exact[rows[served]] = True
+    # a weld row that is not served is passed, never exact
+    ex = exact & (served_exact | ~np.isin(np.arange(len(q)), rows))
+    w = _Walk(det, q, ex, branch, rows, own, blocked, status, detail, ids)
+    if not served:
+        for i in range(len(q)):
+            w.out.add(q[i], i, bool(ex[i]), int(branch[i]), bool(own[i]))
+        return (*w.out.arrays(), [])
+    for i in range(int(rows[served[0]]) + 1):
+        w.out.add(q[i], i, bool(ex[i]), int(branch[i]), bool(own[i]))
+    a, fails = served[0], []
+    queue = deque(served[1:])
+    while queue:
+        b = queue.popleft()
+        mark = w.mark()
+        why = w.join(a, b)
+        if why is None:
+            w.prev[b] = (a, mark)
+            a, fails = b, []
+            continue
+        w.drop(b, why)
+        fails.append(b)
+        if len(fails) == TRAP_FAILS and a in w.prev and a not in w.tested:
+            a, fails, again = w.without(a, fails)
+            queue.extendleft(reversed(again))
+    _tail(det, w.out, q, ex, branch, int(rows[a]), own, blocked)
+    return (*w.out.arrays(), w.replanned)
+
+
+@dataclass
+class _Walk:
+    """The state of :func:`assemble`'s walk: the path so far, the welds joined and how."""
+
+    det: Detour
+    q: NDArray[np.float64]
+    ex: NDArray[np.bool_]
+    branch: NDArray[np.int64]
+    rows: NDArray[np.int64]
+    own: NDArray[np.bool_]
+    blocked: set[int] | None
+    status: list[str]
+    detail: list[str]
+    ids: tuple[str, ...]
+    out: JointPath = field(default_factory=JointPath)
+    replanned: list[int] = field(default_factory=list)
+    #: per weld joined: the weld it was joined from and the path's :data:`Mark` before its leg
+    prev: dict[int, tuple[int, Mark]] = field(default_factory=dict)
+    #: welds already tested as a trap
+    tested: set[int] = field(default_factory=set)
+
+    def mark(self) -> Mark:
+        return (*self.out.mark(), len(self.replanned))
+
+    def join(self, a: int, b: int) -> str | None:
+        """Append the leg from weld ``a`` (the path's end) to weld ``b`` and ``b`` itself:
+        the route's own rows when free, else a detour. ``None`` when done, else why not (the
+        path unchanged)."""
+        ia, ib = int(self.rows[a]), int(self.rows[b])
+        q, br, own = self.q, self.branch, self.own
+        hits = _leg_hits(self.det, q, own, ia, ib, self.blocked)
+        if not hits:
+            self.out.zone[-1] = bool(own[ia])
+            for i in range(ia + 1, ib + 1):
+                self.out.add(q[i], i, bool(self.ex[i]), int(br[i]), bool(own[i]))
+            return None
+        path = _detour(self.det, q, br, ia, ib)
+        if path is None:
+            return (
+                f"{hits[0].body} on the leg from weld {self.ids[a]}; no detour through retract "
+                "poses found"
+            )
+        _add_detour(self.out, self.det.robot, path, ia, ib, self.rows, q, br)
+        self.replanned.append(a)
+        return None
+
+    def drop(self, k: int, why: str) -> None:
+        self.status[k], self.detail[k] = COLLISION, why
+        log.info("weld %s dropped: %s", self.ids[k], why)
+
+    def without(self, a: int, fails: list[int]) -> tuple[int, list[int], list[int]]:
+        """Test weld ``a`` as the trap (module docstring): ``(the weld the path now ends at,
+        the welds dropped in a row from it, the welds to try again next)``."""
+        self.tested.add(a)
+        p, (n, z, n_rep) = self.prev[a]
+        saved, saved_rep = self.out.cut((n, z)), self.replanned[n_rep:]
+        del self.replanned[n_rep:]
+        ra = int(self.rows[a])
+        ex_a, self.ex[ra] = bool(self.ex[ra]), False
+        for j, f in enumerate(fails):
+            mark = self.mark()
+            if self.join(p, f) is None:
+                names = ", ".join(self.ids[k] for k in fails)
+                self.drop(
+                    a,
+                    f"the robot cannot go on from this weld: weld(s) {names} after it not "
+                    f"reached from it; weld {self.ids[f]} reached from weld {self.ids[p]}",
+                )
+                self.status[f], self.detail[f] = OK, ""
+                self.prev[f] = (p, mark)
+                for k in fails[j + 1 :]:
+                    self.status[k], self.detail[k] = OK, ""
+                return f, [], fails[j + 1 :]
+        self.out.paste(saved)
+        self.replanned.extend(saved_rep)
+        self.ex[ra] = ex_a
+        log.info("weld %s kept: none of the welds it did not reach is reached without it",
+                 self.ids[a])  # fmt: skip
+        return a, fails, []
+
+
+def _leg_hits(
+    det: Detour, q: NDArray, own: NDArray, ia: int, ib: int, blocked: set[int] | None
+) -> list[Any]:
+    """The first blocked motion of the route's own rows ``ia..ib`` (``[]``: free), from the
+    caller's ``blocked`` motions when given, else checked here."""
+    if blocked is None:
+        return det.checker.path_hits(q[ia : ib + 1], own[ia:ib], first_only=True)
+    at = sorted(s for s in blocked if ia <= s < ib)
+    if not at:
+        return []
+    return det.checker.path_hits(q[at[0] : at[0] + 2], own[at[0] : at[0] + 1])
+
+
+def _detour(det: Detour, q: NDArray, branch: NDArray, ia: int, ib: int) -> NDArray | None:
+    """``[leave a ..., transfer ..., approach b ...]`` (rad), else ``None``."""
+    la = det.leave(q[ia], ia, int(branch[ia]))
+    lb = None if la is None else det.leave(q[ib], ib, int(branch[ib]))
+    if la is None or lb is None:
+        return None
+    mid = det.transfer(la[-1], lb[-1])
+    if mid is None:
+        return None
+    return np.vstack([la[:-1], mid, lb[:-1][::-1]])
+
+
+def _add_detour(
+    out: JointPath,
+    robot: Robot,
+    path: NDArray,
+    ia: int,
+    ib: int,
+    rows: NDArray[np.int64],
+    q: NDArray,
+    branch: NDArray,
+) -> None:
+    """Rows of a detour from the weld at route row ``ia`` to the one at ``ib``: the retract
+    (labelled ``ia``), inner points (labelled ``ia``, then one per weld passed between), the
+    approach (labelled ``ib``) and the weld ``ib`` itself."""
+    passed = [int(r) for r in rows if ia < r < ib]
+    P = subdivide(path, len(passed))
+    pb = robot.branch_of(P)
+    labels = [ia] * len(P)
+    labels[-1] = ib
+    for j, r in enumerate(passed):  # the last inner points stand for the welds passed
+        labels[len(P) - 1 - len(passed) + j] = r
+    out.zone[-1] = True  # weld -> retract: contact zone exempt
+    for p, lab, b in zip(P, labels, pb, strict=True):
+        out.add(p, lab, False, int(b), zone=False)
+    out.zone[-1] = True  # approach -> weld
+    out.add(q[ib], ib, True, int(branch[ib]))
+
+
+def _tail(
+    det: Detour,
+    out: JointPath,
+    q: NDArray,
+    ex: NDArray,
+    branch: NDArray,
+    ia: int,
+    own: NDArray[np.bool_],
+    blocked: set[int] | None = None,
+) -> None:
+    """The route's rows after the last served weld (module docstring); ``own[i]``: the contact
+    zone is exempt on the route's own motion leaving row ``i``."""
+    m = len(q)
+    if ia + 1 >= m:
+        return
+    if not _leg_hits(det, q, own, ia, m - 1, blocked):
+        out.zone[-1] = bool(own[ia])
+        for i in range(ia + 1, m):
+            out.add(q[i], i, bool(ex[i]), int(branch[i]), bool(own[i]))
+        return
+    got = det.retract(q[ia], det.T_tcp[ia], int(branch[ia]))
+    out.zone[-1] = True  # weld -> retract (or no motion): contact zone exempt, as checked
+    if got is None:
+        # no way off the last served weld: the robot stays there (zero motions), the route's
+        # later welds are passed without welding; before, the route's own blocked rows were
+        # kept and the final check refused the whole route
+        log.info("no retract from the last served weld: the program ends there")
+        for i in range(ia + 1, m):
+            out.add(q[ia], i, False, int(branch[ia]))
+        return
+    # the rest of the route's rows as points on the retract from the last served weld (a motion
+    # retract() checked), the last of them the retract configuration itself
+    P = subdivide(np.vstack([q[ia], got[0]]), m - 2 - ia)[1:]
+    pb = det.robot.branch_of(P)
+    for j, i in enumerate(range(ia + 1, m)):
+        out.add(P[j], i, False, int(pb[j]))
