@@ -109,6 +109,29 @@ def test_verify_refuses_a_route_planned_with_another_tool(planned, capsys):
     assert "planned with another tool" in line and "tcp" in line
 
 
+def test_tip_cone_narrows_a_mesh_tools_contact_zone_and_verify_must_agree(planned, capsys):
+    """A mesh tool has no tip cone (the whole contact sphere may touch); ``--tip-cone 15`` keeps
+    only the wire's cone: the nozzle's mouth, inside the sphere but off the axis, is no longer
+    in the zone. A route planned without it is refused by a
+    verify with it (another tool definition)."""
+    from weldplan.commands._tool import tool_from_args
+
+    tmp, _ = planned
+    ns = dataclasses.make_dataclass("Args", ["tool", "tcp", "tool_units", "tool_mesh", "tip_cone"])
+    plain, prov = tool_from_args(ns(str(tmp / "torch.stl"), "0,0,0,0,0,0", None, None, None))
+    cone, prov_c = tool_from_args(ns(str(tmp / "torch.stl"), "0,0,0,0,0,0", None, None, 15.0))
+    assert plain.tip_cone is None and cone.tip_cone == 15.0 and prov_c["tip_cone"] == 15.0
+    v = plain.vertices
+    r = np.linalg.norm(v, axis=1)
+    off_axis = np.degrees(np.arccos(np.clip(-v[:, 2] / np.maximum(r, 1e-9), -1, 1)))
+    rim = v[(r < 20.0) & (off_axis > 30.0)]  # the nozzle's mouth, near the TCP but off its axis
+    assert len(rim) and plain.in_zone(rim, 20.0).all() and not cone.in_zone(rim, 20.0).any()
+    capsys.readouterr()
+    rc = run_cli(["verify", str(tmp / "r.json"), str(tmp / "box.stl"), "--tool",
+                  str(tmp / "torch.stl"), "--tcp", "0,0,0,0,0,0", "--tip-cone", "15"])  # fmt: skip
+    assert rc == 2 and "tip_cone None (route) != 15.0 (given)" in one_line_error(capsys)
+
+
 def test_verify_catches_a_tampered_pose(planned, capsys):
     tmp, _ = planned
     d = json.loads((tmp / "r.json").read_text())
@@ -216,6 +239,8 @@ def test_parse_tcp_errors_name_the_field():
         (["--tool", "{tmp}/nofixed.urdf"], "no fixed joint"),
         (["--tool", "{tmp}/cad.urdf"], "--tool-mesh"),
         (["--tcp", "0,0,0,0,0,0"], "--tcp needs --tool"),
+        (["--tip-cone", "15"], "--tip-cone needs --tool"),
+        (["--tool", "{tmp}/torch.stl", "--tcp", "0,0,0,0,0,0", "--tip-cone", "0"], "(0, 90]"),
         (["--tool", "{tmp}/torch.stl", "--tcp", "0,0,0,0,0,0", "--tool-cone", "120"], "90"),
     ],
 )

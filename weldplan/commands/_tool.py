@@ -41,6 +41,13 @@ def _degrees(text: str) -> float:
     return value
 
 
+def _cone(text: str) -> float:
+    value = _degrees(text)
+    if value <= 0.0:
+        raise argparse.ArgumentTypeError(f"must lie in (0, 90] degrees, got {text!r}")
+    return value
+
+
 def _nonneg_mm(text: str) -> float:
     try:
         value = float(text)
@@ -74,6 +81,15 @@ def add_tool_arguments(p: argparse.ArgumentParser, *, search: bool = True) -> No
         "--tool-mesh",
         metavar="F",
         help="with a URDF --tool: a mesh in its root-link frame instead of the URDF's own",
+    )
+    p.add_argument(
+        "--tip-cone",
+        metavar="DEG",
+        type=_cone,
+        help="with --tool: the tool may touch the part only within this many degrees of its "
+        "axis behind the TCP, inside the contact sphere (an arc torch's wire and contact tip: "
+        "its nozzle never passes through a sheet near the spot); default: the tool's own (none "
+        "for a mesh: the whole sphere, as a spot gun's electrodes close over the sheet)",
     )
     if search:
         p.add_argument(
@@ -166,13 +182,20 @@ def add_transition_arguments(p: argparse.ArgumentParser) -> None:
 def tool_from_args(args: argparse.Namespace) -> tuple[Any, dict[str, Any]] | None:
     """The tool and its provenance (:func:`weldplan.tool.load.load_tool`), ``None`` without one."""
     if not getattr(args, "tool", None):
-        for opt in ("tcp", "tool_units", "tool_mesh"):
+        for opt in ("tcp", "tool_units", "tool_mesh", "tip_cone"):
             if getattr(args, opt, None) is not None:
                 raise WeldplanError(f"--{opt.replace('_', '-')} needs --tool")
         return None
     from weldplan.tool.load import load_tool
 
-    return load_tool(args.tool, tcp=args.tcp, units=args.tool_units, mesh=args.tool_mesh)
+    tool, prov = load_tool(args.tool, tcp=args.tcp, units=args.tool_units, mesh=args.tool_mesh)
+    cone = getattr(args, "tip_cone", None)
+    if cone is not None:
+        import dataclasses
+
+        tool = dataclasses.replace(tool, tip_cone=float(cone), _cache={})
+        prov = {**prov, "tip_cone": float(cone)}
+    return tool, prov
 
 
 def plan_poses(

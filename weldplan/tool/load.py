@@ -35,8 +35,9 @@ KNOWN_URDF_MESHES = {
     ),
 }
 
-#: the provenance keys that must agree for a route to be re-checked with a tool
-PROVENANCE_KEYS = ("file_sha256", "mesh_sha256", "tcp", "units")
+#: the provenance keys that must agree for a route to be re-checked with a tool (``tip_cone``:
+#: ``--tip-cone``, absent when not given)
+PROVENANCE_KEYS = ("file_sha256", "mesh_sha256", "tcp", "units", "tip_cone")
 
 
 def parse_tcp(text: str) -> list[float]:
