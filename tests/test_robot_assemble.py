@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from weldplan.robot.assemble import TRAP_FAILS, assemble
+from weldplan.robot.assemble import TRAP_FAILS, TRAP_TESTS, assemble
 from weldplan.robot.reach import COLLISION, OK
 
 
@@ -106,9 +106,21 @@ def test_welds_no_one_reaches_are_dropped_and_the_weld_before_them_kept():
     assert replanned == [0, 1, 2, 5]
 
 
-def test_a_weld_is_tested_as_the_trap_once():
-    # W1 is a trap and W2..W4 are pockets: W1 is tested once (the trial from W0 fails: W2, W3
-    # are pockets) and kept; W4 is then dropped from W1 without a second test
-    status, _, welded, det, _ = _walk(6, traps={1}, pockets={2, 3, 4})
-    assert welded == [0, 1] and status[5] == COLLISION
-    assert det.tried.count((0, 2)) == 1 and (0, 4) not in det.tried
+def test_a_trap_whose_next_welds_no_one_reaches_is_found_on_the_next_test():
+    # car2_200's case: W2's exit leads nowhere and W3, W4 cannot be entered from anywhere; the
+    # first test (W3, W4 from W1) keeps W2, the second (W5, W6 from W1) reaches W5: W2 dropped
+    status, detail, welded, det, _ = _walk(8, traps={2}, pockets={3, 4})
+    assert welded == [0, 1, 5, 6, 7]
+    assert [k for k, s in enumerate(status) if s != OK] == [2, 3, 4]
+    assert "W3, W4, W5, W6 after it" in detail[2] and "W5 reached from weld W1" in detail[2]
+    assert det.tried[2:] == [(2, 3), (2, 4), (1, 3), (1, 4), (2, 5), (2, 6), (1, 5), (5, 6),
+                             (6, 7)]  # fmt: skip
+
+
+def test_a_weld_is_tested_as_the_trap_at_most_trap_tests_times():
+    # W1 is a trap and W2..W9 are pockets: W1 is tested TRAP_TESTS times (W2..W7 from W0), kept,
+    # and W8..W11 are dropped from it without more tests
+    assert TRAP_TESTS == 3
+    status, _, welded, det, _ = _walk(12, traps={1}, pockets=set(range(2, 10)))
+    assert welded == [0, 1] and all(s == COLLISION for s in status[2:])
+    assert [b for a, b in det.tried if a == 0] == [1, 2, 3, 4, 5, 6, 7]

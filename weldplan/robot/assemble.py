@@ -16,8 +16,11 @@ car2_200 with car2_50's base, one such weld cost all 106 welds tried after it, o
 each, before the 15 min time-box). ``a`` is then set aside and those welds are tried again from
 the weld served before it: when one of them is reached, ``a`` is dropped (its ``detail`` says
 which welds it could not reach) and the rest are tried on from there; when none is, ``a`` is put
-back and they stay dropped. Each weld is put to this test once; the first served weld (no weld
-before it) never is. Welds the path passes
+back and they stay dropped. The test is repeated after every :data:`TRAP_FAILS` more failures
+from ``a``, with the latest ones, at most :data:`TRAP_TESTS` times (the welds right after ``a``
+may be hard to reach from anywhere: on that car2_200 run Z4L-3's successors Z4L-2 and Z4L-1
+were reached from neither Z4L-3 nor the weld before it); the first served weld (no weld before
+it) is never tested. Welds the path passes
 without serving keep a row on it that is not exact (the program passes them without welding):
 the detour's joint polyline is subdivided where it has fewer inner rows than such welds (points
 on its own segments: the motion is unchanged). The motions of the route's own legs are checked
@@ -51,6 +54,9 @@ log = logging.getLogger(__name__)
 #: welds in a row not reached from one weld before that weld is tested as the trap (module
 #: docstring)
 TRAP_FAILS = 2
+#: the most times one weld is tested as the trap (each test costs up to :data:`TRAP_FAILS`
+#: transfers that may fail: a bound on what a route whose later welds no one reaches pays)
+TRAP_TESTS = 3
 
 #: a place in a :class:`JointPath` (its rows, the zone flag of its last row) and how many legs
 #: had been detoured then
@@ -183,7 +189,7 @@ def assemble(
             continue
         w.drop(b, why)
         fails.append(b)
-        if len(fails) == TRAP_FAILS and a in w.prev and a not in w.tested:
+        if len(fails) % TRAP_FAILS == 0 and a in w.prev and w.tested.get(a, 0) < TRAP_TESTS:
             a, fails, again = w.without(a, fails)
             queue.extendleft(reversed(again))
     _tail(det, w.out, q, ex, branch, int(rows[a]), own, blocked)
@@ -208,8 +214,8 @@ class _Walk:
     replanned: list[int] = field(default_factory=list)
     #: per weld joined: the weld it was joined from and the path's :data:`Mark` before its leg
     prev: dict[int, tuple[int, Mark]] = field(default_factory=dict)
-    #: welds already tested as a trap
-    tested: set[int] = field(default_factory=set)
+    #: per weld, how many times it was tested as the trap
+    tested: dict[int, int] = field(default_factory=dict)
 
     def mark(self) -> Mark:
         return (*self.out.mark(), len(self.replanned))
@@ -241,33 +247,35 @@ class _Walk:
         log.info("weld %s dropped: %s", self.ids[k], why)
 
     def without(self, a: int, fails: list[int]) -> tuple[int, list[int], list[int]]:
-        """Test weld ``a`` as the trap (module docstring): ``(the weld the path now ends at,
-        the welds dropped in a row from it, the welds to try again next)``."""
-        self.tested.add(a)
+        """Test weld ``a`` as the trap (module docstring) with the last :data:`TRAP_FAILS` of
+        ``fails`` (the welds dropped in a row from it): ``(the weld the path now ends at, the
+        welds dropped in a row from it, the welds to try again next)``."""
+        self.tested[a] = self.tested.get(a, 0) + 1
         p, (n, z, n_rep) = self.prev[a]
         saved, saved_rep = self.out.cut((n, z)), self.replanned[n_rep:]
         del self.replanned[n_rep:]
         ra = int(self.rows[a])
         ex_a, self.ex[ra] = bool(self.ex[ra]), False
-        for j, f in enumerate(fails):
+        window = fails[-TRAP_FAILS:]
+        for j, f in enumerate(window):
             mark = self.mark()
             if self.join(p, f) is None:
-                names = ", ".join(self.ids[k] for k in fails)
+                names = ", ".join(self.ids[k] for k in fails[:5])
+                more = f" and {len(fails) - 5} more" if len(fails) > 5 else ""
                 self.drop(
                     a,
-                    f"the robot cannot go on from this weld: weld(s) {names} after it not "
+                    f"the robot cannot go on from this weld: weld(s) {names}{more} after it not "
                     f"reached from it; weld {self.ids[f]} reached from weld {self.ids[p]}",
                 )
-                self.status[f], self.detail[f] = OK, ""
                 self.prev[f] = (p, mark)
-                for k in fails[j + 1 :]:
+                for k in window[j:]:
                     self.status[k], self.detail[k] = OK, ""
-                return f, [], fails[j + 1 :]
+                return f, [], window[j + 1 :]
         self.out.paste(saved)
         self.replanned.extend(saved_rep)
         self.ex[ra] = ex_a
-        log.info("weld %s kept: none of the welds it did not reach is reached without it",
-                 self.ids[a])  # fmt: skip
+        log.info("weld %s kept: neither of %s is reached without it", self.ids[a],
+                 ", ".join(self.ids[k] for k in window))  # fmt: skip
         return a, fails, []
 
 
