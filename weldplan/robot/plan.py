@@ -50,7 +50,8 @@ from weldplan.robot.urdf import chain_transform
 
 log = logging.getLogger(__name__)
 
-#: default OMPL planner and time (s) for a blocked leg
+#: default OMPL planner and budget (CPU s, :meth:`weldplan.robot.replan.Detour._ompl`) for a
+#: blocked leg
 REPLAN_PLANNER = "rrtconnect"
 REPLAN_TIME_S = 5.0
 #: base-search candidates re-scored along the whole route
@@ -205,7 +206,7 @@ def plan_robot_route(
     check_collision, replan
         Check robot and tool against the part; re-plan blocked legs with OMPL.
     planner, replan_time_s, rng
-        OMPL planner name, its time limit per leg (s) and seed.
+        OMPL planner name, its budget per leg (CPU s of this process) and seed.
     search_top
         The best candidates of the base search re-scored along the whole route.
     tcp_poses
