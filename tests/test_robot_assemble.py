@@ -19,11 +19,15 @@ class _Hit:
     segment: int = 0
 
 
-class _EveryMotionBlocked:
-    """Every route motion is blocked: every leg between served welds needs a detour."""
+@dataclass
+class _Blocked:
+    """Every route motion is blocked, except the legs leaving the weld rows in ``free``: every
+    other leg between served welds needs a detour."""
+
+    free: set[int] = field(default_factory=set)
 
     def path_hits(self, q, zone=None, first_only=False):
-        return [_Hit()] if len(q) > 1 else []
+        return [] if all(int(r) in self.free for r in q[:-1, 0]) else [_Hit()]
 
 
 class _Branchless:
@@ -33,15 +37,15 @@ class _Branchless:
 
 @dataclass
 class ScriptedDetour:
-    """Each weld row ``r`` is left to the configuration ``q[r] + 0.5``; a transfer exists
-    unless it leaves a weld in ``traps`` or enters one in ``pockets``."""
+    """Each weld row ``r`` is left to (and approached from) the configuration ``q[r] + 0.5``; a
+    transfer exists unless it leaves a weld in ``traps`` or enters one in ``pockets``."""
 
     q: np.ndarray
     traps: set[int] = field(default_factory=set)
     pockets: set[int] = field(default_factory=set)
     tried: list[tuple[int, int]] = field(default_factory=list)
     robot: _Branchless = field(default_factory=_Branchless)
-    checker: _EveryMotionBlocked = field(default_factory=_EveryMotionBlocked)
+    checker: _Blocked = field(default_factory=_Blocked)
 
     def leave(self, q, row, branch):
         return (q + 0.5)[None]
@@ -61,10 +65,10 @@ class ScriptedDetour:
         return np.tile(np.eye(4), (len(self.q), 1, 1))
 
 
-def _walk(n, **kw):
+def _walk(n, free=(), **kw):
     q = np.zeros((n, 6))
     q[:, 0] = np.arange(n)
-    det = ScriptedDetour(q, **kw)
+    det = ScriptedDetour(q, checker=_Blocked(set(free)), **kw)
     rows = np.arange(n)
     status = [OK] * n
     detail = [""] * n
@@ -75,6 +79,7 @@ def _walk(n, **kw):
     assert np.all(np.diff(row) >= 0)  # the rows stay in route order, none twice as a weld
     welded = [int(r) for r in row[exact]]
     assert len(set(welded)) == len(welded)
+    _walk.path = Q[:, 0]
     return status, detail, welded, det, replanned
 
 
@@ -83,44 +88,59 @@ def test_every_leg_detoured_serves_every_weld():
     assert status == [OK] * 6 and welded == list(range(6)) and replanned == list(range(5))
 
 
+def test_a_weld_whose_exit_leads_nowhere_is_left_back_along_the_path():
+    # W2's exit leads nowhere: W3 is reached by going back to the end of the last transfer (W1's
+    # exit, a hub) and on from there; before, W3, W4 and W5 were tried from W2 and dropped
+    status, _, welded, det, replanned = _walk(6, traps={2})
+    assert status == [OK] * 6 and welded == list(range(6))
+    assert det.tried == [(0, 1), (1, 2), (2, 3), (1, 3), (3, 4), (4, 5)]
+    at = int(np.flatnonzero(_walk.path == 2)[0])
+    # W2, back to its approach (2.5) and the hub (1.5), the detour from there (from the hub
+    # again: a motion of length 0), W3's approach (3.5), W3
+    np.testing.assert_array_equal(_walk.path[at : at + 6], [2, 2.5, 1.5, 1.5, 3.5, 3])
+
+
 def test_a_weld_the_robot_cannot_go_on_from_is_dropped_not_every_weld_after_it():
-    # W2's exit leads nowhere: before, W3, W4 and W5 were each tried from W2 and dropped
+    # W0 -> W1 -> W2 are the route's own free legs (no transfer, so no hub to go back to) and
+    # W2's exit leads nowhere: W3 and W4 fail from W2, W2 is tested as the trap, W3 is reached
+    # from W1, W2 dropped
     assert TRAP_FAILS == 2
-    status, detail, welded, det, _ = _walk(6, traps={2})
+    status, detail, welded, det, _ = _walk(6, free={0, 1}, traps={2})
     assert welded == [0, 1, 3, 4, 5]
     assert [k for k, s in enumerate(status) if s != OK] == [2]
     assert detail[2].startswith("the robot cannot go on from this weld")
-    assert "W3, W4" in detail[2] and "W3 reached from weld W1" in detail[2]
-    # the two failures from W2, the trial from W1, then on from W3
-    assert det.tried == [(0, 1), (1, 2), (2, 3), (2, 4), (1, 3), (3, 4), (4, 5)]
+    assert "W3, W4 after it" in detail[2] and "W3 reached from weld W1" in detail[2]
+    assert det.tried == [(2, 3), (2, 4), (1, 3), (3, 4), (4, 5)]
 
 
 def test_welds_no_one_reaches_are_dropped_and_the_weld_before_them_kept():
-    # W3 and W4 cannot be entered from anywhere: W2 is tested as the trap, the trial from W1
-    # reaches neither, so W2 is put back and the walk goes on from it
+    # W3 and W4 cannot be entered from anywhere: each is tried from W2 and the two hubs (W1's and
+    # W0's exits), W2 is tested as the trap (the trial from W1 reaches neither), kept, and the
+    # walk goes on from it
     status, detail, welded, det, replanned = _walk(7, pockets={3, 4})
     assert welded == [0, 1, 2, 5, 6]
     assert [status[k] for k in (3, 4)] == [COLLISION] * 2
     assert all("on the leg from weld W2" in detail[k] for k in (3, 4))
-    assert det.tried == [(0, 1), (1, 2), (2, 3), (2, 4), (1, 3), (1, 4), (2, 5), (5, 6)]
+    assert det.tried == [(0, 1), (1, 2), (2, 3), (1, 3), (0, 3), (2, 4), (1, 4), (0, 4),
+                         (1, 3), (1, 4), (2, 5), (5, 6)]  # fmt: skip
     assert replanned == [0, 1, 2, 5]
 
 
 def test_a_trap_whose_next_welds_no_one_reaches_is_found_on_the_next_test():
     # car2_200's case: W2's exit leads nowhere and W3, W4 cannot be entered from anywhere; the
     # first test (W3, W4 from W1) keeps W2, the second (W5, W6 from W1) reaches W5: W2 dropped
-    status, detail, welded, det, _ = _walk(8, traps={2}, pockets={3, 4})
+    status, detail, welded, det, _ = _walk(8, free={0, 1}, traps={2}, pockets={3, 4})
     assert welded == [0, 1, 5, 6, 7]
     assert [k for k, s in enumerate(status) if s != OK] == [2, 3, 4]
     assert "W3, W4, W5, W6 after it" in detail[2] and "W5 reached from weld W1" in detail[2]
-    assert det.tried[2:] == [(2, 3), (2, 4), (1, 3), (1, 4), (2, 5), (2, 6), (1, 5), (5, 6),
-                             (6, 7)]  # fmt: skip
+    assert det.tried == [(2, 3), (2, 4), (1, 3), (1, 4), (2, 5), (2, 6), (1, 5), (5, 6),
+                         (6, 7)]  # fmt: skip
 
 
 def test_a_weld_is_tested_as_the_trap_at_most_trap_tests_times():
     # W1 is a trap and W2..W9 are pockets: W1 is tested TRAP_TESTS times (W2..W7 from W0), kept,
     # and W8..W11 are dropped from it without more tests
     assert TRAP_TESTS == 3
-    status, _, welded, det, _ = _walk(12, traps={1}, pockets=set(range(2, 10)))
+    status, _, welded, det, _ = _walk(12, free={0}, traps={1}, pockets=set(range(2, 10)))
     assert welded == [0, 1] and all(s == COLLISION for s in status[2:])
-    assert [b for a, b in det.tried if a == 0] == [1, 2, 3, 4, 5, 6, 7]
+    assert [b for a, b in det.tried if a == 0] == [2, 3, 4, 5, 6, 7]

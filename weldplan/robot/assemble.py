@@ -10,6 +10,13 @@ approach ``b`` (:mod:`weldplan.robot.replan`).
 When no detour is found, ``b`` is dropped (status ``collision``, its ``detail`` naming the body
 that blocked the leg) and the next served weld is tried from ``a``.
 
+*Back along the path.* When no detour from ``a`` reaches ``b``, the robot may go back the way it
+came: along the assembled path (its own motions, reversed, each checked as it was) to a *hub*,
+the end of an earlier transfer (a clear configuration from which OMPL found a way; the latest
+:data:`RETRACE_HUBS`, not ``a``'s own approach, which is where ``a`` is left from), and detour
+from there (transfer, approach ``b``). ``a`` stays served; the rows going back are labelled with
+``a``'s row and are not exact.
+
 *A weld the robot cannot go on from.* When :data:`TRAP_FAILS` welds in a row cannot be reached
 from ``a``, ``a`` itself may be the trap: its exit leads into a pocket no transfer leaves (on
 car2_200 with car2_50's base, one such weld cost all 106 welds tried after it, one OMPL run
@@ -54,6 +61,9 @@ log = logging.getLogger(__name__)
 #: welds in a row not reached from one weld before that weld is tested as the trap (module
 #: docstring)
 TRAP_FAILS = 2
+#: hubs (the ends of earlier transfers) a blocked leg may go back to, the latest first
+#: (:meth:`_Walk.retrace`; each costs a transfer that may fail)
+RETRACE_HUBS = 2
 #: the most times one weld is tested as the trap (each test costs up to :data:`TRAP_FAILS`
 #: transfers that may fail: a bound on what a route whose later welds no one reaches pays)
 TRAP_TESTS = 3
@@ -216,11 +226,15 @@ class _Walk:
     prev: dict[int, tuple[int, Mark]] = field(default_factory=dict)
     #: per weld, how many times it was tested as the trap
     tested: dict[int, int] = field(default_factory=dict)
+    #: rows of the path at the ends of its transfers (clear configurations OMPL connected)
+    hubs: list[tuple[int, int]] = field(default_factory=list)
+    #: the welds reached by going back along the path (:meth:`retrace`)
+    retraced: list[int] = field(default_factory=list)
 
     def mark(self) -> Mark:
         return (*self.out.mark(), len(self.replanned))
 
-    def join(self, a: int, b: int) -> str | None:
+    def join(self, a: int, b: int, retrace: bool = True) -> str | None:
         """Append the leg from weld ``a`` (the path's end) to weld ``b`` and ``b`` itself:
         the route's own rows when free, else a detour. ``None`` when done, else why not (the
         path unchanged)."""
@@ -232,15 +246,63 @@ class _Walk:
             for i in range(ia + 1, ib + 1):
                 self.out.add(q[i], i, bool(self.ex[i]), int(br[i]), bool(own[i]))
             return None
-        path = _detour(self.det, q, br, ia, ib)
-        if path is None:
+        got = _detour(self.det, q, br, ia, ib)
+        if got is None:
+            if retrace and self.retrace(a, b):
+                return None
             return (
                 f"{hits[0].body} on the leg from weld {self.ids[a]}; no detour through retract "
                 "poses found"
             )
-        _add_detour(self.out, self.det.robot, path, ia, ib, self.rows, q, br)
+        n0 = len(self.out.q)
+        _add_detour(self.out, self.det.robot, got[0], ia, ib, self.rows, q, br)
         self.replanned.append(a)
+        self._hubs_at(n0, got[1:], (-1, b))
         return None
+
+    def _hubs_at(self, n0: int, confs: tuple[NDArray, ...], owners: tuple[int, ...]) -> None:
+        """Record as hubs the rows from ``n0`` on that equal ``confs`` (a transfer's ends: clear
+        configurations from which OMPL found a way), each with the weld it approaches (-1:
+        none; a weld's approach is also where it is left from, no way round it)."""
+        for c, k in zip(confs, owners, strict=True):
+            for i in range(n0, len(self.out.q)):
+                if np.array_equal(self.out.q[i], c):
+                    self.hubs.append((i, k))
+                    break
+
+    def retrace(self, a: int, b: int) -> bool:
+        """Reach weld ``b`` from weld ``a`` (the path's end) by going back along the path to one
+        of the last :data:`RETRACE_HUBS` hubs and detouring from there (module docstring);
+        whether that worked (rows appended, else the path unchanged)."""
+        ia, ib = int(self.rows[a]), int(self.rows[b])
+        end = len(self.out.q) - 1
+        hubs: list[int] = []
+        for h, k in reversed(self.hubs):  # the latest first, not a's own, each place once
+            if h < end and k != a and not any(np.array_equal(self.out.q[h], self.out.q[g])
+                                              for g in hubs):  # fmt: skip
+                hubs.append(h)
+        hubs = hubs[:RETRACE_HUBS]
+        lb = self.det.leave(self.q[ib], ib, int(self.branch[ib])) if hubs else None
+        if lb is None:
+            return False
+        for h in hubs:
+            mid = self.det.transfer(self.out.q[h], lb[-1])
+            if mid is None:
+                continue
+            out, zones = self.out, list(self.out.zone)
+            for j in range(end - 1, h - 1, -1):  # back along the path: its own motions reversed
+                out.zone[-1] = zones[j]
+                out.add(out.q[j], ia, False, out.branch[j])
+            n0 = len(out.q)
+            P = np.vstack([mid, lb[:-1][::-1]])  # from the hub again: a motion of length 0
+            _add_detour(out, self.det.robot, P, ia, ib, self.rows, self.q, self.branch, False)
+            self.replanned.append(a)
+            self.retraced.append(b)
+            self._hubs_at(n0, (lb[-1],), (b,))
+            log.info("weld %s reached from weld %s back along the path (%d rows)",
+                     self.ids[b], self.ids[a], end - h)  # fmt: skip
+            return True
+        return False
 
     def drop(self, k: int, why: str) -> None:
         self.status[k], self.detail[k] = COLLISION, why
@@ -252,14 +314,15 @@ class _Walk:
         welds dropped in a row from it, the welds to try again next)``."""
         self.tested[a] = self.tested.get(a, 0) + 1
         p, (n, z, n_rep) = self.prev[a]
-        saved, saved_rep = self.out.cut((n, z)), self.replanned[n_rep:]
+        saved, saved_rep, saved_hubs = self.out.cut((n, z)), self.replanned[n_rep:], self.hubs
         del self.replanned[n_rep:]
+        self.hubs = [(h, k) for h, k in self.hubs if h < n]
         ra = int(self.rows[a])
         ex_a, self.ex[ra] = bool(self.ex[ra]), False
         window = fails[-TRAP_FAILS:]
         for j, f in enumerate(window):
             mark = self.mark()
-            if self.join(p, f) is None:
+            if self.join(p, f, retrace=False) is None:  # a's retrace tried the hubs
                 names = ", ".join(self.ids[k] for k in fails[:5])
                 more = f" and {len(fails) - 5} more" if len(fails) > 5 else ""
                 self.drop(
@@ -273,6 +336,7 @@ class _Walk:
                 return f, [], window[j + 1 :]
         self.out.paste(saved)
         self.replanned.extend(saved_rep)
+        self.hubs = saved_hubs
         self.ex[ra] = ex_a
         log.info("weld %s kept: neither of %s is reached without it", self.ids[a],
                  ", ".join(self.ids[k] for k in window))  # fmt: skip
@@ -292,8 +356,11 @@ def _leg_hits(
     return det.checker.path_hits(q[at[0] : at[0] + 2], own[at[0] : at[0] + 1])
 
 
-def _detour(det: Detour, q: NDArray, branch: NDArray, ia: int, ib: int) -> NDArray | None:
-    """``[leave a ..., transfer ..., approach b ...]`` (rad), else ``None``."""
+def _detour(
+    det: Detour, q: NDArray, branch: NDArray, ia: int, ib: int
+) -> tuple[NDArray, NDArray, NDArray] | None:
+    """``([leave a ..., transfer ..., approach b ...] (rad), transfer start, transfer end)``,
+    else ``None``."""
     la = det.leave(q[ia], ia, int(branch[ia]))
     lb = None if la is None else det.leave(q[ib], ib, int(branch[ib]))
     if la is None or lb is None:
@@ -301,7 +368,7 @@ def _detour(det: Detour, q: NDArray, branch: NDArray, ia: int, ib: int) -> NDArr
     mid = det.transfer(la[-1], lb[-1])
     if mid is None:
         return None
-    return np.vstack([la[:-1], mid, lb[:-1][::-1]])
+    return np.vstack([la[:-1], mid, lb[:-1][::-1]]), la[-1], lb[-1]
 
 
 def _add_detour(
@@ -313,10 +380,13 @@ def _add_detour(
     rows: NDArray[np.int64],
     q: NDArray,
     branch: NDArray,
+    leave_zone: bool = True,
 ) -> None:
     """Rows of a detour from the weld at route row ``ia`` to the one at ``ib``: the retract
     (labelled ``ia``), inner points (labelled ``ia``, then one per weld passed between), the
-    approach (labelled ``ib``) and the weld ``ib`` itself."""
+    approach (labelled ``ib``) and the weld ``ib`` itself. ``leave_zone``: the motion from the
+    path's end to ``path[0]`` is checked with the contact zone exempt (it leaves a weld; not so
+    from a clear configuration, :meth:`_Walk.retrace`)."""
     passed = [int(r) for r in rows if ia < r < ib]
     P = subdivide(path, len(passed))
     pb = robot.branch_of(P)
@@ -324,7 +394,7 @@ def _add_detour(
     labels[-1] = ib
     for j, r in enumerate(passed):  # the last inner points stand for the welds passed
         labels[len(P) - 1 - len(passed) + j] = r
-    out.zone[-1] = True  # weld -> retract: contact zone exempt
+    out.zone[-1] = leave_zone  # weld -> retract: contact zone exempt
     for p, lab, b in zip(P, labels, pb, strict=True):
         out.add(p, lab, False, int(b), zone=False)
     out.zone[-1] = True  # approach -> weld
