@@ -73,13 +73,13 @@ def _walk(n, free=(), **kw):
     status = [OK] * n
     detail = [""] * n
     ids = tuple(f"W{i}" for i in range(n))
-    Q, row, exact, _, _, replanned = assemble(
+    Q, row, exact, _, zone, replanned = assemble(
         det, q, np.ones(n, bool), np.zeros(n, np.int64), rows, status, detail, ids
     )
     assert np.all(np.diff(row) >= 0)  # the rows stay in route order, none twice as a weld
     welded = [int(r) for r in row[exact]]
     assert len(set(welded)) == len(welded)
-    _walk.path = Q[:, 0]
+    _walk.path, _walk.zone = Q[:, 0], zone
     return status, detail, welded, det, replanned
 
 
@@ -95,9 +95,13 @@ def test_a_weld_whose_exit_leads_nowhere_is_left_back_along_the_path():
     assert status == [OK] * 6 and welded == list(range(6))
     assert det.tried == [(0, 1), (1, 2), (2, 3), (1, 3), (3, 4), (4, 5)]
     at = int(np.flatnonzero(_walk.path == 2)[0])
-    # W2, back to its approach (2.5) and the hub (1.5), the detour from there (from the hub
-    # again: a motion of length 0), W3's approach (3.5), W3
-    np.testing.assert_array_equal(_walk.path[at : at + 6], [2, 2.5, 1.5, 1.5, 3.5, 3])
+    # W2, back to its approach (2.5) and the hub (1.5), the transfer from there to W3's
+    # approach (3.5), W3
+    np.testing.assert_array_equal(_walk.path[at : at + 5], [2, 2.5, 1.5, 3.5, 3])
+    assert np.all(np.diff(_walk.path) != 0)  # no motion of length 0
+    # each motion going back checked as it was forward (2.5 -> 2 the approach, zone exempt;
+    # 1.5 -> 2.5 the transfer, whole tool), the new transfer with the whole tool
+    np.testing.assert_array_equal(_walk.zone[at : at + 4], [True, False, False, True])
 
 
 def test_a_weld_the_robot_cannot_go_on_from_is_dropped_not_every_weld_after_it():

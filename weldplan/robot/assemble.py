@@ -290,12 +290,12 @@ class _Walk:
             if mid is None:
                 continue
             out, zones = self.out, list(self.out.zone)
-            for j in range(end - 1, h - 1, -1):  # back along the path: its own motions reversed
-                out.zone[-1] = zones[j]
+            for j in range(end - 1, h, -1):  # back along the path: its own motions reversed,
+                out.zone[-1] = zones[j]  # each checked as it was (zones[j]: j -> j + 1)
                 out.add(out.q[j], ia, False, out.branch[j])
             n0 = len(out.q)
-            P = np.vstack([mid, lb[:-1][::-1]])  # from the hub again: a motion of length 0
-            _add_detour(out, self.det.robot, P, ia, ib, self.rows, self.q, self.branch, False)
+            P = np.vstack([mid, lb[:-1][::-1]])  # mid[0]: the hub, reached by the motion h + 1 -> h
+            _add_detour(out, self.det.robot, P, ia, ib, self.rows, self.q, self.branch, zones[h])
             self.replanned.append(a)
             self.retraced.append(b)
             self._hubs_at(n0, (lb[-1],), (b,))
