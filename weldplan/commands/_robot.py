@@ -192,11 +192,17 @@ def pose_acceptance(
 
     from weldplan.robot.collision import RobotCollision
     from weldplan.robot.posechoice import ReachTest, place_for_poses
+    from weldplan.robot.reach import BaseSearch
+    from weldplan.robot.selfcollision import cell_floor
     from weldplan.tool import plan_weld_poses
 
     t0 = time.perf_counter()
     F = flange_tcp(args, robot)
-    checker = RobotCollision(robot, cell.part, None, F, contact_radius=args.contact_radius)
+    # a base searched here stands on place_for_poses' floor (BaseSearch()'s): links stay above it
+    floor = None if _base_fixed(args) else cell_floor(BaseSearch(), None, cell.part)
+    checker = RobotCollision(
+        robot, cell.part, None, F, contact_radius=args.contact_radius, floor_z=floor
+    )
     placement = None
     if not _base_fixed(args):
         first = plan_weld_poses(
@@ -304,10 +310,12 @@ def _joint_route(
     Raises :class:`PlanningError` when the path still collides."""
     from weldplan.robot.plan import plan_robot_route
     from weldplan.robot.reach import BaseSearch
+    from weldplan.robot.selfcollision import cell_floor
     from weldplan.tool.route_frames import route_poses
 
     poses = route_poses(route)
-    given = _base_fixed(args) or (reach is not None and reach.placement is not None)
+    searched_first = reach is not None and reach.placement is not None
+    given = _base_fixed(args) or searched_first
     if reach is not None:
         robot = reach.robot
     gun = _gun_route(route, poses)  # None: the robot follows the point-tip route
@@ -325,6 +333,8 @@ def _joint_route(
         tcp_poses=None if gun is None else gun.tcp,
         zone=None if gun is None else gun.zone,
         exits=None if gun is None else gun.exits,
+        # the base searched before the poses stands on BaseSearch()'s floor (none when given)
+        floor_z=cell_floor(BaseSearch(), None, cell.part) if searched_first else None,
     )
     if reach is not None and reach.placement is not None:  # searched, before the poses
         rr.stats["placement"].update(
