@@ -133,16 +133,43 @@ def test_ordinary_motions_pass_and_free_verdicts_hold_under_dense_sampling(gun_c
     assert n_free >= 3 and n_blocked >= 1
 
 
-def test_the_floor_is_the_searched_bases_only():
-    part = make_plate([0.0, 0.0, 250.0], 2)  # lowest point z = 249
-    assert cell_floor(BaseSearch(), None, part) == pytest.approx(249.0)
-    assert cell_floor(BaseSearch(floor_z=-10.0), None, part) == -10.0
-    assert cell_floor(BaseSearch(), np.eye(4), part) is None  # a given base: no floor known
-    assert cell_floor(None, None, part) is None
-    assert cell_floor(BaseSearch(line=((0, 0, 0), (1, 0, 0))), None, part) is None
+def test_a_floor_is_known_only_when_given():
+    assert cell_floor(BaseSearch(floor_z=-10.0), None) == -10.0
+    # the search's default (the part's lowest point) is where it stands the base, not a floor
+    assert cell_floor(BaseSearch(), None) is None
+    assert cell_floor(BaseSearch(floor_z=-10.0), np.eye(4)) is None  # a given base
+    assert cell_floor(None, None) is None
+    assert cell_floor(BaseSearch(floor_z=0.0, line=((0, 0, 0), (1, 0, 0))), None) is None
 
 
 def _lifted(z: float) -> np.ndarray:
     B = np.eye(4)
     B[2, 3] = z
     return B
+
+
+def test_plan_robot_route_keeps_the_links_above_a_given_floor(robot):
+    """The box scene (base 0.7 m below the box): a floor 100 mm below the box's floor plate
+    cuts through link_1, so no weld is served, and the details name the pair; a floor 100 mm
+    below the base (a pedestal) changes nothing, and the route records the floor it was checked
+    against for verify --robot."""
+    from tests.robot_helpers import BOX_BASE, TORCH_TCP, down_poses
+    from tests.route_fixtures import box_part, box_route
+    from weldplan.robot.plan import plan_robot_route
+    from weldplan.robot.routejson import RobotCheck
+    from weldplan.tool import arc_torch
+
+    route = box_route()
+    kw = dict(flange_tcp=TORCH_TCP, part=box_part(), tool=arc_torch(), base=BOX_BASE)
+    rr = plan_robot_route(route, down_poses(route), robot, floor_z=-100.0, replan=False, **kw)
+    assert rr.status == ("collision",) * 3 and not rr.stats["collision_free"]
+    assert all(d.startswith("link_1/floor collide (the floor) at the weld pose") for d in rr.detail)
+    assert "link_1/floor" in {h["body"] for h in rr.stats["hits"]}
+    rr = plan_robot_route(route, down_poses(route), robot, floor_z=-800.0, replan=False, **kw)
+    bare = plan_robot_route(route, down_poses(route), robot, replan=False, **kw)
+    assert rr.stats["floor_z"] == -800.0 and bare.stats["floor_z"] is None
+    assert rr.status == bare.status and rr.stats["hits"] == bare.stats["hits"]  # the wall graze
+    assert (
+        "above the floor at z -800 mm" in RobotCheck(True, 0.0, 0.0, (), (), 3, -800.0).describe()
+    )
+    assert "no floor known" in RobotCheck(True, 0.0, 0.0, (), (), 3).describe()

@@ -80,6 +80,14 @@ def add_robot_arguments(p: argparse.ArgumentParser) -> None:
         help="robot base in the part frame (mm, degrees about +z); default: searched on the floor",
     )
     g.add_argument(
+        "--floor-z",
+        metavar="MM",
+        type=_number("height in mm", -1e6, 1e6),
+        help="the cell's floor height in the part frame: the base search stands the robot on it "
+        "(default: the part's lowest point) and no link nor the tool may reach below it "
+        "(default: no floor known, not checked)",
+    )
+    g.add_argument(
         "--weld-time",
         metavar="S",
         type=_number("number of s", 0.0, 3600.0),
@@ -140,7 +148,7 @@ def robot_from_args(args: argparse.Namespace) -> Any:
     """The robot (placed at ``--robot-base`` when given), ``None`` without ``--robot``; options
     that need it, or a tool, fail here, before any planning."""
     if not getattr(args, "robot", None):
-        for opt in ("opw", "robot_base", "trajectory", "tool_mass", "robot_html"):
+        for opt in ("opw", "robot_base", "floor_z", "trajectory", "tool_mass", "robot_html"):
             if getattr(args, opt, None) is not None:
                 raise WeldplanError(f"--{opt.replace('_', '-')} needs --robot")
         if getattr(args, "cost", "length") == "time":
@@ -193,13 +201,11 @@ def pose_acceptance(
     from weldplan.robot.collision import RobotCollision
     from weldplan.robot.posechoice import ReachTest, place_for_poses
     from weldplan.robot.reach import BaseSearch
-    from weldplan.robot.selfcollision import cell_floor
     from weldplan.tool import plan_weld_poses
 
     t0 = time.perf_counter()
     F = flange_tcp(args, robot)
-    # a base searched here stands on place_for_poses' floor (BaseSearch()'s): links stay above it
-    floor = None if _base_fixed(args) else cell_floor(BaseSearch(), None, cell.part)
+    floor = getattr(args, "floor_z", None)
     checker = RobotCollision(
         robot, cell.part, None, F, contact_radius=args.contact_radius, floor_z=floor
     )
@@ -209,7 +215,9 @@ def pose_acceptance(
             cell, route, tool, cone=args.tool_cone, contact_radius=args.contact_radius
         )
         try:
-            placement = place_for_poses(robot, route, first, F, cell.part, checker)
+            placement = place_for_poses(
+                robot, route, first, F, cell.part, checker, BaseSearch(floor_z=floor)
+            )
         except PlanningError as exc:
             log.warning("robot reach test skipped: no base for the first-pass poses (%s)", exc)
             return None
@@ -310,12 +318,10 @@ def _joint_route(
     Raises :class:`PlanningError` when the path still collides."""
     from weldplan.robot.plan import plan_robot_route
     from weldplan.robot.reach import BaseSearch
-    from weldplan.robot.selfcollision import cell_floor
     from weldplan.tool.route_frames import route_poses
 
     poses = route_poses(route)
-    searched_first = reach is not None and reach.placement is not None
-    given = _base_fixed(args) or searched_first
+    given = _base_fixed(args) or (reach is not None and reach.placement is not None)
     if reach is not None:
         robot = reach.robot
     gun = _gun_route(route, poses)  # None: the robot follows the point-tip route
@@ -328,13 +334,12 @@ def _joint_route(
         part=cell.part,
         tool=tool,
         base=robot.base if given else None,
-        search=None if given else BaseSearch(),
+        search=None if given else BaseSearch(floor_z=getattr(args, "floor_z", None)),
         rng=args.seed,
         tcp_poses=None if gun is None else gun.tcp,
         zone=None if gun is None else gun.zone,
         exits=None if gun is None else gun.exits,
-        # the base searched before the poses stands on BaseSearch()'s floor (none when given)
-        floor_z=cell_floor(BaseSearch(), None, cell.part) if searched_first else None,
+        floor_z=getattr(args, "floor_z", None),  # a given floor is checked whatever the base
     )
     if reach is not None and reach.placement is not None:  # searched, before the poses
         rr.stats["placement"].update(

@@ -137,8 +137,6 @@ class Hit:
     distance: float
 
 
-
-
 def sphere_rates(
     F: NDArray[np.float64],
     frame: int,

@@ -223,9 +223,8 @@ def plan_robot_route(
         the weld along them before it tries its own retracts.
     floor_z
         mm: the floor (part frame) no link nor the tool may reach
-        (:mod:`weldplan.robot.selfcollision`); default: the floor a searched base stands on
-        (``search.floor_z``, else the part's lowest point), none for a given base (not checked;
-        ``stats["floor_z"]`` is then ``None``).
+        (:mod:`weldplan.robot.selfcollision`); default: ``search.floor_z`` for a searched base,
+        else none (not checked; ``stats["floor_z"]`` is then ``None``).
 
     Raises
     ------
@@ -251,7 +250,7 @@ def plan_robot_route(
     rows = weld_rows(route)
     zone_r = _contact_radius(contact_radius, poses)
     if floor_z is None:
-        floor_z = cell_floor(search, base, part)
+        floor_z = cell_floor(search, base)
     checker = (
         RobotCollision(robot, part, tool, F, contact_radius=zone_r, floor_z=floor_z)
         if check_collision

@@ -19,7 +19,10 @@ which must weld the route's welds with a pose, each at its spot and pose), every
 the joint limits, and the robot's links plus the tool are checked against the part along every
 joint-space motion
 (:class:`weldplan.robot.collision.RobotCollision`, the same proof the robot route was verified
-with: the contact zone about the TCP exempt, as the weld poses were verified).
+with: the contact zone about the TCP exempt, as the weld poses were verified), against each other
+(self-collision, the whole tool) and against the floor the route names (``stats["floor_z"]``:
+the searched base's floor; a route without one is not checked against a floor, and the report
+says so).
 """
 
 from __future__ import annotations

@@ -22,7 +22,9 @@ rare configuration. Every other pair is checked; on the shared KUKA with the gun
 applies (no other pair touches at the zero pose, none touches at every sample).
 
 The floor: every body except those of the root link (it stands on the floor or on its pedestal)
-must stay more than :data:`SELF_GAP_MM` above it. Without a known floor it is not checked.
+must stay more than :data:`SELF_GAP_MM` above it. Without a known floor it is not checked: a floor
+is known when it is given (``plan --floor-z``, :attr:`weldplan.robot.reach.BaseSearch.floor_z`,
+``plan_robot_route(floor_z=)``), not where the base search assumes one (:func:`cell_floor`).
 
 States: a pair whose bounding spheres are apart cannot touch; FCL collide judges the rest, as the
 part's state check does (likewise a body whose bounding sphere stays above the floor).
@@ -202,15 +204,15 @@ def allowed_collisions(
     return acm
 
 
-def cell_floor(search: Any, base: Any, part: Any) -> float | None:
-    """mm: the floor height (part frame) a base search stands the robot on: ``search.floor_z``,
-    else the part's lowest point (:func:`weldplan.robot.reach.candidate_bases`); ``None`` when no
-    floor is known (a given base, no search, or a search along a line)."""
+def cell_floor(search: Any, base: Any) -> float | None:
+    """mm: the floor (part frame) a base search was told it stands the robot on,
+    ``search.floor_z``; ``None`` when no floor is known: a given base, no search, a search along
+    a line, or no ``floor_z`` (the search then stands the robot on the part's lowest point,
+    :func:`weldplan.robot.reach.candidate_bases`: an assumption about where to put the base,
+    not a floor anyone gave; the part may stand on a fixture)."""
     if base is not None or search is None or getattr(search, "line", None) is not None:
         return None
-    if search.floor_z is not None:
-        return float(search.floor_z)
-    return float(part.bounds[0, 2]) if part is not None else 0.0
+    return None if search.floor_z is None else float(search.floor_z)
 
 
 class SelfCheck:
