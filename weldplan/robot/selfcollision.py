@@ -118,14 +118,6 @@ class AllowedCollisions:
         return [f"{self.names[i]}/{self.names[j]}: {w}" for (i, j), w in self.reasons.items()]
 
 
-def _pair_touch(bodies: list[Any], i: int, j: int, F: NDArray[np.float64]) -> bool:
-    """Whether bodies ``i`` and ``j`` touch (FCL collide) at link frames ``F (7, 4, 4)``."""
-    a, b = bodies[i], bodies[j]
-    a.obj.setTransform(fcl_tf(F[a.frame]))
-    b.obj.setTransform(fcl_tf(F[b.frame]))
-    return bool(fcl.collide(a.obj, b.obj, fcl.CollisionRequest(), fcl.CollisionResult()))
-
-
 def _pair_distance(bodies: list[Any], i: int, j: int, F: NDArray[np.float64]) -> float:
     """mm: FCL distance of bodies ``i`` and ``j`` at link frames ``F (7, 4, 4)``; 0 on contact."""
     a, b = bodies[i], bodies[j]
@@ -294,15 +286,13 @@ class SelfCheck:
             return out
         c = self._centres(F)
         use = self._use(tool)
-        for i, j in self.acm.checked:
-            if not (use[i] and use[j]):
-                continue
-            near = np.linalg.norm(c[:, i] - c[:, j], axis=1) <= (
-                self.radius[i] + self.radius[j] + SELF_GAP_MM
-            )
-            for k in np.flatnonzero(near):
-                if out[k] is None and _pair_touch(self.bodies, i, j, F[k]):
-                    out[k] = self._names(i, j)
+        pairs = [(i, j) for i, j in self.acm.checked if use[i] and use[j]]
+        if pairs:
+            I, J = np.array(pairs).T
+            gap = np.linalg.norm(c[:, I] - c[:, J], axis=2) - self.radius[I] - self.radius[J]
+            near = gap <= SELF_GAP_MM  # (n, pairs): bounding spheres meet
+            for k in np.flatnonzero(near.any(axis=1)):
+                out[k] = self._touching(F[k], [pairs[p] for p in np.flatnonzero(near[k])])
         if self.floor_z is not None:
             for b in self.on_floor:
                 near = c[:, b, 2] - self.radius[b] <= self.floor_z
@@ -310,6 +300,20 @@ class SelfCheck:
                     if out[k] is None and self._below(robot, b, F[k], 0.0):
                         out[k] = self._names(b, -1)
         return out
+
+    def _touching(self, F: NDArray[np.float64], pairs: list[tuple[int, int]]) -> str | None:
+        """The first of ``pairs`` that touches (FCL collide) at link frames ``F (7, 4, 4)``, each
+        body placed once."""
+        placed: set[int] = set()
+        for i, j in pairs:
+            for b in (i, j):
+                if b not in placed:
+                    self.bodies[b].obj.setTransform(fcl_tf(F[self.bodies[b].frame]))
+                    placed.add(b)
+            req, res = fcl.CollisionRequest(), fcl.CollisionResult()
+            if fcl.collide(self.bodies[i].obj, self.bodies[j].obj, req, res):
+                return self._names(i, j)
+        return None
 
     def _suspects(
         self, robot: Any, qa: NDArray[np.float64], qb: NDArray[np.float64]
