@@ -19,7 +19,8 @@ A pair of bodies is not checked when it is
 MoveIt's fourth rule ("never" in contact over the samples) is not used: a sample proves nothing
 about the configurations it missed, and the tool folded into the upper arm is exactly such a
 rare configuration. Every other pair is checked; on the shared KUKA with the gun only rule 1
-applies (no other pair touches at the zero pose, none touches at every sample).
+applies (no other pair touches at the zero pose, none touches at every sample): 20 of its 28
+pairs are checked.
 
 The floor: every body except those of the root link (it stands on the floor or on its pedestal)
 must stay more than :data:`SELF_GAP_MM` above it. Without a known floor it is not checked: a floor
@@ -33,10 +34,12 @@ Motions (linear in joint space): during a motion the points of body ``a`` move r
 frame of body ``b`` (the lower link) only through the joints between them, at most ``sum_j |dq_j|
 R_j`` mm (``R_j`` bounding their distance to joint j's axis: the checker's motion radii); against
 the floor the whole chain counts. A pair whose bounding spheres, at either end of the motion, are
-farther apart than that bound plus the gap is free; the others are advanced conservatively with FCL
-distance (from a configuration at distance ``d`` nothing can touch before the bodies have moved
-``d`` relative to each other; closer than :data:`SELF_GAP_MM` counts as a collision), as the part
-check does.
+farther apart than that bound plus the gap is free; the others are advanced conservatively with
+FCL distance (from a configuration at distance ``d`` nothing can touch before the bodies have
+moved ``d`` relative to each other; closer than :data:`SELF_GAP_MM` counts as a collision), as the
+part check does. Against the floor the motion is bisected on FCL collide instead
+(:meth:`SelfCheck._floor_motion`: FCL's distance to a box is slow). A motion's hit is the pair
+that meets first.
 
 A hit names the pair ``"tool/link_3"`` (the body on the later link first) or ``"link_2/floor"``.
 """
