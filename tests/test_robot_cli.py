@@ -32,6 +32,7 @@ def _gun_urdf():
         (["--acc-scale", "0"], "--acc-scale"),
         (["--robot-base", "1,2,3"], "--robot-base"),
         (["--robot-base", "1,2,3,inf"], "--robot-base"),
+        (["--floor-z", "nan"], "--floor-z"),
     ],
 )
 def test_bad_robot_options_are_one_line_errors(tmp_path, capsys, extra, needle):
@@ -48,6 +49,7 @@ def test_bad_robot_options_are_one_line_errors(tmp_path, capsys, extra, needle):
     [
         (["--trajectory", "t.csv"], "--trajectory needs --robot"),
         (["--robot-base", "0,0,0,0"], "--robot-base needs --robot"),
+        (["--floor-z", "0"], "--floor-z needs --robot"),
         (["--robot", "ROBOT"], "--robot needs a --tool"),
     ],
 )

@@ -80,6 +80,14 @@ def add_robot_arguments(p: argparse.ArgumentParser) -> None:
         help="robot base in the part frame (mm, degrees about +z); default: searched on the floor",
     )
     g.add_argument(
+        "--floor-z",
+        metavar="MM",
+        type=_number("height in mm", -1e6, 1e6),
+        help="the cell's floor height in the part frame: the base search stands the robot on it "
+        "(default: the part's lowest point) and no link nor the tool may reach below it "
+        "(default: no floor known, not checked)",
+    )
+    g.add_argument(
         "--weld-time",
         metavar="S",
         type=_number("number of s", 0.0, 3600.0),
@@ -140,7 +148,7 @@ def robot_from_args(args: argparse.Namespace) -> Any:
     """The robot (placed at ``--robot-base`` when given), ``None`` without ``--robot``; options
     that need it, or a tool, fail here, before any planning."""
     if not getattr(args, "robot", None):
-        for opt in ("opw", "robot_base", "trajectory", "tool_mass", "robot_html"):
+        for opt in ("opw", "robot_base", "floor_z", "trajectory", "tool_mass", "robot_html"):
             if getattr(args, opt, None) is not None:
                 raise WeldplanError(f"--{opt.replace('_', '-')} needs --robot")
         if getattr(args, "cost", "length") == "time":
@@ -192,18 +200,24 @@ def pose_acceptance(
 
     from weldplan.robot.collision import RobotCollision
     from weldplan.robot.posechoice import ReachTest, place_for_poses
+    from weldplan.robot.reach import BaseSearch
     from weldplan.tool import plan_weld_poses
 
     t0 = time.perf_counter()
     F = flange_tcp(args, robot)
-    checker = RobotCollision(robot, cell.part, None, F, contact_radius=args.contact_radius)
+    floor = getattr(args, "floor_z", None)
+    checker = RobotCollision(
+        robot, cell.part, None, F, contact_radius=args.contact_radius, floor_z=floor
+    )
     placement = None
     if not _base_fixed(args):
         first = plan_weld_poses(
             cell, route, tool, cone=args.tool_cone, contact_radius=args.contact_radius
         )
         try:
-            placement = place_for_poses(robot, route, first, F, cell.part, checker)
+            placement = place_for_poses(
+                robot, route, first, F, cell.part, checker, BaseSearch(floor_z=floor)
+            )
         except PlanningError as exc:
             log.warning("robot reach test skipped: no base for the first-pass poses (%s)", exc)
             return None
@@ -320,11 +334,12 @@ def _joint_route(
         part=cell.part,
         tool=tool,
         base=robot.base if given else None,
-        search=None if given else BaseSearch(),
+        search=None if given else BaseSearch(floor_z=getattr(args, "floor_z", None)),
         rng=args.seed,
         tcp_poses=None if gun is None else gun.tcp,
         zone=None if gun is None else gun.zone,
         exits=None if gun is None else gun.exits,
+        floor_z=getattr(args, "floor_z", None),  # a given floor is checked whatever the base
     )
     if reach is not None and reach.placement is not None:  # searched, before the poses
         rr.stats["placement"].update(

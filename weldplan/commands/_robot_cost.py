@@ -105,7 +105,9 @@ def time_leg_cost(args: argparse.Namespace, cell: Any, tool: Any, robot: Any) ->
         weld_time=args.weld_time,
         velocity_scale=args.vel_scale,
         acceleration_scale=args.acc_scale,
-        search=BaseSearch() if args.robot_base is None else None,
+        search=BaseSearch(floor_z=getattr(args, "floor_z", None))
+        if args.robot_base is None
+        else None,
         cone=args.tool_cone,
         contact_radius=args.contact_radius,
     )

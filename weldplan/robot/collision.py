@@ -33,7 +33,14 @@ shortcut shared with any planner:
    distances, and so the same steps, as against the whole part, several times cheaper.
 
 The part is a surface (sheet metal): a body wholly inside a closed solid is not seen here.
-Robot self-collision and the floor are not checked.
+
+The robot against itself and against the floor (:mod:`weldplan.robot.selfcollision`): every
+state and motion checked here is also checked for the pairs of bodies its allowed collision
+matrix does not exempt (the whole tool against the links away from its mount, links against
+links not adjacent in the chain) and, when the cell's floor is known (``floor_z``), for every body
+but the root link against the floor; with the same proof (bounding spheres, then FCL
+conservative advancement, closer than 1 mm counts). A hit names the pair (``"tool/link_3"``,
+``"link_2/floor"``).
 """
 
 from __future__ import annotations
@@ -51,6 +58,7 @@ from weldplan.geometry.distbound import DistanceBound
 from weldplan.geometry.spherecover import sphere_cover
 from weldplan.robot.model import Robot
 from weldplan.robot.nearpart import AlongMotion, PartCrops, fcl_distance, fcl_tf
+from weldplan.robot.selfcollision import SelfCheck, allowed_collisions
 from weldplan.tool.model import Tool, bvh
 
 log = logging.getLogger(__name__)
@@ -117,7 +125,8 @@ class Hit:
     t
         Fraction of the motion (0..1) where the body came within :data:`MIN_GAP_MM`.
     body
-        The body's name (a link name or ``tool``).
+        The body's name (a link name or ``tool``), or the pair that met (``"tool/link_3"``,
+        ``"link_2/floor"``: :mod:`weldplan.robot.selfcollision`).
     distance
         mm: FCL distance there (0 when the meshes intersect).
     """
@@ -126,8 +135,6 @@ class Hit:
     t: float
     body: str
     distance: float
-
-
 
 
 def sphere_rates(
@@ -178,6 +185,8 @@ class RobotCollision:
         ``(4, 4)`` mm: the TCP in the flange frame.
     contact_radius
         mm: the tool's contact zone exempt on motions that end at a weld.
+    floor_z
+        mm: the floor height in the part frame (``None``: no floor known, not checked).
     """
 
     def __init__(
@@ -188,11 +197,13 @@ class RobotCollision:
         flange_tcp: ArrayLike | None = None,
         *,
         contact_radius: float = 20.0,
+        floor_z: float | None = None,
     ) -> None:
         from weldplan.geometry.distance import SurfaceDistance
 
         self.robot = robot
         self.part = part
+        self.floor_z = None if floor_z is None else float(floor_z)
         self.distance = SurfaceDistance(part)
         # the part's derived structures, shared with every with_robot copy (made before or after
         # they are built): the distance table is filled lazily, and a table per copy refilled
@@ -220,6 +231,20 @@ class RobotCollision:
             lo, hi = np.asarray(self.part.bounds, dtype=np.float64)
             self._shared["bound"] = DistanceBound(self.distance, lo, hi)
         return self._shared["bound"]  # type: ignore[return-value]
+
+    @property
+    def selfcheck(self) -> SelfCheck:
+        """The self-collision and floor checks of the links and the whole tool
+        (:class:`~weldplan.robot.selfcollision.SelfCheck`; its allowed collision matrix computed
+        on first use, once per robot and tool)."""
+        key = ("self", self.floor_z)
+        if key not in self._shared:
+            bodies = self.bodies
+            acm = allowed_collisions(self.robot, bodies)
+            t = np.linalg.norm(self.robot.origins[:, :3, 3], axis=1)
+            reach = float(t[0] + self.radii_full[0].max())
+            self._shared[key] = SelfCheck(bodies, self.radii_full, acm, self.floor_z, reach)
+        return self._shared[key]  # type: ignore[return-value]
 
     def with_robot(self, robot: Robot) -> RobotCollision:
         """The same checker for ``robot`` at another base (part structures and link covers are
@@ -265,7 +290,8 @@ class RobotCollision:
 
     # ---------------------------------------------------------------------------- one state
     def state_free(self, q: ArrayLike, *, zone: bool = False) -> bool:
-        """Whether no body (FCL collide) touches the part at configuration ``q (6,)`` rad."""
+        """Whether no body (FCL collide) touches the part at configuration ``q (6,)`` rad, nor
+        another body or the floor (:attr:`selfcheck`)."""
         F = self.robot.link_frames(np.asarray(q, dtype=np.float64))[0]
         bodies = self.zone_bodies if zone else self.bodies
         c = np.array([F[b.frame, :3, :3] @ b.centre + F[b.frame, :3, 3] for b in bodies])
@@ -276,13 +302,15 @@ class RobotCollision:
             body.obj.setTransform(fcl_tf(F[body.frame]))
             if fcl.collide(body.obj, self.part_obj, fcl.CollisionRequest(), fcl.CollisionResult()):
                 return False
-        return True
+        return self.selfcheck.states(self.robot, F[None])[0] is None
 
     def states_blocked(
         self, Q: ArrayLike, *, zone: bool = True, tool: bool = True
     ) -> list[str | None]:
         """Per configuration of ``Q (n, 6)`` rad: the first body (link name or ``tool``) that
-        touches the part (FCL collide), ``None`` where none does (``tool=False``: links only).
+        touches the part (FCL collide), else the first pair that touches (``"tool/link_3"``,
+        ``"link_2/floor"``: :attr:`selfcheck`, the whole tool), ``None`` where none does
+        (``tool=False``: links only).
 
         Broad phase, vectorised: a body whose bounding sphere is farther from the part than its
         radius (exact point-surface distance, open3d) cannot touch it; FCL judges the rest.
@@ -308,6 +336,9 @@ class RobotCollision:
             body.obj.setTransform(fcl_tf(F[i, body.frame]))
             if fcl.collide(body.obj, self.part_obj, fcl.CollisionRequest(), fcl.CollisionResult()):
                 out[i] = body.name
+        rest = [i for i in range(len(Q)) if out[i] is None]
+        for i, b in zip(rest, self.selfcheck.states(self.robot, F[rest], tool=tool), strict=True):
+            out[i] = b
         return out
 
     def body_distance(self, body: Body, F: NDArray[np.float64]) -> float:
@@ -359,6 +390,10 @@ class RobotCollision:
                     hits.append(hit)
                     if first_only:
                         return hits
+        # the robot against itself and the floor (the whole tool), on the motions still free
+        free = np.setdiff1d(np.arange(ns), [h.segment for h in hits])
+        for s, t, pair, d in self.selfcheck.motions(self.robot, Q, free, first_only=first_only):
+            hits.append(Hit(s, t, pair, d))
         return sorted(hits, key=lambda h: h.segment)
 
     def _sphere_level(

@@ -46,6 +46,7 @@ from weldplan.robot.reach import (
     classify,
 )
 from weldplan.robot.replan import Detour
+from weldplan.robot.selfcollision import cell_floor, hit_words
 from weldplan.robot.urdf import chain_transform
 
 log = logging.getLogger(__name__)
@@ -176,6 +177,7 @@ def plan_robot_route(
     tcp_poses: ArrayLike | None = None,
     zone: ArrayLike | None = None,
     exits: dict[int, tuple[NDArray[np.float64], ...]] | None = None,
+    floor_z: float | None = None,
 ) -> RobotRoute:
     """The route in joint space, verified (module docstring).
 
@@ -221,6 +223,10 @@ def plan_robot_route(
         Per route row of a weld, TCP paths ``(k, 4, 4)`` mm leaving it that the tool stage
         proved free (:attr:`weldplan.robot.gunpath.GunRoute.exits`): a detour leaves and reaches
         the weld along them before it tries its own retracts.
+    floor_z
+        mm: the floor (part frame) no link nor the tool may reach
+        (:mod:`weldplan.robot.selfcollision`); default: ``search.floor_z`` for a searched base,
+        else none (not checked; ``stats["floor_z"]`` is then ``None``).
 
     Raises
     ------
@@ -245,8 +251,12 @@ def plan_robot_route(
 
     rows = weld_rows(route)
     zone_r = _contact_radius(contact_radius, poses)
+    if floor_z is None:
+        floor_z = cell_floor(search, base)
     checker = (
-        RobotCollision(robot, part, tool, F, contact_radius=zone_r) if check_collision else None
+        RobotCollision(robot, part, tool, F, contact_radius=zone_r, floor_z=floor_z)
+        if check_collision
+        else None
     )
     checker_for = None if checker is None else checker.with_robot
     placement, mask = place(
@@ -260,6 +270,7 @@ def plan_robot_route(
     )
     status = [str(row_status[r]) for r in rows]
     stats = _ik_stats(placement, rb, q, exact, row_status, time.perf_counter() - t0)
+    stats["floor_z"] = floor_z
     replanned: list[int] = []
     row = np.arange(len(q), dtype=np.int64)
     if checker is not None:
@@ -379,7 +390,7 @@ def _joint_route(
         mask, blame = free_branches(rb, checker, T_fl[rows], singular_deg)
         for k, b in enumerate(blame):
             if b is not None:
-                detail[k] = f"{b} touches the part at the weld pose on every usable branch"
+                detail[k] = f"{hit_words(b)} at the weld pose on every usable branch"
     allowed = None
     if mask is not None:
         allowed = np.ones((len(T_fl), 8), dtype=bool)

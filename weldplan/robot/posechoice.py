@@ -59,6 +59,7 @@ from weldplan.robot.reach import (
     classify,
     usable,
 )
+from weldplan.robot.selfcollision import hit_words
 
 log = logging.getLogger(__name__)
 
@@ -138,7 +139,7 @@ class ReachTest:
                     first.setdefault(int(k), b)
             for k, b in first.items():
                 if not free[k]:
-                    out[k] = f"{b} {IN_PART}"
+                    out[k] = f"{b} {IN_PART}" if "/" not in b else hit_words(b)
         for r in out:
             if r is not None:
                 self.vetoes[r.split(" ")[0]] += 1

@@ -19,7 +19,10 @@ which must weld the route's welds with a pose, each at its spot and pose), every
 the joint limits, and the robot's links plus the tool are checked against the part along every
 joint-space motion
 (:class:`weldplan.robot.collision.RobotCollision`, the same proof the robot route was verified
-with: the contact zone about the TCP exempt, as the weld poses were verified).
+with: the contact zone about the TCP exempt, as the weld poses were verified), against each other
+(self-collision, the whole tool) and against the floor the route names (``stats["floor_z"]``:
+the searched base's floor; a route without one is not checked against a floor, and the report
+says so).
 """
 
 from __future__ import annotations
@@ -115,6 +118,9 @@ class RobotCheck:
         Blocked joint-space motions (``(segment, body, distance mm)``).
     rows
         Joint rows checked.
+    floor_z
+        mm: the floor the links and the tool were checked against (``None``: the route names
+        none, e.g. a given base; not checked).
     """
 
     ok: bool
@@ -123,12 +129,19 @@ class RobotCheck:
     outside_limits: tuple[int, ...]
     hits: tuple[tuple[int, str, float], ...]
     rows: int
+    floor_z: float | None = None
 
     def describe(self) -> str:
         if self.ok:
+            floor = (
+                "no floor known"
+                if self.floor_z is None
+                else f"above the floor at z {self.floor_z:.0f} mm"
+            )
             return (
                 f"{self.rows} joint rows: FK within {self.fk_mm:.2g} mm, {self.fk_deg:.2g} deg of "
-                "the route, inside the limits, robot + tool collision-free"
+                "the route, inside the limits, robot + tool collision-free (part, self-collision; "
+                f"{floor})"
             )
         parts = []
         if self.fk_mm > FK_TOLERANCE_MM or self.fk_deg > FK_TOLERANCE_DEG:
@@ -178,7 +191,10 @@ def verify_robot_route(
     if contact_radius is None:
         stored = (route.tool or {}).get("robot", {}).get("contact_radius")
         contact_radius = stored if stored is not None else poses_contact_radius(route)
-    checker = RobotCollision(rb, part, tool, rr.flange_tcp, contact_radius=float(contact_radius))
+    floor = (rr.stats or {}).get("floor_z")
+    checker = RobotCollision(
+        rb, part, tool, rr.flange_tcp, contact_radius=float(contact_radius), floor_z=floor
+    )
     zone = _zone(rr)
     hits = checker.path_hits(rr.q, zone)
     ok = fk_mm <= FK_TOLERANCE_MM and fk_deg <= FK_TOLERANCE_DEG and bool(inside.all())
@@ -190,6 +206,7 @@ def verify_robot_route(
         tuple(int(i) for i in np.flatnonzero(~inside)),
         tuple((int(h.segment), str(h.body), float(h.distance)) for h in hits),
         len(rr.q),
+        None if floor is None else float(floor),
     )
 
 
