@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from weldplan.robot.assemble import TRAP_FAILS, TRAP_TESTS, assemble
+from weldplan.robot.assemble import RETRACE_TRIES, TRAP_FAILS, TRAP_TESTS, assemble
 from weldplan.robot.reach import COLLISION, OK
 
 
@@ -148,3 +148,14 @@ def test_a_weld_is_tested_as_the_trap_at_most_trap_tests_times():
     status, _, welded, det, _ = _walk(12, free={0}, traps={1}, pockets=set(range(2, 10)))
     assert welded == [0, 1] and all(s == COLLISION for s in status[2:])
     assert [b for a, b in det.tried if a == 0] == [2, 3, 4, 5, 6, 7]
+
+
+def test_going_back_stops_after_retrace_tries_failures_from_one_weld():
+    # W3..W8 cannot be entered from anywhere: going back from W2 (to the hubs at W1's and W0's
+    # exits) is tried for W3 and W4 only; later welds are tried from W2 and, in the trap
+    # tests, from W1, never again from the hub at W0
+    assert RETRACE_TRIES == 2
+    status, _, welded, det, _ = _walk(10, pockets=set(range(3, 9)))
+    assert welded == [0, 1, 2, 9]
+    from_w0 = [b for a, b in det.tried if a == 0]
+    assert from_w0 == [1, 3, 4]

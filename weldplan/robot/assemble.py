@@ -15,7 +15,8 @@ came: along the assembled path (its own motions, reversed, each checked as it wa
 the end of an earlier transfer (a clear configuration from which OMPL found a way; the latest
 :data:`RETRACE_HUBS`, not ``a``'s own approach, which is where ``a`` is left from), and detour
 from there (transfer, approach ``b``). ``a`` stays served; the rows going back are labelled with
-``a``'s row and are not exact.
+``a``'s row and are not exact. After :data:`RETRACE_TRIES` failures in a row from one weld, it
+stops trying.
 
 *A weld the robot cannot go on from.* When :data:`TRAP_FAILS` welds in a row cannot be reached
 from ``a``, ``a`` itself may be the trap: its exit leads into a pocket no transfer leaves (on
@@ -64,6 +65,10 @@ TRAP_FAILS = 2
 #: hubs (the ends of earlier transfers) a blocked leg may go back to, the latest first
 #: (:meth:`_Walk.retrace`; each costs a transfer that may fail)
 RETRACE_HUBS = 2
+#: failed tries in a row to go back from one weld after which it no longer tries (a base from
+#: which every later weld is out of reach would pay :data:`RETRACE_HUBS` more failing transfers
+#: for each of them)
+RETRACE_TRIES = 2
 #: the most times one weld is tested as the trap (each test costs up to :data:`TRAP_FAILS`
 #: transfers that may fail: a bound on what a route whose later welds no one reaches pays)
 TRAP_TESTS = 3
@@ -230,6 +235,8 @@ class _Walk:
     hubs: list[tuple[int, int]] = field(default_factory=list)
     #: the welds reached by going back along the path (:meth:`retrace`)
     retraced: list[int] = field(default_factory=list)
+    #: per weld, the tries in a row to go back from it that failed (:data:`RETRACE_TRIES`)
+    retraced_from: dict[int, int] = field(default_factory=dict)
 
     def mark(self) -> Mark:
         return (*self.out.mark(), len(self.replanned))
@@ -248,7 +255,7 @@ class _Walk:
             return None
         got = _detour(self.det, q, br, ia, ib)
         if got is None:
-            if retrace and self.retrace(a, b):
+            if retrace and self.retraced_from.get(a, 0) < RETRACE_TRIES and self.retrace(a, b):
                 return None
             return (
                 f"{hits[0].body} on the leg from weld {self.ids[a]}; no detour through retract "
@@ -285,6 +292,7 @@ class _Walk:
         lb = self.det.leave(self.q[ib], ib, int(self.branch[ib])) if hubs else None
         if lb is None:
             return False
+        self.retraced_from[a] = self.retraced_from.get(a, 0) + 1
         for h in hubs:
             mid = self.det.transfer(self.out.q[h], lb[-1])
             if mid is None:
@@ -298,6 +306,7 @@ class _Walk:
             _add_detour(out, self.det.robot, P, ia, ib, self.rows, self.q, self.branch, zones[h])
             self.replanned.append(a)
             self.retraced.append(b)
+            self.retraced_from[a] = 0
             self._hubs_at(n0, (lb[-1],), (b,))
             log.info("weld %s reached from weld %s back along the path (%d rows)",
                      self.ids[b], self.ids[a], end - h)  # fmt: skip
