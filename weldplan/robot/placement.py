@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from weldplan.errors import PlanningError
+from weldplan.robot.altreach import alt_free
 from weldplan.robot.configs import joint_path
 from weldplan.robot.model import Robot
 from weldplan.robot.reach import OK, BaseSearch, Placement, search_base, usable
@@ -90,36 +91,30 @@ def place(
     singular_deg: float,
     flip_penalty: float,
     top: int,
+    alternatives: list[NDArray[np.float64]] | None = None,
 ) -> tuple[Placement, NDArray[np.bool_] | None]:
     """The base (given, the robot's own, or searched: module docstring) and, for a searched one,
     the allowed-branch mask of its weld rows (``None`` for a given base: the caller computes it).
 
     ``checker_for(robot_at_base)`` builds the collision checker (``None``: no collision test).
+    ``alternatives``: per weld row, ``(k, 4, 4)`` mm flange poses of the weld's other free tool
+    poses (:mod:`weldplan.robot.altreach`); a weld counts at a base when its pose or one of them
+    serves there, at every step.
     """
     T_weld = T_fl[rows]
     if base is not None or search is None:
         B = robot.base if base is None else np.asarray(base, dtype=np.float64)
         return Placement(B, -1, len(T_weld), float("nan"), 0, False), None
     ok = np.all(np.isfinite(T_weld), axis=(1, 2))
+    alts = alternatives
     pool = POOL if checker_for is not None else top
-    cands = search_base(robot, T_weld[ok], part, search, singular_deg=singular_deg, top=pool)
+    cands = search_base(
+        robot, T_weld[ok], part, search, singular_deg=singular_deg, top=pool,
+        alternatives=None if alts is None else [a for a, k in zip(alts, ok, strict=True) if k],
+    )  # fmt: skip
     masks: list[NDArray[np.bool_] | None] = [None] * len(cands)
     if checker_for is not None:
-        keys = []
-        for c, pl in enumerate(cands):
-            rb = robot.with_base(pl.base)
-            free, _ = free_branches(rb, checker_for(rb), T_weld, singular_deg, tool=False)
-            masks[c] = free
-            keys.append((int(free.any(axis=1).sum()), pl.min_manipulability))
-        order = sorted(range(len(cands)), key=lambda c: keys[c], reverse=True)[:top]
-        log.info(
-            "base search: %d candidates re-ranked by collisions at the welds; best serves %d/%d",
-            len(cands),
-            keys[order[0]][0],
-            len(T_weld),
-        )
-        cands = [cands[c] for c in order]
-        masks = [masks[c] for c in order]
+        cands, masks = _rerank(robot, cands, T_weld, checker_for, singular_deg, top, alts)
     best: tuple[tuple[int, float], Placement, NDArray[np.bool_] | None] | None = None
     for pl, mask in zip(cands, masks, strict=True):
         rb = robot.with_base(pl.base)
@@ -128,9 +123,18 @@ def place(
             q, _, exact, status = joint_path(
                 rb, T_fl, singular_deg=singular_deg, flip_penalty=flip_penalty, allowed=allowed
             )
-        except PlanningError:
-            continue
-        n_ok = int(sum(status[r] == OK for r in rows))
+        except PlanningError:  # no weld pose reached: only their alternatives may serve
+            if alts is None:
+                continue
+            q, exact = np.zeros((0, 6)), np.zeros(0, dtype=bool)
+            status = np.full(len(T_fl), "", dtype=object)
+        lost = np.array([status[r] != OK for r in rows], dtype=bool)
+        n_ok = int((~lost).sum())
+        if alts is not None and lost.any():  # served at this base by another of their poses
+            checker = None if checker_for is None else checker_for(rb)
+            n_ok += int(alt_free(rb, checker, alts, lost, singular_deg).sum())
+            if n_ok == 0:
+                continue
         m = float(rb.manipulability(q[exact]).min()) if exact.any() else -np.inf
         if best is None or (n_ok, m) > best[0]:
             best = ((n_ok, m), dataclasses.replace(pl, min_manipulability=m), mask)
@@ -139,6 +143,38 @@ def place(
             f"no base among the {len(cands)} best candidates reaches a weld collision-free"
         )
     return best[1], best[2]
+
+
+def _rerank(
+    robot: Robot,
+    cands: list[Placement],
+    T_weld: NDArray[np.float64],
+    checker_for: Any,
+    singular_deg: float,
+    top: int,
+    alts: list[NDArray[np.float64]] | None,
+) -> tuple[list[Placement], list[NDArray[np.bool_] | None]]:
+    """The ``top`` of ``cands`` by the welds they serve without a link in the part at the weld
+    pose (one of the weld's alternative poses, with ``alts``), then manipulability; with their
+    free-branch masks of the given poses."""
+    keys, masks = [], []
+    for pl in cands:
+        rb = robot.with_base(pl.base)
+        checker = checker_for(rb)
+        free, _ = free_branches(rb, checker, T_weld, singular_deg, tool=False)
+        served = free.any(axis=1)
+        if alts is not None and not served.all():
+            served |= alt_free(rb, checker, alts, ~served, singular_deg)
+        masks.append(free)
+        keys.append((int(served.sum()), pl.min_manipulability))
+    order = sorted(range(len(cands)), key=lambda c: keys[c], reverse=True)[:top]
+    log.info(
+        "base search: %d candidates re-ranked by collisions at the welds; best serves %d/%d",
+        len(cands),
+        keys[order[0]][0],
+        len(T_weld),
+    )
+    return [cands[c] for c in order], [masks[c] for c in order]
 
 
 def _allowed(m: int, rows: NDArray[np.int64], mask: NDArray[np.bool_] | None) -> NDArray | None:

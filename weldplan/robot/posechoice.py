@@ -175,17 +175,22 @@ def place_for_poses(
     *,
     singular_deg: float = DEFAULT_SINGULAR_DEG,
     top: int | None = None,
+    alternatives: bool = True,
 ) -> Placement:
     """The base the robot route would search for ``route`` with weld ``poses`` (module
     docstring): :func:`weldplan.robot.placement.place` over the route's waypoint poses (mm,
     ``part`` the mesh for the base column and the floor), with the links-at-the-welds
-    re-ranking when ``checker`` is given.
+    re-ranking when ``checker`` is given. A weld counts at a base when its pose or, with
+    ``alternatives`` (default), one of the other free poses ``poses`` carries for it
+    (:attr:`~weldplan.tool.result.WeldPoses.alternatives`) serves there: the reach test then
+    picks that pose (:mod:`weldplan.robot.altreach`).
 
     Raises
     ------
     PlanningError
         No base candidate reaches a weld (collision-free, with a checker).
     """
+    from weldplan.robot.altreach import alternative_flange_poses
     from weldplan.robot.configs import FLIP_PENALTY_S
     from weldplan.robot.placement import place
     from weldplan.robot.plan import SEARCH_TOP, tcp_waypoint_poses
@@ -205,5 +210,6 @@ def place_for_poses(
         singular_deg,
         FLIP_PENALTY_S,
         SEARCH_TOP if top is None else top,
+        alternative_flange_poses(poses, route.order, F) if alternatives else None,
     )
     return placement
