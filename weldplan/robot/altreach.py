@@ -135,18 +135,25 @@ def alt_free(
     """``(n,) bool``: for the welds of ``need (n,)``, whether one of their alternative flange
     poses has a usable branch from ``robot``'s base on which no link touches the part (``checker``
     a :class:`~weldplan.robot.collision.RobotCollision` at that base; ``None``: usable is
-    enough)."""
+    enough). In rounds: each round checks the next usable (pose, branch) of every weld not yet
+    served, in the order of ``alts`` (the chosen pose first), so a weld costs one FCL query when
+    its first branch is free."""
     ok = np.zeros(len(need), dtype=bool)
     _, weld, T = _pairs(alts, need[None] & np.array([len(a) > 0 for a in alts])[None])
     if len(T) == 0:
         return ok
     br = robot.ik_all(T)
     idx = np.argwhere(usable(br, singular_deg))
+    w = weld[idx[:, 0]]
     if checker is None:
-        ok[weld[idx[:, 0]]] = True
+        ok[w] = True
         return ok
-    blocked = checker.states_blocked(br.q[idx[:, 0], idx[:, 1]], zone=True, tool=False)
-    for k, b in zip(idx[:, 0], blocked, strict=True):
-        if b is None:
-            ok[weld[k]] = True
-    return ok
+    left = np.ones(len(idx), dtype=bool)
+    while True:
+        live = np.flatnonzero(left & ~ok[w])
+        if len(live) == 0:
+            return ok
+        pick = live[np.unique(w[live], return_index=True)[1]]  # the first of each weld
+        left[pick] = False
+        blocked = checker.states_blocked(br.q[idx[pick, 0], idx[pick, 1]], zone=True, tool=False)
+        ok[w[pick[[b is None for b in blocked]]]] = True

@@ -28,7 +28,7 @@ from weldplan.errors import PlanningError
 from weldplan.robot.altreach import alt_free
 from weldplan.robot.configs import joint_path
 from weldplan.robot.model import Robot
-from weldplan.robot.reach import OK, BaseSearch, Placement, search_base, usable
+from weldplan.robot.reach import OK, PRESELECT, BaseSearch, Placement, search_base, usable
 
 log = logging.getLogger(__name__)
 
@@ -108,6 +108,8 @@ def place(
     ok = np.all(np.isfinite(T_weld), axis=(1, 2))
     alts = alternatives
     pool = POOL if checker_for is not None else top
+    if alts is not None and checker_for is not None:
+        pool = PRESELECT  # every fully scored candidate: the re-rank stops by its bound
     cands = search_base(
         robot, T_weld[ok], part, search, singular_deg=singular_deg, top=pool,
         alternatives=None if alts is None else [a for a, k in zip(alts, ok, strict=True) if k],
@@ -155,26 +157,39 @@ def _rerank(
     alts: list[NDArray[np.float64]] | None,
 ) -> tuple[list[Placement], list[NDArray[np.bool_] | None]]:
     """The ``top`` of ``cands`` by the welds they serve without a link in the part at the weld
-    pose (one of the weld's alternative poses, with ``alts``), then manipulability; with their
-    free-branch masks of the given poses."""
-    keys, masks = [], []
+    pose, then manipulability; with their free-branch masks of the given poses. With ``alts``
+    (module docstring) a weld counts when one of its poses serves, and the candidates (best
+    first by reach) are checked until :data:`POOL` are and the next one's reach count is below
+    the best count served."""
+    keys: list[tuple[int, float]] = []
+    masks: list[NDArray[np.bool_] | None] = []
     for pl in cands:
         rb = robot.with_base(pl.base)
         checker = checker_for(rb)
-        free, _ = free_branches(rb, checker, T_weld, singular_deg, tool=False)
-        served = free.any(axis=1)
-        if alts is not None and not served.all():
-            served |= alt_free(rb, checker, alts, ~served, singular_deg)
-        masks.append(free)
+        if alts is None:
+            free, _ = free_branches(rb, checker, T_weld, singular_deg, tool=False)
+            masks.append(free)
+            keys.append((int(free.any(axis=1).sum()), pl.min_manipulability))
+            continue
+        if len(keys) >= POOL and pl.n_usable < max(keys)[0]:
+            break
+        served = alt_free(rb, checker, alts, np.ones(len(alts), dtype=bool), singular_deg)
+        masks.append(None)
         keys.append((int(served.sum()), pl.min_manipulability))
-    order = sorted(range(len(cands)), key=lambda c: keys[c], reverse=True)[:top]
+    order = sorted(range(len(keys)), key=lambda c: keys[c], reverse=True)[:top]
     log.info(
         "base search: %d candidates re-ranked by collisions at the welds; best serves %d/%d",
-        len(cands),
+        len(keys),
         keys[order[0]][0],
         len(T_weld),
     )
-    return [cands[c] for c in order], [masks[c] for c in order]
+    out = [cands[c] for c in order]
+    if alts is not None:  # the masks of the few that go on
+        masks = [None] * len(keys)
+        for c, pl in zip(order, out, strict=True):
+            rb = robot.with_base(pl.base)
+            masks[c] = free_branches(rb, checker_for(rb), T_weld, singular_deg, tool=False)[0]
+    return out, [masks[c] for c in order]
 
 
 def _allowed(m: int, rows: NDArray[np.int64], mask: NDArray[np.bool_] | None) -> NDArray | None:
