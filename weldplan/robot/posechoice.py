@@ -32,8 +32,12 @@ at each weld) and the first-pass poses are free for the gun, so the base it find
 most of the gun's least-rotation poses are already served; the second pass then re-chooses only
 where the robot vetoes (the DP's first round is the first pass's answer, so welds the robot
 accepts keep their poses unless a neighbour's change makes another pose cheaper). A base
-searched over nominal axes would score poses the gun may not be able to take. The cost is one
-more pose choice (the tool's collision table is built again); measured in docs/robot.md. The
+searched over nominal axes would score poses the gun may not be able to take. The search
+scores each weld with its other free poses too (the first pass's
+:attr:`~weldplan.tool.result.WeldPoses.alternatives`, :mod:`weldplan.robot.altreach`): a weld
+whose least-rotation pose a base cannot take, but another of its free poses it can, counts
+there, since the second pass will pick that one. The cost is one more pose choice (the tool's
+collision table is built again); measured in docs/robot.md. The
 base is not searched again after the second pass (one round: a second round could move the base
 to where the re-chosen poses do better, and then the poses again; not measured to converge).
 """

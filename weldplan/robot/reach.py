@@ -398,28 +398,12 @@ def search_base(
 
         dist = SurfaceDistance(part)
 
-    def score(
-        T_: NDArray[np.float64], b: NDArray[np.float64], alts: Sequence | None = None
-    ) -> tuple[NDArray, NDArray]:
-        clear = None if dist is None else sight_clear(robot, b, T_, dist)
-        counts, mins = score_bases(robot, T_, b, singular_deg, clear, _more(b, alts, dist))
-        if clear is not None and counts.max() == 0:  # the proxy rules all out: reach alone
-            counts, mins = score_bases(robot, T_, b, singular_deg, None, _more(b, alts, None))
-        return counts, mins
-
-    def _more(b: NDArray[np.float64], alts: Sequence | None, d: object | None) -> Callable | None:
-        if alts is None:
-            return None
-        from weldplan.robot.altreach import alt_reach
-
-        return lambda served: alt_reach(robot, b, alts, ~served, singular_deg, d)
-
     if len(T) > SCORE_WELDS and len(bases) > PRESELECT:
         # a first pass on evenly spread welds keeps the candidates worth scoring on all of them
         sub = T[np.linspace(0, len(T) - 1, SCORE_WELDS).round().astype(np.int64)]
-        c_sub, m_sub = score(sub, bases)
+        c_sub, m_sub = _score(robot, sub, bases, singular_deg, dist)
         bases = bases[np.lexsort((-m_sub, -c_sub))[:PRESELECT]]
-    counts, mins = score(T, bases, alternatives)
+    counts, mins = _score(robot, T, bases, singular_deg, dist, alternatives)
     if counts.max() == 0:
         raise PlanningError(
             f"no base among {len(bases)} candidates reaches any weld: widen the search"
@@ -445,3 +429,28 @@ def search_base(
         )
         for i in order
     ]
+
+
+def _score(
+    robot: Robot,
+    T: NDArray[np.float64],
+    bases: NDArray[np.float64],
+    singular_deg: float,
+    dist: object | None,
+    alts: Sequence[NDArray[np.float64]] | None = None,
+) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+    """:func:`score_bases` with the chord proxy (:func:`sight_clear`, with ``dist``; reach alone
+    when it rules out every candidate) and, with ``alts``, each weld's alternative poses."""
+
+    def more(d: object | None) -> Callable | None:
+        if alts is None:
+            return None
+        from weldplan.robot.altreach import alt_reach
+
+        return lambda served: alt_reach(robot, bases, alts, ~served, singular_deg, d)
+
+    clear = None if dist is None else sight_clear(robot, bases, T, dist)
+    counts, mins = score_bases(robot, T, bases, singular_deg, clear, more(dist))
+    if clear is not None and counts.max() == 0:  # the proxy rules all out: reach alone
+        counts, mins = score_bases(robot, T, bases, singular_deg, None, more(None))
+    return counts, mins
