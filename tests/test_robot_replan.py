@@ -144,3 +144,78 @@ def test_sight_clear_sees_a_wall_between_the_shoulder_and_the_wrist(robot):
     aside = make_plate([1000.0, 2000.0, 1000.0], 0, size=600.0)
     assert not sight_clear(robot, bases, T, SurfaceDistance(wall)).any()
     assert sight_clear(robot, bases, T, SurfaceDistance(aside)).all()
+
+
+class _StuckAt:
+    """A stand-in for :class:`~weldplan.robot.replan.Detour`: every leg of the route is blocked
+    (link_3), every weld can be retracted from (its joint vector + 0.5), and a transfer works
+    unless it starts at weld ``stuck``'s retract: the weld the robot cannot leave."""
+
+    def __init__(self, stuck: int) -> None:
+        self.stuck = stuck
+        self.robot = self
+        self.checker = self
+        self.transfers: list[tuple[int, int]] = []
+        self.T_tcp = np.tile(np.eye(4), (16, 1, 1))
+
+    def path_hits(self, q, zone=None, first_only=False):
+        from weldplan.robot.collision import Hit
+
+        return [Hit(0, 0.5, "link_3", 0.0)]
+
+    def leave(self, q, row, branch):
+        return np.vstack([q, q + 0.5])
+
+    def retract(self, q, T, branch):
+        return q + 0.5, T
+
+    def transfer(self, qa, qb):
+        a, b = round(qa[0] - 0.5), round(qb[0] - 0.5)
+        self.transfers.append((a, b))
+        return None if a == self.stuck else np.vstack([qa, qb])
+
+    def branch_of(self, P):
+        return np.zeros(len(P), dtype=np.int64)
+
+
+def test_a_weld_the_robot_cannot_leave_is_dropped_instead_of_every_weld_after_it():
+    from weldplan.robot.replan import assemble
+
+    n = 7
+    q = np.zeros((n, 6))
+    q[:, 0] = np.arange(n)  # one route row per weld, its joint vector names it
+    ids = tuple(f"w{i}" for i in range(n))
+    status, detail = ["ok"] * n, [""] * n
+    det = _StuckAt(2)
+    out_q, row, exact, _, _, replanned = assemble(
+        det, q, np.ones(n, bool), np.zeros(n, np.int64), np.arange(n), status, detail, ids
+    )
+    # w3 and then w4 cannot be reached from w2: w2 is dropped, w3 and w4 are tried again from
+    # w1 and served (before: w2 kept, w3..w6 all dropped, each tried from w2)
+    assert status == ["ok", "ok", "collision", "ok", "ok", "ok", "ok"]
+    assert detail[2].startswith("cannot be left: link_3 on the legs to welds w3 and w4")
+    assert det.transfers == [(0, 1), (1, 2), (2, 3), (2, 4), (1, 3), (3, 4), (4, 5), (5, 6)]
+    assert replanned == [0, 1, 3, 4, 5]  # the legs detoured, by the weld each leaves
+    # w2 is passed without welding: no exact row of it, every other weld has one
+    assert sorted(set(row[exact].tolist())) == [0, 1, 3, 4, 5, 6]
+    assert 2 in row.tolist() and np.all(np.isfinite(out_q))
+
+
+def test_a_weld_no_detour_reaches_is_dropped_alone_and_the_route_goes_on():
+    from weldplan.robot.replan import assemble
+
+    class _Unreachable(_StuckAt):
+        def transfer(self, qa, qb):  # nothing reaches w3; w2 can be left
+            b = round(qb[0] - 0.5)
+            return None if b == 3 else np.vstack([qa, qb])
+
+    n = 6
+    q = np.zeros((n, 6))
+    q[:, 0] = np.arange(n)
+    status, detail = ["ok"] * n, [""] * n
+    assemble(
+        _Unreachable(-1), q, np.ones(n, bool), np.zeros(n, np.int64), np.arange(n), status,
+        detail, tuple(f"w{i}" for i in range(n)),
+    )  # fmt: skip
+    assert status == ["ok", "ok", "ok", "collision", "ok", "ok"]
+    assert detail[3].startswith("link_3 on the leg from weld w2")

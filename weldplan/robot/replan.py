@@ -30,8 +30,13 @@ blocked, the leg becomes a detour:
 3. *approach*: ``b``'s approach configuration to ``b``'s, contact zone exempt.
 
 When no detour is found, ``b`` is dropped (status ``collision``, its ``detail`` naming the body
-that blocked the leg) and the next served weld is tried from ``a``. Welds the path passes
-without serving keep a row on it that is not exact (the program passes them without welding):
+that blocked the leg) and the next served weld is tried from ``a``. When that one cannot be
+reached from ``a`` either, ``a`` is taken for the weld the robot cannot leave: ``a`` is dropped
+instead (``cannot be left``), its leg taken off the path, and both are tried again from the weld
+before ``a`` (once: that weld is not dropped in turn). Before, every weld after a weld that could
+not be left was tried from it, one OMPL run each, and dropped (car2_200 from one base: 190).
+Welds the path passes without serving keep a row on it that is not exact (the program passes
+them without welding):
 the detour's joint polyline is subdivided where it has fewer inner rows than such welds (points
 on its own segments: the motion is unchanged). The motions of the route's own legs are checked
 with the contact zone exempt where the caller says (``zone=``: every one on the point-tip route;
@@ -320,31 +325,75 @@ def assemble(
         return (*out.arrays(), [])
     for i in range(int(rows[served[0]]) + 1):
         out.add(q[i], i, bool(ex[i]), int(branch[i]), bool(own[i]))
+    a, replanned = _legs(det, out, q, ex, branch, rows, served, status, detail, ids, own, blocked)
+    _tail(det, out, q, ex, branch, int(rows[a]), own, blocked)
+    return (*out.arrays(), replanned)
+
+
+def _legs(
+    det: Detour,
+    out: JointPath,
+    q: NDArray,
+    ex: NDArray,
+    branch: NDArray,
+    rows: NDArray[np.int64],
+    served: list[int],
+    status: list[str],
+    detail: list[str],
+    ids: tuple[str, ...],
+    own: NDArray[np.bool_],
+    blocked: set[int] | None,
+) -> tuple[int, list[int]]:
+    """Every leg between served welds onto ``out`` (from the first served weld's row on),
+    detoured where blocked; ``(the last weld kept, the legs detoured)``. A weld with no detour
+    to it is dropped, and the next is tried from the same weld ``a``; when a second weld in a
+    row cannot be reached from ``a``, ``a`` is the weld that cannot be left: it is dropped
+    instead (its leg taken off ``out``) and the welds dropped after it are tried again from
+    the weld before it, once (a weld reached that way is not dropped for being stuck)."""
     replanned: list[int] = []
-    a = served[0]
-    for b in served[1:]:
+    kept = [(served[0], len(out.q), 0)]  # (weld, rows of out and legs detoured before its leg)
+    lost: list[int] = []  # welds dropped in a row from the last kept one
+    todo = list(served[1:])
+    backed = -1  # the weld the route was taken back to (not dropped for being stuck)
+    while todo:
+        a, b = kept[-1][0], todo.pop(0)
         ia, ib = int(rows[a]), int(rows[b])
         hits = _leg_hits(det, q, own, ia, ib, blocked)
+        start = (b, len(out.q), len(replanned))
         if not hits:
             out.zone[-1] = bool(own[ia])
             for i in range(ia + 1, ib + 1):
                 out.add(q[i], i, bool(ex[i]), int(branch[i]), bool(own[i]))
-            a = b
+            kept.append(start)
+            lost = []
             continue
         path = _detour(det, q, branch, ia, ib)
-        if path is None:
-            status[b] = COLLISION
-            detail[b] = (
-                f"{hits[0].body} on the leg from weld {ids[a]}; no detour through retract "
-                "poses found"
-            )
-            log.info("weld %s dropped: %s", ids[b], detail[b])
+        if path is not None:
+            _add_detour(out, det.robot, path, ia, ib, rows, q, branch)
+            replanned.append(a)
+            kept.append(start)
+            lost = []
             continue
-        _add_detour(out, det.robot, path, ia, ib, rows, q, branch)
-        replanned.append(a)
-        a = b
-    _tail(det, out, q, ex, branch, int(rows[a]), own, blocked)
-    return (*out.arrays(), replanned)
+        why = f"{hits[0].body} on the leg from weld {ids[a]}; no detour through retract poses found"
+        if lost and len(kept) > 1 and a != backed:  # a cannot be left: drop it instead
+            _, n_rows, n_rep = kept.pop()
+            del out.q[n_rows:], out.row[n_rows:], out.exact[n_rows:], out.branch[n_rows:]
+            del out.zone[n_rows:], replanned[n_rep:]
+            status[a] = COLLISION
+            detail[a] = (
+                f"cannot be left: {hits[0].body} on the legs to welds {ids[lost[0]]} and "
+                f"{ids[b]}, no detour through retract poses found (dropped instead of them)"
+            )
+            log.info("weld %s dropped: %s", ids[a], detail[a])
+            for k in lost:
+                status[k], detail[k] = OK, ""
+            todo[:0] = [*lost, b]
+            lost, backed = [], kept[-1][0]
+            continue
+        status[b], detail[b] = COLLISION, why
+        log.info("weld %s dropped: %s", ids[b], detail[b])
+        lost.append(b)
+    return kept[-1][0], replanned
 
 
 def _leg_hits(
