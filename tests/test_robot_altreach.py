@@ -108,3 +108,29 @@ def test_the_alternatives_become_flange_poses_spread_the_chosen_one_first():
         w, x, y, z = p.quaternion
         assert np.allclose(T[0, :3, :3], Rotation.from_quat([x, y, z, w]).as_matrix())
         assert np.allclose(T[:, :3, 2], [0.0, 0.0, -1.0])  # every spin points down
+
+
+def test_a_weld_counts_free_when_one_of_its_poses_has_a_branch_clear_of_the_part():
+    from weldplan.robot.altreach import alt_free
+    from weldplan.robot.collision import RobotCollision
+    from weldplan.robot.reach import base_pose
+
+    robot = shared_robot().with_base(base_pose(-1500.0, 0.0, -500.0, 0.0))
+    plate = trimesh.creation.box((600, 600, 2)).apply_translation((0, 0, -1))
+    block = trimesh.creation.box((150, 150, 150)).apply_translation((-570, 0, 1070))
+    spins = Rotation.from_euler("z", np.arange(0, 360, 30)[:, None], degrees=True).as_matrix()
+    T = np.tile(np.eye(4), (12, 1, 1))
+    T[:, :3, :3] = np.diag([1.0, -1.0, -1.0]) @ spins  # from above, 12 spins
+    far = T.copy()
+    far[:, :3, 3] = (4000.0, 0.0, 0.0)  # out of reach
+    alts = [T @ np.linalg.inv(TORCH_TCP), far @ np.linalg.inv(TORCH_TCP)]
+    need = np.array([True, True])
+    for part, first in ((plate, True), (trimesh.util.concatenate([plate, block]), False)):
+        checker = RobotCollision(robot, part, None, TORCH_TCP)
+        got = alt_free(robot, checker, alts, need, 5.0)
+        # the same answer as the reach test over every pose (one FCL query per pose there)
+        test = ReachTest(robot, TORCH_TCP, checker)
+        assert got.tolist() == [any(v is None for v in test.verdicts(T)), False]
+        assert got.tolist() == [first, False]  # the block is over the forearm's way
+    assert alt_free(robot, None, alts, need, 5.0).tolist() == [True, False]  # reach only
+    assert not alt_free(robot, None, alts, ~need, 5.0).any()  # none needed
