@@ -131,13 +131,15 @@ def alt_free(
     alts: Sequence[NDArray[np.float64]],
     need: NDArray[np.bool_],
     singular_deg: float,
+    by_first: NDArray[np.bool_] | None = None,
 ) -> NDArray[np.bool_]:
     """``(n,) bool``: for the welds of ``need (n,)``, whether one of their alternative flange
     poses has a usable branch from ``robot``'s base on which no link touches the part (``checker``
     a :class:`~weldplan.robot.collision.RobotCollision` at that base; ``None``: usable is
     enough). In rounds: each round checks the next usable (pose, branch) of every weld not yet
     served, in the order of ``alts`` (the chosen pose first), so a weld costs one FCL query when
-    its first branch is free."""
+    its first branch is free. ``by_first (n,) bool``, when given, is set where the weld is served
+    by its first pose (all its branches are tried before its other poses)."""
     ok = np.zeros(len(need), dtype=bool)
     _, weld, T = _pairs(alts, need[None] & np.array([len(a) > 0 for a in alts])[None])
     if len(T) == 0:
@@ -145,8 +147,11 @@ def alt_free(
     br = robot.ik_all(T)
     idx = np.argwhere(usable(br, singular_deg))
     w = weld[idx[:, 0]]
+    first = np.r_[True, weld[1:] != weld[:-1]][idx[:, 0]]  # the weld's first pose
     if checker is None:
         ok[w] = True
+        if by_first is not None:
+            by_first[w[first]] = True
         return ok
     left = np.ones(len(idx), dtype=bool)
     while True:
@@ -156,4 +161,7 @@ def alt_free(
         pick = live[np.unique(w[live], return_index=True)[1]]  # the first of each weld
         left[pick] = False
         blocked = checker.states_blocked(br.q[idx[pick, 0], idx[pick, 1]], zone=True, tool=False)
-        ok[w[pick[[b is None for b in blocked]]]] = True
+        free = pick[[b is None for b in blocked]]
+        ok[w[free]] = True
+        if by_first is not None:
+            by_first[w[free[first[free]]]] = True

@@ -131,31 +131,63 @@ def place(
     best: tuple[tuple[int, float], Placement, NDArray[np.bool_] | None] | None = None
     for pl, mask in zip(cands, masks, strict=True):
         rb = robot.with_base(pl.base)
-        allowed = _allowed(len(T_fl), rows, mask)
-        try:
-            q, _, exact, status = joint_path(
-                rb, T_fl, singular_deg=singular_deg, flip_penalty=flip_penalty, allowed=allowed
-            )
-        except PlanningError:  # no weld pose reached: only their alternatives may serve
-            if alts is None:
-                continue
-            q, exact = np.zeros((0, 6)), np.zeros(0, dtype=bool)
-            status = np.full(len(T_fl), "", dtype=object)
-        lost = np.array([status[r] != OK for r in rows], dtype=bool)
-        n_ok = int((~lost).sum())
-        if alts is not None and lost.any():  # served at this base by another of their poses
-            checker = None if checker_for is None else checker_for(rb)
-            n_ok += int(alt_free(rb, checker, alts, lost, singular_deg).sum())
-            if n_ok == 0:
-                continue
-        m = float(rb.manipulability(q[exact]).min()) if exact.any() else -np.inf
-        if best is None or (n_ok, m) > best[0]:
-            best = ((n_ok, m), dataclasses.replace(pl, min_manipulability=m), mask)
+        got = _route_score(rb, T_fl, rows, mask, checker_for, singular_deg, flip_penalty, alts)
+        if got is not None and (best is None or got > best[0]):
+            best = (got, dataclasses.replace(pl, min_manipulability=got[1]), mask)
     if best is None:
         raise PlanningError(
             f"no base among the {len(cands)} best candidates reaches a weld collision-free"
         )
     return best[1], best[2]
+
+
+def _route_score(
+    rb: Robot,
+    T_fl: NDArray[np.float64],
+    rows: NDArray[np.int64],
+    mask: NDArray[np.bool_] | None,
+    checker_for: Any,
+    singular_deg: float,
+    flip_penalty: float,
+    alts: list[NDArray[np.float64]] | None,
+) -> tuple[int, float] | None:
+    """Step 3 for the robot at one base: ``(welds ok along the route, the smallest
+    manipulability of its solved waypoints)``, ``None`` when it reaches none. With ``alts`` a
+    weld the route's pose loses counts when another of its poses is free there, and, with a
+    checker, each leg between welds on which the route's joint path puts a link through the part
+    (:meth:`~weldplan.robot.collision.RobotCollision.path_hits`) counts against it: it needs a
+    detour, which may not exist (module docstring)."""
+    allowed = _allowed(len(T_fl), rows, mask)
+    try:
+        q, _, exact, status = joint_path(
+            rb, T_fl, singular_deg=singular_deg, flip_penalty=flip_penalty, allowed=allowed
+        )
+    except PlanningError:  # no weld pose reached: only their alternatives may serve
+        if alts is None:
+            return None
+        q, exact = np.zeros((0, 6)), np.zeros(0, dtype=bool)
+        status = np.full(len(T_fl), "", dtype=object)
+    lost = np.array([status[r] != OK for r in rows], dtype=bool)
+    n_ok = int((~lost).sum())
+    checker = None if checker_for is None else checker_for(rb)
+    if alts is not None and lost.any():  # served at this base by another of their poses
+        n_ok += int(alt_free(rb, checker, alts, lost, singular_deg).sum())
+        if n_ok == 0:
+            return None
+    n_legs = 0
+    if alts is not None and checker is not None and len(q) > 1:
+        segs = sorted({h.segment for h in checker.path_hits(q)})
+        legs = np.searchsorted(rows, segs, side="right") - 1  # the weld each leaves
+        n_legs = len(set(legs[(legs >= 0) & (legs < len(rows) - 1)].tolist()))
+    m = float(rb.manipulability(q[exact]).min()) if exact.any() else -np.inf
+    x, y, z = rb.base[:3, 3]
+    yaw = np.degrees(np.arctan2(rb.base[1, 0], rb.base[0, 0]))
+    log.info(
+        "base %.0f,%.0f,%.0f,%.1f along the route: %d/%d welds served, %d legs with a link "
+        "through the part, min manipulability %.4f",
+        x, y, z, yaw, n_ok, len(rows), n_legs, m,
+    )  # fmt: skip
+    return n_ok - n_legs, m
 
 
 def _rerank(
@@ -173,6 +205,7 @@ def _rerank(
     first by reach) are checked until :data:`POOL` are and the next one's reach count is below
     the best count served."""
     keys: list[tuple[int, float]] = []
+    given: list[tuple[int, float]] = []
     masks: list[NDArray[np.bool_] | None] = []
     for pl in cands:
         rb = robot.with_base(pl.base)
@@ -184,10 +217,15 @@ def _rerank(
             continue
         if len(keys) >= POOL and pl.n_usable < max(keys)[0]:
             break
-        served = alt_free(rb, checker, alts, np.ones(len(alts), dtype=bool), singular_deg)
+        first = np.zeros(len(alts), dtype=bool)
+        served = alt_free(rb, checker, alts, np.ones(len(alts), dtype=bool), singular_deg, first)
         masks.append(None)
         keys.append((int(served.sum()), pl.min_manipulability))
+        given.append((int(first.sum()), pl.min_manipulability))
     order = sorted(range(len(keys)), key=lambda c: keys[c], reverse=True)[:top]
+    if alts is not None:  # and the best by the given poses alone (module docstring)
+        by_given = sorted(range(len(given)), key=lambda c: given[c], reverse=True)[:top]
+        order += [c for c in by_given if c not in order]
     log.info(
         "base search: %d candidates re-ranked by collisions at the welds; best serves %d/%d",
         len(keys),
