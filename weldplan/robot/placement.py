@@ -174,18 +174,18 @@ def _route_score(
         n_ok += int(alt_free(rb, checker, alts, lost, singular_deg).sum())
         if n_ok == 0:
             return None
-    n_legs = 0
+    n_legs, legs_said = 0, ""
     if alts is not None and checker is not None and len(q) > 1:
         segs = sorted({h.segment for h in checker.path_hits(q)})
         legs = np.searchsorted(rows, segs, side="right") - 1  # the weld each leaves
         n_legs = len(set(legs[(legs >= 0) & (legs < len(rows) - 1)].tolist()))
+        legs_said = f", {n_legs} legs with a link through the part"
     m = float(rb.manipulability(q[exact]).min()) if exact.any() else -np.inf
     x, y, z = rb.base[:3, 3]
     yaw = np.degrees(np.arctan2(rb.base[1, 0], rb.base[0, 0]))
     log.info(
-        "base %.0f,%.0f,%.0f,%.1f along the route: %d/%d welds served, %d legs with a link "
-        "through the part, min manipulability %.4f",
-        x, y, z, yaw, n_ok, len(rows), n_legs, m,
+        "base %.0f,%.0f,%.0f,%.1f along the route: %d/%d welds served%s, min manipulability %.4f",
+        x, y, z, yaw, n_ok, len(rows), legs_said, m,
     )  # fmt: skip
     return n_ok - n_legs, m
 
