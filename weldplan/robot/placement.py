@@ -15,15 +15,19 @@ whole route (:func:`place`, used by :func:`weldplan.robot.plan.plan_robot_route`
    manipulability of the chosen configurations over every solved waypoint.
 
 With each weld's **alternative poses** (the tool's other free poses,
-:mod:`weldplan.robot.altreach`; the pose stage's search, :func:`weldplan.robot.posechoice.
-place_for_poses`) a weld counts at every step when its pose or one of them serves: in the full
-score of step 1, in step 2 (a weld's poses checked in rounds, the chosen one first), and in step
-3 (a weld the route's pose loses counts when another of its poses is free there). Reach
-over-promises where the arm would pass through the part, so step 2 then takes the candidates best
-first by reach until :data:`POOL` are checked **and** the next one's reach count is below the best
-count served (every :data:`~weldplan.robot.reach.PRESELECT` candidate at most), instead of a
-fixed :data:`POOL`: car2_200 had 78 candidates reaching all 200 welds, and the 48 with the best
-manipulability among them served at most 193 without a link in the body.
+:mod:`weldplan.robot.altreach`; on request of the pose stage's search,
+``place_for_poses(alternatives=True)``) a weld counts at every step when its pose or one of them
+serves: in the full score of step 1, in step 2 (a weld's poses checked in rounds, the chosen one
+first; the best by the given poses alone are handed on too), and in step 3 (a weld the route's
+pose loses counts when another of its poses is free there, and each leg whose joint path takes a
+link through the part counts against the base). Reach over-promises where the arm would pass
+through the part, so step 2 then takes the candidates best first by reach until :data:`POOL` are
+checked **and** the next one's reach count is below the best count served (every
+:data:`~weldplan.robot.reach.PRESELECT` candidate at most), instead of a fixed :data:`POOL`:
+car2_200 had 78 candidates reaching all 200 welds, and the 48 with the best manipulability among
+them served at most 193 without a link in the body. The CLI does not ask for it: from the bases
+it finds on car2_200 (every weld pose served) the robot route serves 7 of 200 (docs/robot.md,
+session 6).
 """
 
 from __future__ import annotations
