@@ -32,8 +32,13 @@ at each weld) and the first-pass poses are free for the gun, so the base it find
 most of the gun's least-rotation poses are already served; the second pass then re-chooses only
 where the robot vetoes (the DP's first round is the first pass's answer, so welds the robot
 accepts keep their poses unless a neighbour's change makes another pose cheaper). A base
-searched over nominal axes would score poses the gun may not be able to take. The cost is one
-more pose choice (the tool's collision table is built again); measured in docs/robot.md. The
+searched over nominal axes would score poses the gun may not be able to take. On request
+(``place_for_poses(alternatives=True)``, not the CLI's default) the search scores each weld with
+its other free poses too (the first pass's
+:attr:`~weldplan.tool.result.WeldPoses.alternatives`, :mod:`weldplan.robot.altreach`): a weld
+whose least-rotation pose a base cannot take, but another of its free poses it can, counts
+there, since the second pass will pick that one. The cost is one more pose choice (the tool's
+collision table is built again); measured in docs/robot.md. The
 base is not searched again after the second pass (one round: a second round could move the base
 to where the re-chosen poses do better, and then the poses again; not measured to converge).
 """
@@ -176,17 +181,24 @@ def place_for_poses(
     *,
     singular_deg: float = DEFAULT_SINGULAR_DEG,
     top: int | None = None,
+    alternatives: bool = False,
 ) -> Placement:
     """The base the robot route would search for ``route`` with weld ``poses`` (module
     docstring): :func:`weldplan.robot.placement.place` over the route's waypoint poses (mm,
     ``part`` the mesh for the base column and the floor), with the links-at-the-welds
-    re-ranking when ``checker`` is given.
+    re-ranking when ``checker`` is given. A weld counts at a base when its pose or, with
+    ``alternatives``, one of the other free poses ``poses`` carries for it
+    (:attr:`~weldplan.tool.result.WeldPoses.alternatives`) serves there: the reach test then
+    picks that pose (:mod:`weldplan.robot.altreach`). Off by default: on car2_200 the bases it
+    finds serve every weld pose but the robot route from them cannot leave the first welds
+    (docs/robot.md, session 6).
 
     Raises
     ------
     PlanningError
         No base candidate reaches a weld (collision-free, with a checker).
     """
+    from weldplan.robot.altreach import alternative_flange_poses
     from weldplan.robot.configs import FLIP_PENALTY_S
     from weldplan.robot.placement import place
     from weldplan.robot.plan import SEARCH_TOP, tcp_waypoint_poses
@@ -206,5 +218,6 @@ def place_for_poses(
         singular_deg,
         FLIP_PENALTY_S,
         SEARCH_TOP if top is None else top,
+        alternative_flange_poses(poses, route.order, F) if alternatives else None,
     )
     return placement

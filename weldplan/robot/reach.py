@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import logging
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -190,11 +191,15 @@ def score_bases(
     bases: NDArray[np.float64],
     singular_deg: float = DEFAULT_SINGULAR_DEG,
     clear: NDArray[np.bool_] | None = None,
+    more: Callable[[NDArray[np.bool_]], tuple[NDArray, NDArray]] | None = None,
 ) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
     """Per candidate base ``(c, 4, 4)``: welds usable ``(c,)`` and smallest best manipulability
     ``(c,)`` over flange poses ``(n, 4, 4)`` (mm, part frame). Manipulability is computed only
     for the candidates that reach the most welds (the others cannot win). ``clear (c, n)``: a
-    weld counts only where it is True (:func:`sight_clear`)."""
+    weld counts only where it is True (:func:`sight_clear`). ``more(served (c, n)) -> (got (c,
+    n) bool, manipulability (c, n))``: welds served otherwise where ``served`` is False (by an
+    alternative tool pose, :mod:`weldplan.robot.altreach`); they count, and their manipulability
+    joins the minimum."""
     n, c = len(T_flange), len(bases)
     at_origin = robot.with_base(np.eye(4))
     Tb = np.linalg.inv(bases)[:, None] @ T_flange[None]  # (c, n, 4, 4) in each base's frame
@@ -207,19 +212,23 @@ def score_bases(
     u_all[maybe] = usable(br, singular_deg)
     if clear is not None:
         u_all &= clear[:, :, None]
-    counts = u_all.any(axis=2).sum(axis=1).astype(np.int64)
+    served = u_all.any(axis=2)
+    got, m_more = (np.zeros((c, n), dtype=bool), None) if more is None else more(served)
+    counts = (served | got).sum(axis=1).astype(np.int64)
     mins = np.full(c, -np.inf)
     if n == 0 or c == 0:
         return counts, mins
     for i in np.flatnonzero(counts == counts.max()):
         u = u_all[i]
-        if not u.any():
-            continue
-        idx = np.argwhere(u)
-        m = at_origin.manipulability(br.q[at[i, idx[:, 0]], idx[:, 1]])
         best = np.full(n, -np.inf)
-        np.maximum.at(best, idx[:, 0], m)
-        mins[i] = float(best[u.any(axis=1)].min())
+        if u.any():
+            idx = np.argwhere(u)
+            m = at_origin.manipulability(br.q[at[i, idx[:, 0]], idx[:, 1]])
+            np.maximum.at(best, idx[:, 0], m)
+        if m_more is not None:
+            best = np.where(served[i], best, np.where(got[i], m_more[i], -np.inf))
+        if np.isfinite(best).any():
+            mins[i] = float(best[np.isfinite(best)].min())
     return counts, mins
 
 
@@ -247,19 +256,31 @@ def sight_clear(
     (open3d ray cast through ``distance``, a :class:`~weldplan.geometry.distance.SurfaceDistance`).
     A ranking proxy, not a check: the upper arm and forearm lie about that chord, so a part
     across it usually means a link through the part."""
+    c, n = len(bases), len(T_flange)
+    B = np.broadcast_to(bases[:, None], (c, n, 4, 4))
+    T = np.broadcast_to(T_flange[None], (c, n, 4, 4))
+    return chord_clear(robot, B.reshape(-1, 4, 4), T.reshape(-1, 4, 4), distance).reshape(c, n)
+
+
+def chord_clear(
+    robot: Robot, bases: NDArray[np.float64], T_flange: NDArray[np.float64], distance: object
+) -> NDArray[np.bool_]:
+    """``(p,) bool``: :func:`sight_clear` of pairs, base ``bases[i]`` to flange pose
+    ``T_flange[i]`` (both ``(p, 4, 4)`` mm, part frame)."""
     p = robot.opw
-    wc = T_flange[:, :3, 3] - p.c4 * T_flange[:, :3, 2]  # (n, 3)
-    z = bases[:, :3, 2]  # (c, 3)
+    wc = T_flange[:, :3, 3] - p.c4 * T_flange[:, :3, 2]  # (p, 3)
+    z = bases[:, :3, 2]
     o = bases[:, :3, 3] + p.c1 * z
-    d = wc[None] - o[:, None]  # (c, n, 3)
-    h = d - np.einsum("cni,ci->cn", d, z)[..., None] * z[:, None]
-    h /= np.maximum(np.linalg.norm(h, axis=2, keepdims=True), 1e-9)
-    sh = o[:, None] + p.a1 * h
-    seg = wc[None] - sh
-    L = np.linalg.norm(seg, axis=2)
-    u = seg / np.maximum(L, 1e-9)[..., None]
-    hit = distance.first_hit(sh.reshape(-1, 3), u.reshape(-1, 3))  # type: ignore[attr-defined]
-    return hit.reshape(L.shape) >= L
+    d = wc - o
+    h = d - np.einsum("pi,pi->p", d, z)[:, None] * z
+    h /= np.maximum(np.linalg.norm(h, axis=1, keepdims=True), 1e-9)
+    sh = o + p.a1 * h
+    seg = wc - sh
+    L = np.linalg.norm(seg, axis=1)
+    u = seg / np.maximum(L, 1e-9)[:, None]
+    if len(L) == 0:
+        return np.ones(0, dtype=bool)
+    return distance.first_hit(sh, u) >= L  # type: ignore[attr-defined]
 
 
 def candidate_bases(
@@ -332,6 +353,7 @@ def search_base(
     *,
     singular_deg: float = DEFAULT_SINGULAR_DEG,
     top: int = 1,
+    alternatives: Sequence[NDArray[np.float64]] | None = None,
 ) -> list[Placement]:
     """The ``top`` best candidate bases (module docstring): most welds usable, then the largest
     smallest manipulability over them; best first.
@@ -348,6 +370,11 @@ def search_base(
         Where to look (:class:`BaseSearch`).
     top
         How many placements to return (fewer when there are fewer candidates).
+    alternatives
+        Per weld, ``(k, 4, 4)`` mm: its alternative flange poses (the tool's other free poses,
+        :mod:`weldplan.robot.altreach`). In the full score a weld whose pose fails at a candidate
+        counts there when one of them is usable (the first pass on :data:`SCORE_WELDS` welds
+        scores the given poses only).
 
     Raises
     ------
@@ -371,19 +398,12 @@ def search_base(
 
         dist = SurfaceDistance(part)
 
-    def score(T_: NDArray[np.float64], b: NDArray[np.float64]) -> tuple[NDArray, NDArray]:
-        clear = None if dist is None else sight_clear(robot, b, T_, dist)
-        counts, mins = score_bases(robot, T_, b, singular_deg, clear)
-        if clear is not None and counts.max() == 0:  # the proxy rules all out: reach alone
-            counts, mins = score_bases(robot, T_, b, singular_deg)
-        return counts, mins
-
     if len(T) > SCORE_WELDS and len(bases) > PRESELECT:
         # a first pass on evenly spread welds keeps the candidates worth scoring on all of them
         sub = T[np.linspace(0, len(T) - 1, SCORE_WELDS).round().astype(np.int64)]
-        c_sub, m_sub = score(sub, bases)
+        c_sub, m_sub = _score(robot, sub, bases, singular_deg, dist)
         bases = bases[np.lexsort((-m_sub, -c_sub))[:PRESELECT]]
-    counts, mins = score(T, bases)
+    counts, mins = _score(robot, T, bases, singular_deg, dist, alternatives)
     if counts.max() == 0:
         raise PlanningError(
             f"no base among {len(bases)} candidates reaches any weld: widen the search"
@@ -409,3 +429,28 @@ def search_base(
         )
         for i in order
     ]
+
+
+def _score(
+    robot: Robot,
+    T: NDArray[np.float64],
+    bases: NDArray[np.float64],
+    singular_deg: float,
+    dist: object | None,
+    alts: Sequence[NDArray[np.float64]] | None = None,
+) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+    """:func:`score_bases` with the chord proxy (:func:`sight_clear`, with ``dist``; reach alone
+    when it rules out every candidate) and, with ``alts``, each weld's alternative poses."""
+
+    def more(d: object | None) -> Callable | None:
+        if alts is None:
+            return None
+        from weldplan.robot.altreach import alt_reach
+
+        return lambda served: alt_reach(robot, bases, alts, ~served, singular_deg, d)
+
+    clear = None if dist is None else sight_clear(robot, bases, T, dist)
+    counts, mins = score_bases(robot, T, bases, singular_deg, clear, more(dist))
+    if clear is not None and counts.max() == 0:  # the proxy rules all out: reach alone
+        counts, mins = score_bases(robot, T, bases, singular_deg, None, more(None))
+    return counts, mins

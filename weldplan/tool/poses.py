@@ -45,7 +45,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from weldplan.errors import InputError
 from weldplan.tool.model import Tool
-from weldplan.tool.orient import candidate_rotations, local_candidates
+from weldplan.tool.orient import candidate_rotations, local_candidates, rotation_angles
 from weldplan.tool.pose_choice import DEFAULT_MAX_VETOES, Accept, ChoiceState, choose
 from weldplan.tool.pose_search import PoseSearch, probe_positions
 from weldplan.tool.result import NO_FREE_POSE, OK, Miss, WeldPose, WeldPoses, quat_wxyz
@@ -237,6 +237,9 @@ def plan_weld_poses(
     if both_sides:
         choice, total = _turn_over(table, state, choice, total, pick)
     t_miss = time.perf_counter()
+    alts = _alternatives(
+        dists, table.allowed & table.tried, state.rejected, quats, choice, clearance
+    )
     misses = {i: table.miss(i, near[i][1], params) for i in range(n) if i not in choice}
     dists[~table.tried] = 0.0  # not tried: counted as not free below
     notes = {i: _veto_note(r) for i, r in state.veto_reasons.items() if i in state.exhausted}
@@ -270,6 +273,7 @@ def plan_weld_poses(
             "miss_s": round(time.perf_counter() - t_miss, 3),
             "total_s": round(elapsed, 3),
         },
+        alternatives=alts,
     )
     log.info("%s (%.1f s)", result.summary().splitlines()[0], elapsed)
     return result
@@ -412,6 +416,34 @@ def _assemble(
                 )
             )
     return tuple(poses)
+
+
+def _alternatives(
+    dists: NDArray[np.float64],
+    live: NDArray[np.bool_],
+    rejected: NDArray[np.bool_],
+    quats: NDArray[np.float64],
+    choice: dict[int, int],
+    clearance: float,
+) -> tuple[NDArray[np.float64], ...]:
+    """Per weld, the quaternions of its candidates not known to fail for the tool
+    (:attr:`~weldplan.tool.result.WeldPoses.alternatives`): tried and still allowed (``live``),
+    not colliding (``dists != 0``), clearance not measured short (NaN or at least the clearance:
+    :func:`_first_free` stops at the first that keeps it), not rejected by the re-check; the
+    chosen one first, then by rotation from it."""
+    out: list[NDArray[np.float64]] = []
+    for i in range(len(dists)):
+        if i not in choice:
+            out.append(np.zeros((0, 4)))
+            continue
+        c = choice[i]
+        d = dists[i]
+        with np.errstate(invalid="ignore"):
+            k = np.flatnonzero(live[i] & ~rejected[i] & (d != 0) & ~(d < clearance))
+        k = k[k != c]
+        ang = rotation_angles(quats[i, k], quats[i, c][None])[:, 0]
+        out.append(np.concatenate([quats[i, [c]], quats[i, k[np.argsort(ang, kind="stable")]]]))
+    return tuple(out)
 
 
 def _veto_note(reasons: list[str]) -> str:

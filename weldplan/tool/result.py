@@ -217,6 +217,13 @@ class WeldPoses:
         The search settings (cone, steps, contact radius, clearance).
     stats
         Figures of the run (candidates checked, seconds).
+    alternatives
+        Per weld (the same order), ``(k, 4)`` quaternions ``(qw, qx, qy, qz)``: the candidate
+        orientations of the search not known to fail for the tool (no collision; clearance
+        unmeasured or kept; not rejected by the re-check), the chosen one first, the others by
+        rotation from it; ``(0, 4)`` for a weld with no pose. What the robot's base search may
+        choose among (:mod:`weldplan.robot.altreach`). Empty when not known (read from JSON:
+        not written there).
     """
 
     poses: tuple[WeldPose, ...]
@@ -224,6 +231,7 @@ class WeldPoses:
     total_rotation: float
     settings: dict[str, Any] = field(default_factory=dict)
     stats: dict[str, Any] = field(default_factory=dict)
+    alternatives: tuple[NDArray[np.float64], ...] = field(default=(), compare=False, repr=False)
 
     @property
     def n_ok(self) -> int:
