@@ -281,25 +281,48 @@ def plan_robot_route(
             det, q, exact, branch, rows, status, detail, tuple(route.order), stats,
             replan=replan, zone=own_zone,
         )  # fmt: skip
-    weld_index = np.array([_weld_row(row, exact, r) for r in rows], dtype=np.int64)
     _check_fk(rb, q, exact, T_fl, row, stats)
+    stats["seconds_total"] = round(time.perf_counter() - t0, 3)
+    return _robot_route(
+        robot, placement.base, F, q, row, exact, branch, rows, route.order, status, detail,
+        replanned, stats,
+    )  # fmt: skip
+
+
+def _robot_route(
+    robot: Robot,
+    base: NDArray,
+    F: NDArray,
+    q: NDArray,
+    row: NDArray,
+    exact: NDArray,
+    branch: NDArray,
+    rows: NDArray,
+    order: Any,
+    status: list[str],
+    detail: list[str],
+    replanned: list[int],
+    stats: dict[str, Any],
+) -> RobotRoute:
+    """The :class:`RobotRoute` of an assembled joint route: each weld's exact row, the branch
+    flips (rows whose solved branch differs from the previous solved row's), logged."""
+    weld_index = np.array([_weld_row(row, exact, r) for r in rows], dtype=np.int64)
     solved = branch >= 0
     flips = [
         int(i)
         for i in range(1, len(q))
         if solved[i] and solved[i - 1] and branch[i] != branch[i - 1]
     ]
-    stats["seconds_total"] = round(time.perf_counter() - t0, 3)
     rr = RobotRoute(
         robot=robot.name,
         joint_names=robot.joint_names,
-        base=placement.base,
+        base=base,
         flange_tcp=F,
         q=q,
         row=row,
         exact=exact,
         branch=branch,
-        weld_ids=tuple(route.order),
+        weld_ids=tuple(order),
         weld_index=weld_index,
         status=tuple(status),
         flips=tuple(flips),
@@ -316,6 +339,7 @@ def plan_robot_route(
         stats["seconds_total"],
     )
     return rr
+
 
 
 def _collision_stage(
