@@ -29,7 +29,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from weldplan.robot.model import Robot
-from weldplan.robot.reach import chord_clear, may_reach, usable
+from weldplan.robot.reach import alt_pairs, usable
 
 #: alternative poses per weld that the base search scores (the chosen one included)
 SCORE_ALTS = 16
@@ -76,55 +76,6 @@ def alternative_flange_poses(
     return out
 
 
-def _pairs(
-    alts: Sequence[NDArray[np.float64]], need: NDArray[np.bool_]
-) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]:
-    """``(cand (p,), weld (p,), T (p, 4, 4))``: every alternative of every needed (candidate,
-    weld) pair of ``need (c, n)``, one row each."""
-    c_idx, w_idx = np.nonzero(need)
-    sizes = np.array([len(alts[w]) for w in w_idx], dtype=np.int64)
-    cand = np.repeat(c_idx, sizes)
-    weld = np.repeat(w_idx, sizes)
-    T = np.concatenate([alts[w] for w in w_idx]) if len(w_idx) else np.zeros((0, 4, 4))
-    return cand, weld, T
-
-
-def alt_reach(
-    robot: Robot,
-    bases: NDArray[np.float64],
-    alts: Sequence[NDArray[np.float64]],
-    need: NDArray[np.bool_],
-    singular_deg: float,
-    dist: object | None = None,
-) -> tuple[NDArray[np.bool_], NDArray[np.float64]]:
-    """Per (candidate base, weld) of ``need (c, n)``: whether one of the weld's alternative
-    flange poses (``alts[w] (k, 4, 4)`` mm, part frame) is usable from the base ``bases[c]``
-    (with ``dist``, a :class:`~weldplan.geometry.distance.SurfaceDistance`, only where its
-    shoulder-wrist chord misses the part: :func:`~weldplan.robot.reach.chord_clear`), and the
-    best manipulability over those usable branches (``-inf`` elsewhere)."""
-    got = np.zeros(need.shape, dtype=bool)
-    best = np.full(need.shape, -np.inf)
-    cand, weld, T = _pairs(alts, need & np.array([len(a) > 0 for a in alts])[None])
-    if len(T) == 0:
-        return got, best
-    Tb = np.linalg.inv(bases)[cand] @ T  # in each candidate's base frame
-    keep = may_reach(robot, Tb)
-    if dist is not None:
-        keep[keep] = chord_clear(robot, bases[cand[keep]], T[keep], dist)
-    cand, weld, Tb = cand[keep], weld[keep], Tb[keep]
-    if len(Tb) == 0:
-        return got, best
-    at_origin = robot.with_base(np.eye(4))
-    br = at_origin.ik_all(Tb)
-    idx = np.argwhere(usable(br, singular_deg))
-    if len(idx) == 0:
-        return got, best
-    m = at_origin.manipulability(br.q[idx[:, 0], idx[:, 1]])
-    np.maximum.at(best, (cand[idx[:, 0]], weld[idx[:, 0]]), m)
-    got = np.isfinite(best)
-    return got, best
-
-
 def alt_free(
     robot: Robot,
     checker: Any,
@@ -141,7 +92,7 @@ def alt_free(
     its first branch is free. ``by_first (n,) bool``, when given, is set where the weld is served
     by its first pose (all its branches are tried before its other poses)."""
     ok = np.zeros(len(need), dtype=bool)
-    _, weld, T = _pairs(alts, need[None] & np.array([len(a) > 0 for a in alts])[None])
+    _, weld, T = alt_pairs(alts, need[None] & np.array([len(a) > 0 for a in alts])[None])
     if len(T) == 0:
         return ok
     br = robot.ik_all(T)

@@ -445,8 +445,6 @@ def _score(
     def more(d: object | None) -> Callable | None:
         if alts is None:
             return None
-        from weldplan.robot.altreach import alt_reach
-
         return lambda served: alt_reach(robot, bases, alts, ~served, singular_deg, d)
 
     clear = None if dist is None else sight_clear(robot, bases, T, dist)
@@ -454,3 +452,52 @@ def _score(
     if clear is not None and counts.max() == 0:  # the proxy rules all out: reach alone
         counts, mins = score_bases(robot, T, bases, singular_deg, None, more(None))
     return counts, mins
+
+
+def alt_pairs(
+    alts: Sequence[NDArray[np.float64]], need: NDArray[np.bool_]
+) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]:
+    """``(cand (p,), weld (p,), T (p, 4, 4))``: every alternative of every needed (candidate,
+    weld) pair of ``need (c, n)``, one row each."""
+    c_idx, w_idx = np.nonzero(need)
+    sizes = np.array([len(alts[w]) for w in w_idx], dtype=np.int64)
+    cand = np.repeat(c_idx, sizes)
+    weld = np.repeat(w_idx, sizes)
+    T = np.concatenate([alts[w] for w in w_idx]) if len(w_idx) else np.zeros((0, 4, 4))
+    return cand, weld, T
+
+
+def alt_reach(
+    robot: Robot,
+    bases: NDArray[np.float64],
+    alts: Sequence[NDArray[np.float64]],
+    need: NDArray[np.bool_],
+    singular_deg: float,
+    dist: object | None = None,
+) -> tuple[NDArray[np.bool_], NDArray[np.float64]]:
+    """Per (candidate base, weld) of ``need (c, n)``: whether one of the weld's alternative
+    flange poses (``alts[w] (k, 4, 4)`` mm, part frame) is usable from the base ``bases[c]``
+    (with ``dist``, a :class:`~weldplan.geometry.distance.SurfaceDistance`, only where its
+    shoulder-wrist chord misses the part: :func:`chord_clear`), and the
+    best manipulability over those usable branches (``-inf`` elsewhere)."""
+    got = np.zeros(need.shape, dtype=bool)
+    best = np.full(need.shape, -np.inf)
+    cand, weld, T = alt_pairs(alts, need & np.array([len(a) > 0 for a in alts])[None])
+    if len(T) == 0:
+        return got, best
+    Tb = np.linalg.inv(bases)[cand] @ T  # in each candidate's base frame
+    keep = may_reach(robot, Tb)
+    if dist is not None:
+        keep[keep] = chord_clear(robot, bases[cand[keep]], T[keep], dist)
+    cand, weld, Tb = cand[keep], weld[keep], Tb[keep]
+    if len(Tb) == 0:
+        return got, best
+    at_origin = robot.with_base(np.eye(4))
+    br = at_origin.ik_all(Tb)
+    idx = np.argwhere(usable(br, singular_deg))
+    if len(idx) == 0:
+        return got, best
+    m = at_origin.manipulability(br.q[idx[:, 0], idx[:, 1]])
+    np.maximum.at(best, (cand[idx[:, 0]], weld[idx[:, 0]]), m)
+    got = np.isfinite(best)
+    return got, best
