@@ -58,6 +58,10 @@ QUAT_NORM_TOL = 1e-6
 #: OMPL seeds must be positive 32-bit integers (0 is ignored by OMPL)
 _SEED_MOD = 2**32 - 1
 
+#: OMPL's own wall-clock limit where a caller budgets CPU seconds (``stop``), in units of that
+#: budget: a safety net only (the gun's SE(3) re-plan, the robot's joint-space transfers)
+WALL_FACTOR = 10.0
+
 StateCheck = Callable[[NDArray[np.float64]], bool]
 MotionCheck = Callable[[NDArray[np.float64], NDArray[np.float64]], bool]
 

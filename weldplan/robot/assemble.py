@@ -28,14 +28,16 @@ back and they stay dropped. The test is repeated after every :data:`TRAP_FAILS` 
 from ``a``, with the latest ones, at most :data:`TRAP_TESTS` times (the welds right after ``a``
 may be hard to reach from anywhere: on that car2_200 run Z4L-3's successors Z4L-2 and Z4L-1
 were reached from neither Z4L-3 nor the weld before it); the first served weld (no weld before
-it) is never tested. Welds the path passes
-without serving keep a row on it that is not exact (the program passes them without welding):
-the detour's joint polyline is subdivided where it has fewer inner rows than such welds (points
-on its own segments: the motion is unchanged). The motions of the route's own legs are checked
-with the contact zone exempt where the caller says (``zone=``: every one on the point-tip route;
-only near the spots on a route along the gun's transitions, :mod:`weldplan.robot.gunpath`), those
-of the retract/approach with it exempt, those of the transfer without (``zone`` in the result).
-The caller checks the assembled path again (the verification).
+it) is never tested.
+
+Welds the path passes without serving keep a row on it that is not exact (the program passes
+them without welding): the detour's joint polyline is subdivided where it has fewer inner rows
+than such welds (points on its own segments: the motion is unchanged). The motions of the
+route's own legs are checked with the contact zone exempt where the caller says (``zone=``:
+every one on the point-tip route; only near the spots on a route along the gun's transitions,
+:mod:`weldplan.robot.gunpath`), those of the retract/approach with it exempt, those of the
+transfer without (``zone`` in the result). The caller checks the assembled path again (the
+verification).
 
 The head (route rows before the first served weld) and the tail (after the last) are the route's
 own rows; a blocked tail is replaced by the retract from the last served weld (subdivided, one
@@ -88,6 +90,9 @@ class JointPath:
     branch: list[int] = field(default_factory=list)
     zone: list[bool] = field(default_factory=list)
 
+    #: the per-row lists, in order
+    LISTS = ("q", "row", "exact", "branch", "zone")
+
     def add(self, q: NDArray, row: int, exact: bool, branch: int, zone: bool = True) -> None:
         self.q.append(np.asarray(q, dtype=np.float64))
         self.row.append(int(row))
@@ -102,9 +107,8 @@ class JointPath:
     def cut(self, mark: tuple[int, bool]) -> tuple[Any, ...]:
         """Remove every row after ``mark`` and return them (:meth:`paste` puts them back)."""
         n, z = mark
-        names = ("q", "row", "exact", "branch", "zone")
-        saved = tuple(getattr(self, k)[n:] for k in names) + (self.zone[n - 1] if n else True,)
-        for k in names:
+        saved = tuple(getattr(self, k)[n:] for k in self.LISTS) + (self.zone[n - 1] if n else True,)
+        for k in self.LISTS:
             del getattr(self, k)[n:]
         if n:
             self.zone[n - 1] = z
@@ -115,7 +119,7 @@ class JointPath:
         *lists, z = saved
         if self.zone:
             self.zone[-1] = z
-        for k, v in zip(("q", "row", "exact", "branch", "zone"), lists, strict=True):
+        for k, v in zip(self.LISTS, lists, strict=True):
             getattr(self, k).extend(v)
 
     def arrays(self) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
@@ -233,8 +237,6 @@ class _Walk:
     tested: dict[int, int] = field(default_factory=dict)
     #: rows of the path at the ends of its transfers (clear configurations OMPL connected)
     hubs: list[tuple[int, int]] = field(default_factory=list)
-    #: the welds reached by going back along the path (:meth:`retrace`)
-    retraced: list[int] = field(default_factory=list)
     #: per weld, the tries in a row to go back from it that failed (:data:`RETRACE_TRIES`)
     retraced_from: dict[int, int] = field(default_factory=dict)
 
@@ -305,7 +307,6 @@ class _Walk:
             P = np.vstack([mid, lb[:-1][::-1]])  # mid[0]: the hub, reached by the motion h + 1 -> h
             _add_detour(out, self.det.robot, P, ia, ib, self.rows, self.q, self.branch, zones[h])
             self.replanned.append(a)
-            self.retraced.append(b)
             self.retraced_from[a] = 0
             self._hubs_at(n0, (lb[-1],), (b,))
             log.info("weld %s reached from weld %s back along the path (%d rows)",

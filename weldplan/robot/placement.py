@@ -173,7 +173,7 @@ def _route_score(
         status = np.full(len(T_fl), "", dtype=object)
     lost = np.array([status[r] != OK for r in rows], dtype=bool)
     n_ok = int((~lost).sum())
-    checker = None if checker_for is None else checker_for(rb)
+    checker = None if checker_for is None or alts is None else checker_for(rb)
     if alts is not None and lost.any():  # served at this base by another of their poses
         n_ok += int(alt_free(rb, checker, alts, lost, singular_deg).sum())
         if n_ok == 0:

@@ -45,6 +45,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from weldplan.motion.sampling import WALL_FACTOR
 from weldplan.robot.collision import RobotCollision
 from weldplan.robot.model import Robot
 from weldplan.robot.reach import usable
@@ -73,9 +74,6 @@ TUCK_A2_A3 = ((-90.0, 90.0), (-120.0, 120.0))
 RETRY_TIME_S = 30.0
 #: s: the most all the retries of one route may take together (then a leg gets one run only)
 RETRY_TOTAL_S = 120.0
-#: OMPL's wall-clock limit of a transfer, in multiples of its CPU budget (a safety net: the
-#: budget itself is CPU seconds, :meth:`Detour._ompl`)
-WALL_FACTOR = 10.0
 #: configurations on a joint motion at which a transfer's IK branch is checked
 #: (:meth:`Detour.on_branch`)
 BRANCH_SAMPLES = 9
@@ -83,7 +81,8 @@ BRANCH_SAMPLES = 9
 
 @dataclass(frozen=True)
 class Detour:
-    """What :func:`assemble` needs besides the joint route (see the module docstring)."""
+    """What :func:`weldplan.robot.assemble.assemble` needs besides the joint route (see the
+    module docstring)."""
 
     robot: Robot
     checker: RobotCollision
@@ -100,7 +99,7 @@ class Detour:
     #: weld's own) which the gun stage proved free for the tool: tried before :meth:`retract`
     #: (:func:`weldplan.robot.gunpath.gun_exits`)
     exits: dict[int, tuple[NDArray[np.float64], ...]] = field(default_factory=dict)
-    #: figures of the transfers planned with OMPL (runs, solved, retries, seconds)
+    #: figures of the transfers planned with OMPL (runs, solved, retries, CPU and wall seconds)
     ompl: dict[str, float] = field(default_factory=dict, compare=False)
     #: how each weld was left or reached by a detour: ``"gun exit"`` or ``"retract"``
     left_by: dict[str, int] = field(default_factory=dict, compare=False)
@@ -173,17 +172,14 @@ class Detour:
         With :attr:`keep_branch` and both ends on one IK branch, every step stays on it
         (:meth:`on_branch`): the detour passes no wrist, elbow or shoulder flip."""
         keep = self._kept_branch(qa, qb)
-        if self.on_branch(qa, qb, keep) and self.checker.motion_free(qa, qb):
+        if self._motion_ok(qa, qb, keep):
             return np.vstack([qa, qb])
         for a2, a3 in self.tuck:
             P = np.array([qa, qa, qb, qb])
             P[1:3, 1:3] = np.radians([a2, a3])
             if not self.robot.in_limits(P[1:3]).all():
                 continue
-            if all(
-                self.on_branch(x, y, keep) and self.checker.motion_free(x, y)
-                for x, y in zip(P[:-1], P[1:], strict=True)
-            ):
+            if all(self._motion_ok(x, y, keep) for x, y in zip(P[:-1], P[1:], strict=True)):
                 return P
         return self._ompl(qa, qb, keep)
 
@@ -207,6 +203,11 @@ class Detour:
         t = np.linspace(0.0, 1.0, BRANCH_SAMPLES)[:, None]
         return bool(np.all(self.robot.branch_bits(qa + t * (qb - qa)) == keep))
 
+    def _motion_ok(self, qa: NDArray, qb: NDArray, keep: int | None) -> bool:
+        """The straight joint motion ``qa -> qb`` stays on branch ``keep`` and is free for the
+        whole tool and every link."""
+        return self.on_branch(qa, qb, keep) and bool(self.checker.motion_free(qa, qb))
+
     def _ompl(self, qa: NDArray, qb: NDArray, keep: int | None = None) -> NDArray | None:
         """OMPL in joint space (:func:`~weldplan.motion.sampling.plan_rn`), ``time_s``; while
         that is not enough, more runs of ``retry_time_s`` with the next seeds as long as the
@@ -225,9 +226,6 @@ class Detour:
                 self.checker.state_free(x)
             )
 
-        def motion(x: NDArray, y: NDArray) -> bool:
-            return self.on_branch(x, y, keep) and bool(self.checker.motion_free(x, y))
-
         k = 0
         while True:
             if k and (
@@ -245,7 +243,7 @@ class Detour:
                 self.robot.lower,
                 self.robot.upper,
                 valid,
-                motion_valid=motion,
+                motion_valid=lambda x, y: self._motion_ok(x, y, keep),
                 planner=self.planner,
                 time_s=WALL_FACTOR * budget,
                 seed=None if self.rng is None else self.rng + k,

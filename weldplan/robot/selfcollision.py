@@ -55,7 +55,7 @@ import fcl
 import numpy as np
 from numpy.typing import NDArray
 
-from weldplan.robot.nearpart import fcl_tf
+from weldplan.robot.nearpart import fcl_distance, fcl_tf
 
 log = logging.getLogger(__name__)
 
@@ -124,11 +124,8 @@ class AllowedCollisions:
 def _pair_distance(bodies: list[Any], i: int, j: int, F: NDArray[np.float64]) -> float:
     """mm: FCL distance of bodies ``i`` and ``j`` at link frames ``F (7, 4, 4)``; 0 on contact."""
     a, b = bodies[i], bodies[j]
-    a.obj.setTransform(fcl_tf(F[a.frame]))
     b.obj.setTransform(fcl_tf(F[b.frame]))
-    if fcl.collide(a.obj, b.obj, fcl.CollisionRequest(), fcl.CollisionResult()):
-        return 0.0
-    return float(fcl.distance(a.obj, b.obj, fcl.DistanceRequest(), fcl.DistanceResult()))
+    return fcl_distance(a.obj, F[a.frame], b.obj)
 
 
 def _key(bodies: list[Any], robot: Any, samples: int, seed: int, gap: float) -> str:
@@ -379,9 +376,9 @@ class SelfCheck:
     def _advance(
         self, robot: Any, qa: NDArray, qb: NDArray, i: int, j: int, rate: float
     ) -> tuple[float, float] | None:
-        """Conservative advancement of pair ``(i, j)`` (``j < 0``: body i and the floor) along
-        ``qa -> qb``, over which they move at most ``rate`` mm relative to each other: ``(t,
-        distance)`` where they come within :data:`SELF_GAP_MM`, ``None`` when they never do."""
+        """Conservative advancement of pair ``(i, j)`` along ``qa -> qb``, over which they
+        move at most ``rate`` mm relative to each other: ``(t, distance)`` where they come
+        within :data:`SELF_GAP_MM`, ``None`` when they never do."""
         t = 0.0
         d = 0.0
         for _ in range(MAX_SELF_STEPS):

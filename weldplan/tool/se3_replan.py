@@ -18,11 +18,8 @@ import numpy as np
 import trimesh
 from numpy.typing import NDArray
 
+from weldplan.motion.sampling import WALL_FACTOR
 from weldplan.tool.transit import BLOCKED, REPLANNED, Transition
-
-#: OMPL's own wall-clock limit, in units of the re-plan's CPU budget (a safety net only: the
-#: CPU budget, checked by every state and motion check and by OMPL between its steps, stops it)
-WALL_FACTOR = 10.0
 
 
 def _se3_box(a: NDArray, b: NDArray, part: trimesh.Trimesh, pad: float) -> tuple[NDArray, NDArray]:
