@@ -244,3 +244,26 @@ def test_joint_line_deviation_is_the_sagitta_of_an_axis_1_turn(build):
     got = joint_line_deviation(robot, Tft, qa[None], qb[None])[0]
     assert got == pytest.approx(r * (1 - np.cos(np.radians(10.0))), rel=1e-9)
     assert joint_line_deviation(robot, Tft, qa[None], qa[None])[0] == 0.0
+
+
+@pytest.mark.parametrize("abc", [(30.0, 90.0, 0.0), (-120.0, -90.0, 45.0), (10.0, 89.99999999, 5.0),
+                                 (170.0, 20.0, -35.0), (0.0, 0.0, 180.0)])  # fmt: skip
+def test_krl_abc_angles_rebuild_the_rotation_without_a_gimbal_lock_warning(abc):
+    import warnings
+
+    from scipy.spatial.transform import Rotation
+
+    from weldplan.io.posts.krl import abc_deg
+
+    R = Rotation.from_euler("ZYX", abc, degrees=True).as_matrix()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # scipy's "Gimbal lock detected" would fail here
+        got = abc_deg(R)
+    a, b, c = np.radians(got)
+    Rz = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]])
+    Ry = np.array([[np.cos(b), 0, np.sin(b)], [0, 1, 0], [-np.sin(b), 0, np.cos(b)]])
+    Rx = np.array([[1, 0, 0], [0, np.cos(c), -np.sin(c)], [0, np.sin(c), np.cos(c)]])
+    assert np.abs(Rz @ Ry @ Rx - R).max() < 1e-9
+    assert -90.0 <= got[1] <= 90.0
+    if abs(abc[1]) < 89.0:  # away from the lock the angles are the ones given
+        np.testing.assert_allclose(got, abc, atol=1e-9)
