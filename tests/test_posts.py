@@ -220,15 +220,53 @@ def test_a_weld_the_robot_cannot_serve_is_passed_without_welding(build):
     )  # fmt: skip
     assert b.skipped == ("C",)
     assert [t.joint_id for t in b.program.targets if t.kind == "weld"] == ["A", "B"]
-    moves = {t.row: t.move for t in b.program.targets[1:-1]}
-    assert moves[3] == "joint" and moves[4] == "joint"  # into and out of the passed row
+    # no target stands for C: the robot moves from row 2 straight on to row 4 (the same joint
+    # path), C named in the header only
+    assert 3 not in {t.row for t in b.program.targets}
+    assert b.row.tolist() == [0, 1, 2, 4, 5, 6, 7]
     assert b.timing.total == pytest.approx(b.timing.motion_time + 2 * 0.5)
     text = render_rapid(b.program)
-    assert "Not welded" in text and "C." in text
+    assert "Not welded (the robot cannot serve them; no target moves to them): C." in text
+    assert "route row 3" not in text
     mod = parse_rapid(text)
-    assert len(mod.welds) == 2
+    assert len(mod.welds) == 2 and len(mod.moves) == len(b.program.targets) == 7 + 2
     for (_, name, _, _), t in zip(mod.moves, b.program.targets, strict=True):
         _check_fk(robot, t.q, mod.wobj @ mod.targets[name][0], mod.tool)
+
+
+def test_welds_after_the_last_served_one_are_named_not_moved_to(build):
+    """A robot route that ends at its last served weld (no way off it) holds that configuration
+    for the route's later rows; the program stops there and names the welds it leaves out, in
+    both posts, with no move to them."""
+    from tests.route_fixtures import box_route
+    from weldplan.io.export import route_rows
+    from weldplan.io.trajectory import trajectory_csv_text
+    from weldplan.robot.program import robot_program
+
+    robot, Tft, Q, _ = build
+    route = box_route(directions=True)
+    rows = route_rows(route)
+    assert [r["joint_id"] for r in rows if r["kind"] == "weld"] == ["A", "C", "B"]
+    last = 3  # C, the last served weld: B (row 7) and the vias before it are held at C
+    Qh = Q.copy()
+    Qh[last + 1 :] = Q[last]
+    exact = np.arange(len(Q)) <= last
+    b = robot_program(
+        route, Qh, robot, Tft, exact=exact, part=box_part(), tool_mass=2.0,
+        tool_cog=np.zeros(3), weld_time=0.5,
+    )  # fmt: skip
+    assert b.skipped == ("B",) and b.row.tolist() == list(range(last + 1))
+    assert max(t.row for t in b.program.targets) == last
+    assert len({tuple(np.round(t.q, 9)) for t in b.program.targets[1:]}) == last + 1
+    src, dat = render_krl(b.program)
+    prog = parse_krl(src, dat)
+    assert len(prog.welds) == 2 and len(prog.moves) == last + 1 + 2
+    assert "no target moves to them): B." in src and "no target moves to them): B." in dat
+    assert "weld B" not in dat and "route row 7" not in dat
+    mod = parse_rapid(render_rapid(b.program))
+    assert len(mod.moves) == last + 1 + 2
+    steps = {int(r.split(",")[1]) for r in trajectory_csv_text(b.timing, b.row).splitlines()[1:]}
+    assert steps == set(range(last + 1))
 
 
 def test_joint_line_deviation_is_the_sagitta_of_an_axis_1_turn(build):

@@ -467,7 +467,7 @@ def _texts(args: argparse.Namespace, build: Any, rr: Any, rb: Any, outputs: dict
             texts["post"], texts["post_dat"] = render_krl(build.program)
         check_program(args.post, texts, build.program, rb)
     if "trajectory" in outputs:
-        texts["trajectory"] = trajectory_csv_text(build.timing, rr.row)
+        texts["trajectory"] = trajectory_csv_text(build.timing, build.row)
     return texts
 
 

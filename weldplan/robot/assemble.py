@@ -336,8 +336,8 @@ class _Walk:
         lv = self.det.leave(q[rk], rk, int(br[rk]))
         A = q[rk][None] if lv is None else lv[::-1]  # the approach, its clear end first
         pb = self.det.robot.branch_of(A)
-        for i in range(rk):
-            self.out.add(A[0], i, False, int(pb[0]), zone=False)
+        for i in range(rk):  # held: no motion (at the weld itself, its contact zone exempt)
+            self.out.add(A[0], i, False, int(pb[0]), zone=lv is None)
         for p, b in zip(A[1:], pb[1:], strict=True):
             self.out.add(p, rk - 1, False, int(b), zone=False)
         self.out.zone[-1] = True  # approach -> weld: contact zone exempt
@@ -518,6 +518,7 @@ class _Walk:
             if self.join(s, f, retrace=False) is None:
                 self._set_aside(a, fails, f, f"weld {self.ids[s]}, the first weld without it")
                 self.prev[f] = (s, mark)
+                self.prev.pop(s, None)  # the first weld now: tested by restart() in turn
                 for k in (s, *window[j:]):
                     self.status[k], self.detail[k] = OK, ""
                 return f, [], window[j + 1 :]
