@@ -84,6 +84,7 @@ from weldplan.robot.walkstats import (
     NO_EXIT,
     NO_TRANSFER,
     TRAP,
+    Assembled,
     WalkStats,
 )
 
@@ -176,31 +177,6 @@ def subdivide(P: NDArray[np.float64], inner: int) -> NDArray[np.float64]:
         i = int(np.argmax(seg))
         P = np.insert(P, i + 1, (P[i] + P[i + 1]) / 2, axis=0)
     return P
-
-
-@dataclass(frozen=True, eq=False)
-class Assembled:
-    """What :func:`assemble` returns.
-
-    Attributes
-    ----------
-    q, row, exact, branch
-        ``(k, 6)`` rad, ``(k,)``, ``(k,)``, ``(k,)``: the assembled joint route.
-    zone
-        ``(k - 1,) bool``: the motions checked with the tool's contact zone exempt.
-    replanned
-        The legs detoured (the position in ``rows`` of the weld each leaves).
-    stats
-        The walk's work and what it left out.
-    """
-
-    q: NDArray[np.float64]
-    row: NDArray[np.int64]
-    exact: NDArray[np.bool_]
-    branch: NDArray[np.int64]
-    zone: NDArray[np.bool_]
-    replanned: tuple[int, ...]
-    stats: WalkStats
 
 
 def assemble(

@@ -1,12 +1,15 @@
-"""The work of the robot's walk over its welds (:func:`weldplan.robot.assemble.assemble`) and
-what it gave up, as the robot stage reports them (``RobotRoute.stats["walk"]``, the CLI's
-summary).
+"""What the robot's walk over its welds (:func:`weldplan.robot.assemble.assemble`) returns: the
+assembled joint route, the walk's work and what it gave up, as the robot stage reports them
+(``RobotRoute.stats["walk"]``, the CLI's summary).
 """
 
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
 from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
 
 #: why the walk left a weld out (:attr:`WalkStats.dropped`; the weld's ``detail`` names the
 #: weld and the body): the weld the leg starts from has no free gun exit or retract; the weld
@@ -85,3 +88,28 @@ class WalkStats:
                 for c, ws in by.items()
             )
         return line
+
+
+@dataclass(frozen=True, eq=False)
+class Assembled:
+    """What :func:`assemble` returns.
+
+    Attributes
+    ----------
+    q, row, exact, branch
+        ``(k, 6)`` rad, ``(k,)``, ``(k,)``, ``(k,)``: the assembled joint route.
+    zone
+        ``(k - 1,) bool``: the motions checked with the tool's contact zone exempt.
+    replanned
+        The legs detoured (the position in ``rows`` of the weld each leaves).
+    stats
+        The walk's work and what it left out.
+    """
+
+    q: NDArray[np.float64]
+    row: NDArray[np.int64]
+    exact: NDArray[np.bool_]
+    branch: NDArray[np.int64]
+    zone: NDArray[np.bool_]
+    replanned: tuple[int, ...]
+    stats: WalkStats
