@@ -350,6 +350,8 @@ class _Walk:
         which end has no way off its weld, or why the transfer failed."""
         ia, ib = int(self.rows[a]), int(self.rows[b])
         q, br = self.q, self.branch
+        if self.tries.get(b, 0) >= TRANSFERS_PER_WELD:  # untried: not even its ends
+            return self.transfer(q[ia], q[ib], b, "")
         la = self.det.leave(q[ia], ia, int(br[ia]))
         if la is None:
             return None, (NO_EXIT, f"weld {self.ids[a]} has no free gun exit or retract")
