@@ -22,7 +22,9 @@ joint-space motion
 with: the contact zone about the TCP exempt, as the weld poses were verified), against each other
 (self-collision, the whole tool) and against the floor the route names (``stats["floor_z"]``:
 the searched base's floor; a route without one is not checked against a floor, and the report
-says so).
+says so). It also finds, from the joint rows alone, the welds of the route the robot followed
+that no exact row welds (:attr:`RobotCheck.left_out`): ``weldplan verify`` then exits 3, as
+``plan`` did.
 """
 
 from __future__ import annotations
