@@ -18,7 +18,7 @@ from weldplan.robot.assemble import (
     assemble,
 )
 from weldplan.robot.reach import COLLISION, OK
-from weldplan.robot.walkstats import NO_TRANSFER, TRAP, WalkStats
+from weldplan.robot.walkstats import NO_APPROACH, NO_TRANSFER, TRAP, WalkStats
 
 
 @dataclass
@@ -45,19 +45,21 @@ class _Branchless:
 
 @dataclass
 class ScriptedDetour:
-    """Each weld row ``r`` is left to (and approached from) the configuration ``q[r] + 0.5``; a
-    transfer exists unless it leaves a weld in ``traps`` or enters one in ``pockets``."""
+    """Each weld row ``r`` is left to (and approached from) the configuration ``q[r] + 0.5``,
+    except those in ``stuck`` (no free exit); a transfer exists unless it leaves a weld in
+    ``traps`` or enters one in ``pockets``."""
 
     q: np.ndarray
     traps: set[int] = field(default_factory=set)
     pockets: set[int] = field(default_factory=set)
+    stuck: set[int] = field(default_factory=set)
     tried: list[tuple[int, int]] = field(default_factory=list)
     ompl: dict[str, float] = field(default_factory=dict)
     robot: _Branchless = field(default_factory=_Branchless)
     checker: _Blocked = field(default_factory=_Blocked)
 
     def leave(self, q, row, branch):
-        return (q + 0.5)[None]
+        return None if row in self.stuck else (q + 0.5)[None]
 
     def retract(self, q, T, branch):
         return q + 0.5, np.zeros(3)
@@ -239,3 +241,23 @@ def test_the_walk_stats_round_trip_and_name_the_welds_left_out():
     line = s.describe()
     assert line.startswith("12 transfer(s) tried (4 found, at most 7 a weld)")
     assert line.endswith("left out: 2 no transfer (W3, W4)")
+
+
+def test_a_weld_with_no_way_in_is_dropped_with_that_cause_and_no_transfer():
+    status, detail, welded, det, _ = _walk(5, stuck={2})
+    assert welded == [0, 1, 3, 4]
+    assert detail[2] == "link_5 on the leg from weld W1; weld W2 has no free gun exit or retract"
+    assert det.tried == [(0, 1), (1, 3), (3, 4)]
+    assert _walk.stats.dropped == (("W2", NO_APPROACH),)
+
+
+def test_a_new_first_weld_with_no_way_in_is_where_the_robot_starts():
+    # W0 leads nowhere and W1 has no free exit: the path starts again at W1 itself (route row 0
+    # held at W1's configuration, checked with its contact zone exempt) and goes on along the
+    # route's own free legs
+    status, _, welded, det, _ = _walk(5, free={1, 2, 3}, traps={0}, stuck={1})
+    assert welded == [1, 2, 3, 4] and status[0] == COLLISION
+    assert det.tried == [(0, 2)]
+    np.testing.assert_array_equal(_walk.path[:3], [1, 1, 2])
+    assert _walk.zone[0]
+
