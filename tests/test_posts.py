@@ -220,15 +220,53 @@ def test_a_weld_the_robot_cannot_serve_is_passed_without_welding(build):
     )  # fmt: skip
     assert b.skipped == ("C",)
     assert [t.joint_id for t in b.program.targets if t.kind == "weld"] == ["A", "B"]
-    moves = {t.row: t.move for t in b.program.targets[1:-1]}
-    assert moves[3] == "joint" and moves[4] == "joint"  # into and out of the passed row
+    # no target stands for C: the robot moves from row 2 straight on to row 4 (the same joint
+    # path), C named in the header only
+    assert 3 not in {t.row for t in b.program.targets}
+    assert b.row.tolist() == [0, 1, 2, 4, 5, 6, 7]
     assert b.timing.total == pytest.approx(b.timing.motion_time + 2 * 0.5)
     text = render_rapid(b.program)
-    assert "Not welded" in text and "C." in text
+    assert "Not welded (the robot cannot serve them; no target moves to them): C." in text
+    assert "route row 3" not in text
     mod = parse_rapid(text)
-    assert len(mod.welds) == 2
+    assert len(mod.welds) == 2 and len(mod.moves) == len(b.program.targets) == 7 + 2
     for (_, name, _, _), t in zip(mod.moves, b.program.targets, strict=True):
         _check_fk(robot, t.q, mod.wobj @ mod.targets[name][0], mod.tool)
+
+
+def test_welds_after_the_last_served_one_are_named_not_moved_to(build):
+    """A robot route that ends at its last served weld (no way off it) holds that configuration
+    for the route's later rows; the program stops there and names the welds it leaves out, in
+    both posts, with no move to them."""
+    from tests.route_fixtures import box_route
+    from weldplan.io.export import route_rows
+    from weldplan.io.trajectory import trajectory_csv_text
+    from weldplan.robot.program import robot_program
+
+    robot, Tft, Q, _ = build
+    route = box_route(directions=True)
+    rows = route_rows(route)
+    assert [r["joint_id"] for r in rows if r["kind"] == "weld"] == ["A", "C", "B"]
+    last = 3  # C, the last served weld: B (row 7) and the vias before it are held at C
+    Qh = Q.copy()
+    Qh[last + 1 :] = Q[last]
+    exact = np.arange(len(Q)) <= last
+    b = robot_program(
+        route, Qh, robot, Tft, exact=exact, part=box_part(), tool_mass=2.0,
+        tool_cog=np.zeros(3), weld_time=0.5,
+    )  # fmt: skip
+    assert b.skipped == ("B",) and b.row.tolist() == list(range(last + 1))
+    assert max(t.row for t in b.program.targets) == last
+    assert len({tuple(np.round(t.q, 9)) for t in b.program.targets[1:]}) == last + 1
+    src, dat = render_krl(b.program)
+    prog = parse_krl(src, dat)
+    assert len(prog.welds) == 2 and len(prog.moves) == last + 1 + 2
+    assert "no target moves to them): B." in src and "no target moves to them): B." in dat
+    assert "weld B" not in dat and "route row 7" not in dat
+    mod = parse_rapid(render_rapid(b.program))
+    assert len(mod.moves) == last + 1 + 2
+    steps = {int(r.split(",")[1]) for r in trajectory_csv_text(b.timing, b.row).splitlines()[1:]}
+    assert steps == set(range(last + 1))
 
 
 def test_joint_line_deviation_is_the_sagitta_of_an_axis_1_turn(build):
@@ -244,3 +282,26 @@ def test_joint_line_deviation_is_the_sagitta_of_an_axis_1_turn(build):
     got = joint_line_deviation(robot, Tft, qa[None], qb[None])[0]
     assert got == pytest.approx(r * (1 - np.cos(np.radians(10.0))), rel=1e-9)
     assert joint_line_deviation(robot, Tft, qa[None], qa[None])[0] == 0.0
+
+
+@pytest.mark.parametrize("abc", [(30.0, 90.0, 0.0), (-120.0, -90.0, 45.0), (10.0, 89.99999999, 5.0),
+                                 (170.0, 20.0, -35.0), (0.0, 0.0, 180.0)])  # fmt: skip
+def test_krl_abc_angles_rebuild_the_rotation_without_a_gimbal_lock_warning(abc):
+    import warnings
+
+    from scipy.spatial.transform import Rotation
+
+    from weldplan.io.posts.krl import abc_deg
+
+    R = Rotation.from_euler("ZYX", abc, degrees=True).as_matrix()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # scipy's "Gimbal lock detected" would fail here
+        got = abc_deg(R)
+    a, b, c = np.radians(got)
+    Rz = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]])
+    Ry = np.array([[np.cos(b), 0, np.sin(b)], [0, 1, 0], [-np.sin(b), 0, np.cos(b)]])
+    Rx = np.array([[1, 0, 0], [0, np.cos(c), -np.sin(c)], [0, np.sin(c), np.cos(c)]])
+    assert np.abs(Rz @ Ry @ Rx - R).max() < 1e-9
+    assert -90.0 <= got[1] <= 90.0
+    if abs(abc[1]) < 89.0:  # away from the lock the angles are the ones given
+        np.testing.assert_allclose(got, abc, atol=1e-9)

@@ -5,12 +5,20 @@ input); the geometry behind real detours is tested in test_robot_replan and test
 
 from __future__ import annotations
 
+from collections import Counter
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from weldplan.robot.assemble import RETRACE_TRIES, TRAP_FAILS, TRAP_TESTS, assemble
+from weldplan.robot.assemble import (
+    RETRACE_TRIES,
+    TRANSFERS_PER_WELD,
+    TRAP_FAILS,
+    TRAP_TESTS,
+    assemble,
+)
 from weldplan.robot.reach import COLLISION, OK
+from weldplan.robot.walkstats import NO_APPROACH, NO_TRANSFER, TRAP, WalkStats
 
 
 @dataclass
@@ -37,18 +45,21 @@ class _Branchless:
 
 @dataclass
 class ScriptedDetour:
-    """Each weld row ``r`` is left to (and approached from) the configuration ``q[r] + 0.5``; a
-    transfer exists unless it leaves a weld in ``traps`` or enters one in ``pockets``."""
+    """Each weld row ``r`` is left to (and approached from) the configuration ``q[r] + 0.5``,
+    except those in ``stuck`` (no free exit); a transfer exists unless it leaves a weld in
+    ``traps`` or enters one in ``pockets``."""
 
     q: np.ndarray
     traps: set[int] = field(default_factory=set)
     pockets: set[int] = field(default_factory=set)
+    stuck: set[int] = field(default_factory=set)
     tried: list[tuple[int, int]] = field(default_factory=list)
+    ompl: dict[str, float] = field(default_factory=dict)
     robot: _Branchless = field(default_factory=_Branchless)
     checker: _Blocked = field(default_factory=_Blocked)
 
     def leave(self, q, row, branch):
-        return (q + 0.5)[None]
+        return None if row in self.stuck else (q + 0.5)[None]
 
     def retract(self, q, T, branch):
         return q + 0.5, np.zeros(3)
@@ -73,14 +84,17 @@ def _walk(n, free=(), **kw):
     status = [OK] * n
     detail = [""] * n
     ids = tuple(f"W{i}" for i in range(n))
-    Q, row, exact, _, zone, replanned = assemble(
-        det, q, np.ones(n, bool), np.zeros(n, np.int64), rows, status, detail, ids
-    )
+    got = assemble(det, q, np.ones(n, bool), np.zeros(n, np.int64), rows, status, detail, ids)
+    row, exact = got.row, got.exact
     assert np.all(np.diff(row) >= 0)  # the rows stay in route order, none twice as a weld
+    assert set(range(n)) <= set(row.tolist())  # every route row has a joint row
     welded = [int(r) for r in row[exact]]
     assert len(set(welded)) == len(welded)
-    _walk.path, _walk.zone = Q[:, 0], zone
-    return status, detail, welded, det, replanned
+    assert welded == [k for k in range(n) if status[k] == OK]
+    assert got.stats.transfers == len(det.tried)
+    assert max(Counter(b for _, b in det.tried).values(), default=0) <= TRANSFERS_PER_WELD
+    _walk.path, _walk.zone, _walk.stats = got.q[:, 0], got.zone, got.stats
+    return status, detail, welded, det, list(got.replanned)
 
 
 def test_every_leg_detoured_serves_every_weld():
@@ -159,3 +173,91 @@ def test_going_back_stops_after_retrace_tries_failures_from_one_weld():
     assert welded == [0, 1, 2, 9]
     from_w0 = [b for a, b in det.tried if a == 0]
     assert from_w0 == [1, 3, 4]
+
+
+def test_a_first_weld_the_robot_cannot_go_on_from_costs_that_weld_only():
+    # W0 (no weld before it) leads nowhere: W1 and W2 fail from it, the path starts again at W1
+    # (the robot may start anywhere), W2 is reached from there: W0 dropped, the rest served;
+    # before, W0 stayed and every later weld was dropped from it (2/40 on a 40-spot station)
+    status, detail, welded, det, _ = _walk(6, traps={0})
+    assert welded == [1, 2, 3, 4, 5]
+    assert [k for k, s in enumerate(status) if s != OK] == [0]
+    assert detail[0].startswith("the robot cannot go on from this weld: weld(s) W1, W2 after it")
+    assert "W2 reached from weld W1, the first weld without it" in detail[0]
+    assert det.tried == [(0, 1), (0, 2), (1, 2), (2, 3), (3, 4), (4, 5)]
+    # route row 0 held at W1's approach (1.5), where the robot starts; W1; its detour to W2
+    np.testing.assert_array_equal(_walk.path[:5], [1.5, 1, 1.5, 2.5, 2])
+    assert _walk.stats.trap_tests == 1 and _walk.stats.traps == 1
+    assert _walk.stats.dropped == (("W0", TRAP),)
+
+
+def test_a_first_weld_trap_on_free_legs_is_left_from_its_successor():
+    # the route's own legs W1 -> W2 -> ... are free; W0 -> W1 is blocked and W0 leads nowhere:
+    # the new start W1 needs no transfer to W2, and its head (route row 0) is W1's approach
+    status, _, welded, det, _ = _walk(5, free={1, 2, 3}, traps={0})
+    assert welded == [1, 2, 3, 4] and status[0] == COLLISION
+    assert det.tried == [(0, 1), (0, 2)]
+
+
+def test_pockets_after_the_first_weld_keep_it():
+    # W1 and W2 cannot be entered from anywhere: the first weld W0 is tested (the path starts at
+    # W1, W2 is not reached from it), kept, and W3 on is served from W0
+    status, detail, welded, det, _ = _walk(6, pockets={1, 2})
+    assert welded == [0, 3, 4, 5]
+    assert [status[k] for k in (1, 2)] == [COLLISION] * 2
+    assert all(detail[k].startswith("link_5 on the leg from weld W0; no transfer") for k in (1, 2))
+    assert det.tried == [(0, 1), (0, 2), (1, 2), (0, 3), (3, 4), (4, 5)]
+    assert _walk.path[0] == 0  # the path starts at W0 again
+    s = _walk.stats
+    assert (s.transfers, s.transfers_found, s.trap_tests, s.traps) == (6, 3, 1, 0)
+    assert s.dropped == (("W1", NO_TRANSFER), ("W2", NO_TRANSFER))
+
+
+def test_a_first_weld_trap_before_pockets_is_found_on_the_next_test():
+    # W0 leads nowhere and W1, W2 cannot be entered: the first test (start at W1, W2 from it)
+    # keeps W0, the second (start at W3, W4 from it) drops W0
+    status, detail, welded, det, _ = _walk(7, traps={0}, pockets={1, 2})
+    assert welded == [3, 4, 5, 6]
+    assert [k for k, s in enumerate(status) if s != OK] == [0, 1, 2]
+    assert "W1, W2, W3, W4 after it" in detail[0]
+    assert det.tried == [(0, 1), (0, 2), (1, 2), (0, 3), (0, 4), (3, 4), (4, 5), (5, 6)]
+
+
+def test_no_weld_gets_more_transfers_than_its_budget(monkeypatch):
+    # with one transfer a weld, the trap test of W0 may not try W2 again: W0 is kept and every
+    # later weld is tried once, from it
+    import weldplan.robot.assemble as asm
+
+    monkeypatch.setattr(asm, "TRANSFERS_PER_WELD", 1)
+    status, _, welded, det, _ = _walk(6, traps={0})
+    assert welded == [0]
+    assert det.tried == [(0, 1), (0, 2), (0, 3), (0, 4), (0, 5)]
+
+
+def test_the_walk_stats_round_trip_and_name_the_welds_left_out():
+    _walk(7, pockets={3, 4})
+    s = _walk.stats
+    assert WalkStats.from_dict(s.to_dict()) == s
+    line = s.describe()
+    assert line.startswith("12 transfer(s) tried (4 found, at most 7 a weld)")
+    assert line.endswith("left out: 2 no transfer (W3, W4)")
+
+
+def test_a_weld_with_no_way_in_is_dropped_with_that_cause_and_no_transfer():
+    status, detail, welded, det, _ = _walk(5, stuck={2})
+    assert welded == [0, 1, 3, 4]
+    assert detail[2] == "link_5 on the leg from weld W1; weld W2 has no free gun exit or retract"
+    assert det.tried == [(0, 1), (1, 3), (3, 4)]
+    assert _walk.stats.dropped == (("W2", NO_APPROACH),)
+
+
+def test_a_new_first_weld_with_no_way_in_is_where_the_robot_starts():
+    # W0 leads nowhere and W1 has no free exit: the path starts again at W1 itself (route row 0
+    # held at W1's configuration, checked with its contact zone exempt) and goes on along the
+    # route's own free legs
+    status, _, welded, det, _ = _walk(5, free={1, 2, 3}, traps={0}, stuck={1})
+    assert welded == [1, 2, 3, 4] and status[0] == COLLISION
+    assert det.tried == [(0, 2)]
+    np.testing.assert_array_equal(_walk.path[:3], [1, 1, 2])
+    assert _walk.zone[0]
+

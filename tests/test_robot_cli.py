@@ -100,9 +100,32 @@ def robot_run(tmp_path_factory):
         "plan", str(mesh), str(joints), "--margin", "50", "--quiet", "-o", str(tmp / "r.csv"),
         "--tool", str(_torch_urdf(tmp)), "--robot", str(_robot_urdf()),
         "--robot-base=-1800,0,-700,0", "--weld-time", "0.4", "--post", "krl",
-        "--trajectory", str(tmp / "traj.csv"),
+        "--trajectory", str(tmp / "traj.csv"), "--json", str(tmp / "r.json"),
     ]  # fmt: skip
     return tmp, run_cli(argv)
+
+
+def test_verify_robot_exits_3_when_the_program_leaves_a_weld_out(robot_run, tmp_path, capsys):
+    """verify finds the welds the program leaves out from the joint rows themselves (no exact
+    row on the weld's row), not from the statuses the route claims."""
+    import json
+
+    tmp, rc = robot_run
+    assert rc == 0
+    verify = [str(tmp / "box.stl"), "--tool", str(tmp / "torch.urdf"),
+              "--robot", str(_robot_urdf())]  # fmt: skip
+    assert run_cli(["verify", str(tmp / "r.json"), *verify]) == 0
+    assert "not in the program" not in capsys.readouterr().out
+    d = json.loads((tmp / "r.json").read_text())
+    rob = d["tool"]["robot"]
+    assert all(s == "ok" for s in rob["status"]) and len(rob["weld_ids"]) == 4
+    # the second weld's exact row made a pass: the same joint path, without that weld
+    r = rob["row"][rob["weld_index"][1]]
+    rob["exact"] = [e and row != r for e, row in zip(rob["exact"], rob["row"], strict=True)]
+    (tmp_path / "r.json").write_text(json.dumps(d))
+    assert run_cli(["verify", str(tmp_path / "r.json"), *verify]) == 3
+    out = capsys.readouterr().out
+    assert f"1 weld(s) not in the program: {rob['weld_ids'][1]}" in out
 
 
 def test_plan_with_robot_writes_krl_src_dat_and_trajectory_that_replay(robot_run):

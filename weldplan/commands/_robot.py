@@ -467,7 +467,7 @@ def _texts(args: argparse.Namespace, build: Any, rr: Any, rb: Any, outputs: dict
             texts["post"], texts["post_dat"] = render_krl(build.program)
         check_program(args.post, texts, build.program, rb)
     if "trajectory" in outputs:
-        texts["trajectory"] = trajectory_csv_text(build.timing, rr.row)
+        texts["trajectory"] = trajectory_csv_text(build.timing, build.row)
     return texts
 
 
@@ -520,6 +520,7 @@ def _rows(rr: Any, build: Any) -> list[tuple[str, str]]:
             + (f"; {len(miss)} weld(s) not in the program (exit code 3)" if miss else ""),
         ),
         *miss,
+        *_walk_rows(rr),
         (
             "cycle time",
             f"{tt.total:.2f} s ({tt.motion_time:.2f} s moving, {tt.weld_time:g} s a weld; legs "
@@ -535,6 +536,15 @@ def _rows(rr: Any, build: Any) -> list[tuple[str, str]]:
             f"{build.tcp_deviation:.2f} mm off the linear moves' lines",
         ),
     ]
+
+
+def _walk_rows(rr: Any) -> list[tuple[str, str]]:
+    """The summary row of the walk over the welds: its work and the welds it left out, by
+    cause (:class:`weldplan.robot.walkstats.WalkStats`)."""
+    from weldplan.robot.walkstats import WalkStats
+
+    walk = rr.stats.get("walk")
+    return [("robot walk", WalkStats.from_dict(walk).describe())] if walk else []
 
 
 def _reach_rows(reach: RobotAcceptance | None) -> list[tuple[str, str]]:

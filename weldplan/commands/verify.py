@@ -75,23 +75,27 @@ def run(args: argparse.Namespace) -> int:
         return 1
     if sweeps is not None:
         print(f"tool transitions ok: {sweeps.describe()}")
-    if not _verify_robot(args, route, part, tool[0]):
+    robot = _verify_robot(args, route, part, tool[0])
+    if robot is None:
         return 1
-    if check.missing or (sweeps is not None and sweeps.blocked):
+    if check.missing or (sweeps is not None and sweeps.blocked) or robot:
         from weldplan.errors import EXIT_PARTIAL
 
         return EXIT_PARTIAL
     return 0
 
 
-def _verify_robot(args: argparse.Namespace, route: object, part: object, tool: object) -> bool:
+def _verify_robot(
+    args: argparse.Namespace, route: object, part: object, tool: object
+) -> tuple[str, ...] | None:
     """Re-check the robot route the route carries, if any (:mod:`weldplan.robot.routejson`):
-    FK, joint limits, robot + tool collision. False (said on stderr) when it fails."""
+    FK, joint limits, robot + tool collision. ``None`` (said on stderr) when it fails, else the
+    welds its program leaves out (a partial route: exit 3)."""
     from weldplan.robot.routejson import robot_route_of, verify_robot_route
 
     rr = robot_route_of(route, args.route)
     if rr is None:
-        return True
+        return ()
     urdf = args.robot or route.tool["robot"].get("urdf")  # type: ignore[attr-defined]
     from weldplan.robot import load_robot
 
@@ -99,6 +103,6 @@ def _verify_robot(args: argparse.Namespace, route: object, part: object, tool: o
     check = verify_robot_route(route, rr, robot, part, tool)
     if not check.ok:
         print(f"weldplan verify: robot route: {check.describe()}", file=sys.stderr)
-        return False
+        return None
     print(f"robot route ok: {check.describe()}")
-    return True
+    return check.left_out

@@ -35,8 +35,9 @@ Q_DECIMALS = 8
 def trajectory_csv_text(timing: Any, row: ArrayLike | None = None) -> str:
     """The CSV text of a :class:`~weldplan.robot.timing.TimedTrajectory` (module docstring).
 
-    ``row`` ``(k,) int`` maps the timing's joint rows to route rows (a
-    :class:`~weldplan.robot.configs.RobotRoute`'s ``row``); default: the identity.
+    ``row`` ``(k,) int`` maps the timing's joint rows to route rows (the program's
+    :attr:`~weldplan.robot.program.ProgramBuild.row`: the joint route without the rows the
+    program only passes); default: the identity.
     """
     step = np.asarray(timing.step, dtype=np.int64)
     if row is not None:

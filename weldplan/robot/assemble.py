@@ -7,8 +7,10 @@ configurations, checked with the tool's contact zone exempt (the TCP is on the v
 When that is blocked, the leg becomes a detour: leave ``a`` (a gun exit or a retract), transfer,
 approach ``b`` (:mod:`weldplan.robot.replan`).
 
-When no detour is found, ``b`` is dropped (status ``collision``, its ``detail`` naming the body
-that blocked the leg) and the next served weld is tried from ``a``.
+When no detour is found, ``b`` is dropped (status ``collision``; its ``detail`` names the body
+that blocked the route's own leg and the cause: which end has no free gun exit or retract, or
+what blocks the straight transfer when no tucked arm or OMPL run found one;
+:data:`~weldplan.robot.walkstats.CAUSES`) and the next served weld is tried from ``a``.
 
 *Back along the path.* When no detour from ``a`` reaches ``b``, the robot may go back the way it
 came: along the assembled path (its own motions, reversed, each checked as it was) to a *hub*,
@@ -27,8 +29,25 @@ which welds it could not reach) and the rest are tried on from there; when none 
 back and they stay dropped. The test is repeated after every :data:`TRAP_FAILS` more failures
 from ``a``, with the latest ones, at most :data:`TRAP_TESTS` times (the welds right after ``a``
 may be hard to reach from anywhere: on that car2_200 run Z4L-3's successors Z4L-2 and Z4L-1
-were reached from neither Z4L-3 nor the weld before it); the first served weld (no weld before
-it) is never tested.
+were reached from neither Z4L-3 nor the weld before it).
+
+*The first served weld* has no weld before it: the robot comes to it from wherever it is. It is
+tested as the trap by starting the path again at the first welds of the window (the robot may
+start anywhere) and trying the others from it: when one is reached, the first weld is dropped
+and the walk goes on from there; else it is put back. So one weld the robot can enter but not
+leave costs that weld wherever it stands in the route, never the rest (before, a 40-spot station
+whose first weld was such a trap served 2 of its 40 welds).
+
+*The budget.* Every transfer tried is charged to the weld it leads to, and no weld gets more
+than :data:`TRANSFERS_PER_WELD` (then it is dropped untried): the walk over ``n`` welds tries at
+most ``n * TRANSFERS_PER_WELD`` transfers, each with its own bounded OMPL budget
+(:class:`~weldplan.robot.replan.Detour`). The work (transfers tried and found, OMPL runs, tries
+back along the path, trap tests) and every weld left out with its cause are reported
+(:class:`~weldplan.robot.walkstats.WalkStats`).
+
+*The head.* The route's rows before the first served weld are its own when free; when they are
+blocked, they are held at the clear end of that weld's approach (its gun exit or retract,
+reversed: the robot starts there), or, with none, at the weld's own configuration.
 
 Welds the path passes without serving keep a row on it that is not exact (the program passes
 them without welding): the detour's joint polyline is subdivided where it has fewer inner rows
@@ -39,8 +58,8 @@ every one on the point-tip route; only near the spots on a route along the gun's
 transfer without (``zone`` in the result). The caller checks the assembled path again (the
 verification).
 
-The head (route rows before the first served weld) and the tail (after the last) are the route's
-own rows; a blocked tail is replaced by the retract from the last served weld (subdivided, one
+The tail (the route's rows after the last served weld) is the route's own rows when free; a
+blocked tail is replaced by the retract from the last served weld (subdivided, one
 point per route row after it, the last the retract configuration), or, with no retract, by the
 last served configuration held (the program ends at that weld).
 """
@@ -58,6 +77,16 @@ from numpy.typing import NDArray
 from weldplan.robot.model import Robot
 from weldplan.robot.reach import COLLISION, OK
 from weldplan.robot.replan import Detour
+from weldplan.robot.selfcollision import hit_words
+from weldplan.robot.walkstats import (
+    BUDGET,
+    NO_APPROACH,
+    NO_EXIT,
+    NO_TRANSFER,
+    TRAP,
+    Assembled,
+    WalkStats,
+)
 
 log = logging.getLogger(__name__)
 
@@ -74,6 +103,12 @@ RETRACE_TRIES = 2
 #: the most times one weld is tested as the trap (each test costs up to :data:`TRAP_FAILS`
 #: transfers that may fail: a bound on what a route whose later welds no one reaches pays)
 TRAP_TESTS = 3
+#: transfers (:meth:`~weldplan.robot.replan.Detour.transfer` calls) tried towards one weld, at
+#: most (module docstring): from the path's end and back along it to the hubs (1 +
+#: :data:`RETRACE_HUBS`), once in a trap test, and once more with its hubs when a trap before
+#: it was set aside; then it is dropped untried. The walk over ``n`` welds tries at most
+#: ``n * TRANSFERS_PER_WELD`` transfers, each with its own bounded OMPL budget
+TRANSFERS_PER_WELD = 2 * (1 + RETRACE_HUBS) + 1
 
 #: a place in a :class:`JointPath` (its rows, the zone flag of its last row) and how many legs
 #: had been detoured then
@@ -155,7 +190,7 @@ def assemble(
     ids: tuple[str, ...],
     zone: NDArray[np.bool_] | None = None,
     blocked: set[int] | None = None,
-) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray, list[int]]:
+) -> Assembled:
     """The joint route with blocked legs detoured (module docstring).
 
     Parameters
@@ -175,12 +210,6 @@ def assemble(
         The route's own motions the caller's check of ``q`` (same checker, same ``zone``) found
         blocked, every one: a leg with none of them is not checked again. ``None``: each leg is
         checked here.
-
-    Returns
-    -------
-    q, row, exact, branch, zone, replanned
-        The assembled route (``zone (k - 1,)`` per motion) and the legs detoured (the position
-        in ``rows`` of the weld each leaves).
     """
     served = [k for k in range(len(rows)) if status[k] == OK]
     own = np.ones(max(len(q) - 1, 0), dtype=bool) if zone is None else np.asarray(zone, bool)
@@ -193,9 +222,8 @@ def assemble(
     if not served:
         for i in range(len(q)):
             w.out.add(q[i], i, bool(ex[i]), int(branch[i]), bool(own[i]))
-        return (*w.out.arrays(), [])
-    for i in range(int(rows[served[0]]) + 1):
-        w.out.add(q[i], i, bool(ex[i]), int(branch[i]), bool(own[i]))
+        return w.result()
+    w.head(served[0])
     a, fails = served[0], []
     queue = deque(served[1:])
     while queue:
@@ -206,13 +234,14 @@ def assemble(
             w.prev[b] = (a, mark)
             a, fails = b, []
             continue
-        w.drop(b, why)
+        w.drop(b, *why)
         fails.append(b)
-        if len(fails) % TRAP_FAILS == 0 and a in w.prev and w.tested.get(a, 0) < TRAP_TESTS:
-            a, fails, again = w.without(a, fails)
+        if len(fails) % TRAP_FAILS == 0 and w.tested.get(a, 0) < TRAP_TESTS:
+            test = w.without if a in w.prev else w.restart  # a without prev: the first weld
+            a, fails, again = test(a, fails)
             queue.extendleft(reversed(again))
     _tail(det, w.out, q, ex, branch, int(rows[a]), own, blocked)
-    return (*w.out.arrays(), w.replanned)
+    return w.result()
 
 
 @dataclass
@@ -239,14 +268,63 @@ class _Walk:
     hubs: list[tuple[int, int]] = field(default_factory=list)
     #: per weld, the tries in a row to go back from it that failed (:data:`RETRACE_TRIES`)
     retraced_from: dict[int, int] = field(default_factory=dict)
+    #: per weld, the transfers tried towards it (:data:`TRANSFERS_PER_WELD`)
+    tries: dict[int, int] = field(default_factory=dict)
+    #: per weld dropped, the cause (:data:`CAUSES`)
+    cause: dict[int, str] = field(default_factory=dict)
+    #: counters of :class:`WalkStats`
+    count: dict[str, int] = field(default_factory=dict)
 
     def mark(self) -> Mark:
         return (*self.out.mark(), len(self.replanned))
 
-    def join(self, a: int, b: int, retrace: bool = True) -> str | None:
+    def tally(self, key: str, by: int = 1) -> None:
+        self.count[key] = self.count.get(key, 0) + by
+
+    def result(self) -> Assembled:
+        """The assembled route and the walk's :class:`WalkStats`."""
+        o = self.det.ompl
+        stats = WalkStats(
+            per_weld=TRANSFERS_PER_WELD,
+            ompl_runs=int(o.get("runs", 0)),
+            ompl_solved=int(o.get("solved", 0)),
+            ompl_cpu_s=round(float(o.get("s", 0.0)), 3),
+            dropped=tuple(
+                (self.ids[k], self.cause[k])
+                for k in sorted(self.cause)
+                if self.status[k] != OK  # fmt: skip
+            ),
+            **self.count,
+        )
+        q, row, exact, branch, zone = self.out.arrays()
+        return Assembled(q, row, exact, branch, zone, tuple(self.replanned), stats)
+
+    def head(self, k: int) -> None:
+        """Start the path at the first served weld ``k`` (module docstring): the route's own
+        rows up to it when free, else the rows before it held at the clear end of ``k``'s
+        approach (a gun exit or a retract, reversed), else at ``k``'s configuration."""
+        rk = int(self.rows[k])
+        q, br, own = self.q, self.branch, self.own
+        if rk == 0 or not _leg_hits(self.det, q, own, 0, rk, self.blocked):
+            for i in range(rk + 1):
+                self.out.add(q[i], i, bool(self.ex[i]), int(br[i]), bool(own[i]))
+            return
+        lv = self.det.leave(q[rk], rk, int(br[rk]))
+        A = q[rk][None] if lv is None else lv[::-1]  # the approach, its clear end first
+        pb = self.det.robot.branch_of(A)
+        for i in range(rk):  # held: no motion (at the weld itself, its contact zone exempt)
+            self.out.add(A[0], i, False, int(pb[0]), zone=lv is None)
+        for p, b in zip(A[1:], pb[1:], strict=True):
+            self.out.add(p, rk - 1, False, int(b), zone=False)
+        self.out.zone[-1] = True  # approach -> weld: contact zone exempt
+        self.out.add(q[rk], rk, bool(self.ex[rk]), int(br[rk]), bool(own[rk]))
+        log.info("weld %s: the robot starts at its approach (the route's rows before it are "
+                 "blocked)", self.ids[k])  # fmt: skip
+
+    def join(self, a: int, b: int, retrace: bool = True) -> tuple[str, str] | None:
         """Append the leg from weld ``a`` (the path's end) to weld ``b`` and ``b`` itself:
-        the route's own rows when free, else a detour. ``None`` when done, else why not (the
-        path unchanged)."""
+        the route's own rows when free, else a detour. ``None`` when done, else ``(cause,
+        why)`` (the path unchanged; cause one of :data:`CAUSES`)."""
         ia, ib = int(self.rows[a]), int(self.rows[b])
         q, br, own = self.q, self.branch, self.own
         hits = _leg_hits(self.det, q, own, ia, ib, self.blocked)
@@ -255,19 +333,57 @@ class _Walk:
             for i in range(ia + 1, ib + 1):
                 self.out.add(q[i], i, bool(self.ex[i]), int(br[i]), bool(own[i]))
             return None
-        got = _detour(self.det, q, br, ia, ib)
+        got, why = self.detour(a, b)
         if got is None:
             if retrace and self.retraced_from.get(a, 0) < RETRACE_TRIES and self.retrace(a, b):
                 return None
-            return (
-                f"{hits[0].body} on the leg from weld {self.ids[a]}; no detour through retract "
-                "poses found"
-            )
+            return why[0], f"{hits[0].body} on the leg from weld {self.ids[a]}; {why[1]}"
         n0 = len(self.out.q)
         _add_detour(self.out, self.det.robot, got[0], ia, ib, self.rows, q, br)
         self.replanned.append(a)
         self._hubs_at(n0, got[1:], (-1, b))
         return None
+
+    def detour(self, a: int, b: int) -> tuple[Any, tuple[str, str]]:
+        """``((path, transfer start, transfer end), None)`` of a detour from weld ``a`` to
+        weld ``b`` (leave ``a``, transfer, approach ``b``; rad), else ``(None, (cause, why))``:
+        which end has no way off its weld, or why the transfer failed."""
+        ia, ib = int(self.rows[a]), int(self.rows[b])
+        q, br = self.q, self.branch
+        if self.tries.get(b, 0) >= TRANSFERS_PER_WELD:  # untried: not even its ends
+            return self.transfer(q[ia], q[ib], b, "")
+        la = self.det.leave(q[ia], ia, int(br[ia]))
+        if la is None:
+            return None, (NO_EXIT, f"weld {self.ids[a]} has no free gun exit or retract")
+        lb = self.det.leave(q[ib], ib, int(br[ib]))
+        if lb is None:
+            return None, (NO_APPROACH, f"weld {self.ids[b]} has no free gun exit or retract")
+        mid, why = self.transfer(la[-1], lb[-1], b, f"weld {self.ids[a]}'s exit")
+        if mid is None:
+            return None, why
+        return (np.vstack([la[:-1], mid, lb[:-1][::-1]]), la[-1], lb[-1]), ("", "")
+
+    def transfer(self, qa: NDArray, qb: NDArray, b: int, src: str) -> tuple[Any, tuple[str, str]]:
+        """``(path, _)`` of :meth:`Detour.transfer` ``qa -> qb`` (the approach of weld ``b``),
+        within ``b``'s :data:`TRANSFERS_PER_WELD`; else ``(None, (cause, why))``: the budget
+        spent, or no transfer and what blocks the straight move (``src`` names ``qa``)."""
+        if self.tries.get(b, 0) >= TRANSFERS_PER_WELD:
+            return None, (BUDGET, f"its {TRANSFERS_PER_WELD} transfers were spent")
+        self.tries[b] = self.tries.get(b, 0) + 1
+        self.tally("transfers")
+        runs = self.det.ompl.get("runs", 0)
+        mid = self.det.transfer(qa, qb)
+        if mid is not None:
+            self.tally("transfers_found")
+            return mid, ("", "")
+        hits = self.det.checker.path_hits(np.array([qa, qb]), np.zeros(1, bool), first_only=True)
+        straight = hit_words(hits[0].body) if hits else "it leaves the IK branch"
+        n = int(self.det.ompl.get("runs", 0) - runs)
+        return None, (
+            NO_TRANSFER,
+            f"no transfer from {src} to weld {self.ids[b]}'s approach (straight: {straight}; "
+            f"no tucked arm; OMPL {n} run(s), unsolved)",
+        )
 
     def _hubs_at(self, n0: int, confs: tuple[NDArray, ...], owners: tuple[int, ...]) -> None:
         """Record as hubs the rows from ``n0`` on that equal ``confs`` (a transfer's ends: clear
@@ -295,8 +411,9 @@ class _Walk:
         if lb is None:
             return False
         self.retraced_from[a] = self.retraced_from.get(a, 0) + 1
+        self.tally("retraces")
         for h in hubs:
-            mid = self.det.transfer(self.out.q[h], lb[-1])
+            mid, _ = self.transfer(self.out.q[h], lb[-1], b, "a hub")
             if mid is None:
                 continue
             out, zones = self.out, list(self.out.zone)
@@ -308,21 +425,36 @@ class _Walk:
             _add_detour(out, self.det.robot, P, ia, ib, self.rows, self.q, self.branch, zones[h])
             self.replanned.append(a)
             self.retraced_from[a] = 0
+            self.tally("retraces_found")
             self._hubs_at(n0, (lb[-1],), (b,))
             log.info("weld %s reached from weld %s back along the path (%d rows)",
                      self.ids[b], self.ids[a], end - h)  # fmt: skip
             return True
         return False
 
-    def drop(self, k: int, why: str) -> None:
-        self.status[k], self.detail[k] = COLLISION, why
+    def drop(self, k: int, cause: str, why: str) -> None:
+        self.status[k], self.detail[k], self.cause[k] = COLLISION, why, cause
         log.info("weld %s dropped: %s", self.ids[k], why)
+
+    def _set_aside(self, a: int, fails: list[int], f: int, p: str) -> None:
+        """Drop weld ``a`` as the trap: ``fails`` were not reached from it, ``f`` was from
+        ``p`` (words)."""
+        names = ", ".join(self.ids[k] for k in fails[:5])
+        more = f" and {len(fails) - 5} more" if len(fails) > 5 else ""
+        self.tally("traps")
+        self.drop(
+            a,
+            TRAP,
+            f"the robot cannot go on from this weld: weld(s) {names}{more} after it not reached "
+            f"from it; weld {self.ids[f]} reached from {p}",
+        )
 
     def without(self, a: int, fails: list[int]) -> tuple[int, list[int], list[int]]:
         """Test weld ``a`` as the trap (module docstring) with the last :data:`TRAP_FAILS` of
         ``fails`` (the welds dropped in a row from it): ``(the weld the path now ends at, the
         welds dropped in a row from it, the welds to try again next)``."""
         self.tested[a] = self.tested.get(a, 0) + 1
+        self.tally("trap_tests")
         p, (n, z, n_rep) = self.prev[a]
         saved, saved_rep, saved_hubs = self.out.cut((n, z)), self.replanned[n_rep:], self.hubs
         del self.replanned[n_rep:]
@@ -333,13 +465,7 @@ class _Walk:
         for j, f in enumerate(window):
             mark = self.mark()
             if self.join(p, f, retrace=False) is None:  # a's retrace tried the hubs
-                names = ", ".join(self.ids[k] for k in fails[:5])
-                more = f" and {len(fails) - 5} more" if len(fails) > 5 else ""
-                self.drop(
-                    a,
-                    f"the robot cannot go on from this weld: weld(s) {names}{more} after it not "
-                    f"reached from it; weld {self.ids[f]} reached from weld {self.ids[p]}",
-                )
+                self._set_aside(a, fails, f, f"weld {self.ids[p]}")
                 self.prev[f] = (p, mark)
                 for k in window[j:]:
                     self.status[k], self.detail[k] = OK, ""
@@ -350,6 +476,36 @@ class _Walk:
         self.ex[ra] = ex_a
         log.info("weld %s kept: neither of %s is reached without it", self.ids[a],
                  ", ".join(self.ids[k] for k in window))  # fmt: skip
+        return a, fails, []
+
+    def restart(self, a: int, fails: list[int]) -> tuple[int, list[int], list[int]]:
+        """Test the first served weld ``a`` (no weld before it) as the trap: the path starts
+        again at the first of the last :data:`TRAP_FAILS` of ``fails`` and the others are tried
+        from there (module docstring); returns as :meth:`without`."""
+        self.tested[a] = self.tested.get(a, 0) + 1
+        self.tally("trap_tests")
+        saved, saved_rep, saved_hubs = self.out.cut((0, True)), self.replanned, self.hubs
+        self.replanned, self.hubs = [], []
+        ra = int(self.rows[a])
+        ex_a, self.ex[ra] = bool(self.ex[ra]), False
+        window = fails[-TRAP_FAILS:]
+        s = window[0]
+        self.head(s)
+        for j, f in enumerate(window[1:], 1):
+            mark = self.mark()
+            if self.join(s, f, retrace=False) is None:
+                self._set_aside(a, fails, f, f"weld {self.ids[s]}, the first weld without it")
+                self.prev[f] = (s, mark)
+                self.prev.pop(s, None)  # the first weld now: tested by restart() in turn
+                for k in (s, *window[j:]):
+                    self.status[k], self.detail[k] = OK, ""
+                return f, [], window[j + 1 :]
+        self.out.cut((0, True))
+        self.out.paste(saved)
+        self.replanned, self.hubs = saved_rep, saved_hubs
+        self.ex[ra] = ex_a
+        log.info("weld %s kept: the path does not go on from %s either", self.ids[a],
+                 self.ids[s])  # fmt: skip
         return a, fails, []
 
 
@@ -364,21 +520,6 @@ def _leg_hits(
     if not at:
         return []
     return det.checker.path_hits(q[at[0] : at[0] + 2], own[at[0] : at[0] + 1])
-
-
-def _detour(
-    det: Detour, q: NDArray, branch: NDArray, ia: int, ib: int
-) -> tuple[NDArray, NDArray, NDArray] | None:
-    """``([leave a ..., transfer ..., approach b ...] (rad), transfer start, transfer end)``,
-    else ``None``."""
-    la = det.leave(q[ia], ia, int(branch[ia]))
-    lb = None if la is None else det.leave(q[ib], ib, int(branch[ib]))
-    if la is None or lb is None:
-        return None
-    mid = det.transfer(la[-1], lb[-1])
-    if mid is None:
-        return None
-    return np.vstack([la[:-1], mid, lb[:-1][::-1]]), la[-1], lb[-1]
 
 
 def _add_detour(

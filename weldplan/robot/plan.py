@@ -367,13 +367,16 @@ def _collision_stage(
     stats["first_check_bodies"] = sorted({h.body for h in hits})
     replanned: list[int] = []
     if hits and replan:
-        q, row, exact, branch, zone, replanned = assemble(
+        got = assemble(
             det, q, exact, branch, rows, status, detail, ids, zone=zone,
             blocked={h.segment for h in hits},
         )  # fmt: skip
+        q, row, exact, branch, zone = got.q, got.row, got.exact, got.branch, got.zone
+        replanned = list(got.replanned)
         hits = det.checker.path_hits(q, zone)  # the verification of the final path
         stats["ompl"] = dict(det.ompl)  # joint-space transfers: runs, retries, solved, s
         stats["detour_ends"] = dict(det.left_by)  # welds left/reached by a gun exit, a retract
+        stats["walk"] = got.stats.to_dict()  # the walk's work, the welds it left out and why
     for h in hits:
         k = _blamed_weld(h, row, rows)
         if k is not None and status[k] == OK:

@@ -65,6 +65,9 @@ LINE_TOLERANCE_MM = 1.0
 LINE_SAMPLES = 16
 #: speed (mm/s) of the joint move to the approach point, from wherever the robot is
 APPROACH_SPEED = 250.0
+#: rad: a row standing for a weld not welded within this of the joint segment between its
+#: neighbours is a pass, not a target (:func:`_without_passes`)
+PASS_TOL_RAD = 1e-9
 
 
 @dataclass(frozen=True, eq=False)
@@ -84,7 +87,12 @@ class ProgramBuild:
     tcp_deviation
         mm: largest distance of the timed TCP (FK of the samples) from its Cartesian segment.
     skipped
-        Welds the joint route does not serve (no exact row): passed without welding.
+        Welds the joint route does not serve (no exact row): passed without welding, named in
+        the program's header, never a target.
+    row
+        ``(k,) int``: the route row of each joint row the program and its timing run over (the
+        joint route without the rows it only passes, :func:`_without_passes`; the ``step`` of
+        :func:`weldplan.io.trajectory.trajectory_csv_text`).
     """
 
     program: RobotProgram
@@ -93,6 +101,7 @@ class ProgramBuild:
     tcp_speed: float
     tcp_deviation: float
     skipped: tuple[str, ...] = ()
+    row: NDArray[np.int64] | None = None
 
 
 def _segment_distance(P: NDArray, A: NDArray, B: NDArray) -> NDArray:
@@ -202,9 +211,11 @@ def robot_program(
         ``tool`` (links only without it) with the contact zone ``contact_radius`` (default the
         pose search's) exempt.
 
-    A route row without an exact joint row (a weld the robot cannot serve, which the robot route
-    interpolates across in joint space) is passed by joint moves without welding and listed in
-    :attr:`ProgramBuild.skipped` and the program's header.
+    A weld without an exact joint row (one the robot cannot serve, which the robot route
+    interpolates across in joint space or passes on a detour) is passed without welding and
+    listed in :attr:`ProgramBuild.skipped` and the program's header; no target moves to it
+    (:func:`_without_passes`: joint rows held at one configuration and interpolated passes are
+    not targets; the joint path is unchanged).
 
     Raises
     ------
@@ -219,6 +230,8 @@ def robot_program(
     rows = route_rows(route)
     n = len(rows)
     Q, R, X = _joint_rows(q, row, exact, n)
+    _check_weld_rows(rows, R)
+    Q, R, X = _without_passes(Q, R, X, rows)
     k = len(Q)
     at = _exact_index(R, X, n)  # route row -> joint row (-1: not served)
     Tft = np.asarray(T_flange_tcp, dtype=np.float64).reshape(4, 4)
@@ -257,7 +270,7 @@ def robot_program(
         log.warning("the program passes %d weld(s) without welding: %s", len(skipped), skipped)
     notes = _notes(route, len(targets), timing, cst, tcp_speed, c, moves, skipped)
     program = _program(name, robot, targets, Tft, tool_mass, tool_cog, timing.weld_time, notes)
-    return ProgramBuild(program, timing, cst, float(tcp_speed), dev, tuple(skipped))
+    return ProgramBuild(program, timing, cst, float(tcp_speed), dev, tuple(skipped), R)
 
 
 def _program(
@@ -311,15 +324,54 @@ def _blend_radii(
     return allowed_radii(points, cand, part, c)
 
 
+def _check_weld_rows(rows: list[dict], R: NDArray[np.int64]) -> None:
+    """PlanningError for a weld with no joint row at all."""
+    missing = [j for j, r in enumerate(rows) if r["kind"] == "weld" and not np.any(R == j)]
+    if missing:
+        raise PlanningError(f"the joint route has no row for the weld at route row {missing[0]}")
+
+
+def _without_passes(
+    Q: NDArray[np.float64], R: NDArray[np.int64], X: NDArray[np.bool_], rows: list[dict]
+) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.bool_]]:
+    """The joint rows the program moves to: without the rows that are not exact and either
+    repeat the joint values of the row before (a configuration held while the route's later
+    rows pass: no motion) or stand for a weld that is not welded and lie on the joint segment
+    from the row before to the next (an interpolated pass, :data:`PASS_TOL_RAD`). The joint
+    path is the same; a weld not welded is never moved to (the header names it)."""
+    weld = np.array([r["kind"] == "weld" for r in rows], dtype=bool)
+    welded = set(R[X & weld[R]].tolist())
+    keep = np.ones(len(Q), dtype=bool)
+    last = 0
+    for i in range(1, len(Q)):
+        passed = not X[i] and (
+            np.array_equal(Q[i], Q[last])
+            or (
+                weld[R[i]]
+                and int(R[i]) not in welded
+                and i + 1 < len(Q)
+                and _on_segment(Q[i], Q[last], Q[i + 1])
+            )
+        )
+        keep[i] = not passed
+        last = last if passed else i
+    return Q[keep], R[keep], X[keep]
+
+
+def _on_segment(p: NDArray, a: NDArray, b: NDArray) -> bool:
+    """Whether ``p (6,)`` lies on the joint segment ``a -> b`` within :data:`PASS_TOL_RAD`."""
+    d = b - a
+    den = float(d @ d)
+    t = 0.0 if den == 0.0 else min(max(float((p - a) @ d) / den, 0.0), 1.0)
+    return bool(np.abs(a + t * d - p).max() <= PASS_TOL_RAD)
+
+
 def _served_welds(
     rows: list[dict], R: NDArray[np.int64], at: NDArray[np.int64]
 ) -> tuple[NDArray[np.int64], list[str]]:
     """The joint rows where the robot welds, and the ids of the welds it passes without
-    welding (no exact joint row); PlanningError for a weld with no joint row at all."""
+    welding (no exact joint row)."""
     weld_rows = [j for j, r in enumerate(rows) if r["kind"] == "weld"]
-    missing = [j for j in weld_rows if not np.any(R == j)]
-    if missing:
-        raise PlanningError(f"the joint route has no row for the weld at route row {missing[0]}")
     welds = at[[j for j in weld_rows if at[j] >= 0]]
     skipped = [str(rows[j]["joint_id"]) for j in weld_rows if at[j] < 0]
     return welds, skipped
@@ -450,7 +502,8 @@ def _notes(
 ) -> tuple[str, ...]:
     """The header comment lines of the program."""
     miss = (
-        (f"Not welded (the robot cannot serve them; passed in joint space): {', '.join(skipped)}.",)
+        (f"Not welded (the robot cannot serve them; no target moves to them): "
+         f"{', '.join(skipped)}.",)  # fmt: skip
         if skipped
         else ()
     )

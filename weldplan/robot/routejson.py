@@ -22,7 +22,9 @@ joint-space motion
 with: the contact zone about the TCP exempt, as the weld poses were verified), against each other
 (self-collision, the whole tool) and against the floor the route names (``stats["floor_z"]``:
 the searched base's floor; a route without one is not checked against a floor, and the report
-says so).
+says so). It also finds, from the joint rows alone, the welds of the route the robot followed
+that no exact row welds (:attr:`RobotCheck.left_out`): ``weldplan verify`` then exits 3, as
+``plan`` did.
 """
 
 from __future__ import annotations
@@ -121,6 +123,9 @@ class RobotCheck:
     floor_z
         mm: the floor the links and the tool were checked against (``None``: the route names
         none, e.g. a given base; not checked).
+    left_out
+        The welds of the route the robot followed that no exact row welds (the program passes
+        them without welding): found from the rows, whatever the route's statuses say.
     """
 
     ok: bool
@@ -130,19 +135,13 @@ class RobotCheck:
     hits: tuple[tuple[int, str, float], ...]
     rows: int
     floor_z: float | None = None
+    left_out: tuple[str, ...] = ()
 
     def describe(self) -> str:
+        if self.ok and self.left_out:
+            return f"{self._ok_words()}; {_left_out_words(self.left_out)}"
         if self.ok:
-            floor = (
-                "no floor known"
-                if self.floor_z is None
-                else f"above the floor at z {self.floor_z:.0f} mm"
-            )
-            return (
-                f"{self.rows} joint rows: FK within {self.fk_mm:.2g} mm, {self.fk_deg:.2g} deg of "
-                "the route, inside the limits, robot + tool collision-free (part, self-collision; "
-                f"{floor})"
-            )
+            return self._ok_words()
         parts = []
         if self.fk_mm > FK_TOLERANCE_MM or self.fk_deg > FK_TOLERANCE_DEG:
             parts.append(f"FK misses the route by {self.fk_mm:.3g} mm, {self.fk_deg:.3g} deg")
@@ -152,6 +151,20 @@ class RobotCheck:
             s, body, dist = self.hits[0]
             parts.append(f"{len(self.hits)} blocked motion(s), first: motion {s} ({body})")
         return "; ".join(parts)
+
+    def _ok_words(self) -> str:
+        z = self.floor_z
+        floor = "no floor known" if z is None else f"above the floor at z {z:.0f} mm"
+        return (
+            f"{self.rows} joint rows: FK within {self.fk_mm:.2g} mm, {self.fk_deg:.2g} deg of "
+            "the route, inside the limits, robot + tool collision-free (part, self-collision; "
+            f"{floor})"
+        )
+
+
+def _left_out_words(ids: tuple[str, ...]) -> str:
+    more = f" and {len(ids) - 10} more" if len(ids) > 10 else ""
+    return f"{len(ids)} weld(s) not in the program: {', '.join(ids[:10])}{more}"
 
 
 def verify_robot_route(
@@ -175,6 +188,7 @@ def verify_robot_route(
     rb = robot.with_base(rr.base)
     follows = _followed(route)
     pts = route.waypoints() if follows is None else follows[0]
+    left_out = _left_out(route if follows is None else follows[2], rr)
     if len(rr.row) and (rr.row.min() < 0 or rr.row.max() >= len(pts)):
         raise InputError("the robot route's rows are not rows of the route", field="tool.robot")
     ex = np.asarray(rr.exact, dtype=bool)
@@ -207,6 +221,18 @@ def verify_robot_route(
         tuple((int(h.segment), str(h.body), float(h.distance)) for h in hits),
         len(rr.q),
         None if floor is None else float(floor),
+        left_out,
+    )
+
+
+def _left_out(followed: Any, rr: Any) -> tuple[str, ...]:
+    """The welds of ``followed`` (the route the robot followed) on whose row no exact joint row
+    is: the program passes them without welding."""
+    from weldplan.tool.route_frames import weld_rows
+
+    welded = set(rr.row[np.asarray(rr.exact, dtype=bool)].tolist())
+    return tuple(
+        str(w) for w, r in zip(followed.order, weld_rows(followed), strict=True) if r not in welded
     )
 
 
@@ -225,9 +251,10 @@ def _zone(rr: Any) -> Any:
     return zone
 
 
-def _followed(route: Any) -> tuple[Any, Any] | None:
-    """``(points (m, 3) mm, quaternions (m, 4))`` of the route along the gun's transitions the
-    robot followed (``follows``), ``None`` when it followed the point-tip route.
+def _followed(route: Any) -> tuple[Any, Any, Any] | None:
+    """``(points (m, 3) mm, quaternions (m, 4), the route)`` of the route along the gun's
+    transitions the robot followed (``follows``), ``None`` when it followed the point-tip
+    route.
 
     Raises
     ------
@@ -261,7 +288,7 @@ def _followed(route: Any) -> tuple[Any, Any] | None:
         raise InputError(
             "the robot's route does not weld the route's welds at their poses", field="tool.robot"
         )
-    return pts, Q
+    return pts, Q, fr
 
 
 def _angle_between(tcp: Any, quats: Any) -> float:

@@ -41,7 +41,6 @@ import logging
 import math
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from weldplan.errors import WeldplanError
 from weldplan.io.blending import krl_cdis
@@ -53,11 +52,30 @@ log = logging.getLogger(__name__)
 DEFAULT_WELD_TEMPLATE = "WAIT SEC {time} ; spot {id}: replace with the gun's weld instruction"
 POS_DECIMALS = 3
 ANGLE_DECIMALS = 5
+#: ``cos B`` below which a pose is at gimbal lock for the A, B, C angles (:func:`abc_deg`; B
+#: within 2e-4 deg of +-90)
+GIMBAL_COS = 1e-6
 
 
 def abc_deg(R: np.ndarray) -> np.ndarray:
-    """``(3,)`` KUKA ``A, B, C`` in degrees: ``R = Rz(A) @ Ry(B) @ Rx(C)``."""
-    return Rotation.from_matrix(R).as_euler("ZYX", degrees=True)
+    """``(3,)`` KUKA ``A, B, C`` in degrees: ``R = Rz(A) @ Ry(B) @ Rx(C)`` (``R (3, 3)`` a
+    rotation).
+
+    ``B = atan2(-R[2, 0], hypot(R[0, 0], R[1, 0]))`` in [-90, 90]; ``A = atan2(R[1, 0],
+    R[0, 0])`` and ``C = atan2(R[2, 1], R[2, 2])``. At gimbal lock (``B = +-90`` deg, ``cos B``
+    below :data:`GIMBAL_COS`) ``A`` and ``C`` turn about the same axis and only their sum (B =
+    -90) or difference (B = 90) is defined: ``C`` is 0 and ``A = atan2(-R[0, 1], R[1, 1])``,
+    exact for ``R = Rz(A) Ry(B)`` at any ``B`` (scipy's ``as_euler`` makes the same choice but
+    warns "Gimbal lock detected" on stderr).
+    """
+    R = np.asarray(R, dtype=np.float64).reshape(3, 3)
+    cb = math.hypot(R[0, 0], R[1, 0])
+    b = math.atan2(-R[2, 0], cb)
+    if cb < GIMBAL_COS:
+        a, c = math.atan2(-R[0, 1], R[1, 1]), 0.0
+    else:
+        a, c = math.atan2(R[1, 0], R[0, 0]), math.atan2(R[2, 1], R[2, 2])
+    return np.degrees([a, b, c])
 
 
 def frame_text(T: np.ndarray) -> str:
