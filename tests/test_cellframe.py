@@ -126,7 +126,9 @@ def test_bad_poses_are_one_line_input_errors_naming_the_field(make, field):
 def test_a_matrix_file_reads_and_its_errors_name_file_and_line(tmp_path):
     good = PartPose.from_xyzrpy([10, 20, 30, 0, 90, 45])
     f = tmp_path / "pose.txt"
-    f.write_text("# part -> cell\n" + "\n".join(" ".join(repr(float(v)) for v in r) for r in good.matrix))
+    f.write_text(
+        "# part -> cell\n" + "\n".join(" ".join(repr(float(v)) for v in r) for r in good.matrix)
+    )
     np.testing.assert_array_equal(parse_part_pose(str(f)).matrix, good.matrix)
     np.testing.assert_allclose(parse_part_pose("10,20,30,0,90,45").matrix, good.matrix)
     f.write_text("1 0 0 0\n0 1 0 0\n0 0 1 nan\n0 0 0 1\n")
