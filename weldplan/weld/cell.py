@@ -230,6 +230,8 @@ class Cell:
             f"grid: {' x '.join(map(str, g['shape']))} voxels of {g['pitch_mm']:g} mm, "
             f"clearance {g['clearance_mm']:g} mm, {g['free']:,} free / {g['obstacle']:,} obstacle",
         ]
+        if self.part_pose is not None:
+            lines.append(f"frame: cell (z up); {self.part_pose.describe()}")
         c = s["checks"]
         removed = c["faces_removed"]
         if removed.get("degenerate_faces") or removed.get("duplicate_faces"):
