@@ -362,3 +362,19 @@ def test_cli_plan_in_the_cell_and_verify_re_applies_the_pose(tmp_path, capsys):
     capsys.readouterr()
     assert run_cli([*ver, "--part-pose", "1000,-500,300,10,-20,36"]) == 2
     assert "planned with part pose" in one_line_error(capsys)
+
+
+@pytest.mark.slow
+def test_cli_the_floor_sets_where_the_fixture_stands_without_a_robot(tmp_path):
+    import json
+
+    from weldplan.io.mesh import load_part
+
+    js = tmp_path / "r.json"
+    argv = ["plan", str(DEMO_PART), str(DEMO_JOINTS), "-o", str(tmp_path / "r.csv")]
+    opts = ["--json", str(js), "--up", "z", "--floor-z", "-200", "--fixture-z", "50", "--quiet"]
+    assert run_cli([*argv, *opts]) == 0
+    pose = PartPose.from_dict(json.loads(js.read_text())["provenance"]["part_pose"])
+    assert (pose.floor_z, pose.fixture_z) == (-200.0, 50.0)
+    low = pose.to_cell(load_part(DEMO_PART).vertices)[:, 2].min()
+    assert low == pytest.approx(-150.0, abs=1e-9)

@@ -62,9 +62,9 @@ def run(args: argparse.Namespace) -> int:
         raise WeldplanError(
             f"--approach-cone must lie in (0, 90] degrees, got {args.approach_cone}"
         )
-    pose = part_pose_from_args(args)
-    if pose is not None and args.robot:  # the robot stands on the cell's floor, checked
-        args.floor_z = pose.floor_z
+    pose = part_pose_from_args(args)  # its floor: --floor-z, default 0 in the cell
+    if pose is not None:  # a robot stands on the cell's floor and is checked against it
+        args.floor_z = pose.floor_z if args.robot else None
 
     def make_cell():
         from weldplan.weld.cell import load_cell
