@@ -9,6 +9,7 @@ the run (seed, workers, scale), then the tool's and the robot's options
 from __future__ import annotations
 
 import argparse
+import math
 from typing import Any
 
 from weldplan.errors import WeldplanError
@@ -180,8 +181,8 @@ def part_pose_from_args(args: argparse.Namespace) -> Any:
         try:
             fix = float(fixture)
         except ValueError:
-            fix = float("nan")
-        if not (fix == fix and abs(fix) < float("inf")):
+            fix = math.nan
+        if not math.isfinite(fix):
             raise InputError(f"must be a finite number of mm, got {fixture!r}", field="--fixture-z")
     floor = getattr(args, "floor_z", None)
     floor = 0.0 if floor is None else float(floor)
