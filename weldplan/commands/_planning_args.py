@@ -9,6 +9,7 @@ the run (seed, workers, scale), then the tool's and the robot's options
 from __future__ import annotations
 
 import argparse
+import math
 from typing import Any
 
 from weldplan.errors import WeldplanError
@@ -132,6 +133,65 @@ def _add_run_arguments(p: argparse.ArgumentParser) -> None:
         "the reason, in the summary and the route JSON (stats.skipped); exit code 3",
     )
     p.add_argument("--quiet", action="store_true", help="no progress bars and no summary on stdout")
+
+
+def add_part_pose_arguments(p: argparse.ArgumentParser) -> None:
+    """``--up``, ``--part-pose``, ``--fixture-z``: the part's pose in the cell
+    (:mod:`weldplan.cellframe`), for ``plan`` and ``verify``."""
+    g = p.add_argument_group(
+        "the part in the cell (everything is then planned and written in the cell frame: z up, "
+        "the floor at --floor-z, default 0; the programs' work object / BASE carry the pose)"
+    )
+    g.add_argument(
+        "--up",
+        metavar="AXIS",
+        help="the part's axis that points up in the cell: x, y, z, -x, -y or -z (y: (x, y, z) -> "
+        "(x, -z, y), a quarter turn about x); the part then stands on the floor (--fixture-z 0)",
+    )
+    g.add_argument(
+        "--part-pose",
+        metavar="X,Y,Z,RX,RY,RZ|FILE",
+        help="the part frame in the cell: mm and degrees, R = Rz(rz) Ry(ry) Rx(rx) (fixed axes "
+        "x then y then z; KUKA A,B,C = rz,ry,rx), or a text file of a 4x4 matrix (mm)",
+    )
+    g.add_argument(
+        "--fixture-z",
+        metavar="MM",
+        help="height of the part's lowest point above the floor, mm (replaces the pose's z; "
+        "default 0 with --up, the pose's own z with --part-pose)",
+    )
+
+
+def part_pose_from_args(args: argparse.Namespace) -> Any:
+    """The :class:`~weldplan.cellframe.PartPose` the options give (not yet placed on the
+    part), ``None`` without ``--up`` / ``--part-pose``; a one-line InputError naming the
+    option for a bad axis, NaN, a non-rotation matrix or a bad combination."""
+    from weldplan.cellframe import PartPose, parse_part_pose
+    from weldplan.errors import InputError
+
+    up, pose, fixture = (getattr(args, k, None) for k in ("up", "part_pose", "fixture_z"))
+    if up is None and pose is None:
+        if fixture is not None:
+            raise InputError("needs --up or --part-pose", field="--fixture-z")
+        return None
+    if up is not None and pose is not None:
+        raise InputError("give --up or --part-pose, not both", field="--part-pose")
+    fix = None
+    if fixture is not None:
+        try:
+            fix = float(fixture)
+        except ValueError:
+            fix = math.nan
+        if not math.isfinite(fix):
+            raise InputError(f"must be a finite number of mm, got {fixture!r}", field="--fixture-z")
+    floor = getattr(args, "floor_z", None)
+    floor = 0.0 if floor is None else float(floor)
+    if up is not None:
+        try:
+            return PartPose.from_up(up, fixture_z=0.0 if fix is None else fix, floor_z=floor)
+        except InputError as exc:
+            raise InputError(exc.message, field="--up") from None
+    return parse_part_pose(pose, fixture_z=fix, floor_z=floor)
 
 
 def positive_mm(text: str) -> float:

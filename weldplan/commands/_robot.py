@@ -77,15 +77,17 @@ def add_robot_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--robot-base",
         metavar="X,Y,Z,YAW",
-        help="robot base in the part frame (mm, degrees about +z); default: searched on the floor",
+        help="robot base in the planning frame (the cell frame with --up/--part-pose, else the "
+        "part frame; mm, degrees about +z); default: searched on the floor",
     )
     g.add_argument(
         "--floor-z",
         metavar="MM",
         type=_number("height in mm", -1e6, 1e6),
-        help="the cell's floor height in the part frame: the base search stands the robot on it "
-        "(default: the part's lowest point) and no link nor the tool may reach below it "
-        "(default: no floor known, not checked)",
+        help="the cell's floor height (in the cell frame with --up/--part-pose, default 0 there; "
+        "else in the part frame): the base search stands the robot on it (default without a "
+        "part pose: the part's lowest point) and no link nor the tool may reach below it "
+        "(default without a part pose: no floor known, not checked)",
     )
     g.add_argument(
         "--weld-time",
@@ -288,6 +290,9 @@ def robot_stage(
     )
     if len(build.skipped) == len(rr.weld_ids):
         raise PlanningError(f"the robot serves none of the welds ({', '.join(rr.status)})")
+    if getattr(cell, "part_pose", None) is not None:  # the work object carries the part pose
+        prog = dataclasses.replace(build.program, part_pose=cell.part_pose.matrix)
+        build = dataclasses.replace(build, program=prog)
     texts = _texts(args, build, rr, rb, outputs)
     if "robot_html" in outputs:
         from weldplan.viz.robot_scene import robot_html

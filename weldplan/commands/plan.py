@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from weldplan.commands._planning import add_planning_arguments, run_planning
+from weldplan.commands._planning_args import add_part_pose_arguments, part_pose_from_args
 from weldplan.commands.demo import positive_mm
 
 HELP = "plan the ordered collision-free torch route through the weld joints of a part"
@@ -46,6 +47,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="largest distance from a joint to the part's surface, mm (default: the larger of "
         "20 and 4 x (clearance + pitch), 40 at the defaults); a joint farther is an error",
     )
+    add_part_pose_arguments(p)
     add_planning_arguments(p, default_output=None)
 
 
@@ -60,6 +62,9 @@ def run(args: argparse.Namespace) -> int:
         raise WeldplanError(
             f"--approach-cone must lie in (0, 90] degrees, got {args.approach_cone}"
         )
+    pose = part_pose_from_args(args)  # its floor: --floor-z, default 0 in the cell
+    if pose is not None:  # a robot stands on the cell's floor and is checked against it
+        args.floor_z = pose.floor_z if args.robot else None
 
     def make_cell():
         from weldplan.weld.cell import load_cell
@@ -75,6 +80,7 @@ def run(args: argparse.Namespace) -> int:
             margin=args.margin,
             approach_cone=args.approach_cone,
             max_joint_distance=args.max_joint_distance,
+            part_pose=pose,
         )
 
     def joint_points():
@@ -87,7 +93,8 @@ def run(args: argparse.Namespace) -> int:
         level = logger.level
         logger.setLevel(logging.ERROR)
         try:
-            return read_joints(args.joints, units=args.units).xyz
+            xyz = read_joints(args.joints, units=args.units).xyz
+            return xyz if pose is None else pose.to_cell(xyz)  # the grid's box, less the lift
         finally:
             logger.setLevel(level)
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from weldplan.commands._planning_args import add_part_pose_arguments, part_pose_from_args
 from weldplan.commands.demo import positive_mm
 from weldplan.commands.plan import add_cell_arguments
 
@@ -25,6 +26,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "provenance is refused at another)",
     )
     p.add_argument("--joints", help="joints CSV: the route must visit exactly these joints")
+    add_part_pose_arguments(p)
     from weldplan.commands._tool import add_tool_arguments
 
     add_tool_arguments(p, search=False)
@@ -37,19 +39,26 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from weldplan.cellframe import recorded_pose
     from weldplan.commands._tool import tool_from_args
     from weldplan.io.export import read_route
     from weldplan.io.mesh import load_part
     from weldplan.tool.check_route import check_tool_provenance, verify_route_poses
     from weldplan.weld.verify import verify_route
 
+    given = part_pose_from_args(args)
     route = read_route(args.route)
     part = load_part(args.mesh, units=args.units, scale=args.scale, length=args.length)
+    pose = recorded_pose(route.provenance, given, part, path=args.route)
     joints = None
     if args.joints:
         from weldplan.io.joints import read_joints
 
         joints = read_joints(args.joints, units=args.units)
+    if pose is not None:  # re-applied from the route: the checks run in its cell frame
+        part = pose.mesh_to_cell(part)
+        if joints is not None:
+            joints = pose.joints_to_cell(joints)
     tool = tool_from_args(args)  # a bad --tool fails before any check
     if tool is not None:
         check_tool_provenance(route, tool[1], args.route)

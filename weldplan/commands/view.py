@@ -44,9 +44,13 @@ def run(args: argparse.Namespace) -> int:
         check_tool_provenance(route, tool[1], args.route)
     part = None
     if args.mesh:
+        from weldplan.cellframe import recorded_pose
         from weldplan.io.mesh import load_part
 
         part = load_part(args.mesh, units=args.units, scale=args.scale, length=args.length)
+        pose = recorded_pose(route.provenance, None, part, path=args.route)
+        if pose is not None:  # a route planned in the cell: the part drawn where it stood
+            part = pose.mesh_to_cell(part)
     if args.html:
         from weldplan.viz.viewer import write_html
 

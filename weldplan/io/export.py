@@ -18,7 +18,10 @@ points of its C2 curve instead of the polyline's vias, of kind ``smooth`` (every
 them checked at the clearance, at most ``--smooth-spacing`` mm apart); ``tool_*`` is the
 joint's unit approach direction as the joints CSV gave it
 (columns ``nx, ny, nz``: from the weld spot towards the side the torch comes from), empty where
-the CSV gave none and always on via rows. Coordinates are mm. A route planned with a tool
+the CSV gave none and always on via rows. Coordinates are mm, in the frame the route was
+planned in: a route planned with the part placed in the cell (:mod:`weldplan.cellframe`,
+``plan --up/--part-pose``) is in the cell frame, and its CSV starts with one ``#`` line that
+says so and gives the part pose (:func:`frame_comment`). A route planned with a tool
 (``weldplan plan --tool``) has five more columns, ``qw,qx,qy,qz,status``: the TCP orientation
 (scalar-first quaternion of the TCP frame in the part frame) at every waypoint, slerped by arc
 length between the welds' poses, and the weld's pose status on weld rows (docs/tool.md); these
@@ -181,6 +184,9 @@ def to_csv_text(route: Route) -> str:
         for i, r in enumerate(weld_rows(travel_route(route))):
             status[int(r)] = poses.poses[i].status
     buf = io.StringIO()
+    note = frame_comment(route)
+    if note is not None:
+        buf.write(f"# {note}\n")
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(CSV_FIELDS if quats is None else CSV_FIELDS + POSE_FIELDS)
     for k, r in enumerate(rows):
@@ -197,6 +203,20 @@ def to_csv_text(route: Route) -> str:
             cells.append(status[k])
         w.writerow(cells)
     return buf.getvalue()
+
+
+def frame_comment(route: Route) -> str | None:
+    """One line saying the route is in the cell frame, with the part pose (row-major 4x4, part
+    frame -> cell frame, mm) and the floor; ``None`` for a route in the part frame."""
+    prov = route.provenance or {}
+    pose = prov.get("part_pose")
+    if prov.get("frame") != "cell" or not pose:
+        return None
+    m = " ".join(f"{float(v):.6g}" for row in pose["matrix"] for v in row)
+    return (
+        f"frame: cell (z up, floor at z {float(pose.get('floor_z', 0.0)):g} mm); part pose "
+        f"({pose.get('given', 'matrix')}), part -> cell 4x4 row-major: {m}"
+    )
 
 
 def write_csv(route: Route, path: str | PathLike[str]) -> Path:

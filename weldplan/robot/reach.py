@@ -14,7 +14,9 @@ singularity than ``singular_deg`` (``|sin(theta5)| >= sin(singular_deg)``: A4 an
 
 Placement (:func:`search_base`, then :func:`weldplan.robot.plan.plan_robot_route` re-scores its
 best few along the whole route): candidate base poses on the floor (a square grid about the weld
-poses) or along a line, each turned to face the welds (A1 then works about the middle of its
+poses, on the plane ``z = floor_z`` of the planning frame and the pedestal planes above it; with
+the part placed in a cell, :mod:`weldplan.cellframe`, that is the cell's floor, z up) or along a
+line, each turned to face the welds (A1 then works about the middle of its
 range; more yaws on request). Candidates whose base column would stand in the part are dropped
 (a capsule about A1 from the floor to the A2 axis, radius the base's and A1 link's extent,
 checked by exact point-surface distance). A candidate is scored by the number of welds it makes
@@ -69,8 +71,8 @@ REACH_SLACK_MM = 1.0
 
 
 def base_pose(x: float, y: float, z: float, yaw_deg: float) -> NDArray[np.float64]:
-    """``(4, 4)``: a robot base at ``(x, y, z)`` mm in the part frame, turned ``yaw_deg`` about
-    the part's z axis (the floor normal)."""
+    """``(4, 4)``: a robot base at ``(x, y, z)`` mm in the planning frame (the cell frame when
+    the part has a pose in the cell), turned ``yaw_deg`` about its z axis (the floor normal)."""
     c, s = math.cos(math.radians(yaw_deg)), math.sin(math.radians(yaw_deg))
     B = np.eye(4)
     B[:2, :2] = [[c, -s], [s, c]]
@@ -115,7 +117,10 @@ class BaseSearch:
     Attributes
     ----------
     floor_z
-        mm: the floor height in the part frame (default: the part's lowest point).
+        mm: the floor height in the planning frame: the cell's floor
+        (:attr:`weldplan.cellframe.PartPose.floor_z`) when the part was placed in a cell, and
+        the floor the robot is then checked against; default (a station in the part frame, no
+        floor known): the part's lowest point, not checked.
     line
         ``((x, y, z), (x, y, z))`` mm: search along this segment instead of the floor.
     step
@@ -139,6 +144,10 @@ class BaseSearch:
     heights: tuple[float, ...] = DEFAULT_HEIGHTS
 
     def __post_init__(self) -> None:
+        if self.floor_z is not None and not math.isfinite(self.floor_z):
+            raise InputError(
+                f"the floor must be a finite z in mm, got {self.floor_z}", field="floor_z"
+            )
         h = np.asarray(self.heights, dtype=np.float64)
         if h.ndim != 1 or len(h) == 0 or not np.all(np.isfinite(h)) or np.any(h < 0):
             raise InputError(

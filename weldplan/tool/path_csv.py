@@ -129,7 +129,11 @@ def route_tool_csv(route: Any) -> str:
     ValueError
         When the route has no tool transitions (the poses were not all re-checked, or no tool).
     """
+    from weldplan.io.export import frame_comment
+
     path = route_tool_path(route)
     if path is None:
         raise ValueError("the route has no tool transitions to write")
-    return tool_path_csv(path, WeldPoses.from_dict(route.tool["poses"]))
+    note = frame_comment(route)  # a route planned in the cell says so, as its route CSV
+    text = tool_path_csv(path, WeldPoses.from_dict(route.tool["poses"]))
+    return text if note is None else f"# {note}\n{text}"

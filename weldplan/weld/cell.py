@@ -33,6 +33,7 @@ import numpy as np
 import trimesh
 from numpy.typing import ArrayLike, NDArray
 
+from weldplan.cellframe import PartPose, place_part
 from weldplan.errors import InputError
 from weldplan.geometry.collision import CollisionModel
 from weldplan.geometry.grid import (
@@ -103,6 +104,10 @@ class Cell:
         ``coincident_joints`` (pairs of joint ids closer than ``COINCIDENT_MM``),
         ``closed_solids`` (closed components of the part), ``joint_distance_max_mm`` (the
         farthest joint from the surface) and ``max_joint_distance_mm`` (the limit it passed).
+    part_pose
+        The part's pose in the cell (:class:`~weldplan.cellframe.PartPose`, its fixture height
+        resolved): ``part``, ``joints`` and everything planned are then in the cell frame;
+        ``None``: in the part frame (the part frame is taken as the cell's).
     """
 
     part: trimesh.Trimesh
@@ -115,6 +120,7 @@ class Cell:
     clearance: float
     pitch: float
     diagnostics: dict[str, Any] = field(default_factory=dict)
+    part_pose: PartPose | None = None
 
     def __post_init__(self) -> None:
         for name, dtype in (
@@ -131,13 +137,22 @@ class Cell:
         return len(self.joints)
 
     @property
+    def frame(self) -> str:
+        """``"cell"`` when the part was placed by a :attr:`part_pose`, else ``"part"``: the
+        frame of every coordinate planned on this cell."""
+        return "part" if self.part_pose is None else "cell"
+
+    @property
     def provenance(self) -> dict[str, Any]:
         """Where the cell came from, for the route JSON (``Route.provenance``): the geometry
-        hash of the part in mm, the mesh file and its sha256, the units and scale applied when
-        loading (None for a mesh built in memory), the faces the loader removed, the clearance
-        and the pitch."""
+        hash of the part in mm (in :attr:`frame`), the mesh file and its sha256, the units and
+        scale applied when loading (None for a mesh built in memory), the faces the loader
+        removed, the clearance and the pitch; the frame of the route's coordinates and the part
+        pose (:meth:`~weldplan.cellframe.PartPose.to_dict`, ``None`` in the part frame)."""
         meta = dict(self.part.metadata.get("weldplan") or {})
         return {
+            "frame": self.frame,
+            "part_pose": None if self.part_pose is None else self.part_pose.to_dict(),
             "mesh": {
                 "geometry_sha256": geometry_hash(self.part),
                 "file": meta.get("file"),
@@ -215,6 +230,8 @@ class Cell:
             f"grid: {' x '.join(map(str, g['shape']))} voxels of {g['pitch_mm']:g} mm, "
             f"clearance {g['clearance_mm']:g} mm, {g['free']:,} free / {g['obstacle']:,} obstacle",
         ]
+        if self.part_pose is not None:
+            lines.append(f"frame: cell (z up); {self.part_pose.describe()}")
         c = s["checks"]
         removed = c["faces_removed"]
         if removed.get("degenerate_faces") or removed.get("duplicate_faces"):
@@ -256,6 +273,7 @@ def build_cell(
     search_radius: float | None = None,
     approach_cone: float = APPROACH_CONE_DEG,
     max_joint_distance: float | None = None,
+    part_pose: PartPose | None = None,
 ) -> Cell:
     """Model a welding cell (Wang et al. 2017, section 3).
 
@@ -274,6 +292,11 @@ def build_cell(
     max_joint_distance
         Largest distance (mm) from a joint to the part's surface; default
         :func:`default_max_joint_distance` (40 mm at the default clearance and pitch).
+    part_pose
+        The part's pose in the cell (:class:`~weldplan.cellframe.PartPose`): ``part`` and
+        ``joints`` are given in the part frame and moved into the cell frame (the fixture
+        height resolved on the part) before anything else; every stage then plans in the cell
+        frame. ``None``: the part frame is the planning frame.
 
     Returns
     -------
@@ -295,6 +318,15 @@ def build_cell(
         raise InputError(f"joints must be weldplan Joints, got {type(joints).__name__}")
     if not isinstance(part, trimesh.Trimesh) or len(part.faces) == 0:
         raise InputError("the part must be a trimesh.Trimesh with at least one triangle")
+    if part_pose is not None:
+        if not isinstance(part_pose, PartPose):
+            raise InputError(
+                f"part_pose must be a weldplan PartPose, got {type(part_pose).__name__}",
+                field="part_pose",
+            )
+        part, moved, part_pose = place_part(part, joints, part_pose)
+        assert moved is not None
+        joints = moved
     collision = CollisionModel(part)
     far = check_joint_distances(collision, joints, max_joint_distance)
     pairs = _coincident(joints)
@@ -331,6 +363,7 @@ def build_cell(
         clearance=float(clearance),
         pitch=float(pitch),
         diagnostics=_diagnostics(part, joints, pairs, len(solids), far, max_joint_distance),
+        part_pose=part_pose,
     )
 
 
@@ -436,6 +469,7 @@ def load_cell(
     scale: float | None = None,
     length: float | None = None,
     joint_units: str | None = None,
+    part_pose: PartPose | None = None,
     **kw: Any,
 ) -> Cell:
     """Load a part and its joints from files and model the cell.
@@ -449,6 +483,10 @@ def load_cell(
         Units of the mesh file, and its extra scale or target length (mm).
     joint_units
         Units of the joints CSV (default: ``units``). ``scale``/``length`` do not apply to joints.
+    part_pose
+        The part's pose in the cell (:class:`~weldplan.cellframe.PartPose`; see
+        :func:`build_cell`): the mesh and the joints CSV are in the part frame (the mesh after
+        ``units``/``scale``/``length``), the cell is in the cell frame.
     **kw
         Passed to :func:`build_cell` (``pitch``, ``clearance``, ``margin``, ``region``,
         ``search_radius``, ``approach_cone``, ``max_joint_distance``).
@@ -466,7 +504,7 @@ def load_cell(
             )
     part = load_part(mesh_path, units=units, scale=scale, length=length)
     joints = read_joints(joints_path, units=joint_units or units)
-    return build_cell(part, joints, **kw)
+    return build_cell(part, joints, part_pose=part_pose, **kw)
 
 
 def demo_cell(**kw: Any) -> Cell:

@@ -46,7 +46,10 @@ class RapidModule:
     tool: NDArray[np.float64] = field(default_factory=lambda: np.eye(4))
     tool_mass: float = float("nan")
     tool_cog: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
+    #: the work object: user frame @ object frame (the part frame in the robot's world)
     wobj: NDArray[np.float64] = field(default_factory=lambda: np.eye(4))
+    uframe: NDArray[np.float64] = field(default_factory=lambda: np.eye(4))
+    oframe: NDArray[np.float64] = field(default_factory=lambda: np.eye(4))
     speeds: dict[str, float] = field(default_factory=dict)
     targets: dict[str, tuple[NDArray[np.float64], tuple[int, int, int, int]]] = field(
         default_factory=dict
@@ -69,7 +72,7 @@ _RAPID = [
     ),
     (
         "wobj",
-        re.compile(rf'^PERS wobjdata \w+ := \[FALSE,TRUE,"",{_POSE},\[\[0,0,0\],\[1,0,0,0\]\]\];$'),
+        re.compile(rf'^PERS wobjdata \w+ := \[FALSE,TRUE,"",{_POSE},{_POSE}\];$'),
     ),
     ("speed", re.compile(rf"^CONST speeddata (\w+) := \[({_NUM}),{_NUM},{_NUM},{_NUM}\];$")),
     (
@@ -110,7 +113,8 @@ def parse_rapid(text: str, *, path: str = "<rapid>") -> RapidModule:
             mod.tool_mass = float(g[7])
             mod.tool_cog = np.array([float(v) for v in g[8:11]])
         elif kind == "wobj":
-            mod.wobj = _pose_wxyz(list(g[:7]))
+            mod.uframe, mod.oframe = _pose_wxyz(list(g[:7])), _pose_wxyz(list(g[7:14]))
+            mod.wobj = mod.uframe @ mod.oframe
         elif kind == "speed":
             mod.speeds[g[0]] = float(g[1])
         elif kind == "target":

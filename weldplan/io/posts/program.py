@@ -5,11 +5,16 @@ Building one from a planned route is :func:`weldplan.robot.program.robot_program
 
 Frames (mm, radians inside, degrees in the programs):
 
-* ``part_frame``: the part (work object, KUKA BASE) in the robot's base frame (ABB world =
-  robot base, KUKA ``$ROBROOT``; the program sets no other world);
+* ``part_frame``: the planning frame (the cell frame when the part was placed by a part pose,
+  :mod:`weldplan.cellframe`, else the part frame) in the robot's base frame (ABB world = robot
+  base, KUKA ``$ROBROOT``; the program sets no other world);
+* ``part_pose``: the part frame in the planning frame (the part pose), or ``None`` (the same
+  frame). The posts write the work object as both (ABB ``wobjdata``: user frame
+  ``part_frame``, object frame ``part_pose``; KUKA ``BASE_DATA``: their product), and every
+  target in the part frame, so the welds keep the coordinates they were given in;
 * ``tool_frame``: the TCP in the controller's flange frame (ABB ``tool0``, KUKA ``$FLANGE``,
   the URDF's ``tool0``: z out of the flange);
-* a target's ``pose``: the TCP in the part frame. Forward kinematics closes the loop:
+* a target's ``pose``: the TCP in the planning frame. Forward kinematics closes the loop:
   ``part_frame @ pose == fk_tool0(q) @ tool_frame`` (tests check it through the parsers).
 """
 
@@ -88,11 +93,14 @@ class RobotProgram:
     tool_cog
         ``(3,)`` centre of gravity of the tool in the flange frame, mm.
     part_frame
-        ``(4, 4)`` part frame in the robot base frame, mm.
+        ``(4, 4)`` planning frame in the robot base frame, mm.
     weld_time
         s per spot (the default weld instruction waits that long).
     notes
         Header comment lines (how zones, speeds and the cycle time were obtained).
+    part_pose
+        ``(4, 4)`` part frame in the planning frame, mm (:class:`weldplan.cellframe.PartPose`
+        ``.matrix``), or ``None`` when the part frame is the planning frame.
     """
 
     name: str
@@ -105,6 +113,28 @@ class RobotProgram:
     part_frame: NDArray[np.float64]
     weld_time: float = 0.0
     notes: tuple[str, ...] = field(default_factory=tuple)
+    part_pose: NDArray[np.float64] | None = None
+
+    def work_object(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """``(user frame, object frame)`` ``(4, 4)`` mm: :attr:`part_frame` and the part pose
+        (the identity without one); a target's pose in the part frame is
+        ``inv(object frame) @ pose``."""
+        obj = np.eye(4) if self.part_pose is None else np.asarray(self.part_pose, dtype=float)
+        return np.asarray(self.part_frame, dtype=float), obj
+
+    def pose_in_part(self, pose: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``(4, 4)``: a target's pose (planning frame) in the part frame (mm)."""
+        return pose if self.part_pose is None else np.linalg.solve(self.part_pose, pose)
+
+    def frame_note(self) -> str | None:
+        """The header line that says which frame the targets are in (``None`` without a part
+        pose: the planning frame is the part's)."""
+        if self.part_pose is None:
+            return None
+        return (
+            "Frames: the targets are in the part frame (the coordinates of the welds as given); "
+            "the work object / BASE is the part pose in the cell times the cell in the robot base."
+        )
 
 
 def identifier(text: str, default: str) -> str:
