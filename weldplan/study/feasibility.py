@@ -54,7 +54,13 @@ from weldplan.study.result import (
     SpotVerdict,
     StudyRobotInfo,
 )
-from weldplan.study.robot_reach import ReachBudget, SpotPoses, robot_verdicts, tcp_matrices
+from weldplan.study.robot_reach import (
+    ReachBudget,
+    SpotPoses,
+    robot_verdicts,
+    tcp_matrices,
+    tool_recheck,
+)
 from weldplan.tool.model import Tool
 from weldplan.tool.poses import (
     DEFAULT_AZIMUTHS,
@@ -447,12 +453,12 @@ def _gun_word(g: GunVerdict, robot: str) -> RobotVerdict:
 class _Kit:
     """One tool on one robot: the tool, its TCP in the flange frame, the robot's collision
     checker with the tool (re-based per candidate, sharing the part's structures) and the
-    tool's independent pose checker; built once."""
+    tool's independent re-check of a pose (its verdicts remembered across bases); built once."""
 
     tool: StudyTool
     flange_tcp: NDArray[np.float64]
     checker: Any
-    pose_checker: Any
+    tool_clear: Callable[[NDArray[np.float64]], bool]
 
     @classmethod
     def build(cls, part: trimesh.Trimesh, robot: Robot, st: StudyTool, s: StudySettings) -> _Kit:
@@ -463,7 +469,8 @@ class _Kit:
         checker = RobotCollision(
             robot, part, st.tool, F, contact_radius=s.contact_radius, floor_z=s.floor_z
         )
-        return cls(st, F, checker, PoseChecker(part, st.tool, s.contact_radius, s.clearance))
+        pc = PoseChecker(part, st.tool, s.contact_radius, s.clearance)
+        return cls(st, F, checker, tool_recheck(pc))
 
     def judge(
         self, robot: Robot, name: str, free: list[SpotPoses], s: StudySettings
@@ -474,7 +481,7 @@ class _Kit:
             self.checker.with_robot(robot),
             self.flange_tcp,
             free,
-            self.pose_checker,
+            self.tool_clear,
             s.budget(),
             (self.tool.name, name),
         )

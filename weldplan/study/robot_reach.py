@@ -23,7 +23,7 @@ joint_limit_reason`), then ``out_of_reach``.
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -99,7 +99,7 @@ def robot_verdicts(
     checker: object,
     flange_tcp: NDArray[np.float64],
     spots: Sequence[SpotPoses],
-    pose_checker: object,
+    tool_clear: Callable[[NDArray[np.float64]], bool],
     budget: ReachBudget,
     names: tuple[str, str],
 ) -> list[RobotVerdict | None]:
@@ -115,8 +115,9 @@ def robot_verdicts(
         ``(4, 4)`` mm: the TCP in the flange frame.
     spots
         Per spot its free gun poses (:class:`SpotPoses`).
-    pose_checker
-        A :class:`~weldplan.tool.verify_poses.PoseChecker` of the tool against the part.
+    tool_clear
+        ``tool_clear(T (4, 4) mm) -> bool``: the tool's independent re-check of a TCP pose
+        (:func:`tool_recheck`).
     budget
         Work per spot (:class:`ReachBudget`).
     names
@@ -136,7 +137,7 @@ def robot_verdicts(
         or [np.zeros((0, 4, 4))]
     )
     br = robot.ik_all(T @ np.linalg.inv(flange_tcp)) if len(T) else None
-    found = _clear_pairs(robot, checker, br, owner, first, T, pose_checker, budget, len(spots))
+    found = _clear_pairs(robot, checker, br, owner, first, T, tool_clear, budget, len(spots))
     out: list[RobotVerdict | None] = []
     status = classify(br, budget.singular_deg) if br is not None else np.zeros(0, dtype=str)
     for i in range(len(spots)):
@@ -163,15 +164,15 @@ def _clear_pairs(
     owner: NDArray[np.int64],
     first: NDArray[np.bool_],
     T: NDArray[np.float64],
-    pose_checker: object,
+    tool_clear: Callable[[NDArray[np.float64]], bool],
     budget: ReachBudget,
     n: int,
 ) -> dict[int, tuple[int, NDArray[np.float64]] | Counter[str]]:
     """Per spot: ``(pose row, q (6,))`` of its first clear usable pair, else a ``Counter`` of
     what blocked the pairs checked (empty: no usable pair). Rounds of one batched check each
-    (module docstring); a pose other than the verified one is re-checked for the tool before
-    its first pair is (a pose that fails drops all its pairs and does not count against the
-    spot's ``branches``)."""
+    (module docstring). A pair clear of the robot's checks whose pose is not the verified one
+    is then re-checked for the tool (``tool_clear(T)``); a pose that fails drops all its pairs,
+    and that pair does not count against the spot's ``branches``."""
     out: dict[int, tuple[int, NDArray[np.float64]] | Counter[str]] = {
         i: Counter() for i in range(n)
     }
@@ -182,36 +183,42 @@ def _clear_pairs(
     left = np.ones(len(idx), dtype=bool)
     spent = np.zeros(n, dtype=np.int64)
     done = np.zeros(n, dtype=bool)
-    tool_ok = first.copy()  # the verified poses; others once checked
     while True:
         live = np.flatnonzero(left & ~done[w] & (spent[w] < budget.branches))
         if len(live) == 0:
             return out
         pick = live[np.unique(w[live], return_index=True)[1]]  # the next pair of each spot
-        rows = idx[pick, 0]
-        fails = [r for r in rows if not tool_ok[r] and not _tool_clear(pose_checker, T[r])]
-        tool_ok[rows] = True
-        for r in fails:
-            left[idx[:, 0] == r] = False
-            out[int(owner[r])][TOOL_SHORT] += 1  # type: ignore[index]
-        pick = pick[~np.isin(rows, fails)]
         left[pick] = False
         spent[w[pick]] += 1
         q = br.q[idx[pick, 0], idx[pick, 1]]  # type: ignore[attr-defined]
         blocked = checker.states_blocked(q, zone=True, tool=True)  # type: ignore[attr-defined]
         for p, qk, b in zip(pick, q, blocked, strict=True):
-            i = int(w[p])
+            i, row = int(w[p]), int(idx[p, 0])
             if b is not None:
                 out[i][b] += 1  # type: ignore[index]
-            else:
-                out[i] = (int(idx[p, 0]), qk)
+            elif first[row] or tool_clear(T[row]):
+                out[i] = (row, qk)
                 done[i] = True
+            else:
+                left[idx[:, 0] == row] = False
+                spent[i] -= 1
+                out[i][TOOL_SHORT] += 1  # type: ignore[index]
 
 
-def _tool_clear(pose_checker: object, T: NDArray[np.float64]) -> bool:
-    """The tool's independent re-check of TCP pose ``T (4, 4)`` mm."""
-    q = Rotation.from_matrix(T[:3, :3]).as_quat()[[3, 0, 1, 2]]
-    return bool(pose_checker.check(T[:3, 3], q).ok)  # type: ignore[attr-defined]
+def tool_recheck(pose_checker: object) -> Callable[[NDArray[np.float64]], bool]:
+    """``tool_clear(T)``: :class:`~weldplan.tool.verify_poses.PoseChecker` ``pose_checker``'s
+    verdict on TCP pose ``T (4, 4)`` mm, remembered per pose (a pose's verdict does not depend
+    on the robot's base)."""
+    memo: dict[bytes, bool] = {}
+
+    def tool_clear(T: NDArray[np.float64]) -> bool:
+        key = np.asarray(T, dtype=np.float64).tobytes()
+        if key not in memo:
+            q = Rotation.from_matrix(T[:3, :3]).as_quat()[[3, 0, 1, 2]]
+            memo[key] = bool(pose_checker.check(T[:3, 3], q).ok)  # type: ignore[attr-defined]
+        return memo[key]
+
+    return tool_clear
 
 
 def _why_not(
