@@ -141,3 +141,9 @@ def test_a_searched_base_is_said_in_the_table_and_the_json(tmp_path):
     assert rc == (EXIT_OK if study.all_feasible else EXIT_PARTIAL)
     assert "(searched for tool spot_welding_gun)" in (tmp_path / "t.csv").read_text()
     assert study.reach_matrix().shape == (3, 1)
+
+
+def test_help_says_the_exit_codes(capsys):
+    assert run_cli(["check-spots", "--help"]) == EXIT_OK
+    out = capsys.readouterr().out
+    assert "usage: weldplan check-spots" in out and "3  some spots are not feasible" in out

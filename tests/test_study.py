@@ -217,3 +217,16 @@ def test_a_study_without_a_tool_or_with_two_tools_of_one_name_is_refused(cell):
         check_spots(part, spots, [])
     with pytest.raises(ConfigError, match="share a name"):
         check_spots(part, spots, [gun, gun])
+
+
+def test_a_base_with_nothing_to_search_on_says_so(cell):
+    """Every spot off the part: a searched robot keeps its own base, and the result says why."""
+    from weldplan.study import StudyRobot, check_spots
+
+    part, spots, gun = cell
+    one = Joints(ids=("off",), xyz=np.asarray(spots.xyz)[-1:], directions=None)
+    study = check_spots(part, one, [gun], [StudyRobot("r", _robot(BASE), searched=True)])
+    info = study.robots[0]
+    assert not info.searched and "no spot has a free gun pose" in info.note
+    assert study.spots[0].robots[0].status == NO_SURFACE
+    assert FeasibilityStudy.from_json(study.to_json()) == study

@@ -23,6 +23,15 @@ HELP = "weld feasibility study: which spots each gun closes on and each robot re
 
 #: the ``--robot-base`` word for a base searched on the floor
 SEARCHED = "searched"
+#: this command's exit codes (``weldplan check-spots --help``)
+EPILOG = """exit codes:
+  0  every spot is feasible (some robot reaches it with some gun; without --robot: some gun
+     closes on it)
+  1  the run failed: a searched base found no floor candidate within reach of any spot, or
+     the environment failed
+  2  bad input or settings: the message names the file, line and field or the option
+  3  some spots are not feasible: the table says why for each
+  130  interrupted (Ctrl-C)"""
 
 
 def _nonneg_mm(text: str) -> float:
@@ -56,6 +65,7 @@ def _finite_mm(text: str) -> float:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.epilog = EPILOG
     p.add_argument("mesh", help="part mesh (STL, OBJ, PLY, OFF, GLB/GLTF)")
     p.add_argument("spots", help="spots CSV (id, x, y, z[, nx, ny, nz]; part frame)")
     add_cell_arguments(p)
@@ -226,7 +236,7 @@ def _summary(study: Any, title: str, written: list[str]) -> str:
         lines.append(f"robot {tr}: " + ", ".join(f"{k} {v}" for k, v in sorted(words.items())))
     for r in study.robots:
         x, y, z, yaw = r.xyz_yaw()
-        how = "searched" if r.searched else "given"
+        how = "searched" if r.searched else (r.note or "given")
         lines.append(f"base {r.name}: {x:.0f},{y:.0f},{z:.0f},{yaw:.1f} ({how})")
     s = study.stats
     lines.append(

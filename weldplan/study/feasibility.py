@@ -293,19 +293,17 @@ def check_spots(
         verdicts.append(per_tool)
         robot_s.append(round(time.perf_counter() - t, 3))
     stats["robot_s"] = robot_s
-    out = []
-    for i, wid in enumerate(spots.ids):
-        rv = tuple(verdicts[r][k][i] for k in range(len(tools)) for r in range(len(robots)))
-        out.append(
-            SpotVerdict(
-                id=wid,
-                position=tuple(float(v) for v in spots.xyz[i]),  # type: ignore[arg-type]
-                surface_distance=float(dist[i]),
-                stack=stack[i],
-                guns=tuple(g[i] for g in guns),
-                robots=rv,
-            )
+    out = [
+        SpotVerdict(
+            id=wid,
+            position=tuple(float(v) for v in spots.xyz[i]),  # type: ignore[arg-type]
+            surface_distance=float(dist[i]),
+            stack=stack[i],
+            guns=tuple(g[i] for g in guns),
+            robots=tuple(v[k][i] for k in range(len(tools)) for v in verdicts),
         )
+        for i, wid in enumerate(spots.ids)
+    ]
     stats["total_s"] = round(time.perf_counter() - t0, 3)
     study = FeasibilityStudy(
         spots=tuple(out),
@@ -314,12 +312,7 @@ def check_spots(
         settings=asdict(settings),
         stats=stats,
     )
-    log.info(
-        "feasibility study: %d / %d spots feasible (%.1f s)",
-        int(study.feasible.sum()),
-        len(out),
-        stats["total_s"],
-    )
+    log.info("feasibility study: %d / %d spots feasible", int(study.feasible.sum()), len(out))
     return study
 
 
@@ -440,6 +433,7 @@ def _robot_stage(
         base=tuple(tuple(float(v) for v in r) for r in robot.base),
         searched=bool(on),
         tool=on,
+        note="" if on or not sr.searched else "not searched: no spot has a free gun pose",
     )
     return info, out
 

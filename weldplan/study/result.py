@@ -236,6 +236,9 @@ class StudyRobotInfo:
         Whether the base was searched (:func:`weldplan.study.feasibility.check_spots`).
     tool
         The tool whose poses the search scored (searched bases only; empty when given).
+    note
+        Why a base asked to be searched was not (no spot has a free gun pose to search on: the
+        robot's own base stands, and no verdict depends on it); empty otherwise.
     """
 
     name: str
@@ -243,6 +246,7 @@ class StudyRobotInfo:
     base: tuple[tuple[float, ...], ...]
     searched: bool
     tool: str = ""
+    note: str = ""
 
     def base_matrix(self) -> NDArray[np.float64]:
         return np.asarray(self.base, dtype=np.float64)
@@ -259,6 +263,7 @@ class StudyRobotInfo:
             "base": [list(r) for r in self.base],
             "searched": self.searched,
             "tool": self.tool,
+            "note": self.note,
         }
 
     @classmethod
@@ -269,6 +274,7 @@ class StudyRobotInfo:
             base=tuple(tuple(float(v) for v in r) for r in d["base"]),
             searched=bool(d["searched"]),
             tool=str(d.get("tool", "")),
+            note=str(d.get("note", "")),
         )
 
 

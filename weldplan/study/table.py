@@ -43,7 +43,7 @@ def study_csv_text(study: FeasibilityStudy, *, title: str = "weldplan check-spot
     out.write(f"# {title}: {n_ok} / {len(study.spots)} spots feasible; {study.frame} frame, mm\n")
     for r in study.robots:
         x, y, z, yaw = r.xyz_yaw()
-        how = f"searched for tool {r.tool}" if r.searched else "given"
+        how = f"searched for tool {r.tool}" if r.searched else (r.note or "given")
         out.write(f"# robot {r.name}: base {x:.1f},{y:.1f},{z:.1f},{yaw:.2f} ({how})\n")
     w = csv.writer(out, lineterminator="\n")
     w.writerows(table_rows(study))
