@@ -103,14 +103,38 @@ def test_every_spot_feasible_exits_0(tmp_path):
     assert study["robots"] == []
 
 
-def test_a_bad_spot_line_is_one_line_naming_file_line_and_field(tmp_path, capsys):
+@pytest.mark.parametrize("value", ["oops", "nan", "inf"])
+def test_a_bad_spot_line_is_one_line_naming_file_line_and_field(tmp_path, capsys, value):
     bad = tmp_path / "bad.csv"
-    bad.write_text("id,x,y,z\n1,1443.6,-53.2,686\n2,1399.5,oops,688.4\n")
+    bad.write_text(f"id,x,y,z\n1,1443.6,-53.2,686\n2,1399.5,{value},688.4\n")
     argv = ["check-spots", PART, str(bad), "--tool", _gun(), "-o", str(tmp_path / "t.csv")]
     assert run_cli(argv) == EXIT_INPUT
     line = one_line_error(capsys)
     assert "bad.csv" in line and "line 3" in line and "'y'" in line
     assert not (tmp_path / "t.csv").exists()
+
+
+def test_two_tools_get_their_own_columns(tmp_path):
+    """The shared gun (a URDF, its TCP joint) beside an arc torch given as a mesh with --tcp:
+    each a verdict per spot under its file's stem."""
+    from weldplan.tool import arc_torch
+
+    arc_torch(bend_angle=0.0).mesh.export(tmp_path / "torch.stl")
+    spots = _spots_with_directions(tmp_path, off=False)
+    argv = [
+        "check-spots", PART, str(spots), "--quiet", "-o", str(tmp_path / "t.csv"),
+        "--tool", _gun(), "--tcp", "nozzle_tip", "--tool", str(tmp_path / "torch.stl"),
+        "--tcp", "0,0,0,0,0,0", "--json", str(tmp_path / "s.json"),
+    ]  # fmt: skip
+    rc = run_cli(argv)
+    study = FeasibilityStudy.from_json((tmp_path / "s.json").read_text())
+    assert study.tools == ("spot_welding_gun", "torch")
+    assert rc == (EXIT_OK if study.all_feasible else EXIT_PARTIAL)
+    rows = list(csv.DictReader((tmp_path / "t.csv").read_text().splitlines()[1:]))
+    for r, sp in zip(rows, study.spots, strict=True):
+        assert r["gun:torch"] == sp.guns[1].status
+        assert r["gun:spot_welding_gun"] == sp.guns[0].status == "ok"
+        assert r["feasible"] == ("yes" if sp.feasible else "no")
 
 
 def test_mismatched_options_are_one_line_errors(tmp_path, capsys):
