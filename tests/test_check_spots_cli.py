@@ -171,3 +171,26 @@ def test_help_says_the_exit_codes(capsys):
     assert run_cli(["check-spots", "--help"]) == EXIT_OK
     out = capsys.readouterr().out
     assert "usage: weldplan check-spots" in out and "3  some spots are not feasible" in out
+
+
+@pytest.mark.slow
+def test_headless_chromium_draws_the_spots_in_their_verdicts_colours(partial, tmp_path):
+    """The page (fixture: three spots feasible or not, one grey off the part) shows the legend's
+    colours in the 3D view: grey for the spot off the part, green for the feasible ones."""
+    pytest.importorskip("PIL")
+    import numpy as np
+    from PIL import Image
+
+    from tests.test_viewer import _chromium, _run_chromium
+
+    assert _chromium()
+    tmp, _ = partial
+    png = tmp_path / "p.png"
+    shot = _run_chromium(tmp_path, f"--screenshot={png}", (tmp / "p.html").resolve().as_uri())
+    assert shot.returncode == 0 and png.exists(), shot.stderr[-2000:]
+    img = np.asarray(Image.open(png).convert("RGB"), dtype=int)
+    view = img[200:, 450:]  # below and right of the legend box
+    r, g, b = (view[..., k] for k in range(3))
+    green = (g > r + 60) & (g > b + 30)  # 0x2CA02C lit
+    assert green.sum() > 10
+    assert len(np.unique(view.reshape(-1, 3), axis=0)) > 50  # not a blank page
