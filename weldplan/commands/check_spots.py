@@ -239,9 +239,14 @@ def _summary(study: Any, title: str, written: list[str]) -> str:
         how = "searched" if r.searched else (r.note or "given")
         lines.append(f"base {r.name}: {x:.0f},{y:.0f},{z:.0f},{yaw:.1f} ({how})")
     s = study.stats
+
+    def secs(key: str) -> str:
+        return ", ".join(f"{v:.1f}" for v in s[key]) or "-"
+
     lines.append(
-        f"time           gun {', '.join(f'{v:.1f}' for v in s['gun_s'])} s, robot "
-        f"{', '.join(f'{v:.1f}' for v in s['robot_s']) or '-'} s, total {s['total_s']:.1f} s"
+        f"time           gun {secs('gun_s')} s, robot {secs('robot_s')} s, total "
+        f"{s['total_s']:.1f} s wall; CPU gun {secs('gun_cpu_s')} s, robot "
+        f"{secs('robot_cpu_s')} s, total {s['total_cpu_s']:.1f} s"
     )
     lines.append(f"written        {', '.join(written)}")
     if not study.all_feasible:
