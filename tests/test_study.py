@@ -248,3 +248,12 @@ def test_a_mesh_tool_is_mounted_as_the_robot_stage_mounts_it(tmp_path):
     args = argparse.Namespace(tool=str(tmp_path / "torch.stl"), tcp=tcp, tool_units="mm")
     assert np.allclose(robot.tool_transform(st.mount_tcp), flange_tcp(args, robot), atol=1e-9)
     assert st.name == "torch" and np.allclose(st.mount_tcp[:3, 3], [1.0, -2.0, 3.0])
+
+
+def test_no_spots_is_an_empty_study(cell):
+    from weldplan.study import StudyRobot, check_spots
+
+    part, _, gun = cell
+    none = Joints(ids=(), xyz=np.zeros((0, 3)))
+    study = check_spots(part, none, [gun], [StudyRobot("near", _robot(BASE))])
+    assert study.spots == () and study.reach_matrix().shape == (0, 1) and study.all_feasible

@@ -130,7 +130,10 @@ def robot_verdicts(
         no free gun pose (the caller gives the gun's verdict).
     """
     quats = [s.quaternions[spread(s.quaternions, budget.poses)] for s in spots]
-    owner = np.concatenate([np.full(len(q), i, dtype=np.int64) for i, q in enumerate(quats)])
+    owner = np.concatenate(
+        [np.full(len(q), i, dtype=np.int64) for i, q in enumerate(quats)]
+        or [np.zeros(0, dtype=np.int64)]
+    )
     first = np.r_[True, owner[1:] != owner[:-1]] if len(owner) else np.zeros(0, dtype=bool)
     T = np.concatenate(
         [tcp_matrices(s.position, q) for s, q in zip(spots, quats, strict=True)]
