@@ -145,7 +145,7 @@ def test_mismatched_options_are_one_line_errors(tmp_path, capsys):
     assert run_cli([*argv, "--tcp", "a", "--tcp", "b", "--tcp", "c", *out]) == EXIT_INPUT
     assert "--tcp once, or once per --tool (2), got 3" in one_line_error(capsys)
     assert run_cli([*argv[:5], "--robot-base", BASE, *out]) == EXIT_INPUT
-    assert "--robot-base and --floor-z need --robot" in one_line_error(capsys)
+    assert "--robot-base, --opw and --floor-z need --robot" in one_line_error(capsys)
     bad_base = [*argv[:5], "--robot", _robot(), "--robot-base", "1,2,3", *out]
     assert run_cli(bad_base) == EXIT_INPUT
     assert "x,y,z,yaw" in one_line_error(capsys)

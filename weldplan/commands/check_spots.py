@@ -123,6 +123,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="6-axis robot (URDF with limits, OPW parameters beside it)",
     )
     r.add_argument(
+        "--opw",
+        action="append",
+        metavar="F",
+        help="per --robot, in order: its OPW parameters (default: opw_parameters.yaml beside)",
+    )
+    r.add_argument(
         "--robot-base",
         action="append",
         metavar="X,Y,Z,YAW|searched",
@@ -172,19 +178,21 @@ def _tools(args: argparse.Namespace) -> list[Any]:
 
 def _robots(args: argparse.Namespace) -> list[Any]:
     if not args.robot:
-        if args.robot_base or args.floor_z is not None:
-            raise InputError("--robot-base and --floor-z need --robot", field="--robot")
+        if args.robot_base or args.opw or args.floor_z is not None:
+            raise InputError("--robot-base, --opw and --floor-z need --robot", field="--robot")
         return []
     from weldplan.robot import load_robot
     from weldplan.robot.reach import parse_base
     from weldplan.study.feasibility import StudyRobot
 
     bases = _paired(args.robot_base, len(args.robot), "--robot-base", "--robot")
+    opws = _paired(args.opw, len(args.robot), "--opw", "--robot")
     out = []
-    for path, base, name in zip(args.robot, bases, _names(args.robot), strict=True):
+    for path, base, opw, name in zip(args.robot, bases, opws, _names(args.robot), strict=True):
         searched = base is None or base.strip().lower() == SEARCHED
         B = None if searched else parse_base(base)
-        out.append(StudyRobot(name, load_robot(path, base=B), searched, source=str(path)))
+        robot = load_robot(path, opw, base=B)
+        out.append(StudyRobot(name, robot, searched, source=str(path)))
     return out
 
 
