@@ -170,6 +170,13 @@ def test_the_reach_matrix_is_the_verdicts(study):
         study.reach_matrix("torch")
 
 
+def test_the_spots_no_robot_reaches_are_listed_with_why(study):
+    un = study.unreached()
+    assert list(un) == ["15", "off"]
+    assert un["15"].startswith("gun/near: joint_limit A2") and "gun/far: out_of_reach" in un["15"]
+    assert "no_surface no surface within 5 mm" in un["off"]
+
+
 def test_the_study_round_trips_through_json(study):
     back = FeasibilityStudy.from_json(study.to_json())
     assert back == study

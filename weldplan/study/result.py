@@ -351,6 +351,21 @@ class FeasibilityStudy:
         r = self._index(tuple(x.name for x in self.robots), robot, "robot")
         return s.robots[t * len(self.robots) + r]
 
+    def unreached(self) -> dict[str, str]:
+        """The spots that are not feasible, each with why: ``{id: "tool/robot: reason; ..."}``
+        over every (tool, robot) pair (without robots, every tool), in spot order. What an
+        allocation lists instead of dropping a spot."""
+        out: dict[str, str] = {}
+        for s in self.spots:
+            if s.feasible:
+                continue
+            if s.robots:
+                why = [f"{r.tool}/{r.robot}: {r.status} {r.reason}".strip() for r in s.robots]
+            else:
+                why = [f"{g.tool}: {g.status} {g.reason}".strip() for g in s.guns]
+            out[s.id] = "; ".join(why)
+        return out
+
     def counts(self) -> dict[str, Any]:
         """Spots per verdict: ``{"spots", "feasible", "gun": {tool: {status: n}}, "robot":
         {"tool/robot": {status: n}}}``."""
