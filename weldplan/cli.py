@@ -59,6 +59,7 @@ COMMANDS: dict[str, str] = {
     "verify": "weldplan.commands.verify",
     "view": "weldplan.commands.view",
     "planar": "weldplan.commands.planar",
+    "check-spots": "weldplan.commands.check_spots",
 }
 
 

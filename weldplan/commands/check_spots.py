@@ -1,0 +1,262 @@
+"""``weldplan check-spots MESH SPOTS --tool T [--robot URDF] -o table.csv``: the weld feasibility
+study (:mod:`weldplan.study.feasibility`).
+
+Per spot: its distance to the part, the stack it joins (not analysed yet), whether each gun
+closes on it (free candidate poses, the closest miss and which part of the gun hits), whether
+each robot, carrying each gun at its given or searched base, reaches a free pose on a usable IK
+branch without collision (or why not). Writes the table (CSV), optionally the study as JSON and
+a self-contained 3D page coloured by verdict, all or none. Exit 0 when every spot is feasible,
+3 when some are not (listed in the table), 2 for bad input (one line naming file, line, field).
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+from weldplan.commands._planning_args import positive_mm
+from weldplan.commands.plan import add_cell_arguments
+from weldplan.errors import EXIT_OK, EXIT_PARTIAL, InputError
+
+HELP = "weld feasibility study: which spots each gun closes on and each robot reaches"
+
+#: the ``--robot-base`` word for a base searched on the floor
+SEARCHED = "searched"
+#: this command's exit codes (``weldplan check-spots --help``)
+EPILOG = """exit codes:
+  0  every spot is feasible (some robot reaches it with some gun; without --robot: some gun
+     closes on it)
+  1  the run failed: a searched base found no floor candidate within reach of any spot, or
+     the environment failed
+  2  bad input or settings: the message names the file, line and field or the option
+  3  some spots are not feasible: the table says why for each
+  130  interrupted (Ctrl-C)"""
+
+
+def _nonneg_mm(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not 0.0 <= value < float("inf"):
+        raise argparse.ArgumentTypeError(f"must be a finite number of mm >= 0, got {text!r}")
+    return value
+
+
+def _cone(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not 0.0 < value <= 90.0:
+        raise argparse.ArgumentTypeError(f"must lie in (0, 90] degrees, got {text!r}")
+    return value
+
+
+def _finite_mm(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not abs(value) < float("inf"):
+        raise argparse.ArgumentTypeError(f"must be a finite number of mm, got {text!r}")
+    return value
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.epilog = EPILOG
+    p.add_argument("mesh", help="part mesh (STL, OBJ, PLY, OFF, GLB/GLTF)")
+    p.add_argument("spots", help="spots CSV (id, x, y, z[, nx, ny, nz]; part frame)")
+    add_cell_arguments(p)
+    p.add_argument("-o", "--output", required=True, help="the table to write (CSV)")
+    p.add_argument("--json", metavar="F", help="also write the whole study as JSON")
+    p.add_argument("--html", metavar="F", help="also write a 3D page coloured by verdict")
+    g = p.add_argument_group("tools (each --tool may be repeated, with its own --tcp)")
+    g.add_argument(
+        "--tool",
+        action="append",
+        required=True,
+        metavar="URDF|MESH",
+        help="a gun: URDF (TCP its last fixed joint) or a mesh with --tcp",
+    )
+    g.add_argument(
+        "--tcp",
+        action="append",
+        metavar="NAME|X,Y,Z,RX,RY,RZ",
+        help="per --tool, in order: the URDF's TCP joint or link, or a mesh's TCP",
+    )
+    g.add_argument("--tool-units", choices=("m", "mm"), help="unit of mesh tools (default mm)")
+    g.add_argument(
+        "--tool-cone",
+        metavar="DEG",
+        type=_cone,
+        default=15.0,
+        help="largest tilt of the gun off the spot's approach axis (default 15)",
+    )
+    g.add_argument(
+        "--contact-radius",
+        metavar="MM",
+        type=_nonneg_mm,
+        default=20.0,
+        help="the gun may touch the part inside this sphere about the spot (20)",
+    )
+    g.add_argument(
+        "--clearance",
+        metavar="MM",
+        type=_nonneg_mm,
+        default=5.0,
+        help="least distance of the gun outside that sphere to the part (5)",
+    )
+    g.add_argument(
+        "--max-spot-distance",
+        metavar="MM",
+        type=positive_mm,
+        default=5.0,
+        help="a spot farther from the part's surface is 'no surface' (5)",
+    )
+    r = p.add_argument_group("robots (each --robot may be repeated, with its own --robot-base)")
+    r.add_argument(
+        "--robot",
+        action="append",
+        metavar="URDF",
+        help="6-axis robot (URDF with limits, OPW parameters beside it)",
+    )
+    r.add_argument(
+        "--opw",
+        action="append",
+        metavar="F",
+        help="per --robot, in order: its OPW parameters (default: opw_parameters.yaml beside)",
+    )
+    r.add_argument(
+        "--robot-base",
+        action="append",
+        metavar="X,Y,Z,YAW|searched",
+        help="per --robot, in order: its base in the part frame (mm, deg about +z) "
+        "or 'searched' on the floor (default searched)",
+    )
+    r.add_argument(
+        "--floor-z",
+        metavar="MM",
+        type=_finite_mm,
+        help="the floor height in the part frame: searched bases stand on it, no "
+        "link may reach below it (default: the part's lowest point, not checked)",
+    )
+    p.add_argument("--quiet", action="store_true", help="no summary on stdout")
+
+
+def _paired(values: list[str] | None, n: int, what: str, of: str) -> list[str | None]:
+    """``values`` given once per ``of`` (or once for all, or not at all), as ``n`` entries."""
+    if not values:
+        return [None] * n
+    if len(values) == 1 and n > 1:
+        return values * n
+    if len(values) != n:
+        raise InputError(
+            f"give {what} once, or once per {of} ({n}), got {len(values)}",
+            field=f"--{what.lstrip('-')}",
+        )
+    return list(values)
+
+
+def _names(paths: list[str]) -> list[str]:
+    """Names from file stems, numbered where two share one."""
+    stems = [Path(p).stem for p in paths]
+    return [s if stems.count(s) == 1 else f"{s}#{k + 1}" for k, s in enumerate(stems)]
+
+
+def _tools(args: argparse.Namespace) -> list[Any]:
+    from weldplan.study.feasibility import load_study_tool
+
+    tcps = _paired(args.tcp, len(args.tool), "--tcp", "--tool")
+    names = _names(args.tool)
+    return [
+        load_study_tool(path, tcp=tcp, units=args.tool_units, name=name)
+        for path, tcp, name in zip(args.tool, tcps, names, strict=True)
+    ]
+
+
+def _robots(args: argparse.Namespace) -> list[Any]:
+    if not args.robot:
+        if args.robot_base or args.opw or args.floor_z is not None:
+            raise InputError("--robot-base, --opw and --floor-z need --robot", field="--robot")
+        return []
+    from weldplan.robot import load_robot
+    from weldplan.robot.reach import parse_base
+    from weldplan.study.feasibility import StudyRobot
+
+    bases = _paired(args.robot_base, len(args.robot), "--robot-base", "--robot")
+    opws = _paired(args.opw, len(args.robot), "--opw", "--robot")
+    out = []
+    for path, base, opw, name in zip(args.robot, bases, opws, _names(args.robot), strict=True):
+        searched = base is None or base.strip().lower() == SEARCHED
+        B = None if searched else parse_base(base)
+        robot = load_robot(path, opw, base=B)
+        out.append(StudyRobot(name, robot, searched, source=str(path)))
+    return out
+
+
+def run(args: argparse.Namespace) -> int:
+    from weldplan.io.joints import read_joints
+    from weldplan.io.mesh import load_part
+    from weldplan.io.outputset import check_outputs, write_outputs
+    from weldplan.study.feasibility import StudySettings, check_spots
+    from weldplan.study.table import study_csv_text
+
+    outputs = {"csv": Path(args.output)}
+    for kind in ("json", "html"):
+        if getattr(args, kind):
+            outputs[kind] = Path(getattr(args, kind))
+    check_outputs(outputs)
+    settings = StudySettings(
+        cone=args.tool_cone,
+        contact_radius=args.contact_radius,
+        clearance=args.clearance,
+        max_spot_distance=args.max_spot_distance,
+        floor_z=args.floor_z,
+    )
+    spots = read_joints(args.spots, units=args.units)
+    tools, robots = _tools(args), _robots(args)
+    part = load_part(args.mesh, units=args.units, scale=args.scale, length=args.length)
+    study = check_spots(part, spots, tools, robots, settings)
+    title = f"weldplan check-spots {args.mesh} {args.spots}"
+    texts = {outputs["csv"]: study_csv_text(study, title=title)}
+    if "json" in outputs:
+        texts[outputs["json"]] = study.to_json()
+    if "html" in outputs:
+        from weldplan.viz.study_scene import study_html
+
+        texts[outputs["html"]] = study_html(study, part)
+    write_outputs(texts)
+    if not args.quiet:
+        print(_summary(study, title, [str(p) for p in texts]))
+    return EXIT_OK if study.all_feasible else EXIT_PARTIAL
+
+
+def _summary(study: Any, title: str, written: list[str]) -> str:
+    """The lines on stdout: counts per verdict, the bases, the time, the files."""
+    c = study.counts()
+    lines = [title, "-" * len(title), f"spots          {c['spots']}"]
+    lines.append(f"feasible       {c['feasible']} / {c['spots']}")
+    for t, words in c["gun"].items():
+        lines.append(f"gun {t:<10} " + ", ".join(f"{k} {v}" for k, v in sorted(words.items())))
+    for tr, words in c["robot"].items():
+        lines.append(f"robot {tr}: " + ", ".join(f"{k} {v}" for k, v in sorted(words.items())))
+    for r in study.robots:
+        x, y, z, yaw = r.xyz_yaw()
+        how = "searched" if r.searched else (r.note or "given")
+        lines.append(f"base {r.name}: {x:.0f},{y:.0f},{z:.0f},{yaw:.1f} ({how})")
+    s = study.stats
+
+    def secs(key: str) -> str:
+        return ", ".join(f"{v:.1f}" for v in s[key]) or "-"
+
+    lines.append(
+        f"time           gun {secs('gun_s')} s, robot {secs('robot_s')} s, total "
+        f"{s['total_s']:.1f} s wall; CPU gun {secs('gun_cpu_s')} s, robot "
+        f"{secs('robot_cpu_s')} s, total {s['total_cpu_s']:.1f} s"
+    )
+    lines.append(f"written        {', '.join(written)}")
+    if not study.all_feasible:
+        lines.append("exit code 3: some spots are not feasible (see the table)")
+    return "\n".join(lines)
