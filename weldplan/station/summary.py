@@ -1,7 +1,9 @@
-"""The table ``weldplan plan`` and ``weldplan demo`` print at the end of a run."""
+"""The summary of a plan: the table ``weldplan plan`` prints at the end of a run, the rows of
+each stage, and the lines of a partial plan."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Any
 
@@ -134,3 +136,248 @@ def summary_table(
     if note:
         lines.append(note)
     return "\n".join(lines)
+
+
+def plan_rows(plan: Any) -> list[tuple[str, str]]:
+    """The rows of the tool and robot stages of ``plan`` (after ``verified``)."""
+    if plan.poses is None:
+        return []
+    from weldplan.station.toolstage import tool_checks
+
+    rows = pose_rows(plan.route, tool_checks(plan.poses, plan.transitions))
+    if plan.robot is None:
+        return rows
+    joint, build = plan.robot, plan.program
+    rr = joint.robot_route
+    rows += robot_rows(rr, build) + order_rows(plan.route, joint.gun, rr)
+    rows += reach_rows(joint.reach) + cost_rows(plan.route, build.timing.total)
+    return rows
+
+
+def partial_lines(plan: Any) -> list[str]:
+    """One line per cause of a partial plan: joints skipped, welds without a free tool pose,
+    tool transitions blocked, welds not in the robot program."""
+    route = plan.route
+
+    def listed(ids: list[str]) -> str:
+        return ", ".join(ids[:10]) + (", ..." if len(ids) > 10 else "")
+
+    out = []
+    skipped = [s["id"] for s in route.stats.get("skipped") or []]
+    if skipped:
+        out.append(f"partial route: {len(skipped)} joint(s) skipped ({listed(skipped)})")
+    if plan.poses is not None:
+        missed = [str(p.id) for p in plan.poses.poses.poses if not p.ok]
+        if missed:
+            out.append(f"{len(missed)} weld(s) without a free tool pose ({listed(missed)})")
+    if plan.transitions is not None:
+        blocked = [f"{t.from_id}->{t.to_id}" for t in plan.transitions.path.blocked]
+        if blocked:
+            out.append(
+                f"{len(blocked)} tool transition(s) blocked for the swept tool ({listed(blocked)})"
+            )
+    if plan.robot is not None and not out:
+        gun = plan.robot.gun
+        unposed = () if gun is None else tuple(i for i in route.order if i not in gun.route.order)
+        left = (*plan.program.skipped, *unposed)
+        if left:
+            out.append(f"{len(left)} weld(s) not in the robot program")
+    return out
+
+
+def transition_rows(route: Any, check: Any) -> list[tuple[str, str]]:
+    """Summary rows of the transitions: free / total, re-planned, length and rotation versus the
+    point-tip order, and each blocked transition."""
+    from weldplan.tool.route_frames import route_tool_path
+
+    path = route_tool_path(route)
+    if path is None:
+        return []
+    sweeps = getattr(check, "sweeps", None)
+    n = len(path.transitions)
+    est = path.stats.get("point_order")
+    rows = [
+        (
+            "tool transitions",
+            f"{n - len(path.blocked)} / {n} free for the swept tool ("
+            + ", ".join(f"{k} {v}" for k, v in path.by_via().items() if k != "blocked")
+            + f"); retract {path.settings['retract']:g} mm, side exit "
+            f"{path.settings.get('side_exit', 0):g} mm"
+            + (f"; re-checked: {sweeps.describe()}" if sweeps is not None else ""),
+        ),
+        (
+            "tool path",
+            f"{path.length:.1f} mm, orientation change {path.rotation:.1f} deg, order "
+            f"{path.stats.get('order_from', '?')}"
+            + (
+                f" (estimated on direct transitions: point-tip order {est['length']:.1f} mm, "
+                f"{est['rotation_deg']:.1f} deg; tool order "
+                f"{path.stats['tool_order']['length']:.1f} mm, "
+                f"{path.stats['tool_order']['rotation_deg']:.1f} deg)"
+                if est
+                else ""
+            ),
+        ),
+    ]
+    rows += [(f"  {t.from_id}->{t.to_id}", f"blocked; {t.reason}") for t in path.blocked]
+    return rows
+
+
+def pose_rows(route: Any, check: Any) -> list[tuple[str, str]]:
+    """Summary rows of the pose stage: the tool, welds reached, and each miss."""
+    from weldplan.tool.result import WeldPoses
+
+    poses = WeldPoses.from_dict(route.tool["poses"])
+    n = len(poses.poses)
+    rows = [
+        ("tool", f"{poses.tool}, sha256 {route.tool['provenance']['file_sha256'][:12]}"),
+        (
+            "tool poses",
+            f"{poses.n_ok} / {n} welds with a free pose (re-checked: {check.checked} ok poses, "
+            f"fresh FCL models); total orientation change {poses.total_rotation:.1f} deg"
+            + ("" if poses.n_ok == n else "; exit code 3"),
+        ),
+    ]
+    rows += [
+        (f"  weld {p.id}", f"no free pose; {p.miss.describe()}" if p.miss else "no free pose")
+        for p in poses.poses
+        if not p.ok
+    ]
+    return rows + transition_rows(route, check)
+
+
+def robot_rows(rr: Any, build: Any) -> list[tuple[str, str]]:
+    """Summary rows of the robot stage: the robot and its base, the route, each weld left out,
+    the cycle time, the program."""
+    tt = build.timing
+    x, y, z, yaw = rr.stats.get("placement", {}).get("base_xyz_yaw", [math.nan] * 4)
+    legs = tt.leg_times()
+    miss = [
+        (f"  weld {w}", f"not welded: {s.replace('_', ' ')}" + (f"; {d}" if d else ""))
+        for w, s, d in zip(rr.weld_ids, rr.status, rr.detail or [""] * len(rr.status), strict=True)
+        if s != "ok"
+    ]
+    targets = build.program.targets
+    return [
+        ("robot", f"{rr.robot}, base ({x:.0f}, {y:.0f}, {z:.0f}) mm yaw {yaw:.1f} deg"),
+        (
+            "robot route",
+            f"{rr.n_ok} / {len(rr.status)} welds, {len(rr.flips)} branch flip(s), "
+            f"{len(rr.replanned)} leg(s) re-planned in joint space, collision-free "
+            f"{rr.stats.get('collision_free', 'not checked')}"
+            + (f"; {len(miss)} weld(s) not in the program (exit code 3)" if miss else ""),
+        ),
+        *miss,
+        (
+            "cycle time",
+            f"{tt.total:.2f} s ({tt.motion_time:.2f} s moving, {tt.weld_time:g} s a weld; legs "
+            f"{', '.join(f'{v:.2f}' for v in legs[:6])}{' ...' if len(legs) > 6 else ''} s); "
+            f"at a constant {build.tcp_speed:g} mm/s TCP: {build.constant_speed_time:.2f} s",
+        ),
+        (
+            "program",
+            f"{sum(t.move == 'linear' for t in targets)} linear and "
+            f"{sum(t.move == 'joint' for t in targets)} joint moves, "
+            f"{sum(t.blend >= 0.3 for t in targets)} fly-by points; the timed path "
+            f"within {tt.deviation:.1e} rad of the joint path, its TCP up to "
+            f"{build.tcp_deviation:.2f} mm off the linear moves' lines",
+        ),
+    ]
+
+
+def _ends(rr: Any) -> str:
+    """How the detours left and reached their welds (``stats["detour_ends"]``), as
+    ``"; welds left or reached: 2 by a gun exit, 4 by a retract"``."""
+    ends = rr.stats.get("detour_ends") or {}
+    if not ends:
+        return ""
+    return "; welds left or reached: " + ", ".join(f"{v} by a {k}" for k, v in ends.items())
+
+
+def _legs(rr: Any, gun: Any) -> list[tuple[str, str, str]]:
+    """``(from, to, how)`` of each leg between consecutive served welds."""
+    from weldplan.robot.gunpath import legs_taken
+
+    served = [w for w, s in zip(rr.weld_ids, rr.status, strict=True) if s == "ok"]
+    taken = legs_taken(gun.via, rr.status, rr.replanned)
+    return [(a, b, k) for a, b, k in zip(served[:-1], served[1:], taken, strict=True)]
+
+
+def _legs_line(rr: Any, gun: Any) -> str:
+    """How each leg between served welds goes, in one line."""
+    from collections import Counter
+
+    legs_by = _legs(rr, gun)
+    taken = Counter(k for _, _, k in legs_by)
+    gun_legs = {k[4:]: v for k, v in taken.items() if k.startswith("gun ")}
+    detoured = [f"{a}->{b}" for a, b, k in legs_by if k == "detour"]
+    return (
+        f"{sum(gun_legs.values())} along the gun's transitions"
+        + (f" ({', '.join(f'{k} {v}' for k, v in gun_legs.items())})" if gun_legs else "")
+        + f", {taken['detour']} detoured (leave, joint-space transfer, approach"
+        + (f": {', '.join(detoured)}" if detoured else "")
+        + _ends(rr)
+        + f"), {taken['joint']} by one joint motion where the gun's transition is blocked"
+    )
+
+
+def order_rows(route: Any, gun: Any, rr: Any) -> list[tuple[str, str]]:
+    """Summary rows: the order the program follows (and why, when it is not the point-tip
+    route's), how each leg between served welds goes, and the welds the tool never reaches."""
+    if gun is None:
+        return []
+    order = gun.route.order
+    pt = tuple(i for i in route.order if i in set(order))
+    why = (
+        "the tool stage's order, the same as the point-tip route's"
+        if pt == order
+        else f"the tool stage's order, not the point-tip route's ({'-'.join(pt)}): the gun's "
+        "transitions were planned and checked between consecutive welds of the tool order, "
+        "which avoids the pairs found blocked for the gun"
+    )
+    rows = [("robot order", f"{'-'.join(order)}: {why}"), ("robot legs", _legs_line(rr, gun))]
+    rows += [
+        (f"  weld {i}", "not welded: no tool pose (the tool never reaches it)")
+        for i in route.order
+        if i not in order
+    ]
+    return rows
+
+
+def reach_rows(reach: Any) -> list[tuple[str, str]]:
+    """The summary row of the robot's reach test in the pose choice."""
+    if reach is None:
+        return []
+    t = reach.accept
+    why = ", ".join(f"{k} {v}" for k, v in t.vetoes.most_common())
+    base = "searched on the poses chosen without the robot" if reach.placement else "given"
+    return [
+        (
+            "robot reach test",
+            f"{t.calls} gun pose(s) judged, {sum(t.vetoes.values())} vetoed"
+            + (f" ({why})" if why else "")
+            + f"; base {base} ({reach.seconds:.1f} s)",
+        )
+    ]
+
+
+def cost_rows(route: Any, cycle: float | None) -> list[tuple[str, str]]:
+    """The summary row of ``cost = "time"``: seconds of the order, the proved bound, the gap of
+    the timed cycle (``cycle``, s) to it."""
+    st = route.stats.get("cost_time")
+    if not st:
+        return []
+    b = st["time_bound"]
+    timed = (
+        f"; timed cycle {cycle:.2f} s, {100 * (cycle / b - 1):.1f} % over the bound"
+        if cycle is not None and b > 0 and math.isfinite(cycle)
+        else ""
+    )
+    return [
+        (
+            "cost time",
+            f"order {st['time_cost']:.2f} s (rest-to-rest bounds on IK branch "
+            f"{st['station_branch']}, {st['weld_time']:g} s a weld); proved bound {b:.2f} s "
+            f"({st['time_bound_method']}, any order and configuration){timed}",
+        )
+    ]
