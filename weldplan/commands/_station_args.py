@@ -13,14 +13,14 @@ import argparse
 import dataclasses
 from typing import Any
 
+import weldplan.station.model as m
 from weldplan.errors import InputError, WeldplanError
-from weldplan.station import model as m
 
 #: options that are not the station's: the outputs and how the run goes
 RUN_OPTIONS = {
     "command", "verbose", "mesh", "joints", "output", "json", "html", "post", "post_file",
     "trajectory", "tool_csv", "robot_html", "seed", "jobs", "dask", "quiet", "func",
-    "station_defaults",
+    "station_defaults", "usage_error",
 }  # fmt: skip
 _OUTPUTS = ("json", "html", "post", "post_file", "trajectory", "tool_csv", "robot_html")
 

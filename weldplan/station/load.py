@@ -41,8 +41,8 @@ from os import PathLike
 from pathlib import Path
 from typing import Any
 
+import weldplan.station.model as m
 from weldplan.errors import ConfigError, InputError
-from weldplan.station import model as m
 
 _TOP = {"name", "clearance", "floor_z", "seed", "jobs", "part", "cell", "route"}
 _TOP |= {"tool_settings", "robot", "output"}

@@ -359,7 +359,8 @@ class _RobotContext:
 
 def _tool_robot(p: Plan, st: _Stages, ctx: _RobotContext | None) -> Plan:
     """The tool and robot stages on the verified route ``p.route``."""
-    from weldplan.station import robotstage, toolstage
+    import weldplan.station.robotstage as robotstage
+    import weldplan.station.toolstage as toolstage
 
     if p.tool is None:
         return p
