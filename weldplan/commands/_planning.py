@@ -71,23 +71,10 @@ def run_planning(
     show_cell: bool = False,
 ) -> int:  # fmt: skip
     """Plan ``station``, write its files, print the summary; returns the exit code."""
-    import dataclasses
-
     import weldplan
-    from weldplan.station.outputs import output_paths, write_plan
-    from weldplan.station.pipeline import check_station_size
-    from weldplan.station.pipeline import run_warnings as station_warnings
+    from weldplan.station.outputs import write_plan
 
-    if station.name is None:  # the program is named after the file it is written to
-        stem = (station.outputs.post_file or station.outputs.csv).stem
-        station = dataclasses.replace(station, name=stem)
-    spec = station.robot
-    outputs = output_paths(
-        station.outputs, robot=spec is not None and spec.urdf is not None, tool=spec is not None
-    )
-    for w in station_warnings(station):
-        print(f"weldplan: warning: {w}", file=sys.stderr)
-    check_station_size(station, cli=True, workers=_local_workers(args, station.jobs))
+    station, outputs = _prepare(args, station)
     bars = ProgressBars(enabled=False if args.quiet else None)
     t_all = time.perf_counter()
     with _executor(args, station.jobs) as executor:
@@ -102,18 +89,31 @@ def run_planning(
     if not args.quiet:
         if show_cell and hasattr(result.cell, "format_summary"):
             print(result.cell.format_summary() + "\n")
-        print(
-            summary_table(
-                result.route,
-                times,
-                outputs,
-                title=title,
-                report=result.verification,
-                note=note,
-                extra=plan_rows(result),
-            )  # fmt: skip
-        )
+        kw = {"title": title, "report": result.verification, "note": note}
+        print(summary_table(result.route, times, outputs, extra=plan_rows(result), **kw))
     return _partial_code(result)
+
+
+def _prepare(args: argparse.Namespace, station: Any) -> tuple[Any, dict[str, Any]]:
+    """Before any work: the program's name, the output paths checked, the warnings said, the
+    size checked (:func:`weldplan.station.pipeline.check_station_size`)."""
+    import dataclasses
+
+    from weldplan.station.outputs import output_paths
+    from weldplan.station.pipeline import check_station_size
+    from weldplan.station.pipeline import run_warnings as station_warnings
+
+    if station.name is None:  # the program is named after the file it is written to
+        stem = (station.outputs.post_file or station.outputs.csv).stem
+        station = dataclasses.replace(station, name=stem)
+    spec = station.robot
+    outputs = output_paths(
+        station.outputs, robot=spec is not None and spec.urdf is not None, tool=spec is not None
+    )
+    for w in station_warnings(station):
+        print(f"weldplan: warning: {w}", file=sys.stderr)
+    check_station_size(station, cli=True, workers=_local_workers(args, station.jobs))
+    return station, outputs
 
 
 def run_warnings(args: argparse.Namespace) -> list[str]:

@@ -13,6 +13,8 @@ import logging
 import math
 from typing import Any
 
+from weldplan.station.model import ToolSettings
+
 log = logging.getLogger(__name__)
 
 
@@ -78,29 +80,35 @@ def add_tool_arguments(p: argparse.ArgumentParser, *, search: bool = True) -> No
         "for a mesh: the whole sphere, as a spot gun's electrodes close over the sheet)",
     )
     if search:
-        p.add_argument(
-            "--tool-cone",
-            metavar="DEG",
-            type=_degrees,
-            default=15.0,
-            help="largest tilt of the tool off the weld's approach axis, degrees (default 15)",
-        )
-        p.add_argument(
-            "--contact-radius",
-            metavar="MM",
-            type=_nonneg_mm,
-            default=20.0,
-            help="the tool may touch the part only inside this sphere about the weld spot, mm "
-            "(default 20: the electrode tip)",
-        )
-        p.add_argument(
-            "--tool-csv",
-            metavar="F",
-            help="with --tool: also write the tool's verified path as CSV (the transitions in "
-            "the tool's order, one row per TCP pose with its quaternion: the motion the swept "
-            "check proved free; weldplan.tool.path_csv)",
-        )
+        _add_pose_arguments(p)
         add_transition_arguments(p)
+
+
+def _add_pose_arguments(p: argparse.ArgumentParser) -> None:
+    """``--tool-cone``, ``--contact-radius``, ``--tool-csv`` (defaults: ToolSettings')."""
+    d = ToolSettings()
+    p.add_argument(
+        "--tool-cone",
+        metavar="DEG",
+        type=_degrees,
+        default=d.cone,
+        help="largest tilt of the tool off the weld's approach axis, degrees (default 15)",
+    )
+    p.add_argument(
+        "--contact-radius",
+        metavar="MM",
+        type=_nonneg_mm,
+        default=d.contact_radius,
+        help="the tool may touch the part only inside this sphere about the weld spot, mm "
+        "(default 20: the electrode tip)",
+    )
+    p.add_argument(
+        "--tool-csv",
+        metavar="F",
+        help="with --tool: also write the tool's verified path as CSV (the transitions in "
+        "the tool's order, one row per TCP pose with its quaternion: the motion the swept "
+        "check proved free; weldplan.tool.path_csv)",
+    )
 
 
 def _seconds(text: str) -> float:
@@ -109,12 +117,42 @@ def _seconds(text: str) -> float:
 
 def add_transition_arguments(p: argparse.ArgumentParser) -> None:
     """``--retract``, ``--side-exit``, ``--no-slide``, ``--rot-weight``, ``--tool-order``,
-    ``--no-exit-check``, ``--se3-time`` (the transitions)."""
+    ``--no-exit-check``, ``--se3-time`` (the transitions; defaults: ToolSettings')."""
+    d = ToolSettings()
+    _add_exit_arguments(p, d)
+    p.add_argument(
+        "--rot-weight",
+        metavar="MM/RAD",
+        type=_nonneg_mm,
+        default=d.rot_weight,
+        help="with --tool: the weld order minimises TCP length + this x orientation change "
+        "(default 200 mm per rad)",
+    )
+    p.add_argument(
+        "--tool-order",
+        choices=("tool", "route"),
+        default=d.order,
+        help="with --tool: order the welds on the tool's costs (default) or keep the point-tip "
+        "route's order",
+    )
+    p.add_argument(
+        "--se3-time",
+        metavar="S",
+        type=_seconds,
+        default=d.se3_time,
+        help="with --tool: CPU seconds OMPL may spend re-planning one blocked transition in SE(3) "
+        "(default 10; 0: report blocked transitions without re-planning)",
+    )
+
+
+def _add_exit_arguments(p: argparse.ArgumentParser, d: ToolSettings) -> None:
+    """How the tool leaves and reaches a weld: ``--retract``, ``--side-exit``, ``--no-slide``,
+    ``--no-exit-check``."""
     p.add_argument(
         "--retract",
         metavar="MM",
         type=_nonneg_mm,
-        default=50.0,
+        default=d.retract,
         help="with --tool: leave and approach each weld along the tool axis over this many mm "
         "(default 50; every motion of the swept tool is checked)",
     )
@@ -122,7 +160,7 @@ def add_transition_arguments(p: argparse.ArgumentParser) -> None:
         "--side-exit",
         metavar="MM",
         type=_nonneg_mm,
-        default=250.0,
+        default=d.side_exit,
         help="with --tool: where the axial retract is blocked, try leaving sideways by this many "
         "mm first (a C-gun round a flange; default 250, 0: never)",
     )
@@ -134,34 +172,11 @@ def add_transition_arguments(p: argparse.ArgumentParser) -> None:
         "a C-gun stays straddled over the flange; tried after the axial retract by default)",
     )
     p.add_argument(
-        "--rot-weight",
-        metavar="MM/RAD",
-        type=_nonneg_mm,
-        default=200.0,
-        help="with --tool: the weld order minimises TCP length + this x orientation change "
-        "(default 200 mm per rad)",
-    )
-    p.add_argument(
-        "--tool-order",
-        choices=("tool", "route"),
-        default="tool",
-        help="with --tool: order the welds on the tool's costs (default) or keep the point-tip "
-        "route's order",
-    )
-    p.add_argument(
         "--no-exit-check",
         dest="exit_check",
         action="store_false",
         help="with --tool: choose each weld's pose without asking whether the tool can leave it "
         "(a lift off the sheet, the axial retract or a side exit; on by default, docs/tool.md)",
-    )
-    p.add_argument(
-        "--se3-time",
-        metavar="S",
-        type=_seconds,
-        default=10.0,  # weldplan.tool.transitions.DEFAULT_SE3_TIME (not imported: fcl)
-        help="with --tool: CPU seconds OMPL may spend re-planning one blocked transition in SE(3) "
-        "(default 10; 0: report blocked transitions without re-planning)",
     )
 
 

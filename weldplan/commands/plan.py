@@ -57,6 +57,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     from weldplan.commands._station_args import record_defaults
 
     record_defaults(p)
+    p.set_defaults(usage_error=p.error)  # -o is required in the quick form only
 
 
 def run(args: argparse.Namespace) -> int:
@@ -71,7 +72,7 @@ def run(args: argparse.Namespace) -> int:
         title = f"weldplan plan {args.mesh}"
     else:
         if args.output is None:
-            raise WeldplanError("the following argument is required: -o/--output")
+            args.usage_error("the following arguments are required: -o/--output")
         if not 0.0 < args.approach_cone <= 90.0:
             raise WeldplanError(
                 f"--approach-cone must lie in (0, 90] degrees, got {args.approach_cone}"
