@@ -76,6 +76,11 @@ def _add_planner_arguments(p: argparse.ArgumentParser) -> None:
         help="with --smooth: largest spacing of the smooth waypoints, mm (default 5; denser "
         "where a chord would cut into the clearance)",
     )
+    _add_sequencer_arguments(p)
+
+
+def _add_sequencer_arguments(p: argparse.ArgumentParser) -> None:
+    """``--sequencer`` and ``--aco``."""
     p.add_argument(
         "--sequencer",
         default="auto",

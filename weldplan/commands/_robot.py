@@ -111,6 +111,11 @@ def _add_robot_stage_arguments(g: Any) -> None:
         default=d.tcp_speed,
         help="constant TCP speed the cycle time is compared with (default 1000)",
     )
+    _add_program_arguments(g, d)
+
+
+def _add_program_arguments(g: Any, d: RobotSettings) -> None:
+    """``--moves`` and ``--cost``."""
     g.add_argument(
         "--moves",
         choices=("linear", "joint"),
