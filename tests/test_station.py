@@ -17,7 +17,7 @@ import pytest
 from tests.cli_helpers import one_line_error, run_cli
 from tests.conftest import ROOT, require_shared
 from tests.route_fixtures import write_box_station
-from weldplan.errors import ConfigError, InputError
+from weldplan.errors import ConfigError, InputError, WeldplanError
 
 #: keys whose values are wall-clock figures (the only ones allowed to differ between runs)
 TIMING = re.compile(r"seconds|(^|_)s$|^time$")
@@ -270,3 +270,33 @@ def test_the_demo_station_file_options_and_library_write_the_same_files(tmp_path
     file, options, library = (_no_clock(x) for x in (file, options, library))
     assert file == options == library
     assert file["r.json"]["tool"]["robot"]
+
+
+def test_bench_robot_runs_the_pipeline_on_a_station_file(box, capsys):
+    """``weldplan bench robot --station FILE`` is :func:`weldplan.plan`: its stages, its route."""
+    import weldplan
+    from weldplan.bench import robot as bench
+
+    tmp, _, _, head = box
+    toml = _write(tmp, head + "\n[cell]\nmargin = 50\n")
+    assert bench.main(["--station", str(toml)]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert list(out["seconds_by_stage"]) == ["cell", "route", "verify"]
+    p = weldplan.plan(weldplan.load_station(toml), rng=0)
+    assert out["order"] == "-".join(p.route.order) and out["joints"] == len(p.cell.joints.ids)
+    assert out["route_mm"] == round(p.route.length, 2) and out["not_served"] == []
+
+
+def test_bench_robot_builds_the_car2_station_it_names():
+    from weldplan.bench.robot import TORCH_MASS_KG, car2_station
+
+    require_shared("bodies", "car2.obj")
+    st = car2_station(50, "torch", "1,2,3,4", cone=0.0)
+    (robot,) = st.robots
+    assert st.part.welds.name == "car2_synthetic_50.csv" and st.part.length == 4500.0
+    assert robot.tool.builtin == "arc_torch" and robot.tool.mass == TORCH_MASS_KG
+    assert robot.base == (1.0, 2.0, 3.0, 4.0) and st.tool.cone == 0.0
+    gun = car2_station(200, "gun", search_step=400.0).robots[0]
+    assert gun.tool.is_urdf and gun.base is None and gun.search == {"step": 400.0}
+    with pytest.raises(WeldplanError, match="no synthetic set of 7 joints"):
+        car2_station(7)
