@@ -287,7 +287,8 @@ class ToolSpec:
         A URDF (its TCP: the last fixed joint, or ``tcp`` naming a joint or link) or a mesh.
     builtin, params
         ``"arc_torch"`` (:func:`weldplan.tool.arc_torch`) with its keyword parameters (mm,
-        degrees); mounted with its body's end on the flange, the TCP on the flange's z axis.
+        degrees; default the bent torch, 22 deg); mounted with its body's end on the flange and
+        its body along the flange's z axis.
     tcp
         With a mesh: ``"x,y,z,rx,ry,rz"`` in the mesh frame; with a URDF: a joint or link name.
     units, mesh
