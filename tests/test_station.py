@@ -257,21 +257,6 @@ def test_file_options_and_library_write_the_same_point_tip_route(box):
     assert file["r.json"]["order"]
 
 
-@pytest.mark.slow
-def test_the_demo_station_file_options_and_library_write_the_same_files(tmp_path):
-    """``examples/demo_station.toml``: the shared gun on the KUKA over the demo's 15 welds
-    (about 2 minutes a run on 2 cores)."""
-    gun = require_shared("tools", "spot_welding_gun", "spot_welding_gun.urdf")
-    robot = require_shared("robots", "kuka_kr150r3100_2", "kr150r3100_2.urdf")
-    toml = ROOT / "examples" / "demo_station.toml"
-    argv = ["demo", "--no-html", "--tool", str(gun), "--robot", str(robot)]
-    file, options, library = _three_ways(tmp_path, toml, argv, "krl")
-    assert sorted(file) == ["r.csv", "r.dat", "r.json", "r.src"]
-    file, options, library = (_no_clock(x) for x in (file, options, library))
-    assert file == options == library
-    assert file["r.json"]["tool"]["robot"]
-
-
 def test_bench_robot_runs_the_pipeline_on_a_station_file(box, capsys):
     """``weldplan bench robot --station FILE`` is :func:`weldplan.plan`: its stages, its route."""
     import weldplan
@@ -300,3 +285,57 @@ def test_bench_robot_builds_the_car2_station_it_names():
     assert gun.tool.is_urdf and gun.base is None and gun.search == {"step": 400.0}
     with pytest.raises(WeldplanError, match="no synthetic set of 7 joints"):
         car2_station(7)
+
+
+def test_the_built_in_bent_torch_on_the_robot_welds_every_spot(box):
+    """The bent torch named in the file, on the KUKA at a given base: every weld served, and the
+    robot's forward kinematics (URDF chain) with the torch's mounting put the TCP on each weld
+    spot of the CSV, in the tool pose planned there (about 30 s on 2 cores)."""
+    from scipy.spatial.transform import Rotation
+
+    import weldplan
+    from weldplan.io.joints import read_joints
+    from weldplan.station.mount import torch_flange_tcp
+
+    tmp, _, joints, head = box
+    urdf = require_shared("robots", "kuka_kr150r3100_2", "kr150r3100_2.urdf")
+    toml = _write(tmp, head + (
+        f"\n[cell]\nmargin = 50\n[[robot]]\nurdf = '{urdf}'\nbase = [-1800, 0, -700, 0]\n"
+        "weld_time = 0.4\n[robot.tool]\nbuiltin = 'arc_torch'\nbend_angle = 22\nmass = 3\n"
+    ))  # fmt: skip
+    p = weldplan.plan(weldplan.load_station(toml), rng=0)
+    rr = p.robot.robot_route
+    assert list(rr.status) == ["ok"] * 4 and p.partial() == [] and p.program.timing.total > 1.6
+    F = torch_flange_tcp({"bend_angle": 22.0})
+    np.testing.assert_allclose(rr.flange_tcp, F, atol=1e-9)
+    tcp = p.robot.robot.fk(rr.q) @ F  # (k, 4, 4) in the part frame
+    spots = {i: x for i, x in zip(read_joints(joints).ids, read_joints(joints).xyz, strict=True)}
+    for pose in p.poses.poses.poses:
+        k = int(np.argmin(np.linalg.norm(tcp[:, :3, 3] - spots[pose.id], axis=1)))
+        assert np.linalg.norm(tcp[k, :3, 3] - spots[pose.id]) < 0.01  # on the CSV's spot
+        R = Rotation.from_quat(np.roll(pose.quaternion, -1)).as_matrix()
+        assert np.abs(tcp[k, :3, :3] - R).max() < 1e-6  # in the planned tool pose
+
+
+def test_the_demo_station_file_is_the_demo_with_the_gun_and_the_robot():
+    """``examples/demo_station.toml`` reads as ``weldplan demo --tool GUN --robot KR150``: the
+    demo's part and joints files, the same robot, tool and settings."""
+    import argparse
+    import dataclasses
+
+    import weldplan
+    from weldplan.commands import demo
+    from weldplan.commands._station_args import station_from_args
+    from weldplan.station.model import PartSpec
+    from weldplan.weld import demo_part
+
+    gun = require_shared("tools", "spot_welding_gun", "spot_welding_gun.urdf")
+    robot = require_shared("robots", "kuka_kr150r3100_2", "kr150r3100_2.urdf")
+    filed = weldplan.load_station(ROOT / "examples" / "demo_station.toml")
+    p = argparse.ArgumentParser()
+    demo.add_arguments(p)
+    args = p.parse_args(["--tool", str(gun), "--robot", str(robot)])
+    quick = station_from_args(args, PartSpec())
+    assert filed.part == PartSpec(demo_part.DEMO_PART.resolve(), demo_part.DEMO_JOINTS.resolve())
+    same = {"part": quick.part, "outputs": quick.outputs, "source": None}
+    assert dataclasses.replace(filed, **same) == quick
