@@ -245,6 +245,7 @@ def test_a_mesh_tool_is_mounted_as_the_robot_stage_mounts_it(tmp_path):
     import argparse
 
     from weldplan.commands._robot_cost import flange_tcp
+
     from weldplan.study import load_study_tool
     from weldplan.tool import arc_torch
 

@@ -8,6 +8,11 @@ cheap)::
     cell = weldplan.demo_cell()
     route = weldplan.plan_route(cell, rng=0)
     weldplan.verify_route(route, cell.part).ok
+
+The whole job (tool poses, transitions, robot, program) on a station file::
+
+    station = weldplan.load_station("examples/demo_station.toml")
+    plan = weldplan.plan(station, rng=0)
 """
 
 from __future__ import annotations
@@ -33,6 +38,12 @@ _LAZY: dict[str, str] = {
     "plan_route": "weldplan.weld.pipeline",
     "Route": "weldplan.weld.route",
     "verify_route": "weldplan.weld.verify",
+    "Station": "weldplan.station.model",
+    "load_station": "weldplan.station.load",
+    "plan": "weldplan.station.pipeline",
+    "Plan": "weldplan.station.pipeline",
+    "write_plan": "weldplan.station.outputs",
+    "MountedTool": "weldplan.station.mount",
 }
 
 __all__ = ["__version__", *_LAZY]

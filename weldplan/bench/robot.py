@@ -1,19 +1,21 @@
-"""``python -m weldplan.bench.robot``: IK, branch choice and robot collision on a car2 station.
+"""``weldplan bench robot``: the whole pipeline users run, on a car2 station, timed by stage.
 
-The station: the synthetic ``n``-joint set on car2 (:func:`weldplan.weld.synthetic.car2_joints`,
-seed 0, scaled to 4500 mm, SYNTHETIC spots), visited in its line order; each leg goes straight
-from a spot to its virtual joint ``approach_mm`` out along its approach direction, to the next
-spot's virtual joint, and down to that spot (the torch route's shape without the pair planner,
-whose time is not what this measures). The shared spot gun's pose at each spot comes from
-:func:`weldplan.tool.plan_weld_poses` over 12 spins without tilt (:data:`POSE_SPIN_STEP`;
-cached in ``--cache``: it is the tool stage's cost, not this one's). The
-robot is the KUKA KR 150 R3100-2; its base is searched on the floor (the part's lowest point)
-or given with ``--robot-base``.
+The station (:func:`car2_station`): car2 (``../shared/data/bodies/car2.obj`` scaled to 4500 mm)
+with the synthetic ``n``-joint set of ``assets/car2/car2_synthetic_{n}.csv``
+(:mod:`weldplan.weld.synthetic`, seed 0, SYNTHETIC spots; n = 50, 200, 1000 or 4000), the shared
+spot gun or the built-in straight arc torch on the KUKA KR 150 R3100-2, its base searched on the
+floor (the part's lowest point) or given with ``--robot-base``. ``--station FILE`` runs any
+station file instead (docs/station.md).
 
-Timed: :func:`weldplan.robot.plan.plan_robot_route` without re-planning (the base search, IK of
-every waypoint, branch and turn choice, the collision check of robot and gun at the welds and
-along the whole joint path); ``--replan`` detours blocked legs too. The issue's target: a
-200-joint station in <= 30 s on 2 cores.
+It runs :func:`weldplan.plan`, the same call as ``weldplan plan`` (the point-tip route, the
+reach test, the tool poses and transitions, the joint route with its detours, the timing and
+the program), and reports each stage's wall seconds, the process's CPU seconds and the load.
+The issue-17 target (the robot stage of a 200-joint station in <= 30 s on 2 cores) is the
+``robot`` stage's figure.
+
+:func:`station` and :func:`straight_route` keep the earlier set-up (straight legs through the
+spots' virtual joints, the gun poses of :func:`weldplan.tool.plan_weld_poses`) for the scripts
+and tests that build a robot route without the pair planner.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ import logging
 import os
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -97,159 +100,111 @@ def station(
 TORCH_REACH_MM = 425.0
 
 
-def measure(
-    n: int,
-    base: str | None,
-    cache: Path | None,
-    search_step: float,
-    tool_name: str = "gun",
-    replan: bool = False,
-    reach_poses: bool = False,
-    cone: float = POSE_CONE,
-    spin_step: float = POSE_SPIN_STEP,
-) -> dict:
-    from weldplan.robot import load_robot
-    from weldplan.robot.plan import plan_robot_route, tool_flange_tcp
-    from weldplan.robot.reach import BaseSearch, parse_base
+#: kg of the built-in arc torch on the flange (its body, neck and nozzle; an assumption)
+TORCH_MASS_KG = 5.0
+
+
+def car2_station(n: int, tool_name: str = "gun", base: str | None = None, **kw: Any) -> Any:
+    """The ``n``-joint car2 :class:`~weldplan.station.model.Station` (module docstring); ``kw``:
+    ``search_step`` (mm), ``cone`` (deg, the gun-pose search's tilt)."""
+    from weldplan.station import model as m
     from weldplan.tool.torch import SHARED_GUN_DIR
     from weldplan.weld.synthetic import CAR2
 
+    welds = Path(__file__).resolve().parents[2] / "assets" / "car2" / f"car2_synthetic_{n}.csv"
+    if not welds.is_file():
+        raise WeldplanError(f"no synthetic set of {n} joints ({welds}); use 50, 200, 1000, 4000")
     robot_dir = Path(CAR2).parents[1] / "robots" / "kuka_kr150r3100_2"
-    part, route, poses, gun = station(n, cache, tool_name, cone, spin_step)
-    robot = load_robot(robot_dir / "kr150r3100_2.urdf")
     if tool_name == "gun":
-        F = tool_flange_tcp(robot, SHARED_GUN_DIR / "spot_welding_gun.urdf", "nozzle_tip")
+        tool = m.ToolSpec(file=SHARED_GUN_DIR / "spot_welding_gun.urdf")
     else:
-        F = np.eye(4)
-        F[2, 3] = TORCH_REACH_MM
-    reach: dict = {}
-    if reach_poses:
-        poses, base_T, reach = _reach_poses(
-            robot, F, part, route, poses, gun, base, search_step, cone, spin_step
-        )
-        kw: dict = {"base": base_T}
-    else:
-        kw = {"base": parse_base(base)} if base else {"search": BaseSearch(step=search_step)}
+        tool = m.ToolSpec(builtin="arc_torch", params={"bend_angle": 0.0}, mass=TORCH_MASS_KG)
+    where: dict[str, Any] = {"search": {"step": kw.get("search_step", 250.0)}}
+    if base:
+        where = {"base": tuple(float(v) for v in base.split(","))}
+    robot = m.RobotSpec(tool=tool, urdf=robot_dir / "kr150r3100_2.urdf", **where)
+    return m.Station(
+        part=m.PartSpec(Path(CAR2), welds, length=4500.0),
+        robots=(robot,),
+        tool=m.ToolSettings(cone=kw.get("cone", m.ToolSettings.cone)),
+        name=f"car2_{n}",
+    )
+
+
+def measure(station: Any, seed: int = 0) -> dict:
+    """Plan ``station`` (:func:`weldplan.plan`) and return its figures."""
+    import weldplan
+
     t0 = time.perf_counter()
     c0 = time.process_time()
-    rr = plan_robot_route(
-        route, poses, robot, flange_tcp=F, part=part, tool=gun, replan=replan, **kw
-    )
-    total = time.perf_counter() - t0
-    cpu = time.process_time() - c0
-    st = {s: rr.status.count(s) for s in sorted(set(rr.status))}
-    return {
-        "station": f"car2 synthetic {n} joints (seed 0), straight legs, tool {tool_name}",
-        "gun_poses_ok": poses.n_ok,
-        "welds": st,
-        # what blocks the welds charged with a collision (body: count)
-        "collision_bodies": {
-            b: sum(d.split(" ")[0] == b for d in rr.detail if d)
-            for b in sorted({d.split(" ")[0] for d in rr.detail if d})
-        },
-        "first_check_bodies": rr.stats.get("first_check_bodies"),
-        "replanned_legs": len(rr.replanned),
-        "flips": len(rr.flips),
-        "waypoints": len(rr.q),
-        "base_xyz_yaw": [round(v, 1) for v in rr.stats["placement"]["base_xyz_yaw"]],
-        "base_searched": rr.stats["placement"]["searched"] or bool(reach.get("base_searched")),
-        # --reach-poses: the gun poses re-chosen with the robot's reach test at the base
-        **({"reach_poses": reach} if reach else {}),
-        "seconds_total": round(total, 2),
-        # CPU seconds of this process (all its threads): the wall time's share of a loaded box
-        "cpu_seconds_total": round(cpu, 2),
-        "seconds_ik_configs_incl_search": rr.stats["seconds_ik_configs"],
-        "seconds_collision": rr.stats.get("seconds_collision"),
-        "collision_free": rr.stats.get("collision_free"),
-        "blocked_motions": len(rr.stats.get("hits", [])),
-        "fk_max_error_mm": rr.stats["fk_max_error_mm"],
-        "load_average": os.getloadavg(),
+    p = weldplan.plan(station, rng=seed)
+    total, cpu = time.perf_counter() - t0, time.process_time() - c0
+    out: dict[str, Any] = {
+        "station": str(station.source or station.name),
+        "joints": len(p.cell.joints.ids),
+        "order": "-".join(p.route.order),
+        "route_mm": round(p.route.length, 2),
     }
+    if p.poses is not None:
+        out["tool_poses_ok"] = p.poses.poses.n_ok
+        out["transitions_blocked"] = len(p.transitions.path.blocked)
+    if p.robot is not None:
+        rr = p.robot.robot_route
+        out.update(
+            welds={s: rr.status.count(s) for s in sorted(set(rr.status))},
+            flips=len(rr.flips),
+            replanned_legs=len(rr.replanned),
+            base_xyz_yaw=[round(v, 1) for v in rr.stats["placement"]["base_xyz_yaw"]],
+            collision_free=rr.stats.get("collision_free"),
+            fk_max_error_mm=rr.stats["fk_max_error_mm"],
+            cycle_s=round(p.program.timing.total, 3),
+        )
+    out["not_served"] = p.partial()
+    out["seconds_by_stage"] = {s.name: round(s.seconds, 2) for s in p.stages}
+    out["seconds_total"] = round(total, 2)
+    # CPU seconds of this process (all its threads): the wall time's share of a loaded box
+    out["cpu_seconds_total"] = round(cpu, 2)
+    out["load_average"] = os.getloadavg()
+    return out
 
 
-def _reach_poses(robot, F, part, route, poses, gun, base, search_step, cone, spin_step) -> tuple:
-    """The gun poses re-chosen with the robot's reach test (:mod:`weldplan.robot.posechoice`)
-    at ``base``, or at the base searched for the first-pass ``poses``: ``(poses, base (4, 4),
-    figures)``."""
-    from weldplan.robot.collision import RobotCollision
-    from weldplan.robot.posechoice import ReachTest, place_for_poses
-    from weldplan.robot.reach import BaseSearch, parse_base
-    from weldplan.tool import plan_weld_poses
-
-    t0 = time.perf_counter()
-    zone = float(poses.settings.get("contact_radius", 20.0))
-    checker = RobotCollision(robot, part, None, F, contact_radius=zone)
-    if base:
-        B = parse_base(base)
-    else:
-        B = place_for_poses(
-            robot, route, poses, F, part, checker, BaseSearch(step=search_step)
-        ).base
-    t1 = time.perf_counter()
-    rb = robot.with_base(B)
-    test = ReachTest(rb, F, checker.with_robot(rb))
-    again = plan_weld_poses(part, route, gun, cone=cone, spin_step=spin_step, accept=test)
-    t2 = time.perf_counter()
-    figures = {
-        "base_searched": not base,
-        "seconds_base_search": round(t1 - t0, 2),
-        "seconds_poses_with_test": round(t2 - t1, 2),
-        "poses_judged": test.calls,
-        "vetoes": dict(test.vetoes),
-        "welds_exhausted": again.stats["accept_exhausted"],
-        "poses_changed": sum(
-            a.quaternion != b.quaternion for a, b in zip(poses.poses, again.poses, strict=True)
-        ),
-    }
-    return again, B, figures
-
-
-HELP = "IK, branch choice and robot collision on a car2 station (issue 17 target: 200 joints, 30 s)"
+HELP = "the whole pipeline (weldplan.plan) on a car2 station, timed by stage"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("-n", type=int, default=200, help="joints in the station (default 200)")
     p.add_argument("--robot-base", default=None, help="x,y,z,yaw (mm, deg); default: searched")
     p.add_argument("--search-step", type=float, default=250.0, help="floor grid step (mm)")
-    p.add_argument("--cache", type=Path, default=None, help="folder caching the tool poses")
-    p.add_argument(
-        "--replan",
-        action="store_true",
-        help="detour blocked legs too (default: IK, branch choice and the collision check only, "
-        "the issue's timed target)",
-    )
     p.add_argument(
         "--pose-cone",
         type=float,
-        default=POSE_CONE,
-        help=f"tilt cone of the gun-pose search, deg (default {POSE_CONE:g}; plan's is 15)",
-    )
-    p.add_argument(
-        "--pose-spin",
-        type=float,
-        default=POSE_SPIN_STEP,
-        help=f"spin step of the gun-pose search, deg (default {POSE_SPIN_STEP:g}; plan's is 15)",
-    )
-    p.add_argument(
-        "--reach-poses",
-        action="store_true",
-        help="re-choose the gun poses with the robot's reach test first (the base searched for "
-        "the first-pass poses, or --robot-base), as plan --robot does; timed apart",
+        default=15.0,
+        help="tilt cone of the gun-pose search, deg (default 15, plan's)",
     )
     p.add_argument(
         "--tool",
         choices=("gun", "torch"),
         default="gun",
-        help="the shared spot gun (default) or the straight arc torch",
+        help="the shared spot gun (default) or the built-in straight arc torch",
     )
+    p.add_argument("--station", metavar="TOML", help="run this station file instead")
+    p.add_argument("--seed", type=int, default=0, help="the run's seed (default 0)")
 
 
 def run(args: argparse.Namespace) -> int:
     try:
-        out = measure(
-            args.n, args.robot_base, args.cache, args.search_step, args.tool, args.replan,
-            args.reach_poses, args.pose_cone, args.pose_spin,
-        )  # fmt: skip
+        if args.station:
+            from weldplan.station import load_station
+
+            st = load_station(args.station)
+            name = Path(args.station).stem
+        else:
+            st = car2_station(
+                args.n, args.tool, args.robot_base, search_step=args.search_step,
+                cone=args.pose_cone,
+            )  # fmt: skip
+            name = f"robot-{args.n}-{args.tool}"
+        out = measure(st, args.seed)
     except WeldplanError as exc:
         print(f"error: {exc}")
         return 2
@@ -258,7 +213,7 @@ def run(args: argparse.Namespace) -> int:
     folder = getattr(args, "out", None)
     if folder:
         Path(folder).mkdir(parents=True, exist_ok=True)
-        (Path(folder) / f"robot-{args.n}-{args.tool}.json").write_text(text + "\n")
+        (Path(folder) / f"{name}.json").write_text(text + "\n")
     return 0
 
 

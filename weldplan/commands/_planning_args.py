@@ -12,8 +12,6 @@ import argparse
 import math
 from typing import Any
 
-from weldplan.errors import WeldplanError
-
 
 def add_planning_arguments(p: argparse.ArgumentParser, *, default_output: str | None) -> None:
     """Options of the planning run (outputs, planner, sequencer, seed, jobs, quiet)."""
@@ -30,7 +28,9 @@ def add_planning_arguments(p: argparse.ArgumentParser, *, default_output: str | 
 def _add_output_arguments(p: argparse.ArgumentParser, default_output: str | None) -> None:
     """``-o``, ``--json``, ``--html``, ``--post``, ``--post-file``."""
     if default_output is None:
-        p.add_argument("-o", "--output", required=True, help="route CSV to write")
+        p.add_argument(
+            "-o", "--output", help="route CSV to write (required, but for a station file's own)"
+        )
     else:
         p.add_argument(
             "-o", "--output", default=default_output, help=f"route CSV (default {default_output})"
@@ -77,6 +77,11 @@ def _add_planner_arguments(p: argparse.ArgumentParser) -> None:
         help="with --smooth: largest spacing of the smooth waypoints, mm (default 5; denser "
         "where a chord would cut into the clearance)",
     )
+    _add_sequencer_arguments(p)
+
+
+def _add_sequencer_arguments(p: argparse.ArgumentParser) -> None:
+    """``--sequencer`` and ``--aco``."""
     p.add_argument(
         "--sequencer",
         default="auto",
@@ -97,9 +102,13 @@ def _add_run_arguments(p: argparse.ArgumentParser) -> None:
     """Seed, workers (processes, Dask), candidate pairs and memory for large stations,
     unreachable joints, quiet."""
     p.add_argument(
-        "--seed", type=seed_type, default=0, help="random seed, an integer >= 0 (default 0)"
+        "--seed",
+        type=seed_type,
+        help="random seed, an integer >= 0 (default 0, or the station file's seed)",
     )
-    p.add_argument("--jobs", type=int, default=1, help="processes planning local paths (default 1)")
+    p.add_argument(
+        "--jobs", type=int, help="processes planning local paths (default 1, or the station's)"
+    )
     p.add_argument(
         "--dask",
         metavar="ADDR",
@@ -238,24 +247,9 @@ def _post_names() -> list[str]:
 
 
 def config_from_args(args: argparse.Namespace) -> Any:
-    from weldplan.weld.pipeline import PlanConfig
+    """The :class:`~weldplan.weld.pipeline.PlanConfig` of the options."""
+    from weldplan.commands._station_args import route_settings
 
-    if args.aco < 1:
-        raise WeldplanError(f"--aco must be >= 1, got {args.aco}")
-    if args.jobs < 1:
-        raise WeldplanError(f"--jobs must be >= 1, got {args.jobs}")
-    return PlanConfig(
-        clearance=getattr(args, "clearance", 5.0),
-        pitch=getattr(args, "pitch", 5.0),
-        margin=getattr(args, "margin", 150.0),
-        planner=args.planner,
-        sequencer=args.sequencer,
-        aco={"n_iterations": args.aco, "n_ants": args.aco},
-        refine=not getattr(args, "no_refine", False),
-        smooth=bool(getattr(args, "smooth", False)),
-        smooth_spacing=getattr(args, "smooth_spacing", 5.0),
-        candidates=getattr(args, "candidates", None),
-        candidate_radius=getattr(args, "candidate_radius", None),
-        skip_unreachable=bool(getattr(args, "skip_unreachable", False)),
-        memory_limit=getattr(args, "memory_limit", None),
+    return route_settings(args).config(
+        getattr(args, "clearance", 5.0), getattr(args, "pitch", 5.0), getattr(args, "margin", 150.0)
     )

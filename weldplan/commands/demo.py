@@ -32,28 +32,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from weldplan.weld.pipeline import PlanConfig
-
-    PlanConfig(clearance=args.clearance, pitch=args.pitch, margin=args.margin)  # validates
-
-    def make_cell():
-        from weldplan.weld.cell import demo_cell
-
-        return demo_cell(pitch=args.pitch, clearance=args.clearance, margin=args.margin)
+    from weldplan.commands._station_args import station_from_args
+    from weldplan.station.model import PartSpec
 
     return run_planning(
         args,
-        make_cell,
+        station_from_args(args, PartSpec()),  # the embedded demo part and joints
         title="weldplan demo (Wang et al. 2017, 15 joints)",
         note="the paper: lower bound 595.10 mm, its collision-free route 599.72 mm (+0.78 %), "
         "measured between joints without approach segments",
         show_cell=True,
-        joint_points=_demo_points,
     )
-
-
-def _demo_points():
-    """The demo joints' positions (mm), for the size check before the cell is built."""
-    from weldplan.weld import demo_part
-
-    return demo_part.TABLE1_XYZ

@@ -1,8 +1,14 @@
-"""``weldplan plan MESH JOINTS -o route.csv``: the ordered, verified, collision-free route."""
+"""``weldplan plan MESH JOINTS -o route.csv`` or ``weldplan plan station.toml``: the ordered,
+verified, collision-free route (and, with a tool and a robot, their poses, paths and program).
+
+The quick form's options map onto a :class:`~weldplan.station.model.Station`
+(:mod:`weldplan.commands._station_args`); a station file is read by
+:func:`weldplan.station.load_station` (docs/station.md). Both run :func:`weldplan.plan`."""
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 
 from weldplan.commands._planning import add_planning_arguments, run_planning
 from weldplan.commands._planning_args import add_part_pose_arguments, part_pose_from_args
@@ -23,8 +29,10 @@ def add_cell_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("mesh", help="part mesh (STL, OBJ, PLY, OFF, GLB/GLTF)")
-    p.add_argument("joints", help="weld joints CSV (id, x, y, z[, dx, dy, dz])")
+    p.add_argument(
+        "mesh", help="part mesh (STL, OBJ, PLY, OFF, GLB/GLTF), or a station file (.toml)"
+    )
+    p.add_argument("joints", nargs="?", help="weld joints CSV (id, x, y, z[, dx, dy, dz])")
     add_cell_arguments(p)
     p.add_argument("--clearance", type=positive_mm, default=5.0, help="torch-tip radius, mm (5)")
     p.add_argument(
@@ -49,58 +57,35 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     add_part_pose_arguments(p)
     add_planning_arguments(p, default_output=None)
+    from weldplan.commands._station_args import record_defaults
+
+    record_defaults(p)
+    p.set_defaults(usage_error=p.error)  # -o is required in the quick form only
 
 
 def run(args: argparse.Namespace) -> int:
-    from weldplan.weld.pipeline import PlanConfig
+    from weldplan.commands import _station_args
+    from weldplan.errors import WeldplanError
+    from weldplan.station.model import PartSpec
 
-    # validates clearance, pitch and margin before the (slow) cell is built
-    PlanConfig(clearance=args.clearance, pitch=args.pitch, margin=args.margin)
-    if not 0.0 < args.approach_cone <= 90.0:
-        from weldplan.errors import WeldplanError
-
-        raise WeldplanError(
-            f"--approach-cone must lie in (0, 90] degrees, got {args.approach_cone}"
+    if args.joints is None:
+        if not args.mesh.lower().endswith(".toml"):
+            raise WeldplanError("give MESH JOINTS, or a station file (.toml)")
+        station = _station_args.station_from_file(args, args.mesh)
+        title = f"weldplan plan {args.mesh}"
+    else:
+        if args.output is None:
+            args.usage_error("the following arguments are required: -o/--output")
+        if not 0.0 < args.approach_cone <= 90.0:
+            raise WeldplanError(
+                f"--approach-cone must lie in (0, 90] degrees, got {args.approach_cone}"
+            )
+        part = PartSpec(args.mesh, args.joints, args.units, args.scale, args.length)
+        pose = part_pose_from_args(args)  # its floor: --floor-z, default 0 in the cell
+        if pose is not None:  # a robot stands on the cell's floor and is checked against it
+            args.floor_z = pose.floor_z if args.robot else None
+        station = dataclasses.replace(
+            _station_args.station_from_args(args, part), part_pose=pose
         )
-    pose = part_pose_from_args(args)  # its floor: --floor-z, default 0 in the cell
-    if pose is not None:  # a robot stands on the cell's floor and is checked against it
-        args.floor_z = pose.floor_z if args.robot else None
-
-    def make_cell():
-        from weldplan.weld.cell import load_cell
-
-        return load_cell(
-            args.mesh,
-            args.joints,
-            units=args.units,
-            scale=args.scale,
-            length=args.length,
-            pitch=args.pitch,
-            clearance=args.clearance,
-            margin=args.margin,
-            approach_cone=args.approach_cone,
-            max_joint_distance=args.max_joint_distance,
-            part_pose=pose,
-        )
-
-    def joint_points():
-        import logging
-
-        from weldplan.io.joints import read_joints
-
-        # read again by load_cell: its warnings (ignored columns, ...) are said there, once
-        logger = logging.getLogger("weldplan.io.joints")
-        level = logger.level
-        logger.setLevel(logging.ERROR)
-        try:
-            xyz = read_joints(args.joints, units=args.units).xyz
-            return xyz if pose is None else pose.to_cell(xyz)  # the grid's box, less the lift
-        finally:
-            logger.setLevel(level)
-
-    return run_planning(
-        args,
-        make_cell,
-        title=f"weldplan plan {args.mesh} {args.joints}",
-        joint_points=joint_points,
-    )
+        title = f"weldplan plan {args.mesh} {args.joints}"
+    return run_planning(args, station, title=title)

@@ -76,25 +76,14 @@ def run(args: argparse.Namespace) -> int:
         raise WeldplanError(f"unexpected arguments: {' '.join(args.more)}")
     from weldplan.optim.registry import ALGORITHMS, available
     from weldplan.planar.scenarios import load_scenario
-    from weldplan.planar.solve import exact_optimum, solve
+    from weldplan.planar.solve import solve
 
     if args.algorithm.lower() not in ALGORITHMS:
         raise WeldplanError(
             f"unknown algorithm '{args.algorithm}' (field --algorithm); choose one of: "
             + (", ".join(available()) or "(none registered)")
         )
-    optimizer_params = None
-    if args.init is not None:
-        from weldplan.optim.registry import get_optimizer
-
-        optimizer_params = {"init": args.init}
-        try:
-            get_optimizer(args.algorithm, **optimizer_params)
-        except (TypeError, ValueError):
-            raise WeldplanError(
-                f"--init {args.init}: algorithm '{args.algorithm}' does not take this initial "
-                "population (field --init; sma and lrsma take 'problem')"
-            ) from None
+    optimizer_params = _optimizer_params(args)
     scenario = load_scenario(args.scenario)
     r = solve(
         scenario,
@@ -111,19 +100,42 @@ def run(args: argparse.Namespace) -> int:
     else:
         sys.stdout.write(summary(r))
     if args.plot:
-        from weldplan.viz.planar import plot_paths
-
-        # the default pipeline's path is any-angle: its optimum is the any-angle one
-        ex = exact_optimum(scenario, r.encoding if r.pipeline == "as-printed" else "segments")
-        what = r.algorithm if r.pipeline == "as-printed" else f"{r.algorithm}+repair+polish"
-        plot_paths(
-            scenario,
-            {f"{what} ({r.length:.3f})": r.points},
-            args.plot,
-            exact=ex.points_array,
-            title=f"{scenario.name}: {what}, optimum {ex.length:.3f}",
-        )
+        _plot(args.plot, scenario, r)
     return 0
+
+
+def _optimizer_params(args: argparse.Namespace) -> dict | None:
+    """``{"init": ...}`` when ``--init`` is given, checked against the algorithm."""
+    if args.init is None:
+        return None
+    from weldplan.optim.registry import get_optimizer
+
+    params = {"init": args.init}
+    try:
+        get_optimizer(args.algorithm, **params)
+    except (TypeError, ValueError):
+        raise WeldplanError(
+            f"--init {args.init}: algorithm '{args.algorithm}' does not take this initial "
+            "population (field --init; sma and lrsma take 'problem')"
+        ) from None
+    return params
+
+
+def _plot(path: str, scenario: object, r: PlanarRun) -> None:
+    """The run's path beside the exact optimum, as a figure at ``path``."""
+    from weldplan.planar.solve import exact_optimum
+    from weldplan.viz.planar import plot_paths
+
+    # the default pipeline's path is any-angle: its optimum is the any-angle one
+    ex = exact_optimum(scenario, r.encoding if r.pipeline == "as-printed" else "segments")
+    what = r.algorithm if r.pipeline == "as-printed" else f"{r.algorithm}+repair+polish"
+    plot_paths(
+        scenario,
+        {f"{what} ({r.length:.3f})": r.points},
+        path,
+        exact=ex.points_array,
+        title=f"{scenario.name}: {what}, optimum {ex.length:.3f}",
+    )
 
 
 def summary(r: PlanarRun) -> str:

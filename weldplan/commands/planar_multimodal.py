@@ -60,47 +60,54 @@ def run(args: argparse.Namespace) -> int:
         repair=not args.no_repair,
         rng=args.seed,
     )
-    if args.json:
-        sys.stdout.write(r.to_json() + "\n")
-    else:
-        out = [
-            f"scenario   {r.scenario}: {r.k} paths from one ParaPA run "
-            f"({r.n_swarms} swarms x {r.pop_per_swarm}, {r.iterations} iterations, "
-            f"{r.n_eval} evaluations, seed {r.seed}, {r.seconds:.2f} s)",
-            f"optimum    {r.optimum:.4f} (exact, visibility graph)",
-        ]
-        for i in range(len(r.paths)):
-            out.append(
-                f"path {i + 1}     length {r.lengths[i]:.4f}  gap {100 * r.gaps[i]:+.2f} %  "
-                f"{'collision-free' if r.success[i] else 'COLLIDES'}  (swarm {r.swarm[i]})"
-            )
-        for i in range(len(r.paths)):
-            for j in range(i + 1, len(r.paths)):
-                out.append(
-                    f"paths {i + 1}-{j + 1}  "
-                    f"{'distinct' if r.distinct[i][j] else 'NOT distinct'} (homology class), "
-                    f"{r.crossings[i][j]} segment crossings, Hausdorff {r.hausdorff[i][j]:.3f}"
-                )
-        out.append(
-            f"repairs    {r.repairs} abandoned hosts and {r.final_repairs} elites repaired by "
-            "reverse planning (Algorithm 2)"
-        )
-        sys.stdout.write("\n".join(out) + "\n")
+    sys.stdout.write(r.to_json() + "\n" if args.json else _summary(r))
     if args.plot:
-        from weldplan.planar.solve import exact_optimum
-        from weldplan.viz.planar import plot_paths
-
-        ex = exact_optimum(sc, "segments")
-        plot_paths(
-            sc,
-            {
-                f"path {i + 1} (swarm {r.swarm[i]}) {r.lengths[i]:.3f}"
-                + ("" if r.success[i] else " collides"): r.path_array(i)
-                for i in range(len(r.paths))
-            },
-            args.plot,
-            exact=ex.points_array,
-            title=f"{sc.name}: {r.k} multimodal ParaPA paths, optimum {ex.length:.3f}",
-        )
+        _plot(args.plot, sc, r)
     ok = r.n_success == r.k and r.all_distinct
     return 0 if ok else 1
+
+
+def _summary(r: object) -> str:
+    """The run's text summary: each path's length, gap and verdict, each pair's distinctness."""
+    out = [
+        f"scenario   {r.scenario}: {r.k} paths from one ParaPA run "
+        f"({r.n_swarms} swarms x {r.pop_per_swarm}, {r.iterations} iterations, "
+        f"{r.n_eval} evaluations, seed {r.seed}, {r.seconds:.2f} s)",
+        f"optimum    {r.optimum:.4f} (exact, visibility graph)",
+    ]
+    for i in range(len(r.paths)):
+        out.append(
+            f"path {i + 1}     length {r.lengths[i]:.4f}  gap {100 * r.gaps[i]:+.2f} %  "
+            f"{'collision-free' if r.success[i] else 'COLLIDES'}  (swarm {r.swarm[i]})"
+        )
+    for i in range(len(r.paths)):
+        for j in range(i + 1, len(r.paths)):
+            out.append(
+                f"paths {i + 1}-{j + 1}  "
+                f"{'distinct' if r.distinct[i][j] else 'NOT distinct'} (homology class), "
+                f"{r.crossings[i][j]} segment crossings, Hausdorff {r.hausdorff[i][j]:.3f}"
+            )
+    out.append(
+        f"repairs    {r.repairs} abandoned hosts and {r.final_repairs} elites repaired by "
+        "reverse planning (Algorithm 2)"
+    )
+    return "\n".join(out) + "\n"
+
+
+def _plot(path: str, sc: object, r: object) -> None:
+    """The k paths beside the exact optimum, as a figure at ``path``."""
+    from weldplan.planar.solve import exact_optimum
+    from weldplan.viz.planar import plot_paths
+
+    ex = exact_optimum(sc, "segments")
+    plot_paths(
+        sc,
+        {
+            f"path {i + 1} (swarm {r.swarm[i]}) {r.lengths[i]:.3f}"
+            + ("" if r.success[i] else " collides"): r.path_array(i)
+            for i in range(len(r.paths))
+        },
+        path,
+        exact=ex.points_array,
+        title=f"{sc.name}: {r.k} multimodal ParaPA paths, optimum {ex.length:.3f}",
+    )

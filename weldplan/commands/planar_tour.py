@@ -49,25 +49,27 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument("--no-smooth", action="store_true", help="tour: keep the mesh polyline")
 
 
-def _summary(task, results, exact_len: float, exact_method: str, anyangle) -> str:
-    r0 = results[0]
-    head = f"scenario   {task.name}: {len(task.goals)} targets\n"
+def _pipeline_line(r0) -> str:
+    """Which pipeline the run used (as printed, default, or custom), one line."""
     if r0.pipeline == "as-printed":
-        head += (
+        return (
             "pipeline   as printed (paper 002): mesh-edge Dijkstra costs -> optimiser's order "
             "-> B-spline over the mesh-edge legs\n"
         )
-    elif r0.pipeline == "default":
-        head += (
+    if r0.pipeline == "default":
+        return (
             "pipeline   default: any-angle costs (Polyanya) -> optimiser -> polish -> "
             "Polyanya legs -> B-spline (--as-printed: paper 002 alone)\n"
         )
-    else:
-        taut = r0.metric == "any-angle" or any(s[0] == "funnel" for s in r0.stages)
-        head += (
-            f"pipeline   custom: {r0.metric} costs, polish {'on' if r0.polished else 'off'}, "
-            f"{'taut' if taut else 'mesh-edge'} legs\n"
-        )
+    taut = r0.metric == "any-angle" or any(s[0] == "funnel" for s in r0.stages)
+    return (
+        f"pipeline   custom: {r0.metric} costs, polish {'on' if r0.polished else 'off'}, "
+        f"{'taut' if taut else 'mesh-edge'} legs\n"
+    )
+
+
+def _summary(task, results, exact_len: float, exact_method: str, anyangle) -> str:
+    head = f"scenario   {task.name}: {len(task.goals)} targets\n" + _pipeline_line(results[0])
     head += (
         f"exact optimum {exact_len:.3f} (Held-Karp over the any-angle distances, {exact_method}; "
         f"{anyangle.n_queries} Polyanya legs in {anyangle.build_seconds:.2f} s)\n"
@@ -94,10 +96,47 @@ def _summary(task, results, exact_len: float, exact_method: str, anyangle) -> st
 
 
 def run(args: argparse.Namespace) -> int:
-    from weldplan.optim.registry import ALGORITHMS
-    from weldplan.planar.multigoal import PAPER_ITER, PAPER_POP, build_tour_graph, load_tour
+    from weldplan.planar.multigoal import build_tour_graph, load_tour
     from weldplan.planar.tour_anyangle import build_anyangle_graph
     from weldplan.planar.tour_planner import ground_truth, plan_tour
+
+    algos = _algorithms(args)
+    as_printed = bool(getattr(args, "as_printed", False))
+    task = load_tour(args.more[0])
+    anyangle = build_anyangle_graph(task)
+    ex_order, ex_len, ex_method = ground_truth(anyangle)
+    metric = args.metric
+    uses_mesh = as_printed or metric == "mesh" or (metric is None and args.no_funnel)
+    graph = build_tour_graph(task, args.max_edge) if uses_mesh else None
+    kw = {"graph": graph, "anyangle": anyangle, "metric": metric, "as_printed": as_printed}
+    results = [plan_tour(task, a, exact=(ex_order, ex_len), **kw, **_tour_kw(args)) for a in algos]
+    if args.json:
+        sys.stdout.write(json.dumps([json.loads(r.to_json()) for r in results]) + "\n")
+    else:
+        sys.stdout.write(_summary(task, results, ex_len, ex_method, anyangle))
+    if args.plot:
+        from weldplan.viz.tour import plot_tour
+
+        title = f"{task.name}: exact optimal tour {ex_len:.1f}"
+        paths = {f"{r.algorithm} ({r.smooth_length:.1f})": r.points_array for r in results}
+        plot_tour(task, paths, args.plot, mesh=None if graph is None else graph.mesh, title=title)
+    return 0
+
+
+def _tour_kw(args: argparse.Namespace) -> dict:
+    """The options of :func:`weldplan.planar.tour_planner.plan_tour` a run sets."""
+    from weldplan.planar.multigoal import PAPER_ITER, PAPER_POP
+
+    return dict(
+        pop_size=args.pop or PAPER_POP, max_iter=args.iters or PAPER_ITER,
+        two_opt=args.two_opt, polish=not args.no_polish, taut=not args.no_funnel,
+        smooth=not args.no_smooth, rng=args.seed,
+    )  # fmt: skip
+
+
+def _algorithms(args: argparse.Namespace) -> list[str]:
+    """The ``--order-by`` algorithms, checked with the other options."""
+    from weldplan.optim.registry import ALGORITHMS
 
     if len(args.more) != 1:
         raise WeldplanError("usage: weldplan planar tour SCENARIO [options]")
@@ -107,45 +146,4 @@ def run(args: argparse.Namespace) -> int:
             raise WeldplanError(f"unknown algorithm '{a}' (field --order-by)")
     if args.max_edge is not None and args.max_edge <= 0:
         raise WeldplanError("--max-edge must be positive")
-    as_printed = bool(getattr(args, "as_printed", False))
-    task = load_tour(args.more[0])
-    anyangle = build_anyangle_graph(task)
-    ex_order, ex_len, ex_method = ground_truth(anyangle)
-    metric = args.metric
-    uses_mesh = as_printed or metric == "mesh" or (metric is None and args.no_funnel)
-    graph = build_tour_graph(task, args.max_edge) if uses_mesh else None
-    results = []
-    for a in algos:
-        results.append(
-            plan_tour(
-                task,
-                a,
-                graph=graph,
-                anyangle=anyangle,
-                metric=metric,
-                as_printed=as_printed,
-                pop_size=args.pop or PAPER_POP,
-                max_iter=args.iters or PAPER_ITER,
-                two_opt=args.two_opt,
-                polish=not args.no_polish,
-                taut=not args.no_funnel,
-                smooth=not args.no_smooth,
-                exact=(ex_order, ex_len),
-                rng=args.seed,
-            )
-        )
-    if args.json:
-        sys.stdout.write(json.dumps([json.loads(r.to_json()) for r in results]) + "\n")
-    else:
-        sys.stdout.write(_summary(task, results, ex_len, ex_method, anyangle))
-    if args.plot:
-        from weldplan.viz.tour import plot_tour
-
-        plot_tour(
-            task,
-            {f"{r.algorithm} ({r.smooth_length:.1f})": r.points_array for r in results},
-            args.plot,
-            mesh=graph.mesh if graph is not None else None,
-            title=f"{task.name}: exact optimal tour {ex_len:.1f}",
-        )
-    return 0
+    return algos

@@ -1,0 +1,150 @@
+"""The files of a plan, rendered in memory and written as one set.
+
+:func:`output_paths` names every file an :class:`~weldplan.station.model.OutputSpec` asks for
+and checks them before any work (:func:`weldplan.io.outputset.check_outputs`);
+:func:`render_outputs` renders each in memory; :func:`write_plan` writes them as one set
+(:func:`weldplan.io.outputset.write_outputs`: temporaries, then renames, rolled back on
+failure), so a failed run leaves existing files exactly as they were.
+
+With a robot the program is rendered by its post (``rapid``: ABB ``.mod``; ``krl``: KUKA ``.src``
+and ``.dat``) and parsed back (:func:`check_program`): every target is re-solved by forward
+kinematics of the URDF chain (<= 0.01 mm, 0.01 deg), so what is written is what was planned.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from weldplan.errors import PlanningError, WeldplanError
+from weldplan.station.model import OutputSpec
+
+#: the round trip of an emitted program must close within these (mm, deg)
+CHECK_MM = 0.01
+CHECK_DEG = 0.01
+
+
+def output_paths(out: OutputSpec, *, robot: bool, tool: bool) -> dict[str, Path]:
+    """Every file the run will write, by kind, checked before any work is done."""
+    from weldplan.io.export import POSTS
+
+    if out.csv is None:
+        raise WeldplanError("no route CSV to write: give -o (or [output] csv in the station)")
+    paths = {"csv": out.csv}
+    for kind in ("json", "html"):
+        if getattr(out, kind) is not None:
+            paths[kind] = getattr(out, kind)
+    if out.post:
+        paths["post"] = out.post_file or out.csv.with_suffix(POSTS[out.post].suffix)
+    elif out.post_file:
+        raise WeldplanError("--post-file needs --post rapid|krl")
+    if robot and out.post == "krl":  # KRL's data list beside the .src
+        paths["post_dat"] = paths["post"].with_suffix(".dat")
+    if out.tool_csv is not None:
+        if not tool:
+            raise WeldplanError("--tool-csv needs --tool")
+        paths["tool_csv"] = out.tool_csv
+    for kind in ("trajectory", "robot_html"):
+        if getattr(out, kind) is not None:
+            paths[kind] = getattr(out, kind)
+    seen: dict[Path, str] = {}
+    for kind, path in paths.items():
+        key = path.resolve()
+        if key in seen:
+            raise WeldplanError(f"{path}: given for both {seen[key]} and {kind}")
+        seen[key] = kind
+    from weldplan.io.outputset import check_outputs
+
+    check_outputs(paths)
+    return paths
+
+
+def render_outputs(plan: Any, kinds: set[str], post: str | None) -> dict[str, str]:
+    """The text of each output kind of ``plan`` (``post``: ``"rapid"`` or ``"krl"``)."""
+    from weldplan.io.export import render_post, to_csv_text
+    from weldplan.viz.viewer import static_html
+
+    route = plan.route
+    texts = {"csv": to_csv_text(route)}
+    if "json" in kinds:
+        texts["json"] = route.to_json() + "\n"
+    if "html" in kinds:
+        texts["html"] = static_html(route, plan.cell.part, tool=plan.tool and plan.tool.tool)
+    if "tool_csv" in kinds:
+        from weldplan.tool.path_csv import route_tool_csv
+
+        texts["tool_csv"] = route_tool_csv(route)
+    if plan.robot is not None:
+        texts.update(_robot_texts(plan, kinds, post))
+    elif "post" in kinds:
+        texts["post"] = render_post(route, post, plan.cell)
+    return texts
+
+
+def write_plan(plan: Any, paths: dict[str, Path]) -> None:
+    """Render every output of ``paths`` (kind -> path, :func:`output_paths`), then write them as
+    one set."""
+    from weldplan.io.outputset import write_outputs
+
+    texts = render_outputs(plan, set(paths), plan.station.outputs.post)
+    write_outputs({path: texts[kind] for kind, path in paths.items()})
+
+
+def _robot_texts(plan: Any, kinds: set[str], post: str | None) -> dict[str, str]:
+    """The robot's program (checked by :func:`check_program`), trajectory and 3D page."""
+    from weldplan.io.trajectory import trajectory_csv_text
+
+    build, joint = plan.program, plan.robot
+    texts: dict[str, str] = {}
+    if "post" in kinds:
+        if post == "rapid":
+            from weldplan.io.posts.rapid import render_rapid
+
+            texts["post"] = render_rapid(build.program)
+        else:
+            from weldplan.io.posts.krl import render_krl
+
+            texts["post"], texts["post_dat"] = render_krl(build.program)
+        check_program(str(post), texts, build.program, joint.robot)
+    if "trajectory" in kinds:
+        texts["trajectory"] = trajectory_csv_text(build.timing, build.row)
+    if "robot_html" in kinds:
+        from weldplan.viz.robot_scene import robot_html
+
+        texts["robot_html"] = robot_html(
+            joint.robot, build.timing, joint.robot_route.flange_tcp, part=plan.cell.part,
+            tool=plan.tool.tool, route_points=joint.follow.waypoints(),
+        )  # fmt: skip
+    return texts
+
+
+def check_program(post: str, texts: dict[str, str], program: Any, robot: Any) -> float:
+    """Parse the emitted program and re-solve every target by FK of the URDF chain.
+
+    Returns the largest position error (mm); raises :class:`PlanningError` past
+    :data:`CHECK_MM` / :data:`CHECK_DEG`.
+    """
+    from weldplan.io.posts.parse import parse_krl, parse_rapid
+
+    if post == "rapid":
+        mod = parse_rapid(texts["post"])
+        frame, tool = mod.wobj, mod.tool
+        poses = [mod.targets[name][0] for _, name, _, _ in mod.moves]
+    else:
+        prog = parse_krl(texts["post"], texts["post_dat"])
+        frame, tool = prog.base, prog.tool
+        poses = [prog.points[name][0] for _, name, _, _ in prog.moves]
+    Q = np.array([t.q for t in program.targets])
+    T_fk = np.linalg.solve(robot.base, robot.fk(Q))  # flange in the robot base frame
+    T_prog = frame @ np.array(poses) @ np.linalg.inv(tool)
+    mm = float(np.linalg.norm(T_fk[:, :3, 3] - T_prog[:, :3, 3], axis=1).max())
+    c = (np.einsum("nij,nij->n", T_fk[:, :3, :3], T_prog[:, :3, :3]) - 1.0) / 2.0
+    deg = float(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))).max())
+    if mm > CHECK_MM or deg > CHECK_DEG:
+        raise PlanningError(
+            f"the emitted {post} program misses FK of its joint values by {mm:.3g} mm, "
+            f"{deg:.3g} deg; nothing written"
+        )
+    return mm
