@@ -339,3 +339,47 @@ def test_the_demo_station_file_is_the_demo_with_the_gun_and_the_robot():
     assert filed.part == PartSpec(demo_part.DEMO_PART.resolve(), demo_part.DEMO_JOINTS.resolve())
     same = {"part": quick.part, "outputs": quick.outputs, "source": None}
     assert dataclasses.replace(filed, **same) == quick
+
+
+# ---------------------------------------------------------------- the part in the cell
+def test_the_part_pose_in_a_station_file_is_the_one_the_options_give(box):
+    """``[part] up``/``pose``/``fixture_z`` build the same PartPose as ``--up``/``--part-pose``
+    and ``--fixture-z``; the matrix turns the part's y to the cell's z."""
+    import argparse
+
+    import weldplan
+    from weldplan.commands import plan as plan_cmd
+    from weldplan.commands._planning_args import part_pose_from_args
+
+    tmp, mesh, joints, head = box
+    p = argparse.ArgumentParser()
+    plan_cmd.add_arguments(p)
+    for keys, opts in (
+        ('up = "y"\nfixture_z = 350\n', ["--up", "y", "--fixture-z", "350"]),
+        ("pose = [100, -50, 20, 0, 0, 90]\n", ["--part-pose", "100,-50,20,0,0,90"]),
+    ):
+        filed = weldplan.load_station(_write(tmp, head + keys)).part_pose
+        given = part_pose_from_args(p.parse_args([str(mesh), str(joints), "-o", "r.csv", *opts]))
+        assert filed.same_as(given) and filed.fixture_z == given.fixture_z
+    up = weldplan.load_station(_write(tmp, head + 'up = "y"\n')).part_pose
+    np.testing.assert_allclose(up.rotation @ [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    "keys, key, needle",
+    [
+        ('up = "q"\n', "part.up", "unknown up axis"),
+        ("pose = [0, 0, 0, nan, 0, 0]\n", "part.pose", "finite"),
+        ('up = "y"\npose = [0, 0, 0, 0, 0, 0]\n', "part.pose", "not both"),
+        ("fixture_z = 10\n", "part.fixture_z", "needs up or pose"),
+    ],
+)
+def test_a_bad_part_pose_in_a_station_file_names_its_line_and_key(box, keys, key, needle):
+    import weldplan
+
+    tmp, _, _, head = box
+    f = _write(tmp, head + keys)
+    with pytest.raises(InputError) as err:
+        weldplan.load_station(f)
+    assert err.value.field == key and needle in str(err.value), str(err.value)
+    assert err.value.line is not None and err.value.path == str(f)

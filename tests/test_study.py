@@ -241,11 +241,9 @@ def test_a_base_with_nothing_to_search_on_says_so(cell):
 
 def test_a_mesh_tool_is_mounted_as_the_robot_stage_mounts_it(tmp_path):
     """load_study_tool's mounting transform of a mesh tool (TCP x,y,z in the tool's units,
-    fixed-axis x-y-z degrees) is the robot stage's (commands/_robot_cost.flange_tcp)."""
-    import argparse
-
-    from weldplan.commands._robot_cost import flange_tcp
-
+    fixed-axis x-y-z degrees) is the robot stage's (station/mount.flange_tcp)."""
+    from weldplan.station.model import ToolSpec
+    from weldplan.station.mount import flange_tcp
     from weldplan.study import load_study_tool
     from weldplan.tool import arc_torch
 
@@ -253,8 +251,8 @@ def test_a_mesh_tool_is_mounted_as_the_robot_stage_mounts_it(tmp_path):
     tcp = "1,-2,3,10,-20,30"
     st = load_study_tool(str(tmp_path / "torch.stl"), tcp=tcp, units="mm")
     robot = _robot(BASE)
-    args = argparse.Namespace(tool=str(tmp_path / "torch.stl"), tcp=tcp, tool_units="mm")
-    assert np.allclose(robot.tool_transform(st.mount_tcp), flange_tcp(args, robot), atol=1e-9)
+    spec = ToolSpec(file=tmp_path / "torch.stl", tcp=tcp, units="mm", mass=3.0)
+    assert np.allclose(robot.tool_transform(st.mount_tcp), flange_tcp(spec, robot), atol=1e-9)
     assert st.name == "torch" and np.allclose(st.mount_tcp[:3, 3], [1.0, -2.0, 3.0])
 
 
