@@ -64,11 +64,12 @@ def _local_workers(args: argparse.Namespace) -> int:
 
 def _outputs(args: argparse.Namespace) -> dict[str, Path]:
     """Every file the run will write, checked before any work is done."""
-    from weldplan.io.export import POSTS
+    from weldplan.io.export import POSTS, timings_path
 
     out = {"csv": Path(args.output)}
     if args.json:
         out["json"] = Path(args.json)
+        out["timings"] = timings_path(args.json)  # the run's measured times, apart
     if args.html:
         out["html"] = Path(args.html)
     if args.post:
@@ -338,13 +339,13 @@ def _write(
 
     ``staged``: texts a stage already rendered (the robot stage's programs and trajectory); they
     replace the point-tip post."""
-    from weldplan.io.export import render_post, to_csv_text
+    from weldplan.io.export import render_post, route_json_texts, to_csv_text
     from weldplan.io.outputset import write_outputs
     from weldplan.viz.viewer import static_html
 
     texts = {"csv": to_csv_text(route)}
     if "json" in outputs:
-        texts["json"] = route.to_json() + "\n"
+        texts["json"], texts["timings"] = route_json_texts(route)
     if "html" in outputs:
         texts["html"] = static_html(route, cell.part, tool=tool)
     if "post" in outputs and "post" not in (staged or {}):
