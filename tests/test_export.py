@@ -20,14 +20,13 @@ from weldplan.io.export import (
     read_route,
     register_post,
     render_post,
-    split_timings,
-    timings_path,
     tool_frame,
     write_csv,
     write_json,
     write_post,
     write_text_atomic,
 )
+from weldplan.io.timings import split_timings, timings_path
 
 
 def _rows(path):

@@ -64,7 +64,8 @@ def _local_workers(args: argparse.Namespace) -> int:
 
 def _outputs(args: argparse.Namespace) -> dict[str, Path]:
     """Every file the run will write, checked before any work is done."""
-    from weldplan.io.export import POSTS, timings_path
+    from weldplan.io.export import POSTS
+    from weldplan.io.timings import timings_path
 
     out = {"csv": Path(args.output)}
     if args.json:
@@ -339,8 +340,9 @@ def _write(
 
     ``staged``: texts a stage already rendered (the robot stage's programs and trajectory); they
     replace the point-tip post."""
-    from weldplan.io.export import render_post, route_json_texts, to_csv_text
+    from weldplan.io.export import render_post, to_csv_text
     from weldplan.io.outputset import write_outputs
+    from weldplan.io.timings import route_json_texts
     from weldplan.viz.viewer import static_html
 
     texts = {"csv": to_csv_text(route)}

@@ -37,11 +37,9 @@ flies by with the largest zone whose radius fits its free margin (exact distance
 minus the clearance, and at most half of each adjacent segment), else it is an exact stop. So
 they need the part: ``render_post(route, "rapid", part=cell_or_mesh)``; without it they refuse.
 
-The route JSON is a deliverable: the same inputs and seed give the same bytes on any machine
-(../shared/DESIGN.md). The figures a run measures (wall and CPU seconds of each stage, search
-and solver times) differ from run to run, so :func:`route_json_texts` moves them out of it into a
-separate timings JSON (``route.timings.json`` beside ``route.json``), the same nesting with only
-those figures; :func:`split_timings` says which keys they are.
+The route JSON is a deliverable: the same inputs and seed give the same bytes on any machine.
+:func:`write_json` writes it without the run's measured seconds, which
+:mod:`weldplan.io.timings` moves to a file of their own.
 """
 
 from __future__ import annotations
@@ -51,7 +49,6 @@ import io
 import json
 import logging
 import os
-import re
 import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -212,61 +209,11 @@ def write_csv(route: Route, path: str | PathLike[str]) -> Path:
 
 
 def write_json(route: Route, path: str | PathLike[str]) -> Path:
-    """Write the route without its measured times, atomically (:func:`route_json_texts`; the
-    times are left out: :func:`route_json_texts` gives them)."""
+    """Write the route without its measured times, atomically
+    (:func:`weldplan.io.timings.route_json_texts` gives both texts)."""
+    from weldplan.io.timings import route_json_texts
+
     return write_text_atomic(path, route_json_texts(route)[0])
-
-
-#: keys inside a ``stats`` mapping that hold a measured time (s): ``seconds`` and ``seconds_*``,
-#: ``*_s`` (``total_s``, ``wall_s``...), ``s`` (the robot's OMPL CPU seconds) and ``time_s``
-_TIMING_KEY = re.compile(r"^(seconds(_\w+)?|\w+_s|s)$")
-
-
-def _is_timing(key: str, in_stats: bool) -> bool:
-    return in_stats and bool(_TIMING_KEY.match(key))
-
-
-def split_timings(d: Any, in_stats: bool = False) -> tuple[Any, Any]:
-    """``(deliverable, timings)`` of a route's JSON-ready dict ``d``.
-
-    ``timings`` mirrors the nesting of ``d`` with only the measured times: the keys of every
-    ``stats`` mapping (at any depth) named ``seconds``, ``seconds_*``, ``*_s`` or ``s``, whole
-    subtrees included (``stats.seconds`` is a mapping of stage times). Settings such as the
-    SE(3) re-plan's ``time_s`` lie outside ``stats`` and stay. Lists are searched item by item.
-    ``deliverable`` is ``d`` without them; ``timings`` is ``None`` where nothing was moved.
-    """
-    if isinstance(d, dict):
-        keep: dict[str, Any] = {}
-        moved: dict[str, Any] = {}
-        for k, v in d.items():
-            if _is_timing(str(k), in_stats):
-                moved[k] = v
-                continue
-            kept, t = split_timings(v, in_stats or k == "stats")
-            keep[k] = kept
-            if t is not None:
-                moved[k] = t
-        return keep, (moved or None)
-    if isinstance(d, list):
-        pairs = [split_timings(v, in_stats) for v in d]
-        times = [t for _, t in pairs]
-        return [k for k, _ in pairs], (times if any(t is not None for t in times) else None)
-    return d, None
-
-
-def timings_path(json_path: str | PathLike[str]) -> Path:
-    """Where the timings of ``route.json`` go: ``route.timings.json`` beside it."""
-    p = Path(json_path)
-    return p.with_name(p.stem + ".timings.json")
-
-
-def route_json_texts(route: Route) -> tuple[str, str]:
-    """``(route JSON, timings JSON)``: the route without its measured times (the same bytes
-    for the same inputs and seed), and those times (module docstring). :func:`read_route`
-    reads the first alone."""
-    d, t = split_timings(json.loads(route.to_json()))
-    text = json.dumps(d, indent=1, allow_nan=False) + "\n"
-    return text, json.dumps(t or {}, indent=1, allow_nan=False) + "\n"
 
 
 def read_route(path: str | PathLike[str]) -> Route:

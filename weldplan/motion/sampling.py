@@ -21,16 +21,11 @@ Conventions
   ``max_checks`` (below) the result is the same on any machine; with the clock alone how far they
   improve depends on the machine's speed (the seed fixes the sample sequence, not the result).
   Because the seed generator is process-wide, run parallel plans in processes, not threads.
-- Budgets by work (../shared/DESIGN.md, reproducibility): ``max_checks`` counts the calls the
-  caller's ``is_valid`` and ``motion_valid`` receive and becomes OMPL's termination condition.
-  That condition is a plain ``PlannerTerminationCondition(fn)`` (no evaluation period), which
-  OMPL evaluates in the planner's own thread between its steps (OMPL's "Planner Termination
-  Conditions" page: only the variants with an ``interval`` / ``period`` spawn a thread), and the
-  time limit ORed with it is ``timedPlannerTerminationCondition(duration)``, also without a
-  thread: so with a seed the same run stops after the same check on any machine and at any load.
-  A step in progress finishes first, so a run may make a few checks more than ``max_checks``.
-  ``time_s`` stays as a wall-clock safety net; :attr:`SampledPath.ended` says which limit ended
-  an unsolved run (``"clock"``: the run is not reproducible).
+- Budgets by work: ``max_checks`` counts the calls the caller's ``is_valid`` and
+  ``motion_valid`` receive and becomes OMPL's termination condition, evaluated in the planner's
+  own thread (:mod:`weldplan.motion.budget`): with a seed, the same run stops after the same
+  check on any machine and at any load. ``time_s`` stays as a wall-clock safety net;
+  :attr:`SampledPath.ended` says what ended a run (``"clock"``: the run is not reproducible).
 - "No path found" is a result (``solved=False``), never an exception;
   :class:`SamplingArgumentError` is raised only for bad arguments.
 """
@@ -49,6 +44,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from weldplan.errors import ConfigError, PlanningError
 from weldplan.geometry.pathcore import polyline_length
+from weldplan.motion.budget import Checks
 
 log = logging.getLogger(__name__)
 
@@ -247,30 +243,6 @@ def _ompl_seed(seed: int | np.random.Generator | None) -> int | None:
     return int(seed) % _SEED_MOD + 1
 
 
-class _Checks:
-    """Counts the calls the caller's validity callables receive (the work budget
-    ``max_checks``; ``None``: counted, never spent)."""
-
-    def __init__(self, limit: int | None) -> None:
-        self.limit = None if limit is None else int(limit)
-        self.n = 0
-
-    def spent(self) -> bool:
-        return self.limit is not None and self.n >= self.limit
-
-    def state(self, f: Callable[..., bool]) -> Callable[..., bool]:
-        """``f`` counted (any signature: R^n states or SE(3) position, quaternion)."""
-
-        def counted(*args: Any) -> bool:
-            self.n += 1
-            return bool(f(*args))
-
-        return counted
-
-    def motion(self, f: MotionCheck | None) -> MotionCheck | None:
-        return None if f is None else self.state(f)
-
-
 # --------------------------------------------------------------------------- the shared solve
 
 
@@ -286,15 +258,14 @@ def _solve(
     simplify: bool,
     measure: Callable[[NDArray[np.float64]], float],
     dim: int,
-    stop: Callable[[], bool] | None = None,
+    checks: Checks,
     reach: float | None = None,
-    checks: _Checks | None = None,
 ) -> SampledPath:
     """Run ``planner`` on the prepared SimpleSetup ``ss`` and read the path back; it stops at
-    ``time_s`` seconds or as soon as ``stop()`` is true or ``checks`` is spent (OMPL asks in
-    its own thread between its steps: module notes). ``reach``: the planner's ``range`` (the
-    longest motion it adds in one step, in the space's metric), where the planner has one;
-    ``None``: OMPL's default."""
+    ``time_s`` seconds or as soon as ``checks`` is spent or its caller's ``stop()`` is true
+    (OMPL asks in its own thread between its steps: :mod:`weldplan.motion.budget`).
+    ``reach``: the planner's ``range`` (the longest motion it adds in one step, in the space's
+    metric), where the planner has one; ``None``: OMPL's default."""
     ob, og, ou = _import_ompl()
     si = ss.getSpaceInformation()
     if motion_valid is None:
@@ -312,28 +283,11 @@ def _solve(
     # OMPL logs to stderr by itself; the library never prints, so OMPL stays quiet unless this
     # module's logger is at DEBUG.
     ou.setLogLevel(ou.LOG_DEBUG if log.isEnabledFor(logging.DEBUG) else ou.LOG_NONE)
-    checks = _Checks(None) if checks is None else checks
-    stopped = {"stop": False}
-
-    def done() -> bool:
-        if checks.spent():
-            return True
-        if stop is not None and stop():
-            stopped["stop"] = True
-        return stopped["stop"]
-
     t0 = time.perf_counter()
     try:
         if ompl_seed is not None:
             ou.RNG.setSeed(ompl_seed)
-        if stop is None and checks.limit is None:
-            status = ss.solve(float(time_s))
-        else:
-            ptc = ob.plannerOrTerminationCondition(
-                ob.timedPlannerTerminationCondition(float(time_s)),
-                ob.PlannerTerminationCondition(done),
-            )
-            status = ss.solve(ptc)
+        status = ss.solve(checks.termination(ob, time_s))
         used = checks.n
         solved = bool(ss.haveExactSolutionPath())
         simplified = False
@@ -349,7 +303,7 @@ def _solve(
         ou.setLogLevel(level)
     wall = time.perf_counter() - t0
     length = measure(pts) if solved else float("inf")
-    ended = _ended(solved, checks, used, stopped["stop"], wall >= time_s)
+    ended = checks.ended(solved, used, wall >= time_s)
     line = (
         f"{planner}: {status.asString()}, {len(pts)} vertices, length {length:.6g}"
         + (", simplified" if simplified else "")
@@ -358,18 +312,6 @@ def _solve(
     )
     log.debug("%s, %.3g s", line, wall)
     return SampledPath(pts, length, solved, planner, wall, line, checks.n, ended)
-
-
-def _ended(solved: bool, checks: _Checks, used: int, stopped: bool, late: bool) -> str:
-    """What ended a run (:attr:`SampledPath.ended`); the work budget is named before the clock
-    when both are spent."""
-    if solved:
-        return "solved"
-    if checks.limit is not None and used >= checks.limit:
-        return "checks"
-    if stopped:
-        return "stop"
-    return "clock" if late else "planner"
 
 
 @functools.cache
@@ -469,7 +411,7 @@ def plan_rn(
     _check_box(lo, hi, {"start": s, "goal": g})
     _check_common(planner, time_s, resolution, max_checks)
     ob, og, _ = _import_ompl()
-    checks = _Checks(max_checks)
+    checks = Checks(max_checks, stop)
     is_valid = checks.state(is_valid)
 
     space = ob.RealVectorStateSpace(d)
@@ -502,7 +444,6 @@ def plan_rn(
         simplify=simplify,
         measure=polyline_length,
         dim=d,
-        stop=stop,
         checks=checks,
     )
 
@@ -606,7 +547,7 @@ def plan_se3(
     _check_common(planner, time_s, resolution, max_checks)
     if not (np.isfinite(rot_weight) and rot_weight > 0):
         raise SamplingArgumentError(f"rot_weight must be a positive mm per rad, got {rot_weight}")
-    checks = _Checks(max_checks)
+    checks = Checks(max_checks, stop)
     ss, read = _se3_setup(
         lo, hi, rot_weight, checks.state(is_valid), np.r_[p0, q0], np.r_[p1, q1]
     )
@@ -621,9 +562,8 @@ def plan_se3(
         simplify=simplify,
         measure=lambda pts: se3_length(pts, rot_weight),
         dim=7,
-        stop=stop,
-        reach=reach,
         checks=checks,
+        reach=reach,
     )
 
 
