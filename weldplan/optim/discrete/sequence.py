@@ -23,7 +23,7 @@ Methods
     Measured at LKH-3's level on TSPLIB up to 2,152 cities (docs/bench-sequence.md). It has no
     seed and cannot be given one: its Rust core draws its perturbations from ``fastrand``'s
     process-wide generator, seeded from fresh entropy in every process. Even with
-    ``stop_when_converged`` (no clock), one thread and fixed candidate lists, three runs on a280
+    ``stop_when_converged`` and an infinite budget (no clock) and one thread, three runs on a280
     returned three different (optimal) tours, so its order is not reproducible and no polish
     after it can make it so. An explicit choice only.
 ``"auto"``
