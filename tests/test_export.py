@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import json
 import os
 import re
 
@@ -25,6 +26,7 @@ from weldplan.io.export import (
     write_post,
     write_text_atomic,
 )
+from weldplan.io.timings import split_timings, timings_path
 
 
 def _rows(path):
@@ -53,7 +55,39 @@ def test_csv_without_directions_leaves_tool_empty(tmp_path):
 def test_json_round_trip_through_files(tmp_path):
     r = box_route(directions=True)
     write_json(r, tmp_path / "r.json")
-    assert read_route(tmp_path / "r.json") == r
+    back = read_route(tmp_path / "r.json")
+    assert json.loads(back.to_json()) == split_timings(json.loads(r.to_json()))[0]
+    write_json(back, tmp_path / "again.json")  # nothing left to move: the same bytes
+    assert (tmp_path / "again.json").read_bytes() == (tmp_path / "r.json").read_bytes()
+
+
+def test_measured_times_leave_the_route_json_for_the_timings_file():
+    d = {
+        "settings": {"time_s": 10.0, "seconds": 3},  # settings: not measured, they stay
+        "stats": {
+            "seconds": {"local": 0.4, "total": 0.6},
+            "local_paths": {"1-2": {"seconds": 0.01, "length": 5.0}},
+            "pairs": 7,
+            "ompl": {"runs": 2.0, "s": 1.5, "wall_s": 3.0, "checks": 90.0},
+        },
+        "tool": {"poses": {"stats": {"choose_s": 2.0, "candidates": 8}}, "order": ["a"]},
+        "runs": [{"stats": {"seconds_total": 1.0}}, {"stats": {"n": 1}}],
+    }
+    keep, moved = split_timings(d)
+    assert keep == {
+        "settings": {"time_s": 10.0, "seconds": 3},
+        "stats": {"local_paths": {"1-2": {"length": 5.0}}, "pairs": 7,
+                  "ompl": {"runs": 2.0, "checks": 90.0}},
+        "tool": {"poses": {"stats": {"candidates": 8}}, "order": ["a"]},
+        "runs": [{"stats": {}}, {"stats": {"n": 1}}],
+    }  # fmt: skip
+    assert moved == {
+        "stats": {"seconds": {"local": 0.4, "total": 0.6},
+                  "local_paths": {"1-2": {"seconds": 0.01}}, "ompl": {"s": 1.5, "wall_s": 3.0}},
+        "tool": {"poses": {"stats": {"choose_s": 2.0}}},
+        "runs": [{"stats": {"seconds_total": 1.0}}, None],
+    }  # fmt: skip
+    assert timings_path("out/route.json").as_posix() == "out/route.timings.json"
 
 
 def test_read_route_errors_name_the_file(tmp_path):

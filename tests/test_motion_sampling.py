@@ -282,3 +282,61 @@ def test_se3_rejects_a_quaternion_that_is_not_unit():
 def test_se3_length_counts_q_and_minus_q_as_one_rotation():
     pts = np.array([[0, 0, 0, *Q_GOAL], [3, 4, 0, *(-Q_GOAL)]])
     assert se3_length(pts, 10.0) == pytest.approx(5.0)
+
+
+def _bitstar_checks(seed, max_checks, planner="bitstar"):
+    return plan_rn(
+        START,
+        GOAL,
+        LO,
+        HI,
+        lambda x: not in_wall(x),
+        motion_valid=lambda a, b: not segment_hits_wall(a, b),
+        planner=planner,
+        seed=seed,
+        time_s=60.0,  # the safety net only: the work budget ends these runs
+        max_checks=max_checks,
+    )
+
+
+def test_an_anytime_planner_on_a_work_budget_gives_the_same_path_for_the_same_seed():
+    # BIT* keeps improving until a limit: on the clock its path depends on the machine's speed,
+    # on a budget of checks it is the same on every run
+    a, b, c = (_bitstar_checks(s, 3000) for s in (5, 5, 6))
+    assert a.solved and b.solved and c.solved
+    assert a.ended == b.ended == "solved" and a.checks >= 3000
+    np.testing.assert_array_equal(a.points, b.points)
+    assert a.checks == b.checks
+    assert a.points.shape != c.points.shape or not np.array_equal(a.points, c.points)
+    assert DETOUR - 1e-6 <= a.length <= DETOUR * 1.05
+
+
+def test_a_starved_work_budget_gives_up_and_says_so():
+    path = _bitstar_checks(5, 3, planner="rrtconnect")
+    assert not path.solved and path.ended == "checks"
+    assert 3 <= path.checks < 50  # a step in progress finishes first
+    assert "ended by checks" in path.status
+    full = _bitstar_checks(5, 100_000, planner="rrtconnect")
+    assert full.solved and full.ended == "solved" and full.checks > 3
+
+
+def test_a_run_ended_by_the_clock_says_so():
+    # a wall across the whole square: only the clock can end it
+    path = plan_rn(
+        START, GOAL, LO, HI, lambda x: not (4 < x[0] < 6), planner="rrtconnect",
+        time_s=0.05, seed=1, max_checks=10**9,
+    )  # fmt: skip
+    assert not path.solved and path.ended == "clock"
+
+
+def test_se3_on_a_work_budget_is_reproducible():
+    def run(seed):
+        return plan_se3(
+            np.r_[START, 5.0], Q_START, np.r_[GOAL, 5.0], Q_GOAL, [0] * 3, [10] * 3,
+            lambda p, q: not in_wall(p), motion_valid=lambda a, b: not segment_hits_wall(a, b),
+            rot_weight=2.0, planner="bitstar", time_s=60.0, seed=seed, max_checks=2000,
+        )  # fmt: skip
+
+    a, b = run(3), run(3)
+    assert a.solved and a.checks == b.checks
+    np.testing.assert_array_equal(a.points, b.points)

@@ -69,21 +69,43 @@ def test_a_blocked_joint_motion_is_replanned_around_the_plate(robot):
 
 
 def test_a_starved_transfer_gets_one_longer_retry_within_the_route_budget(robot):
-    """The first OMPL run has no time to solve; the retry (next seed, its own budget) does, and
-    a route whose retry budget is spent gets none."""
+    """The first OMPL run has 3 checks, too few to solve; the retry (next seed, its own budget
+    of checks) does, and a route whose retry budget is spent gets none; budgets of checks give
+    the same detour on every run."""
     qm = np.array([0.0, -1.2, 1.2, 0.0, 0.8, 0.0])
     qa, qb = qm.copy(), qm.copy()
     qa[0], qb[0] = -0.3, 0.3
     plate = make_plate(robot.fk(qm)[0, :3, 3], 1, size=160.0)
     chk = RobotCollision(robot, plate, arc_torch(), TORCH_TCP)
-    args = (robot, chk, np.zeros((0, 4, 4)), TORCH_TCP, 5.0, "rrtconnect", 1e-4, 3)
-    det = Detour(*args, tuck=(), retry_time_s=10.0)
+    args = (robot, chk, np.zeros((0, 4, 4)), TORCH_TCP, 5.0, "rrtconnect", 10.0, 3)
+    det = Detour(*args, tuck=(), checks=3, retry_checks=5000)
     path = det.transfer(qa, qb)
     assert path is not None and chk.path_hits(path) == []
     assert det.ompl["runs"] == 2 and det.ompl["retries"] == 1 and det.ompl["solved"] == 1
-    spent = Detour(*args, tuck=(), retry_time_s=10.0, retry_total_s=0.0)
+    assert det.ompl["clock"] == 0 and 3 <= det.ompl["checks"] - det.ompl["retry_checks"] < 20
+    again = Detour(*args, tuck=(), checks=3, retry_checks=5000)
+    np.testing.assert_array_equal(again.transfer(qa, qb), path)
+    assert again.ompl["checks"] == det.ompl["checks"]
+    spent = Detour(*args, tuck=(), checks=3, retry_checks=5000, retry_total_checks=0)
     assert spent.transfer(qa, qb) is None
     assert spent.ompl["runs"] == 1 and spent.ompl["solved"] == 0
+
+
+def test_one_leg_takes_at_most_its_share_of_the_route_retries(robot):
+    """A leg's retries get at most ``retry_leg_checks`` of the route's retry checks, and never
+    more than the route has left: a leg no run can join leaves the rest to the legs after it."""
+    qm = np.array([0.0, -1.2, 1.2, 0.0, 0.8, 0.0])
+    qa, qb = qm.copy(), qm.copy()
+    qa[0], qb[0] = -0.3, 0.3
+    plate = make_plate(robot.fk(qm)[0, :3, 3], 1, size=160.0)
+    chk = RobotCollision(robot, plate, arc_torch(), TORCH_TCP)
+    args = (robot, chk, np.zeros((0, 4, 4)), TORCH_TCP, 5.0, "rrtconnect", 10.0, 3)
+    det = Detour(*args, tuck=(), checks=2, retry_checks=2, retry_leg_checks=4,
+                 retry_total_checks=100)  # fmt: skip
+    assert det._run_checks(0, 0) == 2 and det._run_checks(1, 0) == 2
+    assert det._run_checks(1, 3) == 1 and det._run_checks(2, 4) == 0
+    det.ompl["retry_checks"] = 99.0
+    assert det._run_checks(1, 0) == 1
 
 
 def test_a_transfer_keeps_its_ends_ik_branch(robot):

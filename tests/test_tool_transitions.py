@@ -293,3 +293,27 @@ def test_the_se3_budget_is_a_budget():
     )  # fmt: skip
     assert tp2.plan(poses["a"], poses["b"]).status == "replanned"
     assert tp2.se3_runs[0]["samples"] <= 20_000
+
+
+def test_the_se3_check_budget_starves_and_a_seeded_replan_repeats_exactly():
+    pytest.importorskip("ompl")
+    sheet = _box((400, 400, 2), (0, 0, -1))
+    wall = _box((400, 4, 80), (0, 0, 40))
+    part = trimesh.util.concatenate([sheet, wall])
+    poses = _poses([("a", (0, -100, 0)), ("b", (0, 100, 0))], DOWN)
+
+    def planner(checks):
+        tp = TransitionPlanner(
+            part, _stick(100.0), clearance=5.0, contact_radius=20.0, retract=50.0,
+            time_s=60.0, seed=1, slide=False,
+        )  # fmt: skip
+        tp.se3_checks = checks
+        return tp, tp.plan(poses["a"], poses["b"])
+
+    tp, t = planner(2)
+    assert t.status == BLOCKED and tp.se3_runs[0]["checks"] < 20
+    assert not tp.se3_runs[0]["clock"] and "ended by checks" in t.reason
+    (tp1, t1), (tp2, t2) = planner(2_000), planner(2_000)
+    assert t1.status == t2.status == "replanned"
+    np.testing.assert_array_equal(t1.positions, t2.positions)
+    assert tp1.se3_runs == tp2.se3_runs and not tp1.se3_runs[0]["clock"]

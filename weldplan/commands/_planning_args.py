@@ -86,8 +86,9 @@ def _add_sequencer_arguments(p: argparse.ArgumentParser) -> None:
         "--sequencer",
         default="auto",
         choices=("auto", "fast-tsp", "pso", "exact", "nn"),
-        help="joint order: auto = exact (Held-Karp) up to 13 joints, else fast-tsp; pso = the "
-        "paper's TSP-PSO + polish (default auto)",
+        help="joint order: auto = exact (Held-Karp) up to 13 joints, else nn (nearest neighbour "
+        "+ the seeded 2-opt / Or-opt polish, reproducible); fast-tsp = a stronger engine without "
+        "a seed (not reproducible); pso = the paper's TSP-PSO + polish (default auto)",
     )
     p.add_argument(
         "--aco",

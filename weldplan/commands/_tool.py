@@ -140,8 +140,9 @@ def add_transition_arguments(p: argparse.ArgumentParser) -> None:
         metavar="S",
         type=_seconds,
         default=d.se3_time,
-        help="with --tool: CPU seconds OMPL may spend re-planning one blocked transition in SE(3) "
-        "(default 10; 0: report blocked transitions without re-planning)",
+        help="with --tool: the CPU-seconds safety net of re-planning one blocked transition in "
+        "SE(3), whose budget is a number of checks; a re-plan stopped at 3x this makes the run "
+        "not reproducible (default 10; 0: report blocked transitions without re-planning)",
     )
 
 

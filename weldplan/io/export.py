@@ -39,6 +39,10 @@ Both blend corners only where the part leaves room (:mod:`weldplan.io.blending`)
 flies by with the largest zone whose radius fits its free margin (exact distance to the part
 minus the clearance, and at most half of each adjacent segment), else it is an exact stop. So
 they need the part: ``render_post(route, "rapid", part=cell_or_mesh)``; without it they refuse.
+
+The route JSON is a deliverable: the same inputs and seed give the same bytes on any machine.
+:func:`write_json` writes it without the run's measured seconds, which
+:mod:`weldplan.io.timings` moves to a file of their own.
 """
 
 from __future__ import annotations
@@ -225,8 +229,11 @@ def write_csv(route: Route, path: str | PathLike[str]) -> Path:
 
 
 def write_json(route: Route, path: str | PathLike[str]) -> Path:
-    """Write the whole route (:meth:`Route.to_json`), atomically."""
-    return write_text_atomic(path, route.to_json() + "\n")
+    """Write the route without its measured times, atomically
+    (:func:`weldplan.io.timings.route_json_texts` gives both texts)."""
+    from weldplan.io.timings import route_json_texts
+
+    return write_text_atomic(path, route_json_texts(route)[0])
 
 
 def read_route(path: str | PathLike[str]) -> Route:

@@ -17,9 +17,15 @@ Conventions
 - Seeds: OMPL has one process-wide seed generator (``ompl.util.RNG.setSeed``), which seeds every
   RNG that OMPL creates afterwards. A call with ``seed`` resets it, so a planner that stops on its
   own (``rrtconnect`` stops at its first solution) and ``simplify`` give the same path for the
-  same seed. Anytime planners (``bitstar``, ``rrtstar``...) stop on the clock, so how far they
-  improve depends on the machine's speed: the seed fixes the sample sequence, not the result.
+  same seed. Anytime planners (``bitstar``, ``rrtstar``...) stop on a budget: with
+  ``max_checks`` (below) the result is the same on any machine; with the clock alone how far they
+  improve depends on the machine's speed (the seed fixes the sample sequence, not the result).
   Because the seed generator is process-wide, run parallel plans in processes, not threads.
+- Budgets by work: ``max_checks`` counts the calls the caller's ``is_valid`` and
+  ``motion_valid`` receive and becomes OMPL's termination condition, evaluated in the planner's
+  own thread (:mod:`weldplan.motion.budget`): with a seed, the same run stops after the same
+  check on any machine and at any load. ``time_s`` stays as a wall-clock safety net;
+  :attr:`SampledPath.ended` says what ended a run (``"clock"``: the run is not reproducible).
 - "No path found" is a result (``solved=False``), never an exception;
   :class:`SamplingArgumentError` is raised only for bad arguments.
 """
@@ -38,6 +44,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from weldplan.errors import ConfigError, PlanningError
 from weldplan.geometry.pathcore import polyline_length
+from weldplan.motion.budget import Checks
 
 log = logging.getLogger(__name__)
 
@@ -58,8 +65,9 @@ QUAT_NORM_TOL = 1e-6
 #: OMPL seeds must be positive 32-bit integers (0 is ignored by OMPL)
 _SEED_MOD = 2**32 - 1
 
-#: OMPL's own wall-clock limit where a caller budgets CPU seconds (``stop``), in units of that
-#: budget: a safety net only (the gun's SE(3) re-plan, the robot's joint-space transfers)
+#: OMPL's own wall-clock limit where a caller budgets work (``max_checks`` or its own ``stop``),
+#: in seconds per second of the run's expected time: a safety net only (the gun's SE(3)
+#: re-plan, the robot's joint-space transfers)
 WALL_FACTOR = 10.0
 
 StateCheck = Callable[[NDArray[np.float64]], bool]
@@ -95,6 +103,12 @@ class SampledPath:
         Wall time of the call (planning and simplification), s.
     status
         One line: OMPL's status, vertex count, length, simplification.
+    checks
+        Calls the caller's ``is_valid`` and ``motion_valid`` received (simplification included).
+    ended
+        What ended the run: ``"solved"``, ``"checks"`` (the ``max_checks`` work budget),
+        ``"stop"`` (the caller's ``stop``), ``"clock"`` (the wall-clock safety net ``time_s``:
+        the result depends on the machine) or ``"planner"`` (the planner gave up by itself).
     """
 
     points: NDArray[np.float64]
@@ -103,6 +117,8 @@ class SampledPath:
     planner: str
     time_s: float
     status: str
+    checks: int = 0
+    ended: str = "solved"
 
     def __post_init__(self) -> None:
         pts = np.array(self.points, dtype=np.float64, copy=True)
@@ -119,6 +135,8 @@ class SampledPath:
             "planner": self.planner,
             "time_s": float(self.time_s),
             "status": self.status,
+            "checks": int(self.checks),
+            "ended": self.ended,
         }
 
     @classmethod
@@ -135,6 +153,8 @@ class SampledPath:
             planner=str(data["planner"]),
             time_s=float(data["time_s"]),
             status=str(data["status"]),
+            checks=int(data.get("checks", 0)),
+            ended=str(data.get("ended", "solved" if data["solved"] else "planner")),
         )
 
 
@@ -195,7 +215,9 @@ def _unit_quat(name: str, value: ArrayLike) -> NDArray[np.float64]:
     return q / norm
 
 
-def _check_common(planner: str, time_s: float, resolution: float) -> None:
+def _check_common(
+    planner: str, time_s: float, resolution: float, max_checks: int | None = None
+) -> None:
     if planner not in PLANNERS:
         raise SamplingArgumentError(
             f"unknown planner {planner!r}; choose one of {', '.join(PLANNERS)}"
@@ -206,6 +228,8 @@ def _check_common(planner: str, time_s: float, resolution: float) -> None:
         raise SamplingArgumentError(
             f"resolution is a fraction of the space's extent in (0, 1], got {resolution}"
         )
+    if max_checks is not None and (isinstance(max_checks, bool) or int(max_checks) < 1):
+        raise SamplingArgumentError(f"max_checks must be a positive count, got {max_checks!r}")
 
 
 def _ompl_seed(seed: int | np.random.Generator | None) -> int | None:
@@ -234,13 +258,14 @@ def _solve(
     simplify: bool,
     measure: Callable[[NDArray[np.float64]], float],
     dim: int,
-    stop: Callable[[], bool] | None = None,
+    checks: Checks,
     reach: float | None = None,
 ) -> SampledPath:
     """Run ``planner`` on the prepared SimpleSetup ``ss`` and read the path back; it stops at
-    ``time_s`` seconds or, with ``stop``, as soon as ``stop()`` is true (OMPL asks between its
-    own steps). ``reach``: the planner's ``range`` (the longest motion it adds in one step, in
-    the space's metric), where the planner has one; ``None``: OMPL's default."""
+    ``time_s`` seconds or as soon as ``checks`` is spent or its caller's ``stop()`` is true
+    (OMPL asks in its own thread between its steps: :mod:`weldplan.motion.budget`).
+    ``reach``: the planner's ``range`` (the longest motion it adds in one step, in the space's
+    metric), where the planner has one; ``None``: OMPL's default."""
     ob, og, ou = _import_ompl()
     si = ss.getSpaceInformation()
     if motion_valid is None:
@@ -262,14 +287,8 @@ def _solve(
     try:
         if ompl_seed is not None:
             ou.RNG.setSeed(ompl_seed)
-        if stop is None:
-            status = ss.solve(float(time_s))
-        else:
-            ptc = ob.plannerOrTerminationCondition(
-                ob.timedPlannerTerminationCondition(float(time_s)),
-                ob.PlannerTerminationCondition(lambda: bool(stop())),
-            )
-            status = ss.solve(ptc)
+        status = ss.solve(checks.termination(ob, time_s))
+        used = checks.n
         solved = bool(ss.haveExactSolutionPath())
         simplified = False
         if solved and simplify:
@@ -284,13 +303,15 @@ def _solve(
         ou.setLogLevel(level)
     wall = time.perf_counter() - t0
     length = measure(pts) if solved else float("inf")
+    ended = checks.ended(solved, used, wall >= time_s)
     line = (
         f"{planner}: {status.asString()}, {len(pts)} vertices, length {length:.6g}"
         + (", simplified" if simplified else "")
-        + f", {wall:.3g} s"
+        + f", {used} checks"
+        + ("" if ended in ("solved", "planner") else f", ended by {ended}")
     )
-    log.debug(line)
-    return SampledPath(pts, length, solved, planner, wall, line)
+    log.debug("%s, %.3g s", line, wall)
+    return SampledPath(pts, length, solved, planner, wall, line, checks.n, ended)
 
 
 @functools.cache
@@ -333,6 +354,7 @@ def plan_rn(
     seed: int | np.random.Generator | None = None,
     simplify: bool = True,
     stop: Callable[[], bool] | None = None,
+    max_checks: int | None = None,
 ) -> SampledPath:
     """Plan a path from ``start`` to ``goal`` in the box ``[lower, upper]`` of R^d with OMPL.
 
@@ -354,8 +376,9 @@ def plan_rn(
     planner
         A name in :data:`PLANNERS`; ``bitstar`` (Gammell et al., BIT*) by default.
     time_s
-        Planning time limit, s. Anytime planners use all of it; ``rrtconnect`` stops at its first
-        solution.
+        Wall-clock limit, s: with ``max_checks`` a safety net (a run it ends is reported
+        ``ended="clock"``, not reproducible); without, anytime planners use all of it and
+        ``rrtconnect`` stops at its first solution.
     seed
         Seeds OMPL's process-wide RNG (see the module notes); ``None`` leaves it alone.
     simplify
@@ -363,7 +386,10 @@ def plan_rn(
         reduction, B-spline smoothing with validity checks) after planning.
     stop
         ``stop() -> bool``: planning also ends as soon as it is true (OMPL asks between its own
-        steps), e.g. a budget in CPU seconds; ``time_s`` stays the wall-clock limit.
+        steps); ``time_s`` stays the wall-clock limit.
+    max_checks
+        Work budget: planning ends once ``is_valid`` and ``motion_valid`` together have been
+        called this often (module notes: the same count on any machine); ``None``: no budget.
 
     Returns
     -------
@@ -383,8 +409,10 @@ def plan_rn(
     lo = _vector("lower", lower, d)
     hi = _vector("upper", upper, d)
     _check_box(lo, hi, {"start": s, "goal": g})
-    _check_common(planner, time_s, resolution)
+    _check_common(planner, time_s, resolution, max_checks)
     ob, og, _ = _import_ompl()
+    checks = Checks(max_checks, stop)
+    is_valid = checks.state(is_valid)
 
     space = ob.RealVectorStateSpace(d)
     bounds = ob.RealVectorBounds(d)
@@ -408,7 +436,7 @@ def plan_rn(
     return _solve(
         ss,
         read=read,
-        motion_valid=motion_valid,
+        motion_valid=checks.motion(motion_valid),
         resolution=resolution,
         planner=planner,
         time_s=time_s,
@@ -416,7 +444,7 @@ def plan_rn(
         simplify=simplify,
         measure=polyline_length,
         dim=d,
-        stop=stop,
+        checks=checks,
     )
 
 
@@ -466,6 +494,7 @@ def plan_se3(
     simplify: bool = True,
     stop: Callable[[], bool] | None = None,
     reach: float | None = None,
+    max_checks: int | None = None,
 ) -> SampledPath:
     """Plan a rigid-body path (a torch or a gun) between two poses with OMPL in SE(3).
 
@@ -487,7 +516,7 @@ def plan_se3(
     rot_weight
         mm per rad: the metric is position distance + ``rot_weight`` x rotation angle. (OMPL's
         SO(3) distance is half the rotation angle, so its subspace weight is ``2 rot_weight``.)
-    resolution, planner, time_s, seed, simplify
+    resolution, planner, time_s, seed, simplify, max_checks
         As in :func:`plan_rn`.
     stop
         ``stop() -> bool``: the planner also stops as soon as this is true (a caller's own
@@ -515,14 +544,17 @@ def plan_se3(
     lo = _vector("lower", lower, 3)
     hi = _vector("upper", upper, 3)
     _check_box(lo, hi, {"start_pos": p0, "goal_pos": p1})
-    _check_common(planner, time_s, resolution)
+    _check_common(planner, time_s, resolution, max_checks)
     if not (np.isfinite(rot_weight) and rot_weight > 0):
         raise SamplingArgumentError(f"rot_weight must be a positive mm per rad, got {rot_weight}")
-    ss, read = _se3_setup(lo, hi, rot_weight, is_valid, np.r_[p0, q0], np.r_[p1, q1])
+    checks = Checks(max_checks, stop)
+    ss, read = _se3_setup(
+        lo, hi, rot_weight, checks.state(is_valid), np.r_[p0, q0], np.r_[p1, q1]
+    )
     return _solve(
         ss,
         read=read,
-        motion_valid=motion_valid,
+        motion_valid=checks.motion(motion_valid),
         resolution=resolution,
         planner=planner,
         time_s=time_s,
@@ -530,7 +562,7 @@ def plan_se3(
         simplify=simplify,
         measure=lambda pts: se3_length(pts, rot_weight),
         dim=7,
-        stop=stop,
+        checks=checks,
         reach=reach,
     )
 

@@ -23,9 +23,11 @@ the route's own leg from one served weld ``a`` to the next ``b`` is blocked, it 
    motions), else planned in joint space by OMPL
    (:func:`weldplan.motion.sampling.plan_rn`, ``rrtconnect``) with the whole tool and every link
    checked by :class:`~weldplan.robot.collision.RobotCollision` (states and motions): one run of
-   ``time_s`` and, while that does not solve it, retries of :data:`RETRY_TIME_S` with the next
-   seeds, while the route's retries stay within :data:`RETRY_TOTAL_S` (rrtconnect stops at its
-   first solution, so only a leg that needs the time spends it); budgets in CPU seconds. When
+   :data:`TRANSFER_CHECKS` checks and, while that does not solve it, retries of
+   :data:`RETRY_CHECKS` with the next seeds, at most :data:`RETRY_LEG_CHECKS` for one leg and
+   :data:`RETRY_TOTAL_CHECKS` for the route (rrtconnect stops at its first solution, so only a
+   leg that needs the checks spends them). Budgets count checks (states and motions), so the
+   same seed gives the same detours on any machine; ``time_s`` is a wall-clock safety net. When
    both ends are on one IK branch (they are: the welds' branches are chosen continuous), every
    step of the transfer stays on it (:meth:`Detour.on_branch`; tucks that would flip the elbow
    or shoulder are skipped, OMPL's states and motions off the branch are invalid): a detour
@@ -45,7 +47,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from weldplan.motion.sampling import WALL_FACTOR
+from weldplan.motion.sampling import WALL_FACTOR, SampledPath
 from weldplan.robot.collision import RobotCollision
 from weldplan.robot.model import Robot
 from weldplan.robot.reach import usable
@@ -68,12 +70,21 @@ RETRACT_DIRS = ((2, -1.0), (0, -1.0), (0, 1.0), (1, -1.0), (1, 1.0))
 #: the base): the arm folds there, A1 and the wrist turn folded, and it unfolds at the goal
 TUCK_A2_A3 = ((-90.0, 90.0), (-120.0, 120.0))
 
-#: s: a transfer OMPL did not solve in its first budget gets more runs of this long (the next
-#: seeds) while the route's retries last: rrtconnect stops at its first solution, so only the
-#: legs that need it pay for it
-RETRY_TIME_S = 30.0
-#: s: the most all the retries of one route may take together (then a leg gets one run only)
-RETRY_TOTAL_S = 120.0
+#: checks (calls of the state and motion checks) of a transfer's first OMPL run
+#: (:func:`~weldplan.motion.sampling.plan_rn`'s ``max_checks``): measured 60-70 checks a CPU
+#: second with the KR 150 and a torch (rrtconnect and the simplifier), so about the 5 CPU s
+#: the first run had before
+TRANSFER_CHECKS = 400
+#: checks of each further run (the next seed) of a transfer the first run did not solve (the
+#: 30 CPU s a retry had): rrtconnect stops at its first solution, so only the legs that need
+#: it pay for it
+RETRY_CHECKS = 2_000
+#: the most checks the retries of one leg may take together (two retries): a leg that cannot
+#: be joined does not take the whole route's retries from the legs after it
+RETRY_LEG_CHECKS = 4_000
+#: the most checks all the retries of one route may take together (the 120 CPU s before;
+#: then a leg gets one run)
+RETRY_TOTAL_CHECKS = 8_000
 #: configurations on a joint motion at which a transfer's IK branch is checked
 #: (:meth:`Detour.on_branch`)
 BRANCH_SAMPLES = 9
@@ -90,16 +101,22 @@ class Detour:
     flange_tcp: NDArray[np.float64]  # (4, 4) mm
     singular_deg: float
     planner: str
+    #: s: about what a first OMPL run of ``checks`` takes; OMPL's wall-clock limit, a safety
+    #: net, is :data:`WALL_FACTOR` times it (a retry's in proportion to its checks); a run it
+    #: ends is counted in ``ompl["clock"]`` and the route is not reproducible
     time_s: float
     rng: int | None
     tuck: tuple[tuple[float, float], ...] = TUCK_A2_A3
-    retry_time_s: float = RETRY_TIME_S
-    retry_total_s: float = RETRY_TOTAL_S
+    checks: int = TRANSFER_CHECKS
+    retry_checks: int = RETRY_CHECKS
+    retry_leg_checks: int = RETRY_LEG_CHECKS
+    retry_total_checks: int = RETRY_TOTAL_CHECKS
     #: per route row of a weld, TCP paths ``(k, 4, 4)`` mm that leave it (the first pose the
     #: weld's own) which the gun stage proved free for the tool: tried before :meth:`retract`
     #: (:func:`weldplan.robot.gunpath.gun_exits`)
     exits: dict[int, tuple[NDArray[np.float64], ...]] = field(default_factory=dict)
-    #: figures of the transfers planned with OMPL (runs, solved, retries, CPU and wall seconds)
+    #: figures of the transfers planned with OMPL (runs, solved, retries, checks, retry_checks,
+    #: clock: runs the safety net ended; CPU and wall seconds)
     ompl: dict[str, float] = field(default_factory=dict, compare=False)
     #: how each weld was left or reached by a detour: ``"gun exit"`` or ``"retract"``
     left_by: dict[str, int] = field(default_factory=dict, compare=False)
@@ -209,16 +226,16 @@ class Detour:
         return self.on_branch(qa, qb, keep) and bool(self.checker.motion_free(qa, qb))
 
     def _ompl(self, qa: NDArray, qb: NDArray, keep: int | None = None) -> NDArray | None:
-        """OMPL in joint space (:func:`~weldplan.motion.sampling.plan_rn`), ``time_s``; while
-        that is not enough, more runs of ``retry_time_s`` with the next seeds as long as the
-        route's retries have spent less than ``retry_total_s`` (the first leg that needs them
-        may take them all: on a route along the gun's order, a leg that cannot be detoured is
-        a bridge between two groups of welds, and every later weld of the far group would be
-        tried from the same weld across the same gap). The budgets are CPU seconds of this
-        process (:func:`time.process_time`), as the gun's SE(3) re-plan's: on a shared machine
-        a wall-clock limit gave OMPL anything from a fifth to all of it; OMPL's own wall-clock
-        limit is :data:`WALL_FACTOR` times the budget, a safety net. ``keep``: the states and
-        motions must stay on that IK branch (:meth:`on_branch`)."""
+        """OMPL in joint space (:func:`~weldplan.motion.sampling.plan_rn`): a first run of
+        ``checks`` checks (states and motions); while that is not enough, more runs of
+        ``retry_checks`` with the next seeds, at most ``retry_leg_checks`` for this leg and
+        ``retry_total_checks`` for the route (:meth:`_run_checks`): budgets of work, so the
+        same seed gives the same detour on any machine and at any load (before, CPU seconds:
+        the answer changed with the machine, and the first leg that needed retries took the
+        route's whole retry budget). OMPL's own wall-clock limit, :data:`WALL_FACTOR` times
+        ``time_s`` (a retry's scaled by its checks), is a safety net: a run it ends is counted
+        in ``ompl["clock"]``. ``keep``: the states and motions must stay on that IK branch
+        (:meth:`on_branch`)."""
         from weldplan.motion.sampling import plan_rn
 
         def valid(x: NDArray) -> bool:
@@ -226,17 +243,15 @@ class Detour:
                 self.checker.state_free(x)
             )
 
+        leg = {"retry_checks": 0}
         k = 0
         while True:
-            if k and (
-                self.retry_time_s <= 0 or self.ompl.get("retry_s", 0.0) >= self.retry_total_s
-            ):
+            budget = self._run_checks(k, leg["retry_checks"])
+            if budget <= 0:
                 if k == 1:
-                    log.info("joint-space transfer: no retry (%.0f s spent)", self.retry_total_s)
+                    log.info("joint-space transfer: no retry left (%s)", self._retry_left())
                 return None
-            budget = self._run_time(k)
             cpu0 = time.process_time()
-            deadline = cpu0 + budget
             res = plan_rn(
                 qa,
                 qb,
@@ -245,26 +260,45 @@ class Detour:
                 valid,
                 motion_valid=lambda x, y: self._motion_ok(x, y, keep),
                 planner=self.planner,
-                time_s=WALL_FACTOR * budget,
+                time_s=WALL_FACTOR * self.time_s * max(1.0, budget / self.checks),
                 seed=None if self.rng is None else self.rng + k,
-                stop=lambda: time.process_time() > deadline,  # noqa: B023 (called in this run)
+                max_checks=budget,
             )
-            cpu = time.process_time() - cpu0
             log.info("joint-space transfer%s: %s", f" (retry {k})" if k else "", res.status)
-            for key, v in (("runs", 1), ("retries", k > 0), ("solved", res.solved)):
-                self.ompl[key] = self.ompl.get(key, 0) + float(v)
-            self.ompl["s"] = self.ompl.get("s", 0.0) + cpu
-            self.ompl["wall_s"] = self.ompl.get("wall_s", 0.0) + res.time_s
+            self._count(res, k, time.process_time() - cpu0)
             if k:
-                self.ompl["retry_s"] = self.ompl.get("retry_s", 0.0) + cpu
+                leg["retry_checks"] += res.checks
             if res.solved:
                 return np.asarray(res.points, dtype=np.float64)
             k += 1
 
-    def _run_time(self, k: int) -> float:
-        """CPU s of OMPL run ``k`` of a transfer: the first ``time_s``, a retry
-        ``retry_time_s`` or what is left of the route's ``retry_total_s``, whichever is less."""
+    def _count(self, res: SampledPath, k: int, cpu: float) -> None:
+        """Add one OMPL run to :attr:`ompl` (the seconds are figures for the report only)."""
+        for key, v in (
+            ("runs", 1),
+            ("retries", k > 0),
+            ("solved", res.solved),
+            ("checks", res.checks),
+            ("retry_checks", res.checks if k else 0),
+            ("clock", res.ended == "clock"),
+            ("s", cpu),
+            ("wall_s", res.time_s),
+        ):
+            self.ompl[key] = self.ompl.get(key, 0) + float(v)
+
+    def _retry_left(self) -> str:
+        used = int(self.ompl.get("retry_checks", 0))
+        return f"{used} of the route's {self.retry_total_checks} retry checks spent"
+
+    def _run_checks(self, k: int, leg_retry: int) -> int:
+        """Checks of OMPL run ``k`` of a transfer whose retries have spent ``leg_retry``: the
+        first ``checks``; a retry ``retry_checks`` or what is left of this leg's
+        ``retry_leg_checks`` or of the route's ``retry_total_checks``, whichever is least
+        (0: no run)."""
         if not k:
-            return self.time_s
-        left = self.retry_total_s - self.ompl.get("retry_s", 0.0)
-        return max(min(self.retry_time_s, left), 1e-3)
+            return int(self.checks)
+        left = min(
+            self.retry_leg_checks - leg_retry,
+            self.retry_total_checks - int(self.ompl.get("retry_checks", 0)),
+        )
+        return max(0, min(int(self.retry_checks), int(left)))

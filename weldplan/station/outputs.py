@@ -36,6 +36,10 @@ def output_paths(out: OutputSpec, *, robot: bool, tool: bool) -> dict[str, Path]
     for kind in ("json", "html"):
         if getattr(out, kind) is not None:
             paths[kind] = getattr(out, kind)
+    if out.json is not None:  # the run's measured times, apart from the deliverable
+        from weldplan.io.timings import timings_path
+
+        paths["timings"] = timings_path(out.json)
     if out.post:
         paths["post"] = out.post_file or out.csv.with_suffix(POSTS[out.post].suffix)
     elif out.post_file:
@@ -69,7 +73,9 @@ def render_outputs(plan: Any, kinds: set[str], post: str | None) -> dict[str, st
     route = plan.route
     texts = {"csv": to_csv_text(route)}
     if "json" in kinds:
-        texts["json"] = route.to_json() + "\n"
+        from weldplan.io.timings import route_json_texts
+
+        texts["json"], texts["timings"] = route_json_texts(route)
     if "html" in kinds:
         texts["html"] = static_html(route, plan.cell.part, tool=plan.tool and plan.tool.tool)
     if "tool_csv" in kinds:

@@ -82,6 +82,37 @@ def smooth_rows(route: Any) -> list[tuple[str, str]]:
     return rows
 
 
+def clock_caps(route: Any) -> list[str]:
+    """What in this run depended on the clock or on an unseeded search, so that the same
+    command may write other files (empty: every search was budgeted by work and seeded).
+
+    Read from the route's figures: the sequencer (fast-tsp has no seed; a ``--sequence-time``
+    budget), a clock budget of the local planner, the gun's SE(3) re-plans and the robot's
+    joint-space transfers that the clock safety net stopped."""
+    s, cfg = route.stats, route.settings
+    caps = []
+    if str(s.get("sequence_method", "")).startswith("fast-tsp"):
+        caps.append("the weld order came from fast-tsp (no seed)")
+    for key, what in (("sequence_time_budget", "sequencer"), ("local_time_budget", "local paths")):
+        if cfg.get(key) is not None:
+            caps.append(f"the {what} had a clock budget ({cfg[key]:g} s)")
+    tr = (route.tool or {}).get("transitions") or {}
+    n = sum(bool(r.get("clock")) for r in (tr.get("stats") or {}).get("se3_runs") or [])
+    if n:
+        caps.append(f"{n} SE(3) re-plan(s) of the gun stopped by the clock")
+    ompl = (((route.tool or {}).get("robot") or {}).get("stats") or {}).get("ompl") or {}
+    if ompl.get("clock"):
+        caps.append(f"{int(ompl['clock'])} joint-space transfer(s) stopped by the clock")
+    return caps
+
+
+def _reproducible(route: Any) -> str:
+    caps = clock_caps(route)
+    if not caps:
+        return "yes: every search seeded and budgeted by work"
+    return "NOT reproducible, the same command may write other files: " + "; ".join(caps)
+
+
 def summary_table(
     route: Any,
     times: dict[str, float],
@@ -125,6 +156,7 @@ def summary_table(
         *smooth_rows(route),
         ("verified", report.describe()),
         *(extra or []),
+        ("reproducible", _reproducible(route)),
         (
             "time",
             ", ".join(f"{k} {v:.2f} s" for k, v in times.items()),

@@ -5,8 +5,9 @@ clear points (both exits free, the move between them blocked) or else between th
 Its states and motions are judged by the transition planner's swept check with the sphere bound
 first (:class:`~weldplan.tool.sweep_fast.FastSweep`: the bound where it proves a pose or a motion
 free, FCL's ``collide`` where it shows one blocked, FCL's distance in between) within a budget
-that holds (:func:`se3_path`), and the path it returns is checked again, motion by motion, by the
-exact check (:class:`~weldplan.tool.sweep.SweepChecker`) before it is taken.
+of work that holds (:func:`se3_path`: checks and FCL samples, so the same seed gives the same
+path on any machine), and the path it returns is checked again, motion by motion, by the exact
+check (:class:`~weldplan.tool.sweep.SweepChecker`) before it is taken.
 """
 
 from __future__ import annotations
@@ -20,6 +21,10 @@ from numpy.typing import NDArray
 
 from weldplan.motion.sampling import WALL_FACTOR
 from weldplan.tool.transit import BLOCKED, REPLANNED, Transition
+
+#: the CPU-seconds safety net of one re-plan, in units of the planner's ``time_s``: reached only
+#: when the work budget takes far longer than usual (a run it stops is marked ``clock``)
+CLOCK_SAFETY = 3.0
 
 
 def _se3_box(a: NDArray, b: NDArray, part: trimesh.Trimesh, pad: float) -> tuple[NDArray, NDArray]:
@@ -76,27 +81,31 @@ def se3_path(
 ) -> tuple[NDArray | None, str]:
     """OMPL's SE(3) path ``(n, 7)`` between two poses, or ``None`` and why not.
 
-    The budget holds: every state and motion check after ``time_s`` CPU seconds of this
-    process (:func:`time.process_time`; OMPL's own wall-clock limit is :data:`WALL_FACTOR`
-    times that, a safety net), or after
-    ``se3_samples`` FCL samples, answers "not free" at once, one motion may take at most
-    ``se3_motion_cap`` samples, and OMPL is told to stop (its termination condition asks
-    between its steps)."""
+    The budget is work and holds: OMPL stops after ``se3_checks`` state and motion checks
+    (:func:`~weldplan.motion.sampling.plan_se3`'s ``max_checks``), every check after
+    ``se3_samples`` FCL samples answers "not free" at once, and one motion may take at most
+    ``se3_motion_cap`` samples: the same seed gives the same answer on any machine. A safety
+    net of :data:`CLOCK_SAFETY` x ``time_s`` CPU seconds of this process
+    (:func:`time.process_time`) does the same; a run it reaches is marked ``clock`` in its
+    figures (the route is then not reproducible)."""
     try:
         from weldplan.motion.sampling import plan_se3
     except ImportError as exc:  # the wrapper or OMPL itself is missing
         return None, f"SE(3) re-planning unavailable ({exc})"
     check = tp.fast
     run = {"states": 0, "motions": 0, "refused": 0, "samples": 0, "bound_states": 0,
-           "bound_motions": 0}  # fmt: skip
+           "bound_motions": 0, "clock": False}  # fmt: skip
     tp.se3_runs.append(run)
-    # the budget is CPU seconds of this process: on a shared machine the wall clock gave OMPL
-    # anything from a fifth to all of it (a 3 s re-plan saw 0.5-3 s of CPU at load 5-6)
-    deadline = time.process_time() + tp.time_s
+    deadline = time.process_time() + CLOCK_SAFETY * tp.time_s
     cap = tp.se3_samples
 
     def spent() -> bool:
-        return (cap is not None and run["samples"] >= cap) or time.process_time() > deadline
+        if cap is not None and run["samples"] >= cap:
+            return True
+        if time.process_time() > deadline:
+            run["clock"] = True
+            return True
+        return False
 
     def is_valid(p: NDArray, q: NDArray) -> bool:
         run["states"] += 1
@@ -125,6 +134,7 @@ def se3_path(
             tp.se3_motion_cap, cap - run["samples"])  # fmt: skip
         out = check.check(s[:3], s[3:], t[:3], t[3:], exempt, soft, cap=left,
                           deadline=deadline)  # fmt: skip
+        run["clock"] = run["clock"] or time.process_time() > deadline
         run["samples"] += out.samples
         tp.samples += out.samples
         run["refused"] += out.out_of_budget
@@ -138,11 +148,18 @@ def se3_path(
         start[0], start[1], goal[0], goal[1], lo, hi, is_valid,
         motion_valid=motion_valid, rot_weight=tp.rot_weight, planner=tp.planner,
         time_s=WALL_FACTOR * tp.time_s, seed=tp.seed, simplify=True, stop=spent, reach=tp.se3_range,
+        max_checks=tp.se3_checks,
     )  # fmt: skip
+    run["checks"] = res.checks
+    run["clock"] = run["clock"] or res.ended == "clock"
+    if run["clock"]:
+        res_note = "; stopped by the clock safety net (not reproducible)"
+    else:
+        res_note = ""
     tally = (
         f"{run['states']} states, {run['motions']} motions checked ({run['refused']} "
         f"refused: budget spent; {run['bound_states']} states and {run['bound_motions']} "
-        f"motions shown free by the sphere bound alone), {run['samples']} FCL samples"
+        f"motions shown free by the sphere bound alone), {run['samples']} FCL samples{res_note}"
     )
     if not res.solved:
         return None, f"{res.planner}: {res.status}; {tally}"

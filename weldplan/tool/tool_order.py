@@ -13,12 +13,13 @@ its own distance ``d_i`` in place of ``retract``: ``c_ij = d_i + d_j + |r_i - r_
 with ``r_i = p_i - d_i z_i``. It is a lower bound-like estimate: a
 transition re-planned in SE(3) is longer. The order is the open path of least total cost over
 the welds with a pose (:func:`weldplan.optim.discrete.sequence.solve_sequence`: exact up to its
-exact limit, fast-tsp above). The poses are those chosen along the point-tip order
+exact limit, above it nearest neighbour + the seeded polish: the same seed, the same order).
+The poses are those chosen along the point-tip order
 (:func:`weldplan.tool.poses.plan_weld_poses`); they are not re-chosen for the new order.
 
 Pairs whose transition was found blocked (``forbid``: the transition planner tried every exit
 and, where allowed, SE(3)) are avoided in both directions wherever an order can do without them
-(unreachable for the exact solver, priced above every other pair by fast-tsp);
+(unreachable for the exact solver, penalised above every order without them above its size);
 :mod:`weldplan.tool.reorder` re-orders until no new pair is blocked.
 """
 
@@ -85,7 +86,8 @@ def order_cost(cost: NDArray[np.float64], order: list[int]) -> float:
 def _avoiding_order(cost: NDArray[np.float64], avoid: NDArray[np.bool_], rng: Any) -> list[int]:
     """The least-cost open path that uses ``avoid`` pairs only where no order does without them:
     exactly (those pairs unreachable; if no order is left, as if none were avoided) up to the
-    exact solver's size, else fast-tsp's own pricing of ``avoid`` above every other cost."""
+    exact solver's size, else the sequencer's penalty of ``avoid`` above any order over the other
+    pairs."""
     from weldplan.errors import PlanningError
     from weldplan.optim.discrete.sequence import EXACT_MAX_NODES, solve_sequence
 

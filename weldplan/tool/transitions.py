@@ -71,10 +71,14 @@ SLIDE_LIFTS = (4.0, 10.0, 20.0)
 #: mm: default side exit when the axial retract is blocked (a C-gun's jaws round a flange: the
 #: shared gun's C back stands 231 mm from its electrode axis)
 DEFAULT_SIDE_EXIT = 250.0
-#: default CPU seconds OMPL may spend on one transition (the CLI's and the bench's too): the
-#: demo's bridge between its two groups of gun poses took 10-30 CPU s with the sphere bound
-#: (session 5; it was 5 s of wall clock here, 3 in the bench, and never found)
+#: default CPU seconds of one transition's SE(3) re-plan, a safety net only (the CLI's and the
+#: bench's too): the work budget is :data:`DEFAULT_SE3_CHECKS`; the clock stops a re-plan only
+#: at :data:`~weldplan.tool.se3_replan.CLOCK_SAFETY` times this, and says so (not reproducible)
 DEFAULT_SE3_TIME = 10.0
+#: state and motion checks one SE(3) re-plan may make (OMPL's ``max_checks``): the demo's three
+#: re-plans took 191, 291 and about 1,900 (the last at 5 CPU s a thousand, cut by the old 10 CPU s
+#: budget), so the same work as before on a quiet machine, now the same on any machine
+DEFAULT_SE3_CHECKS = 2_000
 #: FCL samples one motion of an SE(3) re-plan may take (a conservative advancement that needs
 #: more grazes the part, or turns a 0.7 m gun far; OMPL tries a shorter motion instead)
 DEFAULT_SE3_MOTION_CAP = 200
@@ -119,8 +123,8 @@ class TransitionPlanner:
     planner, time_s, seed, rot_weight
         OMPL's planner, seconds per transition, seed and metric weight (mm per rad).
     se3_samples
-        FCL distance samples one SE(3) re-plan may take in all (``None``: no cap but the time):
-        its state and motion checks answer "not free" once it is spent, so OMPL stops.
+        FCL distance samples one SE(3) re-plan may take in all (``None``: no cap but the
+        checks): its state and motion checks answer "not free" once it is spent, so OMPL stops.
     se3_motion_cap
         Samples one motion of an SE(3) re-plan may take (a longer motion is "not free").
     """
@@ -162,6 +166,8 @@ class TransitionPlanner:
         self._fast: FastSweep | None = None
         #: the SE(3) planner's range (:func:`weldplan.motion.sampling.plan_se3`'s ``reach``)
         self.se3_range: float | None = DEFAULT_SE3_RANGE
+        #: state and motion checks one SE(3) re-plan may make (its work budget)
+        self.se3_checks = DEFAULT_SE3_CHECKS
         self.samples = 0
         #: per SE(3) re-plan: states and motions asked, motions refused for the budget, samples
         self.se3_runs: list[dict[str, Any]] = []
@@ -539,6 +545,7 @@ def plan_transitions(
             "slide_lifts": list(SLIDE_LIFTS),
             "se3_samples": se3_samples,
             "se3_motion_cap": DEFAULT_SE3_MOTION_CAP,
+            "se3_checks": tp.se3_checks,
             "clearance": clearance,
             "contact_radius": radius,
             "rot_weight": rot_weight,

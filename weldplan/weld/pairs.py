@@ -380,7 +380,7 @@ class PairPlanning:
         return self.close_gap(seq)
 
     def close_gap(self, seq: Any) -> Any:
-        """With fast-tsp above Held-Karp size in the lazy mode: plan the legs that optimistic
+        """With fast-tsp or nn above Held-Karp size in the lazy mode: plan the legs that optimistic
         orders use until the route is within ``config.gap_target`` of one
         (:func:`weldplan.weld.converge.close_gap`); ``self.gap_rounds`` records the rounds."""
         from weldplan.optim.discrete.sequence import resolve_method, solve_sequence
@@ -390,7 +390,7 @@ class PairPlanning:
         if (
             config.gap_target is None
             or self.leg_cost is not None  # its optimistic orders are over lengths
-            or resolve_method(config.sequencer, self.n) != "fast-tsp"
+            or resolve_method(config.sequencer, self.n) not in ("fast-tsp", "nn")
             or config.pairs != "lazy"
             or self.n <= self.exact_max
         ):
@@ -405,7 +405,9 @@ class PairPlanning:
             self.C,
             self.known,
             self.pair_index,
-            optimistic=lambda Cb: solve_sequence(Cb, method="fast-tsp", **budget),
+            optimistic=lambda Cb: solve_sequence(
+                Cb, method=resolve_method(config.sequencer, self.n), rng=self.gen, **budget
+            ),
             plan=self.plan,
             resequence=lambda: self.settle(config.sequencer),
             near=self.near_unknown,

@@ -47,9 +47,10 @@ the legs planned in between changed cost; ``PlanConfig.warm_rounds``, ``warm_kic
 solving from scratch: a fresh polish at 1000 joints makes 10,000 kicks (about 40 s), and the
 1000-joint car2 set needed tens of rounds.
 
-With the default sequencer (fast-tsp above 13 joints) there are no warm rounds (it has no warm
-start; a solve at 1000 joints takes about a second), legs not yet known are *avoided* rather
-than penalised, and the rounds go on past the first route: :func:`weldplan.weld.converge.close_gap`
+With the default sequencer above 13 joints (``"nn"``: nearest neighbour and the seeded polish,
+reproducible) and with fast-tsp (no warm start, not reproducible: legs not yet known are
+*avoided* rather than penalised), the rounds go on past the first route:
+:func:`weldplan.weld.converge.close_gap`
 plans the legs that optimistic orders (over planned lengths and lower-bound estimates) use
 until the route is within ``PlanConfig.gap_target`` of one; ``Route.stats["gap_planned"]`` is
 then the route's gap to the proved bound over the same costs (``bound_planned``).
@@ -116,8 +117,9 @@ class PlanConfig:
         ``"so-aco"`` (the paper's Wang et al. 2017 planner, as printed with ``refine=False``),
         ``"aco"`` or ``"ompl"`` (OMPL's BIT*, needs the ompl extra).
     sequencer
-        ``"auto"`` (Held-Karp up to 13 joints, else fast-tsp), ``"fast-tsp"``, ``"pso"`` (the
-        paper's TSP-PSO + polish), ``"exact"``, ``"nn"``.
+        ``"auto"`` (Held-Karp up to 13 joints, else ``"nn"``), ``"fast-tsp"`` (not
+        reproducible: :mod:`weldplan.optim.discrete.sequence`), ``"pso"`` (the paper's TSP-PSO
+        + polish), ``"exact"``, ``"nn"`` (nearest neighbour + the seeded polish).
     pairs
         ``"lazy"`` (plan the blocked pairs the order uses, module docstring) or ``"all"``.
     aco
@@ -181,7 +183,7 @@ class PlanConfig:
     Every field is checked when the config is made (:mod:`weldplan.weld.validate`): a wrong type,
     NaN or out-of-range value raises :class:`~weldplan.errors.ConfigError`, a ``ValueError``.
     gap_target
-        With the fast-tsp sequencer above :data:`LOWER_BOUND_EXACT_MAX` joints in the lazy mode:
+        With the nn or fast-tsp sequencer above :data:`LOWER_BOUND_EXACT_MAX` joints, lazy mode:
         after the known-first rounds, plan the legs that optimistic orders (over planned
         lengths and lower-bound estimates) use until the route is within this relative gap of
         such an order (:func:`weldplan.weld.converge.close_gap`); the proved bound and gap are

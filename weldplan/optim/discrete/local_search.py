@@ -48,7 +48,9 @@ class PolishParams:
     Attributes
     ----------
     neighbours
-        Candidate list length ``K`` (nearest nodes by ``min(A[i, j], A[j, i])``).
+        Candidate list length ``K`` (nearest nodes by ``min(A[i, j], A[j, i])``). 16: from nearest
+        neighbour with the default kicks, seeds 0-2, ch130 ends 0-0.2 % above the optimum and a280
+        1.4-1.5 % (K = 10: 0-1.1 % and 1.1-2.4 %, in about the same time).
     max_segment
         Longest segment Or-opt moves (Or 1976: 3).
     kicks
@@ -67,7 +69,7 @@ class PolishParams:
         limits. A time limit makes results depend on the machine, so it is off by default.
     """
 
-    neighbours: int = 10
+    neighbours: int = 16
     max_segment: int = 3
     kicks: int | None = None
     window: int = 50

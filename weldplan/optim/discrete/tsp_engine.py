@@ -39,9 +39,14 @@ The budget is wall time for the whole call: the conversion and checks above come
 (about 0.15 CPU s at 2,152 nodes, fast-tsp's set-up included) and fast-tsp searches for the
 rest, with one thread on each available core (:func:`search_threads`; fast-tsp's own default is
 one thread). The returned lengths are always recomputed in floats over the caller's matrix,
-never read back from the integers. fast-tsp has no seed: its result depends on wall time and on
-how the threads are scheduled (two runs may return different tours of nearly equal cost). It
-solves up to 20 nodes exactly, in milliseconds.
+never read back from the integers. fast-tsp has no seed and cannot be given one: its Rust core
+draws its perturbations from ``fastrand``'s process-wide generator, seeded from fresh entropy in
+each process, so even with ``stop_when_converged`` and ``duration_seconds=inf`` (no clock) and
+one thread, two runs may return different tours (a280: three runs, three different optimal
+tours); with this wrapper's wall-clock budget the length varies too (lin318 at the optimum in
+one run, 0.27 % above it in another). It solves up to 20 nodes exactly, in
+milliseconds. The sequencer's default is therefore not this engine
+(:mod:`weldplan.optim.discrete.sequence`).
 """
 
 from __future__ import annotations
