@@ -20,7 +20,7 @@ import pytest
 
 from tests.conftest import ROOT, require_shared
 from tests.test_robot_cli import _torch_urdf
-from weldplan.commands._summary import clock_caps
+from weldplan.station.summary import clock_caps
 
 
 def _plan(folder: Path, torch: Path, seed: int) -> subprocess.CompletedProcess:
