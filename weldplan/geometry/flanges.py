@@ -26,8 +26,8 @@ API (what ``weldplan check-spots`` and the tests call)
 
 How a stack is measured (vectorised: open3d ray casting in C++, numpy over all rays)
 -------------------------------------------------------------------------------------
-Through a point, the **normal line** (the normal of the nearest sheet face, ``window`` mm each
-way) is cast against every sheet at once (``RaycastingScene.list_intersections``). The hits of
+Through a point, the whole **normal line** (along the normal of the nearest sheet face) is
+cast against every sheet at once (``RaycastingScene.list_intersections``). The hits of
 one sheet pair up into **layers** (entry, exit: a closed sheet's two faces; a lone hit is a
 zero-thickness surface sheet). Consecutive layers whose faces are parallel (within
 ``parallel_deg`` of the line) and at most ``max_gap`` apart form a **run**; the run nearest the
@@ -88,6 +88,9 @@ VERDICTS: tuple[str, ...] = (
 #: a wall's patch normal is oriented to this side (a generic direction: no face is exactly
 #: perpendicular to it)
 _CANONICAL = np.array([0.5773, 0.5774, 0.5775])
+#: a wall is a closed body crossed in and out at least this far apart (mm); a lone crossing
+#: (an open surface sheet: no thickness to straddle) is a single skin
+_MIN_WALL = 1e-3
 
 
 @dataclass(frozen=True)
@@ -218,7 +221,7 @@ def _verdict(
     sheets: Sheets, f: Found, i: int, X: NDArray, N: NDArray, s: FlangeSettings
 ) -> tuple[str, str, Stack | None, NDArray[np.float64]]:
     """The stack at point ``i`` before the edge march, or the verdict why there is none."""
-    L, W = f.layers, s.window
+    L, W = f.layers, sheets.reach
     if f.near[i] < 0:
         return "single skin", "the normal line meets no sheet", None, X
     a, b = int(f.first[i]), int(f.last[i])
@@ -229,7 +232,7 @@ def _verdict(
     thick = float(L.t_out[b] - L.t_in[a])
     j = int(f.iface[i])
     if j < 0:  # one sheet
-        if s.walls and thick <= s.max_wall:
+        if s.walls and _MIN_WALL < thick <= s.max_wall:
             pos = X + ((L.t_in[a] + L.t_out[a]) / 2 - W) * N
             st = Stack(
                 "wall", names, gauges, (), thick, _t3(N), (names[0], names[0]), math.inf, None
@@ -303,15 +306,12 @@ def find_flanges(
     s = settings or FlangeSettings()
     sheets = _sheets(part_or_sheets)
     gen = as_generator(rng)
-    pts, nrm = [], []
-    for m in sheets.meshes:
-        count = max(int(math.ceil(m.area / s.spacing**2)), 1)
-        P, face = trimesh.sample.sample_surface(m, count, seed=int(gen.integers(2**31)))
-        pts.append(np.asarray(P))
-        nrm.append(np.asarray(m.face_normals)[face])
-    P, N = np.concatenate(pts), np.concatenate(nrm)
+    m = sheets.mesh
+    count = max(int(math.ceil(m.area / s.spacing**2)), 1)
+    P, face = trimesh.sample.sample_surface(m, count, seed=int(gen.integers(2**31)))
+    P, N = np.asarray(P, np.float64), np.asarray(m.face_normals, np.float64)[face]
     f = find_stacks(sheets, P, N, s)
-    L, W = f.layers, s.window
+    L, W = f.layers, sheets.reach
     thick = f.thickness()
     j = f.iface
     lap = (j >= 0) & (thick <= s.max_stack)
@@ -319,7 +319,7 @@ def find_flanges(
     B = np.where(lap, L.body[np.maximum(j, 0) + 1], -1)
     t_snap = np.where(lap, (L.t_out[np.maximum(j, 0)] + L.t_in[np.maximum(j, 0) + 1]) / 2, np.nan)
     if s.walls:
-        wall = ~lap & (f.near >= 0) & (f.iface < 0) & (thick <= s.max_wall)
+        wall = ~lap & (f.near >= 0) & (f.iface < 0) & (thick > _MIN_WALL) & (thick <= s.max_wall)
         k = np.maximum(f.first, 0)
         A = np.where(wall, L.body[k], A)
         B = np.where(wall, L.body[k], B)

@@ -1,6 +1,6 @@
 """Sheet stacks along normal lines: the ray casts under :mod:`weldplan.geometry.flanges`.
 
-Through a point, the normal line (``window`` mm each way) is cast against every sheet at once
+Through a point, the whole normal line is cast against every sheet at once
 (open3d ``RaycastingScene.list_intersections``: C++, all rays in one call). The hits of one
 sheet pair into layers (entry, exit; a lone hit is a zero-thickness surface sheet), consecutive
 layers whose faying faces are parallel and at most ``max_gap`` apart form runs, and the run
@@ -44,8 +44,6 @@ class FlangeSettings:
         Thickest stack that counts (the shared C-gun opens 46.5 mm; less room for clearance).
     search_radius
         A spot farther than this from every sheet is ``"no sheet"``.
-    window
-        Half-length of the normal line cast through a point.
     edge_reach, edge_step, directions
         The edge march: how far, how fine up to 40 mm, in how many directions (even).
     walls, max_wall
@@ -60,7 +58,6 @@ class FlangeSettings:
     min_overlap: float = 14.0
     max_stack: float = 40.0
     search_radius: float = 20.0
-    window: float = 60.0
     edge_reach: float = 250.0
     edge_step: float = 0.5
     directions: int = 16
@@ -70,7 +67,7 @@ class FlangeSettings:
 
     def __post_init__(self) -> None:
         for name in (
-            "max_gap", "parallel_deg", "min_overlap", "max_stack", "search_radius", "window",
+            "max_gap", "parallel_deg", "min_overlap", "max_stack", "search_radius",
             "edge_reach", "edge_step", "max_wall", "spacing",
         ):  # fmt: skip
             v = getattr(self, name)
@@ -81,57 +78,56 @@ class FlangeSettings:
 
 
 class Sheets:
-    """The sheets of a part, prepared for ray casts (an open3d scene, one geometry per sheet).
+    """The sheets of a part, prepared for ray casts (one open3d scene; each face knows its sheet).
 
     Parameters
     ----------
     part_or_sheets
         A mesh (connected components are the sheets), a Scene, a ``{name: mesh}`` mapping or a
         list of meshes (mm).
+
+    Attributes
+    ----------
+    names
+        The sheets' names; ``body0, body1, ...`` for a mesh or a list.
+    mesh
+        All sheets in one mesh, and ``face_sheet (faces,)`` the sheet of each face.
+    reach
+        mm: every normal line starts this far behind its point, outside the part's bounding
+        box, so that every sheet it crosses is crossed whole.
     """
 
     def __init__(self, part_or_sheets: Any) -> None:
         import open3d as o3d
 
-        names, meshes = _split(part_or_sheets)
+        names, mesh, face_sheet = _split(part_or_sheets)
         self.names: tuple[str, ...] = tuple(names)
+        self.mesh = mesh
+        self.face_sheet = face_sheet
+        self._normals = np.asarray(mesh.face_normals, np.float64)
+        self.reach = float(np.linalg.norm(mesh.extents)) + 10.0
         self.scene = o3d.t.geometry.RaycastingScene()
-        self._normals = []
-        for m in meshes:
-            gid = self.scene.add_triangles(
-                np.asarray(m.vertices, np.float32), np.asarray(m.faces, np.uint32)
-            )
-            if gid != len(self._normals):
-                raise RuntimeError("open3d geometry ids out of order")
-            self._normals.append(np.asarray(m.face_normals, np.float64))
-        self.meshes: tuple[trimesh.Trimesh, ...] = tuple(meshes)
+        self.scene.add_triangles(
+            np.asarray(mesh.vertices, np.float32), np.asarray(mesh.faces, np.uint32)
+        )
 
     def closest(self, points: NDArray[np.float64]) -> tuple[NDArray, NDArray, NDArray]:
         """Nearest sheet points ``(n, 3)``, their sheet ``(n,)`` and face normal ``(n, 3)``."""
         q = self.scene.compute_closest_points(np.asarray(points, np.float32))
-        body = q["geometry_ids"].numpy().astype(np.int64)
         face = q["primitive_ids"].numpy().astype(np.int64)
-        normal = np.zeros((len(body), 3))
-        for b in np.unique(body):
-            normal[body == b] = self._normals[b][face[body == b]]
-        return q["points"].numpy().astype(np.float64), body, normal
+        X = q["points"].numpy().astype(np.float64)
+        return X, self.face_sheet[face], self._normals[face]
 
-    def layers(self, origins: NDArray, dirs: NDArray, length: float) -> _Layers:
-        """The layers crossed by rays ``origins + t dirs``, ``0 <= t <= length`` (unit dirs)."""
-        rays = np.hstack([origins, dirs]).astype(np.float32)
+    def layers(self, points: NDArray, dirs: NDArray) -> _Layers:
+        """The layers crossed by the lines through ``points (n, 3)`` along unit ``dirs (n, 3)``,
+        at depths ``t`` from ``points - reach * dirs`` (the point itself at ``t = reach``)."""
+        rays = np.hstack([points - self.reach * dirs, dirs]).astype(np.float32)
         lx = {k: v.numpy() for k, v in self.scene.list_intersections(rays).items()}
         ray = lx["ray_ids"].astype(np.int64)
-        body = lx["geometry_ids"].astype(np.int64)
-        t = lx["t_hit"].astype(np.float64)
         face = lx["primitive_ids"].astype(np.int64)
-        keep = t <= length
-        ray, body, t, face = ray[keep], body[keep], t[keep], face[keep]
-        n = np.zeros((len(t), 3))
-        for b in np.unique(body):
-            sel = body == b
-            n[sel] = self._normals[b][face[sel]]
-        cos = np.einsum("ij,ij->i", n, dirs[ray])
-        return _pair_hits(ray, body, t, cos)
+        t = lx["t_hit"].astype(np.float64)
+        cos = np.einsum("ij,ij->i", self._normals[face], dirs[ray])
+        return _pair_hits(ray, self.face_sheet[face], t, cos)
 
 
 @dataclass(frozen=True)
@@ -197,19 +193,19 @@ def _pair_hits(ray: NDArray, body: NDArray, t: NDArray, cos: NDArray) -> _Layers
     return _Layers(L_ray[o], L_body[o], L_in[o], L_out[o], c_in[o], c_out[o])
 
 
-def _split(part_or_sheets: Any) -> tuple[list[str], list[trimesh.Trimesh]]:
-    """Names and meshes of the sheets (class docstring of :class:`Sheets`)."""
+def _split(part_or_sheets: Any) -> tuple[list[str], trimesh.Trimesh, NDArray[np.int64]]:
+    """Names of the sheets, all of them in one mesh, and the sheet of each of its faces."""
     obj = part_or_sheets
     if isinstance(obj, trimesh.Scene):
         obj = {name: g for name, g in obj.geometry.items() if isinstance(g, trimesh.Trimesh)}
+    if isinstance(obj, trimesh.Trimesh):
+        if len(obj.faces) == 0:
+            raise InputError("the part has no triangles", field="part")
+        labels = trimesh.graph.connected_component_labels(obj.face_adjacency, len(obj.faces))
+        _, labels = np.unique(labels, return_inverse=True)
+        return [f"body{k}" for k in range(labels.max() + 1)], obj, labels.astype(np.int64)
     if isinstance(obj, Mapping):
         names, meshes = [str(k) for k in obj], list(obj.values())
-    elif isinstance(obj, trimesh.Trimesh):
-        labels = trimesh.graph.connected_component_labels(obj.face_adjacency, len(obj.faces))
-        meshes = [
-            obj.submesh([np.flatnonzero(labels == c)], append=True) for c in np.unique(labels)
-        ]
-        names = [f"body{k}" for k in range(len(meshes))]
     elif isinstance(obj, Sequence):
         meshes, names = list(obj), [f"body{k}" for k in range(len(obj))]
     else:
@@ -218,7 +214,8 @@ def _split(part_or_sheets: Any) -> tuple[list[str], list[trimesh.Trimesh]]:
         )
     if not meshes or any(not isinstance(m, trimesh.Trimesh) or len(m.faces) == 0 for m in meshes):
         raise InputError("the part has no sheet with triangles", field="part")
-    return names, meshes
+    labels = np.repeat(np.arange(len(meshes)), [len(m.faces) for m in meshes])
+    return names, trimesh.util.concatenate(meshes), labels
 
 
 @dataclass(frozen=True)
@@ -243,8 +240,8 @@ def find_stacks(sheets: Sheets, P: NDArray, N: NDArray, s: FlangeSettings) -> Fo
     """Cast the normal line through every point ``P (n, 3)`` along ``N (n, 3)``; the stack of
     each (module docstring): the run of the layer nearest the point and its faying surface
     nearest the point."""
-    n, W = len(P), s.window
-    L = sheets.layers(P - W * N, N, 2 * W)
+    n, W = len(P), sheets.reach
+    L = sheets.layers(P, N)
     run = L.runs(s.max_gap, math.cos(math.radians(s.parallel_deg)))
     near = L.nearest(n, W)
     has = near >= 0
@@ -296,12 +293,12 @@ def _probe(
     face; a wall when equal) goes on, and whether any sheet lies within its thickness plus
     ``max_gap`` of its plane. Both ``(m, K, r) bool``."""
     m, K, r = radii.shape
-    W = s.window
+    W = sheets.reach
     Q = C[:, None, None] + radii[..., None] * D[:, :, None]  # (m, K, r, 3)
     NN = np.broadcast_to(N[:, None, None], Q.shape).reshape(-1, 3)
     Q = Q.reshape(-1, 3)
     owner = np.repeat(np.arange(m), K * r)
-    L = sheets.layers(Q - W * NN, NN, 2 * W)
+    L = sheets.layers(Q, NN)
     o = owner[L.ray]
     reach = thick[o] + s.max_gap
     mid_d = np.maximum.reduce([L.t_in - W, W - L.t_out, np.zeros(len(L.ray))])
@@ -312,7 +309,7 @@ def _probe(
     wall = A[o] == B[o]
     w_ok = wall & (L.body == A[o]) & (mid_d <= reach)
     w_ok &= (L.cos_in >= min_cos) & (L.cos_out >= min_cos)
-    w_ok &= L.t_out - L.t_in <= thick[o] + s.max_gap
+    w_ok &= (L.t_out - L.t_in <= thick[o] + s.max_gap) & (L.t_out > L.t_in)
     cont[L.ray[w_ok]] = True
     if len(L.ray) > 1:
         j = np.arange(len(L.ray) - 1)
