@@ -94,9 +94,10 @@ def test_search_finds_a_pose_wherever_the_oracle_does_small(gun):
 
 @pytest.mark.slow
 def test_search_finds_a_pose_wherever_the_oracle_does(gun):
-    """Issue 29, item 5: at least 100 spots of the generated side frame."""
-    st = generate_side_frame(frame_settings("default", 120), rng=0)
-    c = completeness(st.combined(), st.spots, gun)
+    """Issue 29, item 5: at least 100 spots of the generated side frame (every other spot of
+    its 241: all three members)."""
+    st = generate_side_frame(rng=0)
+    c = completeness(st.combined(), _subset(st.spots, range(0, len(st.spots), 2)), gun)
     assert sum(c.oracle) >= 100
     assert c.misses == (), f"oracle closes, search does not: {c.misses}"
 

@@ -148,6 +148,10 @@ def test_bad_settings_and_files_are_one_line_errors(tmp_path):
     with pytest.raises(SystemExit) as exc:
         main([str(tmp_path / "x"), "--spots", "100000"])
     assert exc.value.code == 2
+    (tmp_path / "file").write_text("")
+    with pytest.raises(SystemExit) as exc:
+        main([str(tmp_path / "file" / "out")])  # a path through a file: one line, exit 2
+    assert exc.value.code == 2
     bad = tmp_path / "bad.obj"
     bad.write_text("o a\nv 0 0 0\nf 1 2 3\n")
     with pytest.raises(InputError, match="line 3"):

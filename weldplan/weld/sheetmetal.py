@@ -490,7 +490,12 @@ def write_station(station: SheetStation, out: str | PathLike[str]) -> list[Path]
     from weldplan.io.outputset import check_outputs, write_outputs
 
     folder = Path(out)
-    folder.mkdir(parents=True, exist_ok=True)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(
+            f"cannot make the output folder ({exc.strerror or exc})", path=folder
+        ) from exc
     texts = {folder / name: text for name, text in station_texts(station).items()}
     check_outputs({p.name: p for p in texts})
     return write_outputs(texts)
