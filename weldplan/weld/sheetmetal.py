@@ -465,7 +465,7 @@ def station_texts(station: SheetStation) -> dict[str, str]:
     assert station.spots.directions is not None
     for k, jid in enumerate(station.spots.ids):
         x, y, z = station.spots.xyz[k]
-        nx, ny, nz = station.spots.directions[k]
+        nx, ny, nz = station.spots.directions[k] + 0.0  # no "-0.000000"
         rows.append(
             f"{jid},{x:.6f},{y:.6f},{z:.6f},{nx:.6f},{ny:.6f},{nz:.6f},{station.spot_flange[k]}"
         )
