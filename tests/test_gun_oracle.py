@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import require_shared
 
+from tests.conftest import require_shared
 from weldplan.bench.gun_oracle import (
     GunOracle,
     OracleSettings,
