@@ -148,3 +148,21 @@ def test_bad_input_is_a_one_line_error(station):
     with pytest.raises(InputError, match="no sheet"):
         Sheets([trimesh.Trimesh()])
     assert snap_spots(station.sheets, np.zeros((0, 3))) == ()
+
+
+def _plate(z: float, size: float = 300.0) -> trimesh.Trimesh:
+    """An open square surface (two triangles, no thickness) at height ``z``."""
+    h = size / 2
+    v = [[-h, -h, z], [h, -h, z], [h, h, z], [-h, h, z]]
+    return trimesh.Trimesh(v, [[0, 1, 2], [0, 2, 3]], process=False)
+
+
+def test_surface_models_stack_by_their_distance_and_a_lone_surface_is_a_single_skin():
+    """Mid-surface sheets (no thickness): two surfaces 1.5 mm apart are a stack whose
+    thickness is their distance; one surface alone is a single skin, walls or not."""
+    s = snap_spots([_plate(0.0), _plate(1.5)], [[0.0, 130.0, 0.7]])[0]
+    assert s.ok and s.stack.thickness == pytest.approx(1.5, abs=1e-4)
+    assert s.stack.gauges == (0.0, 0.0) and s.stack.edge_distance == pytest.approx(20.0, abs=0.5)
+    for walls in (False, True):
+        lone = snap_spots([_plate(0.0)], [[0.0, 130.0, 0.5]], FlangeSettings(walls=walls))[0]
+        assert lone.verdict == "single skin" and "0.00 mm" in lone.reason

@@ -239,7 +239,7 @@ def _verdict(
             )
             return "wall", "", st, pos
         what = f"one sheet ({names[0]}, {thick:.2f} mm)"
-        if s.walls:
+        if s.walls and thick > _MIN_WALL:
             return (
                 "too thick",
                 f"{what} is thicker than the {s.max_wall:g} mm a gun straddles",
@@ -277,7 +277,10 @@ def _judged(i: int, st: Stack, pos: NDArray, dist: float, s: FlangeSettings) -> 
     if st.edge_distance is None:
         reason = f"{what} has no free edge within {s.edge_reach:g} mm"
         return SpotSnap(i, False, "no free edge", reason, _t3(pos), dist, st)
-    reason = f"joins {st.joins[0]} and {st.joins[1]}: {what}, edge {st.edge_distance:.1f} mm away"
+    joins = (
+        f"is a wall of {st.joins[0]}" if st.kind == "wall" else "joins " + " and ".join(st.joins)
+    )
+    reason = f"{joins}: {what}, edge {st.edge_distance:.1f} mm away"
     return SpotSnap(i, True, st.kind if st.kind == "wall" else "stack", reason, _t3(pos), dist, st)
 
 
