@@ -148,6 +148,9 @@ def test_bad_settings_and_files_are_one_line_errors(tmp_path):
     with pytest.raises(SystemExit) as exc:
         main([str(tmp_path / "x"), "--spots", "100000"])
     assert exc.value.code == 2
+    with pytest.raises(SystemExit) as exc:
+        main([str(tmp_path / "y"), "--pitch", "0", "3"])
+    assert exc.value.code == 2
     (tmp_path / "file").write_text("")
     with pytest.raises(SystemExit) as exc:
         main([str(tmp_path / "file" / "out")])  # a path through a file: one line, exit 2

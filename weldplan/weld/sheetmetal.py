@@ -502,7 +502,8 @@ def write_station(station: SheetStation, out: str | PathLike[str]) -> list[Path]
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m weldplan.weld.sheetmetal OUT [--seed S] [--spots N]``: write a station."""
+    """``python -m weldplan.weld.sheetmetal OUT [--seed S] [--spots N] [--gap MM]
+    [--thickness LO HI] [--overlap LO HI] [--pitch LO HI]``: write a station."""
     ap = argparse.ArgumentParser(
         prog="python -m weldplan.weld.sheetmetal", description=__doc__.splitlines()[0]
     )
@@ -510,12 +511,27 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--spots", type=int, default=None, help="number of spots (default: all)")
     ap.add_argument("--gap", type=float, default=SheetFrameSettings.gap, help="air gap, mm")
+    d = SheetFrameSettings()
+    for name, what in (
+        ("thickness", "sheet gauges"),
+        ("overlap", "flange overlaps"),
+        ("pitch", "spot pitch"),
+    ):
+        ap.add_argument(f"--{name}", type=float, nargs=2, metavar=("LO", "HI"),
+                        default=getattr(d, name), help=f"range of the {what}, mm")  # fmt: skip
     args = ap.parse_args(argv)
     from weldplan.errors import WeldplanError
 
     try:
         station = generate_side_frame(
-            SheetFrameSettings(n_spots=args.spots, gap=args.gap), rng=args.seed
+            SheetFrameSettings(
+                n_spots=args.spots,
+                gap=args.gap,
+                thickness=tuple(args.thickness),
+                overlap=tuple(args.overlap),
+                pitch=tuple(args.pitch),
+            ),
+            rng=args.seed,
         )
         paths = write_station(station, args.out)
     except WeldplanError as exc:
