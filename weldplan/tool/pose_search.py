@@ -33,6 +33,7 @@ import trimesh
 from numpy.typing import NDArray
 
 from weldplan.tool.model import Tool, bvh
+from weldplan.tool.pose_bound import PoseBound
 from weldplan.tool.result import Miss
 from weldplan.tool.verify_poses import triangle_crossings
 
@@ -86,6 +87,7 @@ class PoseSearch:
     ) -> None:
         self.part = part
         self.tool = tool
+        self.radius = float(radius)
         self.clearance = clearance
         self.crop = crop
         model, self.triangles = tool.fcl_model(radius)
@@ -97,6 +99,10 @@ class PoseSearch:
         self._last: tuple[NDArray, fcl.CollisionObject | None, NDArray[np.int64]] | None = None
         #: crops built so far (``crop=True``)
         self.crops_built = 0
+        self._bound: PoseBound | None = None
+        #: candidates whose clearance :meth:`clearances` judged, those the sphere bound alone
+        #: showed free, and the FCL distance queries of tool pieces it asked
+        self.bound_counts = {"judged": 0, "bound_free": 0, "piece_queries": 0}
 
     def near_faces(self, p: NDArray, margin: float = 0.0) -> NDArray[np.int64]:
         """``(k,)``: indices of the part's triangles whose bounding boxes come within the tool's
@@ -174,6 +180,30 @@ class PoseSearch:
         return float(
             fcl.distance(self.tool_obj, part_obj, fcl.DistanceRequest(), fcl.DistanceResult())
         )
+
+    def clearances(
+        self,
+        part_objs: list[fcl.CollisionObject | None],
+        P: NDArray,
+        Rs: NDArray,
+        *,
+        first_free: bool = False,
+    ) -> NDArray[np.float64]:
+        """``(c,)`` mm: whether the tool outside the zone keeps the clearance with the TCP at
+        ``P (c, 3)`` and rotations ``Rs (c, 3, 3)``, checked against ``part_objs`` (``c`` of
+        :meth:`part_near`'s objects), for candidates that do not collide: at least
+        :attr:`clearance` exactly where it does, but a bound, not the distance
+        (:class:`~weldplan.tool.pose_bound.PoseBound`: sphere bounds, FCL on the tool's pieces
+        that they do not clear). ``first_free``: up to the first that keeps it, NaN after."""
+        if self.clearance <= 0:
+            return np.full(len(Rs), np.inf)
+        if self._bound is None:
+            self._bound = PoseBound(self.part, self.tool, self.radius, self.clearance)
+        out = self._bound.classify(part_objs, P, Rs, first_free=first_free)
+        self.bound_counts["judged"] += int(np.sum(~np.isnan(out.value)))
+        self.bound_counts["piece_queries"] += out.fcl_queries
+        self.bound_counts["bound_free"] += out.bound_free
+        return out.value
 
     def miss(
         self,
