@@ -78,10 +78,19 @@ class ToolPieces:
     children: tuple[tuple[NDArray[np.int64], NDArray[np.int64]], ...]
     objects: tuple[fcl.CollisionObject, ...]
 
+    @staticmethod
+    def _key(tool: Tool, radius: float) -> tuple:
+        return ("pose_pieces", float(radius), tool.tip_cone, PIECE_EDGE_MM, PIECE_LEVELS)
+
+    @classmethod
+    def cached(cls, tool: Tool, radius: float) -> bool:
+        """Whether :meth:`of` has built the pieces of ``tool`` for ``radius`` already."""
+        return cls._key(tool, radius) in tool._cache
+
     @classmethod
     def of(cls, tool: Tool, radius: float) -> ToolPieces:
         """The pieces of ``tool`` outside its zone of ``radius`` mm (cached on the tool)."""
-        key = ("pose_pieces", float(radius), tool.tip_cone, PIECE_EDGE_MM, PIECE_LEVELS)
+        key = cls._key(tool, radius)
         if key not in tool._cache:
             v, f = tool.outside_zone(radius)
             tool._cache[key] = cls.build(v, f)
