@@ -69,9 +69,9 @@ def _first_free(
 
     The order only decides which measurements come first: the DP that runs next still sees every
     candidate not known to fail, so the final choice is the same optimum (see :func:`choose`).
-    The candidates are judged in chunks (:data:`MEASURE_CHUNK`) (:meth:`PoseSearch.clearances`,
-    its sphere bounds vectorised over the chunk), and only up to the first free one, as one at
-    a time would: what the choice learns is the same.
+    The candidates are judged by :meth:`PoseSearch.clearances` in chunks of growing size
+    (:data:`MEASURE_CHUNK`; its sphere bounds are vectorised over a chunk), and only up to the
+    first free one, as one at a time would: what the choice learns is the same.
     """
     todo = np.flatnonzero(np.isnan(dists[i]) & allowed[i])
     cost = rotation_angles(quats[i, todo], ref).sum(axis=1)
