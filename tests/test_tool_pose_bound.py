@@ -158,6 +158,28 @@ def test_the_search_chooses_what_the_whole_tool_distance_chose(monkeypatch):
     assert fast.poses[4].miss.distance > 0  # short, not colliding: measured exactly
 
 
+def test_a_second_search_of_the_same_part_reuses_the_answers_and_gives_the_same_poses():
+    part, fork = _sheet(), _fork()
+    joints = Joints(
+        ids=["a", "b"], xyz=[(-60.0, 30.0, 0.0), (0.0, 30.0, 0.0)], directions=[[0.0, 0.0, 1.0]] * 2
+    )
+    kw = {"clearance": CLEARANCE, "spin_step": 30.0}
+    first = plan_weld_poses(part, joints, fork, **kw)
+    again = plan_weld_poses(part, joints, fork, **kw)
+    assert first.stats["clearance_memo"] == 0
+    # every collide and every clearance the first search asked is found, none asked again
+    assert (
+        again.stats["clearance_memo"]
+        == first.stats["collision_queries"] + first.stats["distance_queries"]
+    )
+    assert again.stats["clearance_judged"] == 0
+    assert [p.to_dict() for p in again.poses] == [p.to_dict() for p in first.poses]
+    # another part (a copy: the same triangles) starts a memo of its own
+    other = plan_weld_poses(part.copy(), joints, fork, **kw)
+    assert other.stats["clearance_memo"] == 0
+    assert [p.to_dict() for p in other.poses] == [p.to_dict() for p in first.poses]
+
+
 @pytest.fixture(scope="module")
 def demo_gun():
     d = require_shared("tools", "spot_welding_gun")

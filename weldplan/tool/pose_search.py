@@ -26,6 +26,8 @@ hits, not an optimum.
 from __future__ import annotations
 
 import logging
+import weakref
+from typing import Any
 
 import fcl
 import numpy as np
@@ -60,6 +62,21 @@ def probe_positions(n: int) -> NDArray[np.int64]:
     """The positions among ``n`` candidates that the closest-miss probe looks at: up to
     :data:`MISS_PROBES`, evenly spread."""
     return np.unique(np.linspace(0, n - 1, min(n, MISS_PROBES)).astype(np.int64))
+
+
+def _memo(
+    tool: Tool, part: trimesh.Trimesh, radius: float, clearance: float, crop: bool
+) -> dict[str, Any]:
+    """The collide and clearance answers of the searches of ``part`` with ``tool`` (cached on
+    the tool, for the one part it was last searched against): a station's poses are searched
+    twice (without the robot's test for the base search, then with it), over the same
+    candidates. Keyed by the TCP position and rotation bytes (and the contact cap): the same
+    query, the same FCL answer."""
+    key = ("pose_memo", float(radius), float(clearance), bool(crop), tool.tip_cone)
+    memo = tool._cache.get(key)
+    if memo is None or memo["part"]() is not part:
+        memo = tool._cache[key] = {"part": weakref.ref(part), "touch": {}, "clear": {}}
+    return memo
 
 
 class PoseSearch:
@@ -105,8 +122,10 @@ class PoseSearch:
         self.crops_built = 0
         self._bound: PoseBound | None = None
         #: candidates whose clearance :meth:`clearances` judged, those the sphere bound alone
-        #: showed free, and the FCL distance queries of tool pieces it asked
-        self.bound_counts = {"judged": 0, "bound_free": 0, "piece_queries": 0}
+        #: showed free, the FCL distance queries of tool pieces it asked, and the collide and
+        #: clearance answers found in the memo of an earlier search (:func:`_memo`)
+        self.bound_counts = {"judged": 0, "bound_free": 0, "piece_queries": 0, "memo": 0}
+        self._memo = _memo(tool, part, radius, clearance, crop)
 
     def near_faces(self, p: NDArray, margin: float = 0.0) -> NDArray[np.int64]:
         """``(k,)``: indices of the part's triangles whose bounding boxes come within the tool's
@@ -171,9 +190,17 @@ class PoseSearch:
         if part_obj is None:
             return out
         req = fcl.CollisionRequest(num_max_contacts=cap, enable_contact=False)
+        memo = self._memo["touch"]
+        at = np.ascontiguousarray(p, dtype=np.float64).tobytes() + bytes([cap])
         for k, R in enumerate(Rs):
-            self.tool_obj.setTransform(fcl.Transform(R, p))
-            out[k] = fcl.collide(self.tool_obj, part_obj, req, fcl.CollisionResult())
+            key = at + np.ascontiguousarray(R, dtype=np.float64).tobytes()
+            hit = memo.get(key)
+            if hit is None:
+                self.tool_obj.setTransform(fcl.Transform(R, p))
+                hit = memo[key] = fcl.collide(self.tool_obj, part_obj, req, fcl.CollisionResult())
+            else:
+                self.bound_counts["memo"] += 1
+            out[k] = hit
         return out
 
     def distance(self, part_obj: fcl.CollisionObject | None, p: NDArray, R: NDArray) -> float:
@@ -206,6 +233,33 @@ class PoseSearch:
         them (car2_50: 32)."""
         if self.clearance <= 0:
             return np.full(len(Rs), np.inf)
+        memo = self._memo["clear"]
+        keys = [
+            np.ascontiguousarray(p, dtype=np.float64).tobytes()
+            + np.ascontiguousarray(R, dtype=np.float64).tobytes()
+            for p, R in zip(P, Rs, strict=True)
+        ]
+        known = np.array([memo.get(k, np.nan) for k in keys])
+        free = np.flatnonzero(known >= self.clearance)
+        upto = int(free[0]) + 1 if first_free and len(free) else len(keys)
+        if not np.isnan(known[:upto]).any():  # an earlier search judged them all
+            self.bound_counts["memo"] += upto
+            known[upto:] = np.nan
+            return known
+        out = self._judge(part_objs, P, Rs, first_free)
+        for k, v in zip(keys, out, strict=True):
+            if not np.isnan(v):
+                memo[k] = float(v)
+        return out
+
+    def _judge(
+        self,
+        part_objs: list[fcl.CollisionObject | None],
+        P: NDArray,
+        Rs: NDArray,
+        first_free: bool,
+    ) -> NDArray[np.float64]:
+        """:meth:`clearances` without the memo."""
         built = ToolPieces.cached(self.tool, self.radius)
         if self._bound is None and self.bound_counts["judged"] < PIECES_AFTER and not built:
             out = np.full(len(Rs), np.nan)
