@@ -122,6 +122,8 @@ class ChoiceState:
         #: per pair of welds: each candidate's row and column in the cached angle matrix
         #: (``(c,)``, -1 where not cached) and the matrix
         self._angles: dict[tuple[int, int], tuple[NDArray, NDArray, NDArray]] = {}
+        #: per pair of welds: the sets of the last cut from that matrix, and the cut
+        self._cut: dict[tuple[int, int], tuple[NDArray, NDArray, NDArray]] = {}
         #: welds whose candidates ``accept.verdicts`` has judged in one batch (module docstring)
         self.batched: set[int] = set()
 
@@ -138,7 +140,12 @@ class ChoiceState:
             if len(pa) and len(pb) and pa.min() >= 0 and pb.min() >= 0:
                 if len(pa) == len(m) and len(pb) == m.shape[1]:
                     return m  # the same sets (subsets of the cached ones, as many)
-                return m[np.ix_(pa, pb)]
+                last = self._cut.get((i, j))
+                if last is not None and np.array_equal(last[0], ci) and np.array_equal(last[1], cj):
+                    return last[2]  # the sets of the last round: most welds' do not change
+                cut = m[np.ix_(pa, pb)]
+                self._cut[(i, j)] = (ci.copy(), cj.copy(), cut)
+                return cut
         m = rotation_angles(quats[i, ci], quats[j, cj])
         a = np.full(quats.shape[1], -1, dtype=np.int64)
         b = np.full(quats.shape[1], -1, dtype=np.int64)
