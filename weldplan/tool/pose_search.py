@@ -50,7 +50,7 @@ MISS_PROBES = 200
 #: candidates of a missed weld measured fully (the probe's best)
 MISS_SHORTLIST = 4
 #: candidates whose clearance a search measures by the whole tool before it builds the pieces
-#: of :class:`~weldplan.tool.pose_bound.PoseBound` (each saves about 1 ms of the 0.9 s they
+#: of :class:`~weldplan.tool.pose_bound.PoseBound` (each saves about 1 ms of the 0.4 s they
 #: cost on the shared gun; the demo judges about 1,700)
 PIECES_AFTER = 256
 #: welds within this distance (mm) of the spot a crop was made for share that crop (made that
@@ -229,7 +229,7 @@ class PoseSearch:
 
         Until the tool's pieces are built, the first :data:`PIECES_AFTER` candidates a search
         judges are measured by FCL's distance of the whole tool (exact): the pieces cost about
-        0.9 s to build for the shared gun, more than a station with few judgements spends on
+        0.4 s to build for the shared gun, more than a station with few judgements spends on
         them (car2_50: 32)."""
         if self.clearance <= 0:
             return np.full(len(Rs), np.inf)
