@@ -48,6 +48,9 @@ Accept = Callable[[int, NDArray[np.float64]], "str | None"]
 
 #: vetoes a weld may take before the test is lifted for it (each costs one more DP round)
 DEFAULT_MAX_VETOES = 12
+#: candidates of one weld judged at once while looking for its first free one: the first chunk
+#: and the largest (each chunk twice the last: most welds find one among their first few)
+MEASURE_CHUNK = (2, 32)
 
 
 def _first_free(
@@ -66,14 +69,27 @@ def _first_free(
 
     The order only decides which measurements come first: the DP that runs next still sees every
     candidate not known to fail, so the final choice is the same optimum (see :func:`choose`).
+    The candidates are judged by :meth:`PoseSearch.clearances` in chunks of growing size
+    (:data:`MEASURE_CHUNK`; its sphere bounds are vectorised over a chunk), and only up to the
+    first free one, as one at a time would: what the choice learns is the same.
     """
     todo = np.flatnonzero(np.isnan(dists[i]) & allowed[i])
     cost = rotation_angles(quats[i, todo], ref).sum(axis=1)
-    for n, k in enumerate(todo[np.argsort(cost, kind="stable")], start=1):
-        dists[i, k] = search.distance(obj, p, rots[i, k])
-        if dists[i, k] >= search.clearance:
-            return n
-    return len(todo)
+    todo = todo[np.argsort(cost, kind="stable")]
+    n = start = 0
+    size = MEASURE_CHUNK[0]
+    while start < len(todo):
+        ks = todo[start : start + size]
+        start, size = start + size, min(2 * size, MEASURE_CHUNK[1])
+        vals = search.clearances(
+            [obj] * len(ks), np.tile(p, (len(ks), 1)), rots[i, ks], first_free=True
+        )
+        got = ~np.isnan(vals)
+        dists[i, ks[got]] = vals[got]
+        n += int(got.sum())
+        if np.any(vals[got] >= search.clearance):
+            break
+    return n
 
 
 class ChoiceState:
@@ -103,7 +119,11 @@ class ChoiceState:
         #: weld -> vetoes it had when it was reopened (its budget counts from there)
         self.veto_base: dict[int, int] = {}
         self._lifted: dict[int, NDArray[np.bool_]] = {}
+        #: per pair of welds: each candidate's row and column in the cached angle matrix
+        #: (``(c,)``, -1 where not cached) and the matrix
         self._angles: dict[tuple[int, int], tuple[NDArray, NDArray, NDArray]] = {}
+        #: per pair of welds: the sets of the last cut from that matrix, and the cut
+        self._cut: dict[tuple[int, int], tuple[NDArray, NDArray, NDArray]] = {}
         #: welds whose candidates ``accept.verdicts`` has judged in one batch (module docstring)
         self.batched: set[int] = set()
 
@@ -114,11 +134,24 @@ class ChoiceState:
         weld ``j``, cut from a matrix cached per pair of welds (the DP's rounds shrink the
         candidate sets; the angles do not change)."""
         hit = self._angles.get((i, j))
-        if hit is None or not (np.isin(ci, hit[0]).all() and np.isin(cj, hit[1]).all()):
-            hit = (ci, cj, rotation_angles(quats[i, ci], quats[j, cj]))
-            self._angles[(i, j)] = hit
-        a, b, m = hit
-        return m[np.ix_(np.searchsorted(a, ci), np.searchsorted(b, cj))]
+        if hit is not None:
+            a, b, m = hit
+            pa, pb = a[ci], b[cj]  # positions in the cached matrix (-1: not cached)
+            if len(pa) and len(pb) and pa.min() >= 0 and pb.min() >= 0:
+                if len(pa) == len(m) and len(pb) == m.shape[1]:
+                    return m  # the same sets (subsets of the cached ones, as many)
+                last = self._cut.get((i, j))
+                if last is not None and np.array_equal(last[0], ci) and np.array_equal(last[1], cj):
+                    return last[2]  # the sets of the last round: most welds' do not change
+                cut = m[np.ix_(pa, pb)]
+                self._cut[(i, j)] = (ci.copy(), cj.copy(), cut)
+                return cut
+        m = rotation_angles(quats[i, ci], quats[j, cj])
+        a = np.full(quats.shape[1], -1, dtype=np.int64)
+        b = np.full(quats.shape[1], -1, dtype=np.int64)
+        a[ci], b[cj] = np.arange(len(ci)), np.arange(len(cj))
+        self._angles[(i, j)] = (a, b, m)
+        return m
 
     def exhaust(self, i: int) -> None:
         """Lift the acceptance test for weld ``i``."""
@@ -222,10 +255,12 @@ def choose(
 
     ``xyz (n, 3)`` mm: the weld spots; ``ids``: their names (for the log). ``dists (n, c)``
     holds 0 for colliding candidates and NaN where the clearance is not measured yet; it is
-    filled in place. Only ``allowed (n, c)`` candidates take part. The DP runs over every
-    candidate not known to fail; each chosen candidate whose clearance is unknown is measured,
-    and a weld whose choice falls short has its other candidates measured, least rotation from
-    its neighbours' picks first, up to the first that keeps the clearance (:func:`_first_free`),
+    filled in place, with :meth:`PoseSearch.clearances` (at least the clearance exactly where a
+    candidate keeps it; a bound, not the distance). Only ``allowed (n, c)`` candidates take
+    part. The DP runs over every candidate not known to fail; each chosen candidate whose
+    clearance is unknown is measured (all of them at once), and a weld whose choice falls short
+    has its other candidates measured, least rotation from its neighbours' picks first, up to
+    the first that keeps the clearance (:func:`_first_free`),
     before the DP runs again. When every chosen candidate is known to be free, each passes the
     independent re-check or is dropped and the DP runs again; then each must pass ``accept``
     (module docstring) or is vetoed and the DP runs again. The answer is the DP's optimum over
@@ -252,13 +287,12 @@ def choose(
             lambda k, w=welds_ok, c=cand: state.angles(quats, w[k - 1], c[k - 1], w[k], c[k]),
         )
         choice = {i: int(c[j]) for i, c, j in zip(welds_ok, cand, pick, strict=True)}
-        short = []
-        for i, k in choice.items():
-            if np.isnan(dists[i, k]):
-                dists[i, k] = search.distance(objs[i], xyz[i], rots[i, k])
-                counts["distance_queries"] += 1
-                if dists[i, k] < clearance:
-                    short.append(i)
+        todo = [(i, k) for i, k in choice.items() if np.isnan(dists[i, k])]
+        if todo:
+            wi, ki = np.array(todo).T
+            dists[wi, ki] = search.clearances([objs[i] for i in wi], xyz[wi], rots[wi, ki])
+            counts["distance_queries"] += len(todo)
+        short = [i for i, k in todo if dists[i, k] < clearance]
         if short:
             chain = list(choice)  # the welds with a pick, in route order
             for i in short:

@@ -266,6 +266,7 @@ def plan_weld_poses(
             **state.counts,
             "accept_exhausted": len(state.exhausted),
             "crops_built": search.crops_built,
+            **{f"clearance_{k}": v for k, v in search.bound_counts.items()},
             "setup_s": round(t_near - t0, 3),
             "broad_phase_s": round(t_collide - t_near, 3),
             "collide_s": round(t_choose - t_collide, 3),
@@ -361,10 +362,31 @@ class _Table:
         self._collide(i, self.over)
 
     def miss(self, i: int, index: NDArray[np.int64], params: NDArray[np.float64]) -> Miss:
-        """Weld ``i``'s closest miss over its tried candidates, their clearances measured."""
+        """Weld ``i``'s closest miss over its tried candidates, their clearances measured.
+
+        The choice's values are bounds (:meth:`PoseSearch.clearances`); the miss ranks by the
+        distance itself, so the candidates that could hold the largest are measured by FCL:
+        every unmeasured one, every one at the clearance or above (a re-checked pick), and the
+        short ones in order of their upper bounds while one could still beat the best."""
         mine = np.flatnonzero(self.allowed[i])
-        for k in mine[np.isnan(self.dists[i, mine])]:
-            self.dists[i, k] = self.search.distance(self.objs[i], self.xyz[i], self.rots[i, k])
+        d = self.dists[i]
+
+        def measure(k: int) -> None:
+            d[k] = self.search.distance(self.objs[i], self.xyz[i], self.rots[i, k])
+
+        dm, c = d[mine], self.search.clearance
+        with np.errstate(invalid="ignore"):
+            short = (dm > 0) & (dm < c)
+            redo = np.isnan(dm) | ((dm >= c) & np.isfinite(dm))
+        for k in mine[redo]:
+            measure(int(k))
+        best = float(np.max(d[mine[~short]], initial=0.0))
+        short = mine[short]
+        for k in short[np.argsort(-d[short], kind="stable")]:
+            if d[k] < best:
+                break  # an upper bound below the best distance measured: it cannot win
+            measure(int(k))
+            best = max(best, float(d[k]))
         return self.search.miss(
             self.objs[i], index, self.xyz[i], self.rots[i, mine], self.dists[i, mine],
             params[mine], self.touch[i, mine],
