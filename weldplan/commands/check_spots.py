@@ -115,6 +115,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         default=5.0,
         help="a spot farther from the part's surface is 'no surface' (5)",
     )
+    g.add_argument(
+        "--walls",
+        action="store_true",
+        help="the stack column: a single body thin enough for the gun to straddle near a free "
+        "edge counts as a wall (slab models such as car2); default: a spot joins two sheets",
+    )
     r = p.add_argument_group("robots (each --robot may be repeated, with its own --robot-base)")
     r.add_argument(
         "--robot",
@@ -218,7 +224,9 @@ def run(args: argparse.Namespace) -> int:
     spots = read_joints(args.spots, units=args.units)
     tools, robots = _tools(args), _robots(args)
     part = load_part(args.mesh, units=args.units, scale=args.scale, length=args.length)
-    study = check_spots(part, spots, tools, robots, settings)
+    from weldplan.study.stacks import flange_stacks
+
+    study = check_spots(part, spots, tools, robots, settings, stacks=flange_stacks(args.walls))
     title = f"weldplan check-spots {args.mesh} {args.spots}"
     texts = {outputs["csv"]: study_csv_text(study, title=title)}
     if "json" in outputs:
