@@ -60,8 +60,9 @@ REPLAN_PLANNER = "rrtconnect"
 REPLAN_TIME_S = 5.0
 #: base-search candidates re-scored along the whole route
 SEARCH_TOP = 5
-#: the joint-space roadmaps' work by default (:mod:`weldplan.motion.roadmap`): few milestones,
-#: since each edge is an FCL-proven motion of the whole arm and tool (tens of ms)
+#: the joint-space roadmaps' work when asked for (``plan_robot_route(roadmap=ROADMAP)``,
+#: :mod:`weldplan.motion.roadmap`): few milestones, since each edge is an FCL-proven motion of
+#: the whole arm and tool (tens of ms)
 ROADMAP = RoadmapSettings(milestones=40, neighbours=6)
 #: mm / deg: the verification tolerance of an exact row's FK against the route's pose
 POSE_TOL_MM = 1e-6
@@ -184,7 +185,7 @@ def plan_robot_route(
     zone: ArrayLike | None = None,
     exits: dict[int, tuple[NDArray[np.float64], ...]] | None = None,
     floor_z: float | None = None,
-    roadmap: RoadmapSettings | None = ROADMAP,
+    roadmap: RoadmapSettings | None = None,
 ) -> RobotRoute:
     """The route in joint space, verified (module docstring).
 
@@ -238,7 +239,8 @@ def plan_robot_route(
         The work of the joint-space roadmaps (:mod:`weldplan.motion.roadmap`, seeded with
         ``rng``): a searched base is chosen by the welds one roadmap joins
         (:func:`~weldplan.robot.roadmaps.join_welds`), and a detour asks the roadmap of its
-        base before OMPL (:meth:`~weldplan.robot.replan.Detour.via_roadmap`). ``None``: neither.
+        base before OMPL (:meth:`~weldplan.robot.replan.Detour.via_roadmap`). ``None`` (the
+        default, docs/robot.md says why): neither; :data:`ROADMAP` is the suggested setting.
 
     Raises
     ------

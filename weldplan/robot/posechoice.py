@@ -182,7 +182,7 @@ def place_for_poses(
     singular_deg: float = DEFAULT_SINGULAR_DEG,
     top: int | None = None,
     alternatives: bool = False,
-    roadmap: Any = "default",
+    roadmap: Any = None,
 ) -> Placement:
     """The base the robot route would search for ``route`` with weld ``poses`` (module
     docstring): :func:`weldplan.robot.placement.place` over the route's waypoint poses (mm,
@@ -193,9 +193,9 @@ def place_for_poses(
     picks that pose (:mod:`weldplan.robot.altreach`). Off by default: on car2_200 the bases it
     finds serve every weld pose but the robot route from them cannot leave the first welds
     (docs/robot.md, session 6). ``roadmap``: the
-    :class:`~weldplan.motion.roadmap.RoadmapSettings` of the last step, the best candidates
-    re-ranked by the welds one joint-space roadmap joins (``"default"``: the robot route's
-    :data:`~weldplan.robot.plan.ROADMAP`; ``None``: not re-ranked).
+    :class:`~weldplan.motion.roadmap.RoadmapSettings` of a last step, the best candidates
+    re-ranked by the welds one joint-space roadmap joins (e.g. the robot route's
+    :data:`~weldplan.robot.plan.ROADMAP`; ``None``, the default: not re-ranked).
 
     Raises
     ------
@@ -205,7 +205,7 @@ def place_for_poses(
     from weldplan.robot.altreach import alternative_flange_poses
     from weldplan.robot.configs import FLIP_PENALTY_S
     from weldplan.robot.placement import place
-    from weldplan.robot.plan import ROADMAP, SEARCH_TOP, tcp_waypoint_poses
+    from weldplan.robot.plan import SEARCH_TOP, tcp_waypoint_poses
     from weldplan.tool.route_frames import weld_rows
 
     F = np.asarray(flange_tcp, dtype=np.float64).reshape(4, 4)
@@ -223,7 +223,7 @@ def place_for_poses(
         FLIP_PENALTY_S,
         SEARCH_TOP if top is None else top,
         alternative_flange_poses(poses, route.order, F) if alternatives else None,
-        joins=ROADMAP if roadmap == "default" else roadmap,
+        joins=roadmap,
     )
     if placement.join is not None and placement.join.roadmap is not None:
         placement.join.roadmap.close()  # the robot route builds its own for the new poses
