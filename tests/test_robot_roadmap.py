@@ -22,7 +22,7 @@ from weldplan.robot.replan import Detour  # noqa: E402
 from weldplan.robot.roadmaps import LegRoadmap, branch_roadmap  # noqa: E402
 from weldplan.tool import arc_torch  # noqa: E402
 
-SMALL = RoadmapSettings(milestones=10, neighbours=6)
+SMALL = RoadmapSettings(milestones=10, neighbours=6, query_neighbours=6)
 
 
 @pytest.fixture(scope="module")
@@ -40,6 +40,7 @@ def plate_scene(robot):
     return RobotCollision(robot, plate, arc_torch(), TORCH_TCP), qa, qb
 
 
+@pytest.mark.slow  # two roadmaps of FCL-proven motions (about 12 s at load 5 on 2 cores)
 def test_the_roadmap_joins_what_a_straight_joint_motion_cannot_and_repeats_with_its_seed(robot):
     chk, qa, qb = plate_scene(robot)
     assert not chk.motion_free(qa, qb)
@@ -110,7 +111,7 @@ def test_the_base_that_reaches_as_well_but_cannot_join_its_welds_loses_to_the_on
     cands = [Placement(A, 2, 2, 0.0, 2, True), Placement(B, 2, 2, 0.0, 2, True)]
     plain, _ = rank_bases(arm, cands, [None, None], T_fl, rows, chk.with_robot, 5.0, 1000.0)
     np.testing.assert_array_equal(plain.base, A)  # by reach and manipulability, A first
-    tiny = RoadmapSettings(milestones=5, neighbours=4)
+    tiny = RoadmapSettings(milestones=5, neighbours=4, query_neighbours=4)
     with caplog.at_level(logging.INFO, logger="weldplan.robot.placement"):
         best, _ = rank_bases(
             arm, cands, [None, None], T_fl, rows, chk.with_robot, 5.0, 1000.0, None, tiny

@@ -68,6 +68,9 @@ class RoadmapSettings:
         Milestones grown before the queries (the queries add their own).
     neighbours
         PRM's ``k``: nearest milestones a new one tries to connect to (OMPL's default 10).
+    query_neighbours
+        ``k`` while queries are added (:meth:`Roadmap.connect`): a query is where the caller
+        needs an answer, often near an obstacle where the nearest few motions are blocked.
     max_checks
         State validity checks during growth at most (a scene where valid samples are rare stops
         here instead of sampling on).
@@ -79,12 +82,13 @@ class RoadmapSettings:
 
     milestones: int = 60
     neighbours: int = 8
+    query_neighbours: int = 16
     max_checks: int = 20000
     star: bool = False
     wall_s: float = 600.0
 
     def __post_init__(self) -> None:
-        for name in ("milestones", "neighbours", "max_checks"):
+        for name in ("milestones", "neighbours", "query_neighbours", "max_checks"):
             v = getattr(self, name)
             if not (isinstance(v, (int, np.integer)) and v >= 1):
                 raise ConfigError(f"{name} must be a positive integer, got {v!r}", field=name)
@@ -282,10 +286,15 @@ class Roadmap:
             self._pdef.addStartState(self._state(new[-1]))
         level = ou.getLogLevel()
         ou.setLogLevel(ou.LOG_NONE)
+        star = self.settings.star
+        if not star:
+            self._prm.setMaxNearestNeighbors(int(self.settings.query_neighbours))
         try:  # a C++ condition: PRM's solution thread must not call into Python
             self._prm.solve(ob.timedPlannerTerminationCondition(0.0))
         finally:
             ou.setLogLevel(level)
+            if not star:
+                self._prm.setMaxNearestNeighbors(int(self.settings.neighbours))
         self._queries.extend(np.array(q, copy=True) for q in new)
         self._graph = None
 

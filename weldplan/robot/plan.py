@@ -63,7 +63,7 @@ SEARCH_TOP = 5
 #: the joint-space roadmaps' work when asked for (``plan_robot_route(roadmap=ROADMAP)``,
 #: :mod:`weldplan.motion.roadmap`): few milestones, since each edge is an FCL-proven motion of
 #: the whole arm and tool (tens of ms)
-ROADMAP = RoadmapSettings(milestones=40, neighbours=6)
+ROADMAP = RoadmapSettings(milestones=40, neighbours=6, query_neighbours=16)
 #: mm / deg: the verification tolerance of an exact row's FK against the route's pose
 POSE_TOL_MM = 1e-6
 POSE_TOL_DEG = 1e-6
