@@ -40,7 +40,6 @@ def plate_scene(robot):
     return RobotCollision(robot, plate, arc_torch(), TORCH_TCP), qa, qb
 
 
-@pytest.mark.slow  # two roadmaps of FCL-proven motions (about 12 s at load 5 on 2 cores)
 def test_the_roadmap_joins_what_a_straight_joint_motion_cannot_and_repeats_with_its_seed(robot):
     chk, qa, qb = plate_scene(robot)
     assert not chk.motion_free(qa, qb)
