@@ -13,6 +13,16 @@ whole route (:func:`place`, used by :func:`weldplan.robot.plan.plan_robot_route`
 3. The best ``top`` are solved along the whole route (:func:`~weldplan.robot.configs.joint_path`
    with the collision-free branches at the welds) and ranked by welds ok, then the smallest
    manipulability of the chosen configurations over every solved waypoint.
+4. With roadmap settings (``place(joins=)``, the robot route's default), those are re-ranked by
+   the welds the robot can **join** (issue 27, item 2), then by step 3's key (:func:`rank_bases`,
+   :func:`~weldplan.robot.roadmaps.join_welds`): consecutive served welds whose own leg is free
+   are joined; the ends of the blocked legs are left by a retract and joined where one joint-space
+   roadmap on their IK branch (OMPL's PRM, :mod:`weldplan.motion.roadmap`, on the same FCL
+   checks as the detours: part, self-collision, floor) puts their retracts in one component; a
+   weld left out tries its other retracts and alternative poses first. Best first, a candidate
+   that serves no more welds than the best joined so far is skipped, so where the first
+   candidate joins all it serves, one roadmap is built (none when no leg is blocked). The
+   chosen base's roadmap goes on to the detours (:class:`~weldplan.robot.roadmaps.LegRoadmap`).
 
 With each weld's **alternative poses** (the tool's other free poses,
 :mod:`weldplan.robot.altreach`; on request of the pose stage's search,
@@ -40,10 +50,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from weldplan.errors import PlanningError
+from weldplan.motion.roadmap import RoadmapSettings
 from weldplan.robot.altreach import alt_free
 from weldplan.robot.configs import joint_path
 from weldplan.robot.model import Robot
 from weldplan.robot.reach import OK, PRESELECT, BaseSearch, Placement, search_base, usable
+from weldplan.robot.replan import Detour
+from weldplan.robot.roadmaps import join_welds
 
 log = logging.getLogger(__name__)
 
@@ -107,6 +120,8 @@ def place(
     flip_penalty: float,
     top: int,
     alternatives: list[NDArray[np.float64]] | None = None,
+    *,
+    joins: RoadmapSettings | None = None,
 ) -> tuple[Placement, NDArray[np.bool_] | None]:
     """The base (given, the robot's own, or searched: module docstring) and, for a searched one,
     the allowed-branch mask of its weld rows (``None`` for a given base: the caller computes it).
@@ -114,7 +129,9 @@ def place(
     ``checker_for(robot_at_base)`` builds the collision checker (``None``: no collision test).
     ``alternatives``: per weld row, ``(k, 4, 4)`` mm flange poses of the weld's other free tool
     poses (:mod:`weldplan.robot.altreach`); a weld counts at a base when its pose or one of them
-    serves there, at every step.
+    serves there, at every step. ``joins`` (with a checker): step 4, the candidates of step 3
+    re-ranked by the welds one roadmap joins (:func:`join_welds`; the placement's
+    :attr:`~weldplan.robot.reach.Placement.join`).
     """
     T_weld = T_fl[rows]
     if base is not None or search is None:
@@ -132,16 +149,79 @@ def place(
     masks: list[NDArray[np.bool_] | None] = [None] * len(cands)
     if checker_for is not None:
         cands, masks = _rerank(robot, cands, T_weld, checker_for, singular_deg, top, alts)
-    best: tuple[tuple[int, float], Placement, NDArray[np.bool_] | None] | None = None
+    return rank_bases(
+        robot, cands, masks, T_fl, rows, checker_for, singular_deg, flip_penalty, alts, joins
+    )
+
+
+def rank_bases(
+    robot: Robot,
+    cands: list[Placement],
+    masks: list[NDArray[np.bool_] | None],
+    T_fl: NDArray[np.float64],
+    rows: NDArray[np.int64],
+    checker_for: Any,
+    singular_deg: float,
+    flip_penalty: float,
+    alts: list[NDArray[np.float64]] | None = None,
+    joins: RoadmapSettings | None = None,
+) -> tuple[Placement, NDArray[np.bool_] | None]:
+    """Steps 3 and 4 of the module docstring: the best of ``cands`` (with their allowed-branch
+    masks, ``None``: every branch) along the whole route (flange poses ``T_fl (m, 4, 4)`` mm,
+    welds at ``rows``), then, with ``joins`` and a checker, by the welds one roadmap joins
+    (:func:`~weldplan.robot.roadmaps.join_welds`); ties keep the order of ``cands``."""
+    scored = []
     for pl, mask in zip(cands, masks, strict=True):
         rb = robot.with_base(pl.base)
         got = _route_score(rb, T_fl, rows, mask, checker_for, singular_deg, flip_penalty, alts)
-        if got is not None and (best is None or got > best[0]):
-            best = (got, dataclasses.replace(pl, min_manipulability=got[1]), mask)
-    if best is None:
+        if got is not None:
+            scored.append((got[0], dataclasses.replace(pl, min_manipulability=got[0][1]), mask,
+                           got[1]))  # fmt: skip
+    if not scored:
         raise PlanningError(
             f"no base among the {len(cands)} best candidates reaches a weld collision-free"
         )
+    scored.sort(key=lambda s: s[0], reverse=True)  # stable: ties keep the search's order
+    if joins is None or checker_for is None:
+        return scored[0][1], scored[0][2]
+    return _by_joins(robot, scored, T_fl, rows, checker_for, singular_deg, joins, alts)
+
+
+def _by_joins(
+    robot: Robot,
+    scored: list[tuple[tuple[int, float], Placement, Any, Any]],
+    T_fl: NDArray[np.float64],
+    rows: NDArray[np.int64],
+    checker_for: Any,
+    singular_deg: float,
+    joins: RoadmapSettings,
+    alts: list[NDArray[np.float64]] | None = None,
+) -> tuple[Placement, NDArray[np.bool_] | None]:
+    """Step 4: the candidates of step 3 (best first) by the welds they join
+    (:func:`~weldplan.robot.roadmaps.join_welds`, with each weld's alternative poses ``alts``),
+    then their step-3 key.
+    A candidate serving no more welds than the best joined count so far cannot beat it and is
+    not built (the welds it serves bound those it joins): when the first candidate joins every
+    weld it serves, one roadmap is built."""
+    best: tuple[tuple[int, tuple[int, float]], Placement, Any] | None = None
+    for key, pl, mask, (q, branch, status) in scored:
+        served = np.array([status[r] == OK for r in rows], dtype=bool)
+        if best is not None and served.sum() <= best[0][0]:
+            continue
+        rb = robot.with_base(pl.base)
+        checker = checker_for(rb)
+        det = Detour(rb, checker, T_fl @ checker.flange_tcp, checker.flange_tcp, singular_deg,
+                     "rrtconnect", 1.0, 0)  # fmt: skip
+        wj = join_welds(det, q, branch, rows, served, joins, alts=alts)
+        x, y, z, yaw = pl.xyz_yaw()
+        log.info(
+            "base %.0f,%.0f,%.0f,%.1f: %d/%d served welds joined (%d blocked legs%s)",
+            x, y, z, yaw, wj.n_joined, int(served.sum()), wj.blocked_legs,
+            "" if wj.report is None else "; roadmap " + wj.report.line(),
+        )  # fmt: skip
+        if best is None or (wj.n_joined, key) > best[0]:
+            best = ((wj.n_joined, key), dataclasses.replace(pl, join=wj), mask)
+    assert best is not None
     return best[1], best[2]
 
 
@@ -154,22 +234,24 @@ def _route_score(
     singular_deg: float,
     flip_penalty: float,
     alts: list[NDArray[np.float64]] | None,
-) -> tuple[int, float] | None:
+) -> tuple[tuple[int, float], tuple[NDArray, NDArray, NDArray]] | None:
     """Step 3 for the robot at one base: ``(welds ok along the route, the smallest
-    manipulability of its solved waypoints)``, ``None`` when it reaches none. With ``alts`` a
+    manipulability of its solved waypoints)`` and the route's joint path ``(q (m, 6), branch
+    (m,), status (m,))``, ``None`` when it reaches none. With ``alts`` a
     weld the route's pose loses counts when another of its poses is free there, and, with a
     checker, each leg between welds on which the route's joint path puts a link through the part
     (:meth:`~weldplan.robot.collision.RobotCollision.path_hits`) counts against it: it needs a
     detour, which may not exist (module docstring)."""
     allowed = _allowed(len(T_fl), rows, mask)
     try:
-        q, _, exact, status = joint_path(
+        q, branch, exact, status = joint_path(
             rb, T_fl, singular_deg=singular_deg, flip_penalty=flip_penalty, allowed=allowed
         )
     except PlanningError:  # no weld pose reached: only their alternatives may serve
         if alts is None:
             return None
         q, exact = np.zeros((0, 6)), np.zeros(0, dtype=bool)
+        branch = np.zeros(0, dtype=np.int64)
         status = np.full(len(T_fl), "", dtype=object)
     lost = np.array([status[r] != OK for r in rows], dtype=bool)
     n_ok = int((~lost).sum())
@@ -191,7 +273,7 @@ def _route_score(
         "base %.0f,%.0f,%.0f,%.1f along the route: %d/%d welds served%s, min manipulability %.4f",
         x, y, z, yaw, n_ok, len(rows), legs_said, m,
     )  # fmt: skip
-    return n_ok - n_legs, m
+    return (n_ok - n_legs, m), (q, branch, status)
 
 
 def _rerank(

@@ -21,6 +21,7 @@ pose, and the collision check of the final path.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import time
 from os import PathLike
@@ -31,6 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from weldplan.errors import ConfigError, InputError, PlanningError
+from weldplan.motion.roadmap import RoadmapSettings
 from weldplan.robot.assemble import assemble
 from weldplan.robot.collision import Hit, RobotCollision
 from weldplan.robot.configs import FLIP_PENALTY_S, RobotRoute, joint_path
@@ -46,6 +48,7 @@ from weldplan.robot.reach import (
     classify,
 )
 from weldplan.robot.replan import Detour
+from weldplan.robot.roadmaps import LegRoadmap
 from weldplan.robot.selfcollision import cell_floor, hit_words
 from weldplan.robot.urdf import chain_transform
 
@@ -57,6 +60,10 @@ REPLAN_PLANNER = "rrtconnect"
 REPLAN_TIME_S = 5.0
 #: base-search candidates re-scored along the whole route
 SEARCH_TOP = 5
+#: the joint-space roadmaps' work when asked for (``plan_robot_route(roadmap=ROADMAP)``,
+#: :mod:`weldplan.motion.roadmap`): few milestones, since each edge is an FCL-proven motion of
+#: the whole arm and tool (tens of ms)
+ROADMAP = RoadmapSettings(milestones=40, neighbours=6, query_neighbours=16)
 #: mm / deg: the verification tolerance of an exact row's FK against the route's pose
 POSE_TOL_MM = 1e-6
 POSE_TOL_DEG = 1e-6
@@ -178,6 +185,7 @@ def plan_robot_route(
     zone: ArrayLike | None = None,
     exits: dict[int, tuple[NDArray[np.float64], ...]] | None = None,
     floor_z: float | None = None,
+    roadmap: RoadmapSettings | None = None,
 ) -> RobotRoute:
     """The route in joint space, verified (module docstring).
 
@@ -227,6 +235,12 @@ def plan_robot_route(
         mm: the floor (part frame) no link nor the tool may reach
         (:mod:`weldplan.robot.selfcollision`); default: ``search.floor_z`` for a searched base,
         else none (not checked; ``stats["floor_z"]`` is then ``None``).
+    roadmap
+        The work of the joint-space roadmaps (:mod:`weldplan.motion.roadmap`, seeded with
+        ``rng``): a searched base is chosen by the welds one roadmap joins
+        (:func:`~weldplan.robot.roadmaps.join_welds`), and a detour asks the roadmap of its
+        base before OMPL (:meth:`~weldplan.robot.replan.Detour.via_roadmap`). ``None`` (the
+        default, docs/robot.md says why): neither; :data:`ROADMAP` is the suggested setting.
 
     Raises
     ------
@@ -260,8 +274,9 @@ def plan_robot_route(
     )
     checker_for = None if checker is None else checker.with_robot
     placement, mask = place(
-        robot, T_fl, rows, part, base, search, checker_for, singular_deg, flip_penalty, search_top
-    )
+        robot, T_fl, rows, part, base, search, checker_for, singular_deg, flip_penalty, search_top,
+        joins=roadmap if replan else None,  # joined by detours: none without them
+    )  # fmt: skip
     rb = robot.with_base(placement.base)
     if checker is not None:
         checker = checker.with_robot(rb)
@@ -275,18 +290,52 @@ def plan_robot_route(
     row = np.arange(len(q), dtype=np.int64)
     if checker is not None:
         det = Detour(
-            rb, checker, T_tcp, F, singular_deg, planner, replan_time_s, rng, exits=exits or {}
-        )
+            rb, checker, T_tcp, F, singular_deg, planner, replan_time_s, rng, exits=exits or {},
+            roadmap=_leg_roadmap(roadmap, placement, q[rows], tuple(route.order), rng),
+        )  # fmt: skip
         q, row, exact, branch, replanned = _collision_stage(
             det, q, exact, branch, rows, status, detail, tuple(route.order), stats,
             replan=replan, zone=own_zone,
         )  # fmt: skip
+        _roadmap_stats(det, placement, stats)
     _check_fk(rb, q, exact, T_fl, row, stats)
     stats["seconds_total"] = round(time.perf_counter() - t0, 3)
     return _robot_route(
         robot, placement.base, F, q, row, exact, branch, rows, route.order, status, detail,
         replanned, stats,
     )  # fmt: skip
+
+
+def _leg_roadmap(
+    settings: RoadmapSettings | None,
+    placement: Placement,
+    q_weld: NDArray[np.float64],
+    ids: tuple[str, ...],
+    rng: int | None,
+) -> LegRoadmap | None:
+    """The detours' roadmaps at the chosen base (the base search's, when it built one there)."""
+    if settings is None:
+        return None
+    wj = placement.join
+    built = {wj.branch: wj.roadmap} if wj is not None and wj.roadmap is not None else None
+    return LegRoadmap(q_weld, ids, settings, rng, built)
+
+
+def _roadmap_stats(det: Detour, placement: Placement, stats: dict[str, Any]) -> None:
+    """The roadmaps' figures into ``stats["roadmap"]`` (the legs asked, joined, the causes of
+    those not joined, each branch's roadmap) and the base search's joins into
+    ``stats["placement"]["joins"]``."""
+    if placement.join is not None:
+        stats["placement"]["joins"] = placement.join.summary()
+    if det.roadmap is None:
+        return
+    det.roadmap.close()  # the route is assembled: no more queries
+    stats["roadmap"] = {
+        "legs": int(det.ompl.get("roadmap_legs", 0)),
+        "joined": int(det.ompl.get("roadmap_joined", 0)),
+        "not_joined": list(det.roadmap_misses),
+        "maps": {str(b): dataclasses.asdict(m.report()) for b, m in det.roadmap.maps.items()},
+    }
 
 
 def _robot_route(

@@ -182,6 +182,7 @@ def place_for_poses(
     singular_deg: float = DEFAULT_SINGULAR_DEG,
     top: int | None = None,
     alternatives: bool = False,
+    roadmap: Any = None,
 ) -> Placement:
     """The base the robot route would search for ``route`` with weld ``poses`` (module
     docstring): :func:`weldplan.robot.placement.place` over the route's waypoint poses (mm,
@@ -191,7 +192,10 @@ def place_for_poses(
     (:attr:`~weldplan.tool.result.WeldPoses.alternatives`) serves there: the reach test then
     picks that pose (:mod:`weldplan.robot.altreach`). Off by default: on car2_200 the bases it
     finds serve every weld pose but the robot route from them cannot leave the first welds
-    (docs/robot.md, session 6).
+    (docs/robot.md, session 6). ``roadmap``: the
+    :class:`~weldplan.motion.roadmap.RoadmapSettings` of a last step, the best candidates
+    re-ranked by the welds one joint-space roadmap joins (e.g. the robot route's
+    :data:`~weldplan.robot.plan.ROADMAP`; ``None``, the default: not re-ranked).
 
     Raises
     ------
@@ -219,5 +223,8 @@ def place_for_poses(
         FLIP_PENALTY_S,
         SEARCH_TOP if top is None else top,
         alternative_flange_poses(poses, route.order, F) if alternatives else None,
+        joins=roadmap,
     )
+    if placement.join is not None and placement.join.roadmap is not None:
+        placement.join.roadmap.close()  # the robot route builds its own for the new poses
     return placement

@@ -35,7 +35,8 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -181,6 +182,9 @@ class Placement:
     min_manipulability: float
     candidates: int
     searched: bool
+    #: which welds one roadmap joins at this base (:class:`weldplan.robot.roadmaps.WeldJoin`;
+    #: ``None``: not judged)
+    join: Any = field(default=None, compare=False, repr=False)
 
     def xyz_yaw(self) -> tuple[float, float, float, float]:
         """``(x, y, z, yaw_deg)`` of :attr:`base` (the ``--robot-base`` form)."""

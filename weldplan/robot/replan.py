@@ -40,9 +40,11 @@ The walk over the welds that uses these detours is :mod:`weldplan.robot.assemble
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import time
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -122,6 +124,11 @@ class Detour:
     left_by: dict[str, int] = field(default_factory=dict, compare=False)
     #: a transfer between two configurations on one IK branch stays on it (:meth:`transfer`)
     keep_branch: bool = True
+    #: the joint-space roadmaps at this base (:class:`weldplan.robot.roadmaps.LegRoadmap`), asked
+    #: before OMPL (:meth:`via_roadmap`); ``None``: OMPL with its retries, as before
+    roadmap: Any = field(default=None, compare=False)
+    #: the legs the roadmap did not join, each with its cause (:meth:`via_roadmap`)
+    roadmap_misses: list[str] = field(default_factory=list, compare=False)
 
     def offset(self, q: NDArray, T: NDArray, branch: int, move: NDArray) -> NDArray | None:
         """The configuration of pose ``T`` moved by ``move (3,)`` mm (part frame, orientation
@@ -189,6 +196,16 @@ class Detour:
         With :attr:`keep_branch` and both ends on one IK branch, every step stays on it
         (:meth:`on_branch`): the detour passes no wrist, elbow or shoulder flip."""
         keep = self._kept_branch(qa, qb)
+        P = self.direct(qa, qb, keep)
+        if P is not None:
+            return P
+        if self.roadmap is not None and keep is not None:
+            return self.via_roadmap(qa, qb, keep)
+        return self._ompl(qa, qb, keep)
+
+    def direct(self, qa: NDArray, qb: NDArray, keep: int | None) -> NDArray | None:
+        """The transfers that need no planner (:meth:`transfer`): the straight joint motion,
+        else through a tucked arm; ``None`` when neither is free (on branch ``keep``)."""
         if self._motion_ok(qa, qb, keep):
             return np.vstack([qa, qb])
         for a2, a3 in self.tuck:
@@ -198,7 +215,23 @@ class Detour:
                 continue
             if all(self._motion_ok(x, y, keep) for x, y in zip(P[:-1], P[1:], strict=True)):
                 return P
-        return self._ompl(qa, qb, keep)
+        return None
+
+    def via_roadmap(self, qa: NDArray, qb: NDArray, keep: int) -> NDArray | None:
+        """``(p, 6)`` rad from ``qa`` to ``qb`` along :attr:`roadmap`'s branch ``keep`` when one
+        of its components holds both (every edge a motion :meth:`motion_ok` proved free). Else
+        the cause (the components of the two ends) goes to :attr:`roadmap_misses` and the log at
+        once, and OMPL gets one run of ``time_s`` with no retries: a roadmap grown on a finite
+        sample proves no disconnection (:mod:`weldplan.motion.roadmap`), so a small bounded
+        attempt stays, not the minutes of retries."""
+        P, why = self.roadmap.join(self, qa, qb, keep)
+        self.ompl["roadmap_legs"] = self.ompl.get("roadmap_legs", 0) + 1.0
+        if P is not None:
+            self.ompl["roadmap_joined"] = self.ompl.get("roadmap_joined", 0) + 1.0
+            return np.asarray(P, dtype=np.float64)
+        self.roadmap_misses.append(why)
+        log.info("joint-space transfer: %s; one bounded OMPL run", why)
+        return dataclasses.replace(self, retry_time_s=0.0)._ompl(qa, qb, keep)
 
     def _kept_branch(self, qa: NDArray, qb: NDArray) -> int | None:
         """The IK branch a transfer ``qa -> qb`` keeps: both ends' when they share one and
@@ -219,6 +252,12 @@ class Detour:
             return True
         t = np.linspace(0.0, 1.0, BRANCH_SAMPLES)[:, None]
         return bool(np.all(self.robot.branch_bits(qa + t * (qb - qa)) == keep))
+
+    def motion_ok(self, qa: NDArray, qb: NDArray, keep: int | None) -> bool:
+        """The detours' test of a straight joint motion (on branch ``keep``, ``None``: any;
+        free for the whole tool and every link), for a roadmap's edges
+        (:func:`weldplan.robot.roadmaps.branch_roadmap`)."""
+        return self._motion_ok(qa, qb, keep)
 
     def _motion_ok(self, qa: NDArray, qb: NDArray, keep: int | None) -> bool:
         """The straight joint motion ``qa -> qb`` stays on branch ``keep`` and is free for the
