@@ -386,3 +386,32 @@ def test_a_bad_part_pose_in_a_station_file_names_its_line_and_key(box, keys, key
         weldplan.load_station(f)
     assert err.value.field == key and needle in str(err.value), str(err.value)
     assert err.value.line is not None and err.value.path == str(f)
+
+
+def test_the_roadmap_is_one_flag_or_one_key_away(box):
+    """``--roadmap`` and ``roadmap = true`` in a ``[[robot]]`` table ask for the same robot
+    settings; a non-boolean value is refused at its line."""
+    import argparse
+
+    import weldplan
+    from weldplan.commands import plan as plan_cmd
+    from weldplan.commands._station_args import station_from_args
+    from weldplan.station.model import PartSpec
+
+    tmp, mesh, joints, head = box
+    urdf = require_shared("robots", "kuka_kr150r3100_2", "kr150r3100_2.urdf")
+    p = argparse.ArgumentParser()
+    plan_cmd.add_arguments(p)
+    args = p.parse_args([
+        str(mesh), str(joints), "-o", "r.csv", "--tool", "builtin:arc_torch",
+        "--robot", str(urdf), "--roadmap",
+    ])  # fmt: skip
+    quick = station_from_args(args, PartSpec(mesh, joints))
+    robot = f"\n[[robot]]\nurdf = '{urdf}'\nroadmap = true\n[robot.tool]\nbuiltin = 'arc_torch'\n"
+    filed = weldplan.load_station(_write(tmp, head + robot))
+    assert quick.robots[0].settings.roadmap and filed.robots[0].settings.roadmap
+    bad = head + robot.replace("true", '"yes"')
+    with pytest.raises(InputError) as err:
+        weldplan.load_station(_write(tmp, bad))
+    line = bad.splitlines().index('roadmap = "yes"') + 1
+    assert err.value.field == "robot.roadmap" and err.value.line == line, str(err.value)

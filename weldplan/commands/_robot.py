@@ -83,6 +83,13 @@ def _add_robot_stage_arguments(g: Any) -> None:
     """The fields of :class:`~weldplan.station.model.RobotSettings` (their defaults)."""
     d = RobotSettings()
     g.add_argument(
+        "--roadmap",
+        action="store_true",
+        default=d.roadmap,
+        help="judge a searched base by the welds one joint-space roadmap (OMPL PRM) joins, and "
+        "ask it before OMPL for a blocked leg (off by default: slower, same answers measured)",
+    )
+    g.add_argument(
         "--weld-time",
         metavar="S",
         type=_number("number of s", 0.0, 3600.0),

@@ -175,4 +175,5 @@ def robot_settings(args: argparse.Namespace) -> m.RobotSettings:
     return m.RobotSettings(
         weld_time=args.weld_time, acc_scale=args.acc_scale, vel_scale=args.vel_scale,
         tcp_speed=args.tcp_speed, moves=args.moves, cost=args.cost,
+        roadmap=bool(getattr(args, "roadmap", False)),
     )  # fmt: skip

@@ -344,7 +344,10 @@ class _RobotContext:
         return self.spec.base_search(self.floor_z)
 
     def kw(self) -> dict[str, Any]:
-        return {"tool": self.tool, "floor_z": self.floor_z, "search": self.search}
+        return {
+            "tool": self.tool, "floor_z": self.floor_z, "search": self.search,
+            "roadmap": self.settings.roadmap,
+        }  # fmt: skip
 
     def time_legs(self, cell: Any) -> tuple[Any, _RobotContext]:
         """``cost = "time"``: the leg times, and this context with the robot placed."""

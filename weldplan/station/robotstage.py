@@ -112,13 +112,25 @@ def reach_test(
             cell, route, mounted.tool, cone=ts.cone, contact_radius=ts.contact_radius
         )
         try:
-            placement = place_for_poses(robot, route, first, F, cell.part, checker, kw["search"])
+            placement = place_for_poses(
+                robot, route, first, F, cell.part, checker, kw["search"],
+                roadmap=_roadmap(kw.get("roadmap", False)),
+            )  # fmt: skip
         except PlanningError as exc:
             log.warning("robot reach test skipped: no base for the first-pass poses (%s)", exc)
             return None
         robot = robot.with_base(placement.base)
     test = ReachTest(robot, F, checker.with_robot(robot))
     return RobotAcceptance(test, robot, placement, time.perf_counter() - t0)
+
+
+def _roadmap(on: bool) -> Any:
+    """The roadmap's work (:data:`weldplan.robot.plan.ROADMAP`) when asked for, else None."""
+    if not on:
+        return None
+    from weldplan.robot.plan import ROADMAP
+
+    return ROADMAP
 
 
 def joint_route_stage(
@@ -144,6 +156,7 @@ def joint_route_stage(
         tcp_poses=None if gun is None else gun.tcp, zone=None if gun is None else gun.zone,
         exits=None if gun is None else gun.exits,
         floor_z=kw["floor_z"],  # a given floor is checked whatever the base
+        roadmap=_roadmap(kw.get("roadmap", False)),
     )  # fmt: skip
     if reach is not None and reach.placement is not None:  # searched, before the poses
         rr.stats["placement"].update(
