@@ -221,7 +221,7 @@ class Detour:
         """``(p, 6)`` rad from ``qa`` to ``qb`` along :attr:`roadmap`'s branch ``keep`` when one
         of its components holds both (every edge a motion :meth:`motion_ok` proved free). Else
         the cause (the components of the two ends) goes to :attr:`roadmap_misses` and the log at
-        once, and OMPL gets one run of ``time_s`` with no retries: a roadmap grown on a finite
+        once, and OMPL gets one run of ``checks`` with no retries: a roadmap grown on a finite
         sample proves no disconnection (:mod:`weldplan.motion.roadmap`), so a small bounded
         attempt stays, not the minutes of retries."""
         P, why = self.roadmap.join(self, qa, qb, keep)
@@ -231,7 +231,7 @@ class Detour:
             return np.asarray(P, dtype=np.float64)
         self.roadmap_misses.append(why)
         log.info("joint-space transfer: %s; one bounded OMPL run", why)
-        return dataclasses.replace(self, retry_time_s=0.0)._ompl(qa, qb, keep)
+        return dataclasses.replace(self, retry_checks=0)._ompl(qa, qb, keep)
 
     def _kept_branch(self, qa: NDArray, qb: NDArray) -> int | None:
         """The IK branch a transfer ``qa -> qb`` keeps: both ends' when they share one and
