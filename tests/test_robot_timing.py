@@ -119,3 +119,35 @@ def test_bad_limits_and_speed_are_config_errors():
 def test_constant_speed_time_is_length_over_speed_plus_dwell():
     P = np.array([[0, 0, 0], [300, 0, 0], [300, 400, 0]], float)
     assert constant_speed_time(P, 2, speed=500.0, weld_time=0.5) == pytest.approx(700 / 500 + 1)
+
+
+@pytest.mark.parametrize("seed", [16, 29, 31, 39])
+def test_written_times_strictly_increase_where_a_regular_sample_met_an_arrival(seed):
+    # on these routes a 10 ms sample fell within 0.05 ms of a waypoint arrival and the CSV
+    # wrote one time twice; the arrival now stands alone and the written t strictly increases
+    from weldplan.io.trajectory import trajectory_csv_text
+
+    q = _route(seed)
+    tt = time_route(q, V, A, weld_rows=[0, 4, 8], weld_time=0.25)
+    assert np.all(np.diff(tt.t) > 0)
+    t = np.array([float(r.split(",")[0]) for r in trajectory_csv_text(tt).splitlines()[1:]])
+    assert len(t) == len(tt.t) and np.all(np.diff(t) > 0)
+    # every waypoint arrival is still a sample; no motion gap grows past 1.1 dt (weld dwells
+    # of 0.25 s apart)
+    assert np.all(np.isin(tt.row_times, tt.t))
+    d = np.diff(tt.t)
+    assert np.all((d <= 0.011 + 1e-12) | np.isclose(d, 0.25))
+
+
+def test_trajectory_csv_refuses_times_that_would_repeat():
+    import types
+
+    from weldplan.errors import PlanningError
+    from weldplan.io.trajectory import trajectory_csv_text
+
+    fake = types.SimpleNamespace(
+        t=np.array([0.0, 0.01, 0.01002]), step=np.array([0, 1, 1]), q=np.zeros((3, 1)),
+        joint_names=("a1",),
+    )  # fmt: skip
+    with pytest.raises(PlanningError, match="samples 1 and 2"):
+        trajectory_csv_text(fake)

@@ -415,3 +415,25 @@ def test_the_roadmap_is_one_flag_or_one_key_away(box):
         weldplan.load_station(_write(tmp, bad))
     line = bad.splitlines().index('roadmap = "yes"') + 1
     assert err.value.field == "robot.roadmap" and err.value.line == line, str(err.value)
+
+
+@pytest.mark.slow
+def test_file_options_and_library_write_the_same_files_for_the_demo_with_the_gun_and_the_robot(
+    tmp_path,
+):
+    """``plan examples/demo_station.toml``, the equivalent options and ``weldplan.plan`` on the
+    loaded station write identical route CSV, JSON and KRL program for the demo with the shared
+    gun on the KR 150 (every search seeded and budgeted by work; a few minutes on 2 cores)."""
+    from weldplan.weld import demo_part
+
+    gun = require_shared("tools", "spot_welding_gun", "spot_welding_gun.urdf")
+    robot = require_shared("robots", "kuka_kr150r3100_2", "kr150r3100_2.urdf")
+    argv = ["plan", str(demo_part.DEMO_PART), str(demo_part.DEMO_JOINTS),
+            "--clearance", "5", "--pitch", "5", "--margin", "150", "--planner", "exact",
+            "--sequencer", "auto", "--seed", "0", "--tool", str(gun), "--tool-cone", "15",
+            "--retract", "50", "--robot", str(robot), "--weld-time", "0.5"]  # fmt: skip
+    toml = ROOT / "examples" / "demo_station.toml"
+    file, options, library = _three_ways(tmp_path, toml, argv, "krl")
+    assert sorted(file) == ["r.csv", "r.dat", "r.json", "r.src"]
+    assert file == options == library
+    assert len(file["r.json"]["order"]) == 15

@@ -22,11 +22,13 @@ the CSV gave none and always on via rows. Coordinates are mm, in the frame the r
 planned in: a route planned with the part placed in the cell (:mod:`weldplan.cellframe`,
 ``plan --up/--part-pose``) is in the cell frame, and its CSV starts with one ``#`` line that
 says so and gives the part pose (:func:`frame_comment`). A route planned with a tool
-(``weldplan plan --tool``) has five more columns, ``qw,qx,qy,qz,status``: the TCP orientation
-(scalar-first quaternion of the TCP frame in the part frame) at every waypoint, slerped by arc
-length between the welds' poses, and the weld's pose status on weld rows (docs/tool.md); these
-orientations along the point-tip route are not checked for the swept tool: the tool's verified
-path is a file of its own (``--tool-csv``, :mod:`weldplan.tool.path_csv`). The
+(``weldplan plan --tool``) has five more columns, ``qw,qx,qy,qz,status``: on a weld row the
+weld's verified TCP pose (scalar-first quaternion of the TCP frame in the part frame; empty when
+the weld has no free pose) and the weld's pose status (docs/tool.md). Via, approach and smooth
+rows leave the four orientation cells empty: no orientation between welds was checked along
+the point-tip route, so none is written there (no file carries a pose that was not checked).
+The tool's verified path between welds is a file of its own (``--tool-csv``,
+:mod:`weldplan.tool.path_csv`). The
 robot posts point the tool's z axis (the torch axis, towards the work) against that direction,
 into the surface; they do not use the tool poses yet.
 
@@ -172,21 +174,25 @@ def to_csv_text(route: Route) -> str:
     """The CSV text of :func:`write_csv`.
 
     A route that carries weld poses (``route.tool``, ``weldplan plan --tool``) gains the columns
-    :data:`POSE_FIELDS`: the TCP orientation at every waypoint
-    (:func:`weldplan.tool.route_frames.waypoint_quaternions`; empty at a weld without a pose)
-    and, on weld rows, the weld's status (``ok`` or ``no free pose``).
+    :data:`POSE_FIELDS`, filled on weld rows only: the weld's verified TCP orientation (empty
+    at a weld without a free pose) and its status (``ok`` or ``no free pose``). Other rows
+    carry no orientation: nothing verified the tool there (the verified path between welds is
+    the ``--tool-csv`` file, :mod:`weldplan.tool.path_csv`).
     """
     rows = route_rows(route, smooth=True)
     quats, status = None, None
     if route.tool.get("poses"):
-        from weldplan.tool.route_frames import route_poses, waypoint_quaternions, weld_rows
+        from weldplan.tool.route_frames import route_poses, weld_rows
 
         poses = route_poses(route)
         assert poses is not None
-        quats = waypoint_quaternions(travel_route(route), poses)
+        quats = np.full((len(rows), 4), np.nan)  # only the verified weld poses are written
         status = [""] * len(rows)
         for i, r in enumerate(weld_rows(travel_route(route))):
-            status[int(r)] = poses.poses[i].status
+            pose = poses.poses[i]
+            status[int(r)] = pose.status
+            if pose.ok and pose.quaternion is not None:
+                quats[int(r)] = pose.quaternion
     buf = io.StringIO()
     note = frame_comment(route)
     if note is not None:

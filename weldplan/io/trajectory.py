@@ -11,7 +11,10 @@ route CSV) the robot is moving to or resting at (:class:`~weldplan.robot.timing.
 joint-space vias of a re-planned leg belong to the row the leg leaves from); one column per robot
 joint, named as in the URDF, in radians. Samples are :data:`~weldplan.robot.timing.DEFAULT_DT`
 apart plus one at every waypoint arrival and at both ends of every weld dwell, so a replay
-that interpolates linearly between rows stays within the timing's tolerance of the path. The CLI
+that interpolates linearly between rows stays within the timing's tolerance of the path. ``t``
+strictly increases, as written (a regular sample that would share an arrival's time is not
+taken, :data:`~weldplan.robot.timing.MIN_GAP_DT`; a trajectory whose written times would repeat
+is refused, nothing written), so a replay may divide by the step. The CLI
 writes it with the other outputs as one set (:mod:`weldplan.io.outputset`): whole or not at all.
 """
 
@@ -24,6 +27,8 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
+
+from weldplan.errors import PlanningError
 
 log = logging.getLogger(__name__)
 
@@ -42,9 +47,16 @@ def trajectory_csv_text(timing: Any, row: ArrayLike | None = None) -> str:
     step = np.asarray(timing.step, dtype=np.int64)
     if row is not None:
         step = np.asarray(row, dtype=np.int64)[step]
+    times = [f"{t:.{T_DECIMALS}f}" for t in timing.t]
+    for k in range(1, len(times)):
+        if float(times[k]) <= float(times[k - 1]):
+            raise PlanningError(
+                f"trajectory samples {k - 1} and {k} both at t {times[k]} s: the written "
+                "times would not strictly increase; nothing written"
+            )
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(["t", "step", *timing.joint_names])
-    for t, s, q in zip(timing.t, step, timing.q, strict=True):
-        w.writerow([f"{t:.{T_DECIMALS}f}", int(s), *(f"{v:.{Q_DECIMALS}f}" for v in q)])
+    for t, s, q in zip(times, step, timing.q, strict=True):
+        w.writerow([t, int(s), *(f"{v:.{Q_DECIMALS}f}" for v in q)])
     return buf.getvalue()

@@ -60,6 +60,10 @@ DEFAULT_TOLERANCE_RAD = 5e-4
 #: sampling period (s) of :attr:`TimedTrajectory.t`: 100 Hz, finer than a KUKA KRC's 12 ms
 #: interpolation cycle; every waypoint arrival is a sample as well
 DEFAULT_DT = 0.01
+#: a regular sample closer than ``MIN_GAP_DT * dt`` to a waypoint arrival is dropped (the
+#: arrival is the exact row): two samples never share a time, and the trajectory CSV's
+#: ``t`` (0.1 ms resolution) strictly increases for any ``dt`` >= 1 ms
+MIN_GAP_DT = 0.1
 #: the most times the knot spacing ``h`` shrinks (at least halving) before giving up
 MAX_DOUBLINGS = 10
 #: TOPP-RA's grid: toppra's own refinement rule (``propose_gridpoints``), an interval is split
@@ -418,7 +422,11 @@ def _sample_segment(
     rows = np.arange(a + 1, b + 1)  # a row equal to the one before it arrives with it
     arrive_rows = arrive[np.searchsorted(rows_kept, rows, side="right") - 1]
     dur = float(arrive[-1])
-    grid_t = np.unique(np.concatenate([np.arange(dt, dur, dt), arrive[1:]]))
+    regular = np.arange(dt, dur, dt)
+    # ``arange`` can end a hair before ``dur`` (or an arrival): that sample would share the
+    # arrival's time to the CSV's resolution, so the arrival (the exact row) stands alone
+    gap = np.abs(regular[:, None] - arrive[None, 1:]).min(axis=1, initial=np.inf)
+    grid_t = np.unique(np.concatenate([regular[gap >= MIN_GAP_DT * dt], arrive[1:]]))
     grid_t = grid_t[grid_t > 0]
     grid_steps = rows_kept[np.searchsorted(arrive, grid_t - 1e-12)]
     grid_q = at(grid_t).reshape(-1, d)

@@ -7,8 +7,10 @@ included). A weld without a free pose has no orientation of its own: its row is 
 the waypoints around it are interpolated between the nearest welds before and after it that have
 a pose. Before the first and after the last weld with a pose the orientation is held.
 
-These orientations are a description of the path for offline programming, not a verified
-transition: the swept tool between welds is not checked here (issue 16, item 3).
+These orientations are IK targets along the point-tip route, not a verified transition: the
+swept tool between welds is not checked here (issue 16, item 3), so no output file carries them
+(the route CSV writes the weld poses only, :func:`weldplan.io.export.to_csv_text`; the verified
+tool path is :mod:`weldplan.tool.path_csv`).
 """
 
 from __future__ import annotations
