@@ -54,10 +54,14 @@ from weldplan.robot.urdf import chain_transform
 
 log = logging.getLogger(__name__)
 
-#: default OMPL planner and budget (CPU s, :meth:`weldplan.robot.replan.Detour._ompl`) for a
-#: blocked leg
+#: default OMPL planner for a blocked leg, and the wall-clock safety net of its first run in s
+#: (:meth:`weldplan.robot.replan.Detour._ompl`: WALL_FACTOR times this, a retry's in proportion
+#: to its checks). The budget is the run's checks; the net must lie well above what they take:
+#: on car2_200 a joint-space motion check of the KR 150 with the torch took ~0.1 s, and at 5 s
+#: (50 s a first run) the net stopped 2 of 5 runs before their checks were spent, which made
+#: the run not reproducible
 REPLAN_PLANNER = "rrtconnect"
-REPLAN_TIME_S = 5.0
+REPLAN_TIME_S = 30.0
 #: base-search candidates re-scored along the whole route
 SEARCH_TOP = 5
 #: the joint-space roadmaps' work when asked for (``plan_robot_route(roadmap=ROADMAP)``,
