@@ -315,3 +315,21 @@ def test_a_map_that_cannot_be_triangulated_is_an_input_error():
     R = np.array([[0.0, 0.0, 0.5, 1.0], [1.0, 5e-324, 1.5, 2.0]])
     with pytest.raises(InputError, match="cannot be triangulated"):
         scenario_navmesh(Obstacles2D(rectangles=R), (0.0, 0.0, 10.0, 10.0))
+
+
+def test_a_goal_walled_off_is_unreachable_at_once_with_or_without_pruning():
+    # hypothesis's case: the goal (0.5, 0.05) sits in a pocket closed by the frame and two
+    # overlapping rectangles; the starved search exhausted memory proving it had no path
+    R = np.array(
+        [[1.75, 3.890625, 4.09375, 6.78125], [4.640625, 1.53125, 7.0625, 3.96875],
+         [2.609375, 0.0, 3.125, 1.28125], [0.0, 0.4375, 2.875, 2.515625]]
+    )  # fmt: skip
+    mesh = scenario_navmesh(Obstacles2D(rectangles=R), (0.0, 0.0, 10.0, 10.0))
+    s, t = (7.198727555460549, 7.892768675185769), (0.5, 0.05)
+    world = _framed(R, (0.0, 0.0, 10.0, 10.0))
+    assert math.isinf(_vg_length(world, np.array(s), np.array(t), (0.0, 0.0, 10.0, 10.0)))
+    for prune in (True, False):
+        res = Polyanya(mesh, prune=prune).query(s, t)
+        assert math.isinf(res.length) and res.expanded == 0
+    # and a goal in the same component is still searched and found
+    assert math.isfinite(Polyanya(mesh, prune=False).distance(s, (9.5, 0.5)))

@@ -110,6 +110,7 @@ class Polyanya:
         self._nexits = np.asarray(mesh.n_exits, dtype=np.int64)
         sizes = np.diff(mesh.ptr)
         self._max_sides = int(sizes.max()) if len(sizes) else 3
+        self._component = _components(mesh)
 
     def distance(self, start: ArrayLike, goal: ArrayLike) -> float:
         """Shortest path length, ``inf`` when none exists (or a point is off the mesh)."""
@@ -126,6 +127,11 @@ class Polyanya:
             return PolyanyaResult(math.inf, np.zeros((0, 2)))
         if set(tpolys).intersection(spolys):  # one convex polygon: the straight segment
             return PolyanyaResult(float(np.hypot(*(t - s))), np.array([s, t]))
+        comp = self._component
+        if not set(comp[spolys].tolist()).intersection(comp[tpolys].tolist()):
+            # no mesh path: answered without a search (the starved variant would otherwise
+            # exhaust its open list, which without pruning can outgrow memory)
+            return PolyanyaResult(math.inf, np.zeros((0, 2)))
         (length, pts), expanded, generated = search(
             self._vx,
             self._vy,
@@ -169,3 +175,16 @@ def warm_up() -> float:
     for prune in (True, False):
         Polyanya(mesh, prune=prune).query([0.5, 0.5], [1.5, 0.5])
     return time.perf_counter() - t
+
+
+def _components(mesh: NavMesh) -> NDArray[np.int64]:
+    """``(n_polygons,)`` the connected component of each polygon, by shared edges."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    n = mesh.n_polygons
+    owner = np.repeat(np.arange(n), np.diff(mesh.ptr))
+    nb = np.asarray(mesh.pnb, dtype=np.int64)
+    keep = nb >= 0
+    graph = coo_matrix((np.ones(int(keep.sum())), (owner[keep], nb[keep])), shape=(n, n))
+    return connected_components(graph, directed=False)[1].astype(np.int64)
