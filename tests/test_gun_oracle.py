@@ -136,3 +136,22 @@ def test_oracle_closes_on_the_deep_frame_misses(gun, deep_frame, spot):
 def test_search_closes_on_the_deep_frame_misses(gun, deep_frame, spot):
     part, spots = deep_frame
     assert plan_weld_poses(part, _subset(spots, [spots.index(spot)]), gun).poses[0].ok
+
+
+def test_weldplan_bench_gun_oracle_writes_its_table(gun, tmp_path, capsys):
+    from weldplan.cli import main
+
+    rc = main(
+        ["bench", "gun-oracle", "--frames", "default", "--spots", "4", "--out", str(tmp_path)]
+    )
+    assert rc == 0
+    rows = [
+        r
+        for r in (tmp_path / "gun_oracle.md").read_text().splitlines()
+        if r.startswith("| default")
+    ]
+    assert len(rows) == 1
+    cells = [c.strip() for c in rows[0].strip("|").split("|")]
+    n, oracle, search = (int(c) for c in cells[1:4])
+    assert n >= 4 and 0 < oracle <= n and 0 < search <= n
+    assert cells[4].startswith(f"{oracle} (") and cells[5] == "-"  # the search misses none

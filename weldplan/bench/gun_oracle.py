@@ -1,6 +1,6 @@
 """A dense-sampling oracle for the gun pose search, and its completeness figures (issue 29, item 5).
 
-``python -m weldplan.bench.gun_oracle --spots 200 --out DIR`` generates a sheet-metal side frame
+``weldplan bench gun-oracle --spots 200 --out DIR`` generates a sheet-metal side frame
 (:mod:`weldplan.weld.sheetmetal`), asks the oracle and weldplan's pose search
 (:func:`weldplan.tool.poses.plan_weld_poses`) which spots the shared C-gun closes on, and
 writes the table (``gun_oracle.md``): spots the oracle closes on, spots the search finds a
@@ -269,15 +269,17 @@ def _table(name: str, c: Completeness) -> list[str]:
     ]
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m weldplan.bench.gun_oracle [--frames default deep] [--seed 0] [--spots N]
-    [--out DIR]``: the completeness table of the shared gun's pose search."""
-    ap = argparse.ArgumentParser(prog="python -m weldplan.bench.gun_oracle")
-    ap.add_argument("--frames", nargs="+", default=["default", "deep"])
-    ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--spots", type=int, default=None, help="spots per frame (default: all)")
-    ap.add_argument("--out", type=Path, default=Path("."))
-    args = ap.parse_args(argv)
+HELP = "the gun pose search against a dense independent oracle on sheet-metal side frames"
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--frames", nargs="+", default=["default", "deep"], help="default, deep")
+    p.add_argument("--seed", type=int, default=0, help="the side frame's seed (default 0)")
+    p.add_argument("--spots", type=int, default=None, help="spots per frame (default: all)")
+
+
+def run(args: argparse.Namespace) -> int:
+    """The completeness table of the shared gun's pose search, written to ``args.out``."""
     from weldplan.tool import shared_spot_gun
     from weldplan.weld.sheetmetal import generate_side_frame
 
@@ -298,10 +300,20 @@ def main(argv: Sequence[str] | None = None) -> int:
         + rows
         + ["", f"load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}, {os.cpu_count()} CPUs", ""]
     )
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "gun_oracle.md").write_text(text, encoding="utf-8")
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "gun_oracle.md").write_text(text, encoding="utf-8")
     print(text)
     return 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m weldplan.bench.gun_oracle [--frames default deep] [--seed 0] [--spots N]
+    [--out DIR]`` (= ``weldplan bench gun-oracle``)."""
+    ap = argparse.ArgumentParser(prog="python -m weldplan.bench.gun_oracle", description=HELP)
+    ap.add_argument("--out", type=Path, default=Path("."))
+    add_arguments(ap)
+    return run(ap.parse_args(argv))
 
 
 if __name__ == "__main__":

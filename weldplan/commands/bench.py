@@ -22,6 +22,7 @@ BENCHES: dict[str, str] = {
     "queries": "weldplan.bench.queries",
     "tool": "weldplan.bench.tool",
     "robot": "weldplan.bench.robot",
+    "gun-oracle": "weldplan.bench.gun_oracle",
 }
 
 
