@@ -73,6 +73,7 @@ def station_from_args(args: argparse.Namespace, part: m.PartSpec) -> m.Station:
             margin=args.margin,
             approach_cone=getattr(args, "approach_cone", m.CellSettings.approach_cone),
             max_joint_distance=getattr(args, "max_joint_distance", None),
+            spot_depth=getattr(args, "spot_depth", m.CellSettings.spot_depth),
         ),  # fmt: skip
         route=route_settings(args),
         tool=tool_settings(args),

@@ -55,6 +55,15 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="largest distance from a joint to the part's surface, mm (default: the larger of "
         "20 and 4 x (clearance + pitch), 40 at the defaults); a joint farther is an error",
     )
+    p.add_argument(
+        "--spot-depth",
+        type=float,
+        default=0.0,
+        metavar="MM",
+        help="mm below the surface, along the approach, that the weld spots lie (a spot on the "
+        "faying surface of a sheet stack: the near sheet's gauge plus the gap); the approach "
+        "cone starts that far out (0: spots on the surface)",
+    )
     add_part_pose_arguments(p)
     add_planning_arguments(p, default_output=None)
     from weldplan.commands._station_args import record_defaults

@@ -15,7 +15,7 @@ The file (docs/station.md)::
     up = "y"                      # optional: the part's up axis, or pose = [x, y, z, rx, ry, rz]
     fixture_z = 0.0               # mm: the part's lowest point above the floor (optional)
 
-    [cell]                        # pitch, margin, approach_cone, max_joint_distance
+    [cell]                        # pitch, margin, approach_cone, max_joint_distance, spot_depth
     [route]                       # planner, sequencer, aco, refine, smooth, ...
     [tool_settings]               # cone, contact_radius, retract, side_exit, ...
 

@@ -130,18 +130,25 @@ class CellSettings:
         Degrees in (0, 90]: each virtual joint lies within this angle of its weld's approach.
     max_joint_distance
         mm: largest distance of a weld from the part's surface (None: the cell's default).
+    spot_depth
+        mm >= 0: how far below the surface, along its approach, each weld spot lies (a spot on
+        the faying surface of a sheet stack: the gauge of the sheet on the approach side plus
+        the gap); the approach cone the route is checked against starts that far out
+        (:func:`weldplan.weld.verify.approach_pieces`). 0: spots on the surface.
     """
 
     pitch: float = 5.0
     margin: float = 150.0
     approach_cone: float = 45.0
     max_joint_distance: float | None = None
+    spot_depth: float = 0.0
 
     def __post_init__(self) -> None:
         _number("pitch", self.pitch, 0.0, lo_open=True)
         _number("margin", self.margin, 0.0, lo_open=True)
         _number("approach_cone", self.approach_cone, 0.0, 90.0, lo_open=True)
         _optional("max_joint_distance", self.max_joint_distance, 0.0, lo_open=True)
+        _number("spot_depth", self.spot_depth, 0.0)
 
 
 @dataclass(frozen=True)

@@ -209,11 +209,14 @@ def cell_stage(station: Station) -> Any:
 
     c, p = station.cell, station.part
     if p.is_demo:
-        return demo_cell(pitch=c.pitch, clearance=station.clearance, margin=c.margin)
+        return demo_cell(
+            pitch=c.pitch, clearance=station.clearance, margin=c.margin, spot_depth=c.spot_depth
+        )
     return load_cell(
         p.mesh, p.welds, units=p.units, scale=p.scale, length=p.length, pitch=c.pitch,  # type: ignore[arg-type]
         clearance=station.clearance, margin=c.margin, approach_cone=c.approach_cone,
         max_joint_distance=c.max_joint_distance, part_pose=station.part_pose,
+        spot_depth=c.spot_depth,
     )  # fmt: skip
 
 

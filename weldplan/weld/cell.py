@@ -108,6 +108,10 @@ class Cell:
         The part's pose in the cell (:class:`~weldplan.cellframe.PartPose`, its fixture height
         resolved): ``part``, ``joints`` and everything planned are then in the cell frame;
         ``None``: in the part frame (the part frame is taken as the cell's).
+    spot_depth
+        mm below the surface the weld spots lie along their approach (a spot on the faying
+        surface of a sheet stack); the approach cone starts that far out
+        (:func:`weldplan.weld.verify.approach_pieces`). 0: spots on the surface.
     """
 
     part: trimesh.Trimesh
@@ -121,6 +125,7 @@ class Cell:
     pitch: float
     diagnostics: dict[str, Any] = field(default_factory=dict)
     part_pose: PartPose | None = None
+    spot_depth: float = 0.0
 
     def __post_init__(self) -> None:
         for name, dtype in (
@@ -274,6 +279,7 @@ def build_cell(
     approach_cone: float = APPROACH_CONE_DEG,
     max_joint_distance: float | None = None,
     part_pose: PartPose | None = None,
+    spot_depth: float = 0.0,
 ) -> Cell:
     """Model a welding cell (Wang et al. 2017, section 3).
 
@@ -297,6 +303,8 @@ def build_cell(
         ``joints`` are given in the part frame and moved into the cell frame (the fixture
         height resolved on the part) before anything else; every stage then plans in the cell
         frame. ``None``: the part frame is the planning frame.
+    spot_depth
+        mm (>= 0, below the surface along the approach): :attr:`Cell.spot_depth`.
 
     Returns
     -------
@@ -313,6 +321,9 @@ def build_cell(
     """
     pitch, clearance, margin, search_radius, max_joint_distance = _settings(
         pitch, clearance, margin, search_radius, max_joint_distance
+    )
+    spot_depth = _finite_mm(
+        "spot_depth", spot_depth, minimum=0.0, text="spot_depth must be >= 0 mm"
     )
     if not isinstance(joints, Joints):
         raise InputError(f"joints must be weldplan Joints, got {type(joints).__name__}")
@@ -350,7 +361,7 @@ def build_cell(
         search_radius=search_radius,
         directions=joints.directions,
         approach_cone=approach_cone,
-        approach_free=lambda p, c: approach_free(collision, p, c, clearance),
+        approach_free=lambda p, c: approach_free(collision, p, c, clearance, depth=spot_depth),
     )
     return Cell(
         part=part,
@@ -364,6 +375,7 @@ def build_cell(
         pitch=float(pitch),
         diagnostics=_diagnostics(part, joints, pairs, len(solids), far, max_joint_distance),
         part_pose=part_pose,
+        spot_depth=float(spot_depth),
     )
 
 

@@ -485,6 +485,9 @@ def _settings(cell: Any, config: PlanConfig, clearance: float) -> dict[str, Any]
         pitch=float(getattr(cell, "pitch", config.pitch)),
         margin=float(getattr(cell, "margin", config.margin)),
     )
+    depth = float(getattr(cell, "spot_depth", 0.0) or 0.0)
+    if depth > 0.0:  # recorded only when set, so a route of spots on the surface reads as before
+        settings["spot_depth"] = depth
     return settings
 
 

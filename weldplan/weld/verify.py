@@ -51,6 +51,7 @@ for; a route without provenance (written before) is checked with a logged warnin
 from __future__ import annotations
 
 import logging
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -255,8 +256,15 @@ def approach_pieces(
     *,
     pieces: int = APPROACH_PIECES,
     exempt: float = APPROACH_EXEMPT_MM,
+    depth: float = 0.0,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """The capsules that check the approach ``spot -> virtual`` (module docstring).
+
+    ``depth`` (mm, >= 0) is how far below the surface the spot lies along its approach (a spot
+    on the faying surface of a sheet stack: the gauge of the sheet the gun presses, plus the
+    gap): the cone's apex moves out along the approach by ``depth``, so the first
+    ``depth + exempt`` mm are not checked and the radius grows from 0 at the apex,
+    ``clearance * (s - depth) / (L - depth)``. ``depth = 0`` is the spot on the surface.
 
     Returns
     -------
@@ -270,11 +278,11 @@ def approach_pieces(
     virtual = np.asarray(virtual, dtype=float)
     d = virtual - spot
     L = float(np.linalg.norm(d))
-    if L <= exempt:
+    if L <= exempt + depth:
         return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0)
-    s = np.linspace(exempt, L, pieces + 1)
+    s = np.linspace(exempt + depth, L, pieces + 1)
     pts = spot + np.outer(s / L, d)
-    radii = clearance * s[:-1] / L * (1.0 - APPROACH_SLACK)
+    radii = clearance * (s[:-1] - depth) / (L - depth) * (1.0 - APPROACH_SLACK)
     return pts[:-1], pts[1:], radii
 
 
@@ -285,11 +293,25 @@ def approach_free(
     clearance: float,
     *,
     pieces: int = APPROACH_PIECES,
+    depth: float = 0.0,
 ) -> bool:
     """Whether the approach ``spot -> virtual`` stays within its cone (module docstring): the
-    check :func:`verify_route` makes, for one approach."""
-    A, B, r = approach_pieces(spot, virtual, clearance, pieces=pieces)
+    check :func:`verify_route` makes, for one approach (``depth``: :func:`approach_pieces`)."""
+    A, B, r = approach_pieces(spot, virtual, clearance, pieces=pieces, depth=depth)
     return all(model.segment_free(a, b, float(rr)) for a, b, rr in zip(A, B, r, strict=True))
+
+
+def spot_depth(route: Route) -> float:
+    """mm below the surface the route's weld spots lie (``route.settings["spot_depth"]``, 0
+    when absent: :func:`approach_pieces`)."""
+    v = route.settings.get("spot_depth", 0.0)
+    try:
+        depth = float(v)
+    except (TypeError, ValueError):
+        depth = math.nan
+    if not (math.isfinite(depth) and depth >= 0.0):
+        raise InputError(f"the route's spot_depth must be a finite number >= 0 mm, got {v!r}")
+    return depth
 
 
 def verify_route(
@@ -344,7 +366,7 @@ def verify_route(
     violations = _joint_table(route, joints)
     counts, visit_violations = _visits(route)
     violations += visit_violations
-    pieces = _LegPieces()
+    pieces = _LegPieces(spot_depth(route))
     for k, leg in enumerate(route.legs):
         violations += pieces.add(route, k, leg, clearance, approach_pieces_per_segment)
     failed = _collisions(model, pieces, clearance)
@@ -384,7 +406,7 @@ def _smooth_paths(
     legs = [k for k, leg in enumerate(route.legs) if leg.smooth is not None]
     if not legs:
         return [], {}
-    pieces = _LegPieces()
+    pieces = _LegPieces(spot_depth(route))
     found: list[Violation] = []
     for k in legs:
         found += pieces.add(route, k, _SmoothView(route.legs[k]), clearance, n_pieces)
@@ -470,7 +492,8 @@ class _LegPieces:
     """The capsules to check, gathered leg by leg: middle segments at the full clearance, and
     the approach cones as :func:`approach_pieces` (module docstring)."""
 
-    def __init__(self) -> None:
+    def __init__(self, depth: float = 0.0) -> None:
+        self.depth = depth
         self.mid_a: list[NDArray] = []
         self.mid_b: list[NDArray] = []
         self.mid_where: list[tuple[int, int]] = []
@@ -509,7 +532,7 @@ class _LegPieces:
                 self.mid_b.append(P[seg + 1])
                 self.mid_where.append((k, seg))
                 continue
-            A, B, r = approach_pieces(spot, virt, clearance, pieces=n_pieces)
+            A, B, r = approach_pieces(spot, virt, clearance, pieces=n_pieces, depth=self.depth)
             self.app_a += list(A)
             self.app_b += list(B)
             self.app_r += [float(x) for x in r]
