@@ -9,6 +9,7 @@ headings (GitHub's anchors). The checkers are tested on pages made to fail, so t
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import re
 from pathlib import Path
 
@@ -119,6 +120,27 @@ def test_every_plan_option_is_in_the_manual() -> None:
 def test_the_option_check_tells_prefixes_apart() -> None:
     assert undocumented(["--tool", "--tool-csv"], ["give --tool-csv F"]) == ["--tool"]
     assert undocumented(["--tool"], ["`--tool URDF`"]) == []
+
+
+def station_keys() -> set[str]:
+    """Every key a station file may hold (:mod:`weldplan.station.load`'s tables and the settings
+    objects' fields)."""
+    import weldplan.station.load as load
+    import weldplan.station.model as m
+
+    keys = set(load._TOP) | load._PART | load._ROBOT | load._TOOL | load._SEARCH
+    for cls in (m.CellSettings, m.RouteSettings, m.ToolSettings, m.OutputSpec):
+        keys |= {f.name for f in dataclasses.fields(cls)}
+    return keys
+
+
+def test_every_station_key_is_in_station_md() -> None:
+    text = (DOCS / "station.md").read_text(encoding="utf-8")
+    code = re.findall(r"`([^`]*)`", text)
+    keys = station_keys()
+    assert {"pitch", "se3_time", "weld_time", "up", "tool_csv"} <= keys
+    missing = sorted(k for k in keys if not any(re.search(rf"\b{k}\b", c) for c in code))
+    assert not missing, f"station keys not in docs/station.md: {missing}"
 
 
 @pytest.mark.parametrize(
