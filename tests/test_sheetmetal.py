@@ -6,6 +6,8 @@ not :mod:`weldplan.geometry.flanges`, which is tested against this generator).""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 import trimesh
@@ -21,7 +23,9 @@ from weldplan.weld.sheetmetal import (
     main,
     read_sheets,
     station_texts,
+    write_station,
 )
+from weldplan.weld.verify import verify_route
 
 
 @pytest.fixture(scope="module")
@@ -159,3 +163,31 @@ def test_bad_settings_and_files_are_one_line_errors(tmp_path):
     bad.write_text("o a\nv 0 0 0\nf 1 2 3\n")
     with pytest.raises(InputError, match="line 3"):
         read_sheets(bad)
+
+
+@pytest.mark.slow
+def test_a_generated_frame_is_planned_whole_with_the_gun_and_the_robot(tmp_path):
+    """The whole pipeline on real lap joints: every spot of a generated frame gets a verified
+    gun pose, the KR 150 on the floor welds them all in one collision-free program, and the
+    route re-checks at the depth the generator states (issue 29: benches and tests on these)."""
+    import weldplan
+    from tests.conftest import require_shared
+
+    gun = require_shared("tools", "spot_welding_gun", "spot_welding_gun.urdf")
+    urdf = require_shared("robots", "kuka_kr150r3100_2", "kr150r3100_2.urdf")
+    st = generate_side_frame(SheetFrameSettings(n_spots=8), rng=3)
+    write_station(st, tmp_path)
+    (tmp_path / "station.toml").write_text(
+        f'seed = 0\n[part]\nmesh = "body.obj"\nwelds = "spots.csv"\npose = [0, 0, 600, 0, 0, 0]\n'
+        f"[cell]\nspot_depth = {st.spot_depth()}\n"
+        f'[[robot]]\nurdf = "{urdf}"\n[robot.tool]\nfile = "{gun}"\ntcp = "nozzle_tip"\n'
+    )
+    p = weldplan.plan(weldplan.load_station(tmp_path / "station.toml"))
+    rr = p.robot.robot_route
+    assert p.poses.poses.n_ok == 8
+    assert rr.status.count("ok") == 8 and not rr.flips and rr.stats["collision_free"]
+    assert p.partial() == []
+    assert p.route.settings["spot_depth"] == pytest.approx(st.spot_depth())
+    # one sheet deeper than the generator says: the route fails its own re-check
+    shallow = dataclasses.replace(p.route, settings={**p.route.settings, "spot_depth": 0.0})
+    assert not verify_route(shallow, p.cell.part).ok

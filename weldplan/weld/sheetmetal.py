@@ -199,6 +199,20 @@ class SheetStation:
         """All sheets in one mesh (what :func:`weldplan.io.mesh.load_part` makes of body.obj)."""
         return trimesh.util.concatenate(list(self.sheets.values()))
 
+    def spot_depth(self) -> float:
+        """mm: how far below the surface the gun presses (the inner panel's, the approach
+        side) the deepest spot lies: that panel's gauge plus half the gap, the largest over the
+        flanges that carry spots (``spot_depth`` of the route stage, docs/sheetmetal.md)."""
+        used = set(self.spot_flange)
+        depths = [
+            g + f.gap / 2.0
+            for f in self.flanges
+            if f.name in used
+            for b, g in zip(f.bodies, f.gauges, strict=True)
+            if b.endswith("_inner")
+        ]
+        return max(depths, default=0.0)
+
 
 def _positive(value: float, name: str) -> None:
     if not (math.isfinite(value) and value > 0):
@@ -460,6 +474,8 @@ def station_texts(station: SheetStation) -> dict[str, str]:
         f"(seed {station.seed}) on its side frame (sill, B-pillar, roof rail: hat sections closed "
         f"by inner panels); spots at mid-overlap on the faying surface of each flange, pitch "
         f"{s.pitch[0]:g}-{s.pitch[1]:g} mm, approach from the inner panel's side\n"
+        f"# the deepest spot lies {station.spot_depth():g} mm below the inner panel's surface: "
+        f"plan with --spot-depth {station.spot_depth():g} or more\n"
     )
     rows = ["id,x,y,z,nx,ny,nz,flange"]
     assert station.spots.directions is not None
