@@ -7,6 +7,7 @@ equivalent options and ``weldplan.plan(weldplan.load_station(FILE))`` write iden
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import re
 from pathlib import Path
@@ -437,3 +438,31 @@ def test_file_options_and_library_write_the_same_files_for_the_demo_with_the_gun
     assert sorted(file) == ["r.csv", "r.dat", "r.json", "r.src"]
     assert file == options == library
     assert len(file["r.json"]["order"]) == 15
+
+
+def test_a_tool_path_that_fails_its_re_check_stops_the_plan_and_writes_nothing(
+    box, monkeypatch, capsys
+):
+    """A transition the independent sweep check refuses is never written (the check is forced
+    to fail here: the planner's own answer passes it on this box)."""
+    import importlib
+
+    from weldplan.cli import main
+
+    vs = importlib.import_module("weldplan.tool.verify_sweeps")  # the package exports the function
+
+    tmp, mesh, joints, head = box
+    real = vs.verify_sweeps
+
+    def failing(*a, **kw):
+        got = real(*a, **kw)
+        assert got.ok  # the real check passes; the test's failure is injected after it
+        return dataclasses.replace(got, ok=False, failures=(("A->B", "the gun hits the part"),))
+
+    monkeypatch.setattr(vs, "verify_sweeps", failing)
+    out = tmp / "r.csv"
+    rc = main(["plan", str(mesh), str(joints), "-o", str(out), "--tool",
+               "builtin:arc_torch,bend_angle=0", "--quiet"])  # fmt: skip
+    err = capsys.readouterr().err
+    assert rc != 0 and "failed its independent re-check" in err and "A->B" in err
+    assert not out.exists() and "Traceback" not in err

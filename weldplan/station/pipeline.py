@@ -388,6 +388,7 @@ def _tool_robot(p: Plan, st: _Stages, ctx: _RobotContext | None) -> Plan:
     with st.stage("transitions") as stats:
         path = toolstage.transitions_stage(p.cell.part, p.tool.tool, poses, settings, seed=p.seed)
         stats.update(blocked=len(path.path.blocked), transitions=len(path.path.transitions))
+    check_sweeps(path.sweeps)
     route = toolstage.with_tool(p.route, p.tool.provenance, poses, path)
     p = dataclasses.replace(p, route=route, poses=poses, transitions=path)
     if ctx is None:
@@ -404,6 +405,16 @@ def _tool_robot(p: Plan, st: _Stages, ctx: _RobotContext | None) -> Plan:
         stats.update(cycle_s=build.timing.total)
     route = robotstage.with_robot(route, joint, str(ctx.spec.urdf))
     return dataclasses.replace(p, route=route, robot=joint, program=build)
+
+
+def check_sweeps(sweeps: Any) -> None:
+    """Refuse a tool path whose free transitions failed their independent re-check
+    (:class:`~weldplan.tool.verify_sweeps.SweepsVerification`): nothing is written."""
+    if not sweeps.ok:
+        raise PlanningError(
+            f"the tool path failed its independent re-check: {sweeps.describe(5)}; "
+            "nothing written"
+        )
 
 
 def _with_warnings(route: Any, warnings: list[str]) -> Any:
