@@ -170,6 +170,47 @@ def sphere_rates(
     return inner
 
 
+class _Carry:
+    """What a body's last FCL distance still proves on the motions after it (path_hits).
+
+    The conservative advancement of a motion ends with the FCL distance ``d`` of the triangles
+    of some spheres of a body at the motion's end; on the next motions of the path no point of
+    the body moves more than their bounds (``D``, mm). While the bounds summed since stay below
+    ``d - MIN_GAP_MM``, the same triangles (or any subset of them: a subset is never closer)
+    cannot come within :data:`MIN_GAP_MM` of the part, so such a motion is free with no FCL
+    call. The advancement itself would have proven it free in its first step, so the verdicts
+    are the same; a path of short motions (a sampled linear move) costs one advancement per
+    body instead of one per motion.
+
+    Parameters
+    ----------
+    seg
+        ``(s,)``: the path's motions checked, increasing.
+    D
+        ``(s, b)`` mm: each motion's bound on how far any point of each body moves.
+    """
+
+    def __init__(self, seg: NDArray[np.int64], D: NDArray[np.float64]) -> None:
+        self.seg = seg
+        self.cum = np.vstack([np.zeros((1, D.shape[1])), np.cumsum(D, axis=0)])
+        self.last: dict[int, tuple[int, NDArray[np.int64], float]] = {}
+
+    def free(self, s_i: int, b: int, spheres: NDArray[np.int64], rates: NDArray) -> bool:
+        """Whether motion ``seg[s_i]`` is free for ``spheres`` of body ``b`` by the distance
+        measured last (class docstring)."""
+        if b not in self.last:
+            return False
+        k, measured, left = self.last[b]
+        if k >= s_i or self.seg[s_i] - self.seg[k] != s_i - k:  # not the same run of motions
+            return False
+        moved = self.cum[s_i, b] - self.cum[k + 1, b]  # motions k + 1 .. s_i - 1
+        return left - moved - float(np.max(rates)) > 0.0 and bool(np.isin(spheres, measured).all())
+
+    def measured(self, s_i: int, b: int, spheres: NDArray[np.int64], left: float) -> None:
+        """Motion ``seg[s_i]``'s advancement of ``spheres`` of body ``b`` left ``left`` mm."""
+        self.last[b] = (s_i, spheres, left)
+
+
 class RobotCollision:
     """Collision checks of a robot (and its tool) against a part (module docstring).
 
@@ -231,6 +272,22 @@ class RobotCollision:
             lo, hi = np.asarray(self.part.bounds, dtype=np.float64)
             self._shared["bound"] = DistanceBound(self.distance, lo, hi)
         return self._shared["bound"]  # type: ignore[return-value]
+
+    def _clear(self, points: NDArray[np.float64], need: ArrayLike) -> NDArray[np.bool_]:
+        """``(n,) bool``: whether each point ``(n, 3)`` mm is farther than ``need`` (mm, scalar
+        or ``(n,)``) from the part: :meth:`DistanceBound.clear
+        <weldplan.geometry.distbound.DistanceBound.clear>`, asked only of the points that the
+        distance to the part's bounding box (a lower bound it takes too) does not clear, so that
+        a link far from the part fills no block of the table for nothing. The same answers."""
+        P = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+        need = np.broadcast_to(np.asarray(need, dtype=np.float64), (len(P),))
+        bound = self.bound
+        box = np.linalg.norm(np.maximum(np.maximum(bound.lo - P, P - bound.hi), 0.0), axis=1)
+        ok = box - bound.tol > need
+        rest = np.flatnonzero(~ok)
+        if len(rest):
+            ok[rest] = bound.clear(P[rest], need[rest])
+        return ok
 
     @property
     def selfcheck(self) -> SelfCheck:
@@ -295,7 +352,7 @@ class RobotCollision:
         F = self.robot.link_frames(np.asarray(q, dtype=np.float64))[0]
         bodies = self.zone_bodies if zone else self.bodies
         c = np.array([F[b.frame, :3, :3] @ b.centre + F[b.frame, :3, 3] for b in bodies])
-        clear = self.bound.clear(c, np.array([b.radius for b in bodies]) + 1e-3)
+        clear = self._clear(c, np.array([b.radius for b in bodies]) + 1e-3)
         for body, far in zip(bodies, clear, strict=True):
             if far:  # its bounding sphere does not reach the part
                 continue
@@ -328,7 +385,7 @@ class RobotCollision:
         )  # (n, b, 3)
         radius = np.array([b.radius for b in bodies])
         need = np.broadcast_to(radius + 1e-3, c.shape[:2]).ravel()
-        near = ~self.bound.clear(c.reshape(-1, 3), need).reshape(len(Q), -1)
+        near = ~self._clear(c.reshape(-1, 3), need).reshape(len(Q), -1)
         for i, b in np.argwhere(near):
             if out[i] is not None:
                 continue
@@ -347,7 +404,12 @@ class RobotCollision:
 
     # ---------------------------------------------------------------------------- a path
     def path_hits(
-        self, Q: ArrayLike, zone: ArrayLike | None = None, *, first_only: bool = False
+        self,
+        Q: ArrayLike,
+        zone: ArrayLike | None = None,
+        *,
+        first_only: bool = False,
+        only: ArrayLike | None = None,
     ) -> list[Hit]:
         """The blocked motions of the joint path ``Q (k, 6)`` rad (module docstring).
 
@@ -359,6 +421,9 @@ class RobotCollision:
             ``(k - 1,) bool``: motions checked with the tool's contact zone exempt.
         first_only
             Stop at the first blocked motion.
+        only
+            ``(k - 1,) bool``: the motions to check (default all); several paths are checked in
+            one call as one array of rows with the motions joining them left out.
 
         Returns
         -------
@@ -372,26 +437,31 @@ class RobotCollision:
                 return [Hit(0, 0.0, "?", 0.0)]
             return []
         Z = np.zeros(ns, dtype=bool) if zone is None else np.asarray(zone, dtype=bool)
+        use = np.ones(ns, dtype=bool) if only is None else np.asarray(only, dtype=bool)
         dq = np.abs(np.diff(Q, axis=0))  # (ns, 6)
         hits: list[Hit] = []
         for zflag in (False, True):
-            seg = np.flatnonzero(Z == zflag)
+            seg = np.flatnonzero((Z == zflag) & use)
             if len(seg) == 0:
                 continue
             bodies = self.zone_bodies if zflag else self.bodies
             Rm = self.radii_zone if zflag else self.radii_full  # set by .bodies
             D = dq[seg] @ Rm  # (s, b) mm: motion bound per body
             suspects = self._sphere_level(Q, seg, D, bodies)
+            carry = _Carry(seg, D)
             for s_i, b, spheres, rates in suspects:
                 if any(h.segment == int(seg[s_i]) for h in hits):
                     continue
-                hit = self._advance(Q, int(seg[s_i]), bodies[b], spheres, rates)
+                if carry.free(s_i, b, spheres, rates):
+                    continue
+                hit, left = self._advance(Q, int(seg[s_i]), bodies[b], spheres, rates)
+                carry.measured(s_i, b, spheres, left)
                 if hit is not None and not any(h.segment == hit.segment for h in hits):
                     hits.append(hit)
                     if first_only:
                         return hits
         # the robot against itself and the floor (the whole tool), on the motions still free
-        free = np.setdiff1d(np.arange(ns), [h.segment for h in hits])
+        free = np.setdiff1d(np.flatnonzero(use), [h.segment for h in hits])
         for s, t, pair, d in self.selfcheck.motions(self.robot, Q, free, first_only=first_only):
             hits.append(Hit(s, t, pair, d))
         return sorted(hits, key=lambda h: h.segment)
@@ -412,7 +482,7 @@ class RobotCollision:
             delta = D[owner, b] / (n[owner] - 1)  # (N,) mm a point moves between samples
             # the body's bounding sphere first, its cover only where that is not enough
             c0 = Fb[:, :3, :3] @ body.centre + Fb[:, :3, 3]
-            near = ~self.bound.clear(c0, body.radius + delta / 2 + MIN_GAP_MM + 1e-3)
+            near = ~self._clear(c0, body.radius + delta / 2 + MIN_GAP_MM + 1e-3)
             # a sample whose bounding sphere is clear covers the half intervals on both sides of
             # it; only the others need the cover
             pick = np.flatnonzero(near)
@@ -429,7 +499,7 @@ class RobotCollision:
             k = np.searchsorted(near_seg, owner[pick])
             step = rates[k] / (n[owner[pick]] - 1)[:, None]
             need = body.radii[None] + step / 2 + MIN_GAP_MM + 1e-3
-            bad = ~self.bound.clear(c.reshape(-1, 3), need.ravel()).reshape(need.shape)
+            bad = ~self._clear(c.reshape(-1, 3), need.ravel()).reshape(need.shape)
             rows = np.flatnonzero(bad.any(axis=1))
             for s_i in np.unique(owner[pick][rows]):
                 spheres = np.flatnonzero(bad[owner[pick] == s_i].any(axis=0))
@@ -444,18 +514,21 @@ class RobotCollision:
         body: Body,
         spheres: NDArray[np.int64],
         rates: NDArray[np.float64],
-    ) -> Hit | None:
+    ) -> tuple[Hit | None, float]:
         """Conservative advancement along motion ``s`` of the triangles of ``spheres`` of
         ``body`` together (one FCL object), no point of which moves more than ``max(rates)`` mm
-        over the whole motion (module docstring); the hit, else ``None``."""
+        over the whole motion (module docstring): the hit, else ``None``; and the slack at the
+        motion's end (mm: the FCL distance of those triangles there less :data:`MIN_GAP_MM`;
+        ``-inf`` where none was measured)."""
         qa, qb = Q[s], Q[s + 1]
         obj = body.union(spheres)
         rate = float(np.max(rates))
         obj.setTransform(fcl_tf(self.robot.link_frames(qa)[0, body.frame]))
         if fcl.collide(obj, self.part_obj, fcl.CollisionRequest(), fcl.CollisionResult()):
-            return Hit(s, 0.0, body.name, 0.0)  # blocked at its start: no need to crop the part
+            # blocked at its start: no need to crop the part
+            return Hit(s, 0.0, body.name, 0.0), -np.inf
         if not self._near_part(qa, body, spheres, rates):
-            return None  # no part triangle within reach of these spheres on this motion
+            return None, -np.inf  # no part triangle within reach of these spheres
         crop = np.count_nonzero(np.isin(body.group, spheres)) >= CROP_MIN_TRIANGLES
         along = AlongMotion(
             self.crops, obj, body.centres[spheres], body.radii[spheres], rate, crop=crop
@@ -466,11 +539,11 @@ class RobotCollision:
             F = self.robot.link_frames(qa + t * (qb - qa))[0]
             d = along.distance(F[body.frame], t)
             if d <= MIN_GAP_MM:
-                return Hit(s, t, body.name, d)
+                return Hit(s, t, body.name, d), -np.inf
             if t >= 1.0 or rate <= 0:
-                return None
+                return None, d - MIN_GAP_MM - rate * (1.0 - t)
             t = min(1.0, t + (d - MIN_GAP_MM) / rate)
-        return Hit(s, t, body.name, d)
+        return Hit(s, t, body.name, d), -np.inf
 
     def _near_part(
         self, qa: NDArray, body: Body, spheres: NDArray[np.int64], rates: NDArray[np.float64]
@@ -482,7 +555,7 @@ class RobotCollision:
         F = self.robot.link_frames(qa)[0, body.frame]
         c = body.centres[spheres] @ F[:3, :3].T + F[:3, 3]
         reach = body.radii[spheres] + rates + MIN_GAP_MM
-        return not np.all(self.bound.clear(c, reach + 1e-3))
+        return not np.all(self._clear(c, reach + 1e-3))
 
     def motion_free(self, qa: ArrayLike, qb: ArrayLike, *, zone: bool = False) -> bool:
         """Whether the joint-space motion ``qa -> qb`` (ends included) is free."""
