@@ -104,3 +104,39 @@ def test_linear_moves_checked_together_as_one_by_one(scene):
     assert together.samples.tolist() == [int(c.samples[0]) for c in alone]
     assert together.reason[1] == together.reason[4] == "collision"  # through the block
     assert together.reason[2] == "ok"  # down to weld B (test_linear_moves)
+
+
+def test_motion_bounds_hold_and_use_the_lever_arm_about_each_axis():
+    """Every vertex of every body, and every cover-sphere centre, moves no farther over a
+    random joint motion (200 samples) than its bound (the static per-body one, and the
+    per-sphere one taken from the distance to each joint's axis line); an A6 turn moves the
+    gun's spheres far less than their distance from the flange would say."""
+    from weldplan.robot.collision import sphere_rates
+
+    robot = shared_robot()
+    Tft, _ = gun_tcp(robot)
+    chk = RobotCollision(robot, _plate(), shared_spot_gun(), Tft)
+    bodies = chk.bodies
+    rng = np.random.default_rng(11)
+    t = np.linspace(0.0, 1.0, 200)[:, None]
+    for _ in range(4):
+        qa = rng.uniform(robot.lower, robot.upper) * 0.5
+        qb = qa + rng.normal(0.0, 0.3, 6)
+        F = robot.link_frames(qa + t * (qb - qa))  # (200, 7, 4, 4)
+        dq = np.abs(qb - qa)
+        static = dq @ chk.radii_full  # (b,)
+        for b, body in enumerate(bodies):
+            Fb = F[:, body.frame]
+            v = body.vertices[:: max(1, len(body.vertices) // 300)]
+            p = np.einsum("nij,sj->nsi", Fb[:, :3, :3], v) + Fb[:, None, :3, 3]
+            assert np.linalg.norm(p - p[:1], axis=2).max() <= static[b] + 1e-6
+            c = np.einsum("nij,sj->nsi", Fb[:, :3, :3], body.centres) + Fb[:, None, :3, 3]
+            rates = sphere_rates(F[:1], body.frame, body.centres, body.radii, dq[None], robot.axes)
+            assert np.all(np.linalg.norm(c - c[:1], axis=2).max(axis=0) <= rates[0] + 1e-6)
+    tool = bodies[-1]
+    turn = np.zeros((1, 6))
+    turn[0, 5] = 0.1
+    F0 = robot.link_frames(HOME)
+    lever = sphere_rates(F0, 6, tool.centres, tool.radii, turn, robot.axes)
+    point = sphere_rates(F0, 6, tool.centres, tool.radii, turn)
+    assert np.all(lever <= point + 1e-9) and np.median(lever) < 0.5 * np.median(point)

@@ -11,8 +11,9 @@ The motion between two rows is linear in joint space. It is proven free conserva
 shortcut shared with any planner:
 
 1. *Bound.* During a motion no point of a sphere (centre ``p``, radius ``r``) moves farther than
-   ``sum_j |dq_j| R_j`` mm, where ``R_j = |p - o_j| + r + sum_{i > j} |dq_i| R_i`` bounds its
-   distance to joint j's axis over the whole motion (:func:`sphere_rates`); a static bound per
+   ``sum_j |dq_j| R_j`` mm, where ``R_j = rho_j(p) + r + sum_{i > j} |dq_i| R_i`` bounds its
+   distance to joint j's axis over the whole motion (``rho_j(p)``: the centre's distance to the
+   axis line at the motion's start, :func:`sphere_rates`); a static bound per
    body (chain offsets plus the body's extent) caps it and sets the number of samples.
 2. *Spheres.* Each body is covered by spheres (its triangles grouped by a grid on their centroids,
    each group inside one sphere), and by one bounding sphere checked first. At every sample the
@@ -143,6 +144,7 @@ def sphere_rates(
     centres: NDArray[np.float64],
     radii: NDArray[np.float64],
     dq: NDArray[np.float64],
+    axes: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
     """``(n, s)`` mm: bounds on how far any point of each sphere moves during each motion.
 
@@ -156,16 +158,27 @@ def sphere_rates(
         ``(s, 3)`` mm in that link's frame, ``(s,)`` mm.
     dq
         ``(n, 6)`` rad: each motion's absolute joint change.
+    axes
+        ``(6, 3)``: the joint axes in their child links' frames
+        (:attr:`~weldplan.robot.model.Robot.axes`); ``None``: the distance to a point on each axis
+        is taken instead of the distance to the axis (larger, also a bound).
 
     A point's distance to joint j's axis changes only through the joints after j, so, from the
-    wrist down, ``R_j = |p - o_j| + r + sum_{i > j} |dq_i| R_i`` bounds it over the whole motion
-    (``o_j`` the start position of a point on the axis: link j+1's origin), and the point moves at
-    most ``sum_j |dq_j| R_j``.
+    wrist down, ``R_j = rho_j(p) + r + sum_{i > j} |dq_i| R_i`` bounds it over the whole motion,
+    with ``rho_j(p)`` the start distance of the centre from the axis (the line through link
+    j+1's origin along the joint's axis; without ``axes``, ``|p - o_j|`` to that origin), and
+    the point moves at most ``sum_j |dq_j| R_j``. The distance to the line is the lever arm
+    itself: a gun's tip near the A6 axis, 700 mm from the flange, moves a few mm when A6 turns
+    0.1 rad, not 70.
     """
     p = np.einsum("nij,sj->nsi", F[:, frame, :3, :3], centres) + F[:, None, frame, :3, 3]
     inner = np.zeros(p.shape[:2])
     for j in range(frame - 1, -1, -1):
-        R = np.linalg.norm(p - F[:, None, j + 1, :3, 3], axis=2) + radii[None] + inner
+        v = p - F[:, None, j + 1, :3, 3]
+        if axes is not None:
+            a = F[:, j + 1, :3, :3] @ axes[j]  # (n, 3): the axis in the part frame
+            v = v - np.einsum("nsi,ni->ns", v, a)[..., None] * a[:, None]
+        R = np.linalg.norm(v, axis=2) + radii[None] + inner
         inner = inner + dq[:, j, None] * R
     return inner
 
@@ -299,7 +312,7 @@ class RobotCollision:
             bodies = self.bodies
             acm = allowed_collisions(self.robot, bodies)
             t = np.linalg.norm(self.robot.origins[:, :3, 3], axis=1)
-            reach = float(t[0] + self.radii_full[0].max())
+            reach = float(t[0] + self._motion_radii(bodies, own=False)[0].max())
             self._shared[key] = SelfCheck(bodies, self.radii_full, acm, self.floor_z, reach)
         return self._shared[key]  # type: ignore[return-value]
 
@@ -334,15 +347,22 @@ class RobotCollision:
         radius = float(np.linalg.norm(v - centre, axis=1).max()) * (1 + 1e-9) + 1e-9
         return Body(name, frame, np.asarray(v), np.asarray(f), c, r, g, centre, radius)
 
-    def _motion_radii(self, bodies: list[Body]) -> NDArray[np.float64]:
+    def _motion_radii(self, bodies: list[Body], own: bool = True) -> NDArray[np.float64]:
         """``(6, b)`` mm: ``R[j, b]`` bounds the distance of body b's points from joint j's axis
-        (0 for joints that do not move it)."""
+        (0 for joints that do not move it): the link offsets from joint j to the body's frame
+        plus the body's extent about its frame's origin; for the body's own joint (the axis is
+        fixed in its frame, through its origin) the largest distance of its vertices from that
+        axis itself (``own``; else the extent too)."""
         t = np.linalg.norm(self.robot.origins[:, :3, 3], axis=1)  # link offsets
         R = np.zeros((6, len(bodies)))
         for b, body in enumerate(bodies):
-            rho = float(np.linalg.norm(body.vertices, axis=1).max())
+            v = body.vertices
+            rho = float(np.linalg.norm(v, axis=1).max())
             for j in range(body.frame):  # joint j (0-based) moves frames j+1..6
                 R[j, b] = t[j + 1 : body.frame].sum() + rho
+            if own and body.frame > 0:
+                a = self.robot.axes[body.frame - 1]
+                R[body.frame - 1, b] = float(np.linalg.norm(v - (v @ a)[:, None] * a, axis=1).max())
         return R
 
     # ---------------------------------------------------------------------------- one state
@@ -494,7 +514,9 @@ class RobotCollision:
             # each sphere's own motion bound, no larger than the body's
             first = np.searchsorted(owner, near_seg)  # the t = 0 sample of each near motion
             dq = np.abs(Q[seg[near_seg] + 1] - Q[seg[near_seg]])
-            rates = sphere_rates(F[first], body.frame, body.centres, body.radii, dq)
+            rates = sphere_rates(
+                F[first], body.frame, body.centres, body.radii, dq, self.robot.axes
+            )
             rates = np.minimum(rates, D[near_seg, b][:, None])  # (near motions, spheres)
             k = np.searchsorted(near_seg, owner[pick])
             step = rates[k] / (n[owner[pick]] - 1)[:, None]
