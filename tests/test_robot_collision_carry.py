@@ -140,3 +140,31 @@ def test_motion_bounds_hold_and_use_the_lever_arm_about_each_axis():
     lever = sphere_rates(F0, 6, tool.centres, tool.radii, turn, robot.axes)
     point = sphere_rates(F0, 6, tool.centres, tool.radii, turn)
     assert np.all(lever <= point + 1e-9) and np.median(lever) < 0.5 * np.median(point)
+
+
+def test_a_probe_ends_blocked_motions_early_with_the_same_verdicts(scene, monkeypatch):
+    """Long motions through the plate and the block: without the probe the advancement creeps
+    to its step cap on each blocked one; with it, the same motions are blocked (same bodies)
+    and the same are free, for far fewer FCL distances; and the robot folding into itself."""
+    import weldplan.robot.collision as collision
+
+    robot, Tft, Q, chk = scene
+    rng = np.random.default_rng(2)
+    ends = Q[1] + rng.normal(0.0, 0.5, (12, 6))
+    ends[:, 1:3] = Q[1, 1:3] + rng.uniform(-0.2, 0.4, (12, 2))  # down into the plate
+    path = np.vstack([Q[1], ends])
+
+    def run(probe):
+        monkeypatch.setattr(collision, "PROBE_AFTER", probe)
+        monkeypatch.setattr(selfcollision, "PROBE_AFTER", probe)
+        calls = _counting(monkeypatch, nearpart, "fcl_distance")
+        hits = [chk.path_hits(path[k : k + 2])[:1] for k in range(len(path) - 1)]
+        n = len(calls)
+        monkeypatch.undo()
+        return [(h[0].body if h else None) for h in hits], n
+
+    probed, n_probed = run(selfcollision.PROBE_AFTER)
+    crept, n_crept = run(frozenset())
+    assert probed == crept
+    assert probed.count(None) >= 2 and len(probed) - probed.count(None) >= 4
+    assert n_probed < 0.5 * n_crept

@@ -59,7 +59,7 @@ from weldplan.geometry.distbound import DistanceBound
 from weldplan.geometry.spherecover import sphere_cover
 from weldplan.robot.model import Robot
 from weldplan.robot.nearpart import AlongMotion, PartCrops, fcl_distance, fcl_tf
-from weldplan.robot.selfcollision import SelfCheck, allowed_collisions
+from weldplan.robot.selfcollision import PROBE_AFTER, PROBE_STATES, SelfCheck, allowed_collisions
 from weldplan.tool.model import Tool, bvh
 
 log = logging.getLogger(__name__)
@@ -181,6 +181,38 @@ def sphere_rates(
         R = np.linalg.norm(v, axis=2) + radii[None] + inner
         inner = inner + dq[:, j, None] * R
     return inner
+
+
+def touches_ahead(
+    robot: Robot,
+    obj: fcl.CollisionObject,
+    other: fcl.CollisionObject,
+    qa: NDArray[np.float64],
+    qb: NDArray[np.float64],
+    t: float,
+    frame: int | None = None,
+) -> bool:
+    """Whether ``obj`` (riding on link ``frame``; default the last) touches ``other`` (FCL
+    collide) at one of ``PROBE_STATES`` states evenly spaced on the rest ``(t, 1]`` of the
+    joint motion ``qa -> qb`` (rad). Conservative advancement never steps into the gap, so on a
+    blocked motion it creeps towards the contact until its step cap; after the steps of
+    ``PROBE_AFTER`` (:mod:`weldplan.robot.selfcollision`) the rest of the motion is probed.
+
+    A contact there makes the motion blocked whatever conservative advancement would have done:
+    it cannot step past a state where the body touches, so it would have ended blocked too (at
+    its step cap, :data:`MAX_ADVANCE_STEPS`, if not before). So a probe changes no verdict; it
+    only ends a blocked motion's advancement early (where it stands, ``t``), instead of creeping
+    towards the contact for hundreds of steps. Finding no contact proves nothing: the
+    advancement goes on.
+    """
+    f = 6 if frame is None else frame
+    ts = t + (1.0 - t) * np.arange(1, PROBE_STATES + 1) / PROBE_STATES
+    F = robot.link_frames(qa + ts[:, None] * (qb - qa))[:, f]
+    for Fk in F:
+        obj.setTransform(fcl_tf(Fk))
+        if fcl.collide(obj, other, fcl.CollisionRequest(), fcl.CollisionResult()):
+            return True
+    return False
 
 
 class _Carry:
@@ -557,13 +589,17 @@ class RobotCollision:
         )
         t = 0.0
         d = 0.0
-        for _ in range(MAX_ADVANCE_STEPS):
+        for step in range(MAX_ADVANCE_STEPS):
             F = self.robot.link_frames(qa + t * (qb - qa))[0]
             d = along.distance(F[body.frame], t)
             if d <= MIN_GAP_MM:
                 return Hit(s, t, body.name, d), -np.inf
             if t >= 1.0 or rate <= 0:
                 return None, d - MIN_GAP_MM - rate * (1.0 - t)
+            if step in PROBE_AFTER and touches_ahead(
+                self.robot, obj, self.part_obj, qa, qb, t, body.frame
+            ):
+                return Hit(s, t, body.name, d), -np.inf
             t = min(1.0, t + (d - MIN_GAP_MM) / rate)
         return Hit(s, t, body.name, d), -np.inf
 

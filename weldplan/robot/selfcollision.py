@@ -66,6 +66,12 @@ ACM_SAMPLES = 1000
 ACM_SEED = 0
 #: conservative-advancement steps per (motion, pair) before a motion is declared blocked
 MAX_SELF_STEPS = 400
+#: conservative advancement never steps into the gap, so on a blocked motion it creeps towards
+#: the contact until its step cap; after these steps the rest of the motion is probed for a
+#: contact (FCL collide at PROBE_STATES states), and one found ends the advancement as blocked
+#: at once (here and against the part: :func:`weldplan.robot.collision.touches_ahead`)
+PROBE_AFTER = frozenset({12, 48, 160})
+PROBE_STATES = 24
 #: mm: the floor check of a motion splits it until no point moves more than this in a piece
 FLOOR_TOL_MM = 0.05
 #: pieces examined per (motion, body) against the floor before the motion is declared blocked
@@ -404,15 +410,32 @@ class SelfCheck:
         hit)."""
         t = 0.0
         d = 0.0
-        for _ in range(MAX_SELF_STEPS):
+        for step in range(MAX_SELF_STEPS):
             d = _pair_distance(self.bodies, i, j, robot.link_frames(qa + t * (qb - qa))[0])
             if d <= SELF_GAP_MM:
                 return (t, d), -np.inf
             if rate * (1.0 - t) <= d - SELF_GAP_MM:
                 # they cannot meet before the motion ends
                 return None, d - SELF_GAP_MM - rate * (1.0 - t)
+            if step in PROBE_AFTER and self._touch_ahead(robot, qa, qb, i, j, t):
+                return (t, d), -np.inf  # blocked whatever the advancement would do
             t = t + (d - SELF_GAP_MM) / rate
         return (t, d), -np.inf
+
+    def _touch_ahead(self, robot: Any, qa: NDArray, qb: NDArray, i: int, j: int, t: float) -> bool:
+        """Whether bodies ``i`` and ``j`` touch (FCL collide) at one of :data:`PROBE_STATES`
+        states on the rest ``(t, 1]`` of ``qa -> qb``: the advancement cannot pass such a state,
+        so the motion is blocked (:func:`weldplan.robot.collision.touches_ahead`, the same probe
+        against the part)."""
+        ts = t + (1.0 - t) * np.arange(1, PROBE_STATES + 1) / PROBE_STATES
+        F = robot.link_frames(qa + ts[:, None] * (qb - qa))
+        a, b = self.bodies[i], self.bodies[j]
+        for Fk in F:
+            a.obj.setTransform(fcl_tf(Fk[a.frame]))
+            b.obj.setTransform(fcl_tf(Fk[b.frame]))
+            if fcl.collide(a.obj, b.obj, fcl.CollisionRequest(), fcl.CollisionResult()):
+                return True
+        return False
 
     def _floor_motion(
         self, robot: Any, qa: NDArray, qb: NDArray, b: int, rate: float
