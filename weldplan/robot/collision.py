@@ -58,8 +58,9 @@ from numpy.typing import ArrayLike, NDArray
 from weldplan.geometry.distbound import DistanceBound
 from weldplan.geometry.spherecover import sphere_cover
 from weldplan.robot.model import Robot
+from weldplan.robot.motionbound import Carry, sphere_groups, sphere_rates, touches_ahead
 from weldplan.robot.nearpart import AlongMotion, PartCrops, fcl_distance, fcl_tf
-from weldplan.robot.selfcollision import PROBE_AFTER, PROBE_STATES, SelfCheck, allowed_collisions
+from weldplan.robot.selfcollision import PROBE_AFTER, SelfCheck, allowed_collisions
 from weldplan.tool.model import Tool, bvh
 
 log = logging.getLogger(__name__)
@@ -96,6 +97,7 @@ class Body:
     centre: NDArray[np.float64]
     radius: float
     parts: dict[tuple[int, ...], fcl.CollisionObject] = field(default_factory=dict, repr=False)
+    groups: list[tuple[NDArray, ...]] = field(default_factory=list, repr=False)
 
     @property
     def obj(self) -> fcl.CollisionObject:
@@ -136,124 +138,6 @@ class Hit:
     t: float
     body: str
     distance: float
-
-
-def sphere_rates(
-    F: NDArray[np.float64],
-    frame: int,
-    centres: NDArray[np.float64],
-    radii: NDArray[np.float64],
-    dq: NDArray[np.float64],
-    axes: NDArray[np.float64] | None = None,
-) -> NDArray[np.float64]:
-    """``(n, s)`` mm: bounds on how far any point of each sphere moves during each motion.
-
-    Parameters
-    ----------
-    F
-        ``(n, 7, 4, 4)``: the link frames at each motion's start.
-    frame
-        The link the spheres ride on.
-    centres, radii
-        ``(s, 3)`` mm in that link's frame, ``(s,)`` mm.
-    dq
-        ``(n, 6)`` rad: each motion's absolute joint change.
-    axes
-        ``(6, 3)``: the joint axes in their child links' frames
-        (:attr:`~weldplan.robot.model.Robot.axes`); ``None``: the distance to a point on each axis
-        is taken instead of the distance to the axis (larger, also a bound).
-
-    A point's distance to joint j's axis changes only through the joints after j, so, from the
-    wrist down, ``R_j = rho_j(p) + r + sum_{i > j} |dq_i| R_i`` bounds it over the whole motion,
-    with ``rho_j(p)`` the start distance of the centre from the axis (the line through link
-    j+1's origin along the joint's axis; without ``axes``, ``|p - o_j|`` to that origin), and
-    the point moves at most ``sum_j |dq_j| R_j``. The distance to the line is the lever arm
-    itself: a gun's tip near the A6 axis, 700 mm from the flange, moves a few mm when A6 turns
-    0.1 rad, not 70.
-    """
-    p = np.einsum("nij,sj->nsi", F[:, frame, :3, :3], centres) + F[:, None, frame, :3, 3]
-    inner = np.zeros(p.shape[:2])
-    for j in range(frame - 1, -1, -1):
-        v = p - F[:, None, j + 1, :3, 3]
-        if axes is not None:
-            a = F[:, j + 1, :3, :3] @ axes[j]  # (n, 3): the axis in the part frame
-            v = v - np.einsum("nsi,ni->ns", v, a)[..., None] * a[:, None]
-        R = np.linalg.norm(v, axis=2) + radii[None] + inner
-        inner = inner + dq[:, j, None] * R
-    return inner
-
-
-def touches_ahead(
-    robot: Robot,
-    obj: fcl.CollisionObject,
-    other: fcl.CollisionObject,
-    qa: NDArray[np.float64],
-    qb: NDArray[np.float64],
-    t: float,
-    frame: int | None = None,
-) -> bool:
-    """Whether ``obj`` (riding on link ``frame``; default the last) touches ``other`` (FCL
-    collide) at one of ``PROBE_STATES`` states evenly spaced on the rest ``(t, 1]`` of the
-    joint motion ``qa -> qb`` (rad). Conservative advancement never steps into the gap, so on a
-    blocked motion it creeps towards the contact until its step cap; after the steps of
-    ``PROBE_AFTER`` (:mod:`weldplan.robot.selfcollision`) the rest of the motion is probed.
-
-    A contact there makes the motion blocked whatever conservative advancement would have done:
-    it cannot step past a state where the body touches, so it would have ended blocked too (at
-    its step cap, :data:`MAX_ADVANCE_STEPS`, if not before). So a probe changes no verdict; it
-    only ends a blocked motion's advancement early (where it stands, ``t``), instead of creeping
-    towards the contact for hundreds of steps. Finding no contact proves nothing: the
-    advancement goes on.
-    """
-    f = 6 if frame is None else frame
-    ts = t + (1.0 - t) * np.arange(1, PROBE_STATES + 1) / PROBE_STATES
-    F = robot.link_frames(qa + ts[:, None] * (qb - qa))[:, f]
-    for Fk in F:
-        obj.setTransform(fcl_tf(Fk))
-        if fcl.collide(obj, other, fcl.CollisionRequest(), fcl.CollisionResult()):
-            return True
-    return False
-
-
-class _Carry:
-    """What a body's last FCL distance still proves on the motions after it (path_hits).
-
-    The conservative advancement of a motion ends with the FCL distance ``d`` of the triangles
-    of some spheres of a body at the motion's end; on the next motions of the path no point of
-    the body moves more than their bounds (``D``, mm). While the bounds summed since stay below
-    ``d - MIN_GAP_MM``, the same triangles (or any subset of them: a subset is never closer)
-    cannot come within :data:`MIN_GAP_MM` of the part, so such a motion is free with no FCL
-    call. The advancement itself would have proven it free in its first step, so the verdicts
-    are the same; a path of short motions (a sampled linear move) costs one advancement per
-    body instead of one per motion.
-
-    Parameters
-    ----------
-    seg
-        ``(s,)``: the path's motions checked, increasing.
-    D
-        ``(s, b)`` mm: each motion's bound on how far any point of each body moves.
-    """
-
-    def __init__(self, seg: NDArray[np.int64], D: NDArray[np.float64]) -> None:
-        self.seg = seg
-        self.cum = np.vstack([np.zeros((1, D.shape[1])), np.cumsum(D, axis=0)])
-        self.last: dict[int, tuple[int, NDArray[np.int64], float]] = {}
-
-    def free(self, s_i: int, b: int, spheres: NDArray[np.int64], rates: NDArray) -> bool:
-        """Whether motion ``seg[s_i]`` is free for ``spheres`` of body ``b`` by the distance
-        measured last (class docstring)."""
-        if b not in self.last:
-            return False
-        k, measured, left = self.last[b]
-        if k >= s_i or self.seg[s_i] - self.seg[k] != s_i - k:  # not the same run of motions
-            return False
-        moved = self.cum[s_i, b] - self.cum[k + 1, b]  # motions k + 1 .. s_i - 1
-        return left - moved - float(np.max(rates)) > 0.0 and bool(np.isin(spheres, measured).all())
-
-    def measured(self, s_i: int, b: int, spheres: NDArray[np.int64], left: float) -> None:
-        """Motion ``seg[s_i]``'s advancement of ``spheres`` of body ``b`` left ``left`` mm."""
-        self.last[b] = (s_i, spheres, left)
 
 
 class RobotCollision:
@@ -500,7 +384,7 @@ class RobotCollision:
             Rm = self.radii_zone if zflag else self.radii_full  # set by .bodies
             D = dq[seg] @ Rm  # (s, b) mm: motion bound per body
             suspects = self._sphere_level(Q, seg, D, bodies)
-            carry = _Carry(seg, D)
+            carry = Carry(seg, D)
             for s_i, b, spheres, rates in suspects:
                 if any(h.segment == int(seg[s_i]) for h in hits):
                     continue
@@ -552,14 +436,42 @@ class RobotCollision:
             rates = np.minimum(rates, D[near_seg, b][:, None])  # (near motions, spheres)
             k = np.searchsorted(near_seg, owner[pick])
             step = rates[k] / (n[owner[pick]] - 1)[:, None]
-            need = body.radii[None] + step / 2 + MIN_GAP_MM + 1e-3
-            bad = ~self._clear(c.reshape(-1, 3), need.ravel()).reshape(need.shape)
-            rows = np.flatnonzero(bad.any(axis=1))
-            for s_i in np.unique(owner[pick][rows]):
-                spheres = np.flatnonzero(bad[owner[pick] == s_i].any(axis=0))
-                r_i = rates[int(np.searchsorted(near_seg, s_i)), spheres]
-                out.append((int(s_i), b, spheres, r_i))
+            bad = self._bad_spheres(body, Fp, c, step)
+            # per near motion (its samples are consecutive in ``pick``), the spheres bad anywhere
+            motions, starts = np.unique(owner[pick], return_index=True)
+            bad_seg = np.logical_or.reduceat(bad, starts, axis=0)
+            for m in np.flatnonzero(bad_seg.any(axis=1)):
+                spheres = np.flatnonzero(bad_seg[m])
+                r_i = rates[int(np.searchsorted(near_seg, motions[m])), spheres]
+                out.append((int(motions[m]), b, spheres, r_i))
         return out
+
+    def _bad_spheres(
+        self, body: Body, Fp: NDArray, c: NDArray[np.float64], step: NDArray[np.float64]
+    ) -> NDArray[np.bool_]:
+        """``(p, s) bool``: the cover spheres of ``body`` not proven clear at each sample (link
+        frame ``Fp (p, 4, 4)``, centres ``c (p, s, 3)`` mm, motion ``step (p, s)`` mm between
+        samples): a sphere is clear when its centre is farther from the part than its radius,
+        half its step and the gap.
+
+        The spheres are asked in groups first (:func:`sphere_groups`): a group's sphere holds
+        each of its spheres, so when its centre is farther than its radius, its members' largest
+        half step and the gap, every member's centre is farther than the member's own need, and
+        the members are not asked: the same answers, for a few dozen queries a sample instead
+        of the tool's 800.
+        """
+        need = body.radii[None] + step / 2 + MIN_GAP_MM + 1e-3
+        if not body.groups:
+            body.groups.append(sphere_groups(body.centres, body.radii))
+        member, gc, gr, order, starts = body.groups[0]
+        g_step = np.maximum.reduceat(step[:, order], starts, axis=1)  # (p, g)
+        g_c = gc @ np.swapaxes(Fp[:, :3, :3], 1, 2) + Fp[:, None, :3, 3]
+        g_need = gr[None] + g_step / 2 + MIN_GAP_MM + 1e-3
+        g_clear = self._clear(g_c.reshape(-1, 3), g_need.ravel()).reshape(g_need.shape)
+        ask = ~g_clear[:, member]  # (p, s): spheres whose group is not clear
+        bad = np.zeros(need.shape, dtype=bool)
+        bad[ask] = ~self._clear(c[ask], need[ask])
+        return bad
 
     def _advance(
         self,
