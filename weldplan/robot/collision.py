@@ -11,9 +11,8 @@ The motion between two rows is linear in joint space. It is proven free conserva
 shortcut shared with any planner:
 
 1. *Bound.* During a motion no point of a sphere (centre ``p``, radius ``r``) moves farther than
-   ``sum_j |dq_j| R_j`` mm, where ``R_j = rho_j(p) + r + sum_{i > j} |dq_i| R_i`` bounds its
-   distance to joint j's axis over the whole motion (``rho_j(p)``: the centre's distance to the
-   axis line at the motion's start, :func:`sphere_rates`); a static bound per
+   ``sum_j |dq_j| R_j`` mm, where ``R_j = |p - o_j| + r + sum_{i > j} |dq_i| R_i`` bounds its
+   distance to joint j's axis over the whole motion (:func:`sphere_rates`); a static bound per
    body (chain offsets plus the body's extent) caps it and sets the number of samples.
 2. *Spheres.* Each body is covered by spheres (its triangles grouped by a grid on their centroids,
    each group inside one sphere), and by one bounding sphere checked first. At every sample the
@@ -228,7 +227,7 @@ class RobotCollision:
             bodies = self.bodies
             acm = allowed_collisions(self.robot, bodies)
             t = np.linalg.norm(self.robot.origins[:, :3, 3], axis=1)
-            reach = float(t[0] + self._motion_radii(bodies, own=False)[0].max())
+            reach = float(t[0] + self.radii_full[0].max())
             self._shared[key] = SelfCheck(bodies, self.radii_full, acm, self.floor_z, reach)
         return self._shared[key]  # type: ignore[return-value]
 
@@ -263,22 +262,15 @@ class RobotCollision:
         radius = float(np.linalg.norm(v - centre, axis=1).max()) * (1 + 1e-9) + 1e-9
         return Body(name, frame, np.asarray(v), np.asarray(f), c, r, g, centre, radius)
 
-    def _motion_radii(self, bodies: list[Body], own: bool = True) -> NDArray[np.float64]:
+    def _motion_radii(self, bodies: list[Body]) -> NDArray[np.float64]:
         """``(6, b)`` mm: ``R[j, b]`` bounds the distance of body b's points from joint j's axis
-        (0 for joints that do not move it): the link offsets from joint j to the body's frame
-        plus the body's extent about its frame's origin; for the body's own joint (the axis is
-        fixed in its frame, through its origin) the largest distance of its vertices from that
-        axis itself (``own``; else the extent too)."""
+        (0 for joints that do not move it)."""
         t = np.linalg.norm(self.robot.origins[:, :3, 3], axis=1)  # link offsets
         R = np.zeros((6, len(bodies)))
         for b, body in enumerate(bodies):
-            v = body.vertices
-            rho = float(np.linalg.norm(v, axis=1).max())
+            rho = float(np.linalg.norm(body.vertices, axis=1).max())
             for j in range(body.frame):  # joint j (0-based) moves frames j+1..6
                 R[j, b] = t[j + 1 : body.frame].sum() + rho
-            if own and body.frame > 0:
-                a = self.robot.axes[body.frame - 1]
-                R[body.frame - 1, b] = float(np.linalg.norm(v - (v @ a)[:, None] * a, axis=1).max())
         return R
 
     # ---------------------------------------------------------------------------- one state
@@ -430,9 +422,7 @@ class RobotCollision:
             # each sphere's own motion bound, no larger than the body's
             first = np.searchsorted(owner, near_seg)  # the t = 0 sample of each near motion
             dq = np.abs(Q[seg[near_seg] + 1] - Q[seg[near_seg]])
-            rates = sphere_rates(
-                F[first], body.frame, body.centres, body.radii, dq, self.robot.axes
-            )
+            rates = sphere_rates(F[first], body.frame, body.centres, body.radii, dq)
             rates = np.minimum(rates, D[near_seg, b][:, None])  # (near motions, spheres)
             k = np.searchsorted(near_seg, owner[pick])
             step = rates[k] / (n[owner[pick]] - 1)[:, None]

@@ -2,7 +2,7 @@
 collision proof skip (:mod:`weldplan.robot.collision`, :mod:`weldplan.robot.selfcollision`).
 
 - :func:`sphere_rates`: per cover sphere, a bound on how far any of its points moves over a
-  linear joint motion, from its lever arm about each joint's axis.
+  linear joint motion.
 - :func:`sphere_groups`: the cover spheres in groups, each group inside one sphere, asked first.
 - :class:`Carry`: a body's last conservative-advancement distance still proves the next motions
   of a path while their bounds stay below it.
@@ -34,7 +34,6 @@ def sphere_rates(
     centres: NDArray[np.float64],
     radii: NDArray[np.float64],
     dq: NDArray[np.float64],
-    axes: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
     """``(n, s)`` mm: bounds on how far any point of each sphere moves during each motion.
 
@@ -48,27 +47,18 @@ def sphere_rates(
         ``(s, 3)`` mm in that link's frame, ``(s,)`` mm.
     dq
         ``(n, 6)`` rad: each motion's absolute joint change.
-    axes
-        ``(6, 3)``: the joint axes in their child links' frames
-        (:attr:`~weldplan.robot.model.Robot.axes`); ``None``: the distance to a point on each axis
-        is taken instead of the distance to the axis (larger, also a bound).
 
     A point's distance to joint j's axis changes only through the joints after j, so, from the
-    wrist down, ``R_j = rho_j(p) + r + sum_{i > j} |dq_i| R_i`` bounds it over the whole motion,
-    with ``rho_j(p)`` the start distance of the centre from the axis (the line through link
-    j+1's origin along the joint's axis; without ``axes``, ``|p - o_j|`` to that origin), and
-    the point moves at most ``sum_j |dq_j| R_j``. The distance to the line is the lever arm
-    itself: a gun's tip near the A6 axis, 700 mm from the flange, moves a few mm when A6 turns
-    0.1 rad, not 70.
+    wrist down, ``R_j = |p - o_j| + r + sum_{i > j} |dq_i| R_i`` bounds it over the whole motion
+    (``o_j`` the start position of a point on the axis: link j+1's origin), and the point moves at
+    most ``sum_j |dq_j| R_j``. (The distance to the axis line itself, the lever arm, is smaller
+    and also a bound; it is not used: it changes the advancement's steps, and with them the
+    verdict on a motion that stays just outside the gap until the step cap.)
     """
     p = np.einsum("nij,sj->nsi", F[:, frame, :3, :3], centres) + F[:, None, frame, :3, 3]
     inner = np.zeros(p.shape[:2])
     for j in range(frame - 1, -1, -1):
-        v = p - F[:, None, j + 1, :3, 3]
-        if axes is not None:
-            a = F[:, j + 1, :3, :3] @ axes[j]  # (n, 3): the axis in the part frame
-            v = v - np.einsum("nsi,ni->ns", v, a)[..., None] * a[:, None]
-        R = np.linalg.norm(v, axis=2) + radii[None] + inner
+        R = np.linalg.norm(p - F[:, None, j + 1, :3, 3], axis=2) + radii[None] + inner
         inner = inner + dq[:, j, None] * R
     return inner
 
