@@ -140,9 +140,9 @@ def check_linear_moves(
     Ta, Tb = robot.fk(A) @ F, robot.fk(B) @ F
     branch = robot.branch_of(A)
     Finv = np.linalg.inv(F)
-    ok = np.zeros(m, dtype=bool)
     reasons: list[str] = []
     samples = np.zeros(m, dtype=np.int64)
+    paths: dict[int, NDArray] = {}  # the moves whose kinematics hold: their sampled joint path
     for i in range(m):
         T = line_poses(Ta[i], Tb[i], step_mm, step_deg) @ Finv
         samples[i] = len(T)
@@ -150,9 +150,28 @@ def check_linear_moves(
         if Q is not None and np.abs(Q[-1] - B[i]).max() > END_TOL_RAD:
             Q, why = None, "turn"
         if Q is not None:
-            free = checker is not None and not checker.path_hits(Q, np.ones(len(Q) - 1, bool))
-            why = OK if free else "collision"
-        ok[i] = why == OK
+            paths[i] = Q
         reasons.append(why)
+    for i in _blocked(checker, paths):
+        reasons[i] = "collision"
+    ok = np.array([why == OK for why in reasons], dtype=bool)
     log.info("linear moves: %d of %d verified", int(ok.sum()), m)
     return LinearChecks(ok, tuple(reasons), samples)
+
+
+def _blocked(checker: Any, paths: dict[int, NDArray]) -> set[int]:
+    """The moves of ``paths`` (move -> ``(s, 6)`` rad sampled joint path) whose path the
+    checker does not prove free (all of them without a checker): every path in one
+    :meth:`~weldplan.robot.collision.RobotCollision.path_hits` call, the motions joining one
+    path to the next left out (each motion's verdict is its own, so the same verdicts as one
+    call per move, with the per-call work done once)."""
+    if checker is None or not paths:
+        return set(paths)
+    moves = list(paths)
+    Q = np.concatenate([paths[i] for i in moves])
+    ends = np.cumsum([len(paths[i]) for i in moves])  # one past each path's last row
+    inner = np.ones(len(Q) - 1, dtype=bool)
+    inner[ends[:-1] - 1] = False  # the motion from one path's last row to the next one's first
+    hits = checker.path_hits(Q, np.ones(len(Q) - 1, bool), only=inner)
+    owner = np.searchsorted(ends, [h.segment for h in hits], side="right")
+    return {moves[int(k)] for k in owner}

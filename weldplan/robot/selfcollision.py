@@ -66,6 +66,12 @@ ACM_SAMPLES = 1000
 ACM_SEED = 0
 #: conservative-advancement steps per (motion, pair) before a motion is declared blocked
 MAX_SELF_STEPS = 400
+#: conservative advancement never steps into the gap, so on a blocked motion it creeps towards
+#: the contact until its step cap; after these steps the rest of the motion is probed for a
+#: contact (FCL collide at PROBE_STATES states), and one found ends the advancement as blocked
+#: at once (here and against the part: :func:`weldplan.robot.collision.touches_ahead`)
+PROBE_AFTER = frozenset({12, 48, 160})
+PROBE_STATES = 24
 #: mm: the floor check of a motion splits it until no point moves more than this in a piece
 FLOOR_TOL_MM = 0.05
 #: pieces examined per (motion, body) against the floor before the motion is declared blocked
@@ -317,15 +323,18 @@ class SelfCheck:
 
     def _suspects(
         self, robot: Any, qa: NDArray[np.float64], qb: NDArray[np.float64]
-    ) -> list[list[tuple[int, int, float]]]:
+    ) -> tuple[list[list[tuple[int, int, float]]], NDArray[np.float64]]:
         """Per motion ``qa[k] -> qb[k]``: the ``(i, j, rate mm)`` pairs (``j < 0``: the floor)
-        whose bounding spheres do not prove it free (module docstring)."""
+        whose bounding spheres do not prove it free (module docstring); and ``(n, p)`` mm, the
+        bound on the relative motion of each checked pair ``acm.checked[p]`` over each motion."""
         dq = np.abs(qb - qa)
         ca, cb = self._centres(robot.link_frames(qa)), self._centres(robot.link_frames(qb))
         out: list[list[tuple[int, int, float]]] = [[] for _ in range(len(qa))]
-        for i, j in self.acm.checked:
+        rates = np.zeros((len(qa), len(self.acm.checked)))
+        for p, (i, j) in enumerate(self.acm.checked):
             fi, fj = self.bodies[i].frame, self.bodies[j].frame  # fi >= fj
             rate = dq[:, fj:fi] @ self.R[fj:fi, i]  # i's motion in j's frame
+            rates[:, p] = rate
             far = np.maximum(
                 np.linalg.norm(ca[:, i] - ca[:, j], axis=1),
                 np.linalg.norm(cb[:, i] - cb[:, j], axis=1),
@@ -339,7 +348,7 @@ class SelfCheck:
                 lb = np.maximum(ca[:, b, 2], cb[:, b, 2]) - self.radius[b] - self.floor_z - rate
                 for k in np.flatnonzero(lb <= SELF_GAP_MM):
                     out[k].append((b, -1, float(rate[k])))
-        return out
+        return out, rates
 
     def motions(
         self,
@@ -351,22 +360,40 @@ class SelfCheck:
     ) -> list[tuple[int, float, str, float]]:
         """``(segment, t, pair, distance mm)`` of the pair that meets first on each blocked
         motion ``Q[s] -> Q[s + 1]`` of ``seg`` (none: every one is free; ``first_only``: stop at
-        the first blocked motion)."""
+        the first blocked motion).
+
+        A pair's FCL distance carries over consecutive motions (``s`` then ``s + 1`` in
+        ``seg``): its *slack*, the distance less :data:`SELF_GAP_MM` less the bounds on the
+        pair's relative motion since it was measured, is a lower bound of what is left of it, so
+        a motion whose bound is below the slack is free with no FCL call. The per-motion
+        advancement would have proven such a motion free in its first step, so the verdicts are
+        the same, with fewer calls: a path of short motions (a sampled linear move) asks FCL
+        about a pair once, not once per motion.
+        """
         seg = np.asarray(seg, dtype=np.int64)
         if len(seg) == 0:
             return []
         qa, qb = Q[seg], Q[seg + 1]
-        suspects = self._suspects(robot, qa, qb)
+        suspects, rates = self._suspects(robot, qa, qb)
+        index = {pair: p for p, pair in enumerate(self.acm.checked)}
+        slack = np.full(len(self.acm.checked), -np.inf)  # mm, at the end of the last motion
         out = []
         for k in range(len(seg)):
+            if k > 0 and seg[k] != seg[k - 1] + 1:
+                slack[:] = -np.inf  # a gap in the path: nothing carries over it
             first: tuple[float, float, str] | None = None  # the earliest pair to meet
             for i, j, rate in suspects[k]:
                 if j < 0:
                     hit = self._floor_motion(robot, qa[k], qb[k], i, rate)
                 else:
-                    hit = self._advance(robot, qa[k], qb[k], i, j, rate)
+                    p = index[(i, j)]
+                    if slack[p] - rate > 0.0:
+                        continue  # free: the distance measured before still proves it
+                    hit, left = self._advance(robot, qa[k], qb[k], i, j, rate)
+                    slack[p] = left + rates[k, p]  # what the motion's own bound leaves below
                 if hit is not None and (first is None or hit[0] < first[0]):
                     first = (hit[0], hit[1], self._names(i, j))
+            slack -= rates[k]
             if first is not None:
                 out.append((int(seg[k]), first[0], first[2], first[1]))
                 if first_only:
@@ -375,20 +402,40 @@ class SelfCheck:
 
     def _advance(
         self, robot: Any, qa: NDArray, qb: NDArray, i: int, j: int, rate: float
-    ) -> tuple[float, float] | None:
+    ) -> tuple[tuple[float, float] | None, float]:
         """Conservative advancement of pair ``(i, j)`` along ``qa -> qb``, over which they
         move at most ``rate`` mm relative to each other: ``(t, distance)`` where they come
-        within :data:`SELF_GAP_MM`, ``None`` when they never do."""
+        within :data:`SELF_GAP_MM` (``None`` when they never do), and the slack left at the
+        motion's end (mm: a lower bound of their distance there less the gap; ``-inf`` after a
+        hit)."""
         t = 0.0
         d = 0.0
-        for _ in range(MAX_SELF_STEPS):
+        for step in range(MAX_SELF_STEPS):
             d = _pair_distance(self.bodies, i, j, robot.link_frames(qa + t * (qb - qa))[0])
             if d <= SELF_GAP_MM:
-                return t, d
+                return (t, d), -np.inf
             if rate * (1.0 - t) <= d - SELF_GAP_MM:
-                return None  # they cannot meet before the motion ends
+                # they cannot meet before the motion ends
+                return None, d - SELF_GAP_MM - rate * (1.0 - t)
+            if step in PROBE_AFTER and self._touch_ahead(robot, qa, qb, i, j, t):
+                return (t, d), -np.inf  # blocked whatever the advancement would do
             t = t + (d - SELF_GAP_MM) / rate
-        return t, d
+        return (t, d), -np.inf
+
+    def _touch_ahead(self, robot: Any, qa: NDArray, qb: NDArray, i: int, j: int, t: float) -> bool:
+        """Whether bodies ``i`` and ``j`` touch (FCL collide) at one of :data:`PROBE_STATES`
+        states on the rest ``(t, 1]`` of ``qa -> qb``: the advancement cannot pass such a state,
+        so the motion is blocked (:func:`weldplan.robot.collision.touches_ahead`, the same probe
+        against the part)."""
+        ts = t + (1.0 - t) * np.arange(1, PROBE_STATES + 1) / PROBE_STATES
+        F = robot.link_frames(qa + ts[:, None] * (qb - qa))
+        a, b = self.bodies[i], self.bodies[j]
+        for Fk in F:
+            a.obj.setTransform(fcl_tf(Fk[a.frame]))
+            b.obj.setTransform(fcl_tf(Fk[b.frame]))
+            if fcl.collide(a.obj, b.obj, fcl.CollisionRequest(), fcl.CollisionResult()):
+                return True
+        return False
 
     def _floor_motion(
         self, robot: Any, qa: NDArray, qb: NDArray, b: int, rate: float
