@@ -85,6 +85,8 @@ class DistanceBound:
         self.shape = tuple(int(k) for k in n)
         self.table = np.full(self.shape, np.nan, dtype=np.float32)
         self._done = np.zeros(tuple(-(-n // BLOCK)), dtype=bool)
+        #: every block computed (:meth:`_fill` has nothing left to look for)
+        self._complete = False
         self.tol = float(getattr(distance, "tolerance", 0.0)) + 1e-3
         log.debug("distance table %s nodes at %.1f mm", self.shape, cell)
 
@@ -109,6 +111,8 @@ class DistanceBound:
     def _fill(self, idx: NDArray[np.int64]) -> None:
         """Compute the blocks of the table that the nodes ``idx (n, 3)`` fall in, where not yet
         done."""
+        if self._complete:
+            return
         b = idx // BLOCK
         new = ~self._done[b[:, 0], b[:, 1], b[:, 2]]
         if not new.any():
@@ -124,6 +128,7 @@ class DistanceBound:
             self.origin + nodes * self.cell
         )
         self._done[todo[:, 0], todo[:, 1], todo[:, 2]] = True
+        self._complete = bool(self._done.all())
 
     def clear(self, points: ArrayLike, need: ArrayLike) -> NDArray[np.bool_]:
         """``(n,) bool``: whether each point ``(n, 3)`` is farther than ``need`` (mm, scalar or
