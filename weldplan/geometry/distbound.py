@@ -92,14 +92,23 @@ class DistanceBound:
 
     def lower(self, points: ArrayLike) -> NDArray[np.float64]:
         """``(n,)`` mm: a lower bound of each point's distance ``(n, 3)`` to the part."""
+        return self.bounds(points)[0]
+
+    def bounds(self, points: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """``(n,)`` mm each: a lower and an upper bound of each point's distance ``(n, 3)`` to
+        the part. The upper one is the same Lipschitz bound the other way, ``D(g) + |x - g|``
+        (any node ``g`` will do, so it holds outside the table too), plus twice the round-off:
+        open3d's own distance of the point is never above it, so a point whose upper bound is
+        below a threshold needs no exact distance to be known short of it."""
         P = np.asarray(points, dtype=np.float64).reshape(-1, 3)
         idx = np.rint((P - self.origin) / self.cell).astype(np.int64)
         np.clip(idx, 0, np.array(self.shape) - 1, out=idx)
         self._fill(idx)
         g = self.origin + idx * self.cell
-        grid = self.table[idx[:, 0], idx[:, 1], idx[:, 2]] - np.linalg.norm(P - g, axis=1)
+        D = self.table[idx[:, 0], idx[:, 1], idx[:, 2]]
+        off = np.linalg.norm(P - g, axis=1)
         box = np.linalg.norm(np.maximum(np.maximum(self.lo - P, P - self.hi), 0.0), axis=1)
-        return np.maximum(grid, box) - self.tol
+        return np.maximum(D - off, box) - self.tol, D + off + 2 * self.tol
 
     def fill_all(self) -> None:
         """Compute the whole table now (a caller with a time budget, such as an SE(3) re-plan

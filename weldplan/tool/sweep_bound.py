@@ -156,9 +156,11 @@ class SweepBound:
     def _dist(self, points: NDArray[np.float64], need: NDArray, exact: bool = True) -> NDArray:
         """``(n,)`` mm: lower bounds of the points' ``(n, 3)`` distances to the part: the table's,
         and (``exact``) open3d's exact distance less its round-off where the table's is not
-        above ``need``."""
-        d = self.table.lower(points)
-        low = np.flatnonzero(d <= need) if exact else ()
+        above ``need`` and its upper bound is (:meth:`DistanceBound.bounds
+        <weldplan.geometry.distbound.DistanceBound.bounds>`: below it, the exact distance could
+        not reach ``need`` either, so whether a point clears ``need`` is the same answer)."""
+        d, up = self.table.bounds(points)
+        low = np.flatnonzero((d <= need) & (up > need)) if exact else ()
         if len(low):
             self.stats["exact"] += len(low)
             d[low] = np.maximum(d[low], self.distance(points[low]) - self.table.tol)
@@ -250,7 +252,9 @@ class SweepBound:
             for level in range(last + 1):
                 c0, r = tree.centres[level][which], tree.radii[level][which]
                 W = np.einsum("nij,nj->ni", Rs[owner], c0) + P[owner]
-                sl = self._dist(W, r + need + floor) - r - need
+                # open3d only for the finest spheres: a coarse one the table cannot clear is
+                # opened instead (its children are cheaper to bound than one exact distance)
+                sl = self._dist(W, r + need + floor, exact=level == last) - r - need
                 good = sl >= floor
                 lever = np.linalg.norm(c0, axis=1)
                 V = np.maximum(dp + theta * lever[good], 1e-12)

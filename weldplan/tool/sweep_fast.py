@@ -191,6 +191,9 @@ class FastSweep:
         run.taken += len(s)
         run.smin = min(run.smin, float(np.min(least[lever < 0], initial=math.inf)))
         ask = np.flatnonzero(lever >= 0)
+        if len(ask) and run.deadline is not None and time.process_time() > run.deadline:
+            run.late, run.blocked = True, float(s[ask[0]])  # the safety net, once a batch
+            return None
         if len(ask) and not run.touched:  # FCL's collide first: cheap, and shows most blocks
             run.touched = True
             hit = self._touch_at(run.at, run.L, run.focused)
@@ -198,9 +201,7 @@ class FastSweep:
                 run.smin, run.blocked = -math.inf, hit
                 return None
         for j in ask:
-            if (run.cap is not None and run.exact >= run.cap) or (
-                run.deadline is not None and time.process_time() > run.deadline
-            ):
+            if run.cap is not None and run.exact >= run.cap:
                 run.late, run.blocked = True, float(s[j])
                 return None
             run.exact += 1
