@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
+from typing import Protocol
 
 import fcl
 import numpy as np
@@ -38,13 +39,23 @@ from numpy.typing import NDArray
 
 from weldplan.tool.orient import least_rotation_choice, rotation_angles
 from weldplan.tool.pose_search import PoseSearch
-from weldplan.tool.verify_poses import PoseChecker
+from weldplan.tool.verify_poses import PoseCheck
 
 log = logging.getLogger(__name__)
 
 #: ``accept(i, T)``: ``None`` accepts weld ``i``'s candidate with TCP pose ``T (4, 4)`` mm, a
 #: string vetoes it and says why
 Accept = Callable[[int, NDArray[np.float64]], "str | None"]
+
+
+class Recheck(Protocol):
+    """The independent re-check of one pose (:class:`~weldplan.tool.verify_poses.PoseChecker`,
+    or :class:`~weldplan.tool.poses.Rechecks` that keeps its verdicts)."""
+
+    def check(self, position: NDArray[np.float64], quaternion: NDArray[np.float64]) -> PoseCheck:
+        """The verdict on the TCP at ``position (3,)`` mm, ``quaternion`` wxyz."""
+        ...
+
 
 #: vetoes a weld may take before the test is lifted for it (each costs one more DP round)
 DEFAULT_MAX_VETOES = 12
@@ -244,7 +255,7 @@ def choose(
     quats: NDArray[np.float64],
     search: PoseSearch,
     objs: list[fcl.CollisionObject | None],
-    checker: PoseChecker,
+    checker: Recheck,
     state: ChoiceState,
     *,
     accept: Accept | None = None,
@@ -317,7 +328,7 @@ def _recheck(
     xyz: NDArray[np.float64],
     ids: tuple[str, ...] | list[str],
     quats: NDArray[np.float64],
-    checker: PoseChecker,
+    checker: Recheck,
     state: ChoiceState,
 ) -> bool:
     """Re-check the picks not yet passed; True when any was rejected (dropped for good)."""
