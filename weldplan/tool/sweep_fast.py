@@ -41,17 +41,19 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from weldplan.tool.sweep import (
+    TOUCH_GRID_MM,
     SweepCheck,
     SweepChecker,
+    _bisection_order,
     _interpolator,
     max_samples,
     motion_bound,
     quat_to_matrix,
 )
+
+__all__ = ["COVER_GRID_MM", "FLOOR_MM", "TOUCH_GRID_MM", "FastSweep", "_bisection_order"]
 from weldplan.tool.sweep_bound import THETA_PAD, Interpolator, SweepBound
 
-#: mm of tool motion between the poses at which a motion is first tested for contact
-TOUCH_GRID_MM = 5.0
 #: mm: a sphere whose bound is below ``min_step`` plus this asks FCL (a sphere just above it
 #: would make tiny steps)
 FLOOR_MM = 2.0
@@ -217,33 +219,7 @@ class FastSweep:
         return rate
 
     def _touch_at(self, at: Interpolator, L: float, focused: bool) -> float | None:
-        """The first parameter, middle first and then halving the gaps (where a blocked motion
-        is most often found), of a grid :data:`TOUCH_GRID_MM` of tool motion apart at which the
-        tool outside its zone touches the part (FCL ``collide``); ``None``: no contact there,
-        which proves nothing."""
-        n = max(1, math.ceil(L / TOUCH_GRID_MM))
-        order = _bisection_order(n + 1)
-        s = order / n
-        P, R = at(s)
-        for k in range(len(s)):
-            self.touch_tests += 1
-            if self.checker.touches(P[k], R[k], focused):
-                return float(s[k])
-        return None
-
-
-def _bisection_order(n: int) -> NDArray[np.int64]:
-    """The integers ``0..n-1`` in the order of a bisection: the middle, then the quarters, ...
-    (the ends last: the motion's ends are states OMPL has checked already)."""
-    seen = np.zeros(n, dtype=bool)
-    out = []
-    step = 1 << max(0, (n - 1).bit_length())
-    while step >= 1:
-        for k in range(step // 2 if step > 1 else 0, n, step):
-            if not seen[k]:
-                seen[k] = True
-                out.append(k)
-        step //= 2
-    ends = list(dict.fromkeys(k for k in (0, n - 1) if k in out))
-    rest = [k for k in out if k not in ends]
-    return np.array(rest + ends, dtype=np.int64)
+        """:meth:`SweepChecker.first_touch`, counted."""
+        hit, tests = self.checker.first_touch(at, L, focused)
+        self.touch_tests += tests
+        return hit
