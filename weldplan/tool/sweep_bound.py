@@ -60,6 +60,10 @@ LEVELS = (10.0, 25.0, 60.0)
 #: mm: triangles are cut to edges below this before the finest cover (a long sliver's sphere
 #: would be as large as the sliver)
 COVER_EDGE_MM = 10.0
+#: nodes of the part's distance table (:class:`~weldplan.geometry.distbound.DistanceBound`; 8.6
+#: mm cells on the demo part): the re-plans fill nearly all of it, and a finer one (1.5 M
+#: nodes, 5.5 mm) cost more to fill than the exact distances it saved
+TABLE_NODES = 400_000
 #: rad added to a motion's rotation angle (``acos`` near 1 loses about 1e-8 rad)
 THETA_PAD = 1e-7
 
@@ -142,7 +146,9 @@ class SweepBound:
     ) -> None:
         self.clearance = float(clearance)
         self.distance = SurfaceDistance(part)
-        self.table = DistanceBound(self.distance, *np.asarray(part.bounds, dtype=np.float64))
+        self.table = DistanceBound(
+            self.distance, *np.asarray(part.bounds, dtype=np.float64), max_nodes=TABLE_NODES
+        )
         key = ("sphere_trees", float(contact_radius), tool.tip_cone, LEVELS)
         if key not in tool._cache:  # the trees depend on the tool and its zone only
             vo, fo = tool.outside_zone(contact_radius)
