@@ -47,7 +47,13 @@ from numpy.typing import ArrayLike, NDArray
 from weldplan.errors import InputError
 from weldplan.tool.model import Tool
 from weldplan.tool.orient import candidate_rotations, local_candidates, rotation_angles
-from weldplan.tool.pose_choice import DEFAULT_MAX_VETOES, Accept, ChoiceState, choose
+from weldplan.tool.pose_choice import (
+    DEFAULT_MAX_VETOES,
+    Accept,
+    Candidates,
+    ChoiceState,
+    choose,
+)
 from weldplan.tool.pose_search import PoseSearch, probe_positions
 from weldplan.tool.result import NO_FREE_POSE, OK, Miss, WeldPose, WeldPoses, quat_wxyz
 from weldplan.tool.verify_poses import PoseCheck, PoseChecker
@@ -228,10 +234,12 @@ def plan_weld_poses(
     checker = Rechecks.of(part, tool, contact_radius, clearance)
     state = ChoiceState(dists.shape)
 
+    cands = Candidates(welds.xyz, tuple(welds.ids), rots, quats)
+
     def pick() -> tuple[dict[int, int], float]:
         return choose(
-            welds.xyz, welds.ids, dists, allowed, rots, quats, search, objs, checker, state,
-            accept=accept, max_vetoes=max_vetoes,
+            cands, dists, allowed, search, objs, checker, state, accept=accept,
+            max_vetoes=max_vetoes,
         )  # fmt: skip
 
     choice, total = pick()
