@@ -43,3 +43,21 @@ def test_the_table_is_filled_only_where_it_is_asked():
     P = part.bounds[0] + np.random.default_rng(1).uniform(0.0, 30.0, (50, 3))
     np.testing.assert_array_equal(bound.clear(P, 10.0), dist(P) > 10.0)
     assert 0 < bound._done.sum() < bound._done.size / 4
+
+
+def test_the_upper_bound_is_never_below_open3ds_own_distance():
+    part = _part()
+    dist = SurfaceDistance(part)
+    bound = DistanceBound(dist, *part.bounds, max_nodes=20_000)
+    rng = np.random.default_rng(4)
+    # inside the table, beyond it (the node is clipped to its edge) and on the part itself
+    P = np.vstack([
+        rng.uniform(part.bounds[0] - 400.0, part.bounds[1] + 400.0, (20_000, 3)),
+        trimesh.sample.sample_surface(part, 2_000, seed=2)[0],
+    ])  # fmt: skip
+    exact = dist(P)
+    low, up = bound.bounds(P)
+    assert np.all(up >= exact) and np.all(low <= exact + 1e-6)
+    inside = np.all((P > part.bounds[0] - 150) & (P < part.bounds[1] + 150), axis=1)
+    # within the table it is as tight as the lower one: the way to the nearest node, twice
+    assert np.all(up[inside] - exact[inside] <= bound.cell * np.sqrt(3) + 2 * bound.tol + 1e-6)

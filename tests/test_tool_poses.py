@@ -264,3 +264,37 @@ def test_shared_crops_and_the_whole_part_give_the_same_poses():
     assert cropped.total_rotation == whole.total_rotation
     # the wall blocks some of b's candidates: the crops held it
     assert 0 < cropped.poses[1].n_collision_free < cropped.stats["candidates_per_weld"]
+
+
+def test_a_second_search_of_the_same_part_reuses_the_recheck_verdicts_and_gives_the_same_poses(
+    monkeypatch,
+):
+    from weldplan.tool.poses import Rechecks
+    from weldplan.tool.verify_poses import PoseChecker
+
+    plate = _box((600, 600, 2), (0, 0, -1))
+    wall = _box((600, 4, 120), (0, 40, 60))  # near weld b: some picks fall short, some pass
+    part = trimesh.util.concatenate([plate, wall])
+    torch = arc_torch()
+    welds = _up(("a", (0, -60, 0)), ("b", (50, 20, 0)), ("c", (-80, -120, 0)))
+    asked = []
+    real = PoseChecker.check
+
+    def counted(self, p, q):
+        asked.append(1)
+        return real(self, p, q)
+
+    monkeypatch.setattr(PoseChecker, "check", counted)
+    first = plan_weld_poses(part, welds, torch)
+    n_first = len(asked)
+    again = plan_weld_poses(part, welds, torch)
+    n_again = len(asked) - n_first
+    # another part (even an equal one) is another re-check
+    other = plan_weld_poses(part.copy(), welds, torch)
+    n_other = len(asked) - n_first - n_again
+    assert first.n_ok == 3 and n_first >= 3
+    assert n_again == 0 and n_other == n_first
+    for x, y, z in zip(first.poses, again.poses, other.poses, strict=True):
+        assert x.quaternion == y.quaternion == z.quaternion
+    assert Rechecks.of(part, torch, 20.0, 5.0) is Rechecks.of(part, torch, 20.0, 5.0)
+    assert verify_poses(again, part, torch).ok

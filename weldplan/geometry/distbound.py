@@ -85,19 +85,30 @@ class DistanceBound:
         self.shape = tuple(int(k) for k in n)
         self.table = np.full(self.shape, np.nan, dtype=np.float32)
         self._done = np.zeros(tuple(-(-n // BLOCK)), dtype=bool)
+        #: every block computed (:meth:`_fill` has nothing left to look for)
+        self._complete = False
         self.tol = float(getattr(distance, "tolerance", 0.0)) + 1e-3
         log.debug("distance table %s nodes at %.1f mm", self.shape, cell)
 
     def lower(self, points: ArrayLike) -> NDArray[np.float64]:
         """``(n,)`` mm: a lower bound of each point's distance ``(n, 3)`` to the part."""
+        return self.bounds(points)[0]
+
+    def bounds(self, points: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """``(n,)`` mm each: a lower and an upper bound of each point's distance ``(n, 3)`` to
+        the part. The upper one is the same Lipschitz bound the other way, ``D(g) + |x - g|``
+        (any node ``g`` will do, so it holds outside the table too), plus twice the round-off:
+        open3d's own distance of the point is never above it, so a point whose upper bound is
+        below a threshold needs no exact distance to be known short of it."""
         P = np.asarray(points, dtype=np.float64).reshape(-1, 3)
         idx = np.rint((P - self.origin) / self.cell).astype(np.int64)
         np.clip(idx, 0, np.array(self.shape) - 1, out=idx)
         self._fill(idx)
         g = self.origin + idx * self.cell
-        grid = self.table[idx[:, 0], idx[:, 1], idx[:, 2]] - np.linalg.norm(P - g, axis=1)
+        D = self.table[idx[:, 0], idx[:, 1], idx[:, 2]]
+        off = np.linalg.norm(P - g, axis=1)
         box = np.linalg.norm(np.maximum(np.maximum(self.lo - P, P - self.hi), 0.0), axis=1)
-        return np.maximum(grid, box) - self.tol
+        return np.maximum(D - off, box) - self.tol, D + off + 2 * self.tol
 
     def fill_all(self) -> None:
         """Compute the whole table now (a caller with a time budget, such as an SE(3) re-plan
@@ -109,6 +120,8 @@ class DistanceBound:
     def _fill(self, idx: NDArray[np.int64]) -> None:
         """Compute the blocks of the table that the nodes ``idx (n, 3)`` fall in, where not yet
         done."""
+        if self._complete:
+            return
         b = idx // BLOCK
         new = ~self._done[b[:, 0], b[:, 1], b[:, 2]]
         if not new.any():
@@ -124,6 +137,7 @@ class DistanceBound:
             self.origin + nodes * self.cell
         )
         self._done[todo[:, 0], todo[:, 1], todo[:, 2]] = True
+        self._complete = bool(self._done.all())
 
     def clear(self, points: ArrayLike, need: ArrayLike) -> NDArray[np.bool_]:
         """``(n,) bool``: whether each point ``(n, 3)`` is farther than ``need`` (mm, scalar or

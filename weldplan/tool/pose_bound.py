@@ -241,42 +241,6 @@ class PoseBound:
         obj.setTransform(tf)
         return float(fcl.distance(obj, part_obj, self.req, fcl.DistanceResult()))
 
-    def _piece(self, k: int, tf: fcl.Transform, part_obj: fcl.CollisionObject) -> float:
-        """mm: FCL's distance from piece ``k`` at ``tf`` to the part object."""
-        obj = self.pieces.objects[k]
-        obj.setTransform(tf)
-        return float(fcl.distance(obj, part_obj, self.req, fcl.DistanceResult()))
-
-    def distance_to(
-        self, part_obj: fcl.CollisionObject | None, p: NDArray[np.float64], R: NDArray[np.float64]
-    ) -> float:
-        """mm: FCL's distance from the tool outside its zone at TCP ``p (3,)``, ``R (3, 3)`` to
-        ``part_obj`` (a subset of the part; ``inf`` when ``None``), the least of its pieces'
-        distances (the same triangles' surface), each piece asked in order of its lower bound
-        and none whose lower bound is not below the least found (branch and bound)."""
-        if part_obj is None:
-            return float("inf")
-        pc = self.pieces
-        p = np.asarray(p, dtype=np.float64)
-        R = np.asarray(R, dtype=np.float64)
-        c, r = pc.centres[-1], pc.radii[-1]
-        W = c @ R.T + p
-        lb = self.distance(W) - self.distance.tolerance - r
-        tf = fcl.Transform(R, p)
-        best = float("inf")
-        for k in np.argsort(lb, kind="stable"):
-            if lb[k] >= best:
-                break
-            self.queries += 1
-            best = min(best, self._piece(int(k), tf, part_obj))
-        return best
-
-    def _piece(self, k: int, tf: fcl.Transform, part_obj: fcl.CollisionObject) -> float:
-        """mm: FCL's distance from piece ``k`` at ``tf`` to the part object."""
-        obj = self.pieces.objects[k]
-        obj.setTransform(tf)
-        return float(fcl.distance(obj, part_obj, self.req, fcl.DistanceResult()))
-
     def classify(
         self,
         part_objs: list[fcl.CollisionObject | None],

@@ -31,6 +31,8 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Protocol
 
 import fcl
 import numpy as np
@@ -38,13 +40,23 @@ from numpy.typing import NDArray
 
 from weldplan.tool.orient import least_rotation_choice, rotation_angles
 from weldplan.tool.pose_search import PoseSearch
-from weldplan.tool.verify_poses import PoseChecker
+from weldplan.tool.verify_poses import PoseCheck
 
 log = logging.getLogger(__name__)
 
 #: ``accept(i, T)``: ``None`` accepts weld ``i``'s candidate with TCP pose ``T (4, 4)`` mm, a
 #: string vetoes it and says why
 Accept = Callable[[int, NDArray[np.float64]], "str | None"]
+
+
+class Recheck(Protocol):
+    """The independent re-check of one pose (:class:`~weldplan.tool.verify_poses.PoseChecker`,
+    or :class:`~weldplan.tool.poses.Rechecks` that keeps its verdicts)."""
+
+    def check(self, position: NDArray[np.float64], quaternion: NDArray[np.float64]) -> PoseCheck:
+        """The verdict on the TCP at ``position (3,)`` mm, ``quaternion`` wxyz."""
+        ...
+
 
 #: vetoes a weld may take before the test is lifted for it (each costs one more DP round)
 DEFAULT_MAX_VETOES = 12
@@ -90,6 +102,26 @@ def _first_free(
         if np.any(vals[got] >= search.clearance):
             break
     return n
+
+
+@dataclass(frozen=True)
+class Candidates:
+    """The welds of one pose search and their candidate orientations.
+
+    Attributes
+    ----------
+    xyz
+        ``(n, 3)`` mm: the weld spots, in route order.
+    ids
+        The welds' names (for the log).
+    rots, quats
+        ``(n, c, 3, 3)`` and ``(n, c, 4)`` (wxyz): each weld's candidate TCP orientations.
+    """
+
+    xyz: NDArray[np.float64]
+    ids: tuple[str, ...]
+    rots: NDArray[np.float64]
+    quats: NDArray[np.float64]
 
 
 class ChoiceState:
@@ -236,15 +268,12 @@ def _judge(
 
 
 def choose(
-    xyz: NDArray[np.float64],
-    ids: tuple[str, ...] | list[str],
+    cands: Candidates,
     dists: NDArray[np.float64],
     allowed: NDArray[np.bool_],
-    rots: NDArray[np.float64],
-    quats: NDArray[np.float64],
     search: PoseSearch,
     objs: list[fcl.CollisionObject | None],
-    checker: PoseChecker,
+    checker: Recheck,
     state: ChoiceState,
     *,
     accept: Accept | None = None,
@@ -253,7 +282,7 @@ def choose(
     """The least-rotation choice over the free (and accepted) candidates, measuring clearances
     lazily.
 
-    ``xyz (n, 3)`` mm: the weld spots; ``ids``: their names (for the log). ``dists (n, c)``
+    ``cands``: the welds and their candidate rotations (:class:`Candidates`). ``dists (n, c)``
     holds 0 for colliding candidates and NaN where the clearance is not measured yet; it is
     filled in place, with :meth:`PoseSearch.clearances` (at least the clearance exactly where a
     candidate keeps it; a bound, not the distance). Only ``allowed (n, c)`` candidates take
@@ -272,6 +301,7 @@ def choose(
     Returns the chosen candidate per weld index (welds with none free are absent) and the summed
     rotation (deg); counts go to ``state``.
     """
+    xyz, ids, rots, quats = cands.xyz, cands.ids, cands.rots, cands.quats
     clearance = search.clearance
     counts = state.counts
     for _ in range(3 * dists.size + 1):
@@ -317,7 +347,7 @@ def _recheck(
     xyz: NDArray[np.float64],
     ids: tuple[str, ...] | list[str],
     quats: NDArray[np.float64],
-    checker: PoseChecker,
+    checker: Recheck,
     state: ChoiceState,
 ) -> bool:
     """Re-check the picks not yet passed; True when any was rejected (dropped for good)."""

@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import logging
 import time
+import weakref
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -46,10 +47,16 @@ from numpy.typing import ArrayLike, NDArray
 from weldplan.errors import InputError
 from weldplan.tool.model import Tool
 from weldplan.tool.orient import candidate_rotations, local_candidates, rotation_angles
-from weldplan.tool.pose_choice import DEFAULT_MAX_VETOES, Accept, ChoiceState, choose
+from weldplan.tool.pose_choice import (
+    DEFAULT_MAX_VETOES,
+    Accept,
+    Candidates,
+    ChoiceState,
+    choose,
+)
 from weldplan.tool.pose_search import PoseSearch, probe_positions
 from weldplan.tool.result import NO_FREE_POSE, OK, Miss, WeldPose, WeldPoses, quat_wxyz
-from weldplan.tool.verify_poses import PoseChecker
+from weldplan.tool.verify_poses import PoseCheck, PoseChecker
 
 log = logging.getLogger(__name__)
 
@@ -224,13 +231,15 @@ def plan_weld_poses(
         table.check(i, both_sides)
     dists, allowed, over = table.dists, table.allowed, table.over
     t_choose = time.perf_counter()
-    checker = PoseChecker(part, tool, contact_radius, clearance)
+    checker = Rechecks.of(part, tool, contact_radius, clearance)
     state = ChoiceState(dists.shape)
+
+    cands = Candidates(welds.xyz, tuple(welds.ids), rots, quats)
 
     def pick() -> tuple[dict[int, int], float]:
         return choose(
-            welds.xyz, welds.ids, dists, allowed, rots, quats, search, objs, checker, state,
-            accept=accept, max_vetoes=max_vetoes,
+            cands, dists, allowed, search, objs, checker, state, accept=accept,
+            max_vetoes=max_vetoes,
         )  # fmt: skip
 
     choice, total = pick()
@@ -278,6 +287,42 @@ def plan_weld_poses(
     )
     log.info("%s (%.1f s)", result.summary().splitlines()[0], elapsed)
     return result
+
+
+class Rechecks:
+    """The re-check of the picks (:class:`~weldplan.tool.verify_poses.PoseChecker`: its own
+    FCL models of the whole part and tool, none shared with the search) and its verdicts, kept
+    on the tool for the one part it was last asked about: a station's poses are searched twice
+    (without the robot's test for the base search, then with it), and the second search's
+    picks are mostly the first's. The same pose, the same verdict: only the work is saved (the
+    models cost about 0.4 s to build on the shared gun, a check about 10 ms). The final
+    re-check of the result (:func:`~weldplan.tool.verify_poses.verify_poses`) builds its own.
+    """
+
+    def __init__(self, checker: PoseChecker) -> None:
+        self.checker = checker
+        self._seen: dict[tuple[bytes, bytes], PoseCheck] = {}
+
+    @classmethod
+    def of(cls, part: trimesh.Trimesh, tool: Tool, radius: float, clearance: float) -> Rechecks:
+        """The re-check of ``part`` with ``tool`` (contact radius and clearance in mm), built
+        once per part (cached on the tool, keyed by the settings; a new part replaces it)."""
+        key = ("pose_rechecks", float(radius), float(clearance), tool.tip_cone)
+        hit = tool._cache.get(key)
+        if hit is None or hit[0]() is not part:
+            hit = (weakref.ref(part), cls(PoseChecker(part, tool, radius, clearance)))
+            tool._cache[key] = hit
+        return hit[1]
+
+    def check(self, position: ArrayLike, quaternion: ArrayLike) -> PoseCheck:
+        """:meth:`PoseChecker.check <weldplan.tool.verify_poses.PoseChecker.check>`, asked once
+        per pose (TCP ``position (3,)`` mm, ``quaternion`` wxyz)."""
+        p = np.asarray(position, dtype=np.float64).reshape(3)
+        q = np.asarray(quaternion, dtype=np.float64).reshape(4)
+        key = (p.tobytes(), q.tobytes())
+        if key not in self._seen:
+            self._seen[key] = self.checker.check(p, q)
+        return self._seen[key]
 
 
 def _turn_over(

@@ -17,7 +17,9 @@ The check (:meth:`SweepChecker.check`) is conservative advancement on FCL distan
 the **slack** (the distance from the tool to the part less the clearance, python-fcl
 ``distance``) is measured; no point of the tool can use it up before ``s + slack / L``, so the
 next sample is taken there. It advances from the start to the middle and from the end back to
-the middle (a weld pose may have little slack, which grows as the tool leaves it). A negative or
+the middle (a weld pose may have little slack, which grows as the tool leaves it); FCL's cheap
+``collide`` on a grid of the motion goes first (:meth:`SweepChecker.first_touch`): a motion on
+which the tool touches the part is blocked there at once. A negative or
 zero slack, more than ``2 (L / min_step + 1)`` samples (a motion that grazes the part), or,
 from an end that is not a weld pose, a slack below ``min_step``, stops the check: the motion is
 reported blocked at ``s``. A passed motion keeps **at least the
@@ -59,6 +61,9 @@ log = logging.getLogger(__name__)
 #: mm: a motion of bound ``L`` may take at most ``2 (L / min_step + 1)`` samples (conservative
 #: advancement along a motion that grazes the part would never end)
 DEFAULT_MIN_STEP = 0.5
+#: mm of tool motion between the poses at which a motion is first tested for contact
+#: (:meth:`SweepChecker.first_touch`)
+TOUCH_GRID_MM = 5.0
 #: mm: the zone's distance to the part outside a spot's sphere is measured up to this much
 #: (:meth:`SweepChecker.slack`); the zone needs only not touch, so a cap costs only step length
 ZONE_CAP_MM = 30.0
@@ -363,6 +368,22 @@ class SweepChecker:
         req = fcl.CollisionRequest()
         return bool(fcl.collide(self._outside, part, req, fcl.CollisionResult()))
 
+    def first_touch(
+        self, at: Callable[[ArrayLike], tuple[NDArray, NDArray]], L: float, focused: bool
+    ) -> tuple[float | None, int]:
+        """The first parameter, middle first and then halving the gaps (where a blocked motion
+        is most often found), of a grid :data:`TOUCH_GRID_MM` of tool motion apart at which the
+        tool outside its zone touches the part (:meth:`touches`), or ``None``: no contact there,
+        which proves nothing; and the poses tested. ``at``: the motion's poses at parameters
+        (:func:`interpolate`), ``L`` its motion bound (mm)."""
+        n = max(1, math.ceil(L / TOUCH_GRID_MM))
+        s = _bisection_order(n + 1) / n
+        P, R = at(s)
+        for k in range(len(s)):
+            if self.touches(P[k], R[k], focused):
+                return float(s[k]), k + 1
+        return None, len(s)
+
     def state_ok(self, p: ArrayLike, q: ArrayLike, exempt: ArrayLike | None = None) -> bool:
         """Whether one pose (TCP ``p (3,)`` mm, ``q`` wxyz) clears (:meth:`slack` >= 0)."""
         return self.slack(p, quat_to_matrix(q), exempt) >= 0.0
@@ -402,6 +423,12 @@ class SweepChecker:
         late = [False]
         first = budget[0]
         pose_at = _interpolator(p0, q0, p1, q1)
+        if L > 0 and cap is None and deadline is None:
+            # FCL's collide first (tens of times cheaper than a distance): a motion on which
+            # the tool touches the part cannot pass, wherever the advancement would stop
+            hit, _ = self.first_touch(pose_at, L, focused)
+            if hit is not None:
+                return SweepCheck(False, 0, -math.inf, hit, L, False, self.min_step)
 
         def slack_at(s: float) -> float:
             spent = first - budget[0]
@@ -447,3 +474,20 @@ def exempt_for(*spots: Any) -> NDArray[np.float64] | None:
     """``(m, 3)`` from the spots given (``None`` entries dropped), ``None`` when there are none."""
     pts = [np.asarray(s, dtype=np.float64).reshape(3) for s in spots if s is not None]
     return np.array(pts) if pts else None
+
+
+def _bisection_order(n: int) -> NDArray[np.int64]:
+    """The integers ``0..n-1`` in the order of a bisection: the middle, then the quarters, ...
+    (the ends last: the motion's ends are states OMPL has checked already)."""
+    seen = np.zeros(n, dtype=bool)
+    out = []
+    step = 1 << max(0, (n - 1).bit_length())
+    while step >= 1:
+        for k in range(step // 2 if step > 1 else 0, n, step):
+            if not seen[k]:
+                seen[k] = True
+                out.append(k)
+        step //= 2
+    ends = list(dict.fromkeys(k for k in (0, n - 1) if k in out))
+    rest = [k for k in out if k not in ends]
+    return np.array(rest + ends, dtype=np.int64)

@@ -25,21 +25,17 @@ that does not is replaced by its children.
 
 Motions. Along a motion (straight TCP segment, slerp; :mod:`weldplan.tool.sweep`) a sphere centre
 ``c`` moves at most ``V = |dp| + theta |c|`` per unit of the parameter (a tighter
-:func:`~weldplan.tool.sweep.motion_bound` for points near the TCP). Its distance is V-Lipschitz in
-the parameter, so over an interval ``[a, b]`` with end distances ``Da``, ``Db`` it stays at least
-``(Da + Db - V (b - a)) / 2``. :meth:`SweepBound.motion_clear` samples the motion on a grid,
-proves every (interval, sphere) pair with that bound, opens the spheres that fail, and halves the
-intervals that still fail up to :data:`MAX_HALVINGS` times. It proves the slack at least
-``margin`` (the checker's ``min_step``) everywhere on the motion; then the exact conservative
-advancement would pass it too (every sample's slack is at least ``min_step``, so it never
-stops short and its steps are at least ``min_step / L``: within its sample budget). Anything
-undecided is left to the exact check: the bound only ever says "free", never "blocked".
+:func:`~weldplan.tool.sweep.motion_bound` for points near the TCP), so a sphere whose slack bound
+is ``sl`` at a sample keeps slack over ``sl / V`` of the parameter either way.
+:meth:`SweepBound.rates` gives, for many samples of one motion at once, the least of these
+ratios and the spheres the bound could not decide; the coarse-to-fine advancement of
+:mod:`weldplan.tool.sweep_fast` covers the motion with them and asks FCL only at the samples
+the bound leaves undecided. The bound only ever says "free", never "blocked".
 """
 
 from __future__ import annotations
 
 import logging
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -51,7 +47,7 @@ from weldplan.geometry.distance import SurfaceDistance
 from weldplan.geometry.distbound import DistanceBound
 from weldplan.geometry.spherecover import sphere_cover
 from weldplan.tool.model import Tool
-from weldplan.tool.sweep import _interpolator, tool_zone
+from weldplan.tool.sweep import tool_zone
 
 log = logging.getLogger(__name__)
 
@@ -64,13 +60,10 @@ LEVELS = (10.0, 25.0, 60.0)
 #: mm: triangles are cut to edges below this before the finest cover (a long sliver's sphere
 #: would be as large as the sliver)
 COVER_EDGE_MM = 10.0
-#: mm: a motion's first grid is fine enough that no sphere centre moves farther between samples
-MOTION_GRID_MM = 40.0
-#: halvings of a motion's undecided intervals before it is left to the exact check
-MAX_HALVINGS = 4
-#: (interval, sphere) pairs a motion may still have open before a halving (more: the motion
-#: runs close to the part, and the advancement, :mod:`weldplan.tool.sweep_fast`, is cheaper)
-MAX_PAIRS = 20_000
+#: nodes of the part's distance table (:class:`~weldplan.geometry.distbound.DistanceBound`; 8.6
+#: mm cells on the demo part): the re-plans fill nearly all of it, and a finer one (1.5 M
+#: nodes, 5.5 mm) cost more to fill than the exact distances it saved
+TABLE_NODES = 400_000
 #: rad added to a motion's rotation angle (``acos`` near 1 loses about 1e-8 rad)
 THETA_PAD = 1e-7
 
@@ -153,7 +146,9 @@ class SweepBound:
     ) -> None:
         self.clearance = float(clearance)
         self.distance = SurfaceDistance(part)
-        self.table = DistanceBound(self.distance, *np.asarray(part.bounds, dtype=np.float64))
+        self.table = DistanceBound(
+            self.distance, *np.asarray(part.bounds, dtype=np.float64), max_nodes=TABLE_NODES
+        )
         key = ("sphere_trees", float(contact_radius), tool.tip_cone, LEVELS)
         if key not in tool._cache:  # the trees depend on the tool and its zone only
             vo, fo = tool.outside_zone(contact_radius)
@@ -162,14 +157,16 @@ class SweepBound:
             tool._cache[key] = (SphereTree.build(vo, fo, LEVELS), zone)
         self.outside, self.zone = tool._cache[key]
         #: decisions by the bound, and the exact distances it asked open3d for
-        self.stats = {"states": 0, "states_clear": 0, "motions": 0, "motions_clear": 0, "exact": 0}
+        self.stats = {"states": 0, "states_clear": 0, "exact": 0}
 
     def _dist(self, points: NDArray[np.float64], need: NDArray, exact: bool = True) -> NDArray:
         """``(n,)`` mm: lower bounds of the points' ``(n, 3)`` distances to the part: the table's,
         and (``exact``) open3d's exact distance less its round-off where the table's is not
-        above ``need``."""
-        d = self.table.lower(points)
-        low = np.flatnonzero(d <= need) if exact else ()
+        above ``need`` and its upper bound is (:meth:`DistanceBound.bounds
+        <weldplan.geometry.distbound.DistanceBound.bounds>`: below it, the exact distance could
+        not reach ``need`` either, so whether a point clears ``need`` is the same answer)."""
+        d, up = self.table.bounds(points)
+        low = np.flatnonzero((d <= need) & (up > need)) if exact else ()
         if len(low):
             self.stats["exact"] += len(low)
             d[low] = np.maximum(d[low], self.distance(points[low]) - self.table.tol)
@@ -221,6 +218,64 @@ class SweepBound:
                 which, _ = tree.open(level, bad)
         return np.concatenate(slacks), np.concatenate(levers), open_lever
 
+    def rates(
+        self,
+        P: ArrayLike,
+        Rs: ArrayLike,
+        exempt: bool,
+        floor: float,
+        speed: tuple[float, float],
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """:meth:`spheres` at ``k`` poses of one motion at once (one tree walk, one distance
+        query per level for all of them): TCP ``P (k, 3)`` mm, ``Rs (k, 3, 3)``.
+
+        ``speed = (dp, theta)``: the motion's TCP travel (mm) and turn (rad), so that a sphere
+        centre ``c`` moves at most ``V = dp + theta |c|`` per unit of the motion parameter.
+
+        Returns
+        -------
+        rate
+            ``(k,)``: the least ``slack / V`` over the spheres whose slack bound reached
+            ``floor`` (``inf`` where none did): the parameter distance over which none of them
+            can use its slack up, either way from the pose.
+        least
+            ``(k,)`` mm: the least slack bound of those spheres.
+        open_lever
+            ``(k,)`` mm: per pose, the largest ``|c| + r`` of the finest spheres still below
+            ``floor`` (their points' lever), ``-1`` where there are none: the bound decides
+            that pose alone.
+        """
+        P = np.asarray(P, dtype=np.float64).reshape(-1, 3)
+        Rs = np.asarray(Rs, dtype=np.float64).reshape(-1, 3, 3)
+        dp, theta = speed
+        k = len(P)
+        rate, least = np.full(k, np.inf), np.full(k, np.inf)
+        open_lever = np.full(k, -1.0)
+        for tree, need in self._bodies(exempt):
+            m = len(tree.radii[0])
+            which, owner = np.tile(np.arange(m), k), np.repeat(np.arange(k), m)
+            last = len(tree.radii) - 1
+            for level in range(last + 1):
+                c0, r = tree.centres[level][which], tree.radii[level][which]
+                W = np.einsum("nij,nj->ni", Rs[owner], c0) + P[owner]
+                # open3d only for the finest spheres: a coarse one the table cannot clear is
+                # opened instead (its children are cheaper to bound than one exact distance)
+                sl = self._dist(W, r + need + floor, exact=level == last) - r - need
+                good = sl >= floor
+                lever = np.linalg.norm(c0, axis=1)
+                V = np.maximum(dp + theta * lever[good], 1e-12)
+                np.minimum.at(rate, owner[good], sl[good] / V)
+                np.minimum.at(least, owner[good], sl[good])
+                bad = ~good
+                if not bad.any():
+                    break
+                if level == last:
+                    np.maximum.at(open_lever, owner[bad], lever[bad] + r[bad])
+                    break
+                which, pos = tree.open(level, which[bad])
+                owner = owner[bad][pos]
+        return rate, least, open_lever
+
     def state_clear(self, p: ArrayLike, R: ArrayLike, exempt: bool) -> bool:
         """Whether the bound proves the tool at TCP ``p (3,)`` mm, ``R (3, 3)`` clears what it
         must (slack >= 0; ``exempt``: weld spots are exempt, as the checker's ``exempt``).
@@ -229,89 +284,3 @@ class SweepBound:
         clear = self.spheres(p, R, exempt, 0.0)[2] < 0
         self.stats["states_clear"] += clear
         return clear
-
-    def motion_clear(
-        self,
-        p0: ArrayLike,
-        q0: ArrayLike,
-        p1: ArrayLike,
-        q1: ArrayLike,
-        exempt: bool,
-        margin: float,
-    ) -> bool:
-        """Whether the bound proves the slack at least ``margin`` mm all along the motion
-        ``(p0, q0) -> (p1, q1)`` (TCP mm, wxyz; module docstring). ``False``: undecided."""
-        self.stats["motions"] += 1
-        at = _interpolator(p0, q0, p1, q1)
-        dp = float(np.linalg.norm(np.asarray(p1, dtype=np.float64) - np.asarray(p0, np.float64)))
-        _, R0 = at([0.0])
-        _, R1 = at([1.0])
-        cos = (np.trace(R0[0].T @ R1[0]) - 1.0) / 2.0
-        theta = math.acos(min(1.0, max(-1.0, cos))) + THETA_PAD
-        for tree, need in self._bodies(exempt):
-            if not self._tree_clear(tree, need + margin, at, dp, theta):
-                return False
-        self.stats["motions_clear"] += 1
-        return True
-
-    def _tree_clear(
-        self, tree: SphereTree, need: float, at: Interpolator, dp: float, theta: float
-    ) -> bool:
-        """One body's part of :meth:`motion_clear`: (interval, sphere) pairs proved coarse to
-        fine, undecided intervals halved."""
-        reach = np.linalg.norm(tree.centres[0], axis=1) + tree.radii[0]
-        n = max(2, math.ceil((dp + theta * float(reach.max())) / MOTION_GRID_MM) + 1)
-        s = np.linspace(0.0, 1.0, n)
-        # pairs: interval ends (a, b), level, sphere; distances at the ends filled as needed
-        a, b = s[:-1], s[1:]
-        k = len(a)
-        m = len(tree.radii[0])
-        a, b = np.repeat(a, m), np.repeat(b, m)
-        sph = np.tile(np.arange(m), k)
-        level = 0
-        halvings = 0
-        while len(a):
-            ok = self._pairs_clear(tree, level, sph, a, b, need, at, dp, theta)
-            a, b, sph = a[~ok], b[~ok], sph[~ok]
-            if not len(a):
-                return True
-            if level < len(tree.radii) - 1:
-                sph, owner = tree.open(level, sph)
-                a, b = a[owner], b[owner]
-                level += 1
-                continue
-            if halvings == MAX_HALVINGS or len(a) > MAX_PAIRS:
-                return False
-            mid = (a + b) / 2
-            a, b = np.concatenate([a, mid]), np.concatenate([mid, b])
-            sph = np.concatenate([sph, sph])
-            halvings += 1
-        return True
-
-    def _pairs_clear(
-        self,
-        tree: SphereTree,
-        level: int,
-        sph: NDArray[np.int64],
-        a: NDArray[np.float64],
-        b: NDArray[np.float64],
-        need: float,
-        at: Interpolator,
-        dp: float,
-        theta: float,
-    ) -> NDArray[np.bool_]:
-        """``(n,) bool``: whether sphere ``sph`` of ``level`` keeps ``need`` mm over ``[a, b]``
-        (pairwise Lipschitz bound, module docstring)."""
-        c = tree.centres[level][sph]
-        r = tree.radii[level][sph]
-        V = dp + theta * np.linalg.norm(c, axis=1)
-        half = V * (b - a) / 2
-        want = r + need + half
-        ends, inv = np.unique(np.concatenate([a, b]), return_inverse=True)
-        P, Rs = at(ends)
-        ia, ib = inv[: len(a)], inv[len(a) :]
-        wa = np.einsum("nij,nj->ni", Rs[ia], c) + P[ia]
-        wb = np.einsum("nij,nj->ni", Rs[ib], c) + P[ib]
-        da = self._dist(wa, want, exact=False)
-        db = self._dist(wb, want, exact=False)
-        return (da + db) / 2 - half >= r + need

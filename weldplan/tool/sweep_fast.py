@@ -5,48 +5,89 @@ asks FCL only where the bound does not decide.
 Why. The SE(3) re-plan's OMPL asks hundreds of states and motions; with an exact FCL distance of
 the gun at every advancement step (about 5 ms near a flange) it saw a few dozen in 10 s.
 
-The advancement. At a sample ``s`` of the motion (the checker's motion model) the bound gives
-each sphere of the tool a slack ``sl_i`` (its centre's distance less its radius and what it must
-keep), and its centre moves at most ``V_i = |dp| + theta |c_i|`` per unit of ``s``, so the sphere
-keeps ``sl_i - V_i |s' - s|`` at ``s'``. The finest spheres whose bound is below the floor are
-left to FCL: the exact slack ``v`` (:meth:`SweepChecker.slack`) bounds every tool point, which
-moves at most ``|dp| + theta (|c_i| + r_i)`` per unit of ``s``, and no point more than the
-motion bound ``L``. The next sample is where the first of these could reach the margin
-(``min_step`` away from a weld pose, 0 within the soft range of one, as the exact check's
-rules), but never nearer than the exact check's own step ``v / L`` where FCL was asked (which
-keeps the clearance: a ``min_step`` margin held there made the advancement creep towards a dip
-below ``min_step`` without ever sampling it). A sample is blocked by the exact check's own rules
-on ``v`` (negative, zero, or below ``min_step`` outside the soft range); the motion's sample
-budget is the exact check's. So a passed motion keeps the clearance everywhere, as the exact
-check's do. Only the step lengths differ, so on a motion that grazes the part the two may
-disagree: the re-plan's path is given to the exact check again
-(:func:`weldplan.tool.se3_replan.replan`).
+The advancement, coarse to fine (:meth:`FastSweep._cover`). The motion (the checker's motion
+model) is sampled on a grid of :data:`COVER_GRID_MM` of tool motion, and every sample of a batch
+is judged in one vectorised call of the bound (:meth:`SweepBound.rates
+<weldplan.tool.sweep_bound.SweepBound.rates>`): each sphere of the tool has a slack bound
+``sl_i`` (its centre's distance less its radius and what it must keep) and its centre moves at
+most ``V_i = |dp| + theta |c_i|`` per unit of ``s``, so the sphere keeps slack over
+``|s' - s| <= sl_i / V_i``. The finest spheres whose bound stays below ``min_step`` +
+:data:`FLOOR_MM` are left to FCL at that sample only: its exact slack ``v``
+(:meth:`SweepChecker.slack`) bounds every tool point, whose lever is at most theirs, and no
+point moves more than the motion bound ``L`` (so ``v / L`` holds however the bound fared, the
+exact check's own step). A sample's **radius** is the least of these; a gap between two
+samples whose radii do not meet is halved, and the new midpoints form the next batch, until no
+gap is left: then the tool keeps slack >= 0 all along the motion, not only at the samples.
+Before the first FCL distance of a motion, FCL's cheap ``collide`` on a grid of
+:data:`TOUCH_GRID_MM` (:meth:`FastSweep._touch_at`) shows most blocked motions at once.
+
+A sample is blocked by the exact check's own rules on ``v`` (negative, zero, or below
+``min_step`` outside the soft range of a weld pose); the motion's sample budget is the exact
+check's (:func:`~weldplan.tool.sweep.max_samples`). So a passed motion keeps the clearance
+everywhere, as the exact check's do; only the places sampled differ, so on a motion that
+grazes the part the two may disagree: the re-plan's path is given to the exact check again
+(:func:`weldplan.tool.se3_replan.replan`). On the demo the three re-plans make the same OMPL
+decisions as with the one-sample-at-a-time advancement (the same states, motions and paths),
+with 1,625 FCL samples instead of 3,967.
 """
 
 from __future__ import annotations
 
 import math
 import time
-from typing import Any
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from weldplan.tool.sweep import (
+    TOUCH_GRID_MM,
     SweepCheck,
     SweepChecker,
+    _bisection_order,
     _interpolator,
     max_samples,
     motion_bound,
     quat_to_matrix,
 )
+
+__all__ = ["COVER_GRID_MM", "FLOOR_MM", "TOUCH_GRID_MM", "FastSweep", "_bisection_order"]
 from weldplan.tool.sweep_bound import THETA_PAD, Interpolator, SweepBound
 
-#: mm of tool motion between the poses at which a motion is first tested for contact
-TOUCH_GRID_MM = 5.0
-#: mm: a sphere whose bound is below the margin plus this asks FCL (a sphere just above the
-#: margin would make tiny steps)
+#: mm: a sphere whose bound is below ``min_step`` plus this asks FCL (a sphere just above it
+#: would make tiny steps)
 FLOOR_MM = 2.0
+#: mm of tool motion between the samples of a motion's first batch (:meth:`FastSweep._cover`)
+COVER_GRID_MM = 40.0
+
+
+@dataclass
+class _Cover:
+    """One motion's advancement (:meth:`FastSweep._cover`): its poses, speeds and rules, and
+    what it has done: samples taken, FCL samples, least slack seen, where it stopped."""
+
+    at: Interpolator
+    L: float
+    speed: tuple[float, float]
+    exempt: NDArray | None
+    soft: tuple[bool, bool]
+    soft_range: float
+    focused: bool
+    cap: int | None
+    deadline: float | None
+    taken: int = 0
+    exact: int = 0
+    smin: float = math.inf
+    blocked: float = math.nan
+    late: bool = False
+    touched: bool = False
+
+    def soft_at(self, s: float) -> bool:
+        """Whether parameter ``s`` lies within the soft range of a soft end (a slack below
+        ``min_step`` may hold there, not elsewhere)."""
+        return (self.soft[0] and s * self.L <= self.soft_range) or (
+            self.soft[1] and (1.0 - s) * self.L <= self.soft_range
+        )
 
 
 class FastSweep:
@@ -97,120 +138,88 @@ class FastSweep:
         the tool keeps the clearance along the whole motion (module docstring)."""
         chk = self.checker
         L = motion_bound(p0, q0, p1, q1, chk.reach)
-        ex = exempt is not None and len(exempt) > 0
-        if self.bound.motion_clear(p0, q0, p1, q1, ex, chk.min_step):
-            return SweepCheck(True, 0, math.inf, bound=L, min_step=chk.min_step)
         at = _interpolator(p0, q0, p1, q1)
         # the checker's crop answers for the whole motion only when both ends lie in its box
         # (the box is convex); a sample's own position in it is not enough for a step
         focused = chk._inside(p0, p1)
-        hit = self._touch_at(at, L, focused)
-        if hit is not None:  # the tool touches the part there: the exact check cannot pass it
-            return SweepCheck(False, 0, -math.inf, hit, L, False, chk.min_step)
         soft_range = max(chk.contact_radius, 10 * chk.min_step)
         if L <= soft_range and any(soft):
             soft = (True, True)
         dp = float(np.linalg.norm(np.asarray(p1, dtype=np.float64) - np.asarray(p0, np.float64)))
         R0, R1 = at([0.0])[1][0], at([1.0])[1][0]
         theta = math.acos(min(1.0, max(-1.0, (np.trace(R0.T @ R1) - 1) / 2))) + THETA_PAD
-        state = {"budget": max_samples(L, chk.min_step), "exact": 0, "smin": math.inf}
-        late = False
-        blocked = float("nan")
-        for start, stop, sign, may in ((0.0, 0.5, 1.0, soft[0]), (1.0, 0.5, -1.0, soft[1])):
-            s = start
-            while True:
-                if (cap is not None and state["exact"] >= cap) or (
-                    deadline is not None and time.process_time() > deadline
-                ):
-                    late, blocked = True, s
-                    break
-                soft_here = may and abs(s - start) * L <= soft_range
-                step = self._step(at(s), exempt, ex, dp, theta, soft_here, state, focused)
-                state["budget"] -= 1
-                if step is None or step[0] <= 0 or state["budget"] < 0:
-                    blocked = s
-                    break
-                if soft_here:  # margin 0 may hold only up to the soft range's end
-                    edge = soft_range / L - abs(s - start) if L > 0 else math.inf
-                    step = max(min(step[0], edge), step[1])
-                else:
-                    step = step[1]
-                if L <= 0 or sign * (stop - s) <= 0:
-                    break
-                s = s + sign * min(step, sign * (stop - s))
-            if not math.isnan(blocked):
-                break
-        self.exact_samples += state["exact"]
-        n = max_samples(L, chk.min_step) - state["budget"]
-        self.bound_samples += n - state["exact"]
+        run = _Cover(at, L, (dp, theta), exempt, soft, soft_range, focused, cap, deadline)
+        self._cover(run)
+        self.exact_samples += run.exact
+        self.bound_samples += run.taken - run.exact
         return SweepCheck(
-            math.isnan(blocked), state["exact"], state["smin"], blocked, L, late, chk.min_step
+            math.isnan(run.blocked), run.exact, run.smin, run.blocked, L, run.late, chk.min_step
         )
 
-    def _touch_at(self, at: Interpolator, L: float, focused: bool) -> float | None:
-        """The first parameter, middle first and then halving the gaps (where a blocked motion
-        is most often found), of a grid :data:`TOUCH_GRID_MM` of tool motion apart at which the
-        tool outside its zone touches the part (FCL ``collide``); ``None``: no contact there,
-        which proves nothing."""
-        n = max(1, math.ceil(L / TOUCH_GRID_MM))
-        order = _bisection_order(n + 1)
-        s = order / n
-        P, R = at(s)
-        for k in range(len(s)):
-            self.touch_tests += 1
-            if self.checker.touches(P[k], R[k], focused):
-                return float(s[k])
-        return None
+    def _cover(self, run: _Cover) -> None:
+        """The coarse-to-fine advancement of the module docstring: samples on a grid of
+        :data:`COVER_GRID_MM` of tool motion, each judged at once by :meth:`_radii`; every gap
+        its two samples' radii do not cover is halved, until none is left (free), a sample is
+        blocked, or the sample budget (:func:`~weldplan.tool.sweep.max_samples`) is spent."""
+        budget = max_samples(run.L, self.checker.min_step)
+        n = max(2, math.ceil(run.L / COVER_GRID_MM) + 1) if run.L > 0 else 1
+        new = _bisection_order(n) / max(n - 1, 1)  # the middle first: where blocks are found
+        S, rad = np.zeros(0), np.zeros(0)
+        while True:
+            if run.taken + len(new) > budget:  # grazes: the exact check's budget spent too
+                run.blocked = float(new[0])
+                return
+            got = self._radii(run, new)
+            if got is None:
+                return
+            S, rad = np.concatenate([S, new]), np.concatenate([rad, got])
+            order = np.argsort(S, kind="stable")
+            S, rad = S[order], rad[order]
+            open_ = np.flatnonzero(rad[:-1] + rad[1:] < np.diff(S))
+            if len(open_) == 0:
+                return
+            new = (S[open_] + S[open_ + 1]) / 2
 
-    def _step(
-        self,
-        pose: tuple[NDArray[np.float64], NDArray[np.float64]],
-        exempt: NDArray | None,
-        ex: bool,
-        dp: float,
-        theta: float,
-        soft_here: bool,
-        state: dict[str, Any],
-        focused: bool,
-    ) -> tuple[float, float] | None:
-        """At one sample: ``None`` when blocked (the exact check's rules on FCL's slack), else
-        the parameter steps ``(with margin 0, with margin min_step)`` that keep the margin."""
+    def _radii(self, run: _Cover, s: NDArray[np.float64]) -> NDArray[np.float64] | None:
+        """The parameter radius about each sample ``s (k,)`` over which the tool keeps slack
+        >= 0 (module docstring), the bound's for all of them in one call and FCL's where the
+        bound does not decide; ``None`` when a sample is blocked or the budget ran out (then
+        ``run.blocked`` says where)."""
         chk = self.checker
-        P, R = pose[0][0], pose[1][0]
-        margin = 0.0 if soft_here else chk.min_step
-        sl, lever, open_lever = self.bound.spheres(P, R, ex, margin + FLOOR_MM)
-        V = dp + theta * lever
-        steps: list[float] = []
-        exact = math.inf
-        if open_lever >= 0:  # the bound does not decide: FCL's slack bounds every point
-            state["exact"] += 1
-            exact = chk.slack(P, R, exempt, focused)
-            state["smin"] = min(state["smin"], exact)
-            if exact < 0 or (exact == 0 and dp + theta > 0) or exact < margin:
+        P, Rs = run.at(s)
+        dp, theta = run.speed
+        ex = run.exempt is not None and len(run.exempt) > 0
+        rate, least, lever = self.bound.rates(P, Rs, ex, chk.min_step + FLOOR_MM, run.speed)
+        run.taken += len(s)
+        run.smin = min(run.smin, float(np.min(least[lever < 0], initial=math.inf)))
+        ask = np.flatnonzero(lever >= 0)
+        if len(ask) and run.deadline is not None and time.process_time() > run.deadline:
+            run.late, run.blocked = True, float(s[ask[0]])  # the safety net, once a batch
+            return None
+        if len(ask) and not run.touched:  # FCL's collide first: cheap, and shows most blocks
+            run.touched = True
+            hit = self._touch_at(run.at, run.L, run.focused)
+            if hit is not None:  # the tool touches the part there: slack < 0
+                run.smin, run.blocked = -math.inf, hit
                 return None
-        else:
-            state["smin"] = min(state["smin"], float(sl.min()))
-        for m in (0.0, chk.min_step):
-            t = float(np.min((sl - m) / np.maximum(V, 1e-12), initial=math.inf))
-            if open_lever >= 0:  # FCL's slack also bounds every point, at the motion bound L
-                t = min(t, (exact - m) / max(dp + theta * open_lever, 1e-12))
-                t = max(t, exact / max(dp + theta * chk.reach, 1e-12))  # the exact check's step
-            steps.append(t)
-        return steps[0], steps[1]
+        for j in ask:
+            if run.cap is not None and run.exact >= run.cap:
+                run.late, run.blocked = True, float(s[j])
+                return None
+            run.exact += 1
+            v = chk.slack(P[j], Rs[j], run.exempt, run.focused)
+            run.smin = min(run.smin, v)
+            if v < 0 or (v == 0 and dp + theta > 0) or (v < chk.min_step and not run.soft_at(s[j])):
+                run.blocked = float(s[j])
+                return None
+            # FCL's slack bounds every point: those of the undecided spheres move at most
+            # dp + theta lever, any point at most the motion bound L
+            rate[j] = min(rate[j], v / max(dp + theta * lever[j], 1e-12))
+            rate[j] = max(rate[j], v / max(dp + theta * chk.reach, 1e-12))
+        return rate
 
-
-def _bisection_order(n: int) -> NDArray[np.int64]:
-    """The integers ``0..n-1`` in the order of a bisection: the middle, then the quarters, ...
-    (the ends last: the motion's ends are states OMPL has checked already)."""
-    seen = np.zeros(n, dtype=bool)
-    out = []
-    step = 1 << max(0, (n - 1).bit_length())
-    while step >= 1:
-        for k in range(step // 2 if step > 1 else 0, n, step):
-            if not seen[k]:
-                seen[k] = True
-                out.append(k)
-        step //= 2
-    ends = list(dict.fromkeys(k for k in (0, n - 1) if k in out))
-    rest = [k for k in out if k not in ends]
-    return np.array(rest + ends, dtype=np.int64)
+    def _touch_at(self, at: Interpolator, L: float, focused: bool) -> float | None:
+        """:meth:`SweepChecker.first_touch`, counted."""
+        hit, tests = self.checker.first_touch(at, L, focused)
+        self.touch_tests += tests
+        return hit
