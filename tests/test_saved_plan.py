@@ -118,11 +118,9 @@ def test_verdict_exit_codes_and_lookup():
 
 
 def test_a_point_tip_route_loads_with_an_empty_tool_section(tmp_path):
-    route = box_route()
-    weldplan.Route  # noqa: B018  (the public name exists)
     from weldplan.station.saved import save_route
 
-    path = save_route(route, tmp_path / "p.json")
+    path = save_route(box_route(), tmp_path / "p.json")
     saved = load_plan(path)
     assert saved.tool_route.is_empty and saved.poses is None and saved.part is None
     saved.save(tmp_path / "q.json")
@@ -148,8 +146,8 @@ def test_route_files_written_before_the_typed_section_load_and_resave_unchanged(
 
 def test_the_old_robot_file_re_checks_by_fk_and_fcl(tmp_path):
     urdf = require_shared("robots", "kuka_kr150r3100_2", "kr150r3100_2.urdf")
-    from weldplan.station.mount import load_tool_spec
     from weldplan.station.model import ToolSpec
+    from weldplan.station.mount import load_tool_spec
 
     _, mesh, _ = write_box_station(tmp_path)
     tool = load_tool_spec(ToolSpec(builtin="arc_torch", params={"bend_angle": 22}))
