@@ -173,3 +173,31 @@ def test_the_demo_with_the_gun_and_the_kr150_saves_loads_and_verifies(tmp_path):
     w = saved.verify(tool=plan.tool)
     assert w.ok and [c.name for c in w.checks] == [c.name for c in v.checks], w.describe()
     assert w.exit_code == (EXIT_PARTIAL if plan.partial() else 0)
+
+
+def test_a_plan_with_a_part_pose_verifies_in_the_cell_frame_and_refuses_another_pose(tmp_path):
+    """The box stood up (its y to the cell's z, 350 mm above the floor), point-tip only: the
+    saved route lies in the cell frame and is checked against the mesh placed by the pose it
+    records; a pose given that differs is bad input."""
+    from weldplan.cellframe import PartPose, parse_part_pose
+    from weldplan.station.saved import PartFiles
+
+    _, mesh, joints = write_box_station(tmp_path)
+    toml = tmp_path / "station.toml"
+    toml.write_text(
+        f'clearance = 5.0\n[part]\nmesh = "{mesh.name}"\nwelds = "{joints.name}"\n'
+        'up = "y"\nfixture_z = 350\n[cell]\nmargin = 50\n'
+    )
+    plan = weldplan.plan(weldplan.load_station(toml), rng=0)
+    v = plan.verify()
+    assert v.ok and v["part pose"].text.startswith("part pose"), v.describe()
+    path = plan.save(tmp_path / "posed.json")
+    saved = load_plan(path, mesh=mesh, part=PartFiles(joints=joints))
+    assert isinstance(saved.part_pose, PartPose) and saved.part_pose.same_as(plan.cell.part_pose)
+    # the part placed in the cell: the route's weld spots are the placed joints
+    np.testing.assert_allclose(saved.joints.xyz, saved.route.joint_xyz, atol=1e-9)
+    w = saved.verify()
+    assert w.ok and [c.name for c in w.checks] == ["part pose", "route"], w.describe()
+    other = parse_part_pose("0,0,100,0,0,0")
+    with pytest.raises(InputError, match="planned with part pose"):
+        load_plan(path, mesh=mesh, part=PartFiles(part_pose=other))

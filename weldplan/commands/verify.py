@@ -1,4 +1,10 @@
-"""``weldplan verify ROUTE MESH``: re-check a saved route against the part, independently."""
+"""``weldplan verify ROUTE MESH``: re-check a saved route against the part, independently.
+
+A thin call on the library: :func:`weldplan.station.saved.load_plan` reads the route and places
+the part, :meth:`~weldplan.station.saved.SavedPlan.verify` runs the re-checks
+(:mod:`weldplan.station.recheck`), and this command prints each check's line and exits with the
+verdict's code.
+"""
 
 from __future__ import annotations
 

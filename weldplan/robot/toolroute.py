@@ -55,9 +55,9 @@ class FollowedRoute:
         Keys this version does not know, kept as read.
     """
 
-    route: Any
-    quaternions: NDArray[np.float64]
-    zone: NDArray[np.bool_]
+    route: Any = field(repr=False)
+    quaternions: NDArray[np.float64] = field(repr=False)
+    zone: NDArray[np.bool_] = field(repr=False)
     via: tuple[str, ...]
     extra: Mapping[str, Any] = field(default_factory=dict)
 
