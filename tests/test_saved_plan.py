@@ -201,3 +201,14 @@ def test_a_plan_with_a_part_pose_verifies_in_the_cell_frame_and_refuses_another_
     other = parse_part_pose("0,0,100,0,0,0")
     with pytest.raises(InputError, match="planned with part pose"):
         load_plan(path, mesh=mesh, part=PartFiles(part_pose=other))
+
+
+def test_an_unreadable_tool_section_is_bad_input_naming_the_file_and_field(tmp_path):
+    d = json.loads(OLD_TORCH.read_text())
+    d["tool"]["transitions"]["transitions"][0] = {"no": "transition"}
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(d))
+    with pytest.raises(InputError) as e:
+        load_plan(bad)
+    assert "bad.json" in str(e.value) and "tool" in str(e.value)
+    assert "\n" not in str(e.value)

@@ -157,9 +157,8 @@ def load_plan(
     try:
         tool_route = ToolRoute.of(route)
     except (KeyError, TypeError, ValueError) as exc:
-        raise InputError(
-            f"the tool section is not valid ({exc})", path=path, field="tool"
-        ) from None
+        why = f"missing field {exc}" if isinstance(exc, KeyError) else str(exc)
+        raise InputError(f"the tool section is not valid: {why}", path=path, field="tool") from None
     if mesh is None:
         return SavedPlan(Path(path), route, tool_route)
     from weldplan.io.mesh import load_part
