@@ -113,10 +113,11 @@ class SavedRobotRoute:
     def from_dict(cls, d: Mapping[str, Any]) -> SavedRobotRoute:
         from weldplan.robot.configs import RobotRoute
 
-        known = tuple(RobotRoute.from_dict(d).to_dict()) + ROBOT_KEYS
+        rr = RobotRoute.from_dict(d)
+        known = tuple(rr.to_dict()) + ROBOT_KEYS
         f = d.get("follows")
         return cls(
-            route=RobotRoute.from_dict(d),
+            route=rr,
             urdf=d.get("urdf"),
             urdf_sha256=d.get("urdf_sha256"),
             contact_radius=d.get("contact_radius"),
