@@ -13,6 +13,9 @@ The whole job (tool poses, transitions, robot, program) on a station file::
 
     station = weldplan.load_station("examples/demo_station.toml")
     plan = weldplan.plan(station, rng=0)
+    plan.save("route.json")
+    saved = weldplan.load_plan("route.json", mesh="part.stl")
+    saved.verify(tool=plan.tool).ok
 """
 
 from __future__ import annotations
@@ -44,6 +47,10 @@ _LAZY: dict[str, str] = {
     "Plan": "weldplan.station.pipeline",
     "write_plan": "weldplan.station.outputs",
     "MountedTool": "weldplan.station.mount",
+    "load_plan": "weldplan.station.saved",
+    "SavedPlan": "weldplan.station.saved",
+    "Verdict": "weldplan.station.recheck",
+    "ToolRoute": "weldplan.robot.toolroute",
 }
 
 __all__ = ["__version__", *_LAZY]

@@ -1,4 +1,10 @@
-"""``weldplan verify ROUTE MESH``: re-check a saved route against the part, independently."""
+"""``weldplan verify ROUTE MESH``: re-check a saved route against the part, independently.
+
+A thin call on the library: :func:`weldplan.station.saved.load_plan` reads the route and places
+the part, :meth:`~weldplan.station.saved.SavedPlan.verify` runs the re-checks
+(:mod:`weldplan.station.recheck`), and this command prints each check's line and exits with the
+verdict's code.
+"""
 
 from __future__ import annotations
 
@@ -39,79 +45,35 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from weldplan.cellframe import recorded_pose
+    """Load the route with the part (:func:`weldplan.station.saved.load_plan`), re-check it
+    (:meth:`~weldplan.station.saved.SavedPlan.verify`) and print each check's line: exit 0 ok,
+    1 a check failed, 3 ok but welds left out (2, bad input, is the CLI's)."""
     from weldplan.commands._tool import tool_from_args
-    from weldplan.io.export import read_route
-    from weldplan.io.mesh import load_part
-    from weldplan.tool.check_route import check_tool_provenance, verify_route_poses
-    from weldplan.weld.verify import verify_route
+    from weldplan.station.recheck import RobotFiles
+    from weldplan.station.saved import PartFiles, load_plan
 
-    given = part_pose_from_args(args)
-    route = read_route(args.route)
-    part = load_part(args.mesh, units=args.units, scale=args.scale, length=args.length)
-    pose = recorded_pose(route.provenance, given, part, path=args.route)
-    joints = None
-    if args.joints:
-        from weldplan.io.joints import read_joints
-
-        joints = read_joints(args.joints, units=args.units)
-    if pose is not None:  # re-applied from the route: the checks run in its cell frame
-        part = pose.mesh_to_cell(part)
-        if joints is not None:
-            joints = pose.joints_to_cell(joints)
+    files = PartFiles(
+        units=args.units, scale=args.scale, length=args.length, joints=args.joints,
+        part_pose=part_pose_from_args(args),
+    )  # fmt: skip
+    saved = load_plan(args.route, mesh=args.mesh, part=files)
     tool = tool_from_args(args)  # a bad --tool fails before any check
-    if tool is not None:
-        check_tool_provenance(route, tool[1], args.route)
-    report = verify_route(route, part, clearance=args.clearance, joints=joints)
-    if not report.ok:
-        print(f"weldplan verify: {report.describe(limit=20)}", file=sys.stderr)
-        return 1
-    print(report.describe())
-    if tool is None:
-        if route.tool:
-            print("the route carries tool poses: pass --tool to re-check them")
-        return 0
-    check = verify_route_poses(route, part, tool[0])
-    if not check.ok:
-        print(f"weldplan verify: tool poses: {check.describe()}", file=sys.stderr)
-        return 1
-    print(f"tool poses ok: {check.describe()}")
-    from weldplan.tool.check_route import verify_route_sweeps
-
-    sweeps = verify_route_sweeps(route, part, tool[0])
-    if sweeps is not None and not sweeps.ok:
-        print(f"weldplan verify: tool transitions: {sweeps.describe()}", file=sys.stderr)
-        return 1
-    if sweeps is not None:
-        print(f"tool transitions ok: {sweeps.describe()}")
-    robot = _verify_robot(args, route, part, tool[0])
-    if robot is None:
-        return 1
-    if check.missing or (sweeps is not None and sweeps.blocked) or robot:
-        from weldplan.errors import EXIT_PARTIAL
-
-        return EXIT_PARTIAL
-    return 0
+    verdict = saved.verify(
+        tool=tool, robot=RobotFiles(args.robot, args.opw), clearance=args.clearance
+    )
+    return _say(verdict)
 
 
-def _verify_robot(
-    args: argparse.Namespace, route: object, part: object, tool: object
-) -> tuple[str, ...] | None:
-    """Re-check the robot route the route carries, if any (:mod:`weldplan.robot.routejson`):
-    FK, joint limits, robot + tool collision. ``None`` (said on stderr) when it fails, else the
-    welds its program leaves out (a partial route: exit 3)."""
-    from weldplan.robot.routejson import robot_route_of, verify_robot_route
-
-    rr = robot_route_of(route, args.route)
-    if rr is None:
-        return ()
-    urdf = args.robot or route.tool["robot"].get("urdf")  # type: ignore[attr-defined]
-    from weldplan.robot import load_robot
-
-    robot = load_robot(urdf, args.opw)
-    check = verify_robot_route(route, rr, robot, part, tool)
-    if not check.ok:
-        print(f"weldplan verify: robot route: {check.describe()}", file=sys.stderr)
-        return None
-    print(f"robot route ok: {check.describe()}")
-    return check.left_out
+def _say(verdict: object) -> int:
+    """Print the verdict's checks (stdout), its failure (stderr, one line); its exit code."""
+    for c in verdict.checks:  # type: ignore[attr-defined]
+        if c.name == "part pose":
+            continue
+        if not c.ok:
+            what = "" if c.name == "route" else f"{c.name}: "
+            print(f"weldplan verify: {what}{c.text}", file=sys.stderr)
+            break
+        print(c.text if c.name == "route" else f"{c.name} ok: {c.text}")
+    if ("tool poses", "no tool given") in verdict.not_run:  # type: ignore[attr-defined]
+        print("the route carries tool poses: pass --tool to re-check them")
+    return int(verdict.exit_code)  # type: ignore[attr-defined]

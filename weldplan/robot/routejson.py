@@ -29,6 +29,7 @@ that no exact row welds (:attr:`RobotCheck.left_out`): ``weldplan verify`` then 
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 from dataclasses import dataclass
 from os import PathLike
@@ -59,20 +60,30 @@ def attach_robot_route(
     ``route.tool["robot"]`` (module docstring). ``gun``: the route along the gun's transitions
     the robot followed (:class:`~weldplan.robot.gunpath.GunRoute`), stored as ``follows``; the
     robot route's rows are then rows of that route."""
-    import dataclasses
-
     from weldplan.io.mesh import file_sha256
+    from weldplan.robot.toolroute import FollowedRoute, SavedRobotRoute
 
-    d = rr.to_dict()
-    d["weld_branch"] = rr.weld_branch.tolist()
-    d["urdf"] = str(urdf)
-    d["urdf_sha256"] = file_sha256(urdf)
-    d["contact_radius"] = contact_radius
+    follows = None
     if gun is not None:
-        d["follows"] = gun.to_dict()
-    tool = dict(route.tool)
-    tool["robot"] = d
-    return dataclasses.replace(route, tool=tool)
+        follows = FollowedRoute(gun.route, gun.quaternions(), gun.zone, tuple(gun.via))
+    saved = SavedRobotRoute(rr, str(urdf), file_sha256(urdf), contact_radius, follows)
+    return dataclasses.replace(route, tool={**route.tool, "robot": saved.to_dict()})
+
+
+def saved_robot_route(route: Any, path: str | PathLike[str] | None = None) -> Any:
+    """The robot section of ``route`` (:class:`~weldplan.robot.toolroute.SavedRobotRoute`),
+    ``None`` without one; :class:`InputError` (naming ``path``) when it is not readable."""
+    from weldplan.robot.toolroute import SavedRobotRoute
+
+    d = (route.tool or {}).get("robot")
+    if not d:
+        return None
+    try:
+        return SavedRobotRoute.from_dict(d)
+    except (KeyError, TypeError, ValueError) as exc:
+        raise InputError(
+            f"the robot route is not valid ({exc})", path=path, field="tool.robot"
+        ) from None
 
 
 def robot_route_of(route: Any, path: str | PathLike[str] | None = None) -> Any:
@@ -83,17 +94,10 @@ def robot_route_of(route: Any, path: str | PathLike[str] | None = None) -> Any:
     InputError
         A robot section that is not a joint route (``path``: the route file, for the message).
     """
-    from weldplan.robot.configs import RobotRoute
-
-    d = (route.tool or {}).get("robot")
-    if not d:
+    saved = saved_robot_route(route, path)
+    if saved is None:
         return None
-    try:
-        rr = RobotRoute.from_dict(d)
-    except (KeyError, TypeError, ValueError) as exc:
-        raise InputError(
-            f"the robot route is not valid ({exc})", path=path, field="tool.robot"
-        ) from None
+    rr = saved.route
     k = len(rr.q)
     if not (len(rr.row) == len(rr.exact) == len(rr.branch) == k) or not np.all(np.isfinite(rr.q)):
         raise InputError(

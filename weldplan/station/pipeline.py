@@ -127,6 +127,70 @@ class Plan:
 
         return partial_lines(self)
 
+    def summary(self, title: str = "weldplan plan") -> str:
+        """The table ``weldplan plan`` prints at the end of a run (without the files written):
+        the route, its verification, the tool and robot stages, the stage times."""
+        from weldplan.station.summary import plan_rows, summary_table
+
+        return summary_table(
+            self.route, self.times, {}, title=title, report=self.verification,
+            extra=plan_rows(self),
+        )  # fmt: skip
+
+    @property
+    def tool_route(self) -> Any:
+        """The route's tool section typed (:class:`~weldplan.robot.toolroute.ToolRoute`:
+        weld poses, tool path, robot route; empty without a tool), as the route JSON saves it."""
+        from weldplan.robot.toolroute import ToolRoute
+
+        return ToolRoute.of(self.route)
+
+    def save(self, path: Any) -> Any:
+        """Write the route JSON (and its timings beside it) as one set, whole or not at all
+        (:func:`weldplan.station.saved.save_route`); :func:`weldplan.station.saved.load_plan`
+        reads it back. Returns the path."""
+        from weldplan.station.saved import save_route
+
+        return save_route(self.route, path)
+
+    def verify(self) -> Any:
+        """Re-check the plan as it would be saved, independently of the planner
+        (:func:`weldplan.station.recheck.recheck`: the part pose, the point-tip route by FCL, the
+        weld poses and transitions of the whole tool, the robot route by FK + FCL).
+
+        The route is first written to its JSON text and read back, so what is checked is what
+        :meth:`save` writes, re-parsed (none of the planner's objects or caches).
+
+        Returns
+        -------
+        :class:`~weldplan.station.recheck.Verdict`
+        """
+        from weldplan.io.timings import route_json_texts
+        from weldplan.station.recheck import recheck
+        from weldplan.weld.route import Route
+
+        route = Route.from_json(route_json_texts(self.route)[0])
+        robot = None if self.robot is None else self.robot.robot
+        return recheck(
+            route, self.cell.part, tool=self.tool, robot=robot, joints=self.cell.joints,
+            part_pose=_pose_check(route, getattr(self.cell, "part_pose", None)),
+        )  # fmt: skip
+
+
+def _pose_check(route: Any, pose: Any) -> Any:
+    """The part pose the route records against the cell's (:class:`CheckResult`)."""
+    from weldplan.cellframe import PartPose
+    from weldplan.station.recheck import CheckResult
+
+    rec = route.provenance.get("part_pose")
+    saved = None if rec is None else PartPose.from_dict(rec)
+    if saved is None and pose is None:
+        return CheckResult("part pose", True, "planned in the part frame")
+    ok = saved is not None and pose is not None and saved.same_as(pose)
+    said = "none" if saved is None else saved.describe()
+    text = said if ok else f"the route records {said}, the cell has {pose and pose.describe()}"
+    return CheckResult("part pose", ok, text)
+
 
 def run_warnings(station: Station) -> list[str]:
     """Settings whose combination does less than a reader expects."""
