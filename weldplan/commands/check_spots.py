@@ -15,7 +15,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from weldplan.commands._planning_args import positive_mm
+from weldplan.commands._types import cone_degrees, finite_mm, nonneg_mm, positive_mm
 from weldplan.commands.plan import add_cell_arguments
 from weldplan.errors import EXIT_OK, EXIT_PARTIAL, InputError
 
@@ -34,36 +34,6 @@ EPILOG = """exit codes:
   130  interrupted (Ctrl-C)"""
 
 
-def _nonneg_mm(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not 0.0 <= value < float("inf"):
-        raise argparse.ArgumentTypeError(f"must be a finite number of mm >= 0, got {text!r}")
-    return value
-
-
-def _cone(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not 0.0 < value <= 90.0:
-        raise argparse.ArgumentTypeError(f"must lie in (0, 90] degrees, got {text!r}")
-    return value
-
-
-def _finite_mm(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not abs(value) < float("inf"):
-        raise argparse.ArgumentTypeError(f"must be a finite number of mm, got {text!r}")
-    return value
-
-
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.epilog = EPILOG
     p.add_argument("mesh", help="part mesh (STL, OBJ, PLY, OFF, GLB/GLTF)")
@@ -72,6 +42,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("-o", "--output", required=True, help="the table to write (CSV)")
     p.add_argument("--json", metavar="F", help="also write the whole study as JSON")
     p.add_argument("--html", metavar="F", help="also write a 3D page coloured by verdict")
+    _add_tool_arguments(p)
+    _add_robot_arguments(p)
+    p.add_argument("--quiet", action="store_true", help="no summary on stdout")
+
+
+def _add_tool_arguments(p: argparse.ArgumentParser) -> None:
+    """The guns (``--tool`` with its ``--tcp``, repeatable) and how each is judged at a spot."""
     g = p.add_argument_group("tools (each --tool may be repeated, with its own --tcp)")
     g.add_argument(
         "--tool",
@@ -87,24 +64,29 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="per --tool, in order: the URDF's TCP joint or link, or a mesh's TCP",
     )
     g.add_argument("--tool-units", choices=("m", "mm"), help="unit of mesh tools (default mm)")
+    _add_gun_check_arguments(g)
+
+
+def _add_gun_check_arguments(g: Any) -> None:
+    """How a gun is judged at a spot: its cone, contact sphere, clearance; the spots' surface."""
     g.add_argument(
         "--tool-cone",
         metavar="DEG",
-        type=_cone,
+        type=cone_degrees,
         default=15.0,
         help="largest tilt of the gun off the spot's approach axis (default 15)",
     )
     g.add_argument(
         "--contact-radius",
         metavar="MM",
-        type=_nonneg_mm,
+        type=nonneg_mm,
         default=20.0,
         help="the gun may touch the part inside this sphere about the spot (20)",
     )
     g.add_argument(
         "--clearance",
         metavar="MM",
-        type=_nonneg_mm,
+        type=nonneg_mm,
         default=5.0,
         help="least distance of the gun outside that sphere to the part (5)",
     )
@@ -121,6 +103,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="the stack column: a single body thin enough for the gun to straddle near a free "
         "edge counts as a wall (slab models such as car2); default: a spot joins two sheets",
     )
+
+
+def _add_robot_arguments(p: argparse.ArgumentParser) -> None:
+    """The robots (``--robot`` with its ``--opw`` and ``--robot-base``, repeatable), the floor."""
     r = p.add_argument_group("robots (each --robot may be repeated, with its own --robot-base)")
     r.add_argument(
         "--robot",
@@ -144,11 +130,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     r.add_argument(
         "--floor-z",
         metavar="MM",
-        type=_finite_mm,
+        type=finite_mm,
         help="the floor height in the part frame: searched bases stand on it, no "
         "link may reach below it (default: the part's lowest point, not checked)",
     )
-    p.add_argument("--quiet", action="store_true", help="no summary on stdout")
 
 
 def _paired(values: list[str] | None, n: int, what: str, of: str) -> list[str | None]:
