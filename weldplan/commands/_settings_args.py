@@ -20,7 +20,7 @@ from weldplan.errors import ConfigError
 
 
 def add_settings_options(
-    group: Any, cls: type, section: str, *, only: Iterable[str] | None = None
+    group: Any, cls: type, section: str | None, *, only: Iterable[str] | None = None
 ) -> None:
     """Add an option for every field of ``cls`` that declares one (``only``: these fields).
 
@@ -31,8 +31,8 @@ def add_settings_options(
     cls
         The settings dataclass; each option's ``dest`` is its field's name.
     section
-        Where the station file sets these fields (``"[cell]"``; ``""``: the file's top level),
-        said in each option's help.
+        Where the station file sets these fields (``"[cell]"``; ``""``: the file's top level;
+        ``None``: not a station's settings), said in each option's help.
     only
         Field names to add (default: every field with an option).
     """
@@ -41,16 +41,16 @@ def add_settings_options(
         meta = f.metadata
         if "option" not in meta or (names is not None and f.name not in names):
             continue
-        key = f"{section} {f.name}" if section else f.name
+        key = None if section is None else f"{section} {f.name}" if section else f.name
         kw: dict[str, Any] = {"dest": f.name, "default": f.default}
+        notes = [] if key is None else [f"station file: {key}"]
         if isinstance(f.default, bool):
             kw["action"] = "store_false" if meta["option"].startswith("--no-") else "store_true"
-            value = str(not f.default).lower()
-            kw["help"] = _escape(f"{meta['help']} (station file: {key} = {value})")
+            notes = [f"{n} = {str(not f.default).lower()}" for n in notes]
         else:
             kw.update(type=_parser(cls, f.name), metavar=meta["metavar"], choices=meta["choices"])
-            shown = "" if f.default is None else f"default {_fmt(f.default)}; "
-            kw["help"] = _escape(f"{meta['help']} ({shown}station file: {key})")
+            notes = ([] if f.default is None else [f"default {_fmt(f.default)}"]) + notes
+        kw["help"] = _escape(f"{meta['help']} ({'; '.join(notes)})" if notes else meta["help"])
         group.add_argument(meta["option"], **kw)
 
 

@@ -15,9 +15,11 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from weldplan.commands._types import cone_degrees, finite_mm, nonneg_mm, positive_mm
+from weldplan.commands._settings_args import add_settings_options, settings_from_args
+from weldplan.commands._types import finite_mm
 from weldplan.commands.plan import add_cell_arguments
 from weldplan.errors import EXIT_OK, EXIT_PARTIAL, InputError
+from weldplan.study.feasibility import StudySettings
 
 HELP = "weld feasibility study: which spots each gun closes on and each robot reaches"
 
@@ -64,38 +66,8 @@ def _add_tool_arguments(p: argparse.ArgumentParser) -> None:
         help="per --tool, in order: the URDF's TCP joint or link, or a mesh's TCP",
     )
     g.add_argument("--tool-units", choices=("m", "mm"), help="unit of mesh tools (default mm)")
-    _add_gun_check_arguments(g)
-
-
-def _add_gun_check_arguments(g: Any) -> None:
-    """How a gun is judged at a spot: its cone, contact sphere, clearance; the spots' surface."""
-    g.add_argument(
-        "--tool-cone",
-        metavar="DEG",
-        type=cone_degrees,
-        default=15.0,
-        help="largest tilt of the gun off the spot's approach axis (default 15)",
-    )
-    g.add_argument(
-        "--contact-radius",
-        metavar="MM",
-        type=nonneg_mm,
-        default=20.0,
-        help="the gun may touch the part inside this sphere about the spot (20)",
-    )
-    g.add_argument(
-        "--clearance",
-        metavar="MM",
-        type=nonneg_mm,
-        default=5.0,
-        help="least distance of the gun outside that sphere to the part (5)",
-    )
-    g.add_argument(
-        "--max-spot-distance",
-        metavar="MM",
-        type=positive_mm,
-        default=5.0,
-        help="a spot farther from the part's surface is 'no surface' (5)",
+    add_settings_options(
+        g, StudySettings, None, only=("cone", "contact_radius", "clearance", "max_spot_distance")
     )
     g.add_argument(
         "--walls",
@@ -191,7 +163,7 @@ def run(args: argparse.Namespace) -> int:
     from weldplan.io.joints import read_joints
     from weldplan.io.mesh import load_part
     from weldplan.io.outputset import check_outputs, write_outputs
-    from weldplan.study.feasibility import StudySettings, check_spots
+    from weldplan.study.feasibility import check_spots
     from weldplan.study.table import study_csv_text
 
     outputs = {"csv": Path(args.output)}
@@ -199,13 +171,7 @@ def run(args: argparse.Namespace) -> int:
         if getattr(args, kind):
             outputs[kind] = Path(getattr(args, kind))
     check_outputs(outputs)
-    settings = StudySettings(
-        cone=args.tool_cone,
-        contact_radius=args.contact_radius,
-        clearance=args.clearance,
-        max_spot_distance=args.max_spot_distance,
-        floor_z=args.floor_z,
-    )
+    settings = settings_from_args(StudySettings, args, floor_z=args.floor_z)
     spots = read_joints(args.spots, units=args.units)
     tools, robots = _tools(args), _robots(args)
     part = load_part(args.mesh, units=args.units, scale=args.scale, length=args.length)
