@@ -117,3 +117,28 @@ def test_the_demo_keeps_its_own_cell_options():
     p = _subparser("demo")
     group = {a.dest for a in _group(p, "cell stage")._group_actions}
     assert group == {"clearance", "pitch", "margin"}
+
+
+def test_an_option_parses_as_its_field_type_with_or_without_postponed_annotations():
+    real = dataclasses.make_dataclass(
+        "Real",
+        [("n", int, m.setting(3, "--n", "n")), ("k", int | None, m.setting(None, "--k", "k")),
+         ("x", float, m.setting(1.0, "--x", "x")), ("s", str, m.setting("a", "--s", "s"))],
+        frozen=True,
+    )  # fmt: skip
+    for cls in (real, _Postponed):
+        p = argparse.ArgumentParser()
+        add_settings_options(p, cls, None)
+        got = settings_from_args(
+            cls, p.parse_args(["--n", "4", "--k", "5", "--x", "2", "--s", "b"])
+        )
+        assert (got.n, got.k, got.x, got.s) == (4, 5, 2.0, "b")
+        assert [type(v) for v in (got.n, got.k, got.x)] == [int, int, float]
+
+
+@dataclasses.dataclass(frozen=True)
+class _Postponed:
+    n: int = m.setting(3, "--n", "n")
+    k: int | None = m.setting(None, "--k", "k")
+    x: float = m.setting(1.0, "--x", "x")
+    s: str = m.setting("a", "--s", "s")

@@ -69,7 +69,8 @@ def _parser(cls: type, name: str) -> Callable[[str], Any]:
     """argparse type of field ``name``: the text as the field's type (``str``, ``int``, else a
     float), checked by ``cls``'s own validation of that field alone (a rule that
     ties two fields is checked when the whole object is made)."""
-    annotation = str(next(f.type for f in dataclasses.fields(cls) if f.name == name))
+    t = next(f.type for f in dataclasses.fields(cls) if f.name == name)
+    annotation = t if isinstance(t, str) else getattr(t, "__name__", None) or str(t)
     to: Callable[[str], Any] = {"str": str, "int": int}.get(annotation.split()[0], float)
 
     def parse(text: str) -> Any:
