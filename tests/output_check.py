@@ -73,6 +73,20 @@ def csv_poses(path: Path) -> tuple[np.ndarray, list[int]]:
     return np.array(poses).reshape(-1, 4, 4), rows
 
 
+def csv_rows(path: Path) -> list[dict[str, str]]:
+    """The rows of a CSV weldplan wrote, by column name (its ``#`` comment lines skipped)."""
+    lines = [ln for ln in Path(path).read_text().splitlines() if not ln.startswith("#")]
+    return list(csv.DictReader(lines))
+
+
+def comments(text: str, mark: str = "#") -> list[str]:
+    """The comment lines of a file's text (``mark``: ``#`` CSV, ``!`` RAPID, ``;`` KRL), without
+    the mark and the indent."""
+    return [
+        ln.strip()[len(mark) :].strip() for ln in text.splitlines() if ln.strip().startswith(mark)
+    ]
+
+
 def trajectory_q(path: Path) -> np.ndarray:
     """``(m, d)`` rad: the joint rows of a trajectory CSV (``#`` lines skipped)."""
     lines = [ln for ln in Path(path).read_text().splitlines() if not ln.startswith("#")]

@@ -15,6 +15,7 @@ import pytest
 
 from tests.cli_helpers import one_line_error, run_cli
 from tests.conftest import ROOT, require_shared
+from tests.output_check import comments
 from weldplan.cellframe import UP_AXES, PartPose, parse_part_pose, place_part, recorded_pose
 from weldplan.errors import InputError
 from weldplan.io.joints import Joints
@@ -347,11 +348,11 @@ def test_cli_plan_in_the_cell_and_verify_re_applies_the_pose(tmp_path, capsys):
     rec = json.loads(js.read_text())["provenance"]
     assert rec["frame"] == "cell"
     pose = PartPose.from_dict(rec["part_pose"])
-    first = csv.read_text().splitlines()[0]
-    assert first.startswith("# frame: cell")
+    assert [c for c in comments(csv.read_text()) if c.startswith("frame: cell")]
     # the CSV's weld rows are the joints moved by the pose
     joints = read_joints(DEMO_JOINTS)
-    rows = [r.split(",") for r in csv.read_text().splitlines()[2:]]
+    lines = [ln for ln in csv.read_text().splitlines() if not ln.startswith("#")]
+    rows = [r.split(",") for r in lines[1:]]
     welds = {r[2]: np.array([float(v) for v in r[3:6]]) for r in rows if r[1] == "weld"}
     for k, jid in enumerate(joints.ids):
         np.testing.assert_allclose(welds[jid], pose.to_cell(joints.xyz[k])[0], atol=1e-3)

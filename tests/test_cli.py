@@ -3,13 +3,13 @@ leave existing output files untouched; verification failures refuse to write (ex
 
 from __future__ import annotations
 
-import csv
 import json
 
 import numpy as np
 import pytest
 
 from tests.cli_helpers import run_cli
+from tests.output_check import csv_rows
 from tests.route_fixtures import BOX_JOINTS_CSV, write_box_station
 from weldplan.cli import main
 from weldplan.weld import verify as verify_mod
@@ -146,8 +146,7 @@ def test_plan_writes_every_output_and_verifies(files, capsys):
     assert cap.err == ""  # not a terminal: no progress bars
     for key in ("joints", "pairs planned", "route length", "lower bound", "gap", "time"):
         assert key in cap.out
-    with open(out, newline="") as f:
-        rows = list(csv.DictReader(f))
+    rows = csv_rows(out)
     assert sorted(r["joint_id"] for r in rows if r["kind"] == "weld") == ["A", "B", "C", "D"]
     assert (tmp / "route.src").read_text().startswith("DEF weldplan_route()")
     assert (tmp / "r.html").stat().st_size > 100_000
@@ -224,8 +223,7 @@ def test_demo_plans_verifies_and_exports(tmp_path, monkeypatch, capsys):
     assert main(["demo", "--json", "route.json"]) == 0
     out = capsys.readouterr().out
     assert "route ok" in out and "595.10" in out
-    with open(tmp_path / "route.csv", newline="") as f:
-        rows = list(csv.DictReader(f))
+    rows = csv_rows(tmp_path / "route.csv")
     welds = [r for r in rows if r["kind"] == "weld"]
     assert sorted(int(r["joint_id"]) for r in welds) == list(range(1, 16))
     # the demo joints carry approach directions: exported on weld rows

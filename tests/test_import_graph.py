@@ -1,5 +1,5 @@
-"""weldplan's modules import each other without cycles (data flows one way: model -> planning ->
-route -> export/view).
+"""weldplan's modules import each other without cycles and in the order of their layers (data
+flows one way: model -> planning -> route -> export/view; :data:`LAYERS`).
 
 The graph is read from the source (ast), so it holds every import: module level, inside
 functions (the lazy ones), under ``TYPE_CHECKING``. An import of ``weldplan.a.b`` is an edge to
@@ -79,6 +79,94 @@ def import_graph(root: Path = PACKAGE) -> nx.DiGraph:
 def _describe(g: nx.DiGraph, comp: set[str]) -> str:
     edges = sorted((a, b, g.edges[a, b]["line"]) for a, b in g.subgraph(comp).edges)
     return "\n".join(f"  {a}:{line} -> {b}" for a, b, line in edges)
+
+
+#: weldplan's layers, lowest first: a module may import its own layer and the layers below it,
+#: never one above (module level or inside a function). A module's layer is the one of the
+#: longest prefix that names it. The order is ../shared/DESIGN.md's data flow: the geometry core
+#: and the optimisers; the readers; the point-tip route (weld) and the stages above it (tool,
+#: robot); the exporters after the models they write ("io and viz never import the planners");
+#: the station that runs the stages; the study and the pictures; the commands on top.
+LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
+    ("base", ("weldplan.errors", "weldplan.random", "weldplan.lazy")),
+    ("geometry", ("weldplan.geometry",)),
+    ("optim", ("weldplan.optim",)),
+    # the readers of the inputs and the all-or-nothing file writer: every stage uses them
+    ("readers", ("weldplan.io", "weldplan.io.joints", "weldplan.io.mesh", "weldplan.io.tsplib",
+                 "weldplan.io.outputset")),
+    ("planar", ("weldplan.planar",)),
+    ("motion", ("weldplan.motion",)),
+    ("frames", ("weldplan.cellframe",)),
+    ("weld", ("weldplan.weld",)),
+    ("tool", ("weldplan.tool",)),
+    # the exporters read the route and its poses (weld, tool) and are what the robot's program
+    # is written with; tool/path_csv is the tool path's writer, an exporter beside its model
+    ("exporters", ("weldplan.io.export", "weldplan.io.blending", "weldplan.io.smooth_moves",
+                   "weldplan.io.timings", "weldplan.io.trajectory", "weldplan.io.posts",
+                   "weldplan.tool.path_csv")),
+    ("robot", ("weldplan.robot",)),
+    ("station", ("weldplan.station",)),
+    ("study", ("weldplan.study",)),
+    ("viz", ("weldplan.viz",)),
+    # a plan's files: rendered by the exporters and the viewers
+    ("outputs", ("weldplan.station.outputs",)),
+    ("api", ("weldplan",)),
+    ("bench", ("weldplan.bench",)),
+    ("commands", ("weldplan.commands",)),
+    ("cli", ("weldplan.cli", "weldplan.__main__")),
+)  # fmt: skip
+
+#: imports allowed against the layer order, each with its reason (none today)
+ALLOWED_UPWARD: dict[tuple[str, str], str] = {}
+
+
+def layer_of(module: str, layers=LAYERS) -> int:
+    """Index in ``layers`` of the longest prefix naming ``module`` (KeyError: none)."""
+    best = None
+    for k, (_, prefixes) in enumerate(layers):
+        for prefix in prefixes:
+            if module == prefix or module.startswith(prefix + "."):
+                if best is None or len(prefix) > best[1]:
+                    best = (k, len(prefix))
+    if best is None:
+        raise KeyError(f"{module} is in no layer: add it to LAYERS")
+    return best[0]
+
+
+def layer_violations(g: nx.DiGraph, layers=LAYERS, allowed=None) -> list[str]:
+    """``importer:line -> imported (layer -> higher layer)`` for every upward import."""
+    allowed = ALLOWED_UPWARD if allowed is None else allowed
+    out = []
+    for a, b in sorted(g.edges):
+        la, lb = layer_of(a, layers), layer_of(b, layers)
+        if la < lb and (a, b) not in allowed:
+            out.append(f"  {a}:{g.edges[a, b]['line']} -> {b} ({layers[la][0]} -> {layers[lb][0]})")
+    return out
+
+
+def test_every_module_imports_only_its_layer_and_the_layers_below():
+    g = import_graph()
+    for m in g.nodes:
+        layer_of(m)  # every module has a layer
+    bad = layer_violations(g)
+    assert not bad, "imports from a higher layer (LAYERS):\n" + "\n".join(bad)
+    stale = [e for e in ALLOWED_UPWARD if not g.has_edge(*e)]
+    assert not stale, f"allowed imports that no longer exist: {stale}"
+
+
+def test_the_layer_rule_catches_an_upward_import_even_inside_a_function(tmp_path):
+    pkg = tmp_path / "demo"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text("")
+    (pkg / "low.py").write_text("def f():\n    from demo.high import g\n    return g\n")
+    (pkg / "high.py").write_text("from demo.low import f\n\ng = f\n")
+    layers = (("low", ("demo", "demo.low")), ("high", ("demo.high",)))
+    g = import_graph(pkg)
+    assert layer_violations(g, layers, allowed={}) == ["  demo.low:2 -> demo.high (low -> high)"]
+    assert layer_violations(g, layers, allowed={("demo.low", "demo.high"): "why"}) == []
+    assert layer_of("demo.high.sub", layers) == 1  # the longest prefix wins
+    with pytest.raises(KeyError, match="in no layer"):
+        layer_of("other.mod", layers)
 
 
 def test_weldplan_has_no_import_cycle():

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from tests.cli_helpers import one_line_error, run_cli
+from tests.output_check import trajectory_q
 from tests.route_fixtures import write_box_station
 from tests.test_robot_cli import _robot_urdf, _torch_urdf
 
@@ -92,8 +93,8 @@ def test_the_robot_route_round_trips_through_the_route_json(time_run):
     assert d["weld_branch"] == rr.weld_branch.tolist()
     np.testing.assert_array_equal(rr.q, np.asarray(d["q"]))
     # the trajectory replays the same joint route: its first row is the route's first row
-    first = np.array([float(v) for v in (tmp / "t.csv").read_text().splitlines()[1].split(",")])
-    np.testing.assert_allclose(first[2:], rr.q[0], atol=1e-6)  # the CSV keeps 1e-8 rad
+    first = trajectory_q(tmp / "t.csv")[0]
+    np.testing.assert_allclose(first, rr.q[0], atol=1e-6)  # the CSV keeps 1e-8 rad
 
 
 def test_verify_rechecks_the_robot_route_by_fk_and_collision(time_run, capsys):

@@ -240,20 +240,22 @@ def test_a_base_with_nothing_to_search_on_says_so(cell):
 
 
 def test_a_mesh_tool_is_mounted_as_the_robot_stage_mounts_it(tmp_path):
-    """load_study_tool's mounting transform of a mesh tool (TCP x,y,z in the tool's units,
-    fixed-axis x-y-z degrees) is the robot stage's (station/mount.flange_tcp)."""
-    from weldplan.station.model import ToolSpec
-    from weldplan.station.mount import flange_tcp
+    """load_study_tool mounts a mesh tool as the robot stage does (station/mount.flange_tcp):
+    the robot's flange mount, then the TCP x,y,z in the tool's units and fixed-axis x-y-z
+    degrees (built here with scipy, apart from the mounting code)."""
+    from scipy.spatial.transform import Rotation
+
     from weldplan.study import load_study_tool
     from weldplan.tool import arc_torch
 
     arc_torch(bend_angle=0.0).mesh.export(tmp_path / "torch.stl")
-    tcp = "1,-2,3,10,-20,30"
-    st = load_study_tool(str(tmp_path / "torch.stl"), tcp=tcp, units="mm")
+    st = load_study_tool(str(tmp_path / "torch.stl"), tcp="1,-2,3,10,-20,30", units="mm")
     robot = _robot(BASE)
-    spec = ToolSpec(file=tmp_path / "torch.stl", tcp=tcp, units="mm", mass=3.0)
-    assert np.allclose(robot.tool_transform(st.mount_tcp), flange_tcp(spec, robot), atol=1e-9)
-    assert st.name == "torch" and np.allclose(st.mount_tcp[:3, 3], [1.0, -2.0, 3.0])
+    T = np.eye(4)
+    T[:3, :3] = Rotation.from_euler("xyz", [10.0, -20.0, 30.0], degrees=True).as_matrix()
+    T[:3, 3] = [1.0, -2.0, 3.0]
+    assert np.allclose(st.flange_tcp(robot), robot.mount @ T, atol=1e-9)
+    assert st.name == "torch" and st.spec.tcp == "1,-2,3,10,-20,30"
 
 
 def test_no_spots_is_an_empty_study(cell):

@@ -3,7 +3,6 @@ the viewer's tool copies, one-line errors for bad tool input (issue 16)."""
 
 from __future__ import annotations
 
-import csv
 import dataclasses
 import hashlib
 import json
@@ -14,6 +13,7 @@ from scipy.spatial.transform import Rotation
 
 from tests.cli_helpers import one_line_error, run_cli
 from tests.conftest import require_shared
+from tests.output_check import csv_rows
 from tests.route_fixtures import box_part, box_route
 from weldplan.errors import EXIT_PARTIAL, InputError
 from weldplan.io.export import CSV_FIELDS, POSE_FIELDS, to_csv_text
@@ -69,7 +69,7 @@ def test_no_exit_check_turns_the_exit_test_off():
 
 def test_plan_with_tool_csv_has_orientations_at_the_verified_weld_poses_only(planned):
     tmp, _ = planned
-    rows = list(csv.DictReader((tmp / "r.csv").open()))
+    rows = csv_rows(tmp / "r.csv")
     assert tuple(rows[0]) == CSV_FIELDS + POSE_FIELDS
     d = json.loads((tmp / "r.json").read_text())
     poses = WeldPoses.from_dict(d["tool"]["poses"])

@@ -4,13 +4,13 @@ independent re-check; a blocked transition is a ``blocked`` row, never a motion.
 
 from __future__ import annotations
 
-import csv
 import json
 
 import numpy as np
 import pytest
 
 from tests.cli_helpers import one_line_error, run_cli
+from tests.output_check import csv_rows
 from tests.route_fixtures import box_part
 from weldplan.tool import WeldPose, WeldPoses, arc_torch
 from weldplan.tool.path_csv import FIELDS, tool_path_csv, tool_path_rows
@@ -39,7 +39,7 @@ def planned(tmp_path_factory):
 def _read_path(csv_path):
     """The :class:`ToolPath` a reader of the CSV replays: a transition from each weld row to the
     next, through the rows between them."""
-    rows = list(csv.DictReader(csv_path.open()))
+    rows = csv_rows(csv_path)  # its "#" lines (what produced it, what was verified) skipped
     welds = [k for k, r in enumerate(rows) if r["kind"] == "weld"]
     order = tuple(rows[k]["joint_id"] for k in welds)
     trans = []
@@ -88,7 +88,7 @@ def test_a_tampered_row_fails_the_independent_recheck(planned, tmp_path):
     tmp, _ = planned
     d = json.loads((tmp / "r.json").read_text())
     poses = WeldPoses.from_dict(d["tool"]["poses"])
-    lines = (tmp / "t.csv").read_text().splitlines()
+    lines = [ln for ln in (tmp / "t.csv").read_text().splitlines() if not ln.startswith("#")]
     k = next(i for i, ln in enumerate(lines[1:], 1) if ",weld," not in ln)
     cells = lines[k].split(",")
     cells[5] = "-50.0"  # z: under the box's top, inside the part

@@ -8,7 +8,7 @@ joints is blocked (the FCL capsule at the clearance) is planned by
   (26-connected A* + the secondary optimisation, ``method="exact"``) alone, with the refinement
   on one grid route ("one class"), and with the refinement and the second-class stage
   (:mod:`weldplan.weld.homotopy`), the local stage of ``weldplan plan`` (the default column);
-- OMPL (:mod:`weldplan.motion.local`): BIT* and RRT* for each of ``--budgets`` seconds, then
+- OMPL (:mod:`weldplan.weld.local_ompl`): BIT* and RRT* for each of ``--budgets`` seconds, then
   OMPL's simplifier, with weldplan's own FCL checks as the validity checker (the sphere at the
   clearance + closed-solid test for states, the ``method="fcl"`` capsule for motions);
 
@@ -233,8 +233,8 @@ def planners(
     params={"refine": True})``: A* + SO, the refinement, the second-class stage, all inside one
     timed call); "one class" the same with ``second_class=False``.
     """
-    from weldplan.motion.local import plan_pair_ompl
     from weldplan.weld.local import plan_pair
+    from weldplan.weld.local_ompl import plan_pair_ompl
 
     refine = _refine_hook()
     sweeps = _refine_hook(taut=False)
@@ -305,7 +305,7 @@ _WORKER: dict[str, Any] = {}
 
 def _init_worker(spec: str, size: int, budgets: list[float], ompl: list[str],
                  ours: list[str], limit: int | None) -> None:  # fmt: skip
-    from weldplan.motion.local import TorchChecks
+    from weldplan.weld.local_ompl import TorchChecks
 
     cells = build_cells(spec, size)
     for _, cell in cells:
@@ -476,7 +476,7 @@ def run(args: argparse.Namespace) -> int:
     from concurrent.futures import ProcessPoolExecutor
 
     from weldplan.bench.common import conditions
-    from weldplan.motion.local import TorchChecks
+    from weldplan.weld.local_ompl import TorchChecks
 
     budgets, ompl, ours, limit = _options(args)
     jobs = int(getattr(args, "jobs", 1))

@@ -1,22 +1,38 @@
 """The options of a planning run (``weldplan plan`` and ``weldplan demo``) and the
 :class:`~weldplan.weld.pipeline.PlanConfig` they make.
 
-The groups are added in the order ``--help`` shows them: outputs, the planner and the sequencer,
-the run (seed, workers, scale), then the tool's and the robot's options
-(:mod:`weldplan.commands._tool`, :mod:`weldplan.commands._robot`).
+``--help`` shows one group per stage, in the order the stages run: the outputs, the cell, the
+point-tip route, the run (seed, workers), the tool, the tool stage, the robot, the robot stage.
+A stage's options are its settings object's fields (:mod:`weldplan.commands._settings_args`):
+their defaults and help are the fields', and each option's help names the station file's key.
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+from collections.abc import Iterable
 from typing import Any
+
+from weldplan.commands._settings_args import add_settings_options
+from weldplan.commands._types import positive_gb, positive_mm, seed_type
+from weldplan.station.model import CellSettings, RouteSettings, Station
+
+#: what the commands import from here
+__all__ = [
+    "add_cell_stage_arguments", "add_part_pose_arguments", "add_planning_arguments",
+    "config_from_args", "part_pose_from_args", "positive_gb", "positive_mm", "seed_type",
+]  # fmt: skip
 
 
 def add_planning_arguments(p: argparse.ArgumentParser, *, default_output: str | None) -> None:
-    """Options of the planning run (outputs, planner, sequencer, seed, jobs, quiet)."""
+    """The outputs, the route stage, the run, the tool and the robot (each a help group); the
+    cell stage is :func:`add_cell_stage_arguments`, added first by the command."""
     _add_output_arguments(p, default_output)
-    _add_planner_arguments(p)
+    g = p.add_argument_group(
+        "route stage: the point-tip route's local paths and weld order (station file: [route])"
+    )
+    add_settings_options(g, RouteSettings, "[route]")
     _add_run_arguments(p)
     from weldplan.commands._robot import add_robot_arguments
     from weldplan.commands._tool import add_tool_arguments
@@ -25,124 +41,69 @@ def add_planning_arguments(p: argparse.ArgumentParser, *, default_output: str | 
     add_robot_arguments(p)
 
 
+def add_cell_stage_arguments(p: argparse.ArgumentParser, only: Iterable[str] | None = None) -> None:
+    """The cell stage's options: the station's ``--clearance`` and :class:`CellSettings`' fields
+    (``only``: these fields)."""
+    g = p.add_argument_group(
+        "cell stage: the search grid about the welds and their virtual joints (station file: "
+        "clearance, [cell])"
+    )
+    add_settings_options(g, Station, "", only=["clearance"])
+    add_settings_options(g, CellSettings, "[cell]", only=only)
+
+
 def _add_output_arguments(p: argparse.ArgumentParser, default_output: str | None) -> None:
-    """``-o``, ``--json``, ``--html``, ``--post``, ``--post-file``."""
+    """The files a run writes (station file: ``[output]``)."""
+    g = p.add_argument_group("outputs (station file: [output]; written only when all is verified)")
     if default_output is None:
-        p.add_argument(
-            "-o", "--output", help="route CSV to write (required, but for a station file's own)"
-        )
+        help_o = "route CSV to write (required, but for a station file's own)"
     else:
-        p.add_argument(
-            "-o", "--output", default=default_output, help=f"route CSV (default {default_output})"
-        )
-    p.add_argument("--json", metavar="F", help="also write the whole route as JSON")
-    p.add_argument("--html", metavar="F", help="also write a self-contained 3D page (meshcat)")
-    p.add_argument(
+        help_o = f"route CSV (default {default_output})"
+    g.add_argument("-o", "--output", default=default_output, help=help_o)
+    g.add_argument("--json", metavar="F", help="also write the whole route as JSON")
+    g.add_argument("--html", metavar="F", help="also write a self-contained 3D page (meshcat)")
+    g.add_argument(
         "--post",
         choices=_post_names(),
         help="also write a robot program next to the CSV (rapid: ABB .mod, krl: KUKA .src)",
     )
-    p.add_argument("--post-file", metavar="F", help="where --post writes (default: CSV stem)")
-
-
-def _add_planner_arguments(p: argparse.ArgumentParser) -> None:
-    """The local planner, its refinement and smoothing, the sequencer."""
-    p.add_argument(
-        "--planner",
-        default="exact",
-        choices=("so-aco", "aco", "exact", "ompl"),
-        help="local planner for blocked pairs (default exact: 26-connected A* + the secondary "
-        "optimisation, then the refinement; so-aco: the paper's; ompl: OMPL's BIT*, 1 s a pair, on "
-        "the same FCL checks; needs the ompl extra)",
+    g.add_argument("--post-file", metavar="F", help="where --post writes (default: CSV stem)")
+    g.add_argument(
+        "--tool-csv",
+        metavar="F",
+        help="with --tool: also write the tool's verified path as CSV (the transitions in "
+        "the tool's order, one row per TCP pose with its quaternion: the motion the swept "
+        "check proved free; weldplan.tool.path_csv)",
     )
-    p.add_argument(
-        "--no-refine",
-        action="store_true",
-        help="skip the continuous refinement after the grid planner (with --planner so-aco: the "
-        "paper's pipeline as printed; default: refine, shortcuts anywhere on the path re-checked "
-        "by FCL)",
+    g.add_argument(
+        "--trajectory", metavar="F", help="with --robot: write the timed joint trajectory as CSV"
     )
-    p.add_argument(
-        "--smooth",
-        action="store_true",
-        help="give each leg a smooth path: a C2 curve between its virtual joints, checked at the "
-        "clearance and exported as dense waypoints (CSV/JSON kind 'smooth'; RAPID MoveL, KRL "
-        "SPLINE); a leg whose curve fails keeps its polyline and the summary says so",
-    )
-    p.add_argument(
-        "--smooth-spacing",
-        metavar="MM",
-        type=positive_mm,
-        default=5.0,
-        help="with --smooth: largest spacing of the smooth waypoints, mm (default 5; denser "
-        "where a chord would cut into the clearance)",
-    )
-    _add_sequencer_arguments(p)
-
-
-def _add_sequencer_arguments(p: argparse.ArgumentParser) -> None:
-    """``--sequencer`` and ``--aco``."""
-    p.add_argument(
-        "--sequencer",
-        default="auto",
-        choices=("auto", "fast-tsp", "pso", "exact", "nn"),
-        help="joint order: auto = exact (Held-Karp) up to 13 joints, else nn (nearest neighbour "
-        "+ the seeded 2-opt / Or-opt polish, reproducible); fast-tsp = a stronger engine without "
-        "a seed (not reproducible); pso = the paper's TSP-PSO + polish (default auto)",
-    )
-    p.add_argument(
-        "--aco",
-        metavar="N",
-        type=int,
-        default=10,
-        help="SO-ACO iterations N = ants M (default 10; the paper also runs 50)",
+    g.add_argument(
+        "--robot-html",
+        metavar="F",
+        help="with --robot: write a 3D page of the robot, tool and part animated along the "
+        "timed trajectory",
     )
 
 
 def _add_run_arguments(p: argparse.ArgumentParser) -> None:
-    """Seed, workers (processes, Dask), candidate pairs and memory for large stations,
-    unreachable joints, quiet."""
-    p.add_argument(
+    """Seed, workers (processes, Dask), quiet: how the run goes, not the station's."""
+    g = p.add_argument_group("run: seed, workers, progress (beside a station file too)")
+    g.add_argument(
         "--seed",
         type=seed_type,
         help="random seed, an integer >= 0 (default 0, or the station file's seed)",
     )
-    p.add_argument(
+    g.add_argument(
         "--jobs", type=int, help="processes planning local paths (default 1, or the station's)"
     )
-    p.add_argument(
+    g.add_argument(
         "--dask",
         metavar="ADDR",
         help="plan local paths on Dask: 'local' starts a LocalCluster of --jobs workers (at least "
         "2), 'tcp://HOST:PORT' joins a running scheduler (needs the 'dask' extra)",
     )
-    p.add_argument(
-        "--candidates",
-        metavar="K",
-        type=int,
-        help="check and plan up front only each joint's K nearest pairs, the rest on demand "
-        "(for hundreds of joints; default: every pair checked straight)",
-    )
-    p.add_argument(
-        "--candidate-radius",
-        metavar="MM",
-        type=float,
-        help="with --candidates: neighbours farther than this are planned only on demand",
-    )
-    p.add_argument(
-        "--memory-limit",
-        metavar="GB",
-        type=positive_gb,
-        help="refuse up front a run whose estimated peak memory (grid + pair tables) exceeds "
-        "this (default: 80 %% of the memory available at start)",
-    )
-    p.add_argument(
-        "--skip-unreachable",
-        action="store_true",
-        help="plan the largest group of joints that reach each other and list the others, with "
-        "the reason, in the summary and the route JSON (stats.skipped); exit code 3",
-    )
-    p.add_argument("--quiet", action="store_true", help="no progress bars and no summary on stdout")
+    g.add_argument("--quiet", action="store_true", help="no progress bars and no summary on stdout")
 
 
 def add_part_pose_arguments(p: argparse.ArgumentParser) -> None:
@@ -202,43 +163,6 @@ def part_pose_from_args(args: argparse.Namespace) -> Any:
         except InputError as exc:
             raise InputError(exc.message, field="--up") from None
     return parse_part_pose(pose, fixture_z=fix, floor_z=floor)
-
-
-def positive_mm(text: str) -> float:
-    """argparse type: a positive, finite number of millimetres."""
-    return _positive(text, "mm")
-
-
-def _positive(text: str, unit: str) -> float:
-    """``float(text)`` when it is a positive, finite number, else an argparse error naming
-    ``unit``."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not (0 < value < float("inf")):
-        raise argparse.ArgumentTypeError(f"must be a positive number of {unit}, got {text!r}")
-    return value
-
-
-def seed_type(text: str) -> int:
-    """argparse type: an integer >= 0 (what numpy's ``default_rng`` takes)."""
-    from weldplan.errors import ConfigError
-    from weldplan.weld.validate import seed
-
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    try:
-        return seed(value)
-    except ConfigError as exc:
-        raise argparse.ArgumentTypeError(exc.message) from None
-
-
-def positive_gb(text: str) -> float:
-    """argparse type: a positive, finite number of GB."""
-    return _positive(text, "GB")
 
 
 def _post_names() -> list[str]:

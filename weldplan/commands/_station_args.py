@@ -14,6 +14,7 @@ import dataclasses
 from typing import Any
 
 import weldplan.station.model as m
+from weldplan.commands._settings_args import settings_from_args
 from weldplan.errors import InputError, WeldplanError
 
 #: options that are not the station's: the outputs and how the run goes
@@ -26,9 +27,12 @@ _OUTPUTS = ("json", "html", "post", "post_file", "trajectory", "tool_csv", "robo
 
 
 def record_defaults(p: argparse.ArgumentParser) -> None:
-    """Remember the station options' defaults, to tell which a user gave beside a file."""
+    """Remember the station options' defaults and names, to tell which a user gave beside a
+    file."""
     defaults = {
-        a.dest: a.default for a in p._actions if a.dest not in RUN_OPTIONS and a.dest != "help"
+        a.dest: (a.default, max(a.option_strings, key=len))
+        for a in p._actions
+        if a.dest not in RUN_OPTIONS and a.dest != "help" and a.option_strings
     }
     p.set_defaults(station_defaults=defaults)
 
@@ -46,10 +50,10 @@ def station_from_file(args: argparse.Namespace, path: str) -> m.Station:
     from weldplan.station import load_station
 
     station = load_station(path)
-    for dest, default in getattr(args, "station_defaults", {}).items():
+    for dest, (default, option) in getattr(args, "station_defaults", {}).items():
         if getattr(args, dest, default) != default:
             raise WeldplanError(
-                f"--{dest.replace('_', '-')}: with a station file, set it in {path} "
+                f"{option}: with a station file, set it in {path} "
                 "(the command line gives only the outputs, --seed, --jobs, --dask, --quiet)"
             )
     outputs = outputs_from_args(args, station.outputs)
@@ -68,42 +72,20 @@ def station_from_args(args: argparse.Namespace, part: m.PartSpec) -> m.Station:
         robots=() if robot is None else (robot,),
         clearance=args.clearance,
         floor_z=getattr(args, "floor_z", None),
-        cell=m.CellSettings(
-            pitch=args.pitch,
-            margin=args.margin,
-            approach_cone=getattr(args, "approach_cone", m.CellSettings.approach_cone),
-            max_joint_distance=getattr(args, "max_joint_distance", None),
-            spot_depth=getattr(args, "spot_depth", m.CellSettings.spot_depth),
-        ),  # fmt: skip
+        cell=settings_from_args(m.CellSettings, args),
         route=route_settings(args),
-        tool=tool_settings(args),
+        tool=settings_from_args(m.ToolSettings, args),
         jobs=1 if args.jobs is None else args.jobs,
         outputs=outputs_from_args(args),
     )
 
 
 def route_settings(args: argparse.Namespace) -> m.RouteSettings:
-    if args.aco < 1:
-        raise WeldplanError(f"--aco must be >= 1, got {args.aco}")
-    if args.jobs is not None and args.jobs < 1:
-        raise WeldplanError(f"--jobs must be >= 1, got {args.jobs}")
-    return m.RouteSettings(
-        planner=args.planner, sequencer=args.sequencer, aco=args.aco,
-        refine=not getattr(args, "no_refine", False), smooth=bool(getattr(args, "smooth", False)),
-        smooth_spacing=getattr(args, "smooth_spacing", 5.0),
-        candidates=getattr(args, "candidates", None),
-        candidate_radius=getattr(args, "candidate_radius", None),
-        skip_unreachable=bool(getattr(args, "skip_unreachable", False)),
-        memory_limit=getattr(args, "memory_limit", None),
-    )  # fmt: skip
-
-
-def tool_settings(args: argparse.Namespace) -> m.ToolSettings:
-    return m.ToolSettings(
-        cone=args.tool_cone, contact_radius=args.contact_radius, retract=args.retract,
-        side_exit=args.side_exit, slide=args.slide, rot_weight=args.rot_weight,
-        order=args.tool_order, exit_check=args.exit_check, se3_time=args.se3_time,
-    )  # fmt: skip
+    """The route stage's settings (and ``--jobs`` checked: the run's, not the station's)."""
+    jobs = getattr(args, "jobs", None)
+    if jobs is not None and jobs < 1:
+        raise WeldplanError(f"--jobs must be >= 1, got {jobs}")
+    return settings_from_args(m.RouteSettings, args)
 
 
 def tool_spec(args: argparse.Namespace) -> m.ToolSpec | None:
@@ -168,13 +150,6 @@ def _robot_spec(args: argparse.Namespace) -> m.RobotSpec | None:
         parse_base(args.robot_base)  # the option's own one-line errors
         base = tuple(float(v) for v in args.robot_base.replace(";", ",").split(","))
     return m.RobotSpec(
-        tool=tool, urdf=args.robot, opw=args.opw, base=base, settings=robot_settings(args)
-    )
-
-
-def robot_settings(args: argparse.Namespace) -> m.RobotSettings:
-    return m.RobotSettings(
-        weld_time=args.weld_time, acc_scale=args.acc_scale, vel_scale=args.vel_scale,
-        tcp_speed=args.tcp_speed, moves=args.moves, cost=args.cost,
-        roadmap=bool(getattr(args, "roadmap", False)),
+        tool=tool, urdf=args.robot, opw=args.opw, base=base,
+        settings=settings_from_args(m.RobotSettings, args),
     )  # fmt: skip

@@ -15,9 +15,11 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from weldplan.commands._planning_args import positive_mm
+from weldplan.commands._settings_args import add_settings_options, settings_from_args
+from weldplan.commands._types import finite_mm
 from weldplan.commands.plan import add_cell_arguments
 from weldplan.errors import EXIT_OK, EXIT_PARTIAL, InputError
+from weldplan.study.feasibility import StudySettings
 
 HELP = "weld feasibility study: which spots each gun closes on and each robot reaches"
 
@@ -34,36 +36,6 @@ EPILOG = """exit codes:
   130  interrupted (Ctrl-C)"""
 
 
-def _nonneg_mm(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not 0.0 <= value < float("inf"):
-        raise argparse.ArgumentTypeError(f"must be a finite number of mm >= 0, got {text!r}")
-    return value
-
-
-def _cone(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not 0.0 < value <= 90.0:
-        raise argparse.ArgumentTypeError(f"must lie in (0, 90] degrees, got {text!r}")
-    return value
-
-
-def _finite_mm(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not abs(value) < float("inf"):
-        raise argparse.ArgumentTypeError(f"must be a finite number of mm, got {text!r}")
-    return value
-
-
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.epilog = EPILOG
     p.add_argument("mesh", help="part mesh (STL, OBJ, PLY, OFF, GLB/GLTF)")
@@ -72,6 +44,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("-o", "--output", required=True, help="the table to write (CSV)")
     p.add_argument("--json", metavar="F", help="also write the whole study as JSON")
     p.add_argument("--html", metavar="F", help="also write a 3D page coloured by verdict")
+    _add_tool_arguments(p)
+    _add_robot_arguments(p)
+    p.add_argument("--quiet", action="store_true", help="no summary on stdout")
+
+
+def _add_tool_arguments(p: argparse.ArgumentParser) -> None:
+    """The guns (``--tool`` with its ``--tcp``, repeatable) and how each is judged at a spot."""
     g = p.add_argument_group("tools (each --tool may be repeated, with its own --tcp)")
     g.add_argument(
         "--tool",
@@ -87,33 +66,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="per --tool, in order: the URDF's TCP joint or link, or a mesh's TCP",
     )
     g.add_argument("--tool-units", choices=("m", "mm"), help="unit of mesh tools (default mm)")
-    g.add_argument(
-        "--tool-cone",
-        metavar="DEG",
-        type=_cone,
-        default=15.0,
-        help="largest tilt of the gun off the spot's approach axis (default 15)",
-    )
-    g.add_argument(
-        "--contact-radius",
-        metavar="MM",
-        type=_nonneg_mm,
-        default=20.0,
-        help="the gun may touch the part inside this sphere about the spot (20)",
-    )
-    g.add_argument(
-        "--clearance",
-        metavar="MM",
-        type=_nonneg_mm,
-        default=5.0,
-        help="least distance of the gun outside that sphere to the part (5)",
-    )
-    g.add_argument(
-        "--max-spot-distance",
-        metavar="MM",
-        type=positive_mm,
-        default=5.0,
-        help="a spot farther from the part's surface is 'no surface' (5)",
+    add_settings_options(
+        g, StudySettings, None, only=("cone", "contact_radius", "clearance", "max_spot_distance")
     )
     g.add_argument(
         "--walls",
@@ -121,6 +75,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="the stack column: a single body thin enough for the gun to straddle near a free "
         "edge counts as a wall (slab models such as car2); default: a spot joins two sheets",
     )
+
+
+def _add_robot_arguments(p: argparse.ArgumentParser) -> None:
+    """The robots (``--robot`` with its ``--opw`` and ``--robot-base``, repeatable), the floor."""
     r = p.add_argument_group("robots (each --robot may be repeated, with its own --robot-base)")
     r.add_argument(
         "--robot",
@@ -144,11 +102,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     r.add_argument(
         "--floor-z",
         metavar="MM",
-        type=_finite_mm,
+        type=finite_mm,
         help="the floor height in the part frame: searched bases stand on it, no "
         "link may reach below it (default: the part's lowest point, not checked)",
     )
-    p.add_argument("--quiet", action="store_true", help="no summary on stdout")
 
 
 def _paired(values: list[str] | None, n: int, what: str, of: str) -> list[str | None]:
@@ -206,7 +163,7 @@ def run(args: argparse.Namespace) -> int:
     from weldplan.io.joints import read_joints
     from weldplan.io.mesh import load_part
     from weldplan.io.outputset import check_outputs, write_outputs
-    from weldplan.study.feasibility import StudySettings, check_spots
+    from weldplan.study.feasibility import check_spots
     from weldplan.study.table import study_csv_text
 
     outputs = {"csv": Path(args.output)}
@@ -214,13 +171,7 @@ def run(args: argparse.Namespace) -> int:
         if getattr(args, kind):
             outputs[kind] = Path(getattr(args, kind))
     check_outputs(outputs)
-    settings = StudySettings(
-        cone=args.tool_cone,
-        contact_radius=args.contact_radius,
-        clearance=args.clearance,
-        max_spot_distance=args.max_spot_distance,
-        floor_z=args.floor_z,
-    )
+    settings = settings_from_args(StudySettings, args, floor_z=args.floor_z)
     spots = read_joints(args.spots, units=args.units)
     tools, robots = _tools(args), _robots(args)
     part = load_part(args.mesh, units=args.units, scale=args.scale, length=args.length)

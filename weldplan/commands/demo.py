@@ -4,26 +4,18 @@ from __future__ import annotations
 
 import argparse
 
-from weldplan.commands._planning import (  # positive_mm: also imported from here by plan, verify
-    add_planning_arguments,
-    positive_mm,
-    run_planning,
-)
+from weldplan.commands._planning import add_planning_arguments, run_planning
+from weldplan.commands._planning_args import add_cell_stage_arguments
+from weldplan.commands._types import positive_mm
+
+#: what verify imports from here
+__all__ = ["add_arguments", "positive_mm", "run"]
 
 HELP = "plan, verify and export the embedded demo cell (15 joints of Wang et al. 2017)"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--pitch", type=positive_mm, default=5.0, help="voxel side in mm (default 5)")
-    p.add_argument(
-        "--clearance", type=positive_mm, default=5.0, help="torch-tip clearance in mm (default 5)"
-    )
-    p.add_argument(
-        "--margin",
-        type=positive_mm,
-        default=150.0,
-        help="margin around the joints in mm (default 150)",
-    )
+    add_cell_stage_arguments(p, only=("pitch", "margin"))
     add_planning_arguments(p, default_output="route.csv")
     p.set_defaults(html="route.html")
     p.add_argument(

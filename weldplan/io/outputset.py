@@ -24,7 +24,7 @@ import os
 import shutil
 import stat
 import tempfile
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 from weldplan.errors import InputError, RunError
@@ -44,6 +44,15 @@ _PATH_ERRNOS = {
     errno.ENAMETOOLONG,
     errno.EROFS,
 }
+
+
+def comment_lines(lines: Sequence[str], mark: str, indent: str = "") -> str:
+    """``lines`` as comment lines of an output file, each ended by a newline.
+
+    ``mark``: ``"#"`` (CSV), ``"!"`` (RAPID), ``";"`` (KRL); ``indent`` goes before it. Every
+    reader of weldplan's files skips such lines (:func:`weldplan.io.posts.parse.parse_rapid`,
+    :func:`~weldplan.io.posts.parse.parse_krl`; a CSV's ``#`` lines)."""
+    return "".join(f"{indent}{mark} {line}\n" for line in lines)
 
 
 def _folder(path: Path) -> Path:

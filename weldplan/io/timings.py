@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import re
+from collections.abc import Mapping
 from os import PathLike
 from pathlib import Path
 from typing import Any
@@ -61,10 +62,13 @@ def timings_path(json_path: str | PathLike[str]) -> Path:
     return p.with_name(p.stem + ".timings.json")
 
 
-def route_json_texts(route: Route) -> tuple[str, str]:
+def route_json_texts(route: Route, producer: Mapping[str, Any] | None = None) -> tuple[str, str]:
     """``(route JSON, timings JSON)``: the route without its measured times (the same bytes
     for the same inputs and seed), and those times (module docstring). :func:`read_route`
-    reads the first alone."""
+    reads the first alone. ``producer``: the route JSON's ``"producer"`` entry (what produced
+    it and what was verified, :func:`weldplan.station.outputs.producer`)."""
     d, t = split_timings(json.loads(route.to_json()))
+    if producer is not None:
+        d = {"producer": dict(producer), **d}
     text = json.dumps(d, indent=1, allow_nan=False) + "\n"
     return text, json.dumps(t or {}, indent=1, allow_nan=False) + "\n"

@@ -23,12 +23,14 @@ from __future__ import annotations
 import csv
 import io
 import logging
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from weldplan.errors import PlanningError
+from weldplan.io.outputset import comment_lines
 
 log = logging.getLogger(__name__)
 
@@ -37,8 +39,11 @@ T_DECIMALS = 4
 Q_DECIMALS = 8
 
 
-def trajectory_csv_text(timing: Any, row: ArrayLike | None = None) -> str:
-    """The CSV text of a :class:`~weldplan.robot.timing.TimedTrajectory` (module docstring).
+def trajectory_csv_text(
+    timing: Any, row: ArrayLike | None = None, header: Sequence[str] = ()
+) -> str:
+    """The CSV text of a :class:`~weldplan.robot.timing.TimedTrajectory` (module docstring);
+    ``header``: lines written first as ``#`` comments (what produced it, what was verified).
 
     ``row`` ``(k,) int`` maps the timing's joint rows to route rows (the program's
     :attr:`~weldplan.robot.program.ProgramBuild.row`: the joint route without the rows the
@@ -55,6 +60,7 @@ def trajectory_csv_text(timing: Any, row: ArrayLike | None = None) -> str:
                 "times would not strictly increase; nothing written"
             )
     buf = io.StringIO()
+    buf.write(comment_lines(header, "#"))
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(["t", "step", *timing.joint_names])
     for t, s, q in zip(times, step, timing.q, strict=True):

@@ -28,9 +28,14 @@ from pathlib import Path
 from typing import Any
 
 from weldplan.errors import ConfigError
+from weldplan.weld.validate import PLANNERS, SEQUENCERS
 
 #: the built-in tools a station may name instead of a file (:func:`weldplan.tool.arc_torch`)
 BUILTIN_TOOLS = ("arc_torch",)
+#: the tool stage's weld orders, the robot program's moves, what the robot's sequencer minimises
+TOOL_ORDERS = ("tool", "route")
+ROBOT_MOVES = ("linear", "joint")
+ROBOT_COSTS = ("length", "time")
 #: keyword parameters of the built-in arc torch (mm, degrees; :func:`weldplan.tool.arc_torch`)
 ARC_TORCH_PARAMS = (
     "neck_length",
@@ -67,6 +72,30 @@ def _flag(name: str, v: Any) -> bool:
     if not isinstance(v, bool):
         raise ConfigError(f"{name} must be true or false, got {v!r}", field=name)
     return v
+
+
+def setting(
+    default: Any, option: str, help: str, *, metavar: str | None = None,
+    choices: tuple[str, ...] | None = None,
+) -> Any:  # fmt: skip
+    """A settings field with its command-line option: the field's default and ``help`` are the
+    option's (:mod:`weldplan.commands._settings_args` builds the option groups of ``weldplan
+    plan`` from this metadata), so an option and its station-file key cannot drift.
+
+    Parameters
+    ----------
+    default
+        The field's default (the option's).
+    option
+        The long option, e.g. ``"--tool-cone"``; a bool field's option is a flag that sets it
+        (``"--smooth"``) or, named ``"--no-..."``, clears it (``"--no-slide"``).
+    help
+        What the setting does, with its unit; the default and the station-file key are added.
+    metavar, choices
+        The option's value placeholder and its allowed words.
+    """
+    meta = {"option": option, "help": help, "metavar": metavar, "choices": choices}
+    return field(default=default, metadata=meta)
 
 
 def _normalise(obj: Any, name: str, value: Any) -> None:
@@ -137,11 +166,28 @@ class CellSettings:
         (:func:`weldplan.weld.verify.approach_pieces`). 0: spots on the surface.
     """
 
-    pitch: float = 5.0
-    margin: float = 150.0
-    approach_cone: float = 45.0
-    max_joint_distance: float | None = None
-    spot_depth: float = 0.0
+    pitch: float = setting(5.0, "--pitch", "voxel side of the search grid, mm", metavar="MM")
+    margin: float = setting(
+        150.0, "--margin", "margin of the search grid about the welds, mm", metavar="MM"
+    )
+    approach_cone: float = setting(
+        45.0, "--approach-cone", "the cell stage's cone, degrees in (0, 90]: each virtual joint "
+        "(the point-tip route's start at a weld) lies within this angle of its weld's approach "
+        "direction (90 = anywhere on the torch side); not the tool's --tool-cone",
+        metavar="DEG",
+    )  # fmt: skip
+    max_joint_distance: float | None = setting(
+        None, "--max-joint-distance", "largest distance from a weld to the part's surface, mm; "
+        "a weld farther is an error (default: the larger of 20 and 4 x (clearance + pitch), 40 "
+        "at the defaults)",
+        metavar="MM",
+    )  # fmt: skip
+    spot_depth: float = setting(
+        0.0, "--spot-depth", "mm below the surface, along the approach, that the weld spots lie "
+        "(a spot on the faying surface of a sheet stack: the near sheet's gauge plus the gap); "
+        "the route's approach cone starts that far out (0: spots on the surface)",
+        metavar="MM",
+    )  # fmt: skip
 
     def __post_init__(self) -> None:
         _number("pitch", self.pitch, 0.0, lo_open=True)
@@ -157,16 +203,56 @@ class RouteSettings:
     :class:`~weldplan.weld.pipeline.PlanConfig` a user sets; ``aco``: SO-ACO iterations N = ants
     M)."""
 
-    planner: str = "exact"
-    sequencer: str = "auto"
-    aco: int = 10
-    refine: bool = True
-    smooth: bool = False
-    smooth_spacing: float = 5.0
-    candidates: int | None = None
-    candidate_radius: float | None = None
-    skip_unreachable: bool = False
-    memory_limit: float | None = None
+    planner: str = setting(
+        "exact", "--planner", "local planner for blocked pairs: exact = 26-connected A* + the "
+        "secondary optimisation, then the refinement; so-aco = the paper's; ompl = OMPL's BIT*, "
+        "1 s a pair, on the same FCL checks (needs the ompl extra)",
+        choices=PLANNERS,
+    )  # fmt: skip
+    sequencer: str = setting(
+        "auto", "--sequencer", "weld order: auto = exact (Held-Karp) up to 13 welds, else nn "
+        "(nearest neighbour + the seeded 2-opt / Or-opt polish, reproducible); fast-tsp = a "
+        "stronger engine without a seed (not reproducible); pso = the paper's TSP-PSO + polish",
+        choices=SEQUENCERS,
+    )  # fmt: skip
+    aco: int = setting(10, "--aco", "SO-ACO iterations N = ants M (the paper also runs 50)",
+                       metavar="N")  # fmt: skip
+    refine: bool = setting(
+        True, "--no-refine", "skip the continuous refinement after the grid planner (with "
+        "--planner so-aco: the paper's pipeline as printed; default: refine, shortcuts anywhere "
+        "on the path re-checked by FCL)",
+    )  # fmt: skip
+    smooth: bool = setting(
+        False, "--smooth", "give each leg a smooth path: a C2 curve between its virtual joints, "
+        "checked at the clearance and exported as dense waypoints (CSV/JSON kind 'smooth'; "
+        "RAPID MoveL, KRL SPLINE); a leg whose curve fails keeps its polyline and the summary "
+        "says so",
+    )  # fmt: skip
+    smooth_spacing: float = setting(
+        5.0, "--smooth-spacing", "with --smooth: largest spacing of the smooth waypoints, mm "
+        "(denser where a chord would cut into the clearance)",
+        metavar="MM",
+    )  # fmt: skip
+    candidates: int | None = setting(
+        None, "--candidates", "check and plan up front only each weld's K nearest pairs, the "
+        "rest on demand (for hundreds of welds; default: every pair checked straight)",
+        metavar="K",
+    )  # fmt: skip
+    candidate_radius: float | None = setting(
+        None, "--candidate-radius", "with --candidates: neighbours farther than this (mm) are "
+        "planned only on demand",
+        metavar="MM",
+    )  # fmt: skip
+    skip_unreachable: bool = setting(
+        False, "--skip-unreachable", "plan the largest group of welds that reach each other "
+        "and list the others, with the reason, in the summary and the route JSON "
+        "(stats.skipped); exit code 3",
+    )  # fmt: skip
+    memory_limit: float | None = setting(
+        None, "--memory-limit", "refuse up front a run whose estimated peak memory (grid + "
+        "pair tables), GB, exceeds this (default: 80 % of the memory available at start)",
+        metavar="GB",
+    )  # fmt: skip
 
     def __post_init__(self) -> None:
         if not (isinstance(self.aco, int) and not isinstance(self.aco, bool) and self.aco >= 1):
@@ -218,15 +304,53 @@ class ToolSettings:
         CPU seconds OMPL may spend re-planning one blocked transition in SE(3) (0: none).
     """
 
-    cone: float = 15.0
-    contact_radius: float = 20.0
-    retract: float = 50.0
-    side_exit: float = 250.0
-    slide: bool = True
-    rot_weight: float = 200.0
-    order: str = "tool"
-    exit_check: bool = True
-    se3_time: float = 10.0
+    cone: float = setting(
+        15.0, "--tool-cone", "the tool stage's cone, degrees in [0, 90]: largest tilt of the "
+        "tool's axis off a weld's approach axis (not the cell's --approach-cone nor the tool's "
+        "own contact --tip-cone)",
+        metavar="DEG",
+    )  # fmt: skip
+    contact_radius: float = setting(
+        20.0, "--contact-radius", "the tool may touch the part only inside this sphere about "
+        "the weld spot, mm (the electrode tip's)",
+        metavar="MM",
+    )  # fmt: skip
+    retract: float = setting(
+        50.0, "--retract", "leave and approach each weld along the tool axis over this many mm "
+        "(every motion of the swept tool is checked)",
+        metavar="MM",
+    )  # fmt: skip
+    side_exit: float = setting(
+        250.0, "--side-exit", "where the axial retract is blocked, try leaving sideways by this "
+        "many mm first (a C-gun round a flange; 0: never)",
+        metavar="MM",
+    )  # fmt: skip
+    slide: bool = setting(
+        True, "--no-slide", "never slide between welds (lift 4-20 mm off the sheet, slide, "
+        "lower: a C-gun stays straddled over the flange; tried after the axial retract by "
+        "default)",
+    )  # fmt: skip
+    rot_weight: float = setting(
+        200.0, "--rot-weight", "the weld order minimises TCP length + this x orientation "
+        "change, mm per rad",
+        metavar="MM/RAD",
+    )  # fmt: skip
+    order: str = setting(
+        "tool", "--tool-order", "order the welds on the tool's costs (tool) or keep the "
+        "point-tip route's order (route)",
+        choices=TOOL_ORDERS,
+    )  # fmt: skip
+    exit_check: bool = setting(
+        True, "--no-exit-check", "choose each weld's pose without asking whether the tool can "
+        "leave it (a lift off the sheet, the axial retract or a side exit; on by default, "
+        "docs/tool.md)",
+    )  # fmt: skip
+    se3_time: float = setting(
+        10.0, "--se3-time", "the CPU-seconds safety net of re-planning one blocked transition "
+        "in SE(3), whose budget is a number of checks; a re-plan stopped at 3x this makes the "
+        "run not reproducible (0: report blocked transitions without re-planning)",
+        metavar="S",
+    )  # fmt: skip
 
     def __post_init__(self) -> None:
         _number("cone", self.cone, 0.0, 90.0)
@@ -234,7 +358,7 @@ class ToolSettings:
             _number(k, getattr(self, k), 0.0)
         _flag("slide", self.slide)
         _flag("exit_check", self.exit_check)
-        _choice("order", self.order, ("tool", "route"))
+        _choice("order", self.order, TOOL_ORDERS)
 
     def transition_kw(self, seed: int | None) -> dict[str, Any]:
         """The transition planner's keywords (one place for the exit test's planner and the
@@ -273,13 +397,36 @@ class RobotSettings:
         found the same base at twice the CPU time).
     """
 
-    weld_time: float = DEFAULT_WELD_TIME
-    acc_scale: float = 1.0
-    vel_scale: float = 1.0
-    tcp_speed: float = 1000.0
-    moves: str = "linear"
-    cost: str = "length"
-    roadmap: bool = False
+    weld_time: float = setting(
+        DEFAULT_WELD_TIME, "--weld-time", "seconds per spot in the cycle time", metavar="S"
+    )
+    acc_scale: float = setting(
+        1.0, "--acc-scale", "scale of the robot's joint accelerations (1: each joint reaches "
+        "its URDF velocity in 0.5 s)",
+        metavar="F",
+    )  # fmt: skip
+    vel_scale: float = setting(
+        1.0, "--vel-scale", "scale of the URDF joint velocity limits", metavar="F"
+    )
+    tcp_speed: float = setting(
+        1000.0, "--tcp-speed", "constant TCP speed the cycle time is compared with, mm/s",
+        metavar="MM/S",
+    )  # fmt: skip
+    moves: str = setting(
+        "linear", "--moves", "program moves between route rows: linear (blended where "
+        "verified) or joint (exact stops, the checked joint path itself)",
+        choices=ROBOT_MOVES,
+    )  # fmt: skip
+    cost: str = setting(
+        "length", "--cost", "what the sequencer minimises: route length or the robot's cycle "
+        "time (rest-to-rest bounds between the welds' IK configurations; needs --robot)",
+        choices=ROBOT_COSTS,
+    )  # fmt: skip
+    roadmap: bool = setting(
+        False, "--roadmap", "judge a searched base by the welds one joint-space roadmap (OMPL "
+        "PRM) joins, and ask it before OMPL for a blocked leg (off by default: slower, same "
+        "answers measured)",
+    )  # fmt: skip
 
     def __post_init__(self) -> None:
         _flag("roadmap", self.roadmap)
@@ -287,8 +434,8 @@ class RobotSettings:
         _number("acc_scale", self.acc_scale, 0.0, 1.0, lo_open=True)
         _number("vel_scale", self.vel_scale, 0.0, 1.0, lo_open=True)
         _number("tcp_speed", self.tcp_speed, 0.0, 1e5, lo_open=True)
-        _choice("moves", self.moves, ("linear", "joint"))
-        _choice("cost", self.cost, ("length", "time"))
+        _choice("moves", self.moves, ROBOT_MOVES)
+        _choice("cost", self.cost, ROBOT_COSTS)
 
 
 @dataclass(frozen=True)
@@ -469,7 +616,11 @@ class Station:
 
     part: PartSpec = field(default_factory=PartSpec)
     robots: tuple[RobotSpec, ...] = ()
-    clearance: float = 5.0
+    clearance: float = setting(
+        5.0, "--clearance", "the torch tip's radius: the point-tip route's clearance from the "
+        "part, mm",
+        metavar="MM",
+    )  # fmt: skip
     part_pose: Any = None
     floor_z: float | None = None
     cell: CellSettings = field(default_factory=CellSettings)

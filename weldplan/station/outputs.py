@@ -65,27 +65,67 @@ def output_paths(out: OutputSpec, *, robot: bool, tool: bool) -> dict[str, Path]
     return paths
 
 
+def producer(plan: Any) -> dict[str, Any]:
+    """What produced ``plan``'s files and which independent re-checks it passed (issue 28:
+    each file says so): weldplan's version, the station's name, one line per check. No
+    command line and no time: the same station gives the same files, by file, options or
+    library. A plan exists only once its checks passed (:func:`weldplan.station.plan` raises
+    otherwise), so each named check passed."""
+    import weldplan
+
+    v = plan.verification
+    checks = [
+        f"route: {v.segments_checked} segments free at {v.clearance:g} mm clearance "
+        "(FCL capsules, weldplan.weld.verify)"
+    ]
+    if plan.poses is not None:
+        checks.append(
+            f"tool poses: {plan.poses.check.checked} weld poses free outside the contact zone "
+            "(FCL, weldplan.tool.verify_poses)"
+        )
+    if plan.transitions is not None:
+        checks.append(
+            f"tool transitions: {plan.transitions.sweeps.checked} swept-tool motions free "
+            "(FCL, weldplan.tool.verify_sweeps)"
+        )
+    if plan.robot is not None:
+        checks.append(
+            "robot: FK of the URDF chain puts the TCP on every exact route row; links and "
+            "tool clear of the part along the joint path (FCL, weldplan.robot.plan)"
+        )
+    name = plan.station.name or "weldplan_route"
+    return {"weldplan": weldplan.__version__, "station": name, "verified": checks}
+
+
+def header_lines(prod: dict[str, Any]) -> list[str]:
+    """The comment lines a file starts with, from :func:`producer`."""
+    head = f"produced by weldplan {prod['weldplan']} for station '{prod['station']}'"
+    return [head, *(f"verified: {c}" for c in prod["verified"])]
+
+
 def render_outputs(plan: Any, kinds: set[str], post: str | None) -> dict[str, str]:
-    """The text of each output kind of ``plan`` (``post``: ``"rapid"`` or ``"krl"``)."""
+    """The text of each output kind of ``plan`` (``post``: ``"rapid"`` or ``"krl"``); each file
+    says what produced it and what was verified (:func:`producer`)."""
     from weldplan.io.export import render_post, to_csv_text
     from weldplan.viz.viewer import static_html
 
-    route = plan.route
-    texts = {"csv": to_csv_text(route)}
+    route, prod = plan.route, producer(plan)
+    head = header_lines(prod)
+    texts = {"csv": to_csv_text(route, head)}
     if "json" in kinds:
         from weldplan.io.timings import route_json_texts
 
-        texts["json"], texts["timings"] = route_json_texts(route)
+        texts["json"], texts["timings"] = route_json_texts(route, prod)
     if "html" in kinds:
         texts["html"] = static_html(route, plan.cell.part, tool=plan.tool and plan.tool.tool)
     if "tool_csv" in kinds:
         from weldplan.tool.path_csv import route_tool_csv
 
-        texts["tool_csv"] = route_tool_csv(route)
+        texts["tool_csv"] = route_tool_csv(route, head)
     if plan.robot is not None:
-        texts.update(_robot_texts(plan, kinds, post))
+        texts.update(_robot_texts(plan, kinds, post, head))
     elif "post" in kinds:
-        texts["post"] = render_post(route, post, plan.cell)
+        texts["post"] = render_post(route, post, plan.cell, header=head)
     return texts
 
 
@@ -98,24 +138,28 @@ def write_plan(plan: Any, paths: dict[str, Path]) -> None:
     write_outputs({path: texts[kind] for kind, path in paths.items()})
 
 
-def _robot_texts(plan: Any, kinds: set[str], post: str | None) -> dict[str, str]:
-    """The robot's program (checked by :func:`check_program`), trajectory and 3D page."""
+def _robot_texts(plan: Any, kinds: set[str], post: str | None, head: list[str]) -> dict[str, str]:
+    """The robot's program (checked by :func:`check_program`), trajectory and 3D page
+    (``head``: their comment lines, :func:`header_lines`)."""
     from weldplan.io.trajectory import trajectory_csv_text
 
     build, joint = plan.program, plan.robot
     texts: dict[str, str] = {}
     if "post" in kinds:
+        # written only when the round trip below closes
+        prog = [*head, f"verified: program: every target re-solved by FK of its joint values "
+                f"within {CHECK_MM:g} mm, {CHECK_DEG:g} deg (parsed back)"]  # fmt: skip
         if post == "rapid":
             from weldplan.io.posts.rapid import render_rapid
 
-            texts["post"] = render_rapid(build.program)
+            texts["post"] = render_rapid(build.program, header=prog)
         else:
             from weldplan.io.posts.krl import render_krl
 
-            texts["post"], texts["post_dat"] = render_krl(build.program)
+            texts["post"], texts["post_dat"] = render_krl(build.program, header=prog)
         check_program(str(post), texts, build.program, joint.robot)
     if "trajectory" in kinds:
-        texts["trajectory"] = trajectory_csv_text(build.timing, build.row)
+        texts["trajectory"] = trajectory_csv_text(build.timing, build.row, head)
     if "robot_html" in kinds:
         from weldplan.viz.robot_scene import robot_html
 

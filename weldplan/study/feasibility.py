@@ -44,6 +44,7 @@ from numpy.typing import NDArray
 from weldplan.errors import ConfigError, PlanningError
 from weldplan.io.joints import Joints
 from weldplan.robot.model import Robot
+from weldplan.station.model import ToolSpec, setting
 from weldplan.study.result import (
     NO_GUN_POSE,
     NO_SURFACE,
@@ -119,13 +120,29 @@ class StudySettings:
         Searched bases judged by the study itself (module docstring).
     """
 
-    cone: float = DEFAULT_CONE
+    cone: float = setting(
+        DEFAULT_CONE, "--tool-cone", "largest tilt of the gun off the spot's approach axis, "
+        "degrees in (0, 90]",
+        metavar="DEG",
+    )  # fmt: skip
     tilt_step: float = DEFAULT_TILT_STEP
     spin_step: float = DEFAULT_SPIN_STEP
     azimuths: int = DEFAULT_AZIMUTHS
-    contact_radius: float = DEFAULT_CONTACT_RADIUS
-    clearance: float = DEFAULT_CLEARANCE
-    max_spot_distance: float = DEFAULT_MAX_SPOT_DISTANCE
+    contact_radius: float = setting(
+        DEFAULT_CONTACT_RADIUS, "--contact-radius", "the gun may touch the part inside this "
+        "sphere about the spot, mm",
+        metavar="MM",
+    )  # fmt: skip
+    clearance: float = setting(
+        DEFAULT_CLEARANCE, "--clearance", "least distance of the gun outside that sphere to the "
+        "part, mm",
+        metavar="MM",
+    )  # fmt: skip
+    max_spot_distance: float = setting(
+        DEFAULT_MAX_SPOT_DISTANCE, "--max-spot-distance", "a spot farther from the part's "
+        "surface (mm) is 'no surface'",
+        metavar="MM",
+    )  # fmt: skip
     floor_z: float | None = None
     singular_deg: float = 5.0
     robot_poses: int = 64
@@ -162,14 +179,21 @@ class StudyTool:
         Its name in the tables.
     tool
         The tool (mm, TCP frame).
-    mount_tcp
-        ``(4, 4)`` mm: the TCP in the tool's mounting frame (a URDF's root link, a mesh's own
-        frame), what the robot's flange carries (:meth:`weldplan.robot.model.Robot.tool_transform`).
+    spec
+        The tool as a station names it (:class:`~weldplan.station.model.ToolSpec`): how a robot's
+        flange carries it, as in the robot stage (:meth:`flange_tcp`).
     """
 
     name: str
     tool: Tool
-    mount_tcp: NDArray[np.float64]
+    spec: ToolSpec
+
+    def flange_tcp(self, robot: Robot) -> NDArray[np.float64]:
+        """``(4, 4)`` mm: the TCP in ``robot``'s flange frame
+        (:func:`weldplan.station.mount.flange_tcp`, the robot stage's mounting)."""
+        from weldplan.station.mount import flange_tcp
+
+        return flange_tcp(self.spec, robot)
 
 
 def load_study_tool(
@@ -180,33 +204,19 @@ def load_study_tool(
     mesh: str | None = None,
     name: str | None = None,
 ) -> StudyTool:
-    """A :class:`StudyTool` from a file, as ``weldplan plan --tool`` reads it
-    (:func:`weldplan.tool.load.load_tool`): a URDF (``tcp`` its TCP joint or link, default the
-    last fixed joint; the root link is the mounting frame) or a mesh (``tcp`` ``"x,y,z,rx,ry,rz"``
-    in ``units`` and degrees; the mesh frame is the mounting frame). ``name``: default the
-    file's stem."""
+    """A :class:`StudyTool` from a file, read and mounted as ``weldplan plan --tool`` reads and
+    mounts it (:func:`weldplan.station.mount.load_tool_spec`): a URDF (``tcp`` its TCP joint or
+    link, default the last fixed joint; the root link is the mounting frame) or a mesh (``tcp``
+    ``"x,y,z,rx,ry,rz"`` in ``units`` and degrees; the mesh frame is the mounting frame).
+    ``name``: default the file's stem."""
     from pathlib import Path
 
-    from weldplan.tool.load import load_tool, parse_tcp
+    from weldplan.station.mount import load_tool_spec
 
-    tool, _ = load_tool(path, tcp=tcp, units=units, mesh=mesh)
-    if Path(path).suffix.lower() == ".urdf":
-        from weldplan.robot.urdf import chain_transform, parse_urdf
-
-        if tcp is None:
-            fixed = [j for j in parse_urdf(path)[2] if j.kind == "fixed"]
-            tcp = fixed[-1].name  # load_tool has refused a URDF without one
-        mount = chain_transform(path, tcp)
-    else:
-        from scipy.spatial.transform import Rotation
-
-        from weldplan.tool.model import UNITS
-
-        vals = parse_tcp(str(tcp))
-        mount = np.eye(4)
-        mount[:3, :3] = Rotation.from_euler("xyz", np.radians(vals[3:])).as_matrix()
-        mount[:3, 3] = np.asarray(vals[:3]) * UNITS[units or "mm"]
-    return StudyTool(name or Path(path).stem, tool, mount)
+    mesh_path = None if mesh is None else Path(mesh)
+    spec = ToolSpec(file=Path(path), tcp=tcp, units=units, mesh=mesh_path)
+    tool, _ = load_tool_spec(spec)
+    return StudyTool(name or Path(path).stem, tool, spec)
 
 
 @dataclass(frozen=True, eq=False)
@@ -473,7 +483,7 @@ class _Kit:
         from weldplan.robot.collision import RobotCollision
         from weldplan.tool.verify_poses import PoseChecker
 
-        F = robot.tool_transform(st.mount_tcp)
+        F = st.flange_tcp(robot)
         checker = RobotCollision(
             robot, part, st.tool, F, contact_radius=s.contact_radius, floor_z=s.floor_z
         )

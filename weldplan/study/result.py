@@ -13,7 +13,7 @@ degrees. :meth:`FeasibilityStudy.reach_matrix` is the input a multi-robot alloca
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 import numpy as np
@@ -38,8 +38,33 @@ NOT_ANALYSED = "not analysed"
 FRAME = "part"
 
 
+def _plain(obj: Any) -> dict[str, Any]:
+    """The fields of the dataclass ``obj`` as JSON values, in field order: tuples as lists, a
+    nested result by its ``to_dict``."""
+    out = {}
+    for f in fields(obj):
+        v = getattr(obj, f.name)
+        out[f.name] = (
+            list(v) if isinstance(v, tuple) else v.to_dict() if hasattr(v, "to_dict") else v
+        )
+    return out
+
+
+class _Verdict:
+    """What a gun's and a robot's verdicts share: ``ok`` and their JSON fields."""
+
+    status: str
+
+    @property
+    def ok(self) -> bool:
+        return self.status == OK
+
+    def to_dict(self) -> dict[str, Any]:
+        return _plain(self)
+
+
 @dataclass(frozen=True)
-class GunVerdict:
+class GunVerdict(_Verdict):
     """Whether one tool closes on one spot.
 
     Attributes
@@ -72,22 +97,6 @@ class GunVerdict:
     miss: Miss | None = None
     reason: str = ""
 
-    @property
-    def ok(self) -> bool:
-        return self.status == OK
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "tool": self.tool,
-            "status": self.status,
-            "n_free": self.n_free,
-            "n_candidates": self.n_candidates,
-            "quaternion": None if self.quaternion is None else list(self.quaternion),
-            "flipped": self.flipped,
-            "miss": None if self.miss is None else self.miss.to_dict(),
-            "reason": self.reason,
-        }
-
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> GunVerdict:
         q = d.get("quaternion")
@@ -104,7 +113,7 @@ class GunVerdict:
 
 
 @dataclass(frozen=True)
-class RobotVerdict:
+class RobotVerdict(_Verdict):
     """Whether one robot, carrying one tool, reaches a free pose of that tool at one spot.
 
     Attributes
@@ -134,21 +143,6 @@ class RobotVerdict:
     quaternion: tuple[float, float, float, float] | None = None
     q: tuple[float, ...] | None = None
     poses_tried: int = 0
-
-    @property
-    def ok(self) -> bool:
-        return self.status == OK
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "tool": self.tool,
-            "robot": self.robot,
-            "status": self.status,
-            "reason": self.reason,
-            "quaternion": None if self.quaternion is None else list(self.quaternion),
-            "q": None if self.q is None else list(self.q),
-            "poses_tried": self.poses_tried,
-        }
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> RobotVerdict:

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import csv
 import io
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -120,9 +121,10 @@ def tool_path_csv(path: ToolPath, poses: WeldPoses) -> str:
     return buf.getvalue()
 
 
-def route_tool_csv(route: Any) -> str:
+def route_tool_csv(route: Any, header: Sequence[str] = ()) -> str:
     """The tool path CSV of a route planned with ``--tool`` (its ``route.tool`` carries the
-    poses and the transitions).
+    poses and the transitions); ``header``: lines written first as ``#`` comments (what
+    produced the file and what was verified).
 
     Raises
     ------
@@ -130,10 +132,11 @@ def route_tool_csv(route: Any) -> str:
         When the route has no tool transitions (the poses were not all re-checked, or no tool).
     """
     from weldplan.io.export import frame_comment
+    from weldplan.io.outputset import comment_lines
 
     path = route_tool_path(route)
     if path is None:
         raise ValueError("the route has no tool transitions to write")
     note = frame_comment(route)  # a route planned in the cell says so, as its route CSV
     text = tool_path_csv(path, WeldPoses.from_dict(route.tool["poses"]))
-    return text if note is None else f"# {note}\n{text}"
+    return comment_lines([*header, *([] if note is None else [note])], "#") + text

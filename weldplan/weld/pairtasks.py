@@ -23,8 +23,8 @@ def _plan_pair_task(
     path with the reason: the sequencer then treats it as unreachable."""
     from weldplan.weld.local import LocalPath, SearchLimitError, plan_pair
 
-    if method == "ompl":  # OMPL's BIT* on the same FCL checks (weldplan.motion.local)
-        from weldplan.motion.local import DEFAULT_TIME_S, plan_pair_ompl
+    if method == "ompl":  # OMPL's BIT* on the same FCL checks (weldplan.weld.local_ompl)
+        from weldplan.weld.local_ompl import DEFAULT_TIME_S, plan_pair_ompl
 
         return plan_pair_ompl(cell, i, j, rng=seed, time_s=budget or DEFAULT_TIME_S)
     try:

@@ -19,7 +19,7 @@ import numpy as np
 from weldplan.errors import ConfigError
 
 #: local planners for blocked pairs (:class:`~weldplan.weld.pipeline.PlanConfig` ``planner``);
-#: ``ompl`` (OMPL's BIT* on weldplan's FCL checks, :mod:`weldplan.motion.local`) needs the extra
+#: ``ompl`` (OMPL's BIT* on weldplan's FCL checks, :mod:`weldplan.weld.local_ompl`) needs the extra
 PLANNERS = ("so-aco", "aco", "exact", "ompl")
 #: sequencers (``PlanConfig.sequencer``): auto = Held-Karp up to 13 joints, else nn + polish
 SEQUENCERS = ("auto", "fast-tsp", "pso", "exact", "nn")

@@ -1,4 +1,4 @@
-"""OMPL torch paths on a cell (weldplan.motion.local) and ``--planner ompl`` end to end.
+"""OMPL torch paths on a cell (weldplan.weld.local_ompl) and ``--planner ompl`` end to end.
 
 The box station of route_fixtures: a 2 mm wall (x in [-1, 1], |y| <= 50, z in [0, 60]) on a
 floor, tip radius 5 mm. Between the virtual joints A (-40, 0, 5) and B (40, 0, 5) the shortest
@@ -22,8 +22,8 @@ from route_fixtures import box_part  # noqa: E402
 from weldplan.errors import ConfigError  # noqa: E402
 from weldplan.geometry.collision import CollisionModel  # noqa: E402
 from weldplan.io.joints import Joints  # noqa: E402
-from weldplan.motion.local import TorchChecks, plan_pair_ompl  # noqa: E402
 from weldplan.weld.cell import build_cell  # noqa: E402
+from weldplan.weld.local_ompl import TorchChecks, plan_pair_ompl  # noqa: E402
 from weldplan.weld.pipeline import PlanConfig, plan_route  # noqa: E402
 from weldplan.weld.verify import verify_route  # noqa: E402
 
