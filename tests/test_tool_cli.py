@@ -159,20 +159,27 @@ def test_viewer_draws_the_tool_and_the_weld_without_a_pose(planned):
     route = read_route(tmp / "r.json")
     tool, _ = load_tool(tmp / "torch.stl", tcp="0,0,0,0,0,0")
     window = RecordingWindow()
-    build_scene(meshcat.Visualizer(window=window), route, box_part(), tool=tool)
+    slider = build_scene(meshcat.Visualizer(window=window), route, box_part(), tool=tool)
 
     def node(path):
         return find_node(window.tree, [p for p in path.split("/") if p])
 
     root = "meshcat/weldplan/tool"
-    assert sorted(node(f"{root}/tool")) == ["A", "B", "C", "D"]
+    assert sorted(node(root)) == ["gun", "path", "tool_miss"]  # one tool, not one a weld
     assert list(node(f"{root}/tool_miss")) == ["E"]
     import umsgpack
 
-    matrix = umsgpack.unpackb(node(f"{root}/tool/A").transform)["matrix"]
-    T = np.array(matrix).reshape(4, 4).T  # meshcat sends column-major float32
-    np.testing.assert_allclose(T[:3, 3], [-40.0, 0.0, 0.0], atol=1e-4)
-    np.testing.assert_allclose(T[:3, :3], route_pose(route, "A").rotation(), atol=1e-6)
+    # the slider moves the one tool through the welds with a pose, in the route's order
+    assert slider.path == f"/{root}/gun" and set(slider.ids) == {"A", "B", "C", "D"}
+    assert list(slider.ids) == [j for j in route.order if j != "E"]
+    for jid, cols in zip(slider.ids, slider.matrices, strict=True):
+        T = np.array(cols).reshape(4, 4).T  # column-major, as meshcat sends it
+        pose = route_pose(route, jid)
+        np.testing.assert_allclose(T[:3, 3], pose.position, atol=1e-9)
+        np.testing.assert_allclose(T[:3, :3], pose.rotation(), atol=1e-9)
+    matrix = umsgpack.unpackb(node(f"{root}/gun").transform)["matrix"]
+    T = np.array(matrix).reshape(4, 4).T  # the page opens with the tool at the first weld
+    np.testing.assert_allclose(T, np.array(slider.matrices[0]).reshape(4, 4).T, atol=1e-4)
     assert (tmp / "r.html").stat().st_size > 0
 
 

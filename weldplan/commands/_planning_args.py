@@ -37,6 +37,7 @@ def _add_output_arguments(p: argparse.ArgumentParser, default_output: str | None
         )
     p.add_argument("--json", metavar="F", help="also write the whole route as JSON")
     p.add_argument("--html", metavar="F", help="also write a self-contained 3D page (meshcat)")
+    p.add_argument("--png", metavar="F", help="also write a picture of the cell (needs Chromium)")
     p.add_argument(
         "--post",
         choices=_post_names(),
