@@ -76,9 +76,9 @@ def test_the_camera_fits_the_box_tightly(seed):
     half = rng.uniform(0.05, 1.0, 3)
     half *= 1.0 / half.max()  # scene_transform's box: 2 units on its longest side
     lo, hi = -half, half
-    view = camera_view(lo, hi)
     corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
                         for z in (lo[2], hi[2])])  # fmt: skip
+    view = camera_view(corners)
     x, y, depth = _pinhole_ndc(view.position, corners, camera.ASPECT)
     assert np.all(np.abs(x) <= 1 / MARGIN + 1e-9) and np.all(np.abs(y) <= 1 / MARGIN + 1e-9)
     # tight: some corner touches the margin (the box is not a speck in the view)
@@ -114,10 +114,9 @@ def test_the_route_page_sets_the_framed_camera_and_screen_size_labels():
     props = {(d := umsgpack.unpackb(b))["property"]: d["value"] for b in cam.properties}
     # the framed box: the part's and the route's, centred on the origin, 2 units across
     route = box_route()
-    P = np.concatenate([box_part().bounds, route.joint_xyz, *(g.points for g in route.legs)])
+    P = np.concatenate([box_part().vertices, route.joint_xyz, *(g.points for g in route.legs)])
     s = camera.SCENE_SIZE / np.ptp(P, axis=0).max()
-    half = s * np.ptp(P, axis=0) / 2
-    view = camera_view(-half, half)
+    view = camera_view(s * (P - (P.min(axis=0) + P.max(axis=0)) / 2))
     np.testing.assert_allclose(props["position"], camera_local(view.position), rtol=1e-6)
     assert props["near"] == pytest.approx(view.near) and props["far"] == pytest.approx(view.far)
     node = find_node(window.tree, ["meshcat", "weldplan", "labels", "A"])
@@ -224,3 +223,40 @@ def test_weld_slider_data_is_on_the_page():
     assert data["matrices"][1][12:15] == [1.0, 2.0, 3.0]  # column-major: translation last
     assert "</script>" not in page.split("var data = ", 1)[1].split(";\n", 1)[0]
     assert 'max="1"' in page
+
+
+@pytest.mark.slow
+def test_plan_png_of_the_demo_station_with_the_gun_and_the_robot(tmp_path):
+    """The demo station (the shared gun on the shared KUKA): ``--png`` is the robot cell's page,
+    the route page shows the gun at the weld asked for."""
+    pytest.importorskip("PIL")
+    _chromium()
+    from tests.conftest import ROOT, require_shared
+    from weldplan.viz.png import PngSettings, png_bytes
+
+    require_shared("robots", "kuka_kr150r3100_2")
+    station = ROOT / "examples" / "demo_station.toml"
+    out = {k: str(tmp_path / k) for k in ("route.csv", "route.html", "cell.png")}
+    rc = run_cli(["plan", str(station), "-o", out["route.csv"], "--quiet",
+                  "--html", out["route.html"], "--png", out["cell.png"]])  # fmt: skip
+    assert rc == 0
+    img = load_rgb((tmp_path / "cell.png").read_bytes())
+    r, g, b = img[..., 0], img[..., 1], img[..., 2]
+    orange = (r > 180) & (g > 90) & (g < 170) & (b < 80)  # the robot (0xF28C28)
+    check_picture(img, orange, greyish(img), reddish(img), min_pixels=10)
+    assert orange.mean() > 0.02  # the robot whole in the view, not cut off
+    page = (tmp_path / "route.html").read_text(encoding="utf-8")
+    img = load_rgb(png_bytes(page, PngSettings(width=900, height=600, weld="7")))
+    r, g, b = img[..., 0], img[..., 1], img[..., 2]
+    purple = (b > g + 40) & (r > g + 20)  # the gun (0x8E44AD)
+    green = (g > r + 40) & (g > b + 30)  # welds with a free gun pose (0x2CA02C)
+    check_picture(img, purple, greyish(img), green, min_pixels=10)
+
+
+def test_a_picture_is_written_byte_for_byte_with_the_set(tmp_path):
+    from weldplan.io.outputset import write_outputs
+
+    data = bytes(range(256)) * 4  # every byte value, newlines and all
+    write_outputs({tmp_path / "a.png": data, tmp_path / "a.txt": "text\n"})
+    assert (tmp_path / "a.png").read_bytes() == data
+    assert (tmp_path / "a.txt").read_text() == "text\n"

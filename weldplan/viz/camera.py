@@ -5,8 +5,10 @@ draws: the part, the route, the robot over its whole cycle, the tool. :func:`fra
 scene's mm -> viewer transform (:func:`scene_transform`: the box centred on the origin, where
 meshcat's orbit controls look, about :data:`SCENE_SIZE` viewer units across) and puts the camera
 on a diagonal (:data:`AZIMUTH_DEG`, :data:`ELEVATION_DEG`; z up in the drawn frame, the cell's
-when the part has a pose in it) at the smallest distance at which the eight corners of the box
-fit in the field of view (:func:`camera_view`, with :data:`MARGIN`). The near and far planes
+when the part has a pose in it) at the smallest distance at which every framed point (the
+corners of the part's box, the route, the corners of each link's box at each frame...) fits in
+the field of view (:func:`camera_view`, with :data:`MARGIN`): a pinhole fit of the points
+themselves, tighter than one of their box's corners. The near and far planes
 follow the scene's size, so a 0.3 m demo part and a 4.5 m car body both open whole and can be
 zoomed into without clipping.
 
@@ -89,26 +91,25 @@ def scene_transform(points: NDArray[np.float64]) -> NDArray[np.float64]:
     return T
 
 
-def camera_view(lo: ArrayLike, hi: ArrayLike, *, aspect: float = ASPECT) -> CameraView:
-    """The camera on the diagonal of :func:`view_direction` that frames box ``lo``-``hi``.
+def camera_view(points: ArrayLike, *, aspect: float = ASPECT) -> CameraView:
+    """The camera on the diagonal of :func:`view_direction` that frames ``points``.
 
     Parameters
     ----------
-    lo, hi
-        ``(3,)`` the box's corners (viewer units); the camera looks at the origin.
+    points
+        ``(k, 3)`` what must be in view (viewer units); the camera looks at the origin.
     aspect
         The view's width over its height.
 
     Returns
     -------
     CameraView
-        At the smallest distance ``D`` for which every corner ``c`` has
+        At the smallest distance ``D`` for which every point ``c`` has
         ``|c . up| <= tan(fov / 2) (D - c . d) / MARGIN`` and the same across with
-        ``aspect tan(fov / 2)``: a pinhole camera's view of the box.
+        ``aspect tan(fov / 2)``: a pinhole camera's view of the points.
     """
-    lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
-    corners = np.array([[(lo, hi)[i][0], (lo, hi)[j][1], (lo, hi)[k][2]]
-                        for i in (0, 1) for j in (0, 1) for k in (0, 1)])  # fmt: skip
+    corners = np.asarray(points, dtype=float).reshape(-1, 3)
+    lo, hi = corners.min(axis=0), corners.max(axis=0)
     d = view_direction()
     right = np.cross(-d, [0.0, 0.0, 1.0])
     right /= np.linalg.norm(right)
@@ -136,7 +137,5 @@ def frame_scene(vis: Any, root: Any, points: NDArray[np.float64], *, camera: boo
     root.set_transform(T)
     s = float(T[0, 0])
     if camera:
-        lo = s * P.min(axis=0) + T[:3, 3]
-        hi = s * P.max(axis=0) + T[:3, 3]
-        camera_view(lo, hi).apply(vis)
+        camera_view(s * P + T[:3, 3]).apply(vis)
     return s

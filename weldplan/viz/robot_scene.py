@@ -162,7 +162,7 @@ def _frame_cell(
     if tool_mesh is not None:
         pts.append(_moved(_box_corners(tool_mesh[0]), T_tool))
     if mesh is not None:
-        pts.append(np.asarray(mesh.bounds))
+        pts.append(np.asarray(mesh.vertices))
     if route_points is not None and len(route_points):
         pts.append(np.asarray(route_points, dtype=np.float64))
     return frame_scene(vis, root, np.concatenate(pts, axis=0), camera=camera)

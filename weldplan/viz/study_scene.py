@@ -61,7 +61,7 @@ def build_study_scene(vis: Any, study: FeasibilityStudy, part: trimesh.Trimesh |
     # the opening view: the part, the spots and the robots' columns (40 spot radii tall)
     framed = [frame, bases + [0.0, 0.0, 40 * r_spot]]
     if part is not None:
-        framed.append(np.asarray(part.bounds))
+        framed.append(np.asarray(part.vertices))
     scale = frame_scene(vis, root, np.concatenate(framed))
     if part is not None:
         root["part"].set_object(

@@ -292,7 +292,7 @@ def _frame(
         pts += [np.asarray(t["positions"]) for t in route.tool["transitions"]["transitions"]]
     framed = [np.concatenate(pts, axis=0)]
     if mesh is not None:
-        framed.append(np.asarray(mesh.bounds))
+        framed.append(np.asarray(mesh.vertices))
     if route.tool and tool is not None:
         from weldplan.viz.tool_scene import tool_corners
 
