@@ -87,6 +87,17 @@ def test_the_camera_fits_the_box_tightly(seed):
     assert view.position[2] > 0 and view.position[1] < 0  # from above, at the front
 
 
+def test_the_robot_cell_is_seen_across_the_robots_reach():
+    from weldplan.viz.camera import ROBOT_AZIMUTH_OFFSET_DEG, robot_azimuth, view_direction
+
+    # the robot at the origin reaching along +y: the camera 60 deg to the left of that line
+    az = robot_azimuth([0.0, 0.0, 0.0], [0.0, 1500.0, 800.0])
+    assert az == pytest.approx(90.0 + ROBOT_AZIMUTH_OFFSET_DEG)
+    d = view_direction(az, 0.0)
+    assert np.degrees(np.arccos(d @ [0.0, 1.0, 0.0])) == pytest.approx(ROBOT_AZIMUTH_OFFSET_DEG)
+    assert robot_azimuth([5.0, 5.0, 0.0], [5.0, 5.0, 900.0]) == camera.AZIMUTH_DEG  # overhead
+
+
 def test_camera_local_undoes_meshcats_quarter_turn():
     # meshcat hangs its camera under a group turned by +90 deg about x (three.js is y up)
     Rx = np.array([[1.0, 0, 0], [0, 0, -1], [0, 1, 0]])

@@ -36,6 +36,10 @@ ELEVATION_DEG = 28.0
 MARGIN = 1.08
 #: the width over the height the view is framed for (a landscape window; the height binds first)
 ASPECT = 4.0 / 3.0
+#: the robot cell is seen across the robot's reach: from this far (deg) to the left of the line
+#: from the robot's base to the part, and lower, so the arm shows in profile
+ROBOT_AZIMUTH_OFFSET_DEG = 60.0
+ROBOT_ELEVATION_DEG = 15.0
 #: the near and far planes, in multiples of the box's diagonal (viewer units)
 NEAR_FRACTION = 1e-3
 FAR_MULTIPLE = 40.0
@@ -79,6 +83,17 @@ def view_direction(azimuth_deg: float = AZIMUTH_DEG, elevation_deg: float = ELEV
     return np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
 
 
+def robot_azimuth(base: ArrayLike, target: ArrayLike) -> float:
+    """The robot cell's azimuth (deg): :data:`ROBOT_AZIMUTH_OFFSET_DEG` to the left of the line
+    from the robot's ``base`` ``(3,)`` to the ``target`` ``(3,)`` (the part's or the route's
+    centre), so the arm reaching for the part is seen from its side; :data:`AZIMUTH_DEG` when
+    the base stands over the target."""
+    v = np.asarray(target, dtype=float)[:2] - np.asarray(base, dtype=float)[:2]
+    if np.hypot(*v) < 1e-9:
+        return AZIMUTH_DEG
+    return float(np.degrees(np.arctan2(v[1], v[0])) + ROBOT_AZIMUTH_OFFSET_DEG)
+
+
 def scene_transform(points: NDArray[np.float64]) -> NDArray[np.float64]:
     """``(4, 4)`` mm -> viewer units: the bounding box of ``points (k, 3)`` mm centred on the
     origin (where the camera looks) and :data:`SCENE_SIZE` across its longest side."""
@@ -91,7 +106,13 @@ def scene_transform(points: NDArray[np.float64]) -> NDArray[np.float64]:
     return T
 
 
-def camera_view(points: ArrayLike, *, aspect: float = ASPECT) -> CameraView:
+def camera_view(
+    points: ArrayLike,
+    *,
+    aspect: float = ASPECT,
+    azimuth_deg: float = AZIMUTH_DEG,
+    elevation_deg: float = ELEVATION_DEG,
+) -> CameraView:
     """The camera on the diagonal of :func:`view_direction` that frames ``points``.
 
     Parameters
@@ -100,6 +121,8 @@ def camera_view(points: ArrayLike, *, aspect: float = ASPECT) -> CameraView:
         ``(k, 3)`` what must be in view (viewer units); the camera looks at the origin.
     aspect
         The view's width over its height.
+    azimuth_deg, elevation_deg
+        Where the camera looks from (:func:`view_direction`).
 
     Returns
     -------
@@ -110,7 +133,7 @@ def camera_view(points: ArrayLike, *, aspect: float = ASPECT) -> CameraView:
     """
     corners = np.asarray(points, dtype=float).reshape(-1, 3)
     lo, hi = corners.min(axis=0), corners.max(axis=0)
-    d = view_direction()
+    d = view_direction(azimuth_deg, elevation_deg)
     right = np.cross(-d, [0.0, 0.0, 1.0])
     right /= np.linalg.norm(right)
     up = np.cross(right, -d)
@@ -129,13 +152,23 @@ def camera_view(points: ArrayLike, *, aspect: float = ASPECT) -> CameraView:
     )
 
 
-def frame_scene(vis: Any, root: Any, points: NDArray[np.float64], *, camera: bool = True) -> float:
+def frame_scene(
+    vis: Any,
+    root: Any,
+    points: NDArray[np.float64],
+    *,
+    camera: bool = True,
+    azimuth_deg: float = AZIMUTH_DEG,
+    elevation_deg: float = ELEVATION_DEG,
+) -> float:
     """Scale ``root`` (mm) about the origin to frame ``points (k, 3)`` mm and, with ``camera``,
-    set the camera on their box (:func:`camera_view`). Returns the scale (viewer units per mm)."""
+    set the camera on them from ``azimuth_deg``, ``elevation_deg`` (:func:`camera_view`).
+    Returns the scale (viewer units per mm)."""
     P = np.asarray(points, dtype=np.float64).reshape(-1, 3)
     T = scene_transform(P)
     root.set_transform(T)
     s = float(T[0, 0])
     if camera:
-        camera_view(s * P + T[:3, 3]).apply(vis)
+        view = camera_view(s * P + T[:3, 3], azimuth_deg=azimuth_deg, elevation_deg=elevation_deg)
+        view.apply(vis)
     return s

@@ -156,16 +156,21 @@ def _frame_cell(
 ) -> float:  # fmt: skip
     """Frame the part, the route, every link's box at every frame ``F (f, 7, 4, 4)`` and the
     tool's at ``T_tool (f, 4, 4)``; returns the scene's scale (viewer units per mm)."""
-    from weldplan.viz.camera import frame_scene
+    from weldplan.viz.camera import ROBOT_ELEVATION_DEG, frame_scene, robot_azimuth
 
     pts = [_moved(_box_corners(link.vertices), F[:, link.index]) for link in robot.links]
     if tool_mesh is not None:
         pts.append(_moved(_box_corners(tool_mesh[0]), T_tool))
+    work = [T_tool[:, :3, 3]]  # what the robot reaches for: the part, else the TCP's path
     if mesh is not None:
         pts.append(np.asarray(mesh.vertices))
+        work = [np.asarray(mesh.bounds)]
     if route_points is not None and len(route_points):
         pts.append(np.asarray(route_points, dtype=np.float64))
-    return frame_scene(vis, root, np.concatenate(pts, axis=0), camera=camera)
+    W = np.concatenate(work)
+    azimuth = robot_azimuth(robot.base[:3, 3], (W.min(axis=0) + W.max(axis=0)) / 2)
+    return frame_scene(vis, root, np.concatenate(pts, axis=0), camera=camera,
+                       azimuth_deg=azimuth, elevation_deg=ROBOT_ELEVATION_DEG)  # fmt: skip
 
 
 def _draw_welds(
