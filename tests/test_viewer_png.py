@@ -59,14 +59,14 @@ def check_picture(img: np.ndarray, *masks: np.ndarray, min_pixels: int = 20) -> 
 # ---------------------------------------------------------------------------- the camera
 def _pinhole_ndc(position, corners, aspect):
     """Normalised device coordinates of ``corners`` seen from ``position`` looking at the origin
-    with z up, by a pinhole of meshcat's field of view (an independent look-at)."""
+    with z up, by a pinhole of the page's field of view (an independent look-at)."""
     f = -np.asarray(position) / np.linalg.norm(position)
     r = np.cross(f, [0.0, 0.0, 1.0])
     r /= np.linalg.norm(r)
     u = np.cross(r, f)
     rel = corners - np.asarray(position)
     depth = rel @ f
-    t = np.tan(np.radians(75.0) / 2)
+    t = np.tan(np.radians(camera.FOV_DEG) / 2)
     return (rel @ r) / (depth * t * aspect), (rel @ u) / (depth * t), depth
 
 
@@ -130,6 +130,7 @@ def test_the_route_page_sets_the_framed_camera_and_screen_size_labels():
     view = camera_view(s * (P - (P.min(axis=0) + P.max(axis=0)) / 2))
     np.testing.assert_allclose(props["position"], camera_local(view.position), rtol=1e-6)
     assert props["near"] == pytest.approx(view.near) and props["far"] == pytest.approx(view.far)
+    assert props["fov"] == camera.FOV_DEG
     node = find_node(window.tree, ["meshcat", "weldplan", "labels", "A"])
     label = umsgpack.unpackb(node.object)["object"]
     assert label["object"]["renderOrder"] > 0  # after the see-through part

@@ -37,7 +37,7 @@ import numpy as np
 import trimesh
 from numpy.typing import NDArray
 
-from weldplan.viz.camera import SCENE_SIZE, frame_scene, scene_transform  # noqa: F401
+from weldplan.viz.camera import FOV_DEG, SCENE_SIZE, frame_scene, scene_transform  # noqa: F401
 from weldplan.viz.overlay import WeldSlider
 from weldplan.weld.route import Route
 
@@ -45,9 +45,11 @@ log = logging.getLogger(__name__)
 
 #: seconds the torch takes for the whole route in the animation
 ANIMATION_SECONDS = 20.0
-#: a label's sprite size on the screen, as a share of the view's height x 2 tan(fov / 2)
-#: (three.js sprites without size attenuation; the text is about 3/8 of it: ~2% of the height)
-LABEL_SIZE = 0.1
+#: a label's sprite height as a share of the view's height (its text is about 3/8 of it) ...
+LABEL_SCREEN_SHARE = 0.065
+#: ... as the sprite's scale: three.js draws a sprite without size attenuation as if it stood
+#: at distance 1, where the view is 2 tan(fov / 2) high
+LABEL_SIZE = LABEL_SCREEN_SHARE * 2.0 * float(np.tan(np.radians(FOV_DEG) / 2))
 #: labels are drawn after everything else (three.js renderOrder), so the part never veils them
 LABEL_RENDER_ORDER = 1000
 #: a joint sphere's radius: this share of the framed scene's size ...
