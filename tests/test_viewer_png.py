@@ -117,7 +117,7 @@ def test_the_route_page_sets_the_framed_camera_and_screen_size_labels():
     import umsgpack
     from meshcat.servers.tree import find_node
 
-    from weldplan.viz.viewer import LABEL_SIZE, RecordingWindow, build_scene
+    from weldplan.viz.viewer import LABEL_SIZE, RecordingWindow, build_scene, label_image
 
     window = RecordingWindow()
     build_scene(meshcat.Visualizer(window=window), box_route(), box_part())
@@ -136,8 +136,29 @@ def test_the_route_page_sets_the_framed_camera_and_screen_size_labels():
     assert label["object"]["renderOrder"] > 0  # after the see-through part
     mat = label["materials"][0]
     assert mat["sizeAttenuation"] is False and mat["depthTest"] is False
+    assert label["object"]["name"] == "label A"
     T = np.array(umsgpack.unpackb(node.transform)["matrix"]).reshape(4, 4).T
-    assert T[0, 0] * s == pytest.approx(LABEL_SIZE, rel=1e-5)  # one size on the screen
+    _, aspect, height = label_image("A")
+    assert T[1, 1] * s / height == pytest.approx(LABEL_SIZE, rel=1e-5)  # one box height
+    assert T[0, 0] / T[1, 1] == pytest.approx(aspect, rel=1e-5)  # the image's own width
+
+
+def test_a_label_is_a_white_box_with_dark_text():
+    import io
+
+    from PIL import Image
+
+    from weldplan.viz.viewer import label_image
+
+    png, aspect, height = label_image("13")
+    rgba = np.asarray(Image.open(io.BytesIO(png)).convert("RGBA"), dtype=float)
+    h, w = rgba.shape[:2]
+    assert aspect == pytest.approx(w / h)
+    box = rgba[: int(round(h / height))]  # the box on top, clear below the box's gap
+    assert (rgba[h // 2 :, :, 3] == 0).all()  # the weld below the label stays visible
+    rgb = box[..., :3]
+    dark = (rgb.max(axis=2) < 80).mean()
+    assert 0.03 < dark < 0.5 and (rgb.min(axis=2) > 200).mean() > 0.4  # text on white
 
 
 def test_joint_spheres_never_merge():

@@ -20,13 +20,14 @@ one weld at a time, picked by the weld slider laid over the page
 The page opens framed on everything drawn, the part, the route and the tool at its weld poses
 (:func:`weldplan.viz.camera.frame_scene`: scaled to about 2 viewer units, centred on the origin,
 the camera on a diagonal, z up). Weld labels keep one size on the screen at any zoom
-(:data:`LABEL_SIZE`) and are drawn over the part. Algorithms never import this module.
+(:data:`LABEL_SIZE`), white boxes drawn over everything. Algorithms never import this module.
 """
 
 from __future__ import annotations
 
 import base64
 import colorsys
+import functools
 import logging
 import os
 from os import PathLike
@@ -45,8 +46,10 @@ log = logging.getLogger(__name__)
 
 #: seconds the torch takes for the whole route in the animation
 ANIMATION_SECONDS = 20.0
-#: a label's sprite height as a share of the view's height (its text is about 3/8 of it) ...
-LABEL_SCREEN_SHARE = 0.065
+#: a label's height as a share of the view's height (its text is about 2/3 of it) ...
+LABEL_SCREEN_SHARE = 0.034
+#: the label images' font size (pixels; the texture's resolution, not the size on the screen)
+LABEL_FONT_PX = 40
 #: ... as the sprite's scale: three.js draws a sprite without size attenuation as if it stood
 #: at distance 1, where the view is 2 tan(fov / 2) high
 LABEL_SIZE = LABEL_SCREEN_SHARE * 2.0 * float(np.tan(np.radians(FOV_DEG) / 2))
@@ -188,21 +191,38 @@ document.title = "{title} (" + weldplanCommands.length + " scene commands)";
 
 
 # ---------------------------------------------------------------------------- scene
-def _text_sprite(text: str) -> Any:
-    """A camera-facing label (three.js Sprite with meshcat's ``_text`` canvas texture) of one
-    size on the screen whatever the zoom (no size attenuation; its scale is :data:`LABEL_SIZE`
-    over the scene's scale), drawn over the part (no depth test)."""
-    g = _meshcat().geometry
+@functools.lru_cache(maxsize=4096)
+def label_image(text: str) -> tuple[bytes, float, float]:
+    """``(PNG bytes, width / height, height / the box's height)``: ``text`` in black on a white
+    rounded box with a grey edge, readable over the part, the route and the background alike
+    (Pillow's own font, so no font file is needed). The box fills the image's top rows and the
+    rest is clear: the image's centre, where the sprite stands, is a third of the box's height
+    below the box, so the label sits over its weld without hiding it."""
+    import io
 
-    class TextTexture(g.Texture):
-        def lower(self, object_data: Any) -> dict[str, Any]:
-            return {
-                "uuid": self.uuid,
-                "type": "_text",
-                "text": text,
-                "font_size": 96,
-                "font_face": "sans-serif",
-            }
+    from PIL import Image, ImageDraw, ImageFont
+
+    font = ImageFont.load_default(size=LABEL_FONT_PX)
+    left, top, right, bottom = font.getbbox(text)
+    pad = LABEL_FONT_PX // 4
+    w, h = right - left + 2 * pad, LABEL_FONT_PX + 2 * pad
+    img = Image.new("RGBA", (w, 2 * (h + h // 3)), (0, 0, 0, 0))
+    draw = ImageDraw.Draw(img)
+    draw.rounded_rectangle((0, 0, w - 1, h - 1), radius=pad, fill=(255, 255, 255, 225),
+                           outline=(90, 90, 90, 255), width=2)  # fmt: skip
+    draw.text((pad - left, pad + (LABEL_FONT_PX - bottom - top) // 2), text, fill=(17, 17, 17, 255),
+              font=font)  # fmt: skip
+    out = io.BytesIO()
+    img.save(out, format="PNG")
+    return out.getvalue(), w / img.height, img.height / h
+
+
+def _text_sprite(text: str) -> Any:
+    """A camera-facing label (three.js Sprite textured with :func:`label_image`) of one size on
+    the screen whatever the zoom (no size attenuation), drawn over everything (no depth test,
+    drawn last); the object carries ``text`` as its name."""
+    g = _meshcat().geometry
+    png = label_image(text)[0]
 
     class SpriteMaterial(g.GenericMaterial):
         _type = "SpriteMaterial"
@@ -213,18 +233,23 @@ def _text_sprite(text: str) -> Any:
         def lower(self) -> dict[str, Any]:
             data = super().lower()
             data["object"]["renderOrder"] = LABEL_RENDER_ORDER  # after the see-through part
+            data["object"]["name"] = f"label {text}"
             return data
 
-    material = SpriteMaterial(map=TextTexture(), transparent=True)
+    material = SpriteMaterial(map=g.ImageTexture(g.PngImage(png)), transparent=True)
     material.properties = {"depthTest": False, "sizeAttenuation": False}
     return Sprite(g.Sphere(1.0), material)
 
 
 def draw_label(node: Any, text: str, p: NDArray[np.float64], scale: float) -> None:
     """Label ``text`` at ``p`` (mm) under ``node``, whose scene scale is ``scale`` (viewer units
-    per mm, :func:`~weldplan.viz.camera.frame_scene`)."""
+    per mm, :func:`~weldplan.viz.camera.frame_scene`): its box :data:`LABEL_SIZE` high on the
+    screen, above ``p`` (:func:`label_image`)."""
+    _, aspect, height = label_image(text)
     node.set_object(_text_sprite(text))
-    node.set_transform(_translation(p, scale=LABEL_SIZE / scale))
+    T = _translation(p, scale=LABEL_SIZE * height / scale)
+    T[0, 0] *= aspect
+    node.set_transform(T)
 
 
 def _translation(p: NDArray[np.float64], scale: float = 1.0) -> NDArray[np.float64]:
