@@ -33,8 +33,9 @@ FOV_DEG = 40.0
 AZIMUTH_DEG = -55.0
 #: ... and from above (deg over the horizontal)
 ELEVATION_DEG = 28.0
-#: the box fills at most 1 / MARGIN of the view's height (and of its width at :data:`ASPECT`)
-MARGIN = 1.08
+#: the framed points fill at most 1 / MARGIN of the view's height (and of its width at
+#: :data:`ASPECT`): room for the labels standing over the topmost welds
+MARGIN = 1.2
 #: the width over the height the view is framed for (a landscape window; the height binds first)
 ASPECT = 4.0 / 3.0
 #: the robot cell is seen across the robot's reach: from this far (deg) to the left of the line
