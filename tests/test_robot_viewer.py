@@ -59,6 +59,43 @@ def test_scene_animates_every_link_and_the_tool_at_the_cycles_speed(cell):
     np.testing.assert_allclose(T[:3, 3], route.waypoints()[-1], atol=1e-2)
 
 
+def test_the_view_holds_the_robot_over_its_whole_cycle_and_marks_the_welds(cell):
+    import meshcat
+    import umsgpack
+    from meshcat.servers.tree import find_node
+
+    from weldplan.viz.robot_scene import build_robot_scene, frame_times, robot_slider, sample_q
+    from weldplan.viz.viewer import RecordingWindow
+
+    robot, Tft, route, timing, tool = cell
+    window = RecordingWindow()
+    build_robot_scene(
+        meshcat.Visualizer(window=window), robot, timing, Tft, part=box_part(), tool=tool,
+        route_points=route.waypoints(), weld_ids=list(route.order),
+    )  # fmt: skip
+    root = ["meshcat", "weldplan_robot"]
+    S = np.array(umsgpack.unpackb(find_node(window.tree, root).transform)["matrix"])
+    S = S.reshape(4, 4).T  # mm -> viewer units
+    # every link's every vertex at every frame lies in the framed box (+-1 unit about the origin)
+    F = robot.link_frames(sample_q(timing, frame_times(float(timing.t[-1]))[0]))
+    for link in robot.links:
+        V = np.einsum("fij,nj->fni", F[:, link.index, :3, :3], link.vertices)
+        V = V + F[:, None, link.index, :3, 3]
+        W = V.reshape(-1, 3) @ S[:3, :3].T + S[:3, 3]
+        assert np.abs(W).max() <= 1.0 + 1e-6, link.name
+    # the weld markers stand on the route's joints, labelled with their ids
+    for k, jid in enumerate(route.order):
+        node = find_node(window.tree, [*root, "welds", str(k)])
+        p = np.array(umsgpack.unpackb(node.transform)["matrix"]).reshape(4, 4).T[:3, 3]
+        np.testing.assert_allclose(p, route.joint_xyz[route.index_of(jid)], atol=0.05)
+        label = find_node(window.tree, [*root, "labels", str(k)]).object
+        assert jid.encode() in label
+    slider = robot_slider(timing, list(route.order))
+    dwell = timing.row_times[timing.weld_rows] + timing.weld_time / 2
+    np.testing.assert_allclose(slider.times, dwell)
+    assert slider.ids == tuple(route.order)
+
+
 @pytest.mark.slow
 def test_headless_chromium_draws_the_robot_and_the_time_slider(cell, tmp_path):
     pytest.importorskip("PIL")
@@ -85,3 +122,6 @@ def test_headless_chromium_draws_the_robot_and_the_time_slider(cell, tmp_path):
     assert orange.mean() > 0.03, "robot not drawn"
     blue = (b > r + 40) & (g > 80) & (g < 140) & (r < 110) & (b < 200)  # the gun (0x4A6FA5)
     assert blue.sum() > 200, "tool not drawn"
+    from tests.test_viewer_png import check_picture
+
+    check_picture(img, orange, blue)  # the robot and its tool framed about the centre

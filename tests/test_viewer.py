@@ -36,7 +36,7 @@ def test_scene_holds_part_joints_labels_legs_vias_and_torch():
     assert len(node(f"{root}/vias/leg_0")) == 2 and len(node(f"{root}/vias/leg_1")) == 3
     assert node(f"{root}/torch").object is not None
     assert window.tree.animation is not None  # the torch's animation along the route
-    assert b"_text" in node(f"{root}/labels/A").object
+    assert b"data:image/png;base64," in node(f"{root}/labels/A").object  # the label's box
 
 
 def test_leg_colours_are_distinct():

@@ -62,6 +62,7 @@ def _add_output_arguments(p: argparse.ArgumentParser, default_output: str | None
     g.add_argument("-o", "--output", default=default_output, help=help_o)
     g.add_argument("--json", metavar="F", help="also write the whole route as JSON")
     g.add_argument("--html", metavar="F", help="also write a self-contained 3D page (meshcat)")
+    g.add_argument("--png", metavar="F", help="also write a picture of the cell (needs Chromium)")
     g.add_argument(
         "--post",
         choices=_post_names(),

@@ -20,10 +20,10 @@ from weldplan.errors import InputError, WeldplanError
 #: options that are not the station's: the outputs and how the run goes
 RUN_OPTIONS = {
     "command", "verbose", "mesh", "joints", "output", "json", "html", "post", "post_file",
-    "trajectory", "tool_csv", "robot_html", "seed", "jobs", "dask", "quiet", "func",
+    "trajectory", "tool_csv", "robot_html", "png", "seed", "jobs", "dask", "quiet", "func",
     "station_defaults", "usage_error",
 }  # fmt: skip
-_OUTPUTS = ("json", "html", "post", "post_file", "trajectory", "tool_csv", "robot_html")
+_OUTPUTS = ("json", "html", "post", "post_file", "trajectory", "tool_csv", "robot_html", "png")
 
 
 def record_defaults(p: argparse.ArgumentParser) -> None:

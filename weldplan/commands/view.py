@@ -1,4 +1,4 @@
-"""``weldplan view ROUTE MESH``: the route in meshcat, live or as a static page."""
+"""``weldplan view ROUTE MESH``: the route in meshcat, live, as a static page or as a PNG."""
 
 from __future__ import annotations
 
@@ -7,11 +7,15 @@ import contextlib
 import signal
 import sys
 import time
+from pathlib import Path
 from typing import Any
 
 from weldplan.commands.plan import add_cell_arguments
 
-HELP = "show a route JSON over its part in meshcat (live server, or --html for a static page)"
+HELP = (
+    "show a route JSON over its part in meshcat (live server, --html for a static page, "
+    "--png for a picture)"
+)
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -19,6 +23,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("mesh", nargs="?", help="the part mesh (optional: without it, the route only)")
     add_cell_arguments(p)
     p.add_argument("--html", metavar="F", help="write a self-contained page instead of serving")
+    p.add_argument(
+        "--png", metavar="F", help="write a picture of the page instead of serving (needs Chromium)"
+    )
     p.add_argument("--no-browser", action="store_true", help="do not open a browser")
     p.add_argument(
         "--host",
@@ -36,6 +43,10 @@ def run(args: argparse.Namespace) -> int:
     from weldplan.commands._tool import tool_from_args
     from weldplan.io.export import read_route
 
+    if args.png:  # no Chromium: say so before any work
+        from weldplan.viz.png import find_chromium
+
+        find_chromium()
     route = read_route(args.route)
     tool = tool_from_args(args)
     if tool is not None:  # draw the route's poses only with the tool they were planned for
@@ -51,18 +62,34 @@ def run(args: argparse.Namespace) -> int:
         pose = recorded_pose(route.provenance, None, part, path=args.route)
         if pose is not None:  # a route planned in the cell: the part drawn where it stood
             part = pose.mesh_to_cell(part)
-    if args.html:
-        from weldplan.viz.viewer import write_html
-
-        write_html(route, part, args.html, tool=None if tool is None else tool[0])
-        print(f"wrote {args.html}")
-        return 0
+    if args.html or args.png:
+        return _write_pages(args, route, part, None if tool is None else tool[0])
     from weldplan.viz.viewer import live_view
 
     vis, server = live_view(
         route, part, host=args.host, port=args.port, tool=None if tool is None else tool[0]
     )
     return _serve(vis, server, args.no_browser)
+
+
+def _write_pages(args: argparse.Namespace, route: Any, part: Any, tool: Any) -> int:
+    """Write ``--html`` and ``--png`` as one set (both or neither), checked before rendering."""
+    from weldplan.io.outputset import check_outputs, write_outputs
+    from weldplan.viz.viewer import static_html
+
+    paths = {k: Path(getattr(args, k)) for k in ("html", "png") if getattr(args, k)}
+    check_outputs(paths)
+    page = static_html(route, part, tool=tool)
+    files: dict[Path, str | bytes] = {}
+    if "html" in paths:
+        files[paths["html"]] = page
+    if "png" in paths:
+        from weldplan.viz.png import png_bytes
+
+        files[paths["png"]] = png_bytes(page)
+    write_outputs(files)
+    print("wrote " + ", ".join(str(p) for p in files))
+    return 0
 
 
 def _interrupt(signum: int, frame: object) -> None:

@@ -123,11 +123,14 @@ def _new_mode(path: Path) -> int:
     return 0o666 & ~umask
 
 
-def _write_temp(path: Path, text: str, encoding: str) -> Path:
-    """``text`` in a new temporary file next to ``path``, flushed to disk; its path."""
+def _write_temp(path: Path, text: str | bytes, encoding: str) -> Path:
+    """``text`` (or bytes, e.g. a PNG) in a new temporary file next to ``path``, flushed to
+    disk; its path."""
     fd, tmp = tempfile.mkstemp(prefix=TEMP_PREFIX, suffix=".tmp", dir=_folder(path))
+    binary = isinstance(text, bytes)
     try:
-        with os.fdopen(fd, "w", encoding=encoding, newline="") as f:
+        with os.fdopen(fd, "wb" if binary else "w", encoding=None if binary else encoding,
+                       newline=None if binary else "") as f:  # fmt: skip
             f.write(text)
             f.flush()
             os.fsync(f.fileno())
@@ -172,8 +175,9 @@ def _as_weldplan_error(exc: OSError, path: Path) -> Exception:
     return RunError(f"{path}: {msg}")
 
 
-def write_outputs(texts: Mapping[Path, str], *, encoding: str = "utf-8") -> list[Path]:
-    """Write every ``path -> text`` of ``texts``, all or none (module docstring).
+def write_outputs(texts: Mapping[Path, str | bytes], *, encoding: str = "utf-8") -> list[Path]:
+    """Write every ``path -> text`` of ``texts`` (bytes are written as they are), all or none
+    (module docstring).
 
     Returns
     -------

@@ -573,6 +573,7 @@ class OutputSpec:
     trajectory: Path | None = None
     tool_csv: Path | None = None
     robot_html: Path | None = None
+    png: Path | None = None
 
     def __post_init__(self) -> None:
         for f in fields(self):

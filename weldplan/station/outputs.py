@@ -50,9 +50,13 @@ def output_paths(out: OutputSpec, *, robot: bool, tool: bool) -> dict[str, Path]
         if not tool:
             raise WeldplanError("--tool-csv needs --tool")
         paths["tool_csv"] = out.tool_csv
-    for kind in ("trajectory", "robot_html"):
+    for kind in ("trajectory", "robot_html", "png"):
         if getattr(out, kind) is not None:
             paths[kind] = getattr(out, kind)
+    if out.png is not None:  # no Chromium: say so before any work
+        from weldplan.viz.png import find_chromium
+
+        find_chromium()
     seen: dict[Path, str] = {}
     for kind, path in paths.items():
         key = path.resolve()
@@ -103,7 +107,7 @@ def header_lines(prod: dict[str, Any]) -> list[str]:
     return [head, *(f"verified: {c}" for c in prod["verified"])]
 
 
-def render_outputs(plan: Any, kinds: set[str], post: str | None) -> dict[str, str]:
+def render_outputs(plan: Any, kinds: set[str], post: str | None) -> dict[str, str | bytes]:
     """The text of each output kind of ``plan`` (``post``: ``"rapid"`` or ``"krl"``); each file
     says what produced it and what was verified (:func:`producer`)."""
     from weldplan.io.export import render_post, to_csv_text
@@ -126,6 +130,14 @@ def render_outputs(plan: Any, kinds: set[str], post: str | None) -> dict[str, st
         texts.update(_robot_texts(plan, kinds, post, head))
     elif "post" in kinds:
         texts["post"] = render_post(route, post, plan.cell, header=head)
+    if "png" in kinds:  # the robot cell's page with a robot, else the route's
+        from weldplan.viz.png import png_bytes
+
+        page = texts.get("robot_html") if plan.robot is not None else texts.get("html")
+        if page is None:
+            kind = "robot_html" if plan.robot is not None else "html"
+            page = render_outputs(plan, {kind}, post)[kind]
+        texts["png"] = png_bytes(page)
     return texts
 
 
@@ -166,6 +178,7 @@ def _robot_texts(plan: Any, kinds: set[str], post: str | None, head: list[str]) 
         texts["robot_html"] = robot_html(
             joint.robot, build.timing, joint.robot_route.flange_tcp, part=plan.cell.part,
             tool=plan.tool.tool, route_points=joint.follow.waypoints(),
+            weld_ids=joint.robot_route.weld_ids,
         )  # fmt: skip
     return texts
 

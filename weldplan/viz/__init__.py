@@ -10,7 +10,16 @@ from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["show"]
+__all__ = ["render_png", "show"]
+
+
+def render_png(page: str, path: Any, settings: Any = None) -> Any:
+    """Render a static page (:func:`weldplan.viz.viewer.static_html`,
+    :func:`weldplan.viz.robot_scene.robot_html`) to a PNG at ``path`` by headless Chromium,
+    written whole or not at all; returns the path (:func:`weldplan.viz.png.render_png`)."""
+    from weldplan.viz.png import render_png as _render
+
+    return _render(page, path, settings)
 
 
 def show(route: Any, part: Any = None, *, height: int = 480) -> Any:

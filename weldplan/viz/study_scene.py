@@ -47,7 +47,8 @@ def spot_class(spot: SpotVerdict) -> str:
 def build_study_scene(vis: Any, study: FeasibilityStudy, part: trimesh.Trimesh | None) -> None:
     """Draw ``study`` into meshcat visualizer ``vis`` under ``weldplan/``: ``part``,
     ``spots/<class>/<id>``, ``labels/<id>``, ``robots/<name>`` (a column at each base)."""
-    from weldplan.viz.viewer import _meshcat, _text_sprite, _translation, scene_transform
+    from weldplan.viz.camera import frame_scene
+    from weldplan.viz.viewer import _meshcat, _translation, draw_label
 
     g = _meshcat().geometry
     root = vis["weldplan"]
@@ -55,11 +56,13 @@ def build_study_scene(vis: Any, study: FeasibilityStudy, part: trimesh.Trimesh |
     P = np.array([s.position for s in study.spots], dtype=np.float64).reshape(-1, 3)
     bases = np.array([r.base_matrix()[:3, 3] for r in study.robots]).reshape(-1, 3)
     frame = np.concatenate([P, bases])
-    if len(frame) < 2 and part is not None:
-        frame = np.concatenate([frame, np.asarray(part.vertices)])
-    root.set_transform(scene_transform(frame))
     extent = float(np.ptp(frame, axis=0).max()) if len(frame) > 1 else 100.0
     r_spot = max(extent, 1.0) / 150.0
+    # the opening view: the part, the spots and the robots' columns (40 spot radii tall)
+    framed = [frame, bases + [0.0, 0.0, 40 * r_spot]]
+    if part is not None:
+        framed.append(np.asarray(part.vertices))
+    scale = frame_scene(vis, root, np.concatenate(framed))
     if part is not None:
         root["part"].set_object(
             g.TriangularMeshGeometry(np.asarray(part.vertices), np.asarray(part.faces)),
@@ -72,9 +75,7 @@ def build_study_scene(vis: Any, study: FeasibilityStudy, part: trimesh.Trimesh |
         node.set_object(g.Sphere(r_spot), g.MeshLambertMaterial(color=CLASSES[c][0]))
         node.set_transform(_translation(p))
         if labels:
-            lab = root["labels"][s.id]
-            lab.set_object(_text_sprite(s.id))
-            lab.set_transform(_translation(p + [0.0, 0.0, 3.5 * r_spot], scale=14.0 * r_spot))
+            draw_label(root["labels"][s.id], s.id, p + [0.0, 0.0, 2.0 * r_spot], scale)
     for r, b in zip(study.robots, bases, strict=True):
         col = root["robots"][r.name]
         col.set_object(g.Cylinder(40 * r_spot, 6 * r_spot), g.MeshLambertMaterial(color=0xF2B705))
@@ -82,9 +83,6 @@ def build_study_scene(vis: Any, study: FeasibilityStudy, part: trimesh.Trimesh |
         T[:3, :3] = [[1, 0, 0], [0, 0, -1], [0, 1, 0]]  # meshcat cylinders run along y
         T[:3, 3] = b + [0.0, 0.0, 20 * r_spot]
         col.set_transform(T)
-    vis["/Cameras/default/rotated/<object>"].set_property("position", [1.3, 1.05, 1.65])
-    vis["/Grid"].set_property("visible", False)
-    vis["/Axes"].set_property("visible", False)
 
 
 def study_html(study: FeasibilityStudy, part: trimesh.Trimesh | None = None) -> str:

@@ -1,14 +1,15 @@
-"""The tool in the meshcat scene: the tool mesh at weld poses, and welds without a pose in red.
+"""The tool in the meshcat scene: the tool at one weld at a time, and welds without a pose in red.
 
-Drawn under ``weldplan/tool``: ``tool/<id>`` a copy of the tool mesh at weld ``<id>``'s pose (the
-TCP frame in the part frame), ``tool_miss/<id>`` a red halo about each weld without a free pose.
+Drawn under ``weldplan/tool``: ``gun`` the tool mesh (in its TCP frame) at the first weld with a
+free pose; the page's weld slider (:class:`~weldplan.viz.overlay.WeldSlider`, returned by
+:func:`draw_tool`) moves it to any other weld's pose, so the welds and the route stay visible
+instead of being covered by a copy at every weld. ``tool_miss/<id>`` is a red halo about each
+weld without a free pose.
 With transitions (``route.tool["transitions"]``, :mod:`weldplan.tool.transitions`):
-``path/<k>`` the TCP path of transition ``k`` (free ones in the tool copies' colour, blocked
-ones in magenta), and ``gun`` the tool itself, animated along the whole path
-(:func:`animate_tool`: one keyframe per waypoint, so the viewer's linear position and slerped
-rotation between keyframes are the motion that was checked).
-The tool is drawn at every weld with a pose up to :data:`MAX_INSTANCES`, else at that many
-welds spread evenly along the route order (each copy costs the page the whole mesh).
+``path/<k>`` the TCP path of transition ``k`` (free ones in :data:`TOOL_COLOR`, blocked ones in
+magenta), and the same ``gun`` animated along the whole path (:func:`animate_tool`: one keyframe
+per waypoint, so the viewer's linear position and slerped rotation between keyframes are the
+motion that was checked), loaded paused: the viewer's *Animations* panel plays it.
 
 The displayed mesh is a quadric decimation (open3d) of the tool to at most
 :data:`DISPLAY_TRIANGLES` triangles, for the page's size only: every check used the full mesh.
@@ -23,19 +24,22 @@ import numpy as np
 from numpy.typing import NDArray
 
 from weldplan.tool.route_frames import route_poses
+from weldplan.viz.overlay import WeldSlider
 from weldplan.weld.route import Route
 
 log = logging.getLogger(__name__)
 
-#: tool copies drawn at most (all welds with a pose on small stations)
-MAX_INSTANCES = 15
 #: triangles of the displayed tool mesh at most
 DISPLAY_TRIANGLES = 3000
 #: colour of welds without a free pose, and of those with one when a tool is drawn
 MISS_COLOR = 0xE00000
 OK_COLOR = 0x2CA02C
-#: the tool copies, see-through so that the welds and the route stay visible
+#: colour of the free transitions' lines
 TOOL_COLOR = 0x4A6FA5
+#: colour of the tool (at the slider's weld, and animated along the transitions)
+GUN_COLOR = 0x8E44AD
+#: colour of blocked transitions: magenta, so that red stays the welds without a pose
+BLOCKED_COLOR = 0xD000D0
 
 
 def display_mesh(tool: Any) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
@@ -60,41 +64,56 @@ def display_mesh(tool: Any) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     return np.asarray(tm.vertices), np.asarray(tm.faces, dtype=np.int64)
 
 
-def shown_welds(ok_ids: list[str], limit: int = MAX_INSTANCES) -> list[str]:
-    """Which welds get a tool copy: all when at most ``limit``, else ``limit`` spread evenly."""
-    if len(ok_ids) <= limit:
-        return list(ok_ids)
-    idx = np.unique(np.round(np.linspace(0, len(ok_ids) - 1, limit)).astype(int))
-    return [ok_ids[i] for i in idx]
+def _pose_matrices(poses: list[Any]) -> NDArray[np.float64]:
+    """``(w, 4, 4)`` the TCP frames (part frame, mm) of weld poses ``poses``."""
+    T = np.tile(np.eye(4), (len(poses), 1, 1))
+    for k, p in enumerate(poses):
+        T[k, :3, :3] = p.rotation()
+        T[k, :3, 3] = p.position
+    return T
 
 
-def draw_tool(root: Any, route: Route, tool: Any, r_joint: float) -> None:
-    """Draw the tool at the route's weld poses and highlight welds without one (module docstring).
+def tool_corners(route: Route, tool: Any) -> NDArray[np.float64]:
+    """``(8, 3)`` mm: the corners of the tool's bounding box at the route's first weld pose,
+    where the page opens with it (none without a pose); the weld slider moves it from there."""
+    poses = route_poses(route)
+    ok = [] if poses is None else [p for p in poses.poses if p.ok]
+    if not ok:
+        return np.empty((0, 3))
+    V = np.asarray(tool.vertices, dtype=np.float64)
+    lo, hi = V.min(axis=0), V.max(axis=0)
+    box = np.array([[(lo, hi)[i][0], (lo, hi)[j][1], (lo, hi)[k][2]]
+                    for i in (0, 1) for j in (0, 1) for k in (0, 1)])  # fmt: skip
+    T = _pose_matrices(ok[:1])[0]
+    return box @ T[:3, :3].T + T[:3, 3]
+
+
+def draw_tool(root: Any, route: Route, tool: Any, r_joint: float) -> WeldSlider | None:
+    """Draw the tool at the route's first weld pose and highlight welds without one (module
+    docstring).
 
     ``root`` is the meshcat node of the route (part frame, mm); ``r_joint`` the joint marker
-    radius (mm). Without poses in ``route.tool`` nothing is drawn.
+    radius (mm). Without poses in ``route.tool`` nothing is drawn. Returns the weld slider over
+    the welds with a pose (None without a ``tool`` mesh or without such a weld).
     """
     import meshcat.geometry as g
 
     poses = route_poses(route)
     if poses is None:
-        return
+        return None
     node = root["tool"]
     ok = [p for p in poses.poses if p.ok]
-    shown = set(shown_welds([p.id for p in ok])) if tool is not None else set()
-    if shown:
+    slider = None
+    if tool is not None and ok:
         V, F = display_mesh(tool)
-        for p in ok:
-            if p.id not in shown:
-                continue
-            T = np.eye(4)
-            T[:3, :3] = p.rotation()
-            T[:3, 3] = p.position
-            node["tool"][p.id].set_object(
-                g.TriangularMeshGeometry(V, F),
-                g.MeshLambertMaterial(color=TOOL_COLOR, opacity=0.3, transparent=True),
-            )
-            node["tool"][p.id].set_transform(T)
+        T = _pose_matrices(ok)
+        gun = node["gun"]
+        gun.set_object(
+            g.TriangularMeshGeometry(V, F),
+            g.MeshLambertMaterial(color=GUN_COLOR, opacity=0.85, transparent=True),
+        )
+        gun.set_transform(T[0])
+        slider = WeldSlider.from_poses([p.id for p in ok], T, gun.path.lower())
     for p in poses.poses:
         jid = p.id
         color = OK_COLOR if p.ok else MISS_COLOR
@@ -105,21 +124,11 @@ def draw_tool(root: Any, route: Route, tool: Any, r_joint: float) -> None:
                 g.Sphere(4.0 * r_joint),
                 g.MeshLambertMaterial(color=MISS_COLOR, opacity=0.45, transparent=True),
             )
-            T = np.eye(4)
-            T[:3, 3] = p.position
-            halo.set_transform(T)
-    log.debug(
-        "tool drawn at %d of %d welds; %d without a pose",
-        len(shown),
-        len(ok),
-        len(poses.poses) - len(ok),
-    )
-
-
-#: colour of the animated tool (free transitions are drawn in TOOL_COLOR)
-GUN_COLOR = 0x8E44AD
-#: colour of blocked transitions: magenta, so that red stays the welds without a pose
-BLOCKED_COLOR = 0xD000D0
+            T1 = np.eye(4)
+            T1[:3, 3] = p.position
+            halo.set_transform(T1)
+    log.debug("tool at 1 of %d welds; %d without a pose", len(ok), len(poses.poses) - len(ok))
+    return slider
 
 
 def keyframe_times(positions: NDArray[np.float64], quaternions: NDArray[np.float64],
@@ -160,12 +169,7 @@ def animate_tool(anim: Any, root: Any, route: Route, tool: Any, seconds: float, 
     if tool is None:
         return True
     P, Q = path.waypoints()
-    V, F = display_mesh(tool)
-    gun = node["gun"]
-    gun.set_object(
-        g.TriangularMeshGeometry(V, F),
-        g.MeshLambertMaterial(color=GUN_COLOR, opacity=0.85, transparent=True),
-    )
+    gun = node["gun"]  # drawn by draw_tool at the first weld
     times = keyframe_times(P, Q, float(np.linalg.norm(tool.vertices, axis=1).max()))
     frames = np.round(times * seconds * fps).astype(int)
     from scipy.spatial.transform import Rotation
@@ -174,7 +178,6 @@ def animate_tool(anim: Any, root: Any, route: Route, tool: Any, seconds: float, 
     T = np.tile(np.eye(4), (len(P), 1, 1))
     T[:, :3, :3] = R
     T[:, :3, 3] = P
-    gun.set_transform(T[0])
     for f, Tk in zip(frames, T, strict=True):
         with anim.at_frame(gun, int(f)) as frame:
             frame.set_transform(Tk)

@@ -4,6 +4,7 @@ Three ways to see the same scene (all built by :func:`build_scene`):
 
 - :func:`write_html` / :func:`static_html`: a self-contained HTML page (the meshcat viewer's
   JavaScript and every scene command inlined) that works offline, from a file or an e-mail;
+  :func:`weldplan.viz.png.render_png` renders it to a PNG for reports;
 - :func:`jupyter_view` (and :func:`weldplan.viz.show`): that page inline in a notebook cell;
 - :func:`view_route`: a live meshcat server (``weldplan view``), for stepping and inspecting.
 
@@ -11,17 +12,22 @@ The static page needs no meshcat server: the scene commands are recorded by
 :class:`RecordingWindow`, which packs them exactly as meshcat's own server does for
 ``Visualizer.static_html()`` (same scene tree, same msgpack blobs, same page template). The torch
 is a meshcat animation along the route at constant speed: the viewer's *Animations* panel plays,
-pauses and scrubs it (step it with the time slider).
+pauses and scrubs it (step it with the time slider). A route planned with a tool shows the tool at
+one weld at a time, picked by the weld slider laid over the page
+(:class:`~weldplan.viz.overlay.WeldSlider`); its animation along the transitions waits in the
+*Animations* panel.
 
-The scene is shown centred on the origin (grid and axes hidden) and scaled to about 2 viewer
-units (meshcat's camera is made for objects of a metre or two); the labels and sizes are relative
-to the part, so a door flange and a whole body both read well. Algorithms never import this module.
+The page opens framed on everything drawn, the part, the route and the tool at its weld poses
+(:func:`weldplan.viz.camera.frame_scene`: scaled to about 2 viewer units, centred on the origin,
+the camera on a diagonal, z up). Weld labels keep one size on the screen at any zoom
+(:data:`LABEL_SIZE`), white boxes drawn over everything. Algorithms never import this module.
 """
 
 from __future__ import annotations
 
 import base64
 import colorsys
+import functools
 import logging
 import os
 from os import PathLike
@@ -32,14 +38,27 @@ import numpy as np
 import trimesh
 from numpy.typing import NDArray
 
+from weldplan.viz.camera import FOV_DEG, SCENE_SIZE, frame_scene, scene_transform  # noqa: F401
+from weldplan.viz.overlay import WeldSlider
 from weldplan.weld.route import Route
 
 log = logging.getLogger(__name__)
 
-#: the scene spans about this many viewer units (meshcat's default camera sits ~3 units away)
-SCENE_SIZE = 2.0
 #: seconds the torch takes for the whole route in the animation
 ANIMATION_SECONDS = 20.0
+#: a label's height as a share of the view's height (its text is about 2/3 of it) ...
+LABEL_SCREEN_SHARE = 0.034
+#: the label images' font size (pixels; the texture's resolution, not the size on the screen)
+LABEL_FONT_PX = 40
+#: ... as the sprite's scale: three.js draws a sprite without size attenuation as if it stood
+#: at distance 1, where the view is 2 tan(fov / 2) high
+LABEL_SIZE = LABEL_SCREEN_SHARE * 2.0 * float(np.tan(np.radians(FOV_DEG) / 2))
+#: labels are drawn after everything else (three.js renderOrder), so the part never veils them
+LABEL_RENDER_ORDER = 1000
+#: a joint sphere's radius: this share of the framed scene's size ...
+JOINT_SHARE = 1.0 / 100.0
+#: ... but at most this share of the distance between the two closest joints
+JOINT_GAP_SHARE = 0.35
 
 
 def _meshcat() -> Any:
@@ -112,8 +131,9 @@ class RecordingWindow:
         else:
             raise ValueError(f"unsupported meshcat command {cmd!r}")
 
-    def get_scene(self, title: str = "weldplan route") -> str:
-        """The self-contained HTML page of the recorded scene."""
+    def get_scene(self, title: str = "weldplan route", overlay: str = "") -> str:
+        """The self-contained HTML page of the recorded scene, with ``overlay`` (HTML) laid over
+        it."""
         from meshcat.servers.tree import walk
         from meshcat.servers.zmqserver import VIEWER_ROOT
 
@@ -130,7 +150,7 @@ class RecordingWindow:
         # Commands are applied in order (each awaits the previous), like meshcat's server does
         # it, but as one chain so a property never arrives before its object.
         b64 = ",\n".join(f'"{base64.b64encode(b).decode("ascii")}"' for b in blobs)
-        return _PAGE.format(title=title, mainminjs=js, blobs=b64)
+        return _PAGE.format(title=title, mainminjs=js, blobs=b64, overlay=overlay)
 
     def close(self) -> None:
         pass
@@ -164,25 +184,45 @@ for (var i = 0; i < weldplanCommands.length; i++) {{
 }}
 document.title = "{title} (" + weldplanCommands.length + " scene commands)";
 </script>
+{overlay}
 </body>
 </html>
 """
 
 
 # ---------------------------------------------------------------------------- scene
-def _text_sprite(text: str, color: str = "#111111") -> Any:
-    """A camera-facing label (three.js Sprite with meshcat's ``_text`` canvas texture)."""
-    g = _meshcat().geometry
+@functools.lru_cache(maxsize=4096)
+def label_image(text: str) -> tuple[bytes, float, float]:
+    """``(PNG bytes, width / height, height / the box's height)``: ``text`` in black on a white
+    rounded box with a grey edge, readable over the part, the route and the background alike
+    (Pillow's own font, so no font file is needed). The box fills the image's top rows and the
+    rest is clear: the image's centre, where the sprite stands, is a third of the box's height
+    below the box, so the label sits over its weld without hiding it."""
+    import io
 
-    class TextTexture(g.Texture):
-        def lower(self, object_data: Any) -> dict[str, Any]:
-            return {
-                "uuid": self.uuid,
-                "type": "_text",
-                "text": text,
-                "font_size": 96,
-                "font_face": "sans-serif",
-            }
+    from PIL import Image, ImageDraw, ImageFont
+
+    font = ImageFont.load_default(size=LABEL_FONT_PX)
+    left, top, right, bottom = font.getbbox(text)
+    pad = LABEL_FONT_PX // 4
+    w, h = right - left + 2 * pad, LABEL_FONT_PX + 2 * pad
+    img = Image.new("RGBA", (w, 2 * (h + h // 3)), (0, 0, 0, 0))
+    draw = ImageDraw.Draw(img)
+    draw.rounded_rectangle((0, 0, w - 1, h - 1), radius=pad, fill=(255, 255, 255, 225),
+                           outline=(90, 90, 90, 255), width=2)  # fmt: skip
+    draw.text((pad - left, pad + (LABEL_FONT_PX - bottom - top) // 2), text, fill=(17, 17, 17, 255),
+              font=font)  # fmt: skip
+    out = io.BytesIO()
+    img.save(out, format="PNG")
+    return out.getvalue(), w / img.height, img.height / h
+
+
+def _text_sprite(text: str) -> Any:
+    """A camera-facing label (three.js Sprite textured with :func:`label_image`) of one size on
+    the screen whatever the zoom (no size attenuation), drawn over everything (no depth test,
+    drawn last); the object carries ``text`` as its name."""
+    g = _meshcat().geometry
+    png = label_image(text)[0]
 
     class SpriteMaterial(g.GenericMaterial):
         _type = "SpriteMaterial"
@@ -190,28 +230,32 @@ def _text_sprite(text: str, color: str = "#111111") -> Any:
     class Sprite(g.Object):
         _type = "Sprite"
 
-    material = SpriteMaterial(map=TextTexture(), transparent=True)
-    material.properties = {"depthTest": False, "sizeAttenuation": True}
+        def lower(self) -> dict[str, Any]:
+            data = super().lower()
+            data["object"]["renderOrder"] = LABEL_RENDER_ORDER  # after the see-through part
+            data["object"]["name"] = f"label {text}"
+            return data
+
+    material = SpriteMaterial(map=g.ImageTexture(g.PngImage(png)), transparent=True)
+    material.properties = {"depthTest": False, "sizeAttenuation": False}
     return Sprite(g.Sphere(1.0), material)
+
+
+def draw_label(node: Any, text: str, p: NDArray[np.float64], scale: float) -> None:
+    """Label ``text`` at ``p`` (mm) under ``node``, whose scene scale is ``scale`` (viewer units
+    per mm, :func:`~weldplan.viz.camera.frame_scene`): its box :data:`LABEL_SIZE` high on the
+    screen, above ``p`` (:func:`label_image`)."""
+    _, aspect, height = label_image(text)
+    node.set_object(_text_sprite(text))
+    T = _translation(p, scale=LABEL_SIZE * height / scale)
+    T[0, 0] *= aspect
+    node.set_transform(T)
 
 
 def _translation(p: NDArray[np.float64], scale: float = 1.0) -> NDArray[np.float64]:
     T = np.eye(4)
     T[:3, :3] *= scale
     T[:3, 3] = p
-    return T
-
-
-def scene_transform(points: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``(4, 4)`` mm -> viewer units: centred on the origin (where the camera looks), about
-    :data:`SCENE_SIZE` across; ``points (k, 3)`` mm are what must fit in the view."""
-    lo, hi = points.min(axis=0), points.max(axis=0)
-    extent = float(np.max(hi - lo)) or 1.0
-    s = SCENE_SIZE / extent
-    T = np.eye(4) * s
-    T[3, 3] = 1.0
-    centre = (lo + hi) / 2
-    T[:3, 3] = -s * centre
     return T
 
 
@@ -224,72 +268,94 @@ def build_scene(
     animate: bool = True,
     camera: bool = True,
     tool: Any = None,
-) -> None:
+) -> WeldSlider | None:
     """Draw ``route`` (and ``part``, a mesh or a Cell) into meshcat visualizer ``vis``.
 
     Paths under ``vis["weldplan"]``: ``part``, ``joints/<id>``, ``labels/<id>``,
     ``route/leg_<k>`` (one colour per leg), ``vias/leg_<k>``, ``torch``. A route that carries
     weld poses (``weldplan plan --tool``) also gets ``tool/...``: the ``tool``
-    (:class:`~weldplan.tool.model.Tool`) at its weld poses and the welds without a pose in red
-    (:func:`weldplan.viz.tool_scene.draw_tool`).
+    (:class:`~weldplan.tool.model.Tool`) at one weld pose and the welds without a pose in red
+    (:func:`weldplan.viz.tool_scene.draw_tool`); its animation along the transitions is loaded
+    paused. With ``camera`` the view is framed on everything drawn
+    (:func:`~weldplan.viz.camera.frame_scene`).
+
+    Returns
+    -------
+    WeldSlider or None
+        The weld slider that moves the tool (None without a tool drawn); :func:`static_html`
+        lays it over the page.
     """
     g = _meshcat().geometry
     mesh = _part_mesh(part)
     root = vis["weldplan"]
     root.delete()
-    r_joint, r_via = _frame(root, route, mesh)
+    r_joint, r_via, scale = _frame(vis, root, route, mesh, tool, camera)
     if mesh is not None:
         root["part"].set_object(
             g.TriangularMeshGeometry(np.asarray(mesh.vertices), np.asarray(mesh.faces)),
             g.MeshLambertMaterial(color=0x9AA6B2, opacity=0.55, transparent=True, side=2),
         )
-    _draw_joints(root, route, r_joint, labels)
+    _draw_joints(root, route, r_joint, scale if labels else 0.0)
     _draw_legs(root, route, r_via)
+    slider = None
     if route.tool:
         from weldplan.viz.tool_scene import draw_tool
 
-        draw_tool(root, route, tool, r_joint)
-    _draw_torch(vis, root, route, tool, r_joint, animate)
-    if camera:
-        # meshcat's camera frame is y-up: this looks down at the part from the front right
-        vis["/Cameras/default/rotated/<object>"].set_property("position", [1.3, 1.05, 1.65])
-        vis["/Grid"].set_property("visible", False)
-        vis["/Axes"].set_property("visible", False)
+        slider = draw_tool(root, route, tool, r_joint)
+    _draw_torch(vis, root, route, tool, r_joint, animate, play=slider is None)
     log.debug("scene: %d legs, %d joints", len(route.legs), len(route.joint_ids))
+    return slider
 
 
-def _frame(root: Any, route: Route, mesh: trimesh.Trimesh | None) -> tuple[float, float]:
-    """Set ``root``'s mm -> viewer transform (:func:`scene_transform`) and return the joint
-    and via sphere radii (mm, relative to the framed extent).
-
-    The frame holds the route (joints, legs and the tool's transitions), not the whole part: on
-    a car body the route would otherwise be a speck; the part is drawn around it (zoom out to
-    see all of it). A route of one point frames the part.
-    """
+def _frame(
+    vis: Any, root: Any, route: Route, mesh: trimesh.Trimesh | None, tool: Any, camera: bool
+) -> tuple[float, float, float]:
+    """Frame the scene on the part, the route (joints, legs, the tool's transitions) and the
+    tool at its first weld pose (:func:`~weldplan.viz.camera.frame_scene`); return the joint
+    and via sphere radii (mm, :func:`joint_radius`) and the scene's scale (viewer units per
+    mm)."""
     pts = [route.joint_xyz, *(leg.points for leg in route.legs)]
     if route.tool.get("transitions"):  # the tool's path too: its retracts and exits
         pts += [np.asarray(t["positions"]) for t in route.tool["transitions"]["transitions"]]
-    allp = np.concatenate(pts, axis=0)
-    if len(allp) < 2 or np.ptp(allp, axis=0).max() < 1e-6:
-        if mesh is not None:
-            allp = np.concatenate([allp, np.asarray(mesh.vertices)], axis=0)
-    root.set_transform(scene_transform(allp))
-    extent = float(np.max(allp.max(axis=0) - allp.min(axis=0))) or 1.0
-    return extent / 120.0, extent / 300.0
+    framed = [np.concatenate(pts, axis=0)]
+    if mesh is not None:
+        framed.append(np.asarray(mesh.vertices))
+    if route.tool and tool is not None:
+        from weldplan.viz.tool_scene import tool_corners
+
+        framed.append(tool_corners(route, tool))
+    framed_p = np.concatenate(framed, axis=0)
+    scale = frame_scene(vis, root, framed_p, camera=camera)
+    r_joint = joint_radius(route.joint_xyz, float(np.ptp(framed_p, axis=0).max()) or 1.0)
+    return r_joint, 0.4 * r_joint, scale
 
 
-def _draw_joints(root: Any, route: Route, r_joint: float, labels: bool) -> None:
-    """``joints/<id>`` spheres (red where visited, grey where not) and ``labels/<id>``."""
+def joint_radius(joints: NDArray[np.float64], size: float) -> float:
+    """A joint sphere's radius (mm): :data:`JOINT_SHARE` of the framed ``size`` (mm), so the
+    joints show in the opening view, but at most :data:`JOINT_GAP_SHARE` of the gap between
+    the two closest of ``joints (n, 3)`` mm, so neighbours never merge (and at least a
+    thousandth of ``size``)."""
+    r = JOINT_SHARE * size
+    P = np.asarray(joints, dtype=np.float64).reshape(-1, 3)
+    if len(P) > 1:
+        from scipy.spatial import cKDTree
+
+        gap = float(cKDTree(P).query(P, k=2)[0][:, 1].min())
+        r = min(r, JOINT_GAP_SHARE * gap)
+    return max(r, 1e-3 * size)
+
+
+def _draw_joints(root: Any, route: Route, r_joint: float, label_scale: float) -> None:
+    """``joints/<id>`` spheres (red where visited, grey where not) and, with ``label_scale``
+    (the scene's scale, 0 for none), ``labels/<id>``."""
     g = _meshcat().geometry
     visited = set(route.order)
     for jid, p in zip(route.joint_ids, route.joint_xyz, strict=True):
         color = 0xD62728 if jid in visited else 0x7F7F7F
         root["joints"][jid].set_object(g.Sphere(r_joint), g.MeshLambertMaterial(color=color))
         root["joints"][jid].set_transform(_translation(p))
-        if labels:
-            lab = root["labels"][jid]
-            lab.set_object(_text_sprite(jid))
-            lab.set_transform(_translation(p + [0.0, 0.0, 3.5 * r_joint], scale=14.0 * r_joint))
+        if label_scale:
+            draw_label(root["labels"][jid], jid, p + [0.0, 0.0, 2.0 * r_joint], label_scale)
 
 
 def _draw_legs(root: Any, route: Route, r_via: float) -> None:
@@ -317,11 +383,11 @@ def _draw_legs(root: Any, route: Route, r_via: float) -> None:
 
 
 def _draw_torch(
-    vis: Any, root: Any, route: Route, tool: Any, r_joint: float, animate: bool
+    vis: Any, root: Any, route: Route, tool: Any, r_joint: float, animate: bool, *, play: bool
 ) -> None:
     """The ``torch`` cone at the first waypoint and, with ``animate``, its animation along
     the route at constant speed (:data:`ANIMATION_SECONDS`, 30 frames a second; the tool's
-    too when the route carries one)."""
+    too when the route carries one), playing at once with ``play``."""
     from meshcat.animation import Animation
 
     g = _meshcat().geometry
@@ -344,7 +410,7 @@ def _draw_torch(
             from weldplan.viz.tool_scene import animate_tool
 
             animate_tool(anim, root, route, tool, ANIMATION_SECONDS, 30)
-        vis.set_animation(anim, play=True, repetitions=1000)
+        vis.set_animation(anim, play=play, repetitions=1000)
 
 
 def _torch_pose(p: NDArray[np.float64], r_joint: float) -> NDArray[np.float64]:
@@ -377,8 +443,9 @@ def static_html(route: Route, part: Any = None, **kwargs: Any) -> str:
     mc = _meshcat()
     window = RecordingWindow()
     vis = mc.Visualizer(window=window)
-    build_scene(vis, route, part, **kwargs)
-    return window.get_scene(title=f"weldplan route: {len(route.joint_ids)} joints")
+    slider = build_scene(vis, route, part, **kwargs)
+    title = f"weldplan route: {len(route.joint_ids)} joints"
+    return window.get_scene(title=title, overlay="" if slider is None else slider.html())
 
 
 def write_html(route: Route, part: Any, path: str | PathLike[str], **kwargs: Any) -> Path:
