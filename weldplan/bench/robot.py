@@ -222,7 +222,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from weldplan.bench.robot_runs import format_table, run_all
+    from weldplan.bench.robot_runs import format_row, format_table, run_all, table_head
 
     try:
         if args.station:
@@ -237,12 +237,16 @@ def run(args: argparse.Namespace) -> int:
             )  # fmt: skip
             name = f"robot-{args.n}-{args.tool}" + (f"-up{args.up}" if args.up else "")
         seeds = args.seeds or ((0,) if args.seed is None else (args.seed,))
-        rows = run_all(st, seeds, tuple(args.yaw_offsets))
+        if not args.json:  # the rows as they come: a long bench shows its progress
+            print("\n".join(table_head(name)), flush=True)
+        show = None if args.json else (lambda r: print(format_row(r), flush=True))
+        rows = run_all(st, seeds, tuple(args.yaw_offsets), on_row=show)
     except WeldplanError as exc:
         print(f"error: {exc}")
         return 2
     text = json.dumps([r.to_dict() for r in rows], indent=1)
-    print(text if args.json else format_table(rows, title=name))
+    if args.json:
+        print(text)
     folder = getattr(args, "out", None)
     if folder:
         Path(folder).mkdir(parents=True, exist_ok=True)

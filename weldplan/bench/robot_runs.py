@@ -28,7 +28,7 @@ import hashlib
 import logging
 import os
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -187,10 +187,14 @@ def turned(station: Any, base: tuple[float, ...], offset: float) -> Any:
 
 
 def run_all(
-    station: Any, seeds: tuple[int, ...], yaw_offsets: tuple[float, ...] = ()
+    station: Any,
+    seeds: tuple[int, ...],
+    yaw_offsets: tuple[float, ...] = (),
+    on_row: Callable[[RunRow], None] | None = None,
 ) -> list[RunRow]:
-    """A row per seed, then per yaw offset (module docstring). The offsets need a robot; the
-    seed-0 run is made first when ``seeds`` lacks it."""
+    """A row per seed, then per yaw offset (module docstring), each given to ``on_row`` as soon
+    as it is made. The offsets need a robot; the seed-0 run is made first when ``seeds`` lacks
+    it."""
     if yaw_offsets and not station.robots:
         raise WeldplanError("--yaw-offsets needs a station with a robot")
     rows: list[RunRow] = []
@@ -200,39 +204,47 @@ def run_all(
     for s in order:
         where = "base searched" if station.robots and station.robots[0].base is None else "base"
         rows.append(run_one(station, s, f"seed {s}, {where}"))
-        log.info("%s", rows[-1])
+        if on_row is not None:
+            on_row(rows[-1])
     if yaw_offsets:
         ref = next(r for r in rows if r.seed == 0)
         if ref.base is None:
             raise WeldplanError(f"the seed-0 run has no base to turn ({ref.note})")
         for off in yaw_offsets:
             rows.append(run_one(turned(station, ref.base, off), 0, f"seed-0 base {off:+g} deg"))
-            log.info("%s", rows[-1])
+            if on_row is not None:
+                on_row(rows[-1])
     return rows
+
+
+def table_head(title: str = "") -> list[str]:
+    """The lines of the table above its rows (:func:`format_table`)."""
+    head = (
+        "| run | base x, y, z mm, yaw deg | in program / reachable / total | flips | verified | "
+        + " | ".join(f"{s} s" for s in TABLE_STAGES)
+        + " | wall s | CPU s | load | digest | note |"
+    )
+    sep = "|" + "---|" * (head.count("|") - 1)
+    return ([f"### {title}", ""] if title else []) + [head, sep]
+
+
+def format_row(r: RunRow) -> str:
+    """One run as a table row; a stage cell is ``wall s (CPU s)``, load the 1-min average at
+    the run's end."""
+    base = "-" if r.base is None else ", ".join(f"{v:.0f}" for v in r.base[:3])
+    if r.base is not None:
+        base += f", {r.base[3]:.1f}"
+    stages = " | ".join(
+        f"{r.wall_s[s]:.1f} ({r.cpu_s.get(s, float('nan')):.1f})" if s in r.wall_s else "-"
+        for s in TABLE_STAGES
+    )
+    return (
+        f"| {r.label} | {base} | {r.in_program} / {r.reachable} / {r.total} | {r.flips} | "
+        f"{r.verified} | {stages} | {r.wall_total:.1f} | {r.cpu_total:.1f} | {r.load[0]:.1f} | "
+        f"{r.digest} | {r.note} |"
+    )
 
 
 def format_table(rows: list[RunRow], title: str = "") -> str:
     """A markdown table: one row per run (module docstring)."""
-    head = (
-        "| run | base x, y, z mm, yaw deg | in program / reachable / total | flips | verified | "
-        + " | ".join(f"{s} s" for s in TABLE_STAGES)
-        + " | wall s | CPU s | digest | note |"
-    )
-    out = [f"### {title}" if title else "", head, "|" + "---|" * (head.count("|") - 1)]
-    for r in rows:
-        base = "-" if r.base is None else ", ".join(f"{v:.0f}" for v in r.base[:3])
-        if r.base is not None:
-            base += f", {r.base[3]:.1f}"
-        stages = " | ".join(
-            f"{r.wall_s[s]:.1f} ({r.cpu_s.get(s, float('nan')):.1f})" if s in r.wall_s else "-"
-            for s in TABLE_STAGES
-        )
-        out.append(
-            f"| {r.label} | {base} | {r.in_program} / {r.reachable} / {r.total} | {r.flips} | "
-            f"{r.verified} | {stages} | {r.wall_total:.1f} | {r.cpu_total:.1f} | {r.digest} | "
-            f"{r.note} |"
-        )
-    out.append("stage cells: wall s (CPU s); load average at the end of each run: " + ", ".join(
-        f"{r.load[0]:.1f}" for r in rows
-    ))  # fmt: skip
-    return "\n".join(line for line in out if line)
+    return "\n".join([*table_head(title), *(format_row(r) for r in rows)])
