@@ -24,9 +24,10 @@ it and writes a station of spots along its top edge, labelled *synthetic*:
 
 Everything is a function of the mesh, ``n`` and ``seed``: the same call gives the same spots.
 The wall is found by this module's own ray test, not by
-:func:`weldplan.geometry.flanges.find_flanges`: that finder reads this wall as a zero-thickness
-single skin (the wall's two faces belong to one open surface whose faces are not oriented as a
-closed body's, so its entry/exit pairing fails).
+:func:`weldplan.geometry.flanges.find_flanges`: car2 models this wall as two separate open
+surfaces (two connected components, each face's normal pointing out of the slab) about 9 mm
+apart, which that finder reads as two zero-thickness single skins (a wall there is one closed
+body, and two sheets are a stack only within ``max_gap`` = 4 mm).
 """
 
 from __future__ import annotations
