@@ -103,7 +103,7 @@ def test_one_run_is_one_row_of_the_pipeline_with_cpu_per_stage(tmp_path, capsys)
     assert list(row["wall_s"]) == stages and set(row["cpu_s"]) >= set(stages[3:])
     assert all(v >= 0 for v in row["cpu_s"].values()) and row["cpu_total"] > 0
     table = (out / "box.md").read_text()
-    assert "| seed 0, base | -1800, 0, -700, 0.0 | 4 / 4 / 4 | 0 | ok |" in table
+    assert "| seed 0, base | -1800.0, 0.0, -700.0, 0.0 | 4 / 4 / 4 | 0 | ok |" in table
     assert json.loads((out / "box.json").read_text()) == [row]
 
 

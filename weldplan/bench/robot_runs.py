@@ -14,6 +14,7 @@ that offset. Each run gives a :class:`RunRow`:
 - **verified**: the robot route re-checked by :func:`weldplan.robot.routejson.verify_robot_route`
   (FK, joint limits, robot + tool collision on the whole path, the code ``weldplan verify --robot``
   runs): ``ok``, ``partial`` (checked, but welds are left out) or ``FAIL``;
+- the robot walk's work (detours, transfers, OMPL runs, traps: what a slow robot stage spent);
 - wall and CPU seconds per stage (CPU: this process and its finished children, so that a shared
   machine's load shows apart), and a **digest** of the route (order, base, joint path): two runs
   with the same digest gave the same program.
@@ -62,10 +63,11 @@ class RunRow:
     digest: str = ""
     note: str = ""
     load: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    walk: Mapping[str, Any] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
-        d["wall_s"], d["cpu_s"] = dict(self.wall_s), dict(self.cpu_s)
+        d["wall_s"], d["cpu_s"], d["walk"] = dict(self.wall_s), dict(self.cpu_s), dict(self.walk)
         return d
 
 
@@ -150,6 +152,7 @@ def run_one(station: Any, seed: int, label: str) -> RunRow:
         )  # fmt: skip
     wall, cpu = round(time.perf_counter() - t0, 2), round(_cpu() - c0, 2)
     total = len(p.cell.joints.ids)
+    walk: dict[str, Any] = {}
     if p.robot is None:
         served = reach = flips = 0
         base, verified = given, "-"
@@ -160,12 +163,25 @@ def run_one(station: Any, seed: int, label: str) -> RunRow:
         xyz_yaw = rr.stats["placement"]["base_xyz_yaw"]
         base = tuple(round(float(v), 3) for v in xyz_yaw)
         verified = _verified(p)
+        walk = dict(rr.stats.get("walk", {}))
+        walk["detours"] = len(rr.replanned)
     return RunRow(
         label, seed, base, given is None, served, reach, total, flips, verified,
         wall_s={s.name: round(s.seconds, 2) for s in p.stages}, cpu_s=dict(clock.cpu),
         wall_total=wall, cpu_total=cpu, digest=_digest(p), note="; ".join(p.partial())[:300],
-        load=os.getloadavg(),
+        load=os.getloadavg(), walk=walk,
     )  # fmt: skip
+
+
+def _walk_cell(w: Mapping[str, Any]) -> str:
+    """``detours; transfers found/tried; OMPL solved/runs CPU s; traps`` of the robot's walk."""
+    if not w:
+        return "-"
+    return (
+        f"{w.get('detours', 0)}; {w.get('transfers_found', 0)}/{w.get('transfers', 0)}; "
+        f"{w.get('ompl_solved', 0)}/{w.get('ompl_runs', 0)} {w.get('ompl_cpu_s', 0.0):.0f} s; "
+        f"{w.get('traps', 0)}"
+    )
 
 
 def _n_welds(station: Any) -> int:
@@ -222,16 +238,18 @@ def table_head(title: str = "") -> list[str]:
     head = (
         "| run | base x, y, z mm, yaw deg | in program / reachable / total | flips | verified | "
         + " | ".join(f"{s} s" for s in TABLE_STAGES)
-        + " | wall s | CPU s | load | digest | note |"
+        + " | walk | wall s | CPU s | load | digest | note |"
     )
     sep = "|" + "---|" * (head.count("|") - 1)
     return ([f"### {title}", ""] if title else []) + [head, sep]
 
 
 def format_row(r: RunRow) -> str:
-    """One run as a table row; a stage cell is ``wall s (CPU s)``, load the 1-min average at
-    the run's end."""
-    base = "-" if r.base is None else ", ".join(f"{v:.0f}" for v in r.base[:3])
+    """One run as a table row; a stage cell is ``wall s (CPU s)``; walk: the robot walk's
+    detours; transfers found / tried; OMPL runs solved / run and their CPU s; welds set aside
+    as traps (:class:`~weldplan.robot.walkstats.WalkStats`); load the 1-min average at the
+    run's end."""
+    base = "-" if r.base is None else ", ".join(f"{v:.1f}" for v in r.base[:3])
     if r.base is not None:
         base += f", {r.base[3]:.1f}"
     stages = " | ".join(
@@ -240,8 +258,8 @@ def format_row(r: RunRow) -> str:
     )
     return (
         f"| {r.label} | {base} | {r.in_program} / {r.reachable} / {r.total} | {r.flips} | "
-        f"{r.verified} | {stages} | {r.wall_total:.1f} | {r.cpu_total:.1f} | {r.load[0]:.1f} | "
-        f"{r.digest} | {r.note} |"
+        f"{r.verified} | {stages} | {_walk_cell(r.walk)} | {r.wall_total:.1f} | "
+        f"{r.cpu_total:.1f} | {r.load[0]:.1f} | {r.digest} | {r.note} |"
     )
 
 
