@@ -265,15 +265,16 @@ def test_bench_robot_runs_the_pipeline_on_a_station_file(box, capsys):
     """``weldplan bench robot --station FILE`` is :func:`weldplan.plan`: its stages, its route."""
     import weldplan
     from weldplan.bench import robot as bench
+    from weldplan.bench.robot_runs import _digest
 
     tmp, _, _, head = box
     toml = _write(tmp, head + "\n[cell]\nmargin = 50\n")
-    assert bench.main(["--station", str(toml)]) == 0
-    out = json.loads(capsys.readouterr().out)
-    assert list(out["seconds_by_stage"]) == ["cell", "route", "verify"]
+    assert bench.main(["--station", str(toml), "--json"]) == 0
+    (out,) = json.loads(capsys.readouterr().out)
+    assert list(out["wall_s"]) == ["cell", "route", "verify"]
     p = weldplan.plan(weldplan.load_station(toml), rng=0)
-    assert out["order"] == "-".join(p.route.order) and out["joints"] == len(p.cell.joints.ids)
-    assert out["route_mm"] == round(p.route.length, 2) and out["not_served"] == []
+    assert out["digest"] == _digest(p) and out["total"] == len(p.cell.joints.ids)
+    assert out["note"] == "" and out["verified"] == "-" and out["in_program"] == 0
 
 
 def test_bench_robot_builds_the_car2_station_it_names():

@@ -1,17 +1,20 @@
-"""``weldplan bench robot``: the whole pipeline users run, on a car2 station, timed by stage.
+"""``weldplan bench robot``: the whole pipeline users run, on a station, per seed and per base.
 
-The station (:func:`car2_station`): car2 (``../shared/data/bodies/car2.obj`` scaled to 4500 mm)
-with the synthetic ``n``-joint set of ``assets/car2/car2_synthetic_{n}.csv``
-(:mod:`weldplan.weld.synthetic`, seed 0, SYNTHETIC spots; n = 50, 200, 1000 or 4000), the shared
-spot gun or the built-in straight arc torch on the KUKA KR 150 R3100-2, its base searched on the
-floor (the part's lowest point) or given with ``--robot-base``. ``--station FILE`` runs any
-station file instead (docs/station.md).
+The station (:func:`car2_station`): car2 (``../shared/data/bodies/car2.obj`` scaled to 4500 mm,
+``--up y`` stands it upright in the cell) with the synthetic ``n``-joint set of
+``assets/car2/car2_synthetic_{n}.csv`` (:mod:`weldplan.weld.synthetic`, seed 0, SYNTHETIC spots;
+n = 50, 200, 1000 or 4000), the shared spot gun or the built-in straight arc torch on the KUKA
+KR 150 R3100-2, its base searched on the floor or given with ``--robot-base``. ``--station FILE``
+runs any station file instead (docs/station.md), e.g. ``examples/car2_wall_station.toml``.
 
-It runs :func:`weldplan.plan`, the same call as ``weldplan plan`` (the point-tip route, the
+Each run is :func:`weldplan.plan`, the same call as ``weldplan plan`` (the point-tip route, the
 reach test, the tool poses and transitions, the joint route with its detours, the timing and
-the program), and reports each stage's wall seconds, the process's CPU seconds and the load.
-The issue-17 target (the robot stage of a 200-joint station in <= 30 s on 2 cores) is the
-``robot`` stage's figure.
+the program): one per seed of ``--seeds`` (``0-4``), then, with ``--yaw-offsets``, one per
+offset with the seed-0 searched base given turned by it (issue 27's perturbed bases). It prints
+one table row per run (:mod:`weldplan.bench.robot_runs`): welds in the program / reachable at
+that base / total, flips, the robot route's independent re-check, wall and CPU seconds per
+stage, and a digest of the route (equal digests: the same program). ``--json`` prints the rows
+as JSON; ``--out`` keeps both.
 
 :func:`station` and :func:`straight_route` keep the earlier set-up (straight legs through the
 spots' virtual joints, the gun poses of :func:`weldplan.tool.plan_weld_poses`) for the scripts
@@ -23,7 +26,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
-import os
+import math
 import time
 from pathlib import Path
 from typing import Any
@@ -95,6 +98,43 @@ def station(
     return part, route, poses, gun
 
 
+#: the up axes ``--up`` takes (:data:`weldplan.cellframe.UP_AXES`)
+UP_CHOICES = ("x", "y", "z", "-x", "-y", "-z")
+
+
+def parse_seeds(text: str) -> tuple[int, ...]:
+    """``"0-4"`` -> ``(0, 1, 2, 3, 4)``, ``"0,3,7"`` -> ``(0, 3, 7)``, ``"5"`` -> ``(5,)``:
+    integers >= 0, each once, in the order given."""
+    out: list[int] = []
+    try:
+        for part in text.split(","):
+            a, sep, b = part.strip().partition("-")
+            lo, hi = int(a), int(b) if sep else int(a)
+            if lo < 0 or hi < lo:
+                raise ValueError
+            out += [k for k in range(lo, hi + 1) if k not in out]
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"seeds must be A-B or A,B,... (integers >= 0, A <= B), got {text!r}"
+        ) from None
+    return tuple(out)
+
+
+def parse_offsets(text: str) -> tuple[float, ...]:
+    """``"-30,-15,15,30"`` -> ``(-30.0, -15.0, 15.0, 30.0)`` (degrees, finite, each once)."""
+    try:
+        out = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        out = ()
+    if not out or not all(math.isfinite(v) and abs(v) <= 180.0 for v in out):
+        raise argparse.ArgumentTypeError(
+            f"yaw offsets must be degrees in [-180, 180] separated by commas, got {text!r}"
+        )
+    if len(set(out)) != len(out):
+        raise argparse.ArgumentTypeError(f"yaw offsets repeat a value: {text!r}")
+    return out
+
+
 #: flange -> TCP of the straight arc torch: its TCP 425 mm out along the flange's z axis
 #: (stick-out 15 + nozzle 60 + neck 150 + body 200 mm, the body's end on the flange)
 TORCH_REACH_MM = 425.0
@@ -104,9 +144,13 @@ TORCH_REACH_MM = 425.0
 TORCH_MASS_KG = 5.0
 
 
-def car2_station(n: int, tool_name: str = "gun", base: str | None = None, **kw: Any) -> Any:
-    """The ``n``-joint car2 :class:`~weldplan.station.model.Station` (module docstring); ``kw``:
-    ``search_step`` (mm), ``cone`` (deg, the gun-pose search's tilt)."""
+def car2_station(
+    n: int, tool_name: str = "gun", base: str | None = None, up: str | None = None, **kw: Any
+) -> Any:
+    """The ``n``-joint car2 :class:`~weldplan.station.model.Station` (module docstring), stood
+    with its ``up`` axis to the cell's +z when given (``"y"``: car2 upright, docs/cell-frame.md);
+    ``kw``: ``search_step`` (mm), ``cone`` (deg, the gun-pose search's tilt)."""
+    from weldplan.cellframe import PartPose
     from weldplan.station import model as m
     from weldplan.tool.torch import SHARED_GUN_DIR
     from weldplan.weld.synthetic import CAR2
@@ -128,47 +172,11 @@ def car2_station(n: int, tool_name: str = "gun", base: str | None = None, **kw: 
         robots=(robot,),
         tool=m.ToolSettings(cone=kw.get("cone", m.ToolSettings.cone)),
         name=f"car2_{n}",
+        part_pose=None if up is None else PartPose.from_up(up),
     )
 
 
-def measure(station: Any, seed: int = 0) -> dict:
-    """Plan ``station`` (:func:`weldplan.plan`) and return its figures."""
-    import weldplan
-
-    t0 = time.perf_counter()
-    c0 = time.process_time()
-    p = weldplan.plan(station, rng=seed)
-    total, cpu = time.perf_counter() - t0, time.process_time() - c0
-    out: dict[str, Any] = {
-        "station": str(station.source or station.name),
-        "joints": len(p.cell.joints.ids),
-        "order": "-".join(p.route.order),
-        "route_mm": round(p.route.length, 2),
-    }
-    if p.poses is not None:
-        out["tool_poses_ok"] = p.poses.poses.n_ok
-        out["transitions_blocked"] = len(p.transitions.path.blocked)
-    if p.robot is not None:
-        rr = p.robot.robot_route
-        out.update(
-            welds={s: rr.status.count(s) for s in sorted(set(rr.status))},
-            flips=len(rr.flips),
-            replanned_legs=len(rr.replanned),
-            base_xyz_yaw=[round(v, 1) for v in rr.stats["placement"]["base_xyz_yaw"]],
-            collision_free=rr.stats.get("collision_free"),
-            fk_max_error_mm=rr.stats["fk_max_error_mm"],
-            cycle_s=round(p.program.timing.total, 3),
-        )
-    out["not_served"] = p.partial()
-    out["seconds_by_stage"] = {s.name: round(s.seconds, 2) for s in p.stages}
-    out["seconds_total"] = round(total, 2)
-    # CPU seconds of this process (all its threads): the wall time's share of a loaded box
-    out["cpu_seconds_total"] = round(cpu, 2)
-    out["load_average"] = os.getloadavg()
-    return out
-
-
-HELP = "the whole pipeline (weldplan.plan) on a car2 station, timed by stage"
+HELP = "the whole pipeline (weldplan.plan) on a car2 station, timed by stage, per seed and base"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -187,11 +195,35 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         default="gun",
         help="the shared spot gun (default) or the built-in straight arc torch",
     )
+    p.add_argument(
+        "--up",
+        choices=UP_CHOICES,
+        default=None,
+        help="stand car2 with this axis up in the cell (y: upright; default: the part frame)",
+    )
     p.add_argument("--station", metavar="TOML", help="run this station file instead")
-    p.add_argument("--seed", type=int, default=0, help="the run's seed (default 0)")
+    p.add_argument("--seed", type=int, default=None, help="the run's seed (default 0)")
+    p.add_argument(
+        "--seeds",
+        type=parse_seeds,
+        default=None,
+        metavar="A-B|A,B,...",
+        help="one run per seed, e.g. 0-4 (default 0)",
+    )
+    p.add_argument(
+        "--yaw-offsets",
+        type=parse_offsets,
+        default=(),
+        metavar="DEG,...",
+        help="then one seed-0 run per offset, the base given at the seed-0 searched base turned "
+        "by that many degrees about +z (write --yaw-offsets=-30,-15,15,30)",
+    )
+    p.add_argument("--json", action="store_true", help="print the runs as JSON, not the table")
 
 
 def run(args: argparse.Namespace) -> int:
+    from weldplan.bench.robot_runs import format_row, format_table, run_all, table_head
+
     try:
         if args.station:
             from weldplan.station import load_station
@@ -200,20 +232,26 @@ def run(args: argparse.Namespace) -> int:
             name = Path(args.station).stem
         else:
             st = car2_station(
-                args.n, args.tool, args.robot_base, search_step=args.search_step,
+                args.n, args.tool, args.robot_base, args.up, search_step=args.search_step,
                 cone=args.pose_cone,
             )  # fmt: skip
-            name = f"robot-{args.n}-{args.tool}"
-        out = measure(st, args.seed)
+            name = f"robot-{args.n}-{args.tool}" + (f"-up{args.up}" if args.up else "")
+        seeds = args.seeds or ((0,) if args.seed is None else (args.seed,))
+        if not args.json:  # the rows as they come: a long bench shows its progress
+            print("\n".join(table_head(name)), flush=True)
+        show = None if args.json else (lambda r: print(format_row(r), flush=True))
+        rows = run_all(st, seeds, tuple(args.yaw_offsets), on_row=show)
     except WeldplanError as exc:
         print(f"error: {exc}")
         return 2
-    text = json.dumps(out, indent=1)
-    print(text)
+    text = json.dumps([r.to_dict() for r in rows], indent=1)
+    if args.json:
+        print(text)
     folder = getattr(args, "out", None)
     if folder:
         Path(folder).mkdir(parents=True, exist_ok=True)
         (Path(folder) / f"{name}.json").write_text(text + "\n")
+        (Path(folder) / f"{name}.md").write_text(format_table(rows, title=name) + "\n")
     return 0
 
 
