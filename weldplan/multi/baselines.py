@@ -80,11 +80,20 @@ def allocation_report(
     *,
     rng: RNGLike = None,
     settings: AllocationSettings | None = None,
+    bound_travel: Sequence[ArrayLike] | ArrayLike | None = None,
 ) -> AllocationReport:
     """Our allocation (:func:`weldplan.multi.allocate`, same arguments), its lower bound and
-    the two baselines (module docstring), every order by the same sequencer and polish."""
+    the two baselines (module docstring), every order by the same sequencer and polish.
+
+    ``bound_travel``: move times (``R`` matrices ``(W, W)`` s) never above the
+    real ones, for the bound only (e.g. :mod:`weldplan.robot.legtime`'s ``bound`` over every
+    branch while ``travel`` is its ``cost`` on the station branch): the bound is then one of
+    the timed cycle, not only of the cycle over ``travel``. Default: ``travel``."""
     settings = settings or AllocationSettings()
     problem = AllocationProblem.build(reach, weld_time, travel, settings.closed)
+    for_bound = problem
+    if bound_travel is not None:
+        for_bound = AllocationProblem.build(problem.reach, weld_time, bound_travel, settings.closed)
     seed = seed_of(rng)
     gen = as_generator(rng)
     ours = allocate(problem.reach, problem.weld_time, problem.travel, rng=gen, settings=settings)
@@ -95,7 +104,7 @@ def allocation_report(
     sub = int(gen.integers(2**31))
     return AllocationReport(
         ours=ours,
-        bound=lower_bound(problem),
+        bound=lower_bound(for_bound),
         nearest=nearest_robot(problem, rng=sub, kicks=settings.final_kicks),
         one_robot=one_robot(problem, rng=sub, kicks=settings.final_kicks),
     )

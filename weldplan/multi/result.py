@@ -245,23 +245,27 @@ class AllocationReport:
 
     def rows(self) -> list[tuple[str, float | None, float | None]]:
         """``(what, cycle s or None, over the bound or None)`` for the table a run prints:
-        one robot, nearest robot, ours, the bound."""
+        one robot, nearest robot, ours, the bound (:attr:`LowerBound.name` says which)."""
         b = self.bound.value
         out: list[tuple[str, float | None, float | None]] = []
         for name, a in (("one robot", self.one_robot), ("nearest robot", self.nearest)):
             c = None if a is None else a.cycle_time
             out.append((name, c, None if c is None or b <= 0 else c / b - 1.0))
         out.append(("ours", self.ours.cycle_time, self.gap if b > 0 else None))
-        out.append((f"lower bound ({self.bound.name})", b, None))
+        out.append(("lower bound", b, None))
         return out
 
     def lines(self) -> list[str]:
         """The table as text lines (the library never prints; the CLI does)."""
-        out = [f"{'allocation':<48} {'cycle s':>9} {'vs bound':>9}"]
+        out = [f"{'allocation':<16} {'cycle s':>9} {'vs bound':>9}"]
         for name, c, g in self.rows():
             cs = "-" if c is None else f"{c:9.2f}"
             gs = "" if g is None else f"{100 * g:+8.1f}%"
-            out.append(f"{name:<48} {cs:>9} {gs:>9}")
+            out.append(f"{name:<16} {cs:>9} {gs:>9}")
+        out.append(f"bound: {self.bound.name}")
+        if self.ours.unreached:
+            out.append(f"{len(self.ours.unreached)} welds no robot reaches:")
+            out += [f"  {u.weld}: {'; '.join(u.reasons)}" for u in self.ours.unreached]
         return out
 
     def to_dict(self) -> dict[str, Any]:
