@@ -166,8 +166,9 @@ def test_bound_parts_are_valid_alone():
             assert is_metric(T[r][np.ix_(idx, idx)])
         exact = exact_optimum(reach, wt, T, False)
         b = lower_bound(AllocationProblem.build(reach, wt, T, False))
-        assert b.lp <= exact + 1e-9 and b.unique <= exact + 1e-9
-        assert b.value == max(b.lp, b.unique)
+        assert b.lp <= exact + 1e-9 and b.unique <= exact + 1e-9 and b.integer <= exact + 1e-9
+        assert b.integer >= b.lp - 1e-6
+        assert b.value == max(b.lp, b.unique, b.integer)
 
 
 def test_unique_reach_bound_is_tight_when_one_robot_serves_all():

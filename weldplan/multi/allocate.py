@@ -115,13 +115,16 @@ def initial_assignment(
     if not ok.any():
         return assign, {"start": "none", "milp_status": "no weld served"}
     cost = problem.weld_time + problem.share
-    rob, weld, (c, A_ub, b_ub, A_eq, b_eq) = assignment_model(problem, cost, None)
-    K = len(rob)
+    m = assignment_model(problem, cost, bound=False)
+    rob, weld, K = m.rob, m.weld, len(m.rob)
     res = milp(
-        c,
-        constraints=[LinearConstraint(A_ub, -np.inf, b_ub), LinearConstraint(A_eq, b_eq, b_eq)],
-        integrality=np.r_[np.ones(K), 0.0],
-        bounds=Bounds(0.0, np.r_[np.ones(K), np.inf]),
+        m.c,
+        constraints=[
+            LinearConstraint(m.A_ub, -np.inf, m.b_ub),
+            LinearConstraint(m.A_eq, m.b_eq, m.b_eq),
+        ],
+        integrality=m.integrality,
+        bounds=Bounds(0.0, m.upper),
         options={
             "node_limit": settings.milp_nodes,
             "mip_rel_gap": settings.milp_gap,

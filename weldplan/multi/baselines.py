@@ -104,7 +104,7 @@ def allocation_report(
     sub = int(gen.integers(2**31))
     return AllocationReport(
         ours=ours,
-        bound=lower_bound(for_bound),
+        bound=lower_bound(for_bound, nodes=settings.milp_nodes, seconds=settings.milp_seconds),
         nearest=nearest_robot(problem, rng=sub, kicks=settings.final_kicks),
         one_robot=one_robot(problem, rng=sub, kicks=settings.final_kicks),
     )

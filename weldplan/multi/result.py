@@ -85,7 +85,7 @@ class LowerBound:
     Attributes
     ----------
     value
-        s: ``max(lp, unique)``.
+        s: ``max(integer, lp, unique)``.
     name
         What it is, in words (the binding term first).
     lp
@@ -98,6 +98,10 @@ class LowerBound:
     unique_method
         How ``unique``'s route part was bounded: ``"held-karp"``, ``"1-tree"`` or
         ``"shares"``.
+    integer
+        s: HiGHS's dual bound of the same assignment in integers (0 when it found none).
+    status
+        HiGHS's word on that integer search (optimal, node limit, time limit).
     """
 
     value: float
@@ -106,6 +110,8 @@ class LowerBound:
     unique: float
     unique_robot: str = ""
     unique_method: str = ""
+    integer: float = 0.0
+    status: str = ""
 
     def to_dict(self) -> dict[str, Any]:
         return dict(self.__dict__)
@@ -119,6 +125,8 @@ class LowerBound:
             float(d["unique"]),
             str(d.get("unique_robot", "")),
             str(d.get("unique_method", "")),
+            float(d.get("integer", 0.0)),
+            str(d.get("status", "")),
         )
 
 
