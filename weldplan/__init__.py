@@ -44,6 +44,8 @@ _LAZY: dict[str, str] = {
     "Plan": "weldplan.station.pipeline",
     "write_plan": "weldplan.station.outputs",
     "MountedTool": "weldplan.station.mount",
+    "allocate": "weldplan.multi.allocate",
+    "StationPlan": "weldplan.multi.station",
 }
 
 __all__ = ["__version__", *_LAZY]

@@ -117,3 +117,29 @@ def study_inputs(
         bound[r][np.ix_(idx, idx)] = legs.bound
         branch.append(legs.branch)
     return StudyInputs(reach, wt, cost, bound, tuple(branch))
+
+
+def stack_inputs(parts: Sequence[StudyInputs], names: Sequence[str]) -> StudyInputs:
+    """One :class:`StudyInputs` of the robots of ``parts`` (each over the same welds, e.g.
+    one study per robot with its own tool), the robots renamed ``names``."""
+    if not parts or len(names) != sum(len(p.reach.robots) for p in parts):
+        raise ConfigError("give one name per robot of the parts", field="robots")
+    welds = parts[0].reach.welds
+    if any(p.reach.welds != welds for p in parts):
+        raise ConfigError("the parts are over different welds", field="welds")
+    bases = [p.reach.bases for p in parts]
+    reach = ReachMap(
+        np.vstack([p.reach.ok for p in parts]),
+        tuple(r for p in parts for r in p.reach.reasons),
+        tuple(names),
+        welds,
+        None if any(b is None for b in bases) else np.vstack(bases),  # type: ignore[arg-type]
+        parts[0].reach.positions,
+    )
+    return StudyInputs(
+        reach,
+        np.vstack([p.weld_time for p in parts]),
+        np.concatenate([p.cost for p in parts]),
+        np.concatenate([p.bound for p in parts]),
+        tuple(b for p in parts for b in p.branch),
+    )
