@@ -245,18 +245,23 @@ def test_baselines_against_their_definitions():
             for k in range(3)
         ]
         assert r == int(np.argmin(d))
-    assert rep.one_robot.stats["robot"] == "r1"
-    assert set(rep.one_robot.assignment) == {1}
+    # one robot: the best of the robots that serve all, its route exact (9 welds)
+    full = (1 << 9) - 1
+    alone = {
+        r: wt[r].sum() + best_routes(T[r].tolist(), False)[full] for r in range(3) if ok[r].all()
+    }
+    best = min(alone, key=alone.get)
+    assert rep.one_robot.stats["robot"] == f"r{best}"
+    assert set(rep.one_robot.assignment) == {best}
+    assert rep.one_robot.cycle_time == pytest.approx(alone[best], rel=1e-12)
     assert rep.ours.cycle_time <= rep.one_robot.cycle_time + 1e-9
     names = [row[0] for row in rep.rows()]
     assert names[:3] == ["one robot", "nearest robot", "ours"]
     assert names[3] == "lower bound"
     assert rep.lines()[5].startswith("bound: max(")
-    ok[1, 0] = ok[0, 0] = ok[2, 0] = False
-    ok[0, 0] = True
-    ok[1, 2] = False
-    reach2 = ReachMap.of(ok)
-    assert allocation_report(reach2, wt, T, rng=1).one_robot is None or ok[0].all()
+    none_all = np.ones((3, 9), dtype=bool)
+    none_all[[0, 1, 2], [0, 1, 2]] = False  # robot r misses weld r
+    assert allocation_report(ReachMap.of(none_all), wt, T, rng=1).one_robot is None
 
 
 @pytest.mark.parametrize(
