@@ -92,9 +92,14 @@ def study_inputs(
         raise ConfigError(
             f"the study has {R} robots: give {R} robots and weld times", field="robots"
         )
-    reach = ReachMap.from_study(study, tool)
-    W = len(reach.welds)
-    t = study._index(study.tools, tool, "tool")  # type: ignore[attr-defined]
+    W = len(study.spots)  # type: ignore[attr-defined]
+    tools = tuple(study.tools)  # type: ignore[attr-defined]
+    t = tool if isinstance(tool, int) else tools.index(tool) if tool in tools else -1
+    if not 0 <= t < len(tools):
+        raise ConfigError(
+            f"no tool {tool!r} in the study (it has {', '.join(tools)})", field="tool"
+        )
+    reach = ReachMap.from_study(study, t)
     cost, bound, branch = np.zeros((R, W, W)), np.zeros((R, W, W)), []
     wt = np.zeros((R, W))
     from weldplan.robot.timing import check_weld_time

@@ -28,6 +28,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import tempfile
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -68,6 +69,9 @@ class StationPlan:
         Per robot its :class:`~weldplan.study.FeasibilityStudy` (part frame).
     interference
         :data:`NO_INTERFERENCE`.
+    stats
+        ``{"seconds": {stage: wall s}}``: the cell, each robot's study, the allocation, each
+        robot's plan.
     """
 
     station: Any
@@ -185,19 +189,29 @@ def plan_station(
     from weldplan.multi.baselines import allocation_report
     from weldplan.station.pipeline import cell_stage, plan
 
+    say = progress or (lambda stage, done, total: None)
+    seconds: dict[str, float] = {}
     robots = _robots(station)
     if station.part.is_demo:
         station = _demo_files(station)
+    t = time.perf_counter()
     cell = cell_stage(station)
+    seconds["cell"] = time.perf_counter() - t
     studies, inputs = [], []
     for k, (spec, mounted, robot) in enumerate(robots):
+        say("study", k, len(robots))
+        t = time.perf_counter()
         study = _study(cell, station, k, mounted, robot)
         studies.append(study)
         inputs.append(study_inputs(study, [robot], [spec.settings.weld_time]))
+        seconds[f"study robot{k + 1}"] = time.perf_counter() - t
+    say("study", len(robots), len(robots))
     inp: StudyInputs = stack_inputs(inputs, [f"robot{k + 1}" for k in range(len(robots))])
+    t = time.perf_counter()
     report = allocation_report(
         inp.reach, inp.weld_time, inp.cost, rng=seed, settings=settings, bound_travel=inp.bound
     )
+    seconds["allocation"] = time.perf_counter() - t
     plans: list[Any] = []
     with tempfile.TemporaryDirectory(prefix="weldplan-station-") as tmp:
         for k, (spec, _, _) in enumerate(robots):
@@ -207,8 +221,11 @@ def plan_station(
                 continue
             sub = _sub_station(station, spec, _welds_file(station, ids, Path(tmp), k))
             log.info("station: robot %d plans its %d welds", k + 1, len(ids))
+            t = time.perf_counter()
             plans.append(plan(sub, rng=seed, executor=executor, progress=progress))
-    return StationPlan(station, seed, report, tuple(plans), tuple(studies))
+            seconds[f"plan robot{k + 1}"] = time.perf_counter() - t
+    stats = {"seconds": seconds}
+    return StationPlan(station, seed, report, tuple(plans), tuple(studies), stats=stats)
 
 
 def _demo_files(station: Any) -> Any:
