@@ -51,6 +51,8 @@ _LAZY: dict[str, str] = {
     "SavedPlan": "weldplan.station.saved",
     "Verdict": "weldplan.station.recheck",
     "ToolRoute": "weldplan.robot.toolroute",
+    "allocate": "weldplan.multi.allocate",
+    "StationPlan": "weldplan.multi.station",
 }
 
 __all__ = ["__version__", *_LAZY]

@@ -325,13 +325,25 @@ def plan(
         ``progress(stage, done, total)``: the stages' names and the route's own
         (``"straight"``, ``"local"``, ``"sequence"``).
 
+    Returns
+    -------
+    Plan
+        With several robots a :class:`weldplan.multi.station.StationPlan` instead: the
+        weld allocation, then one :class:`Plan` per robot (no robot-robot interference check
+        yet).
+
     Raises
     ------
     PlanningError
         The route or the weld poses fail their independent re-check, the robot serves no weld
         or its path still collides.
     """
-    spec = station.robot  # one robot, or none (several: ConfigError)
+    if len(station.robots) > 1:  # several robots: allocate, then this pipeline per robot
+        from weldplan.multi.station import plan_station
+
+        seed = draw_seed(rng, station.seed)
+        return plan_station(station, seed=seed, executor=executor, progress=progress)  # type: ignore[return-value]
+    spec = station.robot  # one robot, or none
     seed = draw_seed(rng, station.seed)
     warnings = run_warnings(station)
     mounted, robot = _load_robot(spec)  # a bad tool or robot fails before the (slow) cell

@@ -1,0 +1,253 @@
+"""A proved lower bound of the station cycle time, printed beside every allocation.
+
+Issue 30 asks for a bound of at least ``max(LP relaxation, unavoidable single-robot time)``.
+:func:`lower_bound` returns the larger of two bounds, each valid for any assignment of the
+served welds and any visiting orders:
+
+``lp``: **the min-max assignment with tour shares, relaxed.** Robot ``r``'s cycle over its welds
+``S`` is its weld times plus a route over ``S``, and the route costs at least
+``sum_S share_ri - slack_r`` (:func:`weldplan.multi.problem.tour_shares`), and at least 0. So
+with ``x_ri = 1`` when ``r`` welds ``i``, every allocation satisfies
+
+    sum_i x_ri (w_ri + share_ri) - slack_r <= C,   sum_i x_ri w_ri <= C,   sum_r x_ri = 1
+
+(for closed tours the slack is needed only by a robot with a single weld:
+:func:`assignment_model` pays it only there)
+for its cycle ``C``; the least ``C`` over ``x`` in ``[0, 1]`` (the LP relaxation, solved by
+HiGHS through :func:`scipy.optimize.linprog`) is at most the least over ``x`` in ``{0, 1}``,
+which is at most the optimum. The weld-time constraint gives the issue's "total weld time / R"
+term (and more: each weld at its cheapest robot).
+
+``integer``: **the same assignment in integers**, by HiGHS's branch and bound
+(:func:`scipy.optimize.milp`, budgeted by nodes): its *dual bound*, the least value any integer
+assignment can still reach when the search stops, bounds the integer optimum of the model
+above, hence the station's optimum; it is never below the LP (up to HiGHS's tolerances) and,
+on small stations where the LP splits welds between robots, often well above it.
+
+``unique``: **the welds only one robot serves.** Robot ``r`` welds all of ``U_r`` whatever the
+allocation: its cycle is at least their weld times plus a route over a superset of ``U_r``. When
+its move times satisfy the triangle inequality (checked, :func:`is_metric`), shortcutting the
+other welds gives a route over ``U_r`` alone that is no longer, so the optimal route over
+``U_r`` bounds it: Held-Karp up to :data:`UNIQUE_EXACT_MAX` welds, the 1-tree bound
+(:func:`weldplan.optim.discrete.bounds.one_tree_bound`) above for symmetric times. Otherwise (or
+when better) the shares of ``U_r`` bound it as above. Leg-time *bounds* between welds
+(:mod:`weldplan.robot.legtime`) minimise over configurations per pair, which can break the
+triangle inequality, hence the check.
+
+Spensieri et al. (IEEE T-ASE 2016) bound the min-max multiple generalised TSP the same way in
+spirit (a relaxation of the assignment with per-node tour costs); the shares here are the
+classic degree argument of the 1-tree / assignment bounds of the TSP.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from weldplan.errors import PlanningError
+from weldplan.multi.problem import AllocationProblem
+from weldplan.multi.result import LowerBound
+
+log = logging.getLogger(__name__)
+
+#: Held-Karp bounds the route over a robot's unique welds up to this many (milliseconds)
+UNIQUE_EXACT_MAX = 12
+#: relative tolerance of the triangle-inequality check
+METRIC_RTOL = 1e-9
+#: subgradient steps of the 1-tree bound (a work budget, not a clock)
+ONE_TREE_ITER = 300
+#: branch-and-bound nodes of the ``integer`` term, and its wall-clock safety net (s)
+DEFAULT_NODES = 500
+DEFAULT_SECONDS = 60.0
+#: HiGHS's primal feasibility tolerance (relative), taken off its values to stay below them
+HIGHS_TOL = 1e-7
+
+
+def is_metric(T: NDArray[np.float64]) -> bool:
+    """Whether ``T (n, n)`` satisfies ``T[i, k] <= T[i, j] + T[j, k]`` for all ``i, j, k``
+    (up to :data:`METRIC_RTOL` of its largest entry); ``O(n^3)`` in ``n`` numpy steps."""
+    n = len(T)
+    tol = METRIC_RTOL * float(T.max(initial=0.0))
+    return all(bool(np.all(T[:, j, None] + T[None, j, :] >= T - tol)) for j in range(n))
+
+
+@dataclass(frozen=True, eq=False)
+class AssignmentModel:
+    """The min-max assignment of :func:`assignment_model` as arrays for HiGHS.
+
+    Attributes
+    ----------
+    rob, weld
+        ``(K,)``: the robot and weld of each assignment variable ``x_k``.
+    c
+        ``(n,)``: the objective (``C``, the cycle, is variable ``K``).
+    A_ub, b_ub, A_eq, b_eq
+        The constraints (sparse CSR).
+    upper, integrality
+        ``(n,)``: each variable's upper bound (lower: 0) and integrality (1: binary).
+    """
+
+    rob: NDArray[np.intp]
+    weld: NDArray[np.intp]
+    c: NDArray[np.float64]
+    A_ub: Any
+    b_ub: NDArray[np.float64]
+    A_eq: Any
+    b_eq: NDArray[np.float64]
+    upper: NDArray[np.float64]
+    integrality: NDArray[np.float64]
+
+
+def assignment_model(
+    problem: AllocationProblem, cost: NDArray[np.float64], *, bound: bool
+) -> AssignmentModel:
+    """The min-max assignment over the served pairs.
+
+    Variables: ``x_k`` for each pair ``(rob[k], weld[k])`` the reach map allows, then ``C``.
+    Minimise ``C`` subject to ``sum_r x_ri = 1`` per served weld and, per robot,
+    ``sum_i cost_ri x_ri - C <= 0``. With ``bound`` (the module docstring's model): the
+    robot's :attr:`~weldplan.multi.problem.AllocationProblem.slack` on the right, and
+    ``sum_i w_ri x_ri - C <= 0``; for closed tours the slack is only needed by a robot with
+    one weld, so it is ``slack_r y_r`` with a binary ``y_r`` that allows at most one weld
+    (``sum_i x_ri + (n_r - 1) y_r <= n_r``, ``n_r`` the welds ``r`` serves).
+    """
+    from scipy.sparse import coo_matrix
+
+    ok = problem.ok
+    R, W = ok.shape
+    rob, weld = np.nonzero(ok)
+    K = len(rob)
+    ys = bound and problem.closed
+    n = K + 1 + (R if ys else 0)
+    c = np.zeros(n)
+    c[K] = 1.0
+    served = np.flatnonzero(ok.any(axis=0))
+    row_of = np.full(W, -1)
+    row_of[served] = np.arange(len(served))
+    A_eq = coo_matrix((np.ones(K), (row_of[weld], np.arange(K))), shape=(len(served), n))
+    rr, xs, CC = np.arange(R), np.arange(K), np.full(R, K)
+    rows, cols, vals = [rob, rr], [xs, CC], [cost[rob, weld], -np.ones(R)]
+    b_ub = np.zeros(R)
+    if bound:
+        rows += [R + rob, R + rr]
+        cols += [xs, CC]
+        vals += [problem.weld_time[rob, weld], -np.ones(R)]
+        b_ub = np.r_[np.zeros(R) if ys else problem.slack, np.zeros(R)]
+    if ys:
+        n_r = ok.sum(axis=1).astype(np.float64)
+        rows += [rr, 2 * R + rob, 2 * R + rr]
+        cols += [K + 1 + rr, xs, K + 1 + rr]
+        vals += [-problem.slack, np.ones(K), n_r - 1.0]
+        b_ub = np.r_[b_ub, n_r]
+    A_ub = coo_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+        shape=(len(b_ub), n),
+    )
+    upper = np.ones(n)
+    upper[K] = np.inf
+    integrality = np.ones(n)
+    integrality[K] = 0.0
+    return AssignmentModel(
+        rob, weld, c, A_ub.tocsr(), b_ub, A_eq.tocsr(), np.ones(len(served)), upper, integrality
+    )
+
+
+def _below(v: float) -> float:
+    """``v`` less HiGHS's feasibility tolerance (1e-7 on each row, relative): stay below."""
+    return max(0.0, float(v) - HIGHS_TOL * max(1.0, abs(float(v))))
+
+
+def assignment_bounds(
+    problem: AllocationProblem, nodes: int = DEFAULT_NODES, seconds: float = DEFAULT_SECONDS
+) -> tuple[float, float, str]:
+    """``(lp, integer, status)``: the ``lp`` and ``integer`` terms of the module docstring
+    (s; 0 when no weld is served) and HiGHS's word on the integer search (``nodes``:
+    its branch-and-bound budget; ``seconds``: a wall-clock safety net, reported in
+    ``status`` when it fires)."""
+    from scipy.optimize import Bounds, LinearConstraint, linprog, milp
+
+    if not problem.served.any():
+        return 0.0, 0.0, "no weld served"
+    m = assignment_model(problem, problem.weld_time + problem.share, bound=True)
+    bounds = [(0.0, None if np.isinf(u) else u) for u in m.upper]
+    res = linprog(
+        m.c, A_ub=m.A_ub, b_ub=m.b_ub, A_eq=m.A_eq, b_eq=m.b_eq, bounds=bounds, method="highs"
+    )
+    if res.status != 0:
+        raise PlanningError(f"the allocation bound's LP failed: {res.message}")
+    lp = _below(res.fun)
+    mres = milp(
+        m.c,
+        constraints=[
+            LinearConstraint(m.A_ub, -np.inf, m.b_ub),
+            LinearConstraint(m.A_eq, m.b_eq, m.b_eq),
+        ],
+        integrality=m.integrality,
+        bounds=Bounds(0.0, m.upper),
+        options={"node_limit": nodes, "mip_rel_gap": 0.0, "time_limit": seconds},
+    )
+    dual = getattr(mres, "mip_dual_bound", None)
+    if dual is None or not np.isfinite(dual):
+        return lp, 0.0, str(mres.message)
+    return lp, _below(dual), str(mres.message)
+
+
+def _route_bound(problem: AllocationProblem, r: int, U: NDArray[np.intp]) -> tuple[float, str]:
+    """s: a lower bound of robot ``r``'s route over any superset of ``U`` it serves."""
+    shares = max(0.0, float(problem.share[r, U].sum() - problem.slack[r]))
+    if len(U) < 2:
+        return shares, "shares"
+    idx = np.flatnonzero(problem.ok[r])
+    T = problem.travel[r]
+    if not is_metric(T[np.ix_(idx, idx)]):
+        return shares, "shares"
+    M = T[np.ix_(U, U)]
+    if len(U) <= UNIQUE_EXACT_MAX:
+        from weldplan.optim.discrete.sequence import solve_sequence
+
+        tour = float(solve_sequence(M, method="exact", closed=problem.closed).cost)
+        return max(shares, tour), "held-karp"
+    if np.allclose(M, M.T):
+        from weldplan.optim.discrete.bounds import one_tree_bound
+
+        t = float(one_tree_bound(M, open_path=not problem.closed, max_iter=ONE_TREE_ITER))
+        return max(shares, t), "1-tree"
+    return shares, "shares"
+
+
+def lower_bound(
+    problem: AllocationProblem, *, nodes: int = DEFAULT_NODES, seconds: float = DEFAULT_SECONDS
+) -> LowerBound:
+    """The :class:`~weldplan.multi.result.LowerBound` of ``problem`` (module docstring;
+    ``nodes``, ``seconds``: :func:`assignment_bounds`)."""
+    lp, integer, status = assignment_bounds(problem, nodes, seconds)
+    ok = problem.ok
+    single = ok.sum(axis=0) == 1
+    unique, who, how = 0.0, "", ""
+    for r in range(ok.shape[0]):
+        U = np.flatnonzero(single & ok[r])
+        if not len(U):
+            continue
+        route, method = _route_bound(problem, r, U)
+        t = float(problem.weld_time[r, U].sum()) + route
+        if t > unique:
+            unique, who, how = t, problem.reach.robots[r], method
+    terms = {
+        "min-max assignment with tour shares (HiGHS dual bound)": integer,
+        "its LP relaxation": lp,
+        f"unique-reach welds of {who} ({how})" if who else "unique-reach welds": unique,
+    }
+    names = sorted(terms, key=lambda k: -terms[k])  # the binding term first
+    value = max(terms.values())
+    log.info(
+        "allocation lower bound %.3f s (integer %.3f s, LP %.3f s, unique-reach %.3f s)",
+        value,
+        integer,
+        lp,
+        unique,
+    )
+    return LowerBound(value, f"max({', '.join(names)})", lp, unique, who, how, integer, status)

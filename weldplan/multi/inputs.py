@@ -1,0 +1,150 @@
+"""The allocation's inputs from a feasibility study: reach, weld times and leg times per robot.
+
+:func:`study_inputs` turns a :class:`~weldplan.study.FeasibilityStudy` (robots at their study
+bases) into what :func:`weldplan.multi.allocate` takes:
+
+* the :class:`~weldplan.multi.problem.ReachMap` of the study (:meth:`ReachMap.from_study`:
+  a free gun pose on a usable branch with the links clear, else the study's reason);
+* ``weld_time (R, W)``: each robot's dwell per spot;
+* per robot, leg times between the spots it reaches (:mod:`weldplan.robot.legtime`): the flange
+  pose of the configuration the study found (forward kinematics of ``RobotVerdict.q``), every
+  usable IK configuration of that pose (:func:`~weldplan.robot.legtime.weld_configurations`),
+  and the rest-to-rest times between them (:func:`~weldplan.robot.legtime.leg_times`):
+  ``cost`` (on the station branch, what the sequencer minimises) or ``bound`` (over every
+  branch: a proved lower bound of any timed leg, so that the allocation's bound is a bound of
+  the timed cycle of that pose choice).
+
+Only the study's configuration at each spot is checked against the part; the other
+configurations of the same pose are not (as for the single robot's ``--cost time``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from weldplan.errors import ConfigError
+from weldplan.multi.problem import ReachMap
+
+
+@dataclass(frozen=True, eq=False)
+class StudyInputs:
+    """What :func:`study_inputs` returns.
+
+    Attributes
+    ----------
+    reach
+        The :class:`~weldplan.multi.problem.ReachMap`.
+    weld_time
+        ``(R, W)`` s.
+    cost, bound
+        ``(R, W, W)`` s: each robot's leg times on its station branch, and their lower bound
+        over every branch (0 where the robot does not reach both spots).
+    branch
+        ``(R,)``: each robot's station branch (-1: it reaches no spot).
+    """
+
+    reach: ReachMap
+    weld_time: NDArray[np.float64]
+    cost: NDArray[np.float64]
+    bound: NDArray[np.float64]
+    branch: tuple[int, ...]
+
+
+def study_inputs(
+    study: object,
+    robots: Sequence[object],
+    weld_time: Sequence[float],
+    *,
+    tool: str | int = 0,
+    velocity_scale: float = 1.0,
+    acceleration_scale: float = 1.0,
+) -> StudyInputs:
+    """The allocation's inputs from ``study`` (module docstring).
+
+    Parameters
+    ----------
+    study
+        A :class:`~weldplan.study.FeasibilityStudy` with ``R`` robots.
+    robots
+        The ``R`` :class:`~weldplan.robot.model.Robot` models of the study, in its order
+        (placed here at the study's bases).
+    weld_time
+        ``R`` s: each robot's dwell per spot.
+    tool
+        The study's tool whose reach is allocated.
+    velocity_scale, acceleration_scale
+        Factors on the robots' joint limits (as the robot stage's settings).
+
+    Raises
+    ------
+    ConfigError
+        Lists of the wrong length, or a negative weld time.
+    """
+    from weldplan.robot.legtime import leg_times, weld_configurations
+
+    infos = study.robots  # type: ignore[attr-defined]
+    R = len(infos)
+    if not (len(robots) == len(weld_time) == R):
+        raise ConfigError(
+            f"the study has {R} robots: give {R} robots and weld times", field="robots"
+        )
+    W = len(study.spots)  # type: ignore[attr-defined]
+    tools = tuple(study.tools)  # type: ignore[attr-defined]
+    t = tool if isinstance(tool, int) else tools.index(tool) if tool in tools else -1
+    if not 0 <= t < len(tools):
+        raise ConfigError(
+            f"no tool {tool!r} in the study (it has {', '.join(tools)})", field="tool"
+        )
+    reach = ReachMap.from_study(study, t)
+    cost, bound, branch = np.zeros((R, W, W)), np.zeros((R, W, W)), []
+    wt = np.zeros((R, W))
+    from weldplan.robot.timing import check_weld_time
+
+    for r, (robot, info) in enumerate(zip(robots, infos, strict=True)):
+        wt[r] = check_weld_time(weld_time[r])
+        placed = robot.with_base(info.base_matrix())  # type: ignore[attr-defined]
+        idx = np.flatnonzero(reach.ok[r])
+        if not len(idx):
+            branch.append(-1)
+            continue
+        q = np.array([study.spots[i].robots[t * R + r].q for i in idx])  # type: ignore[attr-defined]
+        configs = weld_configurations(placed, placed.fk(q))  # the study's flange poses
+        legs = leg_times(
+            configs,
+            np.asarray(placed.velocity) * velocity_scale,  # type: ignore[attr-defined]
+            np.asarray(placed.acceleration) * acceleration_scale,  # type: ignore[attr-defined]
+        )
+        cost[r][np.ix_(idx, idx)] = legs.cost
+        bound[r][np.ix_(idx, idx)] = legs.bound
+        branch.append(legs.branch)
+    return StudyInputs(reach, wt, cost, bound, tuple(branch))
+
+
+def stack_inputs(parts: Sequence[StudyInputs], names: Sequence[str]) -> StudyInputs:
+    """One :class:`StudyInputs` of the robots of ``parts`` (each over the same welds, e.g.
+    one study per robot with its own tool), the robots renamed ``names``."""
+    if not parts or len(names) != sum(len(p.reach.robots) for p in parts):
+        raise ConfigError("give one name per robot of the parts", field="robots")
+    welds = parts[0].reach.welds
+    if any(p.reach.welds != welds for p in parts):
+        raise ConfigError("the parts are over different welds", field="welds")
+    bases = [p.reach.bases for p in parts]
+    reach = ReachMap(
+        np.vstack([p.reach.ok for p in parts]),
+        tuple(r for p in parts for r in p.reach.reasons),
+        tuple(names),
+        welds,
+        None if any(b is None for b in bases) else np.vstack(bases),  # type: ignore[arg-type]
+        parts[0].reach.positions,
+    )
+    return StudyInputs(
+        reach,
+        np.vstack([p.weld_time for p in parts]),
+        np.concatenate([p.cost for p in parts]),
+        np.concatenate([p.bound for p in parts]),
+        tuple(b for p in parts for b in p.branch),
+    )

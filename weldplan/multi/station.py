@@ -1,0 +1,238 @@
+"""Several robots, one station: ``weldplan.plan(station)`` with more than one ``[[robot]]``.
+
+:func:`plan_station` runs, in order:
+
+1. the cell (:func:`weldplan.station.pipeline.cell_stage`): the part and every weld;
+2. per robot, at its given base with its own tool, the feasibility study
+   (:func:`weldplan.study.check_spots`: a free gun pose on a usable branch with the links
+   clear, else why not) and its leg times between the welds it reaches
+   (:func:`weldplan.multi.inputs.study_inputs`);
+3. the allocation (:func:`weldplan.multi.allocation_report`: ours, the lower bound, the
+   one-robot and nearest-robot baselines) over the station-branch leg times, the bound over
+   the all-branch ones;
+4. per robot with welds, the single-robot pipeline (:func:`weldplan.station.pipeline.plan`) on
+   a sub-station: the same station with that robot alone and the welds file restricted to its
+   share (written in the file's own units beside nothing: a temporary folder, removed after).
+
+The result (:class:`StationPlan`) holds each robot's :class:`~weldplan.station.pipeline.Plan`,
+the allocation report and the studies. **Robot-robot interference is not handled yet**: every
+robot is planned alone against the part (:data:`NO_INTERFERENCE`; issue 30, item 4).
+
+Limits of this first version (each a :class:`~weldplan.errors.ConfigError` naming the key):
+every robot needs a ``urdf`` and a given ``base``, and the part stays in the part frame
+(no ``part_pose``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from weldplan.errors import ConfigError
+from weldplan.multi.inputs import StudyInputs, stack_inputs, study_inputs
+from weldplan.multi.problem import AllocationSettings
+from weldplan.multi.result import AllocationReport
+
+log = logging.getLogger(__name__)
+
+#: what every station plan says of robot-robot interference until issue 30, item 4 lands
+NO_INTERFERENCE = (
+    "robot-robot interference not checked: each robot is planned alone against the part"
+)
+
+
+@dataclass(frozen=True, eq=False)
+class StationPlan:
+    """What :func:`plan_station` returns.
+
+    Attributes
+    ----------
+    station
+        The station planned.
+    seed
+        The integer seed every stage used.
+    report
+        The :class:`~weldplan.multi.result.AllocationReport` (ours, bound, baselines; cycle
+        times over the leg-time model, s).
+    plans
+        Per robot its :class:`~weldplan.station.pipeline.Plan`, ``None`` for a robot with no
+        weld.
+    studies
+        Per robot its :class:`~weldplan.study.FeasibilityStudy` (part frame).
+    interference
+        :data:`NO_INTERFERENCE`.
+    stats
+        ``{"seconds": {stage: wall s}}``: the cell, each robot's study, the allocation, each
+        robot's plan.
+    """
+
+    station: Any
+    seed: int | None
+    report: AllocationReport
+    plans: tuple[Any, ...]
+    studies: tuple[Any, ...] = ()
+    interference: str = NO_INTERFERENCE
+    stats: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def allocation(self) -> Any:
+        return self.report.ours
+
+    @property
+    def timed_cycles(self) -> tuple[float | None, ...]:
+        """s per robot: its timed program's cycle (``None``: no weld)."""
+        return tuple(None if p is None else float(p.program.timing.total) for p in self.plans)
+
+    @property
+    def cycle_time(self) -> float:
+        """s: the station's timed cycle, the slowest robot's."""
+        return max((c for c in self.timed_cycles if c is not None), default=0.0)
+
+    def summary_rows(self) -> list[tuple[str, str]]:
+        """``(label, text)`` rows: per robot its welds, allocated and timed cycle, utilisation;
+        the station's cycle beside the bound and the baselines; the interference note."""
+        a, top = self.allocation, self.cycle_time
+        rows = []
+        for r, name in enumerate(a.robots):
+            c = self.timed_cycles[r]
+            welded = len(a.shares[r].order)
+            util = c / top if c is not None and top > 0 else 0.0
+            timed = "idle" if c is None else f"timed {c:.2f} s, utilisation {util:.0%}"
+            rows.append(
+                (
+                    f"robot {name}",
+                    f"{welded} welds, allocated {a.shares[r].cycle_time:.2f} s; {timed}",
+                )
+            )
+        rows.append(("station cycle", f"{top:.2f} s timed (the slowest robot)"))
+        rows += [("allocation", line) for line in self.report.lines()]
+        rows.append(("interference", self.interference))
+        return rows
+
+
+def _robots(station: Any) -> list[tuple[Any, Any, Any]]:
+    """``(spec, MountedTool, Robot)`` per robot, refusing what this version cannot plan."""
+    from weldplan.robot import load_robot
+    from weldplan.robot.reach import base_pose
+    from weldplan.station.mount import mount_tool
+
+    if station.part_pose is not None:
+        raise ConfigError("several robots: a part_pose is not supported yet", field="part_pose")
+    for k, spec in enumerate(station.robots):  # every refusal before any (slow) load
+        if spec.urdf is None or spec.base is None:
+            raise ConfigError(
+                f"{len(station.robots)} robots: robot {k + 1} needs a urdf and a given base "
+                "(a station of several robots does not search bases yet)",
+                field="base",
+            )
+    out = []
+    for spec in station.robots:
+        robot = load_robot(spec.urdf, spec.opw, base=base_pose(*spec.base))
+        out.append((spec, mount_tool(spec.tool, robot), robot))
+    return out
+
+
+def _study(cell: Any, station: Any, k: int, mounted: Any, robot: Any) -> Any:
+    """Robot ``k``'s feasibility study of every weld with its own tool."""
+    from weldplan.study import StudyRobot, StudySettings, StudyTool, check_spots
+
+    mount_tcp = np.linalg.solve(robot.mount, mounted.flange_tcp)  # tool root -> TCP
+    ts = station.tool
+    settings = StudySettings(
+        cone=ts.cone, contact_radius=ts.contact_radius, floor_z=station.floor_z
+    )
+    tool = StudyTool(f"tool{k + 1}", mounted.tool, mount_tcp)
+    return check_spots(
+        cell.part, cell.joints, [tool], [StudyRobot(f"robot{k + 1}", robot)], settings
+    )
+
+
+def _welds_file(station: Any, ids: tuple[str, ...], folder: Path, k: int) -> Path:
+    """The station's welds file restricted to ``ids``, in the file's own units."""
+    from weldplan.io.joints import Joints, read_joints
+    from weldplan.io.mesh import unit_scale
+
+    p = station.part
+    j = read_joints(p.welds, units=p.units)
+    keep = [j.ids.index(i) for i in ids]
+    f = unit_scale(p.units)
+    d = None if j.directions is None else np.asarray(j.directions)[keep]
+    out = folder / f"robot{k + 1}_welds.csv"
+    Joints(ids=ids, xyz=np.asarray(j.xyz)[keep] / f, directions=d).to_csv(out)
+    return out
+
+
+def _sub_station(station: Any, spec: Any, welds: Path) -> Any:
+    """The station with robot ``spec`` alone and ``welds`` as its welds file."""
+    part = dataclasses.replace(station.part, welds=welds)
+    return dataclasses.replace(station, part=part, robots=(spec,))
+
+
+def plan_station(
+    station: Any,
+    *,
+    seed: int | None,
+    executor: Any = None,
+    progress: Callable[[str, int, int], None] | None = None,
+    settings: AllocationSettings | None = None,
+) -> StationPlan:
+    """Plan a station of several robots (module docstring); ``seed`` as
+    :func:`weldplan.station.pipeline.plan` draws it."""
+    from weldplan.multi.baselines import allocation_report
+    from weldplan.station.pipeline import cell_stage, plan
+
+    say = progress or (lambda stage, done, total: None)
+    seconds: dict[str, float] = {}
+    robots = _robots(station)
+    if station.part.is_demo:
+        station = _demo_files(station)
+    t = time.perf_counter()
+    cell = cell_stage(station)
+    seconds["cell"] = time.perf_counter() - t
+    studies, inputs = [], []
+    for k, (spec, mounted, robot) in enumerate(robots):
+        say("study", k, len(robots))
+        t = time.perf_counter()
+        study = _study(cell, station, k, mounted, robot)
+        studies.append(study)
+        inputs.append(study_inputs(study, [robot], [spec.settings.weld_time]))
+        seconds[f"study robot{k + 1}"] = time.perf_counter() - t
+    say("study", len(robots), len(robots))
+    inp: StudyInputs = stack_inputs(inputs, [f"robot{k + 1}" for k in range(len(robots))])
+    t = time.perf_counter()
+    report = allocation_report(
+        inp.reach, inp.weld_time, inp.cost, rng=seed, settings=settings, bound_travel=inp.bound
+    )
+    seconds["allocation"] = time.perf_counter() - t
+    plans: list[Any] = []
+    with tempfile.TemporaryDirectory(prefix="weldplan-station-") as tmp:
+        for k, (spec, _, _) in enumerate(robots):
+            ids = report.ours.welds_of(k)
+            if not ids:
+                plans.append(None)
+                continue
+            sub = _sub_station(station, spec, _welds_file(station, ids, Path(tmp), k))
+            log.info("station: robot %d plans its %d welds", k + 1, len(ids))
+            t = time.perf_counter()
+            plans.append(plan(sub, rng=seed, executor=executor, progress=progress))
+            seconds[f"plan robot{k + 1}"] = time.perf_counter() - t
+    stats = {"seconds": seconds}
+    return StationPlan(station, seed, report, tuple(plans), tuple(studies), stats=stats)
+
+
+def _demo_files(station: Any) -> Any:
+    """The demo station with its part and welds as files (the sub-stations need a file)."""
+    from weldplan.weld import demo_part
+
+    if not (demo_part.DEMO_PART.exists() and demo_part.DEMO_JOINTS.exists()):
+        raise ConfigError("several robots on the demo need assets/demo installed", field="part")
+    part = dataclasses.replace(station.part, mesh=demo_part.DEMO_PART, welds=demo_part.DEMO_JOINTS)
+    return dataclasses.replace(station, part=part)
