@@ -88,7 +88,7 @@ def _describe(g: nx.DiGraph, comp: set[str]) -> str:
 #: robot); the exporters after the models they write ("io and viz never import the planners");
 #: the station that runs the stages; the study and the pictures; the commands on top.
 LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
-    ("base", ("weldplan.errors", "weldplan.random", "weldplan.lazy")),
+    ("base", ("weldplan.errors", "weldplan.random", "weldplan.lazy", "weldplan._version")),
     ("geometry", ("weldplan.geometry",)),
     ("optim", ("weldplan.optim",)),
     # the readers of the inputs and the all-or-nothing file writer: every stage uses them
@@ -105,8 +105,12 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
                    "weldplan.io.timings", "weldplan.io.trajectory", "weldplan.io.posts",
                    "weldplan.tool.path_csv")),
     ("robot", ("weldplan.robot",)),
+    # the allocation of welds among robots: reach and leg times of the robot models
+    ("multi", ("weldplan.multi",)),
     ("station", ("weldplan.station",)),
     ("study", ("weldplan.study",)),
+    # several robots: the study per robot, then the single-robot station pipeline per share
+    ("stations", ("weldplan.multi.station",)),
     ("viz", ("weldplan.viz",)),
     # a plan's files: rendered by the exporters and the viewers
     ("outputs", ("weldplan.station.outputs",)),

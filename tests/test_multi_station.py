@@ -68,7 +68,7 @@ def test_leg_times_bound_the_studys_own_configurations(station):
         assert np.all(inp.cost[r][np.ix_(idx, idx)] >= B - 1e-9)
         # the configuration puts the gun's TCP on the spot (FK, independent of the IK)
         placed = robot.with_base(study.robots[r].base_matrix())
-        tcp = placed.fk(q) @ robot.tool_transform(gun.mount_tcp)
+        tcp = placed.fk(q) @ gun.flange_tcp(robot)
         pos = np.array([study.spots[i].position for i in idx])
         assert np.allclose(tcp[:, :3, 3], pos, atol=1e-3)
 

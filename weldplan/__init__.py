@@ -23,7 +23,7 @@ from __future__ import annotations
 from importlib import import_module
 from typing import Any
 
-__version__ = "0.1.0"
+from weldplan._version import __version__
 
 #: public name -> module that defines it
 _LAZY: dict[str, str] = {
@@ -43,7 +43,7 @@ _LAZY: dict[str, str] = {
     "verify_route": "weldplan.weld.verify",
     "Station": "weldplan.station.model",
     "load_station": "weldplan.station.load",
-    "plan": "weldplan.station.pipeline",
+    "plan": "weldplan.plans",
     "Plan": "weldplan.station.pipeline",
     "write_plan": "weldplan.station.outputs",
     "MountedTool": "weldplan.station.mount",

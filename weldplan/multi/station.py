@@ -144,12 +144,11 @@ def _study(cell: Any, station: Any, k: int, mounted: Any, robot: Any) -> Any:
     """Robot ``k``'s feasibility study of every weld with its own tool."""
     from weldplan.study import StudyRobot, StudySettings, StudyTool, check_spots
 
-    mount_tcp = np.linalg.solve(robot.mount, mounted.flange_tcp)  # tool root -> TCP
     ts = station.tool
     settings = StudySettings(
         cone=ts.cone, contact_radius=ts.contact_radius, floor_z=station.floor_z
     )
-    tool = StudyTool(f"tool{k + 1}", mounted.tool, mount_tcp)
+    tool = StudyTool(f"tool{k + 1}", mounted.tool, mounted.spec)  # mounted as the robot stage does
     return check_spots(
         cell.part, cell.joints, [tool], [StudyRobot(f"robot{k + 1}", robot)], settings
     )

@@ -75,7 +75,7 @@ def producer(plan: Any) -> dict[str, Any]:
     command line and no time: the same station gives the same files, by file, options or
     library. A plan exists only once its checks passed (:func:`weldplan.station.plan` raises
     otherwise), so each named check passed."""
-    import weldplan
+    from weldplan._version import __version__
 
     v = plan.verification
     checks = [
@@ -98,7 +98,7 @@ def producer(plan: Any) -> dict[str, Any]:
             "tool clear of the part along the joint path (FCL, weldplan.robot.plan)"
         )
     name = plan.station.name or "weldplan_route"
-    return {"weldplan": weldplan.__version__, "station": name, "verified": checks}
+    return {"weldplan": __version__, "station": name, "verified": checks}
 
 
 def header_lines(prod: dict[str, Any]) -> list[str]:

@@ -338,11 +338,6 @@ def plan(
         The route or the weld poses fail their independent re-check, the robot serves no weld
         or its path still collides.
     """
-    if len(station.robots) > 1:  # several robots: allocate, then this pipeline per robot
-        from weldplan.multi.station import plan_station
-
-        seed = draw_seed(rng, station.seed)
-        return plan_station(station, seed=seed, executor=executor, progress=progress)  # type: ignore[return-value]
     spec = station.robot  # one robot, or none
     seed = draw_seed(rng, station.seed)
     warnings = run_warnings(station)
