@@ -125,7 +125,10 @@ def test_the_cli_and_the_station_file_take_the_depth(tmp_path, capsys):
         f'[output]\ncsv = "{tmp_path / "s.csv"}"\n'
     )
     assert main(["plan", str(toml), "--quiet"]) == 0
-    assert (tmp_path / "s.csv").read_bytes() == out.read_bytes()
+    def rows(f):  # the header names each station; the route is the same
+        return [r for r in f.read_text().splitlines() if not r.startswith("#")]
+
+    assert rows(tmp_path / "s.csv") == rows(out)
     capsys.readouterr()
     assert main(["plan", str(mesh), str(csv), "-o", str(out), "--spot-depth", "-1"]) == 2
     err = capsys.readouterr().err

@@ -1,8 +1,9 @@
 """``weldplan.plan``: a station with one robot (or none) or with several.
 
 One robot, or only the point tip and a tool: :func:`weldplan.station.pipeline.plan`, a
-:class:`~weldplan.station.pipeline.Plan`. Several robots: :func:`weldplan.multi.station.plan_station`
-(allocation, then the single-robot pipeline per robot), a
+:class:`~weldplan.station.pipeline.Plan`. Several robots:
+:func:`weldplan.multi.station.plan_station` (allocation, then the single-robot pipeline per
+robot), a
 :class:`~weldplan.multi.station.StationPlan`. The dispatch lives above both, so the single-robot
 pipeline never imports the station of several robots built on it.
 """
