@@ -130,6 +130,8 @@ def test_the_cli_and_the_station_file_take_the_depth(tmp_path, capsys):
 
     assert rows(tmp_path / "s.csv") == rows(out)
     capsys.readouterr()
-    assert main(["plan", str(mesh), str(csv), "-o", str(out), "--spot-depth", "-1"]) == 2
+    with pytest.raises(SystemExit) as exc:  # argparse's usage error, one line, exit 2
+        main(["plan", str(mesh), str(csv), "-o", str(out), "--spot-depth", "-1"])
+    assert exc.value.code == 2
     err = capsys.readouterr().err
     assert "spot_depth" in err and "Traceback" not in err
