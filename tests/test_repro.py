@@ -87,3 +87,13 @@ def test_the_summary_names_every_clock_cap_and_nothing_else():
     tool["robot"]["stats"]["ompl"]["clock"] = 0.0
     tool["transitions"]["stats"]["se3_runs"][1]["clock"] = False
     assert clock_caps(_route(tool=tool)) == []
+
+
+def test_the_ompl_local_planner_is_named_a_clock_cap_when_it_planned_a_pair():
+    ompl = {"planner": "ompl"}
+    planned = {"sequence_method": "nn+polish", "pairs_planned": 3}
+    assert clock_caps(_route(settings=ompl, stats=planned)) == [
+        "the local paths of --planner ompl had a clock budget (1 s)"
+    ]
+    assert clock_caps(_route(settings=ompl, stats={**planned, "pairs_planned": 0})) == []
+    assert clock_caps(_route(settings={"planner": "exact"}, stats=planned)) == []

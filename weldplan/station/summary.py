@@ -96,6 +96,12 @@ def clock_caps(route: Any) -> list[str]:
     for key, what in (("sequence_time_budget", "sequencer"), ("local_time_budget", "local paths")):
         if cfg.get(key) is not None:
             caps.append(f"the {what} had a clock budget ({cfg[key]:g} s)")
+    if cfg.get("planner") == "ompl" and cfg.get("local_time_budget") is None and s.get(
+        "pairs_planned"
+    ):  # BIT* runs for its time, not for a count of states
+        from weldplan.weld.local_ompl import DEFAULT_TIME_S
+
+        caps.append(f"the local paths of --planner ompl had a clock budget ({DEFAULT_TIME_S:g} s)")
     tr = (route.tool or {}).get("transitions") or {}
     n = sum(bool(r.get("clock")) for r in (tr.get("stats") or {}).get("se3_runs") or [])
     if n:
