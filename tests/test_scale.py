@@ -146,7 +146,8 @@ def test_cli_jobs_and_dask_write_the_serial_route(tmp_path, capsys):
     base = ["plan", str(mesh), str(joints), "--margin", "40", "--candidates", "1", "--quiet"]
     out = {}
     for name, extra in {"serial": [], "pool": ["--jobs", "2"], "dask": ["--dask", "local"]}.items():
-        path = tmp_path / f"{name}.csv"
+        path = tmp_path / name / "route.csv"  # one name: the header names the station by it
+        path.parent.mkdir()
         assert main([*base, "-o", str(path), *extra]) == 0
         out[name] = path.read_bytes()
     assert out["pool"] == out["serial"] == out["dask"]
