@@ -106,7 +106,6 @@ def initial_assignment(
 ) -> tuple[NDArray[np.intp], dict]:
     """``(W,) int`` robot per weld (-1: none serves it) from the min-max MILP of step 1, and
     its figures (``milp_status``, ``milp_value``: the MILP's objective in s, ``start``)."""
-    from scipy.optimize import Bounds, LinearConstraint, milp
 
     from weldplan.multi.bound import assignment_model
 
@@ -117,20 +116,13 @@ def initial_assignment(
     cost = problem.weld_time + problem.share
     m = assignment_model(problem, cost, bound=False)
     rob, weld, K = m.rob, m.weld, len(m.rob)
-    res = milp(
-        m.c,
-        constraints=[
-            LinearConstraint(m.A_ub, -np.inf, m.b_ub),
-            LinearConstraint(m.A_eq, m.b_eq, m.b_eq),
-        ],
-        integrality=m.integrality,
-        bounds=Bounds(0.0, m.upper),
-        options={
+    res = m.milp(
+        {
             "node_limit": settings.milp_nodes,
             "mip_rel_gap": settings.milp_gap,
             "time_limit": settings.milp_seconds,
             "presolve": True,
-        },
+        }
     )
     stats = {"milp_status": str(res.message)}
     if res.x is None:

@@ -101,6 +101,22 @@ class AssignmentModel:
     upper: NDArray[np.float64]
     integrality: NDArray[np.float64]
 
+    def milp(self, options: dict[str, Any]) -> Any:
+        """HiGHS's branch and bound on this model (:func:`scipy.optimize.milp` with
+        ``options``: its node limit, gap, clock safety net), its ``OptimizeResult``."""
+        from scipy.optimize import Bounds, LinearConstraint, milp
+
+        return milp(
+            self.c,
+            constraints=[
+                LinearConstraint(self.A_ub, -np.inf, self.b_ub),
+                LinearConstraint(self.A_eq, self.b_eq, self.b_eq),
+            ],
+            integrality=self.integrality,
+            bounds=Bounds(0.0, self.upper),
+            options=options,
+        )
+
 
 def assignment_model(
     problem: AllocationProblem, cost: NDArray[np.float64], *, bound: bool
@@ -168,7 +184,7 @@ def assignment_bounds(
     (s; 0 when no weld is served) and HiGHS's word on the integer search (``nodes``:
     its branch-and-bound budget; ``seconds``: a wall-clock safety net, reported in
     ``status`` when it fires)."""
-    from scipy.optimize import Bounds, LinearConstraint, linprog, milp
+    from scipy.optimize import linprog
 
     if not problem.served.any():
         return 0.0, 0.0, "no weld served"
@@ -180,16 +196,7 @@ def assignment_bounds(
     if res.status != 0:
         raise PlanningError(f"the allocation bound's LP failed: {res.message}")
     lp = _below(res.fun)
-    mres = milp(
-        m.c,
-        constraints=[
-            LinearConstraint(m.A_ub, -np.inf, m.b_ub),
-            LinearConstraint(m.A_eq, m.b_eq, m.b_eq),
-        ],
-        integrality=m.integrality,
-        bounds=Bounds(0.0, m.upper),
-        options={"node_limit": nodes, "mip_rel_gap": 0.0, "time_limit": seconds},
-    )
+    mres = m.milp({"node_limit": nodes, "mip_rel_gap": 0.0, "time_limit": seconds})
     dual = getattr(mres, "mip_dual_bound", None)
     if dual is None or not np.isfinite(dual):
         return lp, 0.0, str(mres.message)
