@@ -78,3 +78,11 @@ def test_two_robots_share_the_demo_welds_and_each_plans_its_share(tmp_path):
     assert rows["interference"] == NO_INTERFERENCE
     assert {f"robot robot{k}" for k in (1, 2)} <= set(rows)
     assert np.isfinite(p.cycle_time) and p.cycle_time > 0
+    # the schedule runs each robot's own timing (no interlocks yet): the same cycles, no waits,
+    # and every weld of every program on the clock under its id
+    s = p.schedule
+    assert s is not None and s.interlocks == () and s.waiting == (0.0, 0.0)
+    assert s.cycle_times == pytest.approx(p.timed_cycles, abs=1e-9)
+    for r, sub in enumerate(p.plans):
+        welded = {t.joint_id for t in sub.program.program.targets if t.kind == "weld"}
+        assert {a.label for a in s.of(r) if a.kind == "weld"} == welded

@@ -10,8 +10,8 @@
 
 :mod:`.problem` (the inputs and the tour shares), :mod:`.allocate` (the min-max MILP start, the
 sequencer, the local search), :mod:`.bound` (the lower bound), :mod:`.baselines` (one robot,
-nearest robot, the report), :mod:`.result` (the frozen results). Robot-robot interference is
-not handled yet: an allocation says which robot welds which weld and in which order, not when.
+nearest robot, the report), :mod:`.result` (the frozen results), :mod:`.schedule`
+(interlocks and the station's clock: who moves, welds and waits when).
 """
 
 from weldplan.multi.allocate import allocate
@@ -25,19 +25,31 @@ from weldplan.multi.result import (
     RobotShare,
     Unreached,
 )
+from weldplan.multi.schedule import (
+    Activity,
+    Interlock,
+    ReplayVerdict,
+    StationSchedule,
+    station_schedule,
+)
 
 __all__ = [
+    "Activity",
     "Allocation",
     "AllocationProblem",
     "AllocationReport",
     "AllocationSettings",
+    "Interlock",
     "LowerBound",
     "ReachMap",
+    "ReplayVerdict",
     "RobotShare",
+    "StationSchedule",
     "Unreached",
     "allocate",
     "allocation_report",
     "lower_bound",
     "nearest_robot",
     "one_robot",
+    "station_schedule",
 ]

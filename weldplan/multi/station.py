@@ -40,6 +40,7 @@ from weldplan.errors import ConfigError
 from weldplan.multi.inputs import StudyInputs, stack_inputs, study_inputs
 from weldplan.multi.problem import AllocationSettings
 from weldplan.multi.result import AllocationReport
+from weldplan.multi.schedule import ReplayVerdict, StationSchedule, station_schedule
 
 log = logging.getLogger(__name__)
 
@@ -69,6 +70,12 @@ class StationPlan:
         Per robot its :class:`~weldplan.study.FeasibilityStudy` (part frame).
     interference
         :data:`NO_INTERFERENCE`.
+    schedule
+        The nominal :class:`~weldplan.multi.schedule.StationSchedule` of the timed programs
+        (moves, welds, waits on one clock; no interlocks yet), ``None`` before it is built.
+    replay
+        The independent robot-robot replay's :class:`~weldplan.multi.schedule.ReplayVerdict`,
+        ``None`` while interference is not checked.
     stats
         ``{"seconds": {stage: wall s}}``: the cell, each robot's study, the allocation, each
         robot's plan.
@@ -81,6 +88,8 @@ class StationPlan:
     studies: tuple[Any, ...] = ()
     interference: str = NO_INTERFERENCE
     stats: dict[str, Any] = field(default_factory=dict)
+    schedule: StationSchedule | None = None
+    replay: ReplayVerdict | None = None
 
     @property
     def allocation(self) -> Any:
@@ -224,7 +233,23 @@ def plan_station(
             plans.append(plan(sub, rng=seed, executor=executor, progress=progress))
             seconds[f"plan robot{k + 1}"] = time.perf_counter() - t
     stats = {"seconds": seconds}
-    return StationPlan(station, seed, report, tuple(plans), tuple(studies), stats=stats)
+    names = report.ours.robots
+    schedule = station_schedule(
+        names,
+        [None if p is None else p.program.timing for p in plans],
+        weld_ids=[None if p is None else timed_weld_ids(p.program) for p in plans],
+    )
+    return StationPlan(
+        station, seed, report, tuple(plans), tuple(studies), stats=stats, schedule=schedule
+    )
+
+
+def timed_weld_ids(build: Any) -> dict[int, str]:
+    """``{timed row: weld id}`` of a :class:`~weldplan.robot.program.ProgramBuild`: its
+    program's weld targets named by the timed rows (:attr:`ProgramBuild.row`) they stand on."""
+    by_route = {t.row: t.joint_id for t in build.program.targets if t.kind == "weld"}
+    rows = build.row if build.row is not None else range(len(build.timing.row_times))
+    return {i: by_route[int(r)] for i, r in enumerate(rows) if int(r) in by_route}
 
 
 def _demo_files(station: Any) -> Any:

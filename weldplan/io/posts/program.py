@@ -29,6 +29,41 @@ from numpy.typing import NDArray
 MOVES = ("joint", "linear")
 #: target kinds (``approach`` and ``retreat`` frame the route: the first and last virtual joints)
 KINDS = ("approach", "weld", "via", "retreat")
+#: what a :class:`SignalAction` does
+SIGNAL_ACTIONS = ("set", "wait")
+
+
+@dataclass(frozen=True)
+class SignalAction:
+    """One interlock signal at a stop target of a station's program (issue 30, item 4;
+    :class:`weldplan.multi.schedule.Interlock` makes them in pairs).
+
+    ``"set"``: once the robot is at rest at route row ``row`` (after its weld there, if any),
+    it switches its output ``signal`` on: "I am clear". ``"wait"``: at rest at row ``row``, the
+    robot waits for its input ``signal`` to be on before it moves to its next target. KRL
+    writes ``$OUT[signal] = TRUE`` / ``WAIT FOR $IN[signal]``, RAPID ``SetDO`` / ``WaitDI``;
+    every output a program sets is switched off at the program's start.
+
+    Attributes
+    ----------
+    row
+        The route row of the (stop) target it follows.
+    action
+        One of :data:`SIGNAL_ACTIONS`.
+    signal
+        I/O number, >= 1.
+    name
+        The interlock's name (e.g. ``Z1_R1_R2``), for the program's comment or signal name.
+    """
+
+    row: int
+    action: str
+    signal: int
+    name: str
+
+    def __post_init__(self) -> None:
+        if self.action not in SIGNAL_ACTIONS or self.signal < 1:
+            raise ValueError(f"bad signal action {self.action!r} on signal {self.signal}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -101,6 +136,9 @@ class RobotProgram:
     part_pose
         ``(4, 4)`` part frame in the planning frame, mm (:class:`weldplan.cellframe.PartPose`
         ``.matrix``), or ``None`` when the part frame is the planning frame.
+    signals
+        Interlock signals at stop targets (:class:`SignalAction`), in program order; empty
+        for a robot alone in its station.
     """
 
     name: str
@@ -114,6 +152,7 @@ class RobotProgram:
     weld_time: float = 0.0
     notes: tuple[str, ...] = field(default_factory=tuple)
     part_pose: NDArray[np.float64] | None = None
+    signals: tuple[SignalAction, ...] = ()
 
     def work_object(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """``(user frame, object frame)`` ``(4, 4)`` mm: :attr:`part_frame` and the part pose
