@@ -34,6 +34,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from weldplan.tool.settings import DEFAULT_SE3_TIME
+
 HELP = (
     "gun poses and transitions vs point-tip planning time (target <= 2x on car2 200), "
     "reach per station"
@@ -69,7 +71,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--se3-time",
         type=float,
-        default=10.0,  # weldplan.tool.transitions.DEFAULT_SE3_TIME (not imported: fcl)
+        default=DEFAULT_SE3_TIME,
         help="OMPL CPU seconds per blocked transition (default 10; 0: off)",
     )
     p.add_argument(
