@@ -38,3 +38,37 @@ def test_the_rule_counts_nested_functions_and_methods(tmp_path):
     )
     assert long_functions(tmp_path, 5) == {"a.py:long": 6}
     assert long_functions(tmp_path, 6) == {}
+
+
+def test_no_tool_signature_over_ten():
+    """Issue 28, "Done when": no function in weldplan/tool/ takes more than 10 parameters
+    (positional, keyword-only, ``*args`` and ``**kwargs`` counted; a method's ``self`` / ``cls``
+    not): a search takes its inputs and one settings object (weldplan.tool.settings)."""
+    limit = 10
+
+    def wide(tree: ast.Module, where: str) -> dict[str, int]:
+        methods = {id(f) for c in ast.walk(tree) if isinstance(c, ast.ClassDef) for f in c.body}
+        out = {}
+        for node in ast.walk(tree):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                a = node.args
+                names = [p.arg for p in (*a.posonlyargs, *a.args)]
+                n = len(names) + len(a.kwonlyargs) + (a.vararg is not None) + (a.kwarg is not None)
+                if id(node) in methods and names[:1] in (["self"], ["cls"]):
+                    n -= 1
+                if n > limit:
+                    out[f"{where}:{node.name}"] = n
+        return out
+
+    # the rule itself: keyword-only, *args and **kwargs count; a method's self does not
+    probe = ast.parse(
+        "def f(a, b, c, d, e, *g, h, i, j, **k): pass\n"
+        "class C:\n    def m(self, a, b, c, d, e, f, g, h, i, j): pass\n"
+        "    def w(self, a, b, c, d, e, f, g, h, i, j, k): pass\n"
+    )
+    assert wide(probe, "probe") == {"probe:w": 11}, wide(probe, "probe")
+    root = Path(__file__).resolve().parents[1] / "weldplan" / "tool"
+    found: dict[str, int] = {}
+    for path in sorted(root.rglob("*.py")):
+        found.update(wide(ast.parse(path.read_text(encoding="utf-8")), str(path.name)))
+    assert not found, f"signatures over {limit} parameters in weldplan/tool: {found}"

@@ -17,7 +17,7 @@ from weldplan.io.joints import Joints
 from weldplan.robot.altreach import alternative_flange_poses, spread
 from weldplan.robot.posechoice import ReachTest, place_for_poses
 from weldplan.robot.reach import BaseSearch
-from weldplan.tool import arc_torch, plan_weld_poses
+from weldplan.tool import PoseSearchSettings, arc_torch, plan_weld_poses
 from weldplan.tool.orient import rotation_angles
 
 #: four welds on a long plate, welded from above; the robot's bases on a line beside them
@@ -43,7 +43,8 @@ def _station():
         directions=[[0.0, 0.0, 1.0]] * 4,
     )
     route = straight_route(joints)
-    poses = plan_weld_poses(plate, route, arc_torch(bend_angle=0.0), cone=0.0, spin_step=15.0)
+    search = PoseSearchSettings(cone=0.0, spin_step=15.0)
+    poses = plan_weld_poses(plate, route, arc_torch(bend_angle=0.0), search)
     return plate, route, poses
 
 

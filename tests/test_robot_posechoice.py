@@ -18,7 +18,7 @@ from weldplan.io.joints import Joints
 from weldplan.robot.collision import RobotCollision
 from weldplan.robot.posechoice import ReachTest, place_for_poses
 from weldplan.robot.reach import BaseSearch, base_pose
-from weldplan.tool import arc_torch, plan_weld_poses, verify_poses
+from weldplan.tool import PoseSearchSettings, arc_torch, plan_weld_poses, verify_poses
 from weldplan.tool.orient import candidate_rotations, local_candidates
 from weldplan.tool.pose_choice import all_of
 
@@ -56,8 +56,8 @@ def _tcp(p, R=DOWN) -> np.ndarray:
 def test_the_least_rotation_pose_out_of_the_limits_gives_way_to_the_reachable_one():
     robot = _narrow(shared_robot().with_base(BASE))
     plate, torch = _plate(), arc_torch(bend_angle=0.0)
-    opts = {"cone": 0.0, "spin_step": 15.0}
-    plain = plan_weld_poses(plate, _welds(), torch, **opts)
+    opts = PoseSearchSettings(cone=0.0, spin_step=15.0)
+    plain = plan_weld_poses(plate, _welds(), torch, opts)
     assert [p.spin for p in plain.poses] == [0.0, 0.0]  # spin 0 first among equals
     test = ReachTest(robot, TORCH_TCP)
     # the exact answer, independently: of the 24 spins of a weld from above, only 90 deg
@@ -70,7 +70,7 @@ def test_the_least_rotation_pose_out_of_the_limits_gives_way_to_the_reachable_on
 
     # composed with a test that passes everything (all_of keeps the batch judgment)
     accept = all_of(lambda i, T: None, ReachTest(robot, TORCH_TCP))
-    poses = plan_weld_poses(plate, _welds(), torch, **opts, accept=accept)
+    poses = plan_weld_poses(plate, _welds(), torch, opts, accept=accept)
     assert [p.spin for p in poses.poses] == [90.0, 90.0]
     assert [p.tilt for p in poses.poses] == [0.0, 0.0] and not any(p.note for p in poses.poses)
     assert poses.total_rotation == pytest.approx(0.0, abs=1e-9)
@@ -113,8 +113,9 @@ def test_a_weld_whose_every_pose_puts_the_arm_in_the_part_keeps_its_pose_with_a_
     part = trimesh.util.concatenate([_plate(), box])
     torch = arc_torch(bend_angle=0.0)
     test = ReachTest(robot, TORCH_TCP, RobotCollision(robot, part, None, TORCH_TCP))
-    plain = plan_weld_poses(part, _welds(), torch, cone=0.0, spin_step=30.0)
-    poses = plan_weld_poses(part, _welds(), torch, cone=0.0, spin_step=30.0, accept=test)
+    opts = PoseSearchSettings(cone=0.0, spin_step=30.0)
+    plain = plan_weld_poses(part, _welds(), torch, opts)
+    poses = plan_weld_poses(part, _welds(), torch, opts, accept=test)
     # a spin does not move the forearm: every pose is vetoed (the pick, then the other 11 at
     # once), the least-rotation one is kept
     assert [p.quaternion for p in poses.poses] == [p.quaternion for p in plain.poses]
@@ -144,10 +145,11 @@ def test_a_tool_that_straddles_is_turned_over_when_the_test_vetoes_its_approach_
     def from_below(i: int, T: np.ndarray) -> str | None:  # the robot stands under the plate
         return "joint_limit A5" if T[2, 2] < 0 else None
 
-    opts = {"cone": 0.0, "spin_step": 30.0, "both_sides": True}
-    plain = plan_weld_poses(plate, _welds(), torch, **opts)
+    opts = PoseSearchSettings(cone=0.0, spin_step=30.0, both_sides=True)
+    plain = plan_weld_poses(plate, _welds(), torch, opts)
     assert not any(p.flipped for p in plain.poses)  # the approach side first
-    poses = plan_weld_poses(plate, _welds(), torch, **opts, accept=from_below, max_vetoes=12)
+    capped = PoseSearchSettings(cone=0.0, spin_step=30.0, both_sides=True, max_vetoes=12)
+    poses = plan_weld_poses(plate, _welds(), torch, capped, accept=from_below)
     # 12 spins from above, all vetoed: the test is lifted, then put back on the turned-over
     # candidates, and the first of those (spin 0, from below) passes at both welds
     assert [(p.flipped, p.spin, p.note) for p in poses.poses] == [(True, 0.0, "")] * 2
@@ -155,7 +157,8 @@ def test_a_tool_that_straddles_is_turned_over_when_the_test_vetoes_its_approach_
     assert poses.total_rotation == pytest.approx(0.0, abs=1e-9)
     assert verify_poses(poses, plate, torch).ok
     # without both sides, the weld keeps its approach-side pose with the note
-    kept = plan_weld_poses(plate, _welds(), torch, cone=0.0, spin_step=30.0, accept=from_below)
+    one_side = PoseSearchSettings(cone=0.0, spin_step=30.0)
+    kept = plan_weld_poses(plate, _welds(), torch, one_side, accept=from_below)
     assert all(not p.flipped and p.note.startswith("12 free poses vetoed") for p in kept.poses)
 
 

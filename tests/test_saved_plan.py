@@ -212,3 +212,30 @@ def test_an_unreadable_tool_section_is_bad_input_naming_the_file_and_field(tmp_p
         load_plan(bad)
     assert "bad.json" in str(e.value) and "tool" in str(e.value)
     assert "\n" not in str(e.value)
+
+
+def test_the_tool_layer_reads_the_tool_stage_keys_as_the_tool_route_does():
+    """ToolSection (weldplan.tool, below the robot's layer) reads the provenance, the poses and
+    the transitions as ToolRoute does, keeps the robot's section as read, and a re-check of a
+    route whose tool section is unreadable is bad input naming the file and the field."""
+    import dataclasses
+
+    from weldplan.tool.check_route import check_tool_provenance
+    from weldplan.tool.route_frames import route_poses, route_tool_path
+    from weldplan.tool.section import ToolSection
+    from weldplan.weld.route import Route
+
+    d = json.loads(OLD_ROBOT.read_text())
+    section, full = ToolSection.from_dict(d["tool"]), ToolRoute.from_dict(d["tool"])
+    assert section.poses.to_dict() == full.poses.to_dict() == d["tool"]["poses"]
+    assert section.transitions.to_dict() == full.transitions.to_dict()
+    assert section.transitions.to_dict() == d["tool"]["transitions"]
+    assert dict(section.provenance) == d["tool"]["provenance"] and list(section.rest) == ["robot"]
+    route = Route.from_dict(d)
+    assert route_poses(route).to_dict() == d["tool"]["poses"]
+    assert route_tool_path(route).to_dict() == d["tool"]["transitions"]
+    assert ToolSection.of(dataclasses.replace(route, tool={})).poses is None
+    bad = dataclasses.replace(route, tool={**route.tool, "poses": {"poses": [{"id": "a"}]}})
+    with pytest.raises(InputError, match="unreadable tool section") as e:
+        check_tool_provenance(bad, dict(section.provenance), "bad.json")
+    assert e.value.field == "tool" and "bad.json" in str(e.value)

@@ -3,13 +3,20 @@
 from __future__ import annotations
 
 import dataclasses
+from dataclasses import replace
 
 import numpy as np
 import pytest
 import trimesh
 
 from weldplan.io.joints import Joints
-from weldplan.tool import Tool, plan_weld_poses, verify_poses
+from weldplan.tool import (
+    PoseSearchSettings,
+    Tool,
+    TransitionSettings,
+    plan_weld_poses,
+    verify_poses,
+)
 from weldplan.tool.exits import ExitTest
 from weldplan.tool.transitions import TransitionPlanner, plan_transitions
 from weldplan.tool.verify_sweeps import verify_sweeps
@@ -39,11 +46,15 @@ def _welds() -> Joints:
     return Joints(ids=["a", "b"], xyz=[[0, 0, 0], [150, 0, 0]], directions=[[0, 0, 1.0]] * 2)
 
 
+#: the axial retract only: no side exit, no SE(3) re-plan
+AXIAL = TransitionSettings(retract=50.0, side_exit=0.0, se3=False)
+#: room for the 24 untilted spins' vetoes
+VETOES_30 = PoseSearchSettings(max_vetoes=30)
+
+
 def _planner(part: trimesh.Trimesh, tool: Tool) -> TransitionPlanner:
     # side exits off: under this cap a 5 mm lift and a sideways exit would leave every pose
-    return TransitionPlanner(
-        part, tool, clearance=5.0, contact_radius=20.0, retract=50.0, side_exit=0.0, se3=False
-    )
+    return TransitionPlanner(part, tool, AXIAL, clearance=5.0, contact_radius=20.0)
 
 
 def test_a_pose_without_an_exit_gives_way_to_the_least_rotation_pose_with_one():
@@ -57,7 +68,7 @@ def test_a_pose_without_an_exit_gives_way_to_the_least_rotation_pose_with_one():
 
     test = ExitTest(planner, ["a", "b"])
     # the 24 untilted spins all retract into the cap (as many vetoes at most)
-    poses = plan_weld_poses(part, _welds(), stick, accept=test, max_vetoes=30)
+    poses = plan_weld_poses(part, _welds(), stick, VETOES_30, accept=test)
     a, b = poses.poses
     assert a.ok and b.ok and not a.note and not b.note
     # the first candidate past the untilted ones: the first ring (7.5 deg), first direction,
@@ -112,12 +123,11 @@ def test_the_transitions_reuse_the_exits_the_test_checked():
     part, stick = _capped_plate(), _stick()
     planner = _planner(part, stick)
     test = ExitTest(planner, ["a", "b"])
-    poses = plan_weld_poses(part, _welds(), stick, accept=test, max_vetoes=30)
+    poses = plan_weld_poses(part, _welds(), stick, VETOES_30, accept=test)
     assert test.samples > 0
     n_before = planner.samples
-    reused = plan_transitions(part, stick, poses, retract=50.0, side_exit=0.0, se3=False,
-                              reuse=planner)  # fmt: skip
-    fresh = plan_transitions(part, stick, poses, retract=50.0, side_exit=0.0, se3=False)
+    reused = plan_transitions(part, stick, poses, reuse=planner)  # the planner's settings
+    fresh = plan_transitions(part, stick, poses, AXIAL)
     (t,) = reused.transitions
     (f,) = fresh.transitions
     assert t.kinds == f.kinds == ("retract", "move", "approach") and t.free
@@ -127,12 +137,10 @@ def test_the_transitions_reuse_the_exits_the_test_checked():
     assert verify_sweeps(reused, poses, part, stick).ok
     # a planner with other settings is refused
     with pytest.raises(ValueError, match="retract"):
-        plan_transitions(part, stick, poses, retract=30.0, side_exit=0.0, se3=False,
-                         reuse=planner)  # fmt: skip
+        plan_transitions(part, stick, poses, replace(AXIAL, retract=30.0), reuse=planner)
     other = dataclasses.replace(stick, _cache={})
     with pytest.raises(ValueError, match="part or tool"):
-        plan_transitions(part, other, poses, retract=50.0, side_exit=0.0, se3=False,
-                         reuse=planner)  # fmt: skip
+        plan_transitions(part, other, poses, AXIAL, reuse=planner)
 
 
 def test_the_tool_order_prices_a_weld_left_by_a_lift_at_the_lift():
@@ -142,7 +150,8 @@ def test_the_tool_order_prices_a_weld_left_by_a_lift_at_the_lift():
     plate, gun = _box((600, 600, 2), (0, 0, -1)), _stick(straddles=True)
     welds = Joints(ids=["a", "b", "c"], xyz=[[0, 0, 0], [150, 0, 0], [0, 120, 0]],
                    directions=[[0, 0, 1.0]] * 3)  # fmt: skip
-    planner = TransitionPlanner(plate, gun, clearance=5.0, contact_radius=20.0, se3=False)
+    no_se3 = TransitionSettings(se3=False)
+    planner = TransitionPlanner(plate, gun, no_se3, clearance=5.0, contact_radius=20.0)
     poses = plan_weld_poses(plate, welds, gun, accept=ExitTest(planner, welds.ids))
     assert all(p.ok and not p.flipped and p.tilt == 0.0 for p in poses.poses)
     # a C-gun leaves each weld by the first slide lift (4 mm), found by the test and cached

@@ -9,7 +9,7 @@ import pytest
 import trimesh
 
 from weldplan.io.joints import Joints
-from weldplan.tool import WeldPoses, arc_torch, plan_weld_poses, verify_poses
+from weldplan.tool import PoseSearchSettings, WeldPoses, arc_torch, plan_weld_poses, verify_poses
 from weldplan.tool.orient import rotation_angles
 
 
@@ -38,7 +38,7 @@ def test_a_vetoed_pick_gives_way_to_the_next_least_rotation_pose():
         return "untilted at a" if i == 0 and _tilt_deg(T) < 1.0 else None
 
     # 24 spins every 15 deg are untilted: up to 24 vetoes before a tilt is tried
-    poses = plan_weld_poses(plate, welds, torch, accept=accept, max_vetoes=30)
+    poses = plan_weld_poses(plate, welds, torch, PoseSearchSettings(max_vetoes=30), accept=accept)
     a, b = poses.poses
     assert a.ok and b.ok and not a.note and not b.note
     # a is tilted by the first ring (7.5 deg), and b, free to, follows it: no rotation between
@@ -57,8 +57,9 @@ def test_a_weld_whose_every_free_pose_is_vetoed_keeps_its_best_free_pose_with_a_
     welds = _up(("a", (0, 0, 0)), ("b", (100, 50, 0)))
     plain = plan_weld_poses(plate, welds, torch)
     poses = plan_weld_poses(
-        plate, welds, torch, accept=lambda i, T: "no exit" if i == 1 else None, max_vetoes=3
-    )
+        plate, welds, torch, PoseSearchSettings(max_vetoes=3),
+        accept=lambda i, T: "no exit" if i == 1 else None,
+    )  # fmt: skip
     assert [p.quaternion for p in poses.poses] == [p.quaternion for p in plain.poses]
     a, b = poses.poses
     assert b.ok and b.note.startswith("3 free poses vetoed (no exit)")

@@ -12,7 +12,7 @@ from scipy.spatial.transform import Rotation
 
 from tests.conftest import require_shared
 from weldplan.io.joints import Joints
-from weldplan.tool import Tool, plan_weld_poses, pose_search, shared_spot_gun
+from weldplan.tool import PoseSearchSettings, Tool, plan_weld_poses, pose_search, shared_spot_gun
 from weldplan.tool.pose_bound import PoseBound, ToolPieces
 from weldplan.tool.pose_search import PoseSearch
 
@@ -130,9 +130,9 @@ def test_the_search_chooses_what_the_whole_tool_distance_chose(monkeypatch):
         ],
         directions=[[0.0, 0.0, 1.0]] * 5,
     )
-    kw = {"clearance": CLEARANCE, "spin_step": 30.0, "both_sides": False}
+    kw = PoseSearchSettings(clearance=CLEARANCE, spin_step=30.0, both_sides=False)
     monkeypatch.setattr(pose_search, "PIECES_AFTER", 0)  # the pieces from the first judgement
-    fast = plan_weld_poses(part, joints, fork, **kw)
+    fast = plan_weld_poses(part, joints, fork, kw)
 
     def whole(self, objs, P, Rs, *, first_free=False):  # the search before the bound
         out = np.full(len(Rs), np.nan)
@@ -143,7 +143,7 @@ def test_the_search_chooses_what_the_whole_tool_distance_chose(monkeypatch):
         return out
 
     monkeypatch.setattr(PoseSearch, "clearances", whole)
-    exact = plan_weld_poses(part, joints, fork, **kw)
+    exact = plan_weld_poses(part, joints, fork, kw)
     assert fast.stats["clearance_judged"] > 10 and fast.stats["clearance_piece_queries"] > 0
     assert fast.stats["distance_queries"] == exact.stats["distance_queries"]
     for p, q in zip(fast.poses, exact.poses, strict=True):
@@ -163,9 +163,9 @@ def test_a_second_search_of_the_same_part_reuses_the_answers_and_gives_the_same_
     joints = Joints(
         ids=["a", "b"], xyz=[(-60.0, 30.0, 0.0), (0.0, 30.0, 0.0)], directions=[[0.0, 0.0, 1.0]] * 2
     )
-    kw = {"clearance": CLEARANCE, "spin_step": 30.0}
-    first = plan_weld_poses(part, joints, fork, **kw)
-    again = plan_weld_poses(part, joints, fork, **kw)
+    kw = PoseSearchSettings(clearance=CLEARANCE, spin_step=30.0)
+    first = plan_weld_poses(part, joints, fork, kw)
+    again = plan_weld_poses(part, joints, fork, kw)
     assert first.stats["clearance_memo"] == 0
     # every collide and every clearance the first search asked is found, none asked again
     assert (
@@ -175,7 +175,7 @@ def test_a_second_search_of_the_same_part_reuses_the_answers_and_gives_the_same_
     assert again.stats["clearance_judged"] == 0
     assert [p.to_dict() for p in again.poses] == [p.to_dict() for p in first.poses]
     # another part (a copy: the same triangles) starts a memo of its own
-    other = plan_weld_poses(part.copy(), joints, fork, **kw)
+    other = plan_weld_poses(part.copy(), joints, fork, kw)
     assert other.stats["clearance_memo"] == 0
     assert [p.to_dict() for p in other.poses] == [p.to_dict() for p in first.poses]
 

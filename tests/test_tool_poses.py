@@ -14,6 +14,7 @@ from scipy.spatial.transform import Rotation
 from tests.conftest import require_shared
 from weldplan.io.joints import Joints
 from weldplan.tool import (
+    PoseSearchSettings,
     WeldPoses,
     arc_torch,
     plan_weld_poses,
@@ -60,7 +61,9 @@ def test_narrow_slot_has_no_free_pose_and_reports_the_hitting_region():
         ]
     )
     torch = arc_torch(bend_angle=0.0)
-    poses = plan_weld_poses(part, _up(("slot", (0, 0, 0))), torch, contact_radius=10.0)
+    poses = plan_weld_poses(
+        part, _up(("slot", (0, 0, 0))), torch, PoseSearchSettings(contact_radius=10.0)
+    )
     (p,) = poses.poses
     assert not p.ok and p.quaternion is None
     assert p.miss is not None and p.miss.contacts > 0 and p.miss.penetration > 0
@@ -88,7 +91,9 @@ def test_spin_and_tilt_search_finds_the_one_free_orientation():
         ]
     )
     torch = arc_torch(bend_angle=30.0, neck_length=150.0)
-    poses = plan_weld_poses(ceiling, _up(("w", (0, 0, 0))), torch, clearance=0.0)
+    poses = plan_weld_poses(
+        ceiling, _up(("w", (0, 0, 0))), torch, PoseSearchSettings(clearance=0.0)
+    )
     (p,) = poses.poses
     assert p.ok and p.n_collision_free == 1
     assert (p.spin, p.tilt) == (90.0, 0.0)
@@ -150,7 +155,7 @@ def test_weld_poses_json_round_trip():
         [_box((300, 300, 2), (0, 0, -1)), _box((300, 20, 100), (0, 18, 50))]
     )
     joints = _up(("free", (0, -100, 0)), ("near", (0, 0, 0)))
-    poses = plan_weld_poses(part, joints, arc_torch(), cone=0.0)
+    poses = plan_weld_poses(part, joints, arc_torch(), PoseSearchSettings(cone=0.0))
     assert [p.ok for p in poses.poses] == [True, False]
     again = WeldPoses.from_json(poses.to_json())
     assert again.to_dict() == poses.to_dict()
@@ -179,7 +184,7 @@ def test_gun_straddles_a_flange_but_not_the_middle_of_a_wide_plate():
     assert verify_poses(on_flange, flange, gun).ok
     plate = _box((1200, 2, 1200), (0, 1, 0))
     j = Joints(ids=["m"], xyz=[(0.0, 0.0, 0.0)], directions=[[0.0, -1.0, 0.0]])
-    middle = plan_weld_poses(plate, j, gun, cone=0.0, spin_step=45.0)
+    middle = plan_weld_poses(plate, j, gun, PoseSearchSettings(cone=0.0, spin_step=45.0))
     p = middle.poses[0]
     assert not p.ok and p.miss is not None and p.miss.contacts > 0
     assert p.miss.tool_point[2] > 0  # what hits is ahead of the TCP: the far side of the C
@@ -206,13 +211,13 @@ def test_arc_torch_may_not_pass_through_a_sheet_near_the_spot():
     )
     torch = arc_torch(bend_angle=0.0)
     joints = _up(("s", (0, 0, 0)))
-    kw = {"cone": 0.0, "spin_step": 90.0, "contact_radius": 25.0, "clearance": 2.0}
+    kw = PoseSearchSettings(cone=0.0, spin_step=90.0, contact_radius=25.0, clearance=2.0)
     # with the whole sphere exempt (a C-gun's contact zone) the nozzle through the shelf passes
     as_gun = dataclasses.replace(torch, tip_cone=None, _cache={})
-    through = plan_weld_poses(part, joints, as_gun, **kw)
+    through = plan_weld_poses(part, joints, as_gun, kw)
     assert through.poses[0].ok
     # the torch's own zone is its tip cone: the nozzle wall is 35-40 deg off its axis
-    poses = plan_weld_poses(part, joints, torch, **kw)
+    poses = plan_weld_poses(part, joints, torch, kw)
     p = poses.poses[0]
     assert not p.ok and p.miss is not None and p.miss.contacts > 0
     assert 15.0 < p.miss.tool_point[2] * -1 < 25.0  # the nozzle's mouth, behind the TCP
@@ -231,7 +236,7 @@ def test_gun_turns_over_when_the_approach_side_is_blocked():
     # a wall 150 mm behind the TCP on the approach side blocks the gun's body there
     wall = _box((1200, 10, 1200), (0, -150, 0))
     part = trimesh.util.concatenate([flange, wall])
-    one = plan_weld_poses(part, j, gun, both_sides=False)
+    one = plan_weld_poses(part, j, gun, PoseSearchSettings(both_sides=False))
     assert not one.poses[0].ok and one.poses[0].miss is not None
     both = plan_weld_poses(part, j, gun)
     p = both.poses[0]
@@ -254,8 +259,8 @@ def test_shared_crops_and_the_whole_part_give_the_same_poses():
     )
     joints = _up(("a", (0, 0, 0)), ("b", (60, 0, 0)), ("c", (120, 0, 0)), ("d", (1300, 0, 0)))
     torch = arc_torch()
-    cropped = plan_weld_poses(part, joints, torch, spin_step=30.0)
-    whole = plan_weld_poses(part, joints, torch, spin_step=30.0, crop=False)
+    cropped = plan_weld_poses(part, joints, torch, PoseSearchSettings(spin_step=30.0))
+    whole = plan_weld_poses(part, joints, torch, PoseSearchSettings(spin_step=30.0, crop=False))
     # a, b share the crop made at a; c (120 mm from a) and d need their own
     assert cropped.stats["crops_built"] == 3 and whole.stats["crops_built"] == 0
     assert [p.status for p in cropped.poses] == [p.status for p in whole.poses]

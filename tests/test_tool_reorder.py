@@ -9,7 +9,7 @@ import pytest
 import trimesh
 
 from weldplan.io.joints import Joints
-from weldplan.tool import arc_torch, plan_weld_poses
+from weldplan.tool import OrderSettings, TransitionSettings, arc_torch, plan_weld_poses
 from weldplan.tool.reorder import plan_ordered_transitions
 from weldplan.tool.result import OK, WeldPose, WeldPoses
 from weldplan.tool.tool_order import order_cost, tool_leg_costs, tool_order
@@ -82,16 +82,13 @@ def test_a_blocked_transition_reorders_the_welds_round_the_wall():
     # a 300 mm wall between a and b: the cheapest order joins them and the 50 mm retract cannot
     # pass the wall (no SE(3)); priced out, the next order goes round by c and is free
     part, torch, poses = _walled_station()
-    path = plan_ordered_transitions(
-        part, torch, poses, retract=50.0, rot_weight=200.0, seed=0, se3=False
-    )
+    no_se3 = TransitionSettings(retract=50.0, seed=0, se3=False)
+    path = plan_ordered_transitions(part, torch, poses, no_se3, OrderSettings(rot_weight=200.0))
     assert not path.blocked and path.stats["order_rounds"] == 2
     assert path.stats["forbidden_pairs"] == 1
     pairs = {frozenset(p) for p in itertools.pairwise(path.order)}
     assert frozenset("ab") not in pairs and len(path.order) == 3
-    kept = plan_ordered_transitions(
-        part, torch, poses, retract=50.0, rot_weight=200.0, seed=0, se3=False, keep_order=True
-    )
+    kept = plan_ordered_transitions(part, torch, poses, no_se3, OrderSettings(keep_order=True))
     assert kept.order == ("a", "b", "c") and len(kept.blocked) == 1
     assert kept.stats["order_rounds"] == 1
 
@@ -100,7 +97,8 @@ def test_the_planner_plans_a_pair_of_poses_once():
     from weldplan.tool.transitions import TransitionPlanner
 
     part, torch, poses = _walled_station()
-    tp = TransitionPlanner(part, torch, clearance=5.0, contact_radius=20.0, se3=False)
+    no_se3 = TransitionSettings(se3=False)
+    tp = TransitionPlanner(part, torch, no_se3, clearance=5.0, contact_radius=20.0)
     a, b, c = poses.poses
     first = tp.plan(a, c)
     n = tp.samples

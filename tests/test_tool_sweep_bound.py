@@ -4,13 +4,15 @@ on the shared gun against the demo part."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 import trimesh
 from scipy.spatial.transform import Rotation
 
 from tests.conftest import require_shared
-from weldplan.tool import Tool, shared_spot_gun
+from weldplan.tool import Tool, TransitionSettings, shared_spot_gun
 from weldplan.tool.sweep import SweepChecker, interpolate, quat_to_matrix
 from weldplan.tool.sweep_bound import SphereTree, SweepBound
 from weldplan.tool.sweep_fast import FastSweep, _bisection_order
@@ -135,10 +137,11 @@ def test_only_se3_joins_two_welds_across_a_rib_and_the_recheck_agrees():
     )  # fmt: skip
     fork = _fork()
     # no slide, axial retract or side exit passes the rib (test_tool_transitions)
-    without = plan_transitions(part, fork, poses, retract=50.0, se3=False, side_exit=120.0)
+    side = TransitionSettings(retract=50.0, side_exit=120.0)
+    without = plan_transitions(part, fork, poses, replace(side, se3=False))
     assert without.transitions[0].status == BLOCKED
     # the time is only a cap (RRT-Connect stops at its first solution; a loaded machine is slow)
-    path = plan_transitions(part, fork, poses, retract=50.0, side_exit=120.0, time_s=60.0, seed=3)
+    path = plan_transitions(part, fork, poses, replace(side, time_s=60.0, seed=3))
     (t,) = path.transitions
     assert t.status == REPLANNED and t.via == "se3", t.reason
     # the TCP rises over the 60 mm rib somewhere between the two welds

@@ -11,7 +11,7 @@ import pytest
 import trimesh
 from scipy.spatial.transform import Rotation
 
-from weldplan.tool import Tool, WeldPose, WeldPoses
+from weldplan.tool import Tool, TransitionSettings, WeldPose, WeldPoses
 from weldplan.tool.result import OK, quat_wxyz
 from weldplan.tool.sweep import SweepChecker, interpolate, motion_bound, outside_sphere
 from weldplan.tool.tool_order import tool_leg_costs, tool_order
@@ -50,6 +50,8 @@ def _q(R) -> np.ndarray:
 
 
 DOWN = np.diag([1.0, -1.0, -1.0])  # TCP +z along world -z: the tool stands above, pointing down
+#: the default exits with a 50 mm retract, no SE(3) re-plan
+NO_SE3 = TransitionSettings(retract=50.0, se3=False)
 
 
 def test_outside_sphere_cuts_a_large_triangle_covering_the_sphere():
@@ -117,7 +119,7 @@ def test_retract_is_free_for_a_stick_and_blocked_for_a_fork_that_straddles_the_s
     sheet = _box((400, 400, 2), (-140, 0, -1))
     poses = _poses([("a", (30, -100, 0)), ("b", (30, 100, 0))], DOWN)
     # TCP at the top face: DOWN makes TCP x = world x, so the fork's jaw runs under the sheet
-    path = plan_transitions(sheet, _stick(), poses, retract=50.0, se3=False)
+    path = plan_transitions(sheet, _stick(), poses, NO_SE3)
     (t,) = path.transitions
     assert t.status == DIRECT and t.kinds == ("retract", "move", "approach")
     np.testing.assert_allclose(t.positions[1], [30, -100, 50])
@@ -125,14 +127,14 @@ def test_retract_is_free_for_a_stick_and_blocked_for_a_fork_that_straddles_the_s
     v = verify_sweeps(path, poses, sheet, _stick())
     assert v.ok and v.checked == 1, v.describe()
     fork = plan_transitions(
-        sheet, _fork(), poses, retract=50.0, se3=False, side_exit=0.0, slide=False
+        sheet, _fork(), poses, dataclasses.replace(NO_SE3, side_exit=0.0, slide=False)
     )
     (tf,) = fork.transitions
     assert tf.status == BLOCKED and "retract" in tf.reason
     assert verify_sweeps(fork, poses, sheet, _fork()).blocked == ("a->b",)
     # sideways, the fork's jaw comes off the sheet past its edge (x = 60): towards TCP +x only
     side = plan_transitions(
-        sheet, _fork(), poses, retract=50.0, se3=False, side_exit=120.0, slide=False
+        sheet, _fork(), poses, dataclasses.replace(NO_SE3, side_exit=120.0, slide=False)
     )
     (ts,) = side.transitions
     assert ts.status == DIRECT and ts.kinds[:3] == ("lift", "exit +x", "retract"), ts.kinds
@@ -147,7 +149,7 @@ def test_the_recheck_catches_a_transition_through_the_part():
     part = trimesh.util.concatenate([sheet, wall])
     poses = _poses([("a", (0, -100, 0)), ("b", (0, 100, 0))], DOWN)
     stick = _stick()
-    path = plan_transitions(part, stick, poses, retract=50.0, se3=False)
+    path = plan_transitions(part, stick, poses, NO_SE3)
     (t,) = path.transitions
     assert t.status == BLOCKED and "move" in t.reason
     forged = ToolPath(
@@ -170,7 +172,7 @@ def test_the_recheck_catches_a_transition_through_the_part():
 def test_path_json_round_trip():
     sheet = _box((400, 400, 2), (0, 0, -1))
     poses = _poses([("a", (0, -100, 0)), ("b", (0, 100, 0)), ("c", (100, 0, 0))], DOWN)
-    path = plan_transitions(sheet, _stick(), poses, retract=30.0, se3=False)
+    path = plan_transitions(sheet, _stick(), poses, dataclasses.replace(NO_SE3, retract=30.0))
     back = ToolPath.from_dict(path.to_dict())
     assert back.order == path.order and back.length == pytest.approx(path.length)
     for a, b in zip(back.transitions, path.transitions, strict=True):
@@ -209,7 +211,7 @@ def test_a_blocked_move_is_replanned_in_se3_and_the_recheck_agrees():
     poses = _poses([("a", (0, -100, 0)), ("b", (0, 100, 0))], DOWN)
     stick = _stick(100.0)
     # RRT-Connect stops at its first solution; the time is only a cap (a loaded machine is slow)
-    path = plan_transitions(part, stick, poses, retract=50.0, time_s=30.0, seed=1)
+    path = plan_transitions(part, stick, poses, TransitionSettings(time_s=30.0, seed=1))
     (t,) = path.transitions
     assert t.status == "replanned", t.reason
     assert t.kinds[0] == "retract" and t.kinds[-1] == "approach" and "se3" in t.kinds
@@ -227,7 +229,7 @@ def test_slide_along_one_flange_where_the_fork_cannot_retract():
     sheet = _box((400, 400, 2), (-140, 0, -1))
     poses = _poses([("a", (30, -100, 0)), ("b", (30, 100, 0))], DOWN)
     fork = _fork()
-    path = plan_transitions(sheet, fork, poses, retract=50.0, se3=False)
+    path = plan_transitions(sheet, fork, poses, NO_SE3)
     (t,) = path.transitions
     assert t.status == DIRECT and t.kinds == ("lift", "slide", "lower") and t.via == "slide"
     lift = SLIDE_LIFTS[0]
@@ -242,7 +244,7 @@ def test_slide_along_one_flange_where_the_fork_cannot_retract():
     assert v.ok and v.checked == 1, v.describe()
     # a tool that straddles the sheet slides first: the same path, nothing tried before it
     gun = dataclasses.replace(fork, straddles=True, _cache={})
-    (g,) = plan_transitions(sheet, gun, poses, retract=50.0, se3=False).transitions
+    (g,) = plan_transitions(sheet, gun, poses, NO_SE3).transitions
     np.testing.assert_array_equal(g.positions, t.positions)
     assert g.via == "slide" and g.reason == ""
 
@@ -254,7 +256,7 @@ def test_a_blocked_transition_lists_every_exit_tried():
     rib = _box((560, 4, 60), (-60, 0, 30))  # beyond the edge too: no way round it
     part = trimesh.util.concatenate([sheet, rib])
     poses = _poses([("a", (30, -100, 0)), ("b", (30, 100, 0))], DOWN)
-    path = plan_transitions(part, _fork(), poses, retract=50.0, se3=False, side_exit=120.0)
+    path = plan_transitions(part, _fork(), poses, dataclasses.replace(NO_SE3, side_exit=120.0))
     (t,) = path.transitions
     assert t.status == BLOCKED and t.via == "blocked"
     assert "axial: leaving a: retract: retract blocked" in t.reason
@@ -281,10 +283,8 @@ def test_the_se3_budget_is_a_budget():
     part = trimesh.util.concatenate([sheet, wall])
     poses = _poses([("a", (0, -100, 0)), ("b", (0, 100, 0))], DOWN)
     stick = _stick(100.0)
-    tp = TransitionPlanner(
-        part, stick, clearance=5.0, contact_radius=20.0, retract=50.0, time_s=60.0, seed=1,
-        se3_samples=10, slide=False,
-    )  # fmt: skip
+    budget = TransitionSettings(time_s=60.0, seed=1, se3_samples=10, slide=False)
+    tp = TransitionPlanner(part, stick, budget, clearance=5.0, contact_radius=20.0)
     t = tp.plan(poses["a"], poses["b"])
     (run,) = tp.se3_runs
     # the states and motions OMPL asked about took at most the 10 samples (a motion is cut
@@ -292,10 +292,8 @@ def test_the_se3_budget_is_a_budget():
     assert run["samples"] <= 10 and run["motions"] > 0
     assert t.status == BLOCKED and "refused: budget spent" in t.reason
     # the same seed with room to work solves it, and the counts are reproducible
-    tp2 = TransitionPlanner(
-        part, stick, clearance=5.0, contact_radius=20.0, retract=50.0, time_s=60.0, seed=1,
-        se3_samples=20_000, slide=False,
-    )  # fmt: skip
+    roomy = dataclasses.replace(budget, se3_samples=20_000)
+    tp2 = TransitionPlanner(part, stick, roomy, clearance=5.0, contact_radius=20.0)
     assert tp2.plan(poses["a"], poses["b"]).status == "replanned"
     assert tp2.se3_runs[0]["samples"] <= 20_000
 
@@ -308,11 +306,8 @@ def test_the_se3_check_budget_starves_and_a_seeded_replan_repeats_exactly():
     poses = _poses([("a", (0, -100, 0)), ("b", (0, 100, 0))], DOWN)
 
     def planner(checks):
-        tp = TransitionPlanner(
-            part, _stick(100.0), clearance=5.0, contact_radius=20.0, retract=50.0,
-            time_s=60.0, seed=1, slide=False,
-        )  # fmt: skip
-        tp.se3_checks = checks
+        s = TransitionSettings(time_s=60.0, seed=1, slide=False, se3_checks=checks)
+        tp = TransitionPlanner(part, _stick(100.0), s, clearance=5.0, contact_radius=20.0)
         return tp, tp.plan(poses["a"], poses["b"])
 
     tp, t = planner(2)

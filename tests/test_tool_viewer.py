@@ -11,7 +11,7 @@ import trimesh
 import umsgpack
 
 from tests.route_fixtures import box_part, box_route
-from weldplan.tool import Tool, plan_weld_poses
+from weldplan.tool import Tool, TransitionSettings, plan_weld_poses
 from weldplan.tool.transitions import plan_transitions
 from weldplan.viz.tool_scene import TOOL_COLOR, keyframe_times
 
@@ -28,7 +28,7 @@ def tool_route():
     poses = plan_weld_poses(box_part(), route, torch)
     assert poses.n_ok == 3
     # retracted 80 mm the tip passes 20 mm over the 60 mm wall between C and B
-    path = plan_transitions(box_part(), torch, poses, retract=80.0, se3=False)
+    path = plan_transitions(box_part(), torch, poses, TransitionSettings(retract=80.0, se3=False))
     assert [t.status for t in path.transitions] == ["direct", "direct"], path.summary()
     data = {"provenance": {}, "poses": poses.to_dict(), "transitions": path.to_dict()}
     return dataclasses.replace(route, tool=data), torch, path

@@ -212,11 +212,12 @@ def completeness(
     """Run the oracle and :func:`~weldplan.tool.poses.plan_weld_poses` (its defaults: the same
     cone, contact radius and clearance as :class:`OracleSettings`) on the same spots."""
     from weldplan.tool.poses import plan_weld_poses
+    from weldplan.tool.settings import PoseSearchSettings
 
     s = settings or OracleSettings()
     t0, c0 = time.perf_counter(), time.process_time()
-    poses = plan_weld_poses(part, joints, tool, cone=s.cone, contact_radius=s.contact_radius,
-                            clearance=s.clearance)  # fmt: skip
+    search = PoseSearchSettings(cone=s.cone, contact_radius=s.contact_radius, clearance=s.clearance)
+    poses = plan_weld_poses(part, joints, tool, search)
     search_s, search_cpu = time.perf_counter() - t0, time.process_time() - c0
     by_id = {p.id: p.ok for p in poses.poses}
     oracle = GunOracle(part, tool, s)

@@ -78,6 +78,7 @@ def station(
     """``(part, route, poses, tool)`` of the ``n``-joint car2 station (module docstring); the
     gun-pose search over ``cone`` and ``spin_step`` degrees."""
     from weldplan.tool import WeldPoses, arc_torch, plan_weld_poses, shared_spot_gun
+    from weldplan.tool.settings import PoseSearchSettings
     from weldplan.weld.synthetic import car2_joints, car2_part
 
     part = car2_part()
@@ -90,7 +91,8 @@ def station(
         poses = WeldPoses.from_json(f.read_text())
     else:
         t = time.perf_counter()
-        poses = plan_weld_poses(part, route, gun, cone=cone, spin_step=spin_step)
+        search = PoseSearchSettings(cone=cone, spin_step=spin_step)
+        poses = plan_weld_poses(part, route, gun, search)
         log.info("gun poses for %d spots: %.1f s", n, time.perf_counter() - t)
         if f is not None:
             f.parent.mkdir(parents=True, exist_ok=True)

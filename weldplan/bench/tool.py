@@ -34,6 +34,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from weldplan.tool.settings import DEFAULT_SE3_TIME
+
 HELP = (
     "gun poses and transitions vs point-tip planning time (target <= 2x on car2 200), "
     "reach per station"
@@ -69,7 +71,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--se3-time",
         type=float,
-        default=10.0,  # weldplan.tool.transitions.DEFAULT_SE3_TIME (not imported: fcl)
+        default=DEFAULT_SE3_TIME,
         help="OMPL CPU seconds per blocked transition (default 10; 0: off)",
     )
     p.add_argument(
@@ -113,6 +115,7 @@ def _cell(name: str) -> Any:
 def _station(name: str, gun: Any, args: argparse.Namespace) -> dict[str, Any]:
     import weldplan
     from weldplan.tool import plan_weld_poses, verify_poses
+    from weldplan.tool.settings import PoseSearchSettings
 
     load0 = _load()
     t0, c0 = time.perf_counter(), time.process_time()
@@ -121,9 +124,8 @@ def _station(name: str, gun: Any, args: argparse.Namespace) -> dict[str, Any]:
     t_point, c_point = time.perf_counter() - t0, time.process_time() - c0
     t1 = time.perf_counter()
     exits = _exit_test(cell, route, gun, args)
-    poses = plan_weld_poses(
-        cell, route, gun, both_sides=not args.one_side, crop=not args.whole_part, accept=exits
-    )
+    search = PoseSearchSettings(both_sides=not args.one_side, crop=not args.whole_part)
+    poses = plan_weld_poses(cell, route, gun, search, accept=exits)
     if exits is not None:
         poses = dataclasses.replace(poses, stats={**poses.stats, **exits.stats()})
     t_poses = time.perf_counter() - t1
@@ -161,18 +163,26 @@ def _station(name: str, gun: Any, args: argparse.Namespace) -> dict[str, Any]:
     }
 
 
+def _transition_settings(args: Any) -> Any:
+    """The transitions' settings of the bench, the same for the exit test's planner and the
+    transitions (the defaults, seed 0, and ``--se3-time``)."""
+    from weldplan.tool.settings import TransitionSettings
+
+    return TransitionSettings(se3=args.se3_time > 0, time_s=max(args.se3_time, 1e-3), seed=0)
+
+
 def _exit_test(cell: Any, route: Any, gun: Any, args: Any) -> Any:
     """The exit test (:class:`~weldplan.tool.exits.ExitTest`) with the planner the transitions
     use (same settings: :func:`_transitions`), or ``None`` with ``--no-exit-check``."""
     if not args.exit_check:
         return None
     from weldplan.tool.exits import ExitTest
-    from weldplan.tool.poses import DEFAULT_CONTACT_RADIUS
+    from weldplan.tool.settings import DEFAULT_CONTACT_RADIUS
     from weldplan.tool.transitions import TransitionPlanner
 
     planner = TransitionPlanner(
-        cell.part, gun, clearance=float(cell.clearance), contact_radius=DEFAULT_CONTACT_RADIUS,
-        se3=args.se3_time > 0, time_s=max(args.se3_time, 1e-3), seed=0,
+        cell.part, gun, _transition_settings(args), clearance=float(cell.clearance),
+        contact_radius=DEFAULT_CONTACT_RADIUS,
     )  # fmt: skip
     return ExitTest(planner, route.order, tuple(e.strip() for e in args.exits.split(",")))
 
@@ -183,15 +193,13 @@ def _transitions(
     """Order, transitions (re-ordered round blocked pairs, :mod:`weldplan.tool.reorder`) and
     their re-check for one station (timed together); ``reuse``: the exit test's planner."""
     from weldplan.tool.reorder import plan_ordered_transitions
-    from weldplan.tool.tool_order import DEFAULT_ROT_WEIGHT
-    from weldplan.tool.transitions import DEFAULT_RETRACT
+    from weldplan.tool.settings import OrderSettings
     from weldplan.tool.verify_sweeps import verify_sweeps
 
     t0 = time.perf_counter()
     path = plan_ordered_transitions(
-        cell.part, gun, poses, retract=DEFAULT_RETRACT, rot_weight=DEFAULT_ROT_WEIGHT, seed=0,
-        price_lifts=not args.order_axial, reuse=reuse, se3=args.se3_time > 0,
-        time_s=max(args.se3_time, 1e-3),
+        cell.part, gun, poses, _transition_settings(args),
+        OrderSettings(price_lifts=not args.order_axial), reuse=reuse,
     )  # fmt: skip
     t1 = time.perf_counter()
     sweeps = verify_sweeps(path, poses, cell.part, gun)

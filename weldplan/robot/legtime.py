@@ -271,8 +271,9 @@ def cell_leg_times(
     """
     from weldplan.robot.reach import search_base
     from weldplan.tool import plan_weld_poses
+    from weldplan.tool.settings import PoseSearchSettings
 
-    poses = plan_weld_poses(cell, None, tool, **pose_options)
+    poses = plan_weld_poses(cell, None, tool, PoseSearchSettings(**pose_options))
     T = weld_flange_poses(poses, tuple(str(i) for i in cell.joints.ids), flange_tcp)
     has = np.all(np.isfinite(T), axis=(1, 2))
     if not has.any():

@@ -9,7 +9,9 @@ sha256, the contact radius of the check, and the route along the gun's transitio
 :class:`FollowedRoute`). :meth:`ToolRoute.from_dict` reads that section once, and
 :meth:`ToolRoute.to_dict` writes it back in the same layout, key for key: the route JSON's format
 is unchanged, so the files written before :class:`ToolRoute` existed still load, and a route
-read and written again gives the same bytes (``tests/test_saved_plan.py``).
+read and written again gives the same bytes (``tests/test_saved_plan.py``). The tool stage's
+keys are read by :class:`weldplan.tool.section.ToolSection`, what the layers below the robot's
+read.
 
 Keys this version does not know are kept as they were (``extra``), so a newer file is not
 silently stripped when it is re-written.
@@ -172,15 +174,14 @@ class ToolRoute:
         KeyError, TypeError, ValueError
             A section that is not what the planner writes (the caller names the file).
         """
-        from weldplan.tool.result import WeldPoses
-        from weldplan.tool.transit import ToolPath
+        from weldplan.tool.section import ToolSection
 
         d = d or {}
-        poses, path, robot = d.get("poses"), d.get("transitions"), d.get("robot")
+        tool, robot = ToolSection.from_dict(d), d.get("robot")
         return cls(
-            provenance=dict(d.get("provenance") or {}),
-            poses=WeldPoses.from_dict(poses) if poses else None,
-            transitions=ToolPath.from_dict(path) if path else None,
+            provenance=tool.provenance,
+            poses=tool.poses,
+            transitions=tool.transitions,
             robot=SavedRobotRoute.from_dict(robot) if robot else None,
             extra=_extra(d, TOOL_KEYS),
         )

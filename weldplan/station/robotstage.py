@@ -98,6 +98,7 @@ def reach_test(
     weld: the robot stage then searches as without the test."""
     from weldplan.robot.collision import RobotCollision
     from weldplan.robot.posechoice import ReachTest, place_for_poses
+    from weldplan.station.toolstage import pose_settings
     from weldplan.tool import plan_weld_poses
 
     t0 = time.perf_counter()
@@ -108,9 +109,7 @@ def reach_test(
     )
     placement = None
     if not base_fixed:
-        first = plan_weld_poses(
-            cell, route, mounted.tool, cone=ts.cone, contact_radius=ts.contact_radius
-        )
+        first = plan_weld_poses(cell, route, mounted.tool, pose_settings(ts))
         try:
             placement = place_for_poses(
                 robot, route, first, F, cell.part, checker, kw["search"],

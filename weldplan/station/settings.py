@@ -232,15 +232,6 @@ class ToolSettings:
         _flag("exit_check", self.exit_check)
         _choice("order", self.order, TOOL_ORDERS)
 
-    def transition_kw(self, seed: int | None) -> dict[str, Any]:
-        """The transition planner's keywords (one place for the exit test's planner and the
-        transitions stage, which must agree)."""
-        return dict(
-            retract=self.retract, se3=self.se3_time > 0, time_s=max(self.se3_time, 1e-3),
-            seed=seed, rot_weight=max(self.rot_weight, 1.0), side_exit=self.side_exit,
-            slide=self.slide,
-        )  # fmt: skip
-
 
 #: s a spot takes when ``weld_time`` is not given (squeeze, weld and hold of a typical
 #: sheet-steel spot; an assumption, say yours)

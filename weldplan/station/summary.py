@@ -8,6 +8,13 @@ from pathlib import Path
 from typing import Any
 
 
+def _tool_route(route: Any) -> Any:
+    """The route's tool section, typed (:class:`~weldplan.robot.toolroute.ToolRoute`)."""
+    from weldplan.robot.toolroute import ToolRoute
+
+    return ToolRoute.of(route)
+
+
 def _gap_rounds(g: Any) -> str:
     """The converging rounds of the lazy costs (:func:`weldplan.weld.converge.close_gap`)."""
     if not g:
@@ -102,11 +109,12 @@ def clock_caps(route: Any) -> list[str]:
         from weldplan.weld.local_ompl import DEFAULT_TIME_S
 
         caps.append(f"the local paths of --planner ompl had a clock budget ({DEFAULT_TIME_S:g} s)")
-    tr = (route.tool or {}).get("transitions") or {}
-    n = sum(bool(r.get("clock")) for r in (tr.get("stats") or {}).get("se3_runs") or [])
+    tr = _tool_route(route)
+    runs = (tr.transitions.stats.get("se3_runs") or []) if tr.transitions is not None else []
+    n = sum(bool(r.get("clock")) for r in runs)
     if n:
         caps.append(f"{n} SE(3) re-plan(s) of the gun stopped by the clock")
-    ompl = (((route.tool or {}).get("robot") or {}).get("stats") or {}).get("ompl") or {}
+    ompl = (tr.robot.route.stats.get("ompl") or {}) if tr.robot is not None else {}
     if ompl.get("clock"):
         caps.append(f"{int(ompl['clock'])} joint-space transfer(s) stopped by the clock")
     return caps
@@ -223,12 +231,10 @@ def partial_lines(plan: Any) -> list[str]:
     return out
 
 
-def transition_rows(route: Any, check: Any) -> list[tuple[str, str]]:
-    """Summary rows of the transitions: free / total, re-planned, length and rotation versus the
-    point-tip order, and each blocked transition."""
-    from weldplan.tool.route_frames import route_tool_path
-
-    path = route_tool_path(route)
+def transition_rows(path: Any, check: Any) -> list[tuple[str, str]]:
+    """Summary rows of the transitions (:class:`~weldplan.tool.transit.ToolPath`, None: none):
+    free / total, re-planned, length and rotation versus the point-tip order, and each blocked
+    transition."""
     if path is None:
         return []
     sweeps = getattr(check, "sweeps", None)
@@ -263,12 +269,11 @@ def transition_rows(route: Any, check: Any) -> list[tuple[str, str]]:
 
 def pose_rows(route: Any, check: Any) -> list[tuple[str, str]]:
     """Summary rows of the pose stage: the tool, welds reached, and each miss."""
-    from weldplan.tool.result import WeldPoses
-
-    poses = WeldPoses.from_dict(route.tool["poses"])
+    tr = _tool_route(route)
+    poses = tr.poses
     n = len(poses.poses)
     rows = [
-        ("tool", f"{poses.tool}, sha256 {route.tool['provenance']['file_sha256'][:12]}"),
+        ("tool", f"{poses.tool}, sha256 {tr.provenance['file_sha256'][:12]}"),
         (
             "tool poses",
             f"{poses.n_ok} / {n} welds with a free pose (re-checked: {check.checked} ok poses, "
@@ -281,7 +286,7 @@ def pose_rows(route: Any, check: Any) -> list[tuple[str, str]]:
         for p in poses.poses
         if not p.ok
     ]
-    return rows + transition_rows(route, check)
+    return rows + transition_rows(tr.transitions, check)
 
 
 def robot_rows(rr: Any, build: Any) -> list[tuple[str, str]]:

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from weldplan.station.model import ToolSettings
+from weldplan.tool.settings import OrderSettings, PoseSearchSettings, TransitionSettings
 
 
 @dataclass(frozen=True, eq=False)
@@ -53,6 +54,31 @@ class ToolChecks:
     sweeps: Any = None
 
 
+def pose_settings(settings: ToolSettings) -> PoseSearchSettings:
+    """The pose search's settings (:class:`~weldplan.tool.settings.PoseSearchSettings`) of the
+    station's tool stage: its cone and contact radius, the rest the search's defaults."""
+    return PoseSearchSettings(cone=settings.cone, contact_radius=settings.contact_radius)
+
+
+def transition_settings(settings: ToolSettings, seed: int | None) -> TransitionSettings:
+    """The transition planner's settings (:class:`~weldplan.tool.settings.TransitionSettings`)
+    of the station's tool stage, one place for the exit test's planner and the transitions
+    stage, which must agree: no SE(3) re-plan at ``se3_time`` 0, and the SE(3) metric's weight
+    at least 1 mm per rad."""
+    return TransitionSettings(
+        retract=settings.retract, side_exit=settings.side_exit, slide=settings.slide,
+        se3=settings.se3_time > 0, time_s=max(settings.se3_time, 1e-3), seed=seed,
+        rot_weight=max(settings.rot_weight, 1.0),
+    )  # fmt: skip
+
+
+def order_settings(settings: ToolSettings) -> OrderSettings:
+    """The weld order's settings (:class:`~weldplan.tool.settings.OrderSettings`) of the
+    station's tool stage: its rotation weight, and the point-tip order kept for ``order =
+    "route"``."""
+    return OrderSettings(rot_weight=settings.rot_weight, keep_order=settings.order == "route")
+
+
 def poses_stage(
     cell: Any,
     route: Any,
@@ -76,14 +102,13 @@ def poses_stage(
         from weldplan.tool.transitions import TransitionPlanner
 
         planner = TransitionPlanner(
-            cell.part, tool, clearance=float(cell.clearance),
-            contact_radius=settings.contact_radius, **settings.transition_kw(seed),
+            cell.part, tool, transition_settings(settings, seed),
+            clearance=float(cell.clearance), contact_radius=settings.contact_radius,
         )  # fmt: skip
         exits = ExitTest(planner, route.order)
     poses = plan_weld_poses(
-        cell, route, tool, cone=settings.cone, contact_radius=settings.contact_radius,
-        accept=all_of(accept, exits),
-    )  # fmt: skip
+        cell, route, tool, pose_settings(settings), accept=all_of(accept, exits)
+    )
     if exits is not None:
         poses = dataclasses.replace(poses, stats={**poses.stats, **exits.stats()})
     check = verify_poses(poses, cell.part, tool)
@@ -103,11 +128,9 @@ def transitions_stage(
     from weldplan.tool.reorder import plan_ordered_transitions
     from weldplan.tool.verify_sweeps import verify_sweeps
 
-    kw = settings.transition_kw(seed)
     path = plan_ordered_transitions(
-        part, tool, poses.poses, rot_weight=settings.rot_weight,
-        keep_order=settings.order == "route", reuse=poses.planner,
-        **{k: v for k, v in kw.items() if k != "rot_weight"},
+        part, tool, poses.poses, transition_settings(settings, seed), order_settings(settings),
+        reuse=poses.planner,
     )  # fmt: skip
     return TransitionsResult(path, verify_sweeps(path, poses.poses, part, tool))
 

@@ -64,7 +64,7 @@ from weldplan.study.robot_reach import (
     tool_recheck,
 )
 from weldplan.tool.model import Tool
-from weldplan.tool.poses import (
+from weldplan.tool.settings import (
     DEFAULT_AZIMUTHS,
     DEFAULT_CLEARANCE,
     DEFAULT_CONE,
@@ -378,16 +378,14 @@ def _gun_stage(
 ) -> tuple[list[GunVerdict], list[SpotPoses]]:
     """Per spot the tool's :class:`GunVerdict` and its free poses (verified one first)."""
     from weldplan.tool.poses import plan_weld_poses
+    from weldplan.tool.settings import PoseSearchSettings
 
     n = len(spots)
     gun: list[GunVerdict] = []
     free: list[SpotPoses] = [SpotPoses(np.asarray(p), np.zeros((0, 4))) for p in spots.xyz]
     wp = None
     if near.any():
-        wp = plan_weld_poses(
-            part,
-            _subset(spots, near),
-            st.tool,
+        search = PoseSearchSettings(
             cone=s.cone,
             tilt_step=s.tilt_step,
             spin_step=s.spin_step,
@@ -395,6 +393,7 @@ def _gun_stage(
             contact_radius=s.contact_radius,
             clearance=s.clearance,
         )
+        wp = plan_weld_poses(part, _subset(spots, near), st.tool, search)
     rows = iter(range(int(near.sum())))
     limit = f"no surface within {s.max_spot_distance:g} mm"
     for i in range(n):

@@ -9,6 +9,9 @@
     order, _ = tool_order(poses, retract=50.0)   # the weld order on the tool's own costs
     path = plan_transitions(cell.part, gun, poses, order=order)   # ToolPath: swept-gun checked
     verify_sweeps(path, poses, cell.part, gun).ok
+    # each search takes one settings object (weldplan.tool.settings): no tilt, no SE(3) re-plan
+    poses = plan_weld_poses(cell, route, gun, PoseSearchSettings(cone=0.0))
+    path = plan_transitions(cell.part, gun, poses, TransitionSettings(se3=False))
 
 The names above are loaded on first use (PEP 562 module ``__getattr__``): importing a module of
 this package (``weldplan.tool.route_frames``, as :mod:`weldplan.io.export` does for a route with
@@ -30,6 +33,7 @@ if TYPE_CHECKING:  # the same names, for type checkers and readers
     from weldplan.tool.model import Tool, load_tool_urdf, tool_from_mesh
     from weldplan.tool.poses import plan_weld_poses, surface_approach
     from weldplan.tool.result import Miss, WeldPose, WeldPoses
+    from weldplan.tool.settings import OrderSettings, PoseSearchSettings, TransitionSettings
     from weldplan.tool.tool_order import tool_order
     from weldplan.tool.torch import arc_torch, shared_spot_gun
     from weldplan.tool.transit import ToolPath, Transition
@@ -40,12 +44,15 @@ if TYPE_CHECKING:  # the same names, for type checkers and readers
 #: exported name -> the module of this package that defines it
 _EXPORTS = {
     "Miss": "result",
+    "OrderSettings": "settings",
     "PoseChecker": "verify_poses",
+    "PoseSearchSettings": "settings",
     "PosesVerification": "verify_poses",
     "SweepsVerification": "verify_sweeps",
     "Tool": "model",
     "ToolPath": "transit",
     "Transition": "transit",
+    "TransitionSettings": "settings",
     "WeldPose": "result",
     "WeldPoses": "result",
     "arc_torch": "torch",
@@ -62,12 +69,15 @@ _EXPORTS = {
 
 __all__ = [
     "Miss",
+    "OrderSettings",
     "PoseChecker",
+    "PoseSearchSettings",
     "PosesVerification",
     "SweepsVerification",
     "Tool",
     "ToolPath",
     "Transition",
+    "TransitionSettings",
     "WeldPose",
     "WeldPoses",
     "arc_torch",

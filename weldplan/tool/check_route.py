@@ -6,9 +6,9 @@ planned with another tool, or without one. :func:`verify_route_poses` then check
 belong to the route (one per visited weld, in its order, each at its weld spot) and re-checks every
 pose reported ok with :func:`weldplan.tool.verify_poses.verify_poses` (fresh FCL models of the
 whole part and the whole tool, none of the search's caches). :func:`verify_route_sweeps`
-re-checks the tool's transitions (``route.tool["transitions"]``) for the swept tool with
+re-checks the tool's transitions for the swept tool with
 :func:`weldplan.tool.verify_sweeps.verify_sweeps` (fresh FCL models, uniform samples and its own
-bound).
+bound). The route's tool section is read as a :class:`~weldplan.tool.section.ToolSection`.
 """
 
 from __future__ import annotations
@@ -25,6 +25,7 @@ from weldplan.errors import InputError
 from weldplan.tool.load import provenance_mismatch
 from weldplan.tool.result import NO_FREE_POSE, OK
 from weldplan.tool.route_frames import route_poses
+from weldplan.tool.section import ToolSection
 from weldplan.tool.verify_poses import verify_poses
 from weldplan.weld.route import Route
 
@@ -65,11 +66,15 @@ class RoutePosesCheck:
 def check_tool_provenance(
     route: Route, given: dict[str, Any], path: str | PathLike[str] | None = None
 ) -> None:
-    """Refuse a route planned without a tool or with another one (:class:`InputError`)."""
-    if not route.tool or not route.tool.get("poses"):
+    """Refuse a route planned without a tool or with another one, or whose tool section is
+    unreadable (:class:`InputError`)."""
+    try:
+        section = ToolSection.of(route)
+    except (KeyError, TypeError, ValueError) as exc:
+        raise InputError(f"unreadable tool section: {exc}", path=path, field="tool") from exc
+    if section.poses is None:
         raise InputError("the route was planned without --tool: no poses to check", path=path)
-    planned = route.tool.get("provenance") or {}
-    diff = provenance_mismatch(planned, given)
+    diff = provenance_mismatch(dict(section.provenance), given)
     if diff:
         raise InputError(
             f"the route was planned with another tool: {'; '.join(diff)}",
@@ -110,16 +115,17 @@ def verify_route_sweeps(route: Route, part: Any, tool: Any) -> Any:
     Returns a :class:`~weldplan.tool.verify_sweeps.SweepsVerification`; an unreadable tool path
     is a failed one.
     """
-    from weldplan.tool.result import WeldPoses
-    from weldplan.tool.transit import ToolPath
     from weldplan.tool.verify_sweeps import SweepsVerification, verify_sweeps
 
-    d = route.tool.get("transitions") if route.tool else None
-    if not d:
-        return None
+    def unreadable(why: object) -> SweepsVerification:
+        return SweepsVerification(False, 0, 0, failures=(("-", f"unreadable tool path: {why}"),))
+
     try:
-        path = ToolPath.from_dict(d)
-        poses = WeldPoses.from_dict(route.tool["poses"])
+        section = ToolSection.of(route)
     except (KeyError, TypeError, ValueError) as exc:
-        return SweepsVerification(False, 0, 0, failures=(("-", f"unreadable tool path: {exc}"),))
-    return verify_sweeps(path, poses, part, tool)
+        return unreadable(exc)
+    if section.transitions is None:
+        return None
+    if section.poses is None:
+        return unreadable("the route carries transitions and no poses")
+    return verify_sweeps(section.transitions, section.poses, part, tool)

@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 
 from weldplan.tool.result import WeldPoses
-from weldplan.tool.route_frames import route_tool_path
+from weldplan.tool.section import ToolSection
 from weldplan.tool.transit import ToolPath, Transition
 
 #: the columns, in order
@@ -134,9 +134,9 @@ def route_tool_csv(route: Any, header: Sequence[str] = ()) -> str:
     from weldplan.io.export import frame_comment
     from weldplan.io.outputset import comment_lines
 
-    path = route_tool_path(route)
-    if path is None:
+    section = ToolSection.of(route)
+    if section.transitions is None or section.poses is None:
         raise ValueError("the route has no tool transitions to write")
     note = frame_comment(route)  # a route planned in the cell says so, as its route CSV
-    text = tool_path_csv(path, WeldPoses.from_dict(route.tool["poses"]))
+    text = tool_path_csv(section.transitions, section.poses)
     return comment_lines([*header, *([] if note is None else [note])], "#") + text

@@ -40,6 +40,7 @@ from numpy.typing import NDArray
 
 from weldplan.tool.orient import least_rotation_choice, rotation_angles
 from weldplan.tool.pose_search import PoseSearch
+from weldplan.tool.settings import DEFAULT_MAX_VETOES
 from weldplan.tool.verify_poses import PoseCheck
 
 log = logging.getLogger(__name__)
@@ -58,8 +59,6 @@ class Recheck(Protocol):
         ...
 
 
-#: vetoes a weld may take before the test is lifted for it (each costs one more DP round)
-DEFAULT_MAX_VETOES = 12
 #: candidates of one weld judged at once while looking for its first free one: the first chunk
 #: and the largest (each chunk twice the last: most welds find one among their first few)
 MEASURE_CHUNK = (2, 32)

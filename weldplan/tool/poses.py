@@ -44,34 +44,18 @@ import numpy as np
 import trimesh
 from numpy.typing import ArrayLike, NDArray
 
-from weldplan.errors import InputError
 from weldplan.tool.model import Tool
 from weldplan.tool.orient import candidate_rotations, local_candidates, rotation_angles
-from weldplan.tool.pose_choice import (
-    DEFAULT_MAX_VETOES,
-    Accept,
-    Candidates,
-    ChoiceState,
-    choose,
-)
+from weldplan.tool.pose_choice import Accept, Candidates, ChoiceState, choose
 from weldplan.tool.pose_search import PoseSearch, probe_positions
 from weldplan.tool.result import NO_FREE_POSE, OK, Miss, WeldPose, WeldPoses, quat_wxyz
+from weldplan.tool.settings import DEFAULT_CLEARANCE, PoseSearchSettings
+
+# re-exported where it was declared before weldplan.tool.settings
+from weldplan.tool.settings import DEFAULT_CONTACT_RADIUS as DEFAULT_CONTACT_RADIUS
 from weldplan.tool.verify_poses import PoseCheck, PoseChecker
 
 log = logging.getLogger(__name__)
-
-#: default half-angle (deg) of the tilt cone about the approach axis (issue 16)
-DEFAULT_CONE = 15.0
-#: default tilt ring spacing (deg)
-DEFAULT_TILT_STEP = 7.5
-#: default spin spacing about the approach axis (deg)
-DEFAULT_SPIN_STEP = 15.0
-#: default tilt directions per ring
-DEFAULT_AZIMUTHS = 8
-#: default contact-zone radius about the weld spot (mm, issue 16)
-DEFAULT_CONTACT_RADIUS = 20.0
-#: default clearance (mm) when neither the call nor a cell gives one: the cell's torch-tip default
-DEFAULT_CLEARANCE = 5.0
 
 
 @dataclass(frozen=True)
@@ -142,17 +126,9 @@ def plan_weld_poses(
     part_or_cell: Any,
     route_or_joints: Any,
     tool: Tool,
+    settings: PoseSearchSettings | None = None,
     *,
-    cone: float = DEFAULT_CONE,
-    tilt_step: float = DEFAULT_TILT_STEP,
-    spin_step: float = DEFAULT_SPIN_STEP,
-    azimuths: int = DEFAULT_AZIMUTHS,
-    contact_radius: float = DEFAULT_CONTACT_RADIUS,
-    clearance: float | None = None,
-    both_sides: bool | None = None,
-    crop: bool = True,
     accept: Accept | None = None,
-    max_vetoes: int = DEFAULT_MAX_VETOES,
 ) -> WeldPoses:
     """A verified collision-free tool pose for every weld, or its closest miss (module docstring).
 
@@ -166,28 +142,17 @@ def plan_weld_poses(
         :class:`~weldplan.io.joints.Joints` (file order), or ``None`` to take the cell's joints.
     tool
         The tool (:mod:`weldplan.tool.model`).
-    cone, tilt_step, spin_step, azimuths
-        The candidate orientations (degrees; :func:`~weldplan.tool.orient.local_candidates`).
-    contact_radius
-        mm: the contact zone about the weld spot, exempt from the check.
-    clearance
-        mm: least distance between the tool outside the zone and the part; default the cell's
-        clearance, else :data:`DEFAULT_CLEARANCE`.
-    both_sides
-        Also try every candidate turned over (the approach axis reversed: the tool on the other
-        side of the sheet), after the candidates on the approach side, so that ties keep the
-        approach side. Default: the tool's :attr:`~weldplan.tool.model.Tool.straddles` (a C-gun
-        clamps the sheet and welds it from either side; an arc torch does not).
-    crop
-        Check against a BVH per weld of the part cropped to the tool's reach (default), or
-        against one BVH of the whole part (:class:`~weldplan.tool.pose_search.PoseSearch`; the
-        same answers).
-    accept, max_vetoes
+    settings
+        The candidates, the contact zone, the clearance (default the cell's, else
+        :data:`~weldplan.tool.settings.DEFAULT_CLEARANCE`), both sides or one, the cropped
+        check and the acceptance test's vetoes (:class:`~weldplan.tool.settings.PoseSearchSettings`;
+        default its defaults).
+    accept
         An acceptance test of the picks beyond being free (an exit exists, the robot reaches
         it): ``accept(i, T)`` gets weld ``i`` (route order) and its TCP pose ``T (4, 4)`` mm and
         returns ``None`` or the reason it vetoes the pose. A preference: a weld whose free
-        candidates are all vetoed, or that took ``max_vetoes`` vetoes, keeps its least-rotation
-        free pose with the reasons in :attr:`~weldplan.tool.result.WeldPose.note`
+        candidates are all vetoed, or that took ``settings.max_vetoes`` vetoes, keeps its
+        least-rotation free pose with the reasons in :attr:`~weldplan.tool.result.WeldPose.note`
         (:mod:`weldplan.tool.pose_choice`).
 
     Returns
@@ -200,20 +165,19 @@ def plan_weld_poses(
     part = cell.part if cell is not None else part_or_cell
     if not isinstance(part, trimesh.Trimesh):
         raise TypeError("part_or_cell must be a trimesh.Trimesh or a Cell")
+    s = settings if settings is not None else PoseSearchSettings()
+    clearance = s.clearance
     if clearance is None:
         clearance = float(cell.clearance) if cell is not None else DEFAULT_CLEARANCE
-    for name, val in (("clearance", clearance), ("contact_radius", contact_radius)):
-        if not val >= 0:
-            raise InputError(f"must be >= 0 mm, got {val}", field=name)
+    contact_radius = s.contact_radius
     welds = _welds(route_or_joints, cell)
     if welds.directions is not None:
         axes = -np.asarray(welds.directions, dtype=np.float64)
         axes /= np.linalg.norm(axes, axis=1, keepdims=True)
     else:
         axes = surface_approach(part, welds.xyz, welds.free_points)
-    if both_sides is None:
-        both_sides = tool.straddles
-    local, params = local_candidates(cone, tilt_step, spin_step, azimuths)
+    both_sides = tool.straddles if s.both_sides is None else s.both_sides
+    local, params = local_candidates(s.cone, s.tilt_step, s.spin_step, s.azimuths)
     params = np.column_stack([params, np.zeros(len(params))])  # spin, tilt, azimuth, flipped
     rots = candidate_rotations(axes, local)  # (n, c, 3, 3)
     if both_sides:
@@ -221,7 +185,7 @@ def plan_weld_poses(
         params = np.concatenate([params, params + [0.0, 0.0, 0.0, 1.0]])
     n, c = len(welds.ids), len(params)
     quats = quat_wxyz(rots.reshape(-1, 3, 3)).reshape(n, c, 4)
-    search = PoseSearch(part, tool, contact_radius, clearance, crop=crop)
+    search = PoseSearch(part, tool, contact_radius, clearance, crop=s.crop)
     t_near = time.perf_counter()
     near = [search.part_near(p) for p in welds.xyz]
     objs = [o for o, _ in near]
@@ -239,7 +203,7 @@ def plan_weld_poses(
     def pick() -> tuple[dict[int, int], float]:
         return choose(
             cands, dists, allowed, search, objs, checker, state, accept=accept,
-            max_vetoes=max_vetoes,
+            max_vetoes=s.max_vetoes,
         )  # fmt: skip
 
     choice, total = pick()
@@ -259,10 +223,10 @@ def plan_weld_poses(
         tool=f"{tool.name} [{tool.source}]",
         total_rotation=total,
         settings={
-            "cone": cone,
-            "tilt_step": tilt_step,
-            "spin_step": spin_step,
-            "azimuths": azimuths,
+            "cone": s.cone,
+            "tilt_step": s.tilt_step,
+            "spin_step": s.spin_step,
+            "azimuths": s.azimuths,
             "contact_radius": contact_radius,
             "clearance": clearance,
             "tip_cone": tool.tip_cone,

@@ -16,29 +16,22 @@ import logging
 from typing import Any
 
 from weldplan.tool.result import WeldPoses
+from weldplan.tool.settings import OrderSettings, TransitionSettings
 from weldplan.tool.tool_order import tool_order
 from weldplan.tool.transit import ToolPath
-from weldplan.tool.transitions import plan_transitions
+from weldplan.tool.transitions import TransitionPlanner, plan_transitions
 
 log = logging.getLogger(__name__)
-
-#: orders tried when transitions are found blocked
-REORDER_ROUNDS = 3
 
 
 def plan_ordered_transitions(
     part: Any,
     tool: Any,
     poses: WeldPoses,
+    settings: TransitionSettings | None = None,
+    order: OrderSettings | None = None,
     *,
-    retract: float,
-    rot_weight: float,
-    seed: Any = None,
-    price_lifts: bool = True,
-    keep_order: bool = False,
-    rounds: int = REORDER_ROUNDS,
-    reuse: Any = None,
-    **settings: Any,
+    reuse: TransitionPlanner | None = None,
 ) -> ToolPath:
     """Order the welds on the tool's costs and plan the transitions, re-ordering round blocked
     pairs (module docstring).
@@ -47,21 +40,16 @@ def plan_ordered_transitions(
     ----------
     part, tool, poses
         As :func:`~weldplan.tool.transitions.plan_transitions`.
-    retract, rot_weight
-        The order's leg costs (:func:`~weldplan.tool.tool_order.tool_order`; ``retract`` also
-        goes to the transitions).
-    price_lifts
-        With ``reuse`` (the exit test's planner): a weld that planner leaves by a lift is priced
-        at the lift, not the axial retract (:func:`weldplan.tool.exits.leave_distances`).
-    seed
-        The sequencer's and OMPL's seed.
-    keep_order
-        Keep the poses' own order (the point-tip route's) and never re-order.
-    rounds
-        At most this many orders.
-    reuse, settings
-        Passed on to :func:`~weldplan.tool.transitions.plan_transitions` (the exit test's
-        planner; ``se3``, ``time_s``, ``side_exit``, ``slide``, ``workers``...).
+    settings
+        The transitions' (:class:`~weldplan.tool.settings.TransitionSettings`; default those of
+        ``reuse``, else the defaults); its ``retract`` and ``seed`` are the order's too (the
+        leg costs, the sequencer's seed).
+    order
+        The order's leg cost weight, whether to keep the poses' order, the lifts' prices and
+        the rounds (:class:`~weldplan.tool.settings.OrderSettings`; default its defaults).
+    reuse
+        The exit test's planner, passed on to
+        :func:`~weldplan.tool.transitions.plan_transitions` (its checked exits are reused).
 
     Returns
     -------
@@ -69,27 +57,28 @@ def plan_ordered_transitions(
         Its ``stats`` carry the order's estimated costs, ``order_rounds`` and
         ``forbidden_pairs`` (the pairs priced out when the kept order was made).
     """
+    o = order if order is not None else OrderSettings()
+    s = settings if settings is not None else (
+        reuse.settings if reuse is not None else TransitionSettings())  # fmt: skip
     leave = None
-    if reuse is not None and price_lifts:
+    if reuse is not None and o.price_lifts:
         from weldplan.tool.exits import leave_distances
 
         leave = leave_distances(reuse, poses)
     forbid: set[tuple[str, str]] = set()
     best: ToolPath | None = None
-    for k in range(1, max(int(rounds), 1) + 1):
-        order, stats = tool_order(poses, retract, rot_weight, rng=seed, leave=leave, forbid=forbid)
-        if keep_order:
-            order = [p.id for p in poses.poses if p.ok]
-        stats["order_from"] = "route" if keep_order else "tool"
+    for k in range(1, o.rounds + 1):
+        ids, stats = tool_order(poses, s.retract, o.rot_weight, rng=s.seed, leave=leave,
+                                forbid=forbid)  # fmt: skip
+        if o.keep_order:
+            ids = [p.id for p in poses.poses if p.ok]
+        stats["order_from"] = "route" if o.keep_order else "tool"
         stats["order_rounds"] = k
-        path = plan_transitions(
-            part, tool, poses, order=order, retract=retract, rot_weight=max(rot_weight, 1.0),
-            seed=seed, stats=stats, reuse=reuse, **settings,
-        )  # fmt: skip
+        path = plan_transitions(part, tool, poses, s, order=ids, stats=stats, reuse=reuse)
         if best is None or (len(path.blocked), path.length) < (len(best.blocked), best.length):
             best = path
         new = {(t.from_id, t.to_id) for t in path.blocked} - forbid
-        if not new or keep_order:
+        if not new or o.keep_order:
             break
         log.info("tool order: %d transition(s) blocked; re-ordering round them", len(new))
         forbid |= new

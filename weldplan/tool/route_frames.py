@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation, Slerp
 
 from weldplan.tool.result import WeldPoses
+from weldplan.tool.section import ToolSection
 from weldplan.tool.transit import ToolPath
 from weldplan.weld.route import Route
 
@@ -37,17 +38,18 @@ def weld_rows(route: Route) -> NDArray[np.int64]:
 
 
 def route_poses(route: Route) -> WeldPoses | None:
-    """The route's :class:`WeldPoses` (``route.tool["poses"]``), ``None`` without a tool.
+    """The route's :class:`WeldPoses` (:attr:`ToolSection.poses
+    <weldplan.tool.section.ToolSection.poses>`), ``None`` without a tool.
 
     Raises
     ------
     ValueError
-        When the poses are not one per visited weld in the route's order.
+        When the poses are not one per visited weld in the route's order (KeyError, TypeError
+        or ValueError: a tool section that is not what the planner writes).
     """
-    d = route.tool.get("poses") if route.tool else None
-    if not d:
+    poses = ToolSection.of(route).poses
+    if poses is None:
         return None
-    poses = WeldPoses.from_dict(d)
     if poses.order != route.order:
         raise ValueError(
             f"the route's weld poses are for {'-'.join(poses.order)}, "
@@ -57,10 +59,9 @@ def route_poses(route: Route) -> WeldPoses | None:
 
 
 def route_tool_path(route: Route) -> ToolPath | None:
-    """The route's :class:`~weldplan.tool.transit.ToolPath` (``route.tool["transitions"]``),
-    ``None`` without transitions."""
-    d = route.tool.get("transitions") if route.tool else None
-    return ToolPath.from_dict(d) if d else None
+    """The route's :class:`~weldplan.tool.transit.ToolPath` (:attr:`ToolSection.transitions
+    <weldplan.tool.section.ToolSection.transitions>`), ``None`` without transitions."""
+    return ToolSection.of(route).transitions
 
 
 def waypoint_quaternions(route: Route, poses: WeldPoses) -> NDArray[np.float64]:

@@ -96,8 +96,9 @@ def se3_path(
     run = {"states": 0, "motions": 0, "refused": 0, "samples": 0, "bound_states": 0,
            "bound_motions": 0, "clock": False}  # fmt: skip
     tp.se3_runs.append(run)
-    deadline = time.process_time() + CLOCK_SAFETY * tp.time_s
-    cap = tp.se3_samples
+    st = tp.settings
+    deadline = time.process_time() + CLOCK_SAFETY * st.time_s
+    cap = st.se3_samples
 
     def spent() -> bool:
         if cap is not None and run["samples"] >= cap:
@@ -130,8 +131,8 @@ def se3_path(
             any(np.allclose(s, e) for e in ends),
             any(np.allclose(t, e) for e in ends),
         )
-        left = tp.se3_motion_cap if cap is None else min(
-            tp.se3_motion_cap, cap - run["samples"])  # fmt: skip
+        left = st.se3_motion_cap if cap is None else min(
+            st.se3_motion_cap, cap - run["samples"])  # fmt: skip
         out = check.check(s[:3], s[3:], t[:3], t[3:], exempt, soft, cap=left,
                           deadline=deadline)  # fmt: skip
         run["clock"] = run["clock"] or time.process_time() > deadline
@@ -146,9 +147,9 @@ def se3_path(
     lo, hi = _se3_box(start[0], goal[0], tp.part, pad=tp.tool.reach)
     res = plan_se3(
         start[0], start[1], goal[0], goal[1], lo, hi, is_valid,
-        motion_valid=motion_valid, rot_weight=tp.rot_weight, planner=tp.planner,
-        time_s=WALL_FACTOR * tp.time_s, seed=tp.seed, simplify=True, stop=spent, reach=tp.se3_range,
-        max_checks=tp.se3_checks,
+        motion_valid=motion_valid, rot_weight=st.rot_weight, planner=st.planner,
+        time_s=WALL_FACTOR * st.time_s, seed=st.seed, simplify=True, stop=spent, reach=st.se3_range,
+        max_checks=st.se3_checks,
     )  # fmt: skip
     run["checks"] = res.checks
     run["clock"] = run["clock"] or res.ended == "clock"

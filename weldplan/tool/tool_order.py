@@ -33,13 +33,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from weldplan.tool.result import WeldPoses
+from weldplan.tool.settings import DEFAULT_ROT_WEIGHT
 from weldplan.tool.sweep import quat_to_matrix
 
 log = logging.getLogger(__name__)
-
-#: mm per rad: default weight of the orientation change in the leg costs (a turn of 1 rad costs
-#: as much as 200 mm of TCP travel: about what a 0.7 m gun's far end sweeps through)
-DEFAULT_ROT_WEIGHT = 200.0
 
 
 def retract_points(

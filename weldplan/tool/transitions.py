@@ -42,50 +42,29 @@ from __future__ import annotations
 
 import logging
 import time
+from dataclasses import fields
 from typing import Any
 
 import numpy as np
 import trimesh
 from numpy.typing import NDArray
 
-from weldplan.errors import InputError
 from weldplan.tool.model import Tool
 from weldplan.tool.result import WeldPoses
 from weldplan.tool.se3_replan import entering, replan
-from weldplan.tool.sweep import DEFAULT_MIN_STEP, SweepChecker, quat_to_matrix
+from weldplan.tool.settings import TransitionSettings
+from weldplan.tool.sweep import SweepChecker, quat_to_matrix
 from weldplan.tool.sweep_bound import SweepBound
 from weldplan.tool.sweep_fast import FastSweep
 from weldplan.tool.transit import BLOCKED, DIRECT, ToolPath, Transition
 
 log = logging.getLogger(__name__)
 
-#: mm: default retract distance along the TCP axis before leaving a weld (issue 16)
-DEFAULT_RETRACT = 50.0
-#: default OMPL planner for blocked transitions (stops at its first solution, then simplified)
-DEFAULT_SE3_PLANNER = "rrtconnect"
 #: mm: lifts along the TCP axis tried before a side exit (:meth:`TransitionPlanner._side`)
 SIDE_LIFTS = (5.0, 10.0, 20.0)
 #: mm: lifts off the sheet tried for a slide, the middle of the shared gun's 46.5 mm opening
 #: first (0.8 to 47.3 mm ahead of the TCP), then nearer either electrode
 SLIDE_LIFTS = (4.0, 10.0, 20.0)
-#: mm: default side exit when the axial retract is blocked (a C-gun's jaws round a flange: the
-#: shared gun's C back stands 231 mm from its electrode axis)
-DEFAULT_SIDE_EXIT = 250.0
-#: default CPU seconds of one transition's SE(3) re-plan, a safety net only (the CLI's and the
-#: bench's too): the work budget is :data:`DEFAULT_SE3_CHECKS`; the clock stops a re-plan only
-#: at :data:`~weldplan.tool.se3_replan.CLOCK_SAFETY` times this, and says so (not reproducible)
-DEFAULT_SE3_TIME = 10.0
-#: state and motion checks one SE(3) re-plan may make (OMPL's ``max_checks``): the demo's three
-#: re-plans took 191, 291 and about 1,900 (the last at 5 CPU s a thousand, cut by the old 10 CPU s
-#: budget), so the same work as before on a quiet machine, now the same on any machine
-DEFAULT_SE3_CHECKS = 2_000
-#: FCL samples one motion of an SE(3) re-plan may take (a conservative advancement that needs
-#: more grazes the part, or turns a 0.7 m gun far; OMPL tries a shorter motion instead)
-DEFAULT_SE3_MOTION_CAP = 200
-#: the SE(3) planner's range (mm of the metric, ``rot_weight`` mm per rad): OMPL's default, a
-#: fifth of the space's extent, gave motions of 1-1.6 m of gun travel on the demo, each checked
-#: near a flange for hundreds of FCL samples and nearly always blocked
-DEFAULT_SE3_RANGE = 150.0
 
 
 class TransitionPlanner:
@@ -110,64 +89,29 @@ class TransitionPlanner:
     ----------
     part, tool
         The part and the tool (mm).
+    settings
+        The exits, the SE(3) re-plan and its budget
+        (:class:`~weldplan.tool.settings.TransitionSettings`; default its defaults).
     clearance, contact_radius
-        mm, as in the pose search.
-    retract
-        mm along the TCP axis (0: no retract/approach motions, the move starts at the spot).
-    side_exit
-        mm: when the axial retract is blocked, try leaving sideways by this much (0: never).
-    slide
-        Try the slide (:data:`SLIDE_LIFTS`) before the side exits.
-    se3
-        Re-plan blocked transitions with OMPL (needs ``weldplan[ompl]``).
-    planner, time_s, seed, rot_weight
-        OMPL's planner, seconds per transition, seed and metric weight (mm per rad).
-    se3_samples
-        FCL distance samples one SE(3) re-plan may take in all (``None``: no cap but the
-        checks): its state and motion checks answer "not free" once it is spent, so OMPL stops.
-    se3_motion_cap
-        Samples one motion of an SE(3) re-plan may take (a longer motion is "not free").
+        mm, as in the pose search (the poses'
+        :attr:`~weldplan.tool.result.WeldPoses.settings`).
     """
 
     def __init__(
         self,
         part: trimesh.Trimesh,
         tool: Tool,
+        settings: TransitionSettings | None = None,
         *,
         clearance: float,
         contact_radius: float,
-        retract: float = DEFAULT_RETRACT,
-        se3: bool = True,
-        planner: str = DEFAULT_SE3_PLANNER,
-        time_s: float = DEFAULT_SE3_TIME,
-        seed: int | None = 0,
-        rot_weight: float = 200.0,
-        min_step: float = DEFAULT_MIN_STEP,
-        side_exit: float = DEFAULT_SIDE_EXIT,
-        slide: bool = True,
-        se3_samples: int | None = None,
-        se3_motion_cap: int = DEFAULT_SE3_MOTION_CAP,
     ) -> None:
-        if not (np.isfinite(retract) and retract >= 0):
-            raise InputError(f"must be a finite number of mm >= 0, got {retract}", field="retract")
         self.part = part
         self.tool = tool
-        self.retract = float(retract)
-        self.se3 = se3
-        self.planner = planner
-        self.time_s = float(time_s)
-        self.seed = seed
-        self.rot_weight = float(rot_weight)
-        self.side_exit = float(side_exit)
-        self.slide = slide
-        self.se3_samples = se3_samples
-        self.se3_motion_cap = int(se3_motion_cap)
-        self.checker = SweepChecker(part, tool, clearance, contact_radius, min_step=min_step)
+        self.settings = s = settings if settings is not None else TransitionSettings()
+        step = {} if s.min_step is None else {"min_step": s.min_step}
+        self.checker = SweepChecker(part, tool, clearance, contact_radius, **step)
         self._fast: FastSweep | None = None
-        #: the SE(3) planner's range (:func:`weldplan.motion.sampling.plan_se3`'s ``reach``)
-        self.se3_range: float | None = DEFAULT_SE3_RANGE
-        #: state and motion checks one SE(3) re-plan may make (its work budget)
-        self.se3_checks = DEFAULT_SE3_CHECKS
         self.samples = 0
         #: per SE(3) re-plan: states and motions asked, motions refused for the budget, samples
         self.se3_runs: list[dict[str, Any]] = []
@@ -187,6 +131,14 @@ class TransitionPlanner:
             bound.table.fill_all()  # before any re-plan's clock starts: OMPL roams the box
             self._fast = FastSweep(c, bound)
         return self._fast
+
+    def _pad(self) -> float:
+        """mm about the welds the checker focuses on: every exit stays inside."""
+        return self.settings.retract + self.settings.side_exit + max(SIDE_LIFTS + SLIDE_LIFTS) + 1.0
+
+    def _sideways(self) -> bool:
+        """Whether side exits are tried (a side exit and a retract to finish them)."""
+        return self.settings.side_exit > 0 and self.settings.retract > 0
 
     def _motions(
         self,
@@ -229,11 +181,11 @@ class TransitionPlanner:
         key = _pose_key(w)
         if key not in self._axial:
             p = np.asarray(w.position, dtype=np.float64)
-            if self.retract <= 0:
+            if self.settings.retract <= 0:
                 self._axial[key] = (p[None], (), "")
             else:
                 z = quat_to_matrix(np.asarray(w.quaternion, dtype=np.float64))[:, 2]
-                cand = ([p, p - self.retract * z], ("retract",), "retract")
+                cand = ([p, p - self.settings.retract * z], ("retract",), "retract")
                 self._axial[key] = self._try(w, [cand])
         return self._axial[key]
 
@@ -260,18 +212,18 @@ class TransitionPlanner:
             p = np.asarray(w.position, dtype=np.float64)
             q = np.asarray(w.quaternion, dtype=np.float64)
             R = quat_to_matrix(q)
-            back = -self.retract * R[:, 2]
+            back = -self.settings.retract * R[:, 2]
             dirs = (("-x", -R[:, 0]), ("+x", R[:, 0]), ("-y", -R[:, 1]), ("+y", R[:, 1]))
             fails: list[str] = []
             found: tuple[NDArray | None, tuple[str, ...], str] | None = None
             for lift in SIDE_LIFTS:
-                lift = min(lift, self.retract)
+                lift = min(lift, self.settings.retract)
                 (_, up), why = self._lift(w, lift)
                 if why:
                     fails.append(f"lift {lift:g}: lift {why}")
                     continue
                 for name, d in dirs:
-                    side = self.side_exit * d
+                    side = self.settings.side_exit * d
                     P = np.array([up, up + side, p + side + back])
                     ok, k, why = self._motions(P, np.repeat(q[None], 3, axis=0), p[None])
                     if ok:
@@ -343,7 +295,7 @@ class TransitionPlanner:
         n0 = self.samples
         pa, pb = (np.asarray(w.position, dtype=np.float64) for w in (a, b))
         qa, qb = (np.asarray(w.quaternion, dtype=np.float64) for w in (a, b))
-        pad = self.retract + self.side_exit + max(SIDE_LIFTS + SLIDE_LIFTS) + 1.0
+        pad = self._pad()
         self.checker.focus(np.minimum(pa, pb) - pad, np.maximum(pa, pb) + pad)
         tried: list[str] = []
         ends: tuple[NDArray, NDArray] | None = None  # clear points of a and b for SE(3)
@@ -356,17 +308,17 @@ class TransitionPlanner:
 
         # a tool that straddles the sheet (a C-gun) slides first: its axial retract pulls the
         # jaw behind the sheet through it, so trying that first costs a check per weld
-        slide_first = self.slide and self.tool.straddles
+        slide_first = self.settings.slide and self.tool.straddles
         for kind in ("slide", "axial", "side") if slide_first else ("axial", "slide", "side"):
             if kind == "slide":
-                if not self.slide:
+                if not self.settings.slide:
                     continue
                 P, Q, why = self._slide(a, b)
                 if P is not None:
                     return done(P, Q, ("lift", "slide", "lower"), DIRECT)
                 tried.append(f"slide: {why}")
                 continue
-            if kind == "side" and not (self.side_exit > 0 and self.retract > 0 and legs is None):
+            if kind == "side" and not (self._sideways() and legs is None):
                 continue
             leave = self._leave_axial if kind == "axial" else self._leave
             got = self._via(a, b, kind, leave, tried)
@@ -378,7 +330,7 @@ class TransitionPlanner:
             shown = shown or (P, Q, kinds)
         # a blocked transition shows its first joined path tried, else the spot-to-spot segment
         shown = shown or (np.array([pa, pb]), np.array([qa, qb]), ("move",))
-        if not self.se3:
+        if not self.settings.se3:
             return done(*shown, BLOCKED)
         if ends is None:  # no clear exits: from the lifted poses where the lifts are free
             ca, cb = self._clear_point(a), self._clear_point(b)
@@ -421,11 +373,11 @@ class TransitionPlanner:
         ``w`` needs ``id``, ``position`` (mm) and ``quaternion`` (qw, qx, qy, qz).
         """
         p = np.asarray(w.position, dtype=np.float64)
-        pad = self.retract + self.side_exit + max(SIDE_LIFTS + SLIDE_LIFTS) + 1.0
+        pad = self._pad()
         self.checker.focus(p - pad, p + pad)
         fails: list[str] = []
         for kind in kinds:
-            if kind == "lift" and self.slide and self.tool.straddles:
+            if kind == "lift" and self.settings.slide and self.tool.straddles:
                 for lift in SLIDE_LIFTS:
                     _, why = self._lift(w, lift)
                     if not why:
@@ -436,7 +388,7 @@ class TransitionPlanner:
                 if la is not None:
                     return True, "axial retract"
                 fails.append(f"axial {why}")
-            elif kind == "side" and self.side_exit > 0 and self.retract > 0:
+            elif kind == "side" and self._sideways():
                 sa, how, why = self._side(w)
                 if sa is not None:
                     return True, f"side {how[1]}"
@@ -454,38 +406,36 @@ def _pose_key(w: Any) -> tuple[Any, ...]:
     )
 
 
-def _same_settings(
-    tp: TransitionPlanner, part: trimesh.Trimesh, tool: Tool, kw: dict[str, Any]
-) -> None:
-    """Refuse a planner whose part, tool or settings differ from the call's (``ValueError``)."""
-    have = {
-        "clearance": tp.checker.clearance, "contact_radius": tp.checker.contact_radius,
-        "retract": tp.retract, "se3": tp.se3, "planner": tp.planner, "time_s": tp.time_s,
-        "seed": tp.seed, "rot_weight": tp.rot_weight, "side_exit": tp.side_exit,
-        "slide": tp.slide, "se3_samples": tp.se3_samples,
-    }  # fmt: skip
-    diff = [k for k, v in have.items() if v != kw[k]]
-    if tp.part is not part or tp.tool is not tool:
+def _planner_for(
+    part: trimesh.Trimesh,
+    tool: Tool,
+    settings: TransitionSettings | None,
+    zone: tuple[float, float],
+    reuse: TransitionPlanner | None,
+) -> TransitionPlanner:
+    """``reuse`` when it was built for this part, tool, settings (``None``: its own) and
+    ``zone`` (clearance, contact radius in mm), else a ``ValueError`` naming what differs; a new
+    planner without ``reuse``."""
+    if reuse is None:
+        return TransitionPlanner(part, tool, settings, clearance=zone[0], contact_radius=zone[1])
+    mine, theirs = (reuse.settings if settings is None else settings), reuse.settings
+    diff = [f.name for f in fields(mine) if getattr(mine, f.name) != getattr(theirs, f.name)]
+    if (reuse.checker.clearance, reuse.checker.contact_radius) != zone:
+        diff.insert(0, "clearance or contact radius")
+    if reuse.part is not part or reuse.tool is not tool:
         diff.insert(0, "part or tool")
     if diff:
         raise ValueError(f"the planner's settings differ from this call's: {', '.join(diff)}")
+    return reuse
 
 
 def plan_transitions(
     part: trimesh.Trimesh,
     tool: Tool,
     poses: WeldPoses,
+    settings: TransitionSettings | None = None,
     *,
     order: list[str] | None = None,
-    retract: float = DEFAULT_RETRACT,
-    se3: bool = True,
-    planner: str = DEFAULT_SE3_PLANNER,
-    time_s: float = DEFAULT_SE3_TIME,
-    seed: int | None = 0,
-    rot_weight: float = 200.0,
-    side_exit: float = DEFAULT_SIDE_EXIT,
-    slide: bool = True,
-    se3_samples: int | None = None,
     stats: dict[str, Any] | None = None,
     reuse: TransitionPlanner | None = None,
 ) -> ToolPath:
@@ -498,17 +448,19 @@ def plan_transitions(
     poses
         The weld poses (:func:`weldplan.tool.poses.plan_weld_poses`); its settings give the
         clearance and the contact radius.
+    settings
+        :class:`~weldplan.tool.settings.TransitionSettings`; default those of ``reuse``, else
+        the defaults.
     order
         The welds' visiting order (ids with a pose); default the poses' own order
         (:func:`weldplan.tool.tool_order.tool_order` gives the tool-aware one).
-    retract, se3, planner, time_s, seed, rot_weight, side_exit, slide, se3_samples
-        :class:`TransitionPlanner`.
     stats
         Extra figures to record (the ordering's costs).
     reuse
         A :class:`TransitionPlanner` to plan with, keeping the exits it has checked already
         (the pose search's exit test, :mod:`weldplan.tool.exits`, reuses its cache here). Its
-        settings must be those of this call (``ValueError`` otherwise).
+        part, tool, settings and the poses' clearance and contact radius must be this call's
+        (``ValueError`` otherwise).
 
     Returns
     -------
@@ -522,14 +474,8 @@ def plan_transitions(
         raise ValueError("the order must visit exactly the welds that have a pose")
     clearance = float(poses.settings["clearance"])
     radius = float(poses.settings["contact_radius"])
-    kw = dict(
-        clearance=clearance, contact_radius=radius, retract=retract, se3=se3, planner=planner,
-        time_s=time_s, seed=seed, rot_weight=rot_weight, side_exit=side_exit, slide=slide,
-        se3_samples=se3_samples,
-    )  # fmt: skip
-    if reuse is not None:
-        _same_settings(reuse, part, tool, kw)
-    tp = reuse if reuse is not None else TransitionPlanner(part, tool, **kw)  # type: ignore[arg-type]
+    tp = _planner_for(part, tool, settings, (clearance, radius), reuse)
+    s = tp.settings
     n0, c0, r0 = tp.samples, tp.checker.crops_built, len(tp.se3_runs)
     transitions = tuple(
         tp.plan(poses[a], poses[b]) for a, b in zip(order[:-1], order[1:], strict=True)
@@ -539,21 +485,21 @@ def plan_transitions(
         transitions=transitions,
         skipped=tuple(p.id for p in poses.poses if not p.ok),
         settings={
-            "retract": retract,
-            "side_exit": side_exit,
-            "slide": slide,
+            "retract": s.retract,
+            "side_exit": s.side_exit,
+            "slide": s.slide,
             "slide_lifts": list(SLIDE_LIFTS),
-            "se3_samples": se3_samples,
-            "se3_motion_cap": DEFAULT_SE3_MOTION_CAP,
-            "se3_checks": tp.se3_checks,
+            "se3_samples": s.se3_samples,
+            "se3_motion_cap": s.se3_motion_cap,
+            "se3_checks": s.se3_checks,
             "clearance": clearance,
             "contact_radius": radius,
-            "rot_weight": rot_weight,
-            "se3": se3,
-            "planner": planner,
-            "time_s": time_s,
-            "seed": seed,
-            "min_step": DEFAULT_MIN_STEP,
+            "rot_weight": s.rot_weight,
+            "se3": s.se3,
+            "planner": s.planner,
+            "time_s": s.time_s,
+            "seed": s.seed,
+            "min_step": tp.checker.min_step,
         },
         stats={
             **(stats or {}),

@@ -38,6 +38,7 @@ import numpy as np
 import trimesh
 from numpy.typing import NDArray
 
+from weldplan.tool.section import ToolSection
 from weldplan.viz.camera import FOV_DEG, SCENE_SIZE, frame_scene, scene_transform  # noqa: F401
 from weldplan.viz.overlay import WeldSlider
 from weldplan.weld.route import Route
@@ -315,8 +316,9 @@ def _frame(
     and via sphere radii (mm, :func:`joint_radius`) and the scene's scale (viewer units per
     mm)."""
     pts = [route.joint_xyz, *(leg.points for leg in route.legs)]
-    if route.tool.get("transitions"):  # the tool's path too: its retracts and exits
-        pts += [np.asarray(t["positions"]) for t in route.tool["transitions"]["transitions"]]
+    path = ToolSection.of(route).transitions
+    if path is not None:  # the tool's path too: its retracts and exits
+        pts += [t.positions for t in path.transitions]
     framed = [np.concatenate(pts, axis=0)]
     if mesh is not None:
         framed.append(np.asarray(mesh.vertices))

@@ -1,0 +1,71 @@
+"""The tool stage's part of a route's ``tool`` section, typed: :class:`ToolSection`.
+
+A route planned with a tool carries, in its ``tool`` section (the route JSON's), the tool's
+``provenance``, the weld ``poses`` (:class:`~weldplan.tool.result.WeldPoses`) and the tool's
+``transitions`` (:class:`~weldplan.tool.transit.ToolPath`), and, with a robot, the robot's route.
+:class:`ToolSection` reads the tool stage's three once, as the readers of this layer need them
+(the route's frames, the re-checks of a saved route, the exporters); the whole section with the
+robot's route is :class:`weldplan.robot.toolroute.ToolRoute`, which reads its first three keys
+here. The keys not read here (``robot``, and any this version does not know) are kept as they
+were in :attr:`ToolSection.rest`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+from weldplan.tool.result import WeldPoses
+from weldplan.tool.transit import ToolPath
+
+#: the keys of the tool section the tool stage writes, in the order it writes them
+TOOL_STAGE_KEYS = ("provenance", "poses", "transitions")
+
+
+@dataclass(frozen=True, eq=False)
+class ToolSection:
+    """The tool stage's results a route carries (module docstring).
+
+    Attributes
+    ----------
+    provenance
+        The tool the route was planned with (:func:`weldplan.tool.load.load_tool`: files and
+        their sha256, the TCP, the units); metadata, compared, never computed on. Empty for a
+        route planned without a tool.
+    poses
+        :class:`~weldplan.tool.result.WeldPoses`, one per visited weld in the route's order
+        (None: none saved).
+    transitions
+        :class:`~weldplan.tool.transit.ToolPath` (None: the route was planned without them).
+    rest
+        The section's other keys (the robot's route, keys this version does not know), as read.
+    """
+
+    provenance: Mapping[str, Any] = field(default_factory=dict)
+    poses: WeldPoses | None = None
+    transitions: ToolPath | None = None
+    rest: Mapping[str, Any] = field(default_factory=dict)
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any] | None) -> ToolSection:
+        """Read a route's ``tool`` section (``{}`` or None: a point-tip route).
+
+        Raises
+        ------
+        KeyError, TypeError, ValueError
+            A section that is not what the planner writes (the caller names the file).
+        """
+        d = d or {}
+        poses, path = d.get("poses"), d.get("transitions")
+        return cls(
+            provenance=dict(d.get("provenance") or {}),
+            poses=WeldPoses.from_dict(poses) if poses else None,
+            transitions=ToolPath.from_dict(path) if path else None,
+            rest={k: v for k, v in d.items() if k not in TOOL_STAGE_KEYS},
+        )
+
+    @classmethod
+    def of(cls, route: Any) -> ToolSection:
+        """The tool section of a :class:`~weldplan.weld.route.Route` (its ``tool``)."""
+        return cls.from_dict(route.tool)
