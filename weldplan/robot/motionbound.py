@@ -134,8 +134,9 @@ def touches_ahead(
 
 
 class Carry:
-    """What a body's last FCL distance still proves on the motions after it
-    (:meth:`~weldplan.robot.collision.RobotCollision.path_hits`).
+    """What a body's (or a pair of bodies') last FCL distance still proves on the motions after
+    it (:meth:`~weldplan.robot.collision.RobotCollision.path_hits`,
+    :meth:`~weldplan.robot.selfcollision.SelfCheck.motions`).
 
     The conservative advancement of a motion ends with the FCL distance ``d`` of the triangles
     of some spheres of a body at the motion's end; on the next motions of the path no point of
@@ -151,7 +152,8 @@ class Carry:
     seg
         ``(s,)``: the path's motions checked, increasing.
     D
-        ``(s, b)`` mm: each motion's bound on how far any point of each body moves.
+        ``(s, b)`` mm: each motion's bound on how far any point of each body moves (of a pair:
+        relative to each other).
     """
 
     def __init__(self, seg: NDArray[np.int64], D: NDArray[np.float64]) -> None:

@@ -56,7 +56,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from weldplan.geometry.checker import advance
-from weldplan.robot.motionbound import PROBE_AFTER, touches_ahead
+from weldplan.robot.motionbound import PROBE_AFTER, Carry, touches_ahead
 from weldplan.robot.nearpart import fcl_distance, fcl_tf
 
 log = logging.getLogger(__name__)
@@ -74,6 +74,8 @@ FLOOR_TOL_MM = 0.05
 MAX_FLOOR_SPLITS = 2000
 #: the floor's name in a hit
 FLOOR = "floor"
+#: a pair is carried whole (:class:`~weldplan.robot.motionbound.Carry` keeps sphere subsets)
+_WHOLE = np.zeros(1, dtype=np.int64)
 #: allowed collision matrices already computed (key: the bodies' names, frames and meshes)
 _ACM_CACHE: dict[str, AllowedCollisions] = {}
 
@@ -370,9 +372,10 @@ class SelfCheck:
         the first blocked motion).
 
         A pair's FCL distance carries over consecutive motions (``s`` then ``s + 1`` in
-        ``seg``): its *slack*, the distance less :data:`SELF_GAP_MM` less the bounds on the
-        pair's relative motion since it was measured, is a lower bound of what is left of it, so
-        a motion whose bound is below the slack is free with no FCL call. The per-motion
+        ``seg``; :class:`~weldplan.robot.motionbound.Carry`, as a body's against the part): its
+        *slack*, the distance less :data:`SELF_GAP_MM` less the bounds on the pair's relative
+        motion since it was measured, is a lower bound of what is left of it, so a motion whose
+        bound is below the slack is free with no FCL call. The per-motion
         advancement would have proven such a motion free in its first step, so the verdicts are
         the same, with fewer calls: a path of short motions (a sampled linear move) asks FCL
         about a pair once, not once per motion.
@@ -383,24 +386,21 @@ class SelfCheck:
         qa, qb = Q[seg], Q[seg + 1]
         suspects, rates = self._suspects(robot, qa, qb)
         index = {pair: p for p, pair in enumerate(self.acm.checked)}
-        slack = np.full(len(self.acm.checked), -np.inf)  # mm, at the end of the last motion
+        carry = Carry(seg, rates)  # a pair's last distance, as the part check's bodies
         out = []
         for k in range(len(seg)):
-            if k > 0 and seg[k] != seg[k - 1] + 1:
-                slack[:] = -np.inf  # a gap in the path: nothing carries over it
             first: tuple[float, float, str] | None = None  # the earliest pair to meet
             for i, j, rate in suspects[k]:
                 if j < 0:
                     hit = self._floor_motion(robot, qa[k], qb[k], i, rate)
                 else:
                     p = index[(i, j)]
-                    if slack[p] - rate > 0.0:
+                    if carry.free(k, p, _WHOLE, np.array([rate])):
                         continue  # free: the distance measured before still proves it
                     hit, left = self._advance(robot, qa[k], qb[k], i, j, rate)
-                    slack[p] = left + rates[k, p]  # what the motion's own bound leaves below
+                    carry.measured(k, p, _WHOLE, left)
                 if hit is not None and (first is None or hit[0] < first[0]):
                     first = (hit[0], hit[1], self._names(i, j))
-            slack -= rates[k]
             if first is not None:
                 out.append((int(seg[k]), first[0], first[2], first[1]))
                 if first_only:
