@@ -222,6 +222,11 @@ def test_every_report_exposes_one_verdict():
     assert v["tool transitions"].left_out == ("1->2",) and v["tool transitions"].ok
     assert [f.place for f in v["robot route"].failures] == ["row 3", "motion 5"]
     assert "floor" in v["robot route"].failures[1].cause
+    from weldplan.tool.sweep import SweepCheck
+
+    blocked = SweepCheck(False, 12, -0.5, 0.25, 80.0, False, 0.5).verdict
+    assert blocked.failures[0].place == "25 %" and "blocked at 25 %" in blocked.failures[0].cause
+    assert SweepCheck(True, 9, 3.0).verdict.ok
     rp = RoutePosesCheck(True, 4, 3, ("D",), (), 5.1)
     assert rp.verdict.left_out == ("D",) and rp.verdict.checked == 3
     # the station's verdict collects them, a check without a report (the part pose) included

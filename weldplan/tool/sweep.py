@@ -54,7 +54,7 @@ import trimesh
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from weldplan.geometry.checker import advance
+from weldplan.geometry.checker import CheckVerdict, advance
 from weldplan.tool.model import Tool, bvh, outside_sphere
 
 log = logging.getLogger(__name__)
@@ -167,6 +167,13 @@ class SweepCheck:
     bound: float = 0.0
     out_of_budget: bool = False
     min_step: float = 0.0
+
+    @property
+    def verdict(self) -> CheckVerdict:
+        """This check as a :class:`~weldplan.geometry.checker.CheckVerdict` (the place: where
+        it was blocked, as a share of the motion)."""
+        fails = () if self.ok else ((f"{100 * self.blocked_at:.0f} %", self.describe()),)
+        return CheckVerdict.of("tool motion", 1, fails, ok=self.ok)
 
     def describe(self) -> str:
         if self.ok:
