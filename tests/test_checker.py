@@ -161,6 +161,23 @@ def test_point_check_motion_agrees_with_sampled_fcl_distances(demo_part, demo_we
     assert pc.is_valid(a) and not pc.is_valid(spot)
 
 
+def test_point_check_motion_agrees_with_fcl_capsules(demo_part, demo_weld):
+    # random segments about a weld: a motion shown wholly free is a free capsule (python-fcl),
+    # a capsule that touches is never shown wholly free
+    model = CollisionModel(demo_part)
+    pc = PointChecker(model, 5.0)
+    spot, _ = demo_weld
+    rng = np.random.default_rng(3)
+    A = spot + rng.uniform(-60.0, 60.0, (40, 3))
+    B = spot + rng.uniform(-60.0, 60.0, (40, 3))
+    free = model.segments_free(A, B, 5.0, method="fcl")
+    t = np.array([pc.check_motion(a, b) for a, b in zip(A, B, strict=True)])
+    assert free.any() and not free.all()
+    assert np.all(t[~free] < 1.0)
+    # CA may stop short on a grazing segment (none of these), never pass a touching one
+    assert np.all(t[free] == 1.0)
+
+
 def test_both_checkers_satisfy_the_protocol(demo_part):
     chk = SweepChecker(demo_part, arc_torch(), clearance=5.0, contact_radius=0.0)
     assert isinstance(ToolStateChecker(chk), StateChecker)
