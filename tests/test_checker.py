@@ -183,13 +183,9 @@ def test_both_checkers_satisfy_the_protocol(demo_part):
     assert isinstance(ToolStateChecker(chk), StateChecker)
     assert isinstance(PointChecker(CollisionModel(demo_part), 5.0), StateChecker)
     assert not isinstance(chk, StateChecker)  # the planner's own API: the adapter is the one
-    from tests.robot_fixtures import shared_robot
-    from weldplan.robot.collision import RobotCollision
-
-    assert isinstance(RobotCollision(shared_robot(), demo_part), StateChecker)
 
 
-def test_robot_check_motion_agrees_with_sampled_states():
+def test_robot_checker_satisfies_the_protocol_and_agrees_with_sampled_states():
     from tests.robot_fixtures import box_joint_route, gun_tcp, shared_robot
     from tests.route_fixtures import box_part
     from weldplan.robot.collision import MIN_GAP_MM, RobotCollision
@@ -199,6 +195,7 @@ def test_robot_check_motion_agrees_with_sampled_states():
     _, Q = box_joint_route(robot, Tft)
     part = box_part()
     rc = RobotCollision(robot, part)
+    assert isinstance(rc, StateChecker)
     qa = Q[0]
     qb = Q[0].copy()
     qb[1] += 0.6  # the shoulder forward: the arm swings down through the box

@@ -279,12 +279,12 @@ class CheckVerdict:
         *,
         place: str = "{}",
         ok: bool | None = None,
-        **more: Any,
+        min_clearance: float = math.nan,
+        left_out: Any = (),
     ) -> CheckVerdict:
         """The verdict of ``checked`` items with ``failures``: :class:`Failure` or ``(key,
         cause)`` pairs, the place ``place.format(key)`` (``"weld {}"``; a key ``""`` or ``"-"``
-        names no place). ``ok`` defaults to "no failure"; ``more``: ``min_clearance``,
-        ``left_out``."""
+        names no place). ``ok`` defaults to "no failure"."""
         fails = tuple(
             f
             if isinstance(f, Failure)
@@ -296,8 +296,8 @@ class CheckVerdict:
             what,
             int(checked),
             fails,
-            float(more.get("min_clearance", math.nan)),
-            tuple(str(x) for x in more.get("left_out", ())),
+            float(min_clearance),
+            tuple(str(x) for x in left_out),
         )
 
     def describe(self, limit: int = 3) -> str:
