@@ -201,8 +201,8 @@ class PointChecker:
 
     def is_valid(self, state: ArrayLike) -> bool:
         """Whether the tip at ``state (3,)`` mm keeps off the part (python-fcl)."""
-        p = np.asarray(state, dtype=np.float64).reshape(3)
-        return self.model.segment_free(p, p, self.radius)
+        p = np.asarray(state, dtype=np.float64).reshape(1, 3)
+        return bool(self.model.segments_free(p, p, self.radius, method="fcl")[0])
 
     def clearance(self, state: ArrayLike) -> float:
         """mm: the distance of the point ``state (3,)`` to the part's surface (python-fcl)."""
