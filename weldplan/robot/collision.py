@@ -54,12 +54,19 @@ import numpy as np
 import trimesh
 from numpy.typing import ArrayLike, NDArray
 
+from weldplan.geometry.checker import advance
 from weldplan.geometry.distbound import DistanceBound
 from weldplan.geometry.spherecover import sphere_cover
 from weldplan.robot.model import Robot
-from weldplan.robot.motionbound import Carry, sphere_groups, sphere_rates, touches_ahead
+from weldplan.robot.motionbound import (
+    PROBE_AFTER,
+    Carry,
+    sphere_groups,
+    sphere_rates,
+    touches_ahead,
+)
 from weldplan.robot.nearpart import AlongMotion, PartCrops, fcl_distance, fcl_tf
-from weldplan.robot.selfcollision import PROBE_AFTER, SelfCheck, allowed_collisions
+from weldplan.robot.selfcollision import SelfCheck, allowed_collisions
 from weldplan.tool.model import Tool, bvh
 
 log = logging.getLogger(__name__)
@@ -489,21 +496,19 @@ class RobotCollision:
         along = AlongMotion(
             self.crops, obj, body.centres[spheres], body.radii[spheres], rate, crop=crop
         )
-        t = 0.0
-        d = 0.0
-        for step in range(MAX_ADVANCE_STEPS):
-            F = self.robot.link_frames(qa + t * (qb - qa))[0]
-            d = along.distance(F[body.frame], t)
-            if d <= MIN_GAP_MM:
-                return Hit(s, t, body.name, d), -np.inf
-            if t >= 1.0 or rate <= 0:
-                return None, d - MIN_GAP_MM - rate * (1.0 - t)
-            if step in PROBE_AFTER and touches_ahead(
+
+        def distance(t: float) -> float:
+            return along.distance(self.robot.link_frames(qa + t * (qb - qa))[0, body.frame], t)
+
+        def probe(step: int, t: float) -> bool:
+            return step in PROBE_AFTER and touches_ahead(
                 self.robot, obj, self.part_obj, qa, qb, t, body.frame
-            ):
-                return Hit(s, t, body.name, d), -np.inf
-            t = min(1.0, t + (d - MIN_GAP_MM) / rate)
-        return Hit(s, t, body.name, d), -np.inf
+            )
+
+        run = advance(distance, rate, gap=MIN_GAP_MM, max_steps=MAX_ADVANCE_STEPS, probe=probe)
+        if run.free:
+            return None, run.left
+        return Hit(s, run.t, body.name, run.distance), -np.inf
 
     def _near_part(
         self, qa: NDArray, body: Body, spheres: NDArray[np.int64], rates: NDArray[np.float64]
@@ -516,6 +521,36 @@ class RobotCollision:
         c = body.centres[spheres] @ F[:3, :3].T + F[:3, 3]
         reach = body.radii[spheres] + rates + MIN_GAP_MM
         return not np.all(self._clear(c, reach + 1e-3))
+
+    # ------------------------------------------ the StateChecker protocol (geometry.checker)
+    def is_valid(self, state: ArrayLike) -> bool:
+        """Whether configuration ``state (6,)`` rad is free (:meth:`state_free`)."""
+        return self.state_free(state)
+
+    def clearance(self, state: ArrayLike) -> float:
+        """mm: the least FCL distance at configuration ``state (6,)`` rad between a body (the
+        links and the whole tool) and the part, another body it is checked against, or the
+        floor when known (:meth:`SelfCheck.distance
+        <weldplan.robot.selfcollision.SelfCheck.distance>`); 0 in contact."""
+        F = self.robot.link_frames(np.asarray(state, dtype=np.float64))[0]
+        d = min(self.body_distance(b, F) for b in self.bodies)
+        return min(d, self.selfcheck.distance(self.robot, F))
+
+    def check_motion(self, a: ArrayLike, b: ArrayLike, *, zone: bool = False) -> float:
+        """The last valid parameter of the joint-space motion ``a -> b`` (6,) rad: 1.0 when it
+        is free (:meth:`path_hits`), else the earliest of where a body came within
+        :data:`MIN_GAP_MM` of the part and where a pair (or a body and the floor) met: the
+        motion is free before it (a floor hit is placed within
+        :data:`~weldplan.robot.selfcollision.FLOOR_TOL_MM` of motion)."""
+        Q = np.vstack([np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)])
+        hits = self.path_hits(Q, np.array([zone]))
+        if not hits:
+            return 1.0
+        t = hits[0].t
+        if "/" not in hits[0].body:  # a part hit: path_hits did not check the pairs then
+            rest = self.selfcheck.motions(self.robot, Q, np.array([0]))
+            t = min([t] + [h[1] for h in rest])
+        return float(t)
 
     def motion_free(self, qa: ArrayLike, qb: ArrayLike, *, zone: bool = False) -> bool:
         """Whether the joint-space motion ``qa -> qb`` (ends included) is free."""

@@ -22,10 +22,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from weldplan.robot.nearpart import fcl_tf
-from weldplan.robot.selfcollision import PROBE_STATES
 
 #: mm: cell of the groups of cover spheres asked first (:func:`sphere_groups`)
 GROUP_CELL_MM = 150.0
+#: conservative advancement never steps into the gap, so on a blocked motion it creeps towards
+#: the contact until its step cap; after these steps the rest of the motion is probed for a
+#: contact (:func:`touches_ahead`: FCL collide at PROBE_STATES states), and one found ends the
+#: advancement as blocked at once (against the part, and for a pair of bodies)
+PROBE_AFTER = frozenset({12, 48, 160})
+PROBE_STATES = 24
 
 
 def sphere_rates(
@@ -100,33 +105,38 @@ def touches_ahead(
     qb: NDArray[np.float64],
     t: float,
     frame: int | None = None,
+    other_frame: int | None = None,
 ) -> bool:
-    """Whether ``obj`` (riding on link ``frame``; default the last) touches ``other`` (FCL
-    collide) at one of ``PROBE_STATES`` states evenly spaced on the rest ``(t, 1]`` of the
-    joint motion ``qa -> qb`` (rad). Conservative advancement never steps into the gap, so on a
-    blocked motion it creeps towards the contact until its step cap; after the steps of
-    ``PROBE_AFTER`` (:mod:`weldplan.robot.selfcollision`) the rest of the motion is probed.
+    """Whether ``obj`` (riding on link ``frame``; default the last) touches ``other`` (fixed,
+    or riding on link ``other_frame``: a pair of bodies) (FCL collide) at one of
+    :data:`PROBE_STATES` states evenly spaced on the rest ``(t, 1]`` of the joint motion
+    ``qa -> qb`` (rad). Conservative advancement never steps into the gap, so on a blocked
+    motion it creeps towards the contact until its step cap; after the steps of
+    :data:`PROBE_AFTER` the rest of the motion is probed (the ``probe`` of
+    :func:`weldplan.geometry.checker.advance`).
 
     A contact there makes the motion blocked whatever conservative advancement would have done:
     it cannot step past a state where the body touches, so it would have ended blocked too (at
-    its step cap, :data:`MAX_ADVANCE_STEPS`, if not before). So a probe changes no verdict; it
-    only ends a blocked motion's advancement early (where it stands, ``t``), instead of creeping
-    towards the contact for hundreds of steps. Finding no contact proves nothing: the
-    advancement goes on.
+    its step cap, if not before). So a probe changes no verdict; it only ends a blocked
+    motion's advancement early (where it stands, ``t``), instead of creeping towards the
+    contact for hundreds of steps. Finding no contact proves nothing: the advancement goes on.
     """
     f = 6 if frame is None else frame
     ts = t + (1.0 - t) * np.arange(1, PROBE_STATES + 1) / PROBE_STATES
-    F = robot.link_frames(qa + ts[:, None] * (qb - qa))[:, f]
+    F = robot.link_frames(qa + ts[:, None] * (qb - qa))
     for Fk in F:
-        obj.setTransform(fcl_tf(Fk))
+        obj.setTransform(fcl_tf(Fk[f]))
+        if other_frame is not None:
+            other.setTransform(fcl_tf(Fk[other_frame]))
         if fcl.collide(obj, other, fcl.CollisionRequest(), fcl.CollisionResult()):
             return True
     return False
 
 
 class Carry:
-    """What a body's last FCL distance still proves on the motions after it
-    (:meth:`~weldplan.robot.collision.RobotCollision.path_hits`).
+    """What a body's (or a pair of bodies') last FCL distance still proves on the motions after
+    it (:meth:`~weldplan.robot.collision.RobotCollision.path_hits`,
+    :meth:`~weldplan.robot.selfcollision.SelfCheck.motions`).
 
     The conservative advancement of a motion ends with the FCL distance ``d`` of the triangles
     of some spheres of a body at the motion's end; on the next motions of the path no point of
@@ -142,7 +152,8 @@ class Carry:
     seg
         ``(s,)``: the path's motions checked, increasing.
     D
-        ``(s, b)`` mm: each motion's bound on how far any point of each body moves.
+        ``(s, b)`` mm: each motion's bound on how far any point of each body moves (of a pair:
+        relative to each other).
     """
 
     def __init__(self, seg: NDArray[np.int64], D: NDArray[np.float64]) -> None:

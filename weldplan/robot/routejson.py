@@ -38,6 +38,7 @@ from typing import Any
 import numpy as np
 
 from weldplan.errors import InputError
+from weldplan.geometry.checker import CheckVerdict
 
 log = logging.getLogger(__name__)
 
@@ -155,6 +156,19 @@ class RobotCheck:
             s, body, dist = self.hits[0]
             parts.append(f"{len(self.hits)} blocked motion(s), first: motion {s} ({body})")
         return "; ".join(parts)
+
+    @property
+    def verdict(self) -> CheckVerdict:
+        """This check as a :class:`~weldplan.geometry.checker.CheckVerdict` (places: the FK,
+        rows, motions; left out: the welds not in the program)."""
+        from weldplan.robot.selfcollision import hit_words
+
+        fails = []
+        if self.fk_mm > FK_TOLERANCE_MM or self.fk_deg > FK_TOLERANCE_DEG:
+            fails.append(("FK", f"misses the route by {self.fk_mm:.3g} mm, {self.fk_deg:.3g} deg"))
+        fails += [(f"row {r}", "outside the joint limits") for r in self.outside_limits]
+        fails += [(f"motion {s}", f"{hit_words(b)} ({d:.2f} mm)") for s, b, d in self.hits]
+        return CheckVerdict.of("robot route", self.rows, fails, left_out=self.left_out, ok=self.ok)
 
     def _ok_words(self) -> str:
         z = self.floor_z

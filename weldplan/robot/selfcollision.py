@@ -55,6 +55,8 @@ import fcl
 import numpy as np
 from numpy.typing import NDArray
 
+from weldplan.geometry.checker import advance
+from weldplan.robot.motionbound import PROBE_AFTER, Carry, touches_ahead
 from weldplan.robot.nearpart import fcl_distance, fcl_tf
 
 log = logging.getLogger(__name__)
@@ -66,18 +68,14 @@ ACM_SAMPLES = 1000
 ACM_SEED = 0
 #: conservative-advancement steps per (motion, pair) before a motion is declared blocked
 MAX_SELF_STEPS = 400
-#: conservative advancement never steps into the gap, so on a blocked motion it creeps towards
-#: the contact until its step cap; after these steps the rest of the motion is probed for a
-#: contact (FCL collide at PROBE_STATES states), and one found ends the advancement as blocked
-#: at once (here and against the part: :func:`weldplan.robot.collision.touches_ahead`)
-PROBE_AFTER = frozenset({12, 48, 160})
-PROBE_STATES = 24
 #: mm: the floor check of a motion splits it until no point moves more than this in a piece
 FLOOR_TOL_MM = 0.05
 #: pieces examined per (motion, body) against the floor before the motion is declared blocked
 MAX_FLOOR_SPLITS = 2000
 #: the floor's name in a hit
 FLOOR = "floor"
+#: a pair is carried whole (:class:`~weldplan.robot.motionbound.Carry` keeps sphere subsets)
+_WHOLE = np.zeros(1, dtype=np.int64)
 #: allowed collision matrices already computed (key: the bodies' names, frames and meshes)
 _ACM_CACHE: dict[str, AllowedCollisions] = {}
 
@@ -274,6 +272,17 @@ class SelfCheck:
         )
         return max(float(d), 0.0)
 
+    def distance(self, robot: Any, F: NDArray[np.float64]) -> float:
+        """mm: the least FCL distance of the checked pairs, and of the bodies above the floor
+        to it when the floor is known, at link frames ``F (7, 4, 4)`` of ``robot``; 0 on
+        contact, ``inf`` when nothing is checked."""
+        d = min(
+            (_pair_distance(self.bodies, i, j, F) for i, j in self.acm.checked), default=np.inf
+        )
+        if self.floor_z is not None:
+            d = min([d] + [self._floor_gap(robot, b, F) for b in self.on_floor])
+        return float(d)
+
     def _use(self, tool: bool) -> NDArray[np.bool_]:
         return np.array([tool or b.name != "tool" for b in self.bodies])
 
@@ -363,9 +372,10 @@ class SelfCheck:
         the first blocked motion).
 
         A pair's FCL distance carries over consecutive motions (``s`` then ``s + 1`` in
-        ``seg``): its *slack*, the distance less :data:`SELF_GAP_MM` less the bounds on the
-        pair's relative motion since it was measured, is a lower bound of what is left of it, so
-        a motion whose bound is below the slack is free with no FCL call. The per-motion
+        ``seg``; :class:`~weldplan.robot.motionbound.Carry`, as a body's against the part): its
+        *slack*, the distance less :data:`SELF_GAP_MM` less the bounds on the pair's relative
+        motion since it was measured, is a lower bound of what is left of it, so a motion whose
+        bound is below the slack is free with no FCL call. The per-motion
         advancement would have proven such a motion free in its first step, so the verdicts are
         the same, with fewer calls: a path of short motions (a sampled linear move) asks FCL
         about a pair once, not once per motion.
@@ -376,24 +386,21 @@ class SelfCheck:
         qa, qb = Q[seg], Q[seg + 1]
         suspects, rates = self._suspects(robot, qa, qb)
         index = {pair: p for p, pair in enumerate(self.acm.checked)}
-        slack = np.full(len(self.acm.checked), -np.inf)  # mm, at the end of the last motion
+        carry = Carry(seg, rates)  # a pair's last distance, as the part check's bodies
         out = []
         for k in range(len(seg)):
-            if k > 0 and seg[k] != seg[k - 1] + 1:
-                slack[:] = -np.inf  # a gap in the path: nothing carries over it
             first: tuple[float, float, str] | None = None  # the earliest pair to meet
             for i, j, rate in suspects[k]:
                 if j < 0:
                     hit = self._floor_motion(robot, qa[k], qb[k], i, rate)
                 else:
                     p = index[(i, j)]
-                    if slack[p] - rate > 0.0:
+                    if carry.free(k, p, _WHOLE, np.array([rate])):
                         continue  # free: the distance measured before still proves it
                     hit, left = self._advance(robot, qa[k], qb[k], i, j, rate)
-                    slack[p] = left + rates[k, p]  # what the motion's own bound leaves below
+                    carry.measured(k, p, _WHOLE, left)
                 if hit is not None and (first is None or hit[0] < first[0]):
                     first = (hit[0], hit[1], self._names(i, j))
-            slack -= rates[k]
             if first is not None:
                 out.append((int(seg[k]), first[0], first[2], first[1]))
                 if first_only:
@@ -408,34 +415,23 @@ class SelfCheck:
         within :data:`SELF_GAP_MM` (``None`` when they never do), and the slack left at the
         motion's end (mm: a lower bound of their distance there less the gap; ``-inf`` after a
         hit)."""
-        t = 0.0
-        d = 0.0
-        for step in range(MAX_SELF_STEPS):
-            d = _pair_distance(self.bodies, i, j, robot.link_frames(qa + t * (qb - qa))[0])
-            if d <= SELF_GAP_MM:
-                return (t, d), -np.inf
-            if rate * (1.0 - t) <= d - SELF_GAP_MM:
-                # they cannot meet before the motion ends
-                return None, d - SELF_GAP_MM - rate * (1.0 - t)
-            if step in PROBE_AFTER and self._touch_ahead(robot, qa, qb, i, j, t):
-                return (t, d), -np.inf  # blocked whatever the advancement would do
-            t = t + (d - SELF_GAP_MM) / rate
-        return (t, d), -np.inf
 
-    def _touch_ahead(self, robot: Any, qa: NDArray, qb: NDArray, i: int, j: int, t: float) -> bool:
-        """Whether bodies ``i`` and ``j`` touch (FCL collide) at one of :data:`PROBE_STATES`
-        states on the rest ``(t, 1]`` of ``qa -> qb``: the advancement cannot pass such a state,
-        so the motion is blocked (:func:`weldplan.robot.collision.touches_ahead`, the same probe
-        against the part)."""
-        ts = t + (1.0 - t) * np.arange(1, PROBE_STATES + 1) / PROBE_STATES
-        F = robot.link_frames(qa + ts[:, None] * (qb - qa))
-        a, b = self.bodies[i], self.bodies[j]
-        for Fk in F:
-            a.obj.setTransform(fcl_tf(Fk[a.frame]))
-            b.obj.setTransform(fcl_tf(Fk[b.frame]))
-            if fcl.collide(a.obj, b.obj, fcl.CollisionRequest(), fcl.CollisionResult()):
-                return True
-        return False
+        def distance(t: float) -> float:
+            return _pair_distance(self.bodies, i, j, robot.link_frames(qa + t * (qb - qa))[0])
+
+        def probe(step: int, t: float) -> bool:
+            a, b = self.bodies[i], self.bodies[j]
+            return step in PROBE_AFTER and touches_ahead(
+                robot, a.obj, b.obj, qa, qb, t, a.frame, b.frame
+            )
+
+        run = advance(
+            distance, rate, gap=SELF_GAP_MM, until_covered=True, max_steps=MAX_SELF_STEPS,
+            probe=probe,
+        )  # fmt: skip
+        if run.free:  # they cannot meet before the motion ends
+            return None, run.left
+        return (run.t, run.distance), -np.inf
 
     def _floor_motion(
         self, robot: Any, qa: NDArray, qb: NDArray, b: int, rate: float

@@ -34,6 +34,7 @@ from os import PathLike
 from typing import Any
 
 from weldplan.errors import EXIT_PARTIAL
+from weldplan.geometry.checker import CheckVerdict
 
 #: the checks, in the order they run
 CHECKS = ("part pose", "route", "tool poses", "tool transitions", "robot route")
@@ -59,7 +60,8 @@ class CheckResult:
         The check's own report (:class:`~weldplan.weld.verify.VerifyReport`,
         :class:`~weldplan.tool.check_route.RoutePosesCheck`,
         :class:`~weldplan.tool.verify_sweeps.SweepsVerification`,
-        :class:`~weldplan.robot.routejson.RobotCheck`; None for the part pose).
+        :class:`~weldplan.robot.routejson.RobotCheck`; None for the part pose); each exposes
+        the one verdict type, :attr:`verdict`.
     """
 
     name: str
@@ -67,6 +69,16 @@ class CheckResult:
     text: str
     left_out: tuple[str, ...] = ()
     report: Any = None
+
+    @property
+    def verdict(self) -> CheckVerdict:
+        """The check's :class:`~weldplan.geometry.checker.CheckVerdict`: its report's
+        (``report.verdict``), else one made of this line (the part pose)."""
+        own = getattr(self.report, "verdict", None)
+        if isinstance(own, CheckVerdict):
+            return own
+        fails = () if self.ok else (("", self.text),)
+        return CheckVerdict.of(self.name, 1, fails, left_out=self.left_out, ok=self.ok)
 
 
 @dataclass(frozen=True)
@@ -93,6 +105,12 @@ class Verdict:
     @property
     def failures(self) -> tuple[CheckResult, ...]:
         return tuple(c for c in self.checks if not c.ok)
+
+    @property
+    def verdicts(self) -> tuple[CheckVerdict, ...]:
+        """The checks run, in order, each as its
+        :class:`~weldplan.geometry.checker.CheckVerdict`."""
+        return tuple(c.verdict for c in self.checks)
 
     @property
     def left_out(self) -> tuple[str, ...]:

@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from weldplan.errors import InputError
+from weldplan.geometry.checker import CheckVerdict
 from weldplan.tool.load import provenance_mismatch
 from weldplan.tool.result import NO_FREE_POSE, OK
 from weldplan.tool.route_frames import route_poses
@@ -49,6 +50,17 @@ class RoutePosesCheck:
     n_ok: int
     missing: tuple[str, ...] = ()
     failures: tuple[tuple[str, str], ...] = ()
+    #: mm: the least distance measured of the tool outside its zone to the part (``nan``: none)
+    min_clearance: float = math.nan
+
+    @property
+    def verdict(self) -> CheckVerdict:
+        """This check as a :class:`~weldplan.geometry.checker.CheckVerdict` (places: welds;
+        left out: the welds without a pose)."""
+        return CheckVerdict.of(
+            "tool poses", self.n_ok, self.failures, place="weld {}", ok=self.ok,
+            min_clearance=self.min_clearance, left_out=self.missing,
+        )  # fmt: skip
 
     def describe(self, limit: int = 20) -> str:
         if not self.ok:
@@ -106,7 +118,9 @@ def verify_route_poses(route: Route, part: Any, tool: Any) -> RoutePosesCheck:
         return RoutePosesCheck(False, len(poses.poses), poses.n_ok, failures=tuple(failures))
     v = verify_poses(poses, part, tool)
     missing = tuple(p.id for p in poses.poses if not p.ok)
-    return RoutePosesCheck(v.ok, len(poses.poses), poses.n_ok, missing, tuple(v.failures))
+    return RoutePosesCheck(
+        v.ok, len(poses.poses), poses.n_ok, missing, tuple(v.failures), v.min_clearance
+    )
 
 
 def verify_route_sweeps(route: Route, part: Any, tool: Any) -> Any:

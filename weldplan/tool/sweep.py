@@ -54,6 +54,7 @@ import trimesh
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
+from weldplan.geometry.checker import CheckVerdict, advance
 from weldplan.tool.model import Tool, bvh, outside_sphere
 
 log = logging.getLogger(__name__)
@@ -166,6 +167,13 @@ class SweepCheck:
     bound: float = 0.0
     out_of_budget: bool = False
     min_step: float = 0.0
+
+    @property
+    def verdict(self) -> CheckVerdict:
+        """This check as a :class:`~weldplan.geometry.checker.CheckVerdict` (the place: where
+        it was blocked, as a share of the motion)."""
+        fails = () if self.ok else ((f"{100 * self.blocked_at:.0f} %", self.describe()),)
+        return CheckVerdict.of("tool motion", 1, fails, ok=self.ok)
 
     def describe(self) -> str:
         if self.ok:
@@ -443,26 +451,88 @@ class SweepChecker:
             smin[0] = min(smin[0], v)
             return v
 
+        def blocks_at(start: float, may: bool) -> Callable[[float, float], bool]:
+            def blocks(s: float, v: float) -> bool:
+                soft_here = may and abs(s - start) * L <= soft_range
+                short = v < self.min_step and not soft_here
+                return v < 0 or (v == 0 and L > 0) or budget[0] < 0 or (short and L > 0)
+
+            return blocks
+
         # forward from the start and backward from the end, meeting half-way: the slack at a
         # weld pose may be small, and grows as the tool leaves it
         blocked = float("nan")
-        for start, stop, sign, may in ((0.0, 0.5, 1.0, soft[0]), (1.0, 0.5, -1.0, soft[1])):
-            s = start
-            while True:
-                v = slack_at(s)
-                soft_here = may and abs(s - start) * L <= soft_range
-                short = v < self.min_step and not soft_here
-                if v < 0 or (v == 0 and L > 0) or budget[0] < 0 or (short and L > 0):
-                    blocked = s
-                    break
-                if L <= 0 or sign * (stop - s) <= 0:
-                    break
-                s = s + sign * min(v / L, sign * (stop - s))
-            if not math.isnan(blocked):
+        for start, stop, may in ((0.0, 0.5, soft[0]), (1.0, 0.5, soft[1])):
+            run = advance(slack_at, L, start=start, stop=stop, blocked=blocks_at(start, may))
+            if not run.free:
+                blocked = run.t
                 break
         n = first - budget[0]
         ok = math.isnan(blocked)
         return SweepCheck(ok, n, smin[0], blocked, L, late[0], self.min_step)
+
+    def last_valid(
+        self, a: tuple[ArrayLike, ArrayLike], b: tuple[ArrayLike, ArrayLike], exempt: Any = None
+    ) -> float:
+        """The last valid parameter of the motion between the TCP poses ``a = (p0, q0)`` and
+        ``b = (p1, q1)`` (mm, wxyz)
+        (:meth:`~weldplan.geometry.checker.StateChecker.check_motion`): conservative advancement
+        from the start only, by :meth:`check`'s rules (a slack below ``min_step`` blocks outside
+        the soft range of the start, a weld pose maybe; the same sample budget), so it keeps the
+        clearance on ``[0, t]`` and ``1.0`` means all of it. Not the planner's check (that one
+        meets in the middle and tries FCL's collide first: it fails faster, and says less)."""
+        L = motion_bound(a[0], a[1], b[0], b[1], self.reach)
+        soft_range = max(self.contact_radius, 10 * self.min_step)
+        pose_at = _interpolator(a[0], a[1], b[0], b[1])
+        focused = self._inside(a[0], b[0])
+
+        def slack_at(s: float) -> float:
+            pos, rot = pose_at([s])
+            return self.slack(pos[0], rot[0], exempt, focused)
+
+        def blocks(s: float, v: float) -> bool:
+            short = v < self.min_step and s * L > soft_range
+            return v < 0 or (v == 0 and L > 0) or (short and L > 0)
+
+        run = advance(slack_at, L, blocked=blocks, max_steps=max_samples(L, self.min_step))
+        return 1.0 if run.free else run.t
+
+
+class ToolStateChecker:
+    """The tool in SE(3) as a :class:`~weldplan.geometry.checker.StateChecker`: a state is a
+    TCP pose ``(p (3,) mm, q (4,) wxyz)``, a motion the straight TCP segment with slerp.
+
+    An adapter over :class:`SweepChecker` (whose ``clearance`` is the mm the tool must keep,
+    read at two dozen call sites; the protocol's ``clearance(state)`` would clash with it).
+
+    Parameters
+    ----------
+    checker
+        The swept-tool checker.
+    exempt
+        ``(m, 3)`` mm: weld spots whose contact zones apply (:meth:`SweepChecker.slack`), or
+        ``None``: the whole tool keeps the clearance.
+    """
+
+    def __init__(self, checker: SweepChecker, exempt: ArrayLike | None = None) -> None:
+        self.checker = checker
+        self.exempt = exempt
+
+    def is_valid(self, state: tuple[ArrayLike, ArrayLike]) -> bool:
+        """Whether the tool at pose ``state`` keeps the clearance
+        (:meth:`SweepChecker.state_ok`)."""
+        return self.checker.state_ok(state[0], state[1], self.exempt)
+
+    def clearance(self, state: tuple[ArrayLike, ArrayLike]) -> float:
+        """mm: the tool's FCL distance to the part at pose ``state``; with weld spots exempt, a
+        lower bound of what the contact-zone rule measures (:meth:`SweepChecker.slack` plus the
+        clearance)."""
+        p, q = state
+        return self.checker.slack(p, quat_to_matrix(q), self.exempt) + self.checker.clearance
+
+    def check_motion(self, a: tuple[ArrayLike, ArrayLike], b: tuple[ArrayLike, ArrayLike]) -> float:
+        """The last valid parameter of the motion ``a -> b`` (:meth:`SweepChecker.last_valid`)."""
+        return self.checker.last_valid(a, b, self.exempt)
 
 
 def max_samples(bound: float, min_step: float) -> int:

@@ -27,6 +27,7 @@ the part frame instead of tool triangles dropped in the tool frame), so a slip i
 from __future__ import annotations
 
 import logging
+import math
 from dataclasses import dataclass
 
 import fcl
@@ -35,6 +36,7 @@ import trimesh
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
+from weldplan.geometry.checker import CheckVerdict
 from weldplan.tool.model import Tool, bvh
 from weldplan.tool.result import WeldPoses
 
@@ -48,19 +50,38 @@ TOLERANCE_MM = 1e-6
 
 @dataclass(frozen=True)
 class PoseCheck:
-    """Outcome of one pose's re-check: ``ok``, and in words why not."""
+    """Outcome of one pose's re-check: ``ok``, and in words why not; ``distance`` (mm) the FCL
+    distance of the tool outside its zone to the part where it was measured (``nan``: not)."""
 
     ok: bool
     reason: str = ""
+    distance: float = math.nan
+
+    @property
+    def verdict(self) -> CheckVerdict:
+        """This check as a :class:`~weldplan.geometry.checker.CheckVerdict`."""
+        fails = () if self.ok else (("", self.reason),)
+        return CheckVerdict.of("tool pose", 1, fails, min_clearance=self.distance, ok=self.ok)
 
 
 @dataclass(frozen=True)
 class PosesVerification:
-    """Outcome of :func:`verify_poses`: ``ok`` when every weld reported ok passed."""
+    """Outcome of :func:`verify_poses`: ``ok`` when every weld reported ok passed;
+    ``min_clearance`` (mm) the least distance measured of the tool outside its zone to the part
+    (``nan``: none measured)."""
 
     ok: bool
     checked: int
     failures: tuple[tuple[str, str], ...] = ()
+    min_clearance: float = math.nan
+
+    @property
+    def verdict(self) -> CheckVerdict:
+        """This check as a :class:`~weldplan.geometry.checker.CheckVerdict` (places: welds)."""
+        return CheckVerdict.of(
+            "tool poses", self.checked, self.failures, place="weld {}", ok=self.ok,
+            min_clearance=self.min_clearance,
+        )  # fmt: skip
 
 
 class PoseChecker:
@@ -152,7 +173,9 @@ class PoseChecker:
                     False,
                     f"tool outside the contact zone is {max(dist, 0):.2f} mm from the part, "
                     f"less than the clearance {self.clearance:g} mm",
+                    max(float(dist), 0.0),
                 )
+            return PoseCheck(True, distance=float(dist))
         return PoseCheck(True)
 
 
@@ -212,6 +235,7 @@ def verify_poses(
     checker = PoseChecker(part, tool, r, c)
     failures = []
     checked = 0
+    least = math.nan
     for wp in poses.poses:
         if not wp.ok:
             continue
@@ -220,6 +244,7 @@ def verify_poses(
             failures.append((wp.id, "reported ok without an orientation"))
             continue
         out = checker.check(wp.position, wp.quaternion)
+        least = out.distance if math.isnan(least) else min(least, out.distance)
         if not out.ok:
             failures.append((wp.id, out.reason))
-    return PosesVerification(ok=not failures, checked=checked, failures=tuple(failures))
+    return PosesVerification(not failures, checked, tuple(failures), least)

@@ -34,6 +34,7 @@ import trimesh
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation, Slerp
 
+from weldplan.geometry.checker import CheckVerdict
 from weldplan.tool.model import Tool, bvh
 from weldplan.tool.result import WeldPoses
 from weldplan.tool.sweep import outside_sphere
@@ -62,6 +63,19 @@ class SweepsVerification:
     samples: int
     blocked: tuple[str, ...] = ()
     failures: tuple[tuple[str, str], ...] = ()
+    #: mm: the least slack sampled plus the clearance, a lower bound of the least distance of
+    #: the tool to what it must keep off (the contact-zone rule of :mod:`weldplan.tool.sweep`;
+    #: ``nan``: nothing sampled)
+    min_clearance: float = math.nan
+
+    @property
+    def verdict(self) -> CheckVerdict:
+        """This check as a :class:`~weldplan.geometry.checker.CheckVerdict` (places:
+        transitions ``from->to``; left out: the transitions the planner reported blocked)."""
+        return CheckVerdict.of(
+            "tool transitions", self.checked, self.failures, ok=self.ok,
+            min_clearance=self.min_clearance, left_out=self.blocked,
+        )  # fmt: skip
 
     def describe(self, limit: int = 10) -> str:
         if not self.ok:
@@ -122,6 +136,8 @@ class _Sweeps:
         self.part_obj: fcl.CollisionObject | None = None
         self.cuts: dict[tuple[float, ...], fcl.CollisionObject | None] = {}
         self.samples = 0
+        #: mm: the least slack sampled
+        self.least = math.inf
 
     def _near(self, lo: NDArray, hi: NDArray, pad: float) -> NDArray[np.int64]:
         """The part's faces whose bounding boxes come within ``pad`` of the box ``[lo, hi]``."""
@@ -146,6 +162,11 @@ class _Sweeps:
         return self.cuts[key]
 
     def slack(self, R: NDArray, p: NDArray, spots: NDArray) -> float:
+        s = self._slack(R, p, spots)
+        self.least = min(self.least, s)
+        return s
+
+    def _slack(self, R: NDArray, p: NDArray, spots: NDArray) -> float:
         self.samples += 1
         if self.part_obj is None:
             return math.inf
@@ -226,8 +247,9 @@ def _check_free(
     part: trimesh.Trimesh,
     tool: Tool,
     spacing: float,
-) -> tuple[list[tuple[str, str]], int]:
-    """The failures among the free ``transitions`` (name, why) and the samples taken, with
+) -> tuple[list[tuple[str, str]], int, float]:
+    """The failures among the free ``transitions`` (name, why), the samples taken and the least
+    slack sampled plus the clearance (mm, ``inf``: none sampled), with
     fresh models built here (one process's share of :func:`verify_sweeps`)."""
     clearance = float(poses.settings["clearance"])
     radius = float(poses.settings["contact_radius"])
@@ -248,7 +270,7 @@ def _check_free(
                     break
         if why:
             failures.append((f"{t.from_id}->{t.to_id}", why))
-    return failures, sw.samples
+    return failures, sw.samples, sw.least + clearance
 
 
 def verify_sweeps(
@@ -270,7 +292,7 @@ def verify_sweeps(
         failures.append(("order", "the tool path does not visit exactly the welds with a pose"))
     free = [t for t in path.transitions if t.free]
     blocked = [f"{t.from_id}->{t.to_id}" for t in path.transitions if not t.free]
-    fails, samples = _check_free(free, poses, part, tool, spacing)
+    fails, samples, least = _check_free(free, poses, part, tool, spacing)
     failures += fails
     return SweepsVerification(
         ok=not failures,
@@ -278,4 +300,5 @@ def verify_sweeps(
         samples=samples,
         blocked=tuple(blocked),
         failures=tuple(failures),
+        min_clearance=least if math.isfinite(least) else math.nan,
     )

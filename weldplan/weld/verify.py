@@ -59,6 +59,7 @@ import trimesh
 from numpy.typing import NDArray
 
 from weldplan.errors import InputError
+from weldplan.geometry.checker import CheckVerdict
 from weldplan.geometry.collision import CollisionModel
 from weldplan.geometry.solids import ClosedSolids
 from weldplan.io.mesh import MAX_COORD_MM, geometry_hash
@@ -117,6 +118,16 @@ class VerifyReport:
 
     def __bool__(self) -> bool:
         return self.ok
+
+    @property
+    def verdict(self) -> CheckVerdict:
+        """This check as a :class:`~weldplan.geometry.checker.CheckVerdict` (places: legs and
+        segments; the route's segments are judged free or not, no distance is measured)."""
+        fails = []
+        for v in self.violations:
+            where = str(v)[: -len(v.message)].rstrip(": ") if v.leg is not None else ""
+            fails.append((where, v.message))
+        return CheckVerdict.of("route", self.segments_checked, fails, ok=self.ok)
 
     def describe(self, limit: int = 5) -> str:
         """One line a user can act on (the first ``limit`` violations)."""
