@@ -232,7 +232,7 @@ class JointRouteSettings:
     roadmap
         The joint-space roadmaps' work (:mod:`weldplan.motion.roadmap`): a searched base is
         chosen by the welds one roadmap joins and a detour asks the roadmap of its base before
-        OMPL. ``None`` (the default, docs/robot-route.md says why): neither; :data:`ROADMAP` is
+        OMPL. ``None`` (the default, docs/robot-placement.md says why): neither; :data:`ROADMAP` is
         the suggested setting.
     """
 
