@@ -28,10 +28,13 @@ import logging
 import math
 import time
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from weldplan.errors import PlanningError
 from weldplan.station.model import RobotSettings, ToolSettings
+
+if TYPE_CHECKING:
+    from weldplan.robot.settings import JointRouteSettings, ProgramSettings, ToolOnRobot
 
 log = logging.getLogger(__name__)
 
@@ -63,7 +66,7 @@ class RobotResult:
     reach: RobotAcceptance | None = None
 
 
-def tool_on_robot(mounted: Any) -> Any:
+def tool_on_robot(mounted: Any) -> ToolOnRobot:
     """The :class:`~weldplan.robot.settings.ToolOnRobot` of a
     :class:`~weldplan.station.mount.MountedTool` (its tool, flange -> TCP transform and load)."""
     from weldplan.robot.settings import ToolOnRobot
@@ -71,7 +74,7 @@ def tool_on_robot(mounted: Any) -> Any:
     return ToolOnRobot(mounted.flange_tcp, mounted.tool, mounted.mass, mounted.cog)
 
 
-def route_settings(roadmap: bool) -> Any:
+def route_settings(roadmap: bool) -> JointRouteSettings:
     """The joint route's :class:`~weldplan.robot.settings.JointRouteSettings` of a station's robot:
     the defaults, with the roadmaps' work (:data:`weldplan.robot.settings.ROADMAP`) when
     :attr:`RobotSettings.roadmap` asks for it. With :func:`program_settings`, the one place
@@ -81,7 +84,7 @@ def route_settings(roadmap: bool) -> Any:
     return JointRouteSettings(roadmap=ROADMAP if roadmap else None)
 
 
-def program_settings(settings: RobotSettings, name: str) -> Any:
+def program_settings(settings: RobotSettings, name: str) -> ProgramSettings:
     """The program's :class:`~weldplan.robot.settings.ProgramSettings` of a station's robot
     (``name``: the program's)."""
     from weldplan.robot.settings import ProgramSettings
