@@ -39,6 +39,7 @@ from weldplan.robot.payload import urdf_payload
 from weldplan.robot.plan import plan_robot_route, tool_flange_tcp
 from weldplan.robot.program import robot_program
 from weldplan.robot.reach import BaseSearch, parse_base
+from weldplan.robot.settings import ProgramSettings, RobotCell, ToolOnRobot
 from weldplan.tool import plan_weld_poses, verify_poses
 from weldplan.tool.load import load_tool
 from weldplan.weld.verify import verify_route
@@ -91,21 +92,21 @@ def run(
     route = dataclasses.replace(route, tool={"provenance": prov, "poses": poses.to_dict()})
     t_route = time.perf_counter() - t0
     t1 = time.perf_counter()
-    rr = plan_robot_route(
-        route, poses, robot, flange_tcp=Tft, part=cell.part, tool=tool,
-        base=None if base is None else parse_base(base),
-        search=BaseSearch() if base is None else None, rng=0,
+    mass, cog = urdf_payload(GUN)
+    on = ToolOnRobot(Tft, tool, mass=mass, cog=(robot.mount @ np.r_[cog, 1.0])[:3])
+    at = RobotCell(
+        cell.part, base=None if base is None else parse_base(base),
+        search=BaseSearch() if base is None else None,
     )  # fmt: skip
+    rr = plan_robot_route(route, poses, robot, tool=on, cell=at, rng=0)
     t_robot = time.perf_counter() - t1
     rb = robot.with_base(rr.base)
-    mass, cog = urdf_payload(GUN)
-    cog_f = (robot.mount @ np.r_[cog, 1.0])[:3]
     rows = []
     for moves in moves_list:
         t2 = time.perf_counter()
         b = robot_program(
-            route, rr.q, rb, rr.flange_tcp, part=cell, tool_mass=mass, tool_cog=cog_f,
-            row=rr.row, exact=rr.exact, moves=moves, weld_time=weld_time, tcp_speed=tcp_speed,
+            route, rr.q, rb, on, part=cell, row=rr.row, exact=rr.exact,
+            settings=ProgramSettings(moves=moves, weld_time=weld_time, tcp_speed=tcp_speed),
         )  # fmt: skip
         t_prog = time.perf_counter() - t2
         src, dat = render_krl(b.program)

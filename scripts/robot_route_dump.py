@@ -38,6 +38,7 @@ def dump(n: int, tool: str, cache: Path | None, step: float, base: str | None) -
     from weldplan.robot import load_robot
     from weldplan.robot.plan import plan_robot_route, tool_flange_tcp
     from weldplan.robot.reach import BaseSearch, parse_base
+    from weldplan.robot.settings import JointRouteSettings, RobotCell, ToolOnRobot
     from weldplan.tool.torch import SHARED_GUN_DIR
     from weldplan.weld.synthetic import CAR2
 
@@ -50,8 +51,9 @@ def dump(n: int, tool: str, cache: Path | None, step: float, base: str | None) -
         F[2, 3] = TORCH_REACH_MM
     kw: dict = {"base": parse_base(base)} if base else {"search": BaseSearch(step=step)}
     rr = plan_robot_route(
-        route, poses, robot, flange_tcp=F, part=part, tool=gun, replan=False, **kw
-    )
+        route, poses, robot, tool=ToolOnRobot(F, gun), cell=RobotCell(part, **kw),
+        settings=JointRouteSettings(replan=False),
+    )  # fmt: skip
     return answers(rr)
 
 

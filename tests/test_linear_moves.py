@@ -54,12 +54,14 @@ def test_line_poses_are_straight_and_end_on_both_targets():
 
 def test_a_lin_through_an_obstacle_is_emitted_as_a_joint_move(long_joint_route):
     from weldplan.robot.program import robot_program
+    from weldplan.robot.settings import ProgramSettings, ToolOnRobot
 
     robot, Tft, route, Q = long_joint_route
     # the Cartesian check alone (the 600 mm move's joint path strays from the line by more than
     # the default 1 mm, which keeps it a joint move for the timing's sake)
-    common = dict(tool_mass=2.0, tool_cog=np.zeros(3), weld_time=0.5, line_tolerance=None)
-    free = robot_program(route, Q, robot, Tft, part=_plate(), **common)
+    tool = ToolOnRobot(Tft, mass=2.0, cog=np.zeros(3))
+    common = dict(settings=ProgramSettings(weld_time=0.5, line_tolerance=None))
+    free = robot_program(route, Q, robot, tool, part=_plate(), **common)
     moves = [(t.kind, t.row, t.move) for t in free.program.targets]
     assert ("via", 2, "linear") in moves  # the 600 mm straight move is verified linear
     # a 20 mm block where the flange passes half way along that move, 40 mm above it
@@ -67,7 +69,7 @@ def test_a_lin_through_an_obstacle_is_emitted_as_a_joint_move(long_joint_route):
     block = trimesh.creation.box(extents=[20, 20, 20])
     block.apply_translation(F + [0.0, 0.0, 40.0])
     part = trimesh.util.concatenate([_plate(), block])
-    hit = robot_program(route, Q, robot, Tft, part=part, **common)
+    hit = robot_program(route, Q, robot, tool, part=part, **common)
     moves_hit = [(t.kind, t.row, t.move) for t in hit.program.targets]
     assert ("via", 2, "joint") in moves_hit
     assert ("weld", 3, "linear") in moves_hit  # the short moves far from the block stay linear
@@ -97,8 +99,9 @@ def test_check_refuses_unchecked_flipping_and_mis_turned_moves(long_joint_route)
 
 def test_by_default_a_linear_move_also_keeps_its_joint_path_near_the_line(long_joint_route):
     from weldplan.robot.program import joint_line_deviation, robot_program
+    from weldplan.robot.settings import ToolOnRobot
 
     robot, Tft, route, Q = long_joint_route
-    b = robot_program(route, Q, robot, Tft, part=_plate(), tool_mass=2.0, tool_cog=np.zeros(3))
+    b = robot_program(route, Q, robot, ToolOnRobot(Tft, mass=2.0, cog=np.zeros(3)), part=_plate())
     assert float(joint_line_deviation(robot, Tft, Q[1], Q[2])[0]) > 1.0
     assert ("via", 2, "joint") in [(t.kind, t.row, t.move) for t in b.program.targets]

@@ -18,6 +18,7 @@ from weldplan.io.posts.krl import render_krl
 from weldplan.io.posts.parse import parse_krl, parse_rapid
 from weldplan.io.posts.rapid import render_rapid
 from weldplan.robot import ELBOW, SHOULDER, WRIST
+from weldplan.robot.settings import ProgramSettings, ToolOnRobot
 
 MM, DEG = 0.01, 0.01
 
@@ -40,11 +41,9 @@ def build():
         route,
         Q,
         robot,
-        Tft,
+        ToolOnRobot(Tft, mass=mass, cog=(robot.mount @ np.r_[cog, 1.0])[:3]),
         part=box_part(),
-        tool_mass=mass,
-        tool_cog=(robot.mount @ np.r_[cog, 1.0])[:3],
-        weld_time=0.5,
+        settings=ProgramSettings(weld_time=0.5),
     )
     return robot, Tft, Q, b
 
@@ -139,10 +138,8 @@ def test_a_joint_route_off_the_route_is_refused(build):
             box_route(directions=True),
             Q2,
             robot,
-            Tft,
+            ToolOnRobot(Tft, mass=1.0, cog=np.zeros(3)),
             part=box_part(),
-            tool_mass=1.0,
-            tool_cog=np.zeros(3),
         )
 
 
@@ -171,16 +168,21 @@ def test_joint_moves_stop_everywhere_and_a_replanned_via_is_a_joint_move(build):
     Qv = np.vstack([Q[:3], mid, Q[3:]])
     row = np.array([0, 1, 2, 2, 3, 4, 5, 6, 7])
     exact = np.array([True, True, True, False, True, True, True, True, True])
-    common = dict(part=box_part(), tool_mass=2.0, tool_cog=np.zeros(3), weld_time=0.5)
-    lin = robot_program(box_route(directions=True), Qv, robot, Tft, row=row, exact=exact, **common)
+    tool = ToolOnRobot(Tft, mass=2.0, cog=np.zeros(3))
+    common = dict(part=box_part(), row=row, exact=exact)
+    lin = robot_program(
+        box_route(directions=True), Qv, robot, tool, settings=ProgramSettings(weld_time=0.5),
+        **common,
+    )  # fmt: skip
     via = [t for t in lin.program.targets if t.kind == "via" and not np.allclose(t.q, Q[t.row])]
     assert len(via) == 1 and via[0].move == "joint" and via[0].blend == 0.0
     mod = parse_rapid(render_rapid(lin.program))
     for (_, name, _, _), t in zip(mod.moves, lin.program.targets, strict=True):
         _check_fk(robot, t.q, mod.wobj @ mod.targets[name][0], mod.tool)
     jnt = robot_program(
-        box_route(directions=True), Qv, robot, Tft, row=row, exact=exact, moves="joint", **common
-    )
+        box_route(directions=True), Qv, robot, tool,
+        settings=ProgramSettings(moves="joint", weld_time=0.5), **common,
+    )  # fmt: skip
     assert {t.move for t in jnt.program.targets} == {"joint"}
     assert all(t.blend == 0.0 for t in jnt.program.targets)
     assert np.all(jnt.timing.stops) and jnt.timing.total > lin.timing.total
@@ -215,8 +217,8 @@ def test_a_weld_the_robot_cannot_serve_is_passed_without_welding(build):
     exact = np.ones(len(Q), bool)
     exact[3] = False
     b = robot_program(
-        box_route(directions=True), Qs, robot, Tft, exact=exact, part=box_part(),
-        tool_mass=2.0, tool_cog=np.zeros(3), weld_time=0.5,
+        box_route(directions=True), Qs, robot, ToolOnRobot(Tft, mass=2.0, cog=np.zeros(3)),
+        exact=exact, part=box_part(), settings=ProgramSettings(weld_time=0.5),
     )  # fmt: skip
     assert b.skipped == ("C",)
     assert [t.joint_id for t in b.program.targets if t.kind == "weld"] == ["A", "B"]
@@ -252,8 +254,8 @@ def test_welds_after_the_last_served_one_are_named_not_moved_to(build):
     Qh[last + 1 :] = Q[last]
     exact = np.arange(len(Q)) <= last
     b = robot_program(
-        route, Qh, robot, Tft, exact=exact, part=box_part(), tool_mass=2.0,
-        tool_cog=np.zeros(3), weld_time=0.5,
+        route, Qh, robot, ToolOnRobot(Tft, mass=2.0, cog=np.zeros(3)), exact=exact,
+        part=box_part(), settings=ProgramSettings(weld_time=0.5),
     )  # fmt: skip
     assert b.skipped == ("B",) and b.row.tolist() == list(range(last + 1))
     assert max(t.row for t in b.program.targets) == last

@@ -17,6 +17,7 @@ from weldplan.io.joints import Joints
 from weldplan.robot.altreach import alternative_flange_poses, spread
 from weldplan.robot.posechoice import ReachTest, place_for_poses
 from weldplan.robot.reach import BaseSearch
+from weldplan.robot.settings import ToolOnRobot
 from weldplan.tool import PoseSearchSettings, arc_torch, plan_weld_poses
 from weldplan.tool.orient import rotation_angles
 
@@ -85,13 +86,14 @@ def test_the_searched_base_serves_every_weld_with_one_of_its_free_poses():
     plate, route, poses = _station()
     search = BaseSearch(line=LINE, step=500.0, extra_yaws=())
     # scored with every weld's free poses, a base that serves all four wins
-    pl = place_for_poses(robot, route, poses, TORCH_TCP, plate, None, search, alternatives=True)
+    tool = ToolOnRobot(TORCH_TCP)
+    pl = place_for_poses(robot, route, poses, tool, plate, None, search, alternatives=True)
     assert _reached(robot, pl.base, poses) == [True] * 4
     assert pl.n_usable == 4 and pl.searched and pl.min_manipulability > 0
     # scored with the chosen poses only (the tool stage took spin 0 at every weld, first among
     # equals): from the end of the line at y = -1500 two of those are reached, more than from
     # anywhere else, but weld d (2 m along the plate) is out of reach there whatever the pose
-    only = place_for_poses(robot, route, poses, TORCH_TCP, plate, None, search)  # the default
+    only = place_for_poses(robot, route, poses, tool, plate, None, search)  # the default
     assert only.xyz_yaw()[1] == -1500.0
     assert _reached(robot, only.base, poses) == [True, True, True, False]
 

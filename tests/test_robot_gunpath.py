@@ -95,19 +95,21 @@ def test_the_robot_serves_both_welds_only_along_the_gun_path():
     from weldplan.robot import load_robot
     from weldplan.robot.plan import plan_robot_route
     from weldplan.robot.routejson import attach_robot_route, verify_robot_route
+    from weldplan.robot.settings import JointRouteSettings, RobotCell, ToolOnRobot
     from weldplan.tool import arc_torch
 
     robot = load_robot(require_shared("robots", "kuka_kr150r3100_2") / "kr150r3100_2.urdf")
     route, path = two_weld_route(), over_the_wall()
     poses = poses_for(route, path)
     part, torch = box_part(), arc_torch()
-    kw = dict(flange_tcp=TORCH_TCP, part=part, tool=torch, base=BOX_BASE, rng=0)
-    own = plan_robot_route(route, poses, robot, replan=False, **kw)
+    kw = dict(
+        tool=ToolOnRobot(TORCH_TCP, torch), cell=RobotCell(part, base=BOX_BASE),
+        settings=JointRouteSettings(replan=False), rng=0,
+    )  # fmt: skip
+    own = plan_robot_route(route, poses, robot, **kw)
     assert own.stats["collision_free"] is False and own.n_ok < 2
     gr = gun_route(route, poses, path, contact_radius=20.0)
-    rr = plan_robot_route(
-        gr.route, gr.poses, robot, replan=False, tcp_poses=gr.tcp, zone=gr.zone, **kw
-    )
+    rr = plan_robot_route(gr.route, gr.poses, robot, tcp_poses=gr.tcp, zone=gr.zone, **kw)
     assert rr.stats["collision_free"] is True and rr.n_ok == 2 and rr.replanned == ()
     assert rr.exact.all() and not rr.flips
     T = robot.with_base(rr.base).fk(rr.q) @ TORCH_TCP

@@ -18,6 +18,7 @@ from weldplan.io.joints import Joints
 from weldplan.robot.collision import RobotCollision
 from weldplan.robot.posechoice import ReachTest, place_for_poses
 from weldplan.robot.reach import BaseSearch, base_pose
+from weldplan.robot.settings import ToolOnRobot
 from weldplan.tool import PoseSearchSettings, arc_torch, plan_weld_poses, verify_poses
 from weldplan.tool.orient import candidate_rotations, local_candidates
 from weldplan.tool.pose_choice import all_of
@@ -130,8 +131,9 @@ def test_the_base_is_searched_for_the_first_pass_poses_and_serves_them():
     part = box_part()
     checker = RobotCollision(robot, part, None, TORCH_TCP)
     pl = place_for_poses(
-        robot, route, poses, TORCH_TCP, part, checker, BaseSearch(step=500.0, extra_yaws=())
-    )
+        robot, route, poses, ToolOnRobot(TORCH_TCP), part, checker,
+        BaseSearch(step=500.0, extra_yaws=()),
+    )  # fmt: skip
     assert pl.searched and pl.candidates > 0
     rb = robot.with_base(pl.base)
     test = ReachTest(rb, TORCH_TCP, checker.with_robot(rb))

@@ -17,6 +17,7 @@ from weldplan.robot.configs import RobotRoute
 from weldplan.robot.plan import plan_robot_route
 from weldplan.robot.reach import BaseSearch, arm_reach, base_pose, search_base
 from weldplan.robot.replan import Detour
+from weldplan.robot.settings import JointRouteSettings, RobotCell, ToolOnRobot
 from weldplan.tool import arc_torch
 from weldplan.tool.route_frames import weld_rows
 
@@ -150,11 +151,9 @@ def test_a_weld_blocked_on_every_branch_is_reported_with_its_link(robot):
         route,
         poses,
         robot,
-        flange_tcp=TORCH_TCP,
-        part=part,
-        tool=arc_torch(),
-        base=BOX_BASE,
-        replan=False,
+        tool=ToolOnRobot(TORCH_TCP, arc_torch()),
+        cell=RobotCell(part, base=BOX_BASE),
+        settings=JointRouteSettings(replan=False),
     )
     k = rr.weld_ids.index("B")
     assert rr.status[k] == "collision"

@@ -38,6 +38,7 @@ from weldplan.robot.reach import (
     search_base,
     usable,
 )
+from weldplan.robot.settings import JointRouteSettings, RobotCell, ToolOnRobot
 from weldplan.tool import arc_torch
 
 
@@ -226,8 +227,9 @@ def test_plan_robot_route_on_the_box_scene(robot):
     poses = down_poses(route)
     part = box_part()
     rr = plan_robot_route(
-        route, poses, robot, flange_tcp=TORCH_TCP, part=part, tool=arc_torch(), base=BOX_BASE
-    )
+        route, poses, robot, tool=ToolOnRobot(TORCH_TCP, arc_torch()),
+        cell=RobotCell(part, base=BOX_BASE),
+    )  # fmt: skip
     assert rr.status == ("ok", "ok", "ok") and rr.stats["collision_free"] and rr.flips == ()
     # the torch's nozzle grazes the wall's end on the way round it (y = 62 mm, nozzle radius
     # 12.5 mm, wall end at y = 50): that leg is re-planned in joint space
@@ -258,10 +260,9 @@ def test_a_base_that_reaches_nothing_is_one_line_naming_the_field(robot):
             route,
             down_poses(route),
             robot,
-            flange_tcp=TORCH_TCP,
-            part=box_part(),
-            base=base_pose(9000.0, 0.0, 0.0, 0.0),
-            check_collision=False,
+            tool=ToolOnRobot(TORCH_TCP),
+            cell=RobotCell(box_part(), base=base_pose(9000.0, 0.0, 0.0, 0.0)),
+            settings=JointRouteSettings(check_collision=False),
         )
     assert ei.value.field == "--robot-base"
     assert "3 out of reach" in str(ei.value) and "\n" not in str(ei.value)
@@ -305,11 +306,9 @@ def test_demo_cell_with_the_shared_gun_and_a_searched_base(robot):
         route,
         poses,
         robot,
-        flange_tcp=F,
-        part=cell.part,
-        tool=gun,
-        search=BaseSearch(),
-        replan=False,
+        tool=ToolOnRobot(F, gun),
+        cell=RobotCell(cell.part, search=BaseSearch()),
+        settings=JointRouteSettings(replan=False),
     )
     allowed = {"ok", "out_of_reach", "joint_limit", "singular", "no_pose", "collision"}
     assert set(rr.status) <= allowed and len(rr.status) == 15

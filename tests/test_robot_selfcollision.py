@@ -157,16 +157,21 @@ def test_plan_robot_route_keeps_the_links_above_a_given_floor(robot):
     from tests.route_fixtures import box_part, box_route
     from weldplan.robot.plan import plan_robot_route
     from weldplan.robot.routejson import RobotCheck
+    from weldplan.robot.settings import JointRouteSettings, RobotCell, ToolOnRobot
     from weldplan.tool import arc_torch
 
     route = box_route()
-    kw = dict(flange_tcp=TORCH_TCP, part=box_part(), tool=arc_torch(), base=BOX_BASE)
-    rr = plan_robot_route(route, down_poses(route), robot, floor_z=-100.0, replan=False, **kw)
+    kw = dict(tool=ToolOnRobot(TORCH_TCP, arc_torch()), settings=JointRouteSettings(replan=False))
+
+    def on(floor_z):
+        return RobotCell(box_part(), base=BOX_BASE, floor_z=floor_z)
+
+    rr = plan_robot_route(route, down_poses(route), robot, cell=on(-100.0), **kw)
     assert rr.status == ("collision",) * 3 and not rr.stats["collision_free"]
     assert all(d.startswith("link_1/floor collide (the floor) at the weld pose") for d in rr.detail)
     assert "link_1/floor" in {h["body"] for h in rr.stats["hits"]}
-    rr = plan_robot_route(route, down_poses(route), robot, floor_z=-800.0, replan=False, **kw)
-    bare = plan_robot_route(route, down_poses(route), robot, replan=False, **kw)
+    rr = plan_robot_route(route, down_poses(route), robot, cell=on(-800.0), **kw)
+    bare = plan_robot_route(route, down_poses(route), robot, cell=on(None), **kw)
     assert rr.stats["floor_z"] == -800.0 and bare.stats["floor_z"] is None
     assert rr.status == bare.status and rr.stats["hits"] == bare.stats["hits"]  # the wall graze
     assert (

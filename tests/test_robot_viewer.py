@@ -14,14 +14,15 @@ from tests.test_viewer import _run_chromium
 @pytest.fixture(scope="module")
 def cell():
     from weldplan.robot.program import robot_program
+    from weldplan.robot.settings import ProgramSettings, ToolOnRobot
     from weldplan.tool.load import load_tool
 
     robot = shared_robot()
     Tft, gun = gun_tcp(robot)
     route, Q = box_joint_route(robot, Tft)
     b = robot_program(
-        route, Q, robot, Tft, part=box_part(), tool_mass=2.0, tool_cog=np.zeros(3),
-        weld_time=0.5,
+        route, Q, robot, ToolOnRobot(Tft, mass=2.0, cog=np.zeros(3)), part=box_part(),
+        settings=ProgramSettings(weld_time=0.5),
     )  # fmt: skip
     tool, _ = load_tool(gun)
     return robot, Tft, route, b.timing, tool

@@ -13,16 +13,16 @@ whole route (:func:`place`, used by :func:`weldplan.robot.plan.plan_robot_route`
 3. The best ``top`` are solved along the whole route (:func:`~weldplan.robot.configs.joint_path`
    with the collision-free branches at the welds) and ranked by welds ok, then the smallest
    manipulability of the chosen configurations over every solved waypoint.
-4. With roadmap settings (``place(joins=)``, the robot route's default), those are re-ranked by
-   the welds the robot can **join** (issue 27, item 2), then by step 3's key (:func:`rank_bases`,
-   :func:`~weldplan.robot.roadmaps.join_welds`): consecutive served welds whose own leg is free
-   are joined; the ends of the blocked legs are left by a retract and joined where one joint-space
-   roadmap on their IK branch (OMPL's PRM, :mod:`weldplan.motion.roadmap`, on the same FCL
-   checks as the detours: part, self-collision, floor) puts their retracts in one component; a
-   weld left out tries its other retracts and alternative poses first. Best first, a candidate
-   that serves no more welds than the best joined so far is skipped, so where the first
-   candidate joins all it serves, one roadmap is built (none when no leg is blocked). The
-   chosen base's roadmap goes on to the detours (:class:`~weldplan.robot.roadmaps.LegRoadmap`).
+4. With roadmap settings (``PlacementSettings.joins``, :mod:`weldplan.robot.settings`), those are
+   re-ranked by the welds the robot can **join** (issue 27, item 2), then by step 3's key
+   (:func:`rank_bases`, :func:`~weldplan.robot.roadmaps.join_welds`): consecutive served welds whose
+   own leg is free are joined; the ends of the blocked legs are left by a retract and joined where
+   one joint-space roadmap on their IK branch (OMPL's PRM, :mod:`weldplan.motion.roadmap`, on the
+   same FCL checks as the detours: part, self-collision, floor) puts their retracts in one
+   component; a weld left out tries its other retracts and alternative poses first. Best first, a
+   candidate that serves no more welds than the best joined so far is skipped, so where the first
+   candidate joins all it serves, one roadmap is built (none when no leg is blocked). The chosen
+   base's roadmap goes on to the detours (:class:`~weldplan.robot.roadmaps.LegRoadmap`).
 
 With each weld's **alternative poses** (the tool's other free poses,
 :mod:`weldplan.robot.altreach`; on request of the pose stage's search,
@@ -57,6 +57,7 @@ from weldplan.robot.model import Robot
 from weldplan.robot.reach import OK, PRESELECT, BaseSearch, Placement, search_base, usable
 from weldplan.robot.replan import Detour
 from weldplan.robot.roadmaps import join_welds
+from weldplan.robot.settings import PlacementSettings
 
 log = logging.getLogger(__name__)
 
@@ -116,42 +117,41 @@ def place(
     base: ArrayLike | None,
     search: BaseSearch | None,
     checker_for: Any,
-    singular_deg: float,
-    flip_penalty: float,
-    top: int,
+    settings: PlacementSettings,
     alternatives: list[NDArray[np.float64]] | None = None,
-    *,
-    joins: RoadmapSettings | None = None,
 ) -> tuple[Placement, NDArray[np.bool_] | None]:
     """The base (given, the robot's own, or searched: module docstring) and, for a searched one,
     the allowed-branch mask of its weld rows (``None`` for a given base: the caller computes it).
 
     ``checker_for(robot_at_base)`` builds the collision checker (``None``: no collision test).
-    ``alternatives``: per weld row, ``(k, 4, 4)`` mm flange poses of the weld's other free tool
-    poses (:mod:`weldplan.robot.altreach`); a weld counts at a base when its pose or one of them
-    serves there, at every step. ``joins`` (with a checker): step 4, the candidates of step 3
-    re-ranked by the welds one roadmap joins (:func:`join_welds`; the placement's
-    :attr:`~weldplan.robot.reach.Placement.join`).
+    ``settings``: the singular threshold, the flip penalty, the candidates re-scored along the
+    route (``top``) and, with a checker, ``joins``: step 4, the candidates of step 3 re-ranked by
+    the welds one roadmap joins (:func:`join_welds`; the placement's
+    :attr:`~weldplan.robot.reach.Placement.join`). ``alternatives``: per weld row, ``(k, 4, 4)``
+    mm flange poses of the weld's other free tool poses (:mod:`weldplan.robot.altreach`); a weld
+    counts at a base when its pose or one of them serves there, at every step.
     """
     T_weld = T_fl[rows]
     if base is not None or search is None:
         B = robot.base if base is None else np.asarray(base, dtype=np.float64)
         return Placement(B, -1, len(T_weld), float("nan"), 0, False), None
+    sd, top = settings.singular_deg, settings.top
     ok = np.all(np.isfinite(T_weld), axis=(1, 2))
     alts = alternatives
     pool = POOL if checker_for is not None else top
     if alts is not None and checker_for is not None:
         pool = PRESELECT  # every fully scored candidate: the re-rank stops by its bound
     cands = search_base(
-        robot, T_weld[ok], part, search, singular_deg=singular_deg, top=pool,
+        robot, T_weld[ok], part, search, singular_deg=sd, top=pool,
         alternatives=None if alts is None else [a for a, k in zip(alts, ok, strict=True) if k],
     )  # fmt: skip
     masks: list[NDArray[np.bool_] | None] = [None] * len(cands)
     if checker_for is not None:
-        cands, masks = _rerank(robot, cands, T_weld, checker_for, singular_deg, top, alts)
+        cands, masks = _rerank(robot, cands, T_weld, checker_for, sd, top, alts)
     return rank_bases(
-        robot, cands, masks, T_fl, rows, checker_for, singular_deg, flip_penalty, alts, joins
-    )
+        robot, cands, masks, T_fl, rows, checker_for, sd, settings.flip_penalty, alts,
+        settings.joins,
+    )  # fmt: skip
 
 
 def rank_bases(

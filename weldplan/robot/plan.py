@@ -3,8 +3,8 @@
 ::
 
     robot = load_robot(".../kr150r3100_2.urdf")
-    flange_tcp = tool_flange_tcp(robot, ".../spot_welding_gun.urdf", "nozzle_tip")
-    rr = plan_robot_route(route, poses, robot, flange_tcp=flange_tcp, part=cell.part, tool=gun)
+    tool = ToolOnRobot(tool_flange_tcp(robot, ".../spot_welding_gun.urdf", "nozzle_tip"), gun)
+    rr = plan_robot_route(route, poses, robot, tool=tool, cell=RobotCell(part=cell.part))
 
 Steps: TCP poses of every route waypoint (weld poses, slerped between them; or the caller's, as
 for a route along the gun's transitions, :mod:`weldplan.robot.gunpath`) -> flange poses ->
@@ -24,6 +24,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import time
+from dataclasses import dataclass
 from os import PathLike
 from typing import Any
 
@@ -35,39 +36,26 @@ from weldplan.errors import ConfigError, InputError, PlanningError
 from weldplan.motion.roadmap import RoadmapSettings
 from weldplan.robot.assemble import assemble
 from weldplan.robot.collision import Hit, RobotCollision
-from weldplan.robot.configs import FLIP_PENALTY_S, RobotRoute, joint_path
+from weldplan.robot.configs import RobotRoute, joint_path
 from weldplan.robot.model import Robot
 from weldplan.robot.placement import free_branches, place
-from weldplan.robot.reach import (
-    COLLISION,
-    DEFAULT_SINGULAR_DEG,
-    NO_POSE,
-    OK,
-    BaseSearch,
-    Placement,
-    classify,
-)
+from weldplan.robot.reach import COLLISION, NO_POSE, OK, Placement, classify
 from weldplan.robot.replan import Detour
 from weldplan.robot.roadmaps import LegRoadmap
 from weldplan.robot.selfcollision import cell_floor, hit_words
+from weldplan.robot.settings import (  # noqa: F401 (the route's defaults, re-exported)
+    REPLAN_PLANNER,
+    REPLAN_TIME_S,
+    ROADMAP,
+    SEARCH_TOP,
+    JointRouteSettings,
+    RobotCell,
+    ToolOnRobot,
+)
 from weldplan.robot.urdf import chain_transform
 
 log = logging.getLogger(__name__)
 
-#: default OMPL planner for a blocked leg, and the wall-clock safety net of its first run in s
-#: (:meth:`weldplan.robot.replan.Detour._ompl`: WALL_FACTOR times this, a retry's in proportion
-#: to its checks). The budget is the run's checks; the net must lie well above what they take:
-#: on car2_200 a joint-space motion check of the KR 150 with the torch took ~0.1 s, and at 5 s
-#: (50 s a first run) the net stopped 2 of 5 runs before their checks were spent, which made
-#: the run not reproducible
-REPLAN_PLANNER = "rrtconnect"
-REPLAN_TIME_S = 30.0
-#: base-search candidates re-scored along the whole route
-SEARCH_TOP = 5
-#: the joint-space roadmaps' work when asked for (``plan_robot_route(roadmap=ROADMAP)``,
-#: :mod:`weldplan.motion.roadmap`): few milestones, since each edge is an FCL-proven motion of
-#: the whole arm and tool (tens of ms)
-ROADMAP = RoadmapSettings(milestones=40, neighbours=6, query_neighbours=16)
 #: mm / deg: the verification tolerance of an exact row's FK against the route's pose
 POSE_TOL_MM = 1e-6
 POSE_TOL_DEG = 1e-6
@@ -171,25 +159,13 @@ def plan_robot_route(
     poses: Any,
     robot: Robot,
     *,
-    flange_tcp: ArrayLike,
-    part: Any = None,
-    tool: Any = None,
-    base: ArrayLike | None = None,
-    search: BaseSearch | None = None,
-    singular_deg: float = DEFAULT_SINGULAR_DEG,
-    flip_penalty: float = FLIP_PENALTY_S,
-    contact_radius: float | None = None,
-    check_collision: bool = True,
-    replan: bool = True,
-    planner: str = REPLAN_PLANNER,
-    replan_time_s: float = REPLAN_TIME_S,
+    tool: ToolOnRobot,
+    cell: RobotCell | None = None,
+    settings: JointRouteSettings | None = None,
     rng: int | None = 0,
-    search_top: int = SEARCH_TOP,
     tcp_poses: ArrayLike | None = None,
     zone: ArrayLike | None = None,
     exits: dict[int, tuple[NDArray[np.float64], ...]] | None = None,
-    floor_z: float | None = None,
-    roadmap: RoadmapSettings | None = None,
 ) -> RobotRoute:
     """The route in joint space, verified (module docstring).
 
@@ -200,29 +176,18 @@ def plan_robot_route(
         (:class:`~weldplan.tool.result.WeldPoses`, one per visited weld in route order).
     robot
         The robot (:func:`~weldplan.robot.model.load_robot`).
-    flange_tcp
-        ``(4, 4)`` mm: the TCP in the flange frame (:func:`tool_flange_tcp`).
-    part
-        The part mesh (mm); required for the collision check and the base search's part filter.
     tool
-        The tool (:class:`~weldplan.tool.model.Tool`) for the collision check (else only links).
-    base
-        ``(4, 4)`` mm: the robot base in the part frame. ``None``: searched (``search``), or the
-        robot's own base when ``search`` is ``None`` too.
-    search
-        Where to search for the base (:class:`~weldplan.robot.reach.BaseSearch`).
-    singular_deg
-        A5 within this many degrees of 0 is near-singular and avoided.
-    flip_penalty
-        s of joint motion a branch change costs (:mod:`weldplan.robot.configs`).
-    contact_radius
-        mm: the tool's contact zone exempt at the welds (default: the poses' own setting).
-    check_collision, replan
-        Check robot and tool against the part; re-plan blocked legs with OMPL.
-    planner, replan_time_s, rng
-        OMPL planner name, its budget per leg (CPU s of this process) and seed.
-    search_top
-        The best candidates of the base search re-scored along the whole route.
+        The tool on the flange (:class:`~weldplan.robot.settings.ToolOnRobot`: the flange ->
+        TCP transform, :func:`tool_flange_tcp`; the tool mesh for the collision check, else only
+        the links are checked).
+    cell
+        Where the robot works (:class:`~weldplan.robot.settings.RobotCell`: the part, the base
+        given or searched, the floor); the part is required for the collision check. Default:
+        no part, the robot's own base.
+    settings
+        :class:`~weldplan.robot.settings.JointRouteSettings` (default: its defaults).
+    rng
+        Seed of the OMPL detours and of the roadmaps.
     tcp_poses
         ``(m, 4, 4)`` mm: the TCP pose at every route waypoint (default: the weld poses, slerped
         between them by arc length); a route along the gun's transitions gives their own
@@ -235,16 +200,6 @@ def plan_robot_route(
         Per route row of a weld, TCP paths ``(k, 4, 4)`` mm leaving it that the tool stage
         proved free (:attr:`weldplan.robot.gunpath.GunRoute.exits`): a detour leaves and reaches
         the weld along them before it tries its own retracts.
-    floor_z
-        mm: the floor (part frame) no link nor the tool may reach
-        (:mod:`weldplan.robot.selfcollision`); default: ``search.floor_z`` for a searched base,
-        else none (not checked; ``stats["floor_z"]`` is then ``None``).
-    roadmap
-        The work of the joint-space roadmaps (:mod:`weldplan.motion.roadmap`, seeded with
-        ``rng``): a searched base is chosen by the welds one roadmap joins
-        (:func:`~weldplan.robot.roadmaps.join_welds`), and a detour asks the roadmap of its
-        base before OMPL (:meth:`~weldplan.robot.replan.Detour.via_roadmap`). ``None`` (the
-        default, docs/robot.md says why): neither; :data:`ROADMAP` is the suggested setting.
 
     Raises
     ------
@@ -254,60 +209,64 @@ def plan_robot_route(
     PlanningError
         The robot reaches none of them from the searched base.
     ConfigError
-        A bad setting (a non-finite threshold, a collision check without a part).
+        A collision check without a part (bad settings are refused when they are built).
     """
     t0 = time.perf_counter()
-    if not (0.0 <= singular_deg < 90.0):
-        raise ConfigError(
-            f"singular_deg must be in [0, 90), got {singular_deg}", field="singular_deg"
-        )
-    if check_collision and part is None:
+    s = JointRouteSettings() if settings is None else settings
+    c = RobotCell() if cell is None else cell
+    if s.check_collision and c.part is None:
         raise ConfigError("the collision check needs the part mesh", field="part")
-    F, T_tcp, T_fl = _waypoint_frames(route, poses, flange_tcp, tcp_poses)
+    F, T_tcp, T_fl = _waypoint_frames(route, poses, tool.flange_tcp, tcp_poses)
     own_zone = _own_zone(zone, len(T_tcp))
     from weldplan.tool.route_frames import weld_rows
 
     rows = weld_rows(route)
-    zone_r = _contact_radius(contact_radius, poses)
-    if floor_z is None:
-        floor_z = cell_floor(search, base)
+    zone_r = _contact_radius(s.contact_radius, poses)
+    floor_z = cell_floor(c.search, c.base) if c.floor_z is None else c.floor_z
     checker = (
-        RobotCollision(robot, part, tool, F, contact_radius=zone_r, floor_z=floor_z)
-        if check_collision
+        RobotCollision(robot, c.part, tool.tool, F, contact_radius=zone_r, floor_z=floor_z)
+        if s.check_collision
         else None
     )
     checker_for = None if checker is None else checker.with_robot
-    placement, mask = place(
-        robot, T_fl, rows, part, base, search, checker_for, singular_deg, flip_penalty, search_top,
-        joins=roadmap if replan else None,  # joined by detours: none without them
-    )  # fmt: skip
+    placement, mask = place(robot, T_fl, rows, c.part, c.base, c.search, checker_for, s.placement)
     rb = robot.with_base(placement.base)
     if checker is not None:
         checker = checker.with_robot(rb)
     q, branch, exact, row_status, detail = _joint_route(
-        rb, checker, T_fl, rows, mask, placement, singular_deg, flip_penalty
+        rb, checker, T_fl, rows, mask, placement, s.singular_deg, s.flip_penalty
     )
     status = [str(row_status[r]) for r in rows]
     stats = _ik_stats(placement, rb, q, exact, row_status, time.perf_counter() - t0)
     stats["floor_z"] = floor_z
-    replanned: list[int] = []
-    row = np.arange(len(q), dtype=np.int64)
+    path = _JointPath(q, np.arange(len(q), dtype=np.int64), exact, branch, ())
     if checker is not None:
         det = Detour(
-            rb, checker, T_tcp, F, singular_deg, planner, replan_time_s, rng, exits=exits or {},
-            roadmap=_leg_roadmap(roadmap, placement, q[rows], tuple(route.order), rng),
+            rb, checker, T_tcp, F, s.singular_deg, s.planner, s.replan_time_s, rng,
+            exits=exits or {},
+            roadmap=_leg_roadmap(s.roadmap, placement, q[rows], tuple(route.order), rng),
         )  # fmt: skip
-        q, row, exact, branch, replanned = _collision_stage(
-            det, q, exact, branch, rows, status, detail, tuple(route.order), stats,
-            replan=replan, zone=own_zone,
+        path = _collision_stage(
+            det, path, rows, status, detail, tuple(route.order), stats,
+            replan=s.replan, zone=own_zone,
         )  # fmt: skip
         _roadmap_stats(det, placement, stats)
-    _check_fk(rb, q, exact, T_fl, row, stats)
+    _check_fk(rb, path.q, path.exact, T_fl, path.row, stats)
     stats["seconds_total"] = round(time.perf_counter() - t0, 3)
-    return _robot_route(
-        robot, placement.base, F, q, row, exact, branch, rows, route.order, status, detail,
-        replanned, stats,
-    )  # fmt: skip
+    return _robot_route(robot, placement.base, F, path, rows, route.order, status, detail, stats)
+
+
+@dataclass(frozen=True, eq=False)
+class _JointPath:
+    """The joint route as the stages hand it on: ``q (k, 6)`` rad, the route row of each joint
+    row ``row (k,)``, ``exact (k,)`` (on the route's pose), the IK branch ``branch (k,)`` (-1:
+    interpolated), and the legs re-planned in joint space."""
+
+    q: NDArray[np.float64]
+    row: NDArray[np.int64]
+    exact: NDArray[np.bool_]
+    branch: NDArray[np.int64]
+    replanned: tuple[int, ...]
 
 
 def _leg_roadmap(
@@ -346,19 +305,16 @@ def _robot_route(
     robot: Robot,
     base: NDArray,
     F: NDArray,
-    q: NDArray,
-    row: NDArray,
-    exact: NDArray,
-    branch: NDArray,
+    path: _JointPath,
     rows: NDArray,
     order: Any,
     status: list[str],
     detail: list[str],
-    replanned: list[int],
     stats: dict[str, Any],
 ) -> RobotRoute:
     """The :class:`RobotRoute` of an assembled joint route: each weld's exact row, the branch
     flips (rows whose solved branch differs from the previous solved row's), logged."""
+    q, row, exact, branch, replanned = path.q, path.row, path.exact, path.branch, path.replanned
     weld_index = np.array([_weld_row(row, exact, r) for r in rows], dtype=np.int64)
     solved = branch >= 0
     flips = [
@@ -394,12 +350,9 @@ def _robot_route(
     return rr
 
 
-
 def _collision_stage(
     det: Detour,
-    q: NDArray,
-    exact: NDArray,
-    branch: NDArray,
+    path: _JointPath,
     rows: NDArray,
     status: list[str],
     detail: list[str],
@@ -408,13 +361,13 @@ def _collision_stage(
     *,
     replan: bool,
     zone: NDArray[np.bool_],
-) -> tuple[NDArray, NDArray, NDArray, NDArray, list[int]]:
+) -> _JointPath:
     """Check the joint path (``zone``: the motions whose contact zone is exempt), detour blocked
     legs (:func:`weldplan.robot.assemble.assemble`), check the final path again; welds charged with
     a remaining blocked motion get :data:`COLLISION` in ``status`` (in place), and the figures go
     to ``stats``."""
+    q, row, exact, branch = path.q, path.row, path.exact, path.branch
     t1 = time.perf_counter()
-    row = np.arange(len(q), dtype=np.int64)
     hits = det.checker.path_hits(q, zone)
     stats["first_check_hits"] = len(hits)
     stats["first_check_bodies"] = sorted({h.body for h in hits})
@@ -449,7 +402,7 @@ def _collision_stage(
         }
         for h in hits
     ]
-    return q, row, exact, branch, replanned
+    return _JointPath(q, row, exact, branch, tuple(replanned))
 
 
 def _joint_route(

@@ -65,6 +65,7 @@ from weldplan.robot.reach import (
     usable,
 )
 from weldplan.robot.selfcollision import hit_words
+from weldplan.robot.settings import PlacementSettings, ToolOnRobot
 
 log = logging.getLogger(__name__)
 
@@ -174,28 +175,26 @@ def place_for_poses(
     robot: Robot,
     route: Any,
     poses: Any,
-    flange_tcp: ArrayLike,
+    tool: ToolOnRobot,
     part: Any,
     checker: RobotCollision | None = None,
     search: BaseSearch | None = None,
     *,
-    singular_deg: float = DEFAULT_SINGULAR_DEG,
-    top: int | None = None,
+    settings: PlacementSettings | None = None,
     alternatives: bool = False,
-    roadmap: Any = None,
 ) -> Placement:
     """The base the robot route would search for ``route`` with weld ``poses`` (module
     docstring): :func:`weldplan.robot.placement.place` over the route's waypoint poses (mm,
-    ``part`` the mesh for the base column and the floor), with the links-at-the-welds
-    re-ranking when ``checker`` is given. A weld counts at a base when its pose or, with
-    ``alternatives``, one of the other free poses ``poses`` carries for it
+    ``part`` the mesh for the base column and the floor, ``tool`` the tool on the flange), with
+    the links-at-the-welds re-ranking when ``checker`` is given. A weld counts at a base when its
+    pose or, with ``alternatives``, one of the other free poses ``poses`` carries for it
     (:attr:`~weldplan.tool.result.WeldPoses.alternatives`) serves there: the reach test then
     picks that pose (:mod:`weldplan.robot.altreach`). Off by default: on car2_200 the bases it
     finds serve every weld pose but the robot route from them cannot leave the first welds
-    (docs/robot.md, session 6). ``roadmap``: the
-    :class:`~weldplan.motion.roadmap.RoadmapSettings` of a last step, the best candidates
-    re-ranked by the welds one joint-space roadmap joins (e.g. the robot route's
-    :data:`~weldplan.robot.plan.ROADMAP`; ``None``, the default: not re-ranked).
+    (docs/robot-placement.md). ``settings``: the robot route's
+    (:class:`~weldplan.robot.settings.PlacementSettings`; its ``joins``, the roadmap of a last
+    step that re-ranks the best candidates by the welds one joint-space roadmap joins, e.g.
+    :data:`~weldplan.robot.settings.ROADMAP`; ``None``, the default: not re-ranked).
 
     Raises
     ------
@@ -203,12 +202,11 @@ def place_for_poses(
         No base candidate reaches a weld (collision-free, with a checker).
     """
     from weldplan.robot.altreach import alternative_flange_poses
-    from weldplan.robot.configs import FLIP_PENALTY_S
     from weldplan.robot.placement import place
-    from weldplan.robot.plan import SEARCH_TOP, tcp_waypoint_poses
+    from weldplan.robot.plan import tcp_waypoint_poses
     from weldplan.tool.route_frames import weld_rows
 
-    F = np.asarray(flange_tcp, dtype=np.float64).reshape(4, 4)
+    F = tool.flange_tcp
     T_fl = tcp_waypoint_poses(route, poses) @ np.linalg.inv(F)
     checker_for = None if checker is None else checker.with_robot
     placement, _ = place(
@@ -219,11 +217,8 @@ def place_for_poses(
         None,
         search or BaseSearch(),
         checker_for,
-        singular_deg,
-        FLIP_PENALTY_S,
-        SEARCH_TOP if top is None else top,
+        PlacementSettings() if settings is None else settings,
         alternative_flange_poses(poses, route.order, F) if alternatives else None,
-        joins=roadmap,
     )
     if placement.join is not None and placement.join.roadmap is not None:
         placement.join.roadmap.close()  # the robot route builds its own for the new poses

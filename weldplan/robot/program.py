@@ -47,9 +47,12 @@ from weldplan.errors import ConfigError, PlanningError
 from weldplan.io.blending import RAPID_ZONES, allowed_radii, route_clearance
 from weldplan.io.posts.config import arm_flags
 from weldplan.io.posts.program import RobotProgram, Target
+from weldplan.robot.settings import (  # noqa: F401 (LINE_TOLERANCE_MM re-exported)
+    LINE_TOLERANCE_MM,
+    ProgramSettings,
+    ToolOnRobot,
+)
 from weldplan.robot.timing import (
-    DEFAULT_TCP_SPEED,
-    DEFAULT_TOLERANCE_RAD,
     TimedTrajectory,
     constant_speed_time,
     time_route,
@@ -59,8 +62,6 @@ log = logging.getLogger(__name__)
 
 #: FK of a row's joint vector must put the TCP this close (mm) to the route's waypoint
 ROW_TOLERANCE_MM = 0.01
-#: mm: a linear move only where the joint path's TCP stays this close to the Cartesian line
-LINE_TOLERANCE_MM = 1.0
 #: samples per move for :func:`joint_line_deviation`
 LINE_SAMPLES = 16
 #: speed (mm/s) of the joint move to the approach point, from wherever the robot is
@@ -157,21 +158,12 @@ def robot_program(
     route: Any,
     q: ArrayLike,
     robot: Any,
-    T_flange_tcp: ArrayLike,
+    tool: ToolOnRobot,
     *,
     part: Any,
-    tool_mass: float,
-    tool_cog: ArrayLike,
     row: ArrayLike | None = None,
     exact: ArrayLike | None = None,
-    moves: str = "linear",
-    line_tolerance: float | None = LINE_TOLERANCE_MM,
-    weld_time: float = 0.0,
-    clearance: float | None = None,
-    tolerance: float = DEFAULT_TOLERANCE_RAD,
-    tcp_speed: float = DEFAULT_TCP_SPEED,
-    name: str = "weldplan_route",
-    tool: Any = None,
+    settings: ProgramSettings | None = None,
     checker: Any = None,
     contact_radius: float | None = None,
 ) -> ProgramBuild:
@@ -186,30 +178,25 @@ def robot_program(
     robot
         :class:`~weldplan.robot.model.Robot` placed in the part frame (its velocity and
         acceleration limits already scaled as the run asks).
-    T_flange_tcp
-        ``(4, 4)`` mm: the TCP in the flange frame.
+    tool
+        The tool on the flange (:class:`~weldplan.robot.settings.ToolOnRobot`): the flange ->
+        TCP transform, the load the program declares (``mass`` kg and ``cog`` ``(3,)`` mm in the
+        flange frame, required) and the tool mesh for the linear moves' collision check (links
+        only without it).
     part
         Mesh, Cell or CollisionModel for the blend radii (and, a mesh or Cell, for the linear
         moves' collision check).
-    tool_mass, tool_cog
-        kg and ``(3,)`` mm in the flange frame.
     row, exact
         ``(k,)``: the route row each joint row belongs to and whether it is on the route
         (:class:`~weldplan.robot.configs.RobotRoute`); default ``arange(n)`` and all true.
-    moves
-        ``"linear"`` or ``"joint"`` between exact rows (module docstring).
-    line_tolerance
-        mm: with ``"linear"``, a move between two exact rows is linear where the Cartesian move
-        itself passes :func:`weldplan.robot.linear.check_linear_moves` *and* the checked joint
-        path's TCP stays this close to the Cartesian segment (:func:`joint_line_deviation`), so
-        that the timing and speeds of the joint path are those of a path within this of the
-        controller's; ``None``: the Cartesian check alone (the timing may then be of a path far
-        from the line: on the demo up to 149 mm). Else it is a joint move.
-    tool, checker, contact_radius
+    settings
+        :class:`~weldplan.robot.settings.ProgramSettings`: the moves (module docstring), the
+        line tolerance of a linear move, the weld time, the blend clearance, the timing's
+        tolerance, the comparison's TCP speed, the program's name (default: its defaults).
+    checker, contact_radius
         The linear moves' collision check: ``checker`` (a
         :class:`~weldplan.robot.collision.RobotCollision`), else one built from the part mesh and
-        ``tool`` (links only without it) with the contact zone ``contact_radius`` (default the
-        pose search's) exempt.
+        the tool with the contact zone ``contact_radius`` mm (default the pose search's) exempt.
 
     A weld without an exact joint row (one the robot cannot serve, which the robot route
     interpolates across in joint space or passes on a detour) is passed without welding and
@@ -219,14 +206,17 @@ def robot_program(
 
     Raises
     ------
+    ConfigError
+        A tool without its load (``mass``).
     PlanningError
         An exact row whose FK is off its route waypoint by more than :data:`ROW_TOLERANCE_MM`,
         a weld row with no joint row at all.
     """
     from weldplan.io.export import route_rows
 
-    if moves not in ("linear", "joint"):
-        raise ConfigError(f"moves must be 'linear' or 'joint', got {moves!r}", field="moves")
+    s = ProgramSettings() if settings is None else settings
+    if tool.mass is None:
+        raise ConfigError("the program declares the tool's load: give its mass", field="mass")
     rows = route_rows(route)
     n = len(rows)
     Q, R, X = _joint_rows(q, row, exact, n)
@@ -234,20 +224,20 @@ def robot_program(
     Q, R, X = _without_passes(Q, R, X, rows)
     k = len(Q)
     at = _exact_index(R, X, n)  # route row -> joint row (-1: not served)
-    Tft = np.asarray(T_flange_tcp, dtype=np.float64).reshape(4, 4)
+    Tft = tool.flange_tcp
     poses = robot.fk(Q) @ Tft  # (k, 4, 4) TCP in the part frame
     pts = np.array([[r["x"], r["y"], r["z"]] for r in rows], dtype=np.float64)
     _check_rows(poses, pts, at)
     kind_of = [rows[int(r)]["kind"] if X[i] and at[R[i]] == i else "via" for i, r in enumerate(R)]
-    order, kinds, framed = _program_order(R, at, n, k, kind_of)
-    linear = np.zeros(len(order), dtype=bool)
-    if moves == "linear":
+    po = _program_order(R, at, n, k, kind_of)
+    linear = np.zeros(len(po.order), dtype=bool)
+    if s.moves == "linear":
         if checker is None:
-            checker = _checker(robot, part, tool, Tft, contact_radius)
-        linear = _linear_moves(robot, Tft, Q, X, order, line_tolerance, checker)
-    c = route_clearance(route, clearance)
-    radii = _blend_radii(poses[order, :3, 3], kinds, linear, part, c)
-    off = 1 if framed else 0
+            checker = _checker(robot, part, tool, contact_radius)
+        linear = _linear_moves(robot, Tft, Q, X, po.order, s.line_tolerance, checker)
+    c = route_clearance(route, s.clearance)
+    radii = _blend_radii(poses[po.order, :3, 3], po.kinds, linear, part, c)
+    off = 1 if po.framed else 0
     stops = radii[off : off + k] < RAPID_ZONES["z0"]
     welds, skipped = _served_welds(rows, R, at)
 
@@ -257,42 +247,38 @@ def robot_program(
         robot.acceleration,
         weld_rows=welds,
         stops=stops,
-        weld_time=weld_time,
-        tolerance=tolerance,
+        weld_time=s.weld_time,
+        tolerance=s.tolerance,
         joint_names=tuple(robot.joint_names),
     )
     speed, dev = _tcp_speeds(poses[:, :3, 3], robot, Tft, timing, linear[off : off + k])
-    targets = _targets(
-        rows, R, at, Q, poses, arm_flags(robot, Q), order, kinds, linear, radii, speed, framed
-    )
-    cst = constant_speed_time(pts, len(welds), speed=tcp_speed, weld_time=timing.weld_time)
+    targets = _targets(rows, R, at, Q, poses, arm_flags(robot, Q), po, linear, radii, speed)
+    cst = constant_speed_time(pts, len(welds), speed=s.tcp_speed, weld_time=timing.weld_time)
     if skipped:
         log.warning("the program passes %d weld(s) without welding: %s", len(skipped), skipped)
-    notes = _notes(route, len(targets), timing, cst, tcp_speed, c, moves, skipped)
-    program = _program(name, robot, targets, Tft, tool_mass, tool_cog, timing.weld_time, notes)
-    return ProgramBuild(program, timing, cst, float(tcp_speed), dev, tuple(skipped), R)
+    notes = _notes(route, len(targets), timing, cst, s.tcp_speed, c, s.moves, skipped)
+    program = _program(s.name, robot, targets, tool, timing.weld_time, notes)
+    return ProgramBuild(program, timing, cst, float(s.tcp_speed), dev, tuple(skipped), R)
 
 
 def _program(
     name: str,
     robot: Any,
     targets: list[Target],
-    Tft: NDArray[np.float64],
-    tool_mass: float,
-    tool_cog: ArrayLike,
+    tool: ToolOnRobot,
     weld_time: float,
     notes: tuple[str, ...],
 ) -> RobotProgram:
-    """The :class:`RobotProgram` of ``targets``: the tool frame ``Tft (4, 4)`` mm and load (kg,
-    ``(3,)`` mm), the work object = the part frame in the robot base frame."""
+    """The :class:`RobotProgram` of ``targets``: the tool frame (the flange -> TCP transform,
+    mm) and load (kg, ``(3,)`` mm), the work object = the part frame in the robot base frame."""
     return RobotProgram(
         name=name,
         robot=robot.name,
         joint_names=tuple(robot.joint_names),
         targets=tuple(targets),
-        tool_frame=Tft,
-        tool_mass=float(tool_mass),
-        tool_cog=np.asarray(tool_cog, dtype=np.float64).reshape(3),
+        tool_frame=tool.flange_tcp,
+        tool_mass=float(tool.mass),  # type: ignore[arg-type]
+        tool_cog=np.asarray(tool.cog, dtype=np.float64).reshape(3),
         part_frame=np.linalg.inv(robot.base),
         weld_time=weld_time,
         notes=notes,
@@ -390,19 +376,28 @@ def _check_rows(poses: NDArray, pts: NDArray, at: NDArray[np.int64]) -> None:
         )
 
 
+@dataclass(frozen=True)
+class _ProgramOrder:
+    """The joint rows in program order (``order``), their kinds (``"approach"``, ``"weld"``,
+    ``"via"``, ``"retreat"``...) and whether an approach and a retreat frame them."""
+
+    order: list[int]
+    kinds: list[str]
+    framed: bool
+
+
 def _program_order(
     R: NDArray[np.int64], at: NDArray[np.int64], n: int, k: int, kind_of: list[str]
-) -> tuple[list[int], list[str], bool]:
+) -> _ProgramOrder:
     """Joint rows in program order and their kinds: approach (route row 1), every joint row,
     retreat (route row ``n - 2``) when the route has at least three rows."""
-    framed = n >= 3
-    if not framed:
-        return list(range(k)), list(kind_of), False
+    if n < 3:
+        return _ProgramOrder(list(range(k)), list(kind_of), False)
     order = [_first_on(R, at, 1, True), *range(k), _first_on(R, at, n - 2, False)]
-    return order, ["approach", *kind_of, "retreat"], True
+    return _ProgramOrder(order, ["approach", *kind_of, "retreat"], True)
 
 
-def _checker(robot: Any, part: Any, tool: Any, Tft: NDArray, contact_radius: float | None) -> Any:
+def _checker(robot: Any, part: Any, tool: ToolOnRobot, contact_radius: float | None) -> Any:
     """Robot (+ tool) against the part mesh, or ``None`` where the part is no mesh (then no
     move is linear)."""
     import trimesh
@@ -415,7 +410,7 @@ def _checker(robot: Any, part: Any, tool: Any, Tft: NDArray, contact_radius: flo
     from weldplan.tool.poses import DEFAULT_CONTACT_RADIUS
 
     cr = DEFAULT_CONTACT_RADIUS if contact_radius is None else float(contact_radius)
-    return RobotCollision(robot, mesh, tool, Tft, contact_radius=cr)
+    return RobotCollision(robot, mesh, tool.tool, tool.flange_tcp, contact_radius=cr)
 
 
 def _linear_moves(
@@ -455,20 +450,18 @@ def _targets(
     Q: NDArray,
     poses: NDArray,
     flags: Any,
-    order: list[int],
-    kinds: list[str],
+    po: _ProgramOrder,
     linear: NDArray[np.bool_],
     radii: NDArray,
     speed: NDArray,
-    framed: bool,
 ) -> list[Target]:
     """The program's targets, in program order, with the speeds of the timed trajectory."""
     k = len(Q)
     targets = []
-    for i, (j, kind) in enumerate(zip(order, kinds, strict=True)):
+    for i, (j, kind) in enumerate(zip(po.order, po.kinds, strict=True)):
         if kind == "approach":
             v = APPROACH_SPEED
-        elif framed and i == 1:  # the first weld, from the approach point: row 1 -> 0 reversed
+        elif po.framed and i == 1:  # the first weld, from the approach point: row 1 -> 0 reversed
             v = speed[min(_first_on(R, at, 1, True), k - 1)]
         elif kind == "retreat":
             v = speed[k - 1]

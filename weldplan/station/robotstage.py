@@ -28,10 +28,13 @@ import logging
 import math
 import time
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from weldplan.errors import PlanningError
 from weldplan.station.model import RobotSettings, ToolSettings
+
+if TYPE_CHECKING:
+    from weldplan.robot.settings import JointRouteSettings, ProgramSettings, ToolOnRobot
 
 log = logging.getLogger(__name__)
 
@@ -61,6 +64,35 @@ class RobotResult:
     follow: Any
     robot: Any
     reach: RobotAcceptance | None = None
+
+
+def tool_on_robot(mounted: Any) -> ToolOnRobot:
+    """The :class:`~weldplan.robot.settings.ToolOnRobot` of a
+    :class:`~weldplan.station.mount.MountedTool` (its tool, flange -> TCP transform and load)."""
+    from weldplan.robot.settings import ToolOnRobot
+
+    return ToolOnRobot(mounted.flange_tcp, mounted.tool, mounted.mass, mounted.cog)
+
+
+def route_settings(roadmap: bool) -> JointRouteSettings:
+    """The joint route's :class:`~weldplan.robot.settings.JointRouteSettings` of a station's robot:
+    the defaults, with the roadmaps' work (:data:`weldplan.robot.settings.ROADMAP`) when
+    :attr:`RobotSettings.roadmap` asks for it. With :func:`program_settings`, the one place
+    where the station's :class:`RobotSettings` maps onto the robot stages' settings."""
+    from weldplan.robot.settings import ROADMAP, JointRouteSettings
+
+    return JointRouteSettings(roadmap=ROADMAP if roadmap else None)
+
+
+def program_settings(settings: RobotSettings, name: str) -> ProgramSettings:
+    """The program's :class:`~weldplan.robot.settings.ProgramSettings` of a station's robot
+    (``name``: the program's)."""
+    from weldplan.robot.settings import ProgramSettings
+
+    return ProgramSettings(
+        moves=settings.moves, weld_time=settings.weld_time, tcp_speed=settings.tcp_speed,
+        name=name,
+    )  # fmt: skip
 
 
 def time_leg_cost(cell: Any, mounted: Any, robot: Any, base_fixed: bool, **kw: Any) -> Any:
@@ -112,8 +144,8 @@ def reach_test(
         first = plan_weld_poses(cell, route, mounted.tool, pose_settings(ts))
         try:
             placement = place_for_poses(
-                robot, route, first, F, cell.part, checker, kw["search"],
-                roadmap=_roadmap(kw.get("roadmap", False)),
+                robot, route, first, tool_on_robot(mounted), cell.part, checker, kw["search"],
+                settings=route_settings(kw.get("roadmap", False)).placement,
             )  # fmt: skip
         except PlanningError as exc:
             log.warning("robot reach test skipped: no base for the first-pass poses (%s)", exc)
@@ -123,15 +155,6 @@ def reach_test(
     return RobotAcceptance(test, robot, placement, time.perf_counter() - t0)
 
 
-def _roadmap(on: bool) -> Any:
-    """The roadmap's work (:data:`weldplan.robot.plan.ROADMAP`) when asked for, else None."""
-    if not on:
-        return None
-    from weldplan.robot.plan import ROADMAP
-
-    return ROADMAP
-
-
 def joint_route_stage(
     cell: Any, route: Any, mounted: Any, robot: Any, *, base_fixed: bool, **kw: Any
 ) -> RobotResult:
@@ -139,6 +162,7 @@ def joint_route_stage(
     ``settings`` (RobotSettings), ``floor_z``, ``search`` (BaseSearch), ``seed``. Raises
     :class:`PlanningError` when the robot serves no weld or its path still collides."""
     from weldplan.robot.plan import plan_robot_route
+    from weldplan.robot.settings import RobotCell
     from weldplan.tool.route_frames import route_poses
 
     reach: RobotAcceptance | None = kw["reach"]
@@ -148,14 +172,15 @@ def joint_route_stage(
         robot = reach.robot
     gun = _gun_route(route, poses)  # None: the robot follows the point-tip route
     follow = route if gun is None else gun.route
+    at = RobotCell(
+        cell.part, base=robot.base if given else None, search=None if given else kw["search"],
+        floor_z=kw["floor_z"],  # a given floor is checked whatever the base
+    )  # fmt: skip
     rr = plan_robot_route(
-        follow, poses if gun is None else gun.poses, robot, flange_tcp=mounted.flange_tcp,
-        part=cell.part, tool=mounted.tool, base=robot.base if given else None,
-        search=None if given else kw["search"], rng=kw["seed"],
+        follow, poses if gun is None else gun.poses, robot, tool=tool_on_robot(mounted), cell=at,
+        settings=route_settings(kw.get("roadmap", False)), rng=kw["seed"],
         tcp_poses=None if gun is None else gun.tcp, zone=None if gun is None else gun.zone,
         exits=None if gun is None else gun.exits,
-        floor_z=kw["floor_z"],  # a given floor is checked whatever the base
-        roadmap=_roadmap(kw.get("roadmap", False)),
     )  # fmt: skip
     if reach is not None and reach.placement is not None:  # searched, before the poses
         rr.stats["placement"].update(
@@ -184,10 +209,9 @@ def program_stage(
 
     rr = joint.robot_route
     build = robot_program(
-        joint.follow, rr.q, joint.robot, rr.flange_tcp, part=cell, tool_mass=mounted.mass,
-        tool_cog=mounted.cog, row=rr.row, exact=rr.exact, moves=settings.moves,
-        weld_time=settings.weld_time, tcp_speed=settings.tcp_speed, name=name,
-        tool=mounted.tool, contact_radius=poses_contact_radius(route),
+        joint.follow, rr.q, joint.robot, tool_on_robot(mounted), part=cell, row=rr.row,
+        exact=rr.exact, settings=program_settings(settings, name),
+        contact_radius=poses_contact_radius(route),
     )  # fmt: skip
     if len(build.skipped) == len(rr.weld_ids):
         raise PlanningError(f"the robot serves none of the welds ({', '.join(rr.status)})")
