@@ -125,6 +125,11 @@ def test_rapid_writes_the_signals_and_our_reader_takes_them_back(build):
         assert _read_back(mod.signals, prog) == _expected(prog)
         sets = sorted({(a.signal, a.name) for a in prog.signals if a.action == "set"})
         assert mod.resets == sets
+        eio = [ln for ln in text.splitlines() if "I/O configuration (EIO) to declare" in ln]
+        want = {
+            f"{'DO do' if a.action == 'set' else 'DI di'}{a.signal}_{a.name}" for a in prog.signals
+        }
+        assert len(eio) == 1 and set(eio[0].split(": ", 1)[1].split(", ")) == want
         zone = {name: z for _, name, _, z in mod.moves}
         for point, *_ in mod.signals:  # a signal only after a fine point
             assert zone[point] == "fine"

@@ -53,7 +53,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         metavar="TOML",
         help="with a station JSON: the station file (default: the one the plan records)",
     )
-    p.set_defaults(usage_error=p.error)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -65,10 +64,8 @@ def run(args: argparse.Namespace) -> int:
     from weldplan.station.recheck import RobotFiles
     from weldplan.station.saved import PartFiles, load_plan
 
-    if is_station_json(args.route):
+    if args.mesh is None or is_station_json(args.route):
         return _verify_station(args)
-    if args.mesh is None:
-        args.usage_error("the following arguments are required: mesh")
 
     files = PartFiles(
         units=args.units, scale=args.scale, length=args.length, joints=args.joints,

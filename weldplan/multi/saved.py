@@ -57,10 +57,13 @@ class StationPaths:
         Per robot ``{kind: path}`` (the kinds of
         :func:`weldplan.station.outputs.output_paths`: ``csv``, ``json``, ``timings``,
         ``trajectory``, ``post``, ``post_dat``...).
+    post
+        The programs' language (``"rapid"``, ``"krl"``; ``None``: no program).
     """
 
     station: Path
     robots: tuple[dict[str, Path], ...]
+    post: str | None = None
 
     def all(self) -> dict[str, Path]:
         """``{"station": ..., "robot1 csv": ...}``: every file, named for messages."""
@@ -86,7 +89,7 @@ def station_paths(out: Any, n_robots: int) -> StationPaths:
     robots = tuple(
         output_paths(_robot_outputs(out, k), robot=True, tool=True) for k in range(n_robots)
     )
-    paths = StationPaths(station, robots)
+    paths = StationPaths(station, robots, out.post)
     seen: dict[Path, str] = {}
     for kind, p in paths.all().items():
         if p.resolve() in seen:
@@ -194,7 +197,7 @@ def station_texts(splan: Any, paths: StationPaths) -> dict[Path, str | bytes]:
     for plan, files in zip(robot_plans(splan), paths.robots, strict=True):
         if plan is None:
             continue
-        rendered = render_outputs(plan, set(files), splan.station.outputs.post)
+        rendered = render_outputs(plan, set(files), paths.post)
         texts |= {p: rendered[kind] for kind, p in files.items()}
     d = station_dict(splan, paths)
     texts[paths.station] = json.dumps(d, indent=1, allow_nan=False) + "\n"
@@ -316,7 +319,11 @@ def load_station_plan(path: str | PathLike[str]) -> SavedStationPlan:
     except json.JSONDecodeError as exc:
         raise InputError(f"not valid JSON: {exc.msg}", path=path, line=exc.lineno) from None
     if not isinstance(d, dict) or d.get("format") != STATION_FORMAT:
-        raise InputError(f'not a station plan (no "format": "{STATION_FORMAT}")', path=path)
+        raise InputError(
+            f'not a station plan (no "format": "{STATION_FORMAT}"; a route JSON is re-checked '
+            "with its mesh)",
+            path=path,
+        )
     key = "robots"
     try:
         robots = tuple(_robot(path, r) for r in d[key])

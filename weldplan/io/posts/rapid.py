@@ -114,6 +114,15 @@ def signal_di(a: SignalAction) -> str:
     return _signal("di", a)
 
 
+def _eio_note(program: RobotProgram) -> list[str]:
+    """The signals this controller's I/O configuration (EIO) must declare, one line."""
+    names = dict.fromkeys(
+        ("DO " + signal_do(a)) if a.action == "set" else ("DI " + signal_di(a))
+        for a in program.signals
+    )
+    return [f"I/O configuration (EIO) to declare: {', '.join(names)}"] if names else []
+
+
 def _signal_line(a: SignalAction) -> str:
     """``SetDO`` a ``set`` on, ``WaitDI`` a ``wait``: after a ``fine`` point, where RAPID runs
     the next instruction once the robot is there."""
@@ -157,6 +166,7 @@ def render_rapid(
     note = program.frame_note()
     out += [f"    ! {line}" for line in (*program.notes, *(() if note is None else (note,)))]
     out += [f"    ! {line}" for line in signal_notes(program, signal_do, signal_di)]
+    out += [f"    ! {line}" for line in _eio_note(program)]
     at = signals_at(program)  # refuses a signal on a target that is not ``fine``
     uframe, oframe = program.work_object()
     m, cog = program.tool_mass, program.tool_cog
