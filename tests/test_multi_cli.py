@@ -260,3 +260,25 @@ def test_the_saved_station_round_trips_and_verify_checks_the_interlock(splan, tm
     assert (
         not v.ok and not v["schedule"].ok and f"{lock.name}: robot 2 leaves" in v["schedule"].text
     )
+
+
+@pytest.mark.slow
+def test_the_summary_and_the_exit_say_what_is_left_out_and_a_failed_replay(splan):
+    from weldplan.multi.saved import robot_plans
+    from weldplan.multi.schedule import ReplayVerdict
+    from weldplan.station.summary import station_partial, station_rows
+
+    plans = robot_plans(splan)
+    rows = dict(station_rows(splan, plans))
+    for r, name in enumerate(splan.allocation.robots):
+        n = len(splan.allocation.welds_of(r))
+        assert rows[f"robot {name}"].startswith(f"{n} welds, cycle ")
+        assert "interlocks: 0 set, 0 wait" in rows[f"robot {name}"]
+    assert rows["station cycle"].startswith(f"{splan.schedule.cycle_time:.2f} s")
+    assert "not checked" in rows["interference"]
+    assert station_partial(splan, plans) == [f"1 weld(s) no robot reaches ({UNREACHED})"]
+    bad = ReplayVerdict(False, 10.0, 3.5, (0, 4, 1, 2), 12, ("robot1 row 4 / robot2 row 2",))
+    failed = dataclasses.replace(splan, replay=bad)
+    lines = station_partial(failed, plans)
+    assert len(lines) == 2 and "min robot-robot distance 3.5 mm" in lines[1]
+    assert dict(station_rows(failed, plans))["interference"].startswith("replay FAILED")
