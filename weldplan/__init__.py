@@ -53,6 +53,9 @@ _LAZY: dict[str, str] = {
     "ToolRoute": "weldplan.robot.toolroute",
     "allocate": "weldplan.multi.allocate",
     "StationPlan": "weldplan.multi.station",
+    "save_station_plan": "weldplan.multi.saved",
+    "load_station_plan": "weldplan.multi.saved",
+    "SavedStationPlan": "weldplan.multi.saved",
 }
 
 __all__ = ["__version__", *_LAZY]

@@ -57,6 +57,10 @@ def run(args: argparse.Namespace) -> int:
             raise WeldplanError("give MESH JOINTS, or a station file (.toml)")
         station = _station_args.station_from_file(args, args.mesh)
         title = f"weldplan plan {args.mesh}"
+        if len(station.robots) > 1:  # several robots: a station plan and its files
+            from weldplan.commands._station_plan import run_station
+
+            return run_station(args, station, title=title)
     else:
         if args.output is None:
             args.usage_error("the following arguments are required: -o/--output")

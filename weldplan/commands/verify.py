@@ -22,8 +22,14 @@ HELP = (
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("route", help="route JSON written by `weldplan plan --json`")
-    p.add_argument("mesh", help="the part mesh the route was planned for")
+    p.add_argument(
+        "route",
+        help="route JSON written by `weldplan plan --json`, or the station JSON of a station "
+        "of several robots (route_station.json)",
+    )
+    p.add_argument(
+        "mesh", nargs="?", help="the part mesh the route was planned for (not with a station JSON)"
+    )
     add_cell_arguments(p)
     p.add_argument(
         "--clearance",
@@ -42,6 +48,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="the robot of a route that carries a robot route (default: the URDF it names)",
     )
     p.add_argument("--opw", metavar="F", help="OPW parameters (default: beside the URDF)")
+    p.add_argument(
+        "--station",
+        metavar="TOML",
+        help="with a station JSON: the station file (default: the one the plan records)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -49,8 +60,12 @@ def run(args: argparse.Namespace) -> int:
     (:meth:`~weldplan.station.saved.SavedPlan.verify`) and print each check's line: exit 0 ok,
     1 a check failed, 3 ok but welds left out (2, bad input, is the CLI's)."""
     from weldplan.commands._tool import tool_from_args
+    from weldplan.multi.saved import is_station_json
     from weldplan.station.recheck import RobotFiles
     from weldplan.station.saved import PartFiles, load_plan
+
+    if args.mesh is None or is_station_json(args.route):
+        return _verify_station(args)
 
     files = PartFiles(
         units=args.units, scale=args.scale, length=args.length, joints=args.joints,
@@ -62,6 +77,31 @@ def run(args: argparse.Namespace) -> int:
         tool=tool, robot=RobotFiles(args.robot, args.opw), clearance=args.clearance
     )
     return _say(verdict)
+
+
+def _verify_station(args: argparse.Namespace) -> int:
+    """A station JSON: every check of :meth:`weldplan.multi.saved.SavedStationPlan.verify`, one
+    line each (a failure on stderr); the verdict's exit code."""
+    from weldplan.errors import WeldplanError
+    from weldplan.multi.saved import load_station_plan
+
+    if args.mesh is not None:
+        raise WeldplanError(f"{args.route} is a station JSON: give no mesh (its station names it)")
+    saved = load_station_plan(args.route)
+    station = None
+    if args.station is not None:
+        from weldplan.station.load import load_station
+
+        station = load_station(args.station)
+    verdict = saved.verify(station=station)
+    for c in verdict.checks:
+        line = f"{c.name} {'ok' if c.ok else 'FAILED'}: {c.text}"
+        print(line, file=sys.stdout if c.ok else sys.stderr)
+    if verdict.partial:
+        print(
+            f"weldplan verify: ok, welds left out: {', '.join(verdict.left_out)}", file=sys.stderr
+        )
+    return int(verdict.exit_code)
 
 
 def _say(verdict: object) -> int:

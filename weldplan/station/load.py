@@ -175,11 +175,13 @@ def load_station(path: str | PathLike[str]) -> m.Station:
     if not isinstance(robots, list):
         raise r.error(("robot",), "robots are an array of tables: write [[robot]]")
     pose = _part_pose(r, data["part"], data.get("floor_z"))
+    specs = tuple(_robot(r, d, i) for i, d in enumerate(robots))
+    _apart(r, specs)
     return r.build(
         m.Station, (),
         part=_part(r, data["part"]),
         part_pose=pose,
-        robots=tuple(_robot(r, d, i) for i, d in enumerate(robots)),
+        robots=specs,
         cell=_settings(r, data.get("cell", {}), ("cell",), m.CellSettings),
         route=_settings(r, data.get("route", {}), ("route",), m.RouteSettings),
         tool=_settings(r, data.get("tool_settings", {}), ("tool_settings",), m.ToolSettings),
@@ -187,6 +189,26 @@ def load_station(path: str | PathLike[str]) -> m.Station:
         source=path,
         **{k: data[k] for k in ("name", "clearance", "floor_z", "seed", "jobs") if k in data},
     )  # fmt: skip
+
+
+#: mm: two given bases closer than this on the floor (x, y) are the same place: two robots
+#: cannot stand there (a KR 150's foot is about 1 m across)
+MIN_BASE_SPACING = 500.0
+
+
+def _apart(r: _Reader, specs: tuple[m.RobotSpec, ...]) -> None:
+    """Refuse two robots whose given bases are closer than :data:`MIN_BASE_SPACING` in x, y."""
+    for j, b in enumerate(specs):
+        for i, a in enumerate(specs[:j]):
+            if a.base is None or b.base is None:
+                continue
+            d = float(((a.base[0] - b.base[0]) ** 2 + (a.base[1] - b.base[1]) ** 2) ** 0.5)
+            if d < MIN_BASE_SPACING:
+                raise r.error(
+                    ("robot", j, "base"),
+                    f"robot {j + 1} stands {d:.1f} mm from robot {i + 1} (bases closer than "
+                    f"{MIN_BASE_SPACING:g} mm in x, y are the same place)",
+                )
 
 
 def _part_pose(r: _Reader, d: Any, floor_z: Any) -> Any:

@@ -434,3 +434,64 @@ def cost_rows(route: Any, cycle: float | None) -> list[tuple[str, str]]:
             f"({st['time_bound_method']}, any order and configuration){timed}",
         )
     ]
+
+
+def station_rows(splan: Any, plans: tuple[Any, ...]) -> list[tuple[str, str]]:
+    """The rows of a station of several robots (:class:`weldplan.multi.station.StationPlan`;
+    ``plans``: each robot's plan as written, :func:`weldplan.multi.saved.robot_plans`): per
+    robot its welds, timed cycle, utilisation, waiting and interlocks; the station's cycle
+    beside the allocation's, its lower bound and the baselines; the interference line."""
+    a, s = splan.allocation, splan.schedule
+    rows = []
+    for r, name in enumerate(a.robots):
+        p = plans[r]
+        if p is None:
+            rows.append((f"robot {name}", "idle: no weld allocated"))
+            continue
+        build = p.program
+        sets = sum(x.action == "set" for x in build.program.signals)
+        waits = len(build.program.signals) - sets
+        left = len(p.partial())
+        busy = f", utilisation {s.utilisation[r]:.0%}, waiting {s.waiting[r]:.2f} s" if s else ""
+        gone = f" ({left} cause(s) of welds left out)" if left else ""
+        cycle = build.timing.total if s is None else s.cycle_times[r]
+        rows.append((
+            f"robot {name}",
+            f"{len(a.shares[r].order)} welds{gone}, cycle {cycle:.2f} s{busy}; "
+            f"interlocks: {sets} set, {waits} wait",
+        ))  # fmt: skip
+    top = splan.cycle_time if s is None else s.cycle_time
+    rows.append(("station cycle", f"{top:.2f} s timed (the last robot's end, waits counted)"))
+    rows.append(("allocation", "the cycles of the leg-time model it minimised, beside its bound:"))
+    rows += [("", line) for line in splan.report.lines()]
+    rows.append(("interference", interference_line(splan)))
+    return rows
+
+
+def interference_line(splan: Any) -> str:
+    """What the station plan says of robot-robot interference: the replay's verdict, or that
+    it was not checked."""
+    v = splan.replay
+    if v is None:
+        return splan.interference
+    dist = "no motions overlap" if v.min_distance == float("inf") else (
+        f"min robot-robot distance {v.min_distance:.1f} mm"
+    )  # fmt: skip
+    state = "ok" if v.ok else "FAILED"
+    return (
+        f"replay {state}: {v.pairs} overlapping motion pairs, {dist} (clearance {v.clearance:g} mm)"
+    )
+
+
+def station_partial(splan: Any, plans: tuple[Any, ...]) -> list[str]:
+    """One line per cause of exit 3: welds no robot reaches, welds a robot's plan left out,
+    a replay that found robots too close."""
+    out = []
+    un = splan.allocation.unreached
+    if un:
+        out.append(f"{len(un)} weld(s) no robot reaches ({', '.join(u.weld for u in un[:10])})")
+    for name, p in zip(splan.allocation.robots, plans, strict=True):
+        out += [] if p is None else [f"{name}: {line}" for line in p.partial()]
+    if splan.replay is not None and not splan.replay.ok:
+        out.append(f"the replay found robots too close: {interference_line(splan)}")
+    return out

@@ -35,6 +35,12 @@ back)::
   ``$VEL_AXIS`` 100 % (the URDF velocities the cycle time assumes).
 * the weld instruction: ``weld_template`` (placeholders ``{id}``, ``{target}``, ``{time}``),
   by default ``WAIT SEC <weld time>`` with a comment: replace with the gun's instruction.
+* interlock signals (:attr:`RobotProgram.signals`, a station of several robots): every output
+  the program sets is switched off before the first move (``$OUT[n] = FALSE``); a ``set``
+  follows its (exact-stop) target and weld as ``WAIT SEC 0`` (an advance-run stop, so the
+  output switches when the robot is really there) and ``$OUT[n] = TRUE``; a ``wait`` as
+  ``WAIT FOR $IN[n]`` before the motion that leaves the target. Each line ends with
+  ``; <interlock name>``, and the header lists every signal with its wiring.
 """
 
 from __future__ import annotations
@@ -49,7 +55,15 @@ from weldplan.errors import WeldplanError
 from weldplan.io.blending import krl_cdis
 from weldplan.io.outputset import comment_lines
 from weldplan.io.posts.config import kuka_status, kuka_turn
-from weldplan.io.posts.program import RobotProgram, fmt, identifier
+from weldplan.io.posts.program import (
+    RobotProgram,
+    SignalAction,
+    fmt,
+    identifier,
+    outputs_set,
+    signal_notes,
+    signals_at,
+)
 
 log = logging.getLogger(__name__)
 
@@ -117,6 +131,8 @@ def render_krl(
     head += comment_lines(header, ";", "  ").splitlines()
     note = program.frame_note()
     head += [f"  ; {line}" for line in (*program.notes, *(() if note is None else (note,)))]
+    head += [f"  ; {line}" for line in signal_notes(program, _out, _in)]
+    at = signals_at(program)  # refuses a signal on a blended target
     uframe, oframe = program.work_object()
     dat = [f"DEFDAT {name}", *head]
     dat += [
@@ -142,8 +158,9 @@ def render_krl(
         + ", A 0.0, B 0.0, C 0.0}",
     ]
     src += [f"  $VEL_AXIS[{i}] = 100" for i in range(1, 7)]
+    src += [f"  {_out(a)} = FALSE ; {a.name}" for a in outputs_set(program)]
     vel, cdis = None, None
-    for n, t in zip(names, tg, strict=True):
+    for k, (n, t) in enumerate(zip(names, tg, strict=True)):
         cd = 0.0 if t.kind == "weld" or t.move == "joint" else krl_cdis(t.blend, max_cdis)
         if t.move == "joint":
             src.append(f"  PTP {n}")
@@ -160,5 +177,23 @@ def render_krl(
             src.append(
                 "  " + template.format(id=t.joint_id, target=n, time=fmt(program.weld_time, 3))
             )
+        src += [line for a in at.get(k, ()) for line in _signal_lines(a)]
     src += ["END", ""]
     return "\n".join(src), "\n".join(dat)
+
+
+def _out(a: SignalAction) -> str:
+    return f"$OUT[{a.signal}]"
+
+
+def _in(a: SignalAction) -> str:
+    return f"$IN[{a.signal}]"
+
+
+def _signal_lines(a: SignalAction) -> list[str]:
+    """A ``set``: ``WAIT SEC 0`` (an advance-run stop: the output switches when the robot is
+    at rest at the target, not when the interpreter reads ahead), then the output on. A
+    ``wait``: ``WAIT FOR`` the input (itself an advance-run stop) before the next motion."""
+    if a.action == "set":
+        return ["  WAIT SEC 0", f"  {_out(a)} = TRUE ; {a.name}"]
+    return [f"  WAIT FOR {_in(a)} ; {a.name}"]

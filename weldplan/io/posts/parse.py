@@ -57,6 +57,10 @@ class RapidModule:
     moves: list[tuple[str, str, str, str]] = field(default_factory=list)  # instr, target, v, zone
     welds: list[tuple[str, str]] = field(default_factory=list)  # (after target, instruction)
     weld_time: float | None = None
+    #: ``(after target, "set" | "wait", signal number, signal name)`` in program order
+    signals: list[tuple[str, str, int, str]] = field(default_factory=list)
+    #: ``(signal number, signal name)`` of the outputs switched off before the first move
+    resets: list[tuple[int, str]] = field(default_factory=list)
 
 
 _RAPID = [
@@ -86,6 +90,8 @@ _RAPID = [
     ("conf", re.compile(r"^Conf[JL]\\On;$")),
     ("move", re.compile(r"^(MoveJ|MoveL) (\w+),(\w+),(\w+),\w+\\WObj:=\w+;$")),
     ("waittime", re.compile(rf"^WaitTime ({_NUM});$")),
+    ("setdo", re.compile(r"^SetDO (do(\d+)_\w+), ([01]);$")),
+    ("waitdi", re.compile(r"^WaitDI (di(\d+)_\w+), 1;$")),
     ("end", re.compile(r"^(ENDPROC|ENDMODULE)$")),
 ]
 
@@ -125,7 +131,25 @@ def parse_rapid(text: str, *, path: str = "<rapid>") -> RapidModule:
             mod.moves.append(g)  # type: ignore[arg-type]
         elif kind == "waittime":
             mod.weld_time = float(g[0])
+        elif kind in ("setdo", "waitdi"):
+            _rapid_signal(mod, kind, g, path, lineno)
     return mod
+
+
+def _rapid_signal(mod: RapidModule, kind: str, g: tuple, path: str, lineno: int) -> None:
+    """A ``SetDO`` (0 before the first move: a reset; 1 after a target: a set) or a ``WaitDI``
+    after a target."""
+    name, number = g[0], int(g[1])
+    interlock = name.split("_", 1)[1]  # do<n>_<name>, di<n>_<name>
+    if kind == "setdo" and g[2] == "0":
+        if mod.moves:
+            raise InputError(f"{name} switched off after a move", path=path, line=lineno)
+        mod.resets.append((number, interlock))
+        return
+    if not mod.moves:
+        raise InputError(f"a signal before the first move: {name}", path=path, line=lineno)
+    action = "set" if kind == "setdo" else "wait"
+    mod.signals.append((mod.moves[-1][1], action, number, interlock))
 
 
 @dataclass
@@ -142,6 +166,10 @@ class KrlProgram:
         default_factory=list
     )  # instr, point, vel m/s, cdis (0: exact)
     welds: list[tuple[str, str]] = field(default_factory=list)
+    #: ``(after point, "set" | "wait", signal number, interlock name)`` in program order
+    signals: list[tuple[str, str, int, str]] = field(default_factory=list)
+    #: ``(signal number, interlock name)`` of the outputs switched off before the first move
+    resets: list[tuple[int, str]] = field(default_factory=list)
 
 
 _FRAME = rf"\{{X ({_NUM}), Y ({_NUM}), Z ({_NUM}), A ({_NUM}), B ({_NUM}), C ({_NUM})"
@@ -203,9 +231,14 @@ def parse_krl(src: str, dat: str, *, path: str = "<krl>") -> KrlProgram:
         ("vel", re.compile(rf"^\$VEL\.CP = ({_NUM})$")),
         ("cdis", re.compile(rf"^\$APO\.CDIS = ({_NUM})$")),
         ("move", re.compile(r"^(PTP|LIN) (\w+)( C_DIS)?$")),
+        ("out", re.compile(r"^\$OUT\[(\d+)\] = (TRUE|FALSE) ; (\w+)$")),
+        ("advance", re.compile(r"^WAIT SEC 0$")),
+        ("waitin", re.compile(r"^WAIT FOR \$IN\[(\d+)\] ; (\w+)$")),
     ]
+    last = ""
     for lineno, raw in enumerate(src.splitlines(), start=1):
-        line = raw.strip()
+        line, prev = raw.strip(), last
+        last = line
         hit = _match(src_rules, line)
         if hit is None:
             if prog.moves:
@@ -233,4 +266,29 @@ def parse_krl(src: str, dat: str, *, path: str = "<krl>") -> KrlProgram:
             prog.moves.append((g[0], g[1], vel, cdis if g[2] else 0.0))
         elif kind == "def" and prog.name and g[0] != prog.name:
             raise InputError(f"DEF {g[0]} but DEFDAT {prog.name}", path=f"{path}.src", line=lineno)
+        elif kind in ("out", "waitin"):
+            _krl_signal(prog, g, prev, f"{path}.src", lineno)
     return prog
+
+
+def _krl_signal(prog: KrlProgram, g: tuple, prev: str, path: str, lineno: int) -> None:
+    """``$OUT[n] = FALSE`` before the first move (a reset), ``$OUT[n] = TRUE`` after a point
+    and right after ``WAIT SEC 0`` (the advance-run stop that makes it switch at the point),
+    ``WAIT FOR $IN[n]`` after a point."""
+    if len(g) == 2:  # WAIT FOR $IN[n] ; name
+        if not prog.moves:
+            raise InputError("WAIT FOR $IN before the first move", path=path, line=lineno)
+        prog.signals.append((prog.moves[-1][1], "wait", int(g[0]), g[1]))
+        return
+    number, on, name = int(g[0]), g[1] == "TRUE", g[2]
+    if not on:
+        if prog.moves:
+            raise InputError(f"$OUT[{number}] switched off after a move", path=path, line=lineno)
+        prog.resets.append((number, name))
+        return
+    if not prog.moves or prev != "WAIT SEC 0":
+        raise InputError(
+            f"$OUT[{number}] = TRUE without WAIT SEC 0 after a point before it", path=path,
+            line=lineno,
+        )  # fmt: skip
+    prog.signals.append((prog.moves[-1][1], "set", number, name))

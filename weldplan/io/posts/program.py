@@ -20,10 +20,13 @@ Frames (mm, radians inside, degrees in the programs):
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
+
+from weldplan.errors import PlanningError
 
 #: move types a target may have
 MOVES = ("joint", "linear")
@@ -54,12 +57,16 @@ class SignalAction:
         I/O number, >= 1.
     name
         The interlock's name (e.g. ``Z1_R1_R2``), for the program's comment or signal name.
+    peer
+        The other robot's name: the one that waits on a ``"set"``, the one that sets a
+        ``"wait"`` (the header's wiring line; ``""``: not known).
     """
 
     row: int
     action: str
     signal: int
     name: str
+    peer: str = ""
 
     def __post_init__(self) -> None:
         if self.action not in SIGNAL_ACTIONS or self.signal < 1:
@@ -174,6 +181,79 @@ class RobotProgram:
             "Frames: the targets are in the part frame (the coordinates of the welds as given); "
             "the work object / BASE is the part pose in the cell times the cell in the robot base."
         )
+
+
+def is_exact_stop(target: Target) -> bool:
+    """True when both posts stop exactly at ``target`` (RAPID ``fine``, KRL no ``C_DIS``): a
+    weld, a joint move, or no blend allowed."""
+    return target.kind == "weld" or target.move == "joint" or target.blend <= 0
+
+
+def signals_at(program: RobotProgram) -> dict[int, tuple[SignalAction, ...]]:
+    """``{target index: its signal actions}``, in program order: each action after the target
+    of its route row (its weld target, else the last target of the row).
+
+    Raises
+    ------
+    PlanningError
+        A signal on a route row with no target, or on a target the robot does not stop at
+        exactly (an interlock row is a stop row of the timed route, so the robot is at rest
+        there: a blended target would switch the signal while the robot still moves).
+    """
+    last = {t.row: k for k, t in enumerate(program.targets)}
+    last |= {t.row: k for k, t in enumerate(program.targets) if t.kind == "weld"}
+    out: dict[int, list[SignalAction]] = {}
+    for a in program.signals:
+        k = last.get(a.row)
+        if k is None:
+            raise PlanningError(f"signal {a.signal} ({a.name}): no target at route row {a.row}")
+        if not is_exact_stop(program.targets[k]):
+            raise PlanningError(
+                f"signal {a.signal} ({a.name}): the target at route row {a.row} is blended, "
+                "not an exact stop"
+            )
+        out.setdefault(k, []).append(a)
+    return {k: tuple(v) for k, v in out.items()}
+
+
+def outputs_set(program: RobotProgram) -> tuple[SignalAction, ...]:
+    """The first ``"set"`` action of each output the program sets, by signal number: what the
+    program switches off at its start."""
+    first: dict[int, SignalAction] = {}
+    for a in program.signals:
+        if a.action == "set":
+            first.setdefault(a.signal, a)
+    return tuple(first[n] for n in sorted(first))
+
+
+def signal_notes(
+    program: RobotProgram,
+    out_name: Callable[[SignalAction], str],
+    in_name: Callable[[SignalAction], str],
+) -> list[str]:
+    """The header block that lists each signal: number, name, who sets it, who waits on it,
+    and the wiring. ``out_name`` / ``in_name``: how the language names the output / the input
+    that carries an action's signal (KRL ``$OUT[1]``, RAPID ``do1_Z1_R1_R2``)."""
+    if not program.signals:
+        return []
+    lines = [
+        "Interlock signals: wire each output to the input of the same number on the robot "
+        "that waits on it; every output this program sets is switched off at its start."
+    ]
+    for a in program.signals:
+        peer = a.peer or "the other robot"
+        o, i = out_name(a), in_name(a)
+        if a.action == "set":
+            lines.append(
+                f"signal {a.signal} {a.name}: set by this robot at rest at route row {a.row}, "
+                f"{peer} waits on it; wiring: this robot {o} -> {peer} {i}"
+            )
+        else:
+            lines.append(
+                f"signal {a.signal} {a.name}: this robot waits on it at rest at route row "
+                f"{a.row}, {peer} sets it; wiring: {peer} {o} -> this robot {i}"
+            )
+    return lines
 
 
 def identifier(text: str, default: str) -> str:

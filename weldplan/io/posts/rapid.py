@@ -39,6 +39,12 @@ reads back)::
   ``{wobj}``, ``{time}``) after every weld target; the default calls the ``weld_spot`` routine
   above, which waits the weld time: replace it with the gun's own instruction (``SpotL``,
   a servo-gun routine).
+* interlock signals (:attr:`RobotProgram.signals`, a station of several robots): outputs
+  ``do<n>_<name>`` and inputs ``di<n>_<name>`` (:func:`signal_do`, :func:`signal_di`), declared
+  in the controller's I/O configuration as the header's comment block lists them; every output
+  the program sets gets ``SetDO ..., 0;`` before the first move, a ``set`` is ``SetDO ..., 1;``
+  and a ``wait`` ``WaitDI ..., 1;`` after its target (always ``fine``: RAPID runs them once the
+  robot is there) and its weld.
 """
 
 from __future__ import annotations
@@ -54,7 +60,15 @@ from weldplan.errors import WeldplanError
 from weldplan.io.blending import rapid_zone
 from weldplan.io.outputset import comment_lines
 from weldplan.io.posts.config import abb_confdata
-from weldplan.io.posts.program import RobotProgram, fmt, identifier
+from weldplan.io.posts.program import (
+    RobotProgram,
+    SignalAction,
+    fmt,
+    identifier,
+    outputs_set,
+    signal_notes,
+    signals_at,
+)
 
 log = logging.getLogger(__name__)
 
@@ -80,6 +94,39 @@ def _pose_text(T: np.ndarray) -> str:
     xyz = ",".join(fmt(v, POS_DECIMALS) for v in T[:3, 3])
     quat = ",".join(fmt(v, QUAT_DECIMALS) for v in quat_wxyz(T[:3, :3]))
     return f"[[{xyz}],[{quat}]]"
+
+
+def _signal(prefix: str, a: SignalAction) -> str:
+    body = "".join(c if (c.isascii() and c.isalnum()) else "_" for c in a.name)
+    return f"{prefix}{a.signal}_{body}"[:32]
+
+
+def signal_do(a: SignalAction) -> str:
+    """The digital output that carries ``a``'s signal, e.g. ``do1_Z1_R1_R2`` (number, then the
+    interlock's name; <= 32 characters, RAPID's limit). Declare it in the I/O configuration
+    (EIO) of the robot that sets it; the header says so."""
+    return _signal("do", a)
+
+
+def signal_di(a: SignalAction) -> str:
+    """The digital input that carries ``a``'s signal, e.g. ``di1_Z1_R1_R2``, wired to the
+    output :func:`signal_do` of the robot that sets it."""
+    return _signal("di", a)
+
+
+def _eio_note(program: RobotProgram) -> list[str]:
+    """The signals this controller's I/O configuration (EIO) must declare, one line."""
+    names = dict.fromkeys(
+        ("DO " + signal_do(a)) if a.action == "set" else ("DI " + signal_di(a))
+        for a in program.signals
+    )
+    return [f"I/O configuration (EIO) to declare: {', '.join(names)}"] if names else []
+
+
+def _signal_line(a: SignalAction) -> str:
+    """``SetDO`` a ``set`` on, ``WaitDI`` a ``wait``: after a ``fine`` point, where RAPID runs
+    the next instruction once the robot is there."""
+    return f"SetDO {signal_do(a)}, 1;" if a.action == "set" else f"WaitDI {signal_di(a)}, 1;"
 
 
 def speed_name(speed: float) -> tuple[str, int]:
@@ -118,6 +165,9 @@ def render_rapid(
     out += comment_lines(header, "!", "    ").splitlines()
     note = program.frame_note()
     out += [f"    ! {line}" for line in (*program.notes, *(() if note is None else (note,)))]
+    out += [f"    ! {line}" for line in signal_notes(program, signal_do, signal_di)]
+    out += [f"    ! {line}" for line in _eio_note(program)]
+    at = signals_at(program)  # refuses a signal on a target that is not ``fine``
     uframe, oframe = program.work_object()
     m, cog = program.tool_mass, program.tool_cog
     if not (math.isfinite(m) and m > 0):
@@ -139,7 +189,8 @@ def render_rapid(
             f"[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];{tag}"
         )
     out += ["", "    PROC main()", "        ConfJ\\On;", "        ConfL\\On;"]
-    for name, t, z in zip(names, tg, zones, strict=True):
+    out += [f"        SetDO {signal_do(a)}, 0;" for a in outputs_set(program)]
+    for k, (name, t, z) in enumerate(zip(names, tg, zones, strict=True)):
         move = "MoveJ" if t.move == "joint" else "MoveL"
         out.append(
             f"        {move} {name},{speed_name(t.speed)[0]},{z},{TOOL_NAME}\\WObj:={WOBJ_NAME};"
@@ -155,6 +206,7 @@ def render_rapid(
                     time=fmt(program.weld_time, 3),
                 )
             )
+        out += [f"        {_signal_line(a)}" for a in at.get(k, ())]  # after a fine point
     out.append("    ENDPROC")
     if weld_template is None:
         out += [

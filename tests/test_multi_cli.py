@@ -1,0 +1,284 @@
+"""``weldplan plan station.toml`` with several robots, its files, and ``weldplan verify`` of the
+station JSON (issue 30, item 5): the demo part, the shared spot gun on two KUKA KR 150 at given
+bases (tests/test_multi_plan.py's), a station file written in ``tmp_path``.
+
+The fast tests are the bad inputs (one line, exit 2, naming the file and the key). The slow ones
+plan: the command line on five welds both robots reach (exit 0, every file, verify exit 0, a
+corrupted station JSON refused by name), and the library on six (weld 15 no robot reaches) with
+an interlock made by hand, written into both programs and re-checked against the schedule."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tests.cli_helpers import one_line_error, run_cli
+from tests.conftest import require_shared
+
+#: (x, y, z mm, yaw deg), part frame: behind the demo part facing it, and in front facing back
+BASES = ((448.1, 95.3, 652.7, -7.5), (2450.0, -150.0, 652.7, 180.0))
+#: a demo weld neither robot reaches (A2 past its limit from both bases)
+UNREACHED = "15"
+
+
+def _station_toml(folder: Path, ids, bases=BASES, extra: str = "", mesh: str | None = None):
+    """A station file in ``folder`` with the demo welds ``ids`` and a robot at each base."""
+    from weldplan.io.joints import Joints, read_joints
+    from weldplan.weld import demo_part
+
+    urdf = require_shared("robots", "kuka_kr150r3100_2", "kr150r3100_2.urdf")
+    gun = require_shared("tools", "spot_welding_gun", "spot_welding_gun.urdf")
+    folder.mkdir(parents=True, exist_ok=True)
+    j = read_joints(demo_part.DEMO_JOINTS)
+    k = [j.ids.index(i) for i in ids]
+    welds = Joints(ids=tuple(ids), xyz=np.asarray(j.xyz)[k], directions=np.asarray(j.directions)[k])
+    welds.to_csv(folder / "welds.csv")
+    robots = "".join(
+        f'\n[[robot]]\nurdf = "{urdf}"\nbase = {list(b)}\nweld_time = 0.5\n{extra}'
+        f'\n[robot.tool]\nfile = "{gun}"\n'
+        for b in bases
+    )
+    text = f'seed = 0\n[part]\nmesh = "{mesh or demo_part.DEMO_PART}"\nwelds = "welds.csv"\n'
+    (folder / "station.toml").write_text(text + "[tool_settings]\ncone = 15.0\n" + robots)
+    return folder / "station.toml"
+
+
+# ------------------------------------------------------------------ bad input, one line, exit 2
+def test_two_robots_at_the_same_place_are_refused_naming_the_file_line_and_key(tmp_path, capsys):
+    f = _station_toml(tmp_path, ["1", "9"], bases=(BASES[0], (448.1, 95.3, 0.0, 90.0)))
+    assert run_cli(["plan", str(f), "-o", str(tmp_path / "r.csv")]) == 2
+    line = one_line_error(capsys)
+    lines = f.read_text().splitlines()
+    at = [n for n, ln in enumerate(lines, start=1) if ln.startswith("base =")][1]
+    assert f"station.toml, line {at}, field 'robot.base'" in line
+    assert "robot 2 stands 0.0 mm from robot 1" in line
+
+
+def test_a_base_inside_the_part_is_refused_naming_the_file_and_key(tmp_path, capsys):
+    inside = (1400.0, -60.0, 680.0, 0.0)  # among the demo welds, on the part
+    f = _station_toml(tmp_path, ["1", "9"], bases=(BASES[0], inside))
+    out = tmp_path / "r.csv"
+    assert run_cli(["plan", str(f), "-o", str(out)]) == 2
+    line = one_line_error(capsys)
+    assert "station.toml, field 'robot.base'" in line and "robot 2's base" in line
+    assert not list(tmp_path.glob("r*"))  # nothing written
+
+
+def test_an_unknown_key_and_a_missing_mesh_are_one_line_errors(tmp_path, capsys):
+    f = _station_toml(tmp_path / "a", ["1", "9"], extra="weld_tme = 0.5\n")
+    assert run_cli(["plan", str(f), "-o", str(tmp_path / "r.csv")]) == 2
+    assert "field 'robot.weld_tme': unknown key 'weld_tme'" in one_line_error(capsys)
+    f = _station_toml(tmp_path / "b", ["1", "9"], mesh=str(tmp_path / "nowhere.stl"))
+    assert run_cli(["plan", str(f), "-o", str(tmp_path / "r.csv")]) == 2
+    assert "field 'part.mesh': no such file" in one_line_error(capsys)
+
+
+def test_verify_refuses_a_station_json_that_is_not_json_naming_the_line(tmp_path, capsys):
+    from weldplan.multi.saved import STATION_FORMAT
+
+    bad = tmp_path / "s.json"
+    bad.write_text(f'{{\n "format": "{STATION_FORMAT}",\n "robots": [\n}}\n')
+    assert run_cli(["verify", str(bad)]) == 2
+    assert "s.json, line 4: not valid JSON" in one_line_error(capsys)
+    bad.write_text(json.dumps({"format": STATION_FORMAT, "robots": []}))
+    assert run_cli(["verify", str(bad)]) == 2
+    assert "field 'allocation'" in one_line_error(capsys)
+
+
+# --------------------------------------------------------------- the command line, planned once
+@pytest.fixture(scope="module")
+def cli_run(tmp_path_factory):
+    """``weldplan plan station.toml -o out/route.csv --json out/route.json --post krl`` on five
+    demo welds both robots can serve; ``(exit code, out folder, stdout)``."""
+    import contextlib
+    import io
+
+    folder = tmp_path_factory.mktemp("station")
+    f = _station_toml(folder, ["1", "5", "7", "9", "13"])
+    out = folder / "out"
+    out.mkdir()
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        code = run_cli(["plan", str(f), "-o", str(out / "route.csv"), "--json",
+                        str(out / "route.json"), "--post", "krl", "--quiet"])  # fmt: skip
+    return code, out
+
+
+@pytest.mark.slow
+def test_the_command_line_writes_every_robots_files_and_the_station_json(cli_run):
+    from weldplan.io.posts.parse import parse_krl
+    from weldplan.multi.saved import load_station_plan
+
+    code, out = cli_run
+    assert code == 0
+    saved = load_station_plan(out / "route_station.json")
+    assert [r.name for r in saved.robots] == ["robot1", "robot2"]
+    shares = [set(r.welds) for r in saved.robots]
+    assert shares[0] | shares[1] == {"1", "5", "7", "9", "13"} and not shares[0] & shares[1]
+    for k, r in enumerate(saved.robots, start=1):
+        if not r.welds:
+            continue
+        assert r.route == out / f"route_robot{k}.json" and r.route.is_file()
+        assert (out / f"route_robot{k}.csv").is_file() and r.trajectory.is_file()
+        src, dat = (p.read_text() for p in r.program)
+        prog = parse_krl(src, dat)
+        assert prog.name == f"route_robot{k}"
+        welds = [ln.split("; weld ")[1] for ln in dat.splitlines() if "; weld " in ln]
+        assert set(welds) == set(r.welds)
+        assert prog.signals == [] and prog.resets == []  # no interlocks (none planned yet)
+    assert saved.replay is None and "not checked" in saved.interference
+    assert saved.schedule is not None and saved.schedule.interlocks == ()
+
+
+@pytest.mark.slow
+def test_verify_of_the_station_json_exits_0_and_names_every_check(cli_run, capsys):
+    _, out = cli_run
+    capsys.readouterr()
+    assert run_cli(["verify", str(out / "route_station.json")]) == 0
+    said = capsys.readouterr().out
+    for name in ("allocation ok", "robot1 ok", "robot2 ok", "schedule ok"):
+        assert name in said
+    assert "interference ok: interference not re-checked" in said
+
+
+def _corrupt(out: Path, tmp: Path, edit) -> Path:
+    """A copy of the station's files in ``tmp`` with the station JSON changed by ``edit``."""
+    import shutil
+
+    shutil.copytree(out, tmp, dirs_exist_ok=True)
+    p = tmp / "route_station.json"
+    d = json.loads(p.read_text())
+    edit(d)
+    p.write_text(json.dumps(d))
+    return p
+
+
+@pytest.mark.slow
+def test_a_corrupted_station_json_is_refused_naming_the_field_or_the_check(
+    cli_run, tmp_path, capsys
+):
+    _, out = cli_run
+    p = _corrupt(out, tmp_path / "a", lambda d: d.pop("allocation"))
+    assert run_cli(["verify", str(p)]) == 2
+    assert "field 'allocation'" in one_line_error(capsys)
+
+    def twice(d):  # robot 2's first weld in robot 1's share too
+        ours = d["allocation"]["ours"]
+        ours["shares"][0]["order"].append(ours["shares"][1]["order"][0])
+
+    def late(d):  # robot 1's last activity ends 0.5 s later than its trajectory
+        acts = [a for a in d["schedule"]["activities"] if a[0] == 0]
+        acts[-1][3] += 0.5
+
+    def replay(d):  # a plan that says interference was checked: not re-checkable here
+        d["replay"] = {"ok": True, "clearance": 10.0, "min_distance": 50.0, "closest": None,
+                       "pairs": 3}  # fmt: skip
+
+    for name, edit, check in (("b", twice, "allocation"), ("c", late, "schedule"),
+                              ("d", replay, "interference")):  # fmt: skip
+        capsys.readouterr()
+        assert run_cli(["verify", str(_corrupt(out, tmp_path / name, edit))]) == 1
+        assert f"{check} FAILED" in capsys.readouterr().err
+
+
+# ------------------------------------------------------ the library with a hand-made interlock
+@pytest.fixture(scope="module")
+def splan(tmp_path_factory):
+    import weldplan
+
+    f = _station_toml(tmp_path_factory.mktemp("lib"), ["1", "5", "7", "9", "13", UNREACHED])
+    return weldplan.plan(weldplan.load_station(f), rng=0)
+
+
+def _interlocked(splan):
+    """``splan`` with one interlock: robot 2 may not leave its first stop before robot 1 is
+    at rest, its weld done, at its last stop."""
+    from weldplan.multi.schedule import Interlock, station_schedule
+    from weldplan.multi.station import timed_weld_ids
+
+    timings = [p.program.timing for p in splan.plans]
+    last = int(np.flatnonzero(timings[0].stops)[-1])
+    first = int(np.flatnonzero(timings[1].stops)[0])
+    lock = Interlock("Z1", first=0, release_row=last, second=1, wait_row=first, signal=7)
+    ids = [timed_weld_ids(p.program) for p in splan.plans]
+    sched = station_schedule(splan.allocation.robots, timings, [lock], weld_ids=ids)
+    return dataclasses.replace(splan, schedule=sched), lock
+
+
+@pytest.mark.slow
+def test_an_interlock_is_written_into_both_programs_and_read_back(splan, tmp_path):
+    from weldplan.io.posts.parse import parse_rapid
+    from weldplan.multi.saved import robot_plans, station_paths, write_station
+    from weldplan.station.model import OutputSpec
+
+    sp, lock = _interlocked(splan)
+    assert sp.schedule.waiting[1] > 0  # robot 2 really waits
+    paths = station_paths(OutputSpec(csv=tmp_path / "route.csv", post="rapid"), 2)
+    write_station(sp, paths)
+    plans = robot_plans(sp)
+    for k, action in ((0, "set"), (1, "wait")):
+        mod = parse_rapid(paths.robots[k]["post"].read_text())
+        prog = plans[k].program.program
+        assert [(a.action, a.signal, a.name) for a in prog.signals] == [(action, 7, lock.name)]
+        ((point, act, n, name),) = mod.signals
+        assert (act, n, name) == (action, 7, lock.name)
+        row = prog.targets[int(point[1:])].row  # p0005 -> target 5
+        timed = lock.release_row if k == 0 else lock.wait_row
+        assert row == int(np.asarray(plans[k].program.row)[timed])
+        assert mod.resets == ([(7, lock.name)] if action == "set" else [])
+
+
+@pytest.mark.slow
+def test_the_saved_station_round_trips_and_verify_checks_the_interlock(splan, tmp_path, capsys):
+    import weldplan
+
+    sp, lock = _interlocked(splan)
+    path = weldplan.save_station_plan(sp, tmp_path / "cell_station.json")
+    assert (tmp_path / "cell_robot1.json").is_file()
+    saved = weldplan.load_station_plan(path)
+    assert saved.schedule.interlocks == (lock,)
+    assert saved.schedule.cycle_times == pytest.approx(sp.schedule.cycle_times, abs=1e-6)
+    assert saved.report.ours.unreached[0].weld == UNREACHED
+    v = saved.verify()
+    assert v.ok and v.exit_code == 3 and v.left_out == (UNREACHED,)
+    assert "1 interlock(s) hold" in v["schedule"].text
+    # robot 2's wait taken out and its later activities moved up: it leaves before robot 1 is
+    # ready, and only the interlock says so (its moves and welds still match its trajectory)
+    d = json.loads(path.read_text())
+    acts = [a for a in d["schedule"]["activities"] if a[0] == 1]
+    k = next(i for i, a in enumerate(acts) if a[1] == "wait")
+    gone = acts[k][3] - acts[k][2]
+    acts[k][3] -= gone
+    for a in acts[k + 1 :]:
+        a[2], a[3] = a[2] - gone, a[3] - gone
+    path.write_text(json.dumps(d))
+    v = weldplan.load_station_plan(path).verify()
+    assert (
+        not v.ok and not v["schedule"].ok and f"{lock.name}: robot 2 leaves" in v["schedule"].text
+    )
+
+
+@pytest.mark.slow
+def test_the_summary_and_the_exit_say_what_is_left_out_and_a_failed_replay(splan):
+    from weldplan.multi.saved import robot_plans
+    from weldplan.multi.schedule import ReplayVerdict
+    from weldplan.station.summary import station_partial, station_rows
+
+    plans = robot_plans(splan)
+    rows = dict(station_rows(splan, plans))
+    for r, name in enumerate(splan.allocation.robots):
+        n = len(splan.allocation.welds_of(r))
+        assert rows[f"robot {name}"].startswith(f"{n} welds, cycle ")
+        assert "interlocks: 0 set, 0 wait" in rows[f"robot {name}"]
+    assert rows["station cycle"].startswith(f"{splan.schedule.cycle_time:.2f} s")
+    assert "not checked" in rows["interference"]
+    assert station_partial(splan, plans) == [f"1 weld(s) no robot reaches ({UNREACHED})"]
+    bad = ReplayVerdict(False, 10.0, 3.5, (0, 4, 1, 2), 12, ("robot1 row 4 / robot2 row 2",))
+    failed = dataclasses.replace(splan, replay=bad)
+    lines = station_partial(failed, plans)
+    assert len(lines) == 2 and "min robot-robot distance 3.5 mm" in lines[1]
+    assert dict(station_rows(failed, plans))["interference"].startswith("replay FAILED")

@@ -1,0 +1,59 @@
+"""Given bases of a station of several robots, checked against the part before any planning.
+
+A robot whose base is inside the part cannot weld anything; planning it would list every weld
+as unreached and say nothing of why. :func:`check_bases` refuses it first, naming the station
+file and the key (``robot.base``): the robot's base link (the URDF's first link, at its base
+pose) touching the part (FCL on the link's collision mesh and the part's BVH), or the base's
+origin inside a closed (watertight) part mesh. Two robots at the same place are refused when
+the station file is read (:data:`weldplan.station.load.MIN_BASE_SPACING`).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from weldplan.errors import InputError
+
+
+def check_bases(station: Any) -> None:
+    """Raise :class:`~weldplan.errors.InputError` naming the first robot whose given base is
+    inside the part (module docstring). Robots without a given base or URDF are skipped."""
+    import fcl
+
+    from weldplan.io.mesh import load_part
+    from weldplan.robot import load_robot
+    from weldplan.robot.reach import base_pose
+    from weldplan.tool.model import bvh
+
+    given = [(k, s) for k, s in enumerate(station.robots) if s.base is not None and s.urdf]
+    if not given:
+        return
+    part = _part(station, load_part)
+    part_obj = fcl.CollisionObject(bvh(part.vertices, part.faces), fcl.Transform())
+    for k, spec in given:
+        robot = load_robot(spec.urdf, spec.opw, base=base_pose(*spec.base))
+        link = robot.links[0]
+        F = robot.link_frames(np.zeros((1, 6)))[0, link.index]
+        obj = fcl.CollisionObject(
+            bvh(link.vertices, link.faces), fcl.Transform(F[:3, :3], F[:3, 3])
+        )
+        touch = fcl.collide(obj, part_obj, fcl.CollisionRequest(), fcl.CollisionResult())
+        inside = part.is_watertight and bool(part.contains(np.asarray([spec.base[:3]]))[0])
+        if touch or inside:
+            what = "touches the part" if touch else "is inside the part"
+            raise InputError(
+                f"robot {k + 1}'s base {list(spec.base)} {what} (its base link "
+                f"{link.name!r} at that pose)",
+                path=station.source, field="robot.base",
+            )  # fmt: skip
+
+
+def _part(station: Any, load_part: Any) -> Any:
+    p = station.part
+    if p.is_demo:
+        from weldplan.weld import demo_part
+
+        return load_part(demo_part.DEMO_PART)
+    return load_part(p.mesh, units=p.units, scale=p.scale, length=p.length)

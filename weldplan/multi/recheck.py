@@ -1,0 +1,234 @@
+"""Re-check a saved station plan whole: what ``weldplan verify STATION_JSON`` runs.
+
+:func:`verify_station` runs, in order, checks that share none of the planner's objects (each
+reads the files back):
+
+``allocation``
+    every weld of the station's welds file is either in exactly one robot's share or listed
+    as unreached (with its reasons); the shares are disjoint and each robot's route JSON
+    visits exactly its share. Unreached welds are *left out* (exit 3), not a failure.
+``robot<k>``
+    each robot's route JSON through the single-robot re-check
+    (:meth:`weldplan.station.saved.SavedPlan.verify`: the route by FCL, the gun's poses and
+    transitions, the robot route by FK + FCL) with the station's part, tool and robot.
+``schedule``
+    the station's schedule against the saved trajectories: per robot its moves and welds
+    (the waits taken out) last as long as its trajectory CSV, its welds are its route's, its
+    activities follow each other without gap or overlap from 0; every interlock holds (the
+    waiting robot leaves its row no earlier than the releasing robot is at rest, its weld
+    done, at its own); the recorded cycle is the last robot's end.
+``interference``
+    the replay. This version has no independent replay of its own: a plan that says
+    robot-robot interference was not checked (``replay`` null) passes with that said; a plan
+    that records a replay fails here ("not re-checked"), since its claim cannot be re-checked.
+
+A check that fails does not stop the later ones (each reads its own files); the verdict is a
+:class:`~weldplan.station.recheck.Verdict` (exit 0 ok, 1 a check failed, 3 ok but welds left
+out).
+"""
+
+from __future__ import annotations
+
+import csv
+from collections import Counter
+from typing import Any
+
+from weldplan.errors import InputError
+from weldplan.station.recheck import CheckResult, Verdict
+
+#: s: the schedule (6 decimals) against a trajectory CSV's ``t`` (4 decimals)
+CYCLE_TOL = 1e-3
+#: what the interference check says of a plan that did not check interference
+NOT_RECHECKED = (
+    "interference not re-checked: the plan says robot-robot interference was not checked"
+)
+
+
+def verify_station(saved: Any, *, station: Any = None) -> Verdict:
+    """Re-check ``saved`` (:class:`~weldplan.multi.saved.SavedStationPlan`; module docstring).
+
+    ``station``: the :class:`~weldplan.station.model.Station` (default: the station file the
+    plan records, read again). Raises :class:`~weldplan.errors.InputError` when there is none,
+    or when it does not have the plan's robots."""
+    station = station if station is not None else _station(saved)
+    if len(station.robots) != len(saved.robots):
+        raise InputError(
+            f"the station has {len(station.robots)} robots, the plan {len(saved.robots)}",
+            path=saved.path, field="robots",
+        )  # fmt: skip
+    checks = [allocation_check(saved, _weld_ids(station))]
+    routes = []
+    for k in range(len(saved.robots)):
+        check, route = robot_check(saved, station, k)
+        if check is not None:
+            checks.append(check)
+        routes.append(route)
+    checks.append(schedule_check(saved, routes))
+    checks.append(interference_check(saved))
+    return Verdict(tuple(checks))
+
+
+def _station(saved: Any) -> Any:
+    from pathlib import Path
+
+    from weldplan.station.load import load_station
+
+    if saved.station_file is None:
+        raise InputError("the plan records no station file: give the station", path=saved.path)
+    f = Path(saved.station_file)
+    if not f.is_file() and (saved.path.parent / f).is_file():
+        f = saved.path.parent / f
+    return load_station(f)
+
+
+def _weld_ids(station: Any) -> list[str]:
+    from weldplan.io.joints import read_joints
+
+    p = station.part
+    if p.is_demo:
+        from weldplan.weld import demo_part
+
+        return list(read_joints(demo_part.DEMO_JOINTS).ids)
+    return list(read_joints(p.welds, units=p.units).ids)
+
+
+def allocation_check(saved: Any, ids: list[str]) -> CheckResult:
+    """Every weld of ``ids`` (the welds file) in exactly one share or unreached; the robots'
+    recorded shares are the allocation's."""
+    a = saved.report.ours
+    problems = []
+    if Counter(a.welds) != Counter(ids):
+        extra, missing = set(a.welds) - set(ids), set(ids) - set(a.welds)
+        problems.append(f"welds not the file's (extra {sorted(extra)}, missing {sorted(missing)})")
+    held = Counter(a.welds[i] for s in a.shares for i in s.order)
+    unreached = {u.weld for u in a.unreached}
+    for i, w in enumerate(a.welds):
+        r = a.assignment[i] if i < len(a.assignment) else -1
+        in_share = r >= 0 and i in a.shares[r].order
+        if held[w] + (w in unreached) != 1 or (r >= 0) != in_share:
+            problems.append(f"weld {w}: in {held[w]} share(s), unreached {w in unreached}")
+    for k, robot in enumerate(saved.robots):
+        if k >= len(a.shares) or robot.welds != a.welds_of(k):
+            problems.append(f"{robot.name}: its welds are not its share")
+    if problems:
+        return CheckResult("allocation", False, "; ".join(problems[:3]))
+    n = sum(len(s.order) for s in a.shares)
+    text = (
+        f"{n} of {len(ids)} welds in exactly one robot's share, {len(unreached)} unreached "
+        f"(each with its reasons); {len(a.shares)} shares disjoint"
+    )
+    return CheckResult("allocation", True, text, left_out=tuple(sorted(unreached)))
+
+
+def robot_check(saved: Any, station: Any, k: int) -> tuple[CheckResult | None, Any]:
+    """Robot ``k``'s route JSON re-checked alone (module docstring); ``(None, None)`` for an
+    idle robot. Returns the check and the :class:`~weldplan.station.saved.SavedPlan`."""
+    from weldplan.robot import load_robot
+    from weldplan.station.mount import mount_tool
+    from weldplan.station.recheck import RobotFiles
+    from weldplan.station.saved import PartFiles, load_plan
+
+    robot, spec = saved.robots[k], station.robots[k]
+    name = robot.name
+    if robot.route is None:
+        ok = not robot.welds
+        return (None if ok else CheckResult(name, False, "welds but no route JSON")), None
+    p = station.part
+    mesh = _mesh(station)
+    sp = load_plan(robot.route, mesh=mesh, part=PartFiles(p.units, p.scale, p.length))
+    if set(sp.route.joint_ids) != set(robot.welds):
+        return CheckResult(name, False, f"{robot.route.name} does not visit its share"), sp
+    arm = load_robot(spec.urdf, spec.opw)
+    v = sp.verify(tool=mount_tool(spec.tool, arm), robot=RobotFiles(spec.urdf, spec.opw))
+    text = f"{robot.route.name}: {v.describe()}"
+    return CheckResult(name, v.ok, text, left_out=v.left_out), sp
+
+
+def _mesh(station: Any) -> Any:
+    if station.part.is_demo:
+        from weldplan.weld import demo_part
+
+        return demo_part.DEMO_PART
+    return station.part.mesh
+
+
+def _trajectory_end(path: Any) -> float:
+    """s: the last ``t`` of a trajectory CSV (``#`` lines skipped)."""
+    try:
+        lines = [ln for ln in path.read_text().splitlines() if ln and not ln.startswith("#")]
+    except OSError as exc:
+        raise InputError(f"cannot read it: {exc.strerror}", path=path) from None
+    rows = list(csv.reader(lines))
+    if len(rows) < 2 or rows[0][:1] != ["t"]:
+        raise InputError("not a trajectory CSV (no t column or no row)", path=path)
+    return float(rows[-1][0])
+
+
+def schedule_check(saved: Any, routes: list[Any]) -> CheckResult:
+    """The schedule against each robot's trajectory, route and the interlocks (module
+    docstring)."""
+    s = saved.schedule
+    if s is None:
+        return CheckResult("schedule", False, "the plan records no schedule")
+    problems = []
+    for k, robot in enumerate(saved.robots):
+        problems += _robot_schedule(s, k, robot, routes[k])
+    problems += [_interlock_problem(s, lock) for lock in s.interlocks]
+    if abs(s.cycle_time - saved.cycle_time) > CYCLE_TOL:
+        problems.append(f"cycle {saved.cycle_time:.4f} s recorded, {s.cycle_time:.4f} s by it")
+    problems = [p for p in problems if p]
+    if problems:
+        return CheckResult("schedule", False, "; ".join(problems[:3]))
+    text = (
+        f"{len(saved.robots)} robots' moves and welds match their trajectories within "
+        f"{CYCLE_TOL:g} s; {len(s.interlocks)} interlock(s) hold; station cycle "
+        f"{s.cycle_time:.2f} s"
+    )
+    return CheckResult("schedule", True, text)
+
+
+def _robot_schedule(s: Any, k: int, robot: Any, route: Any) -> list[str]:
+    acts = s.of(k)
+    if robot.trajectory is None:
+        return [f"{robot.name}: activities but no trajectory"] if acts else []
+    busy = s.seconds(k, "move") + s.seconds(k, "weld")
+    end = _trajectory_end(robot.trajectory)
+    out = []
+    if abs(busy - end) > CYCLE_TOL:
+        out.append(f"{robot.name}: moves and welds {busy:.4f} s, trajectory {end:.4f} s")
+    t = 0.0
+    for a in acts:
+        if abs(a.start - t) > 1e-6:
+            out.append(f"{robot.name}: a gap or an overlap at {a.start:.4f} s")
+            break
+        t = a.end
+    welded = {a.label for a in acts if a.kind == "weld"}
+    rr = None if route is None else route.robot_route
+    if rr is not None and not welded <= set(rr.weld_ids):
+        out.append(f"{robot.name}: welds {sorted(welded - set(rr.weld_ids))} not in its route")
+    return out
+
+
+def _interlock_problem(s: Any, lock: Any) -> str:
+    """``""`` when ``lock.second`` leaves ``wait_row`` no earlier than ``lock.first`` is at
+    rest at ``release_row`` (its weld there done), by the schedule's clock."""
+    first = [a for a in s.of(lock.first) if a.row == lock.release_row]
+    second = [a for a in s.of(lock.second) if a.row == lock.wait_row and a.kind != "move"]
+    arrive = [a.end for a in first if a.kind == "move"] or [0.0]
+    ready = max([a.end for a in first if a.kind == "weld"] or arrive)
+    moved = [a for a in s.of(lock.second) if a.kind == "move" and a.row == lock.wait_row]
+    leave = max([a.end for a in second] or [a.end for a in moved] or [0.0])
+    if leave + 1e-6 < ready:
+        return f"{lock.name}: robot {lock.second + 1} leaves at {leave:.4f} s, before {ready:.4f} s"
+    return ""
+
+
+def interference_check(saved: Any) -> CheckResult:
+    """The replay (module docstring)."""
+    if saved.replay is None:
+        return CheckResult("interference", True, f"{NOT_RECHECKED}: {saved.interference}")
+    return CheckResult(
+        "interference", False,
+        "not re-checked: the plan records a replay of robot-robot interference, and this "
+        "weldplan has no independent replay to re-check it",
+    )  # fmt: skip
