@@ -479,3 +479,21 @@ def test_the_robot_summary_says_which_floor_the_route_was_checked_against():
     assert "no floor given, none checked" in none and "--floor-z" in none
     assert floor_words({"floor_z": None}) == none
     assert floor_words({"floor_z": -700.0}).endswith("the floor at z -700 mm")
+
+
+def test_a_tool_without_a_mass_is_named_as_it_is_in_the_error():
+    """The load a program declares needs the tool's mass: the built-in torch's error names the
+    torch (not "a mesh tool"), and a mesh tool's names the mesh; both say how to give one."""
+    import numpy as np
+
+    from weldplan.errors import InputError
+    from weldplan.station.model import ToolSpec
+    from weldplan.station.mount import load_tool_spec, tool_load
+
+    spec = ToolSpec(builtin="arc_torch")
+    tool, _ = load_tool_spec(spec)
+    with pytest.raises(InputError, match="the built-in torch has no mass: give --tool-mass"):
+        tool_load(spec, None, tool, np.eye(4))
+    mesh = ToolSpec(file="torch.stl", tcp="0,0,0,0,0,0")
+    with pytest.raises(InputError, match="a mesh tool has no mass: give --tool-mass"):
+        tool_load(mesh, None, tool, np.eye(4))

@@ -244,7 +244,8 @@ def plan_robot_route(
         ``rng``): a searched base is chosen by the welds one roadmap joins
         (:func:`~weldplan.robot.roadmaps.join_welds`), and a detour asks the roadmap of its
         base before OMPL (:meth:`~weldplan.robot.replan.Detour.via_roadmap`). ``None`` (the
-        default, docs/robot.md says why): neither; :data:`ROADMAP` is the suggested setting.
+        default; docs/robot-placement.md, "Joining the welds", says why): neither;
+        :data:`ROADMAP` is the suggested setting.
 
     Raises
     ------

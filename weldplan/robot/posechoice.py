@@ -38,7 +38,8 @@ its other free poses too (the first pass's
 :attr:`~weldplan.tool.result.WeldPoses.alternatives`, :mod:`weldplan.robot.altreach`): a weld
 whose least-rotation pose a base cannot take, but another of its free poses it can, counts
 there, since the second pass will pick that one. The cost is one more pose choice (the tool's
-collision table is built again); measured in docs/robot.md. The
+collision table is built again; docs/robot-placement.md, "Tool poses the arm reaches";
+``weldplan bench robot`` measures it). The
 base is not searched again after the second pass (one round: a second round could move the base
 to where the re-chosen poses do better, and then the poses again; not measured to converge).
 """
@@ -192,7 +193,7 @@ def place_for_poses(
     (:attr:`~weldplan.tool.result.WeldPoses.alternatives`) serves there: the reach test then
     picks that pose (:mod:`weldplan.robot.altreach`). Off by default: on car2_200 the bases it
     finds serve every weld pose but the robot route from them cannot leave the first welds
-    (docs/robot.md, session 6). ``roadmap``: the
+    (docs/robot-placement.md, *Alternative poses*). ``roadmap``: the
     :class:`~weldplan.motion.roadmap.RoadmapSettings` of a last step, the best candidates
     re-ranked by the welds one joint-space roadmap joins (e.g. the robot route's
     :data:`~weldplan.robot.plan.ROADMAP`; ``None``, the default: not re-ranked).
