@@ -148,7 +148,7 @@ def test_plan_writes_every_output_and_verifies(files, capsys):
         assert key in cap.out
     rows = csv_rows(out)
     assert sorted(r["joint_id"] for r in rows if r["kind"] == "weld") == ["A", "B", "C", "D"]
-    assert (tmp / "route.src").read_text().startswith("DEF weldplan_route()")
+    assert (tmp / "route.src").read_text().startswith("DEF route()")  # the station's name
     assert (tmp / "r.html").stat().st_size > 100_000
     # the saved route verifies again from the files alone
     assert main(["verify", str(tmp / "r.json"), str(mesh), "--joints", str(joints)]) == 0

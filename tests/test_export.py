@@ -133,6 +133,20 @@ def test_krl_post():
     assert text.count("; weld joint") == 3
 
 
+def test_the_point_tip_posts_take_the_station_name():
+    """A station with a name names the point-tip program after it (RAPID's module, KRL's
+    program), as the robot's programs are; without one, ``weldplan_route``."""
+    from weldplan.station.outputs import post_name_option
+
+    assert post_name_option("rapid", "door_left") == {"module": "door_left"}
+    assert post_name_option("krl", "door_left") == {"program": "door_left"}
+    assert post_name_option("rapid", None) == {}
+    r, part = box_route(), box_part()
+    rapid = render_post(r, "rapid", part, **post_name_option("rapid", "door_left"))
+    krl = render_post(r, "krl", part, **post_name_option("krl", "door_left"))
+    assert rapid.startswith("MODULE door_left\n") and krl.startswith("DEF door_left()")
+
+
 def test_posts_are_pluggable():
     @register_post("xyz-test", ".txt", "bare coordinates")
     def _xyz(route, **options):

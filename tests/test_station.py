@@ -467,3 +467,33 @@ def test_a_tool_path_that_fails_its_re_check_stops_the_plan_and_writes_nothing(
     err = capsys.readouterr().err
     assert rc != 0 and "failed its independent re-check" in err and "A->B" in err
     assert not out.exists() and "Traceback" not in err
+
+
+def test_the_robot_summary_says_which_floor_the_route_was_checked_against():
+    """A searched base without a floor stands on the part's lowest point, which is no floor anyone
+    gave (the part may stand on a fixture): the summary says none was checked, and how to give
+    one; with a floor (``--floor-z``, a part pose's cell floor) it names its height."""
+    from weldplan.station.summary import floor_words
+
+    none = floor_words({"placement": {"searched": True}})
+    assert "no floor given, none checked" in none and "--floor-z" in none
+    assert floor_words({"floor_z": None}) == none
+    assert floor_words({"floor_z": -700.0}).endswith("the floor at z -700 mm")
+
+
+def test_a_tool_without_a_mass_is_named_as_it_is_in_the_error():
+    """The load a program declares needs the tool's mass: the built-in torch's error names the
+    torch (not "a mesh tool"), and a mesh tool's names the mesh; both say how to give one."""
+    import numpy as np
+
+    from weldplan.errors import InputError
+    from weldplan.station.model import ToolSpec
+    from weldplan.station.mount import load_tool_spec, tool_load
+
+    spec = ToolSpec(builtin="arc_torch")
+    tool, _ = load_tool_spec(spec)
+    with pytest.raises(InputError, match="the built-in torch has no mass: give --tool-mass"):
+        tool_load(spec, None, tool, np.eye(4))
+    mesh = ToolSpec(file="torch.stl", tcp="0,0,0,0,0,0")
+    with pytest.raises(InputError, match="a mesh tool has no mass: give --tool-mass"):
+        tool_load(mesh, None, tool, np.eye(4))

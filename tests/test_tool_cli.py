@@ -108,6 +108,35 @@ def test_verify_refuses_a_route_planned_with_another_tool(planned, capsys):
     assert "planned with another tool" in line and "tcp" in line
 
 
+def test_verify_compares_the_resolved_tcp_not_its_spelling(planned, capsys):
+    """A URDF tool's TCP written as nothing (its last fixed joint) or as that joint's name is one
+    TCP, so verify accepts either; another joint (1 mm along z) is another tool. The URDF wraps
+    the planned mesh tool (the TCP joint at the mesh origin): its provenance replaces the route's,
+    as ``plan --tool tool.urdf`` would record it."""
+    tmp, _ = planned
+    (tmp / "tool.urdf").write_text(
+        '<robot name="t"><link name="root"><collision><geometry><mesh filename="torch.stl" '
+        'scale="0.001 0.001 0.001"/></geometry></collision></link><link name="side"/>'
+        '<link name="tip"/><joint name="side_joint" type="fixed"><origin xyz="0 0 0.001"/>'
+        '<parent link="root"/><child link="side"/></joint><joint name="tip_joint" type="fixed">'
+        '<origin xyz="0 0 0"/><parent link="root"/><child link="tip"/></joint></robot>'
+    )
+    _, prov = load_tool(tmp / "tool.urdf")
+    assert prov["tcp"] is None  # planned without --tcp: the last fixed joint, tip_joint
+    d = json.loads((tmp / "r.json").read_text())
+    d["tool"]["provenance"] = prov
+    (tmp / "urdf_route.json").write_text(json.dumps(d))
+    base = ["verify", str(tmp / "urdf_route.json"), str(tmp / "box.stl"),
+            "--tool", str(tmp / "tool.urdf")]  # fmt: skip
+    for tcp in ([], ["--tcp", "tip_joint"], ["--tcp", "tip"]):  # the joint or its child link
+        capsys.readouterr()
+        assert run_cli(base + tcp) == EXIT_PARTIAL, (tcp, capsys.readouterr())
+    capsys.readouterr()
+    assert run_cli(base + ["--tcp", "side_joint"]) == 2
+    line = one_line_error(capsys)
+    assert "planned with another tool" in line and "tcp None (route) != 'side_joint'" in line
+
+
 def test_tip_cone_narrows_a_mesh_tools_contact_zone_and_verify_must_agree(planned, capsys):
     """A mesh tool has no tip cone (the whole contact sphere may touch); ``--tip-cone 15`` keeps
     only the wire's cone: the nozzle's mouth, inside the sphere but off the axis, is no longer

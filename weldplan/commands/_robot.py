@@ -35,15 +35,18 @@ def add_robot_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--robot-base",
         metavar="X,Y,Z,YAW",
-        help="robot base in the part frame (mm, degrees about +z); default: searched on the floor",
+        help="robot base in the cell frame (the part frame without --up/--part-pose; mm, degrees "
+        "about +z); default: searched on the floor",
     )
     g.add_argument(
         "--floor-z",
         metavar="MM",
         type=number_type("height in mm", -1e6, 1e6),
-        help="the cell's floor height in the part frame: the base search stands the robot on it "
-        "(default: the part's lowest point) and no link nor the tool may reach below it "
-        "(default: no floor known, not checked; station file: floor_z)",
+        help="the cell's floor height, mm, in the cell frame (the part frame without --up/"
+        "--part-pose; with them default 0): the base search stands the robot on it and no link "
+        "nor the tool may reach below it (without a part pose, default: no floor known, not "
+        "checked, the search stands the robot at the part's lowest point; station file: "
+        "floor_z)",
     )
     g.add_argument(
         "--tool-mass",

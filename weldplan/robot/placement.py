@@ -36,8 +36,9 @@ checked **and** the next one's reach count is below the best count served (every
 :data:`~weldplan.robot.reach.PRESELECT` candidate at most), instead of a fixed :data:`POOL`:
 car2_200 had 78 candidates reaching all 200 welds, and the 48 with the best manipulability among
 them served at most 193 without a link in the body. The CLI does not ask for it: from the bases
-it finds on car2_200 (every weld pose served) the robot route serves 7 of 200 (docs/robot.md,
-session 6).
+it finds on car2_200 (every weld pose served) the robot route served 7 of 200 when it was
+measured; why it is off: docs/robot-placement.md, "Tool poses the arm reaches" (*Alternative
+poses*).
 """
 
 from __future__ import annotations

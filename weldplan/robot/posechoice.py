@@ -38,7 +38,8 @@ its other free poses too (the first pass's
 :attr:`~weldplan.tool.result.WeldPoses.alternatives`, :mod:`weldplan.robot.altreach`): a weld
 whose least-rotation pose a base cannot take, but another of its free poses it can, counts
 there, since the second pass will pick that one. The cost is one more pose choice (the tool's
-collision table is built again); measured in docs/robot.md. The
+collision table is built again; docs/robot-placement.md, "Tool poses the arm reaches";
+``weldplan bench robot`` measures it). The
 base is not searched again after the second pass (one round: a second round could move the base
 to where the re-chosen poses do better, and then the poses again; not measured to converge).
 """

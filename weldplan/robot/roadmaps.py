@@ -6,7 +6,8 @@ the route's own free legs, and one OMPL roadmap (:mod:`weldplan.motion.roadmap`)
 checks of the detours (:class:`~weldplan.robot.replan.Detour`) for the legs that are blocked; the
 base search ranks its best candidates by it (:func:`weldplan.robot.placement.rank_bases`,
 step 4), and the detours ask the chosen base's roadmap before OMPL (:class:`LegRoadmap`,
-:meth:`~weldplan.robot.replan.Detour.via_roadmap`). Issue 27, item 2; docs/robot.md.
+:meth:`~weldplan.robot.replan.Detour.via_roadmap`). Issue 27, item 2; docs/robot-placement.md,
+"Joining the welds: one roadmap per base".
 """
 
 from __future__ import annotations

@@ -152,8 +152,9 @@ def tool_load(
         mass = float(spec.mass if spec.mass is not None else load[0])  # type: ignore[index]
         return mass, (robot.mount @ np.r_[cog_root, 1.0])[:3]
     if spec.mass is None:
+        what = "the built-in torch" if spec.builtin is not None else "a mesh tool"
         raise InputError(
-            "a mesh tool has no mass: give --tool-mass with --robot",
+            f"{what} has no mass: give --tool-mass with --robot (station file: the tool's mass)",
             path=spec.file,
             field="--tool-mass",
         )

@@ -107,6 +107,20 @@ def header_lines(prod: dict[str, Any]) -> list[str]:
     return [head, *(f"verified: {c}" for c in prod["verified"])]
 
 
+def post_name_option(post: str, name: str | None) -> dict[str, str]:
+    """The point-tip post's name option (RAPID's ``module``, KRL's ``program``) set to the
+    station's ``name``, as the robot's programs are named; empty without a name (the post's
+    default, ``weldplan_route``) or for a post that takes none."""
+    import inspect
+
+    from weldplan.io.export import POSTS
+
+    if not name:
+        return {}
+    params = inspect.signature(POSTS[post].render).parameters
+    return next(({k: name} for k in ("module", "program") if k in params), {})
+
+
 def render_outputs(plan: Any, kinds: set[str], post: str | None) -> dict[str, str | bytes]:
     """The text of each output kind of ``plan`` (``post``: ``"rapid"`` or ``"krl"``); each file
     says what produced it and what was verified (:func:`producer`)."""
@@ -129,7 +143,8 @@ def render_outputs(plan: Any, kinds: set[str], post: str | None) -> dict[str, st
     if plan.robot is not None:
         texts.update(_robot_texts(plan, kinds, post, head))
     elif "post" in kinds:
-        texts["post"] = render_post(route, post, plan.cell, header=head)
+        name = post_name_option(post, plan.station.name)
+        texts["post"] = render_post(route, post, plan.cell, header=head, **name)
     if "png" in kinds:  # the robot cell's page with a robot, else the route's
         from weldplan.viz.png import png_bytes
 

@@ -13,7 +13,9 @@
 ``tool poses``
     the weld poses belong to the route and each pose reported free is free, fresh FCL models of
     the whole part and tool (:func:`weldplan.tool.check_route.verify_route_poses`), after the
-    tool's provenance is matched (a route planned with another tool is bad input);
+    tool's provenance is matched (a route planned with another tool is bad input; two spellings
+    of one TCP, a joint's name and none for a URDF's last fixed joint, are one tool:
+    :func:`same_tcp_spelling`);
 ``tool transitions``
     the swept tool along every transition (:func:`weldplan.tool.check_route.verify_route_sweeps`);
 ``robot route``
@@ -33,6 +35,8 @@ from dataclasses import dataclass
 from os import PathLike
 from typing import Any
 
+import numpy as np
+
 from weldplan.errors import EXIT_PARTIAL
 from weldplan.geometry.checker import CheckVerdict
 
@@ -40,6 +44,8 @@ from weldplan.geometry.checker import CheckVerdict
 CHECKS = ("part pose", "route", "tool poses", "tool transitions", "robot route")
 #: exit code of a failed check (``weldplan verify``)
 EXIT_FAILED = 1
+#: mm: two spellings of a TCP are one TCP when the tool's vertices in their frames agree to this
+SAME_TCP_MM = 1e-6
 
 
 @dataclass(frozen=True)
@@ -200,7 +206,7 @@ def recheck(
     tool_obj = provenance = None
     if tool is not None:  # another tool is bad input, whatever the route
         tool_obj, provenance = (tool.tool, tool.provenance) if hasattr(tool, "tool") else tool
-        check_tool_provenance(route, provenance, path)
+        check_tool_provenance(route, same_tcp_spelling(route, provenance, tool_obj), path)
     run = _Run([] if part_pose is None else [part_pose], _carried(route))
     if part_pose is not None and not part_pose.ok:
         return run.verdict("an earlier check failed")
@@ -214,6 +220,48 @@ def recheck(
         return run.verdict("an earlier check failed")
     _robot_check(run, route, part, tool_obj, robot, path)
     return run.verdict("an earlier check failed")
+
+
+def same_tcp_spelling(route: Any, provenance: dict[str, Any], tool: Any) -> dict[str, Any]:
+    """``provenance`` with the route's spelling of the TCP when both spellings name one TCP.
+
+    A provenance records the TCP as it was written: ``None`` (a URDF's last fixed joint), a
+    joint or link name, or six numbers. ``--tcp nozzle_tip`` and no ``--tcp`` name the same joint
+    of the shared gun, and are one tool. So, when the route and ``provenance`` differ in the
+    ``tcp`` only, the route's spelling is resolved again in the given files
+    (:func:`weldplan.tool.load.load_tool`) and the tool it gives is compared with ``tool``: the
+    same triangles in the TCP frame to :data:`SAME_TCP_MM` is the same TCP transform, and the
+    route's spelling is returned. Otherwise ``provenance`` is returned unchanged (and
+    :func:`weldplan.tool.check_route.check_tool_provenance` names the difference).
+
+    Parameters
+    ----------
+    route
+        The route, with the provenance of the tool it was planned with (``route.tool``).
+    provenance
+        The given tool's provenance.
+    tool
+        The given :class:`~weldplan.tool.model.Tool` (mm, TCP frame).
+    """
+    from weldplan.errors import InputError
+    from weldplan.tool.load import PROVENANCE_KEYS, load_tool
+
+    planned = (route.tool or {}).get("provenance") or {}
+    if planned.get("tcp") == provenance.get("tcp") or not provenance.get("file"):
+        return provenance
+    if any(planned.get(k) != provenance.get(k) for k in PROVENANCE_KEYS if k != "tcp"):
+        return provenance
+    units = None if provenance.get("units") == "urdf" else provenance.get("units")
+    try:
+        again, _ = load_tool(
+            provenance["file"], tcp=planned.get("tcp"), units=units, mesh=provenance.get("mesh")
+        )
+    except InputError:  # the route's TCP is not in the given files: another tool
+        return provenance
+    v0, v1 = np.asarray(again.vertices), np.asarray(tool.vertices)
+    if v0.shape == v1.shape and np.allclose(v0, v1, rtol=0.0, atol=SAME_TCP_MM):
+        return {**provenance, "tcp": planned.get("tcp")}
+    return provenance
 
 
 class _Run:

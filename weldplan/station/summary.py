@@ -307,7 +307,7 @@ def robot_rows(rr: Any, build: Any) -> list[tuple[str, str]]:
             "robot route",
             f"{rr.n_ok} / {len(rr.status)} welds, {len(rr.flips)} branch flip(s), "
             f"{len(rr.replanned)} leg(s) re-planned in joint space, collision-free "
-            f"{rr.stats.get('collision_free', 'not checked')}"
+            f"{rr.stats.get('collision_free', 'not checked')} ({floor_words(rr.stats)})"
             + (f"; {len(miss)} weld(s) not in the program (exit code 3)" if miss else ""),
         ),
         *miss,
@@ -327,6 +327,18 @@ def robot_rows(rr: Any, build: Any) -> list[tuple[str, str]]:
             f"{build.tcp_deviation:.2f} mm off the linear moves' lines",
         ),
     ]
+
+
+def floor_words(stats: dict[str, Any]) -> str:
+    """What the robot route was checked against, the floor said: the floor it names
+    (``stats["floor_z"]``, mm), or that none was given. A searched base without a floor stands on
+    the part's lowest point, where the part may not stand on the floor (a fixture): no floor is
+    known there and none is checked (docs/robot-route.md, "The robot against itself and the
+    floor"); ``--floor-z`` or the station's ``floor_z`` gives one."""
+    z = stats.get("floor_z")
+    if z is None:
+        return "part, self-collision; no floor given, none checked: --floor-z gives one"
+    return f"part, self-collision, the floor at z {z:.0f} mm"
 
 
 def _walk_rows(rr: Any) -> list[tuple[str, str]]:
