@@ -26,15 +26,16 @@ from weldplan.multi.schedule import Interlock
 def build():
     from weldplan.robot.payload import urdf_payload
     from weldplan.robot.program import robot_program
+    from weldplan.robot.settings import ProgramSettings, ToolOnRobot
 
     robot = shared_robot()
     Tft, gun = gun_tcp(robot)
     route, Q = box_joint_route(robot, Tft)
     mass, cog = urdf_payload(gun)
+    tool = ToolOnRobot(Tft, mass=mass, cog=(robot.mount @ np.r_[cog, 1.0])[:3])
     return robot_program(
-        route, Q, robot, Tft, part=box_part(), tool_mass=mass,
-        tool_cog=(robot.mount @ np.r_[cog, 1.0])[:3], weld_time=0.5,
-    )  # fmt: skip
+        route, Q, robot, tool, part=box_part(), settings=ProgramSettings(weld_time=0.5)
+    )
 
 
 def _programs(build):
