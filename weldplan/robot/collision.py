@@ -365,7 +365,12 @@ class RobotCollision:
                 return [Hit(0, 0.0, "?", 0.0)]
             return []
         Z = np.zeros(ns, dtype=bool) if zone is None else np.asarray(zone, dtype=bool)
-        use = np.ones(ns, dtype=bool) if only is None else np.asarray(only, dtype=bool)
+        use = np.ones(ns, dtype=bool) if only is None else np.array(only, dtype=bool)
+        # motions this checker proved free before (the final path's check repeats the first
+        # check's free motions and the detours' own): the same motion, the same verdict
+        memo = self._free_motions()
+        keys = [Q[i].tobytes() + Q[i + 1].tobytes() + bytes([bool(Z[i])]) for i in range(ns)]
+        use &= np.array([k not in memo for k in keys], dtype=bool)
         dq = np.abs(np.diff(Q, axis=0))  # (ns, 6)
         hits: list[Hit] = []
         for zflag in (False, True):
@@ -392,7 +397,18 @@ class RobotCollision:
         free = np.setdiff1d(np.flatnonzero(use), [h.segment for h in hits])
         for s, t, pair, d in self.selfcheck.motions(self.robot, Q, free, first_only=first_only):
             hits.append(Hit(s, t, pair, d))
+        if not first_only:  # every motion asked was checked: the ones not hit are free
+            memo.update(keys[i] for i in np.setdiff1d(free, [h.segment for h in hits]))
         return sorted(hits, key=lambda h: h.segment)
+
+    def _free_motions(self) -> set[bytes]:
+        """The motions :meth:`path_hits` proved free at this checker's base (rows' bytes and the
+        zone flag; kept with the shared structures, one set per base: a :meth:`with_robot`
+        copy at another base has its own)."""
+        key = ("free_motions", self.robot.base.tobytes())
+        if key not in self._shared:
+            self._shared[key] = set()
+        return self._shared[key]  # type: ignore[return-value]
 
     def _sphere_level(
         self, Q: NDArray, seg: NDArray[np.int64], D: NDArray, bodies: list[Body]
