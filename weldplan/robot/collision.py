@@ -47,6 +47,7 @@ from __future__ import annotations
 
 import copy
 import logging
+import weakref
 from dataclasses import dataclass, field
 
 import fcl
@@ -139,6 +140,22 @@ class Hit:
     distance: float
 
 
+#: structures that depend on a part alone (its exact distance, its distance table), shared by
+#: every checker of it: by the part object's id and content hash (trimesh's, changed by any
+#: edit of the mesh), an entry dropped when its part is collected
+_BY_PART: dict[tuple[int, int], dict[str, object]] = {}
+
+
+def _of_part(part: trimesh.Trimesh) -> dict[str, object]:
+    """The shared structures of ``part`` (see :data:`_BY_PART`), an empty dict at first."""
+    key = (id(part), hash(part))
+    got = _BY_PART.get(key)
+    if got is None:
+        got = _BY_PART[key] = {}
+        weakref.finalize(part, _BY_PART.pop, key, None)
+    return got
+
+
 class RobotCollision:
     """Collision checks of a robot (and its tool) against a part (module docstring).
 
@@ -173,7 +190,10 @@ class RobotCollision:
         self.robot = robot
         self.part = part
         self.floor_z = None if floor_z is None else float(floor_z)
-        self.distance = SurfaceDistance(part)
+        by_part = _of_part(part)
+        if "distance" not in by_part:
+            by_part["distance"] = SurfaceDistance(part)
+        self.distance = by_part["distance"]
         # the part's derived structures, shared with every with_robot copy (made before or after
         # they are built): the distance table is filled lazily, and a table per copy refilled
         # the same blocks once for each base candidate of a search
@@ -195,10 +215,15 @@ class RobotCollision:
     @property
     def bound(self) -> DistanceBound:
         """The part's distance table (:class:`~weldplan.geometry.distbound.DistanceBound`, built on
-        first use and shared by all :meth:`with_robot` copies)."""
+        first use and shared by all :meth:`with_robot` copies and every other checker of the same
+        part (:func:`_of_part`): it depends on the part alone, and a station's reach test, joint
+        route and program each filled the same blocks of their own)."""
         if "bound" not in self._shared:
-            lo, hi = np.asarray(self.part.bounds, dtype=np.float64)
-            self._shared["bound"] = DistanceBound(self.distance, lo, hi)
+            by_part = _of_part(self.part)
+            if "bound" not in by_part:
+                lo, hi = np.asarray(self.part.bounds, dtype=np.float64)
+                by_part["bound"] = DistanceBound(self.distance, lo, hi)
+            self._shared["bound"] = by_part["bound"]
         return self._shared["bound"]  # type: ignore[return-value]
 
     def _clear(self, points: NDArray[np.float64], need: ArrayLike) -> NDArray[np.bool_]:
