@@ -201,15 +201,24 @@ class RobotCollision:
         self.part_obj = fcl.CollisionObject(bvh(part.vertices, part.faces), fcl.Transform())
         self.crops = PartCrops(part.vertices, part.faces, self.part_obj)
         self.flange_tcp = np.eye(4) if flange_tcp is None else np.asarray(flange_tcp, float)
-        links = [self._body(lk.name, lk.index, lk.vertices, lk.faces) for lk in robot.links]
+        # the bodies depend on the robot model and the tool alone: built once for every checker
+        # of them (kept on the robot's and the tool's caches; a with_robot copy shares them too)
+        if "collision_links" not in robot._cache:
+            robot._cache["collision_links"] = [
+                self._body(lk.name, lk.index, lk.vertices, lk.faces) for lk in robot.links
+            ]
+        links = robot._cache["collision_links"]
         self.zone_bodies = list(links)
         self._links = links
         self._tool = tool
         if tool is not None:
-            vz, fz = tool.outside_zone(contact_radius)
-            self.zone_bodies.append(
-                self._body("tool", 6, self._on_link6(vz), fz, TOOL_SPHERE_CELL_MM)
-            )
+            key = ("robot_zone_body", self._mount_key(), float(contact_radius))
+            if key not in tool._cache:
+                vz, fz = tool.outside_zone(contact_radius)
+                tool._cache[key] = self._body(
+                    "tool", 6, self._on_link6(vz), fz, TOOL_SPHERE_CELL_MM
+                )
+            self.zone_bodies.append(tool._cache[key])
         self.radii_zone = self._motion_radii(self.zone_bodies)
 
     @property
@@ -263,6 +272,10 @@ class RobotCollision:
         other.robot = robot
         return other
 
+    def _mount_key(self) -> bytes:
+        """The tool's mounting on the last link (``tip @ flange_tcp``), for the tool's cache."""
+        return (self.robot.tip @ self.flange_tcp).tobytes()
+
     def _on_link6(self, v: NDArray[np.float64]) -> NDArray[np.float64]:
         """Tool vertices (TCP frame, mm) in the last link's frame."""
         T6 = self.robot.tip @ self.flange_tcp
@@ -274,8 +287,13 @@ class RobotCollision:
         if not hasattr(self, "_bodies"):
             full = list(self._links)
             if self._tool is not None:
-                v = self._on_link6(self._tool.vertices)
-                full.append(self._body("tool", 6, v, self._tool.faces, TOOL_SPHERE_CELL_MM))
+                key = ("robot_whole_body", self._mount_key())
+                if key not in self._tool._cache:
+                    v = self._on_link6(self._tool.vertices)
+                    self._tool._cache[key] = self._body(
+                        "tool", 6, v, self._tool.faces, TOOL_SPHERE_CELL_MM
+                    )
+                full.append(self._tool._cache[key])
             self._bodies = full
             self.radii_full = self._motion_radii(full)
         return self._bodies
