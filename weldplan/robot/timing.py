@@ -271,24 +271,46 @@ def _gridpoints(path: Any, s_way: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.unique(np.concatenate([grid, knots[-1:], s_way]))
 
 
+#: toppra's constraints per pair of limits (:func:`_limits`)
+_LIMITS: dict[tuple[bytes, bytes], tuple[Any, Any]] = {}
+
+
+def _limits(velocity: NDArray, acceleration: NDArray) -> list[Any]:
+    """toppra's joint velocity and acceleration constraints of these limits ``(d,)`` (rad/s,
+    rad/s^2), built once per pair of limits: they hold no state of a path (toppra asks them per
+    path and grid), and a route's hundred segments built the same two, with their checks and
+    format strings, a hundred times."""
+    v = np.asarray(velocity, dtype=np.float64)
+    a = np.asarray(acceleration, dtype=np.float64)
+    key = (v.tobytes() + bytes(str(v.shape), "ascii"), a.tobytes() + bytes(str(a.shape), "ascii"))
+    got = _LIMITS.get(key)
+    if got is None:
+        constraint = _toppra().constraint
+        got = (
+            constraint.JointVelocityConstraint(v),
+            constraint.JointAccelerationConstraint(
+                np.column_stack([-a, a]),
+                discretization_scheme=constraint.DiscretizationType.Interpolation,
+            ),
+        )
+        if len(_LIMITS) >= 16:
+            _LIMITS.clear()
+        _LIMITS[key] = got
+    return list(got)
+
+
 def _time_segment(
     q: NDArray[np.float64], velocity: NDArray, acceleration: NDArray, tolerance: float
 ):
     """Rest-to-rest TOPP-RA over ``q (k, d)``: ``(at, arrival times (k,), deviation,
     inserted)``; ``at(t (m,)) -> (m, d)`` joint values at times ``t`` s."""
     ta = _toppra()
-    algo, constraint = ta.algorithm, ta.constraint
+    algo = ta.algorithm
     ParameterizationReturnCode = ta.algorithm.algorithm.ParameterizationReturnCode
 
     path, s_way, dev, inserted = _spline_path(q, tolerance)
     grid = _gridpoints(path, s_way)
-    cons = [
-        constraint.JointVelocityConstraint(velocity),
-        constraint.JointAccelerationConstraint(
-            np.column_stack([-acceleration, acceleration]),
-            discretization_scheme=constraint.DiscretizationType.Interpolation,
-        ),
-    ]
+    cons = _limits(velocity, acceleration)
     inst = algo.TOPPRA(cons, path, gridpoints=grid, parametrizer="ParametrizeConstAccel")
     inst.compute_parameterization(0.0, 0.0)
     data = inst.problem_data
