@@ -33,9 +33,17 @@ def scene():
     return robot, Tft, Q, RobotCollision(robot, part, shared_spot_gun(), Tft)
 
 
+def _fresh(chk):
+    """A checker like ``chk`` that has checked nothing yet (``path_hits`` keeps the motions a
+    checker proved free, and answers them from memory)."""
+    return RobotCollision(chk.robot, chk.part, chk._tool, chk.flange_tcp, floor_z=chk.floor_z)
+
+
 def _one_by_one(chk, Q, zone):
-    """The hits of ``Q``'s motions, each checked alone (nothing carried)."""
+    """The hits of ``Q``'s motions, each checked alone (nothing carried, nothing remembered:
+    a fresh checker like ``chk``)."""
     out = []
+    chk = _fresh(chk)
     for k in range(len(Q) - 1):
         hits = chk.path_hits(Q[k : k + 2], zone[k : k + 1])
         out += [type(h)(k, h.t, h.body, h.distance) for h in hits]
@@ -99,7 +107,10 @@ def test_linear_moves_checked_together_as_one_by_one(scene):
     qa = np.concatenate([Q[:-1], Q[:0:-1]])
     qb = np.concatenate([Q[1:], Q[-2::-1]])
     together = check_linear_moves(robot, Tft, qa, qb, checker=chk)
-    alone = [check_linear_moves(robot, Tft, a, b, checker=chk) for a, b in zip(qa, qb, strict=True)]
+    fresh = _fresh(chk)
+    alone = [
+        check_linear_moves(robot, Tft, a, b, checker=fresh) for a, b in zip(qa, qb, strict=True)
+    ]
     assert together.reason == tuple(c.reason[0] for c in alone)
     assert together.samples.tolist() == [int(c.samples[0]) for c in alone]
     assert together.reason[1] == together.reason[4] == "collision"  # through the block
@@ -149,8 +160,9 @@ def test_a_probe_ends_blocked_motions_early_with_the_same_verdicts(scene, monkey
     def run(probe):
         monkeypatch.setattr(collision, "PROBE_AFTER", probe)
         monkeypatch.setattr(selfcollision, "PROBE_AFTER", probe)
+        fresh = _fresh(chk)  # nothing remembered from the other run
         calls = _counting(monkeypatch, nearpart, "fcl_distance")
-        hits = [chk.path_hits(path[k : k + 2])[:1] for k in range(len(path) - 1)]
+        hits = [fresh.path_hits(path[k : k + 2])[:1] for k in range(len(path) - 1)]
         n = len(calls)
         monkeypatch.undo()
         return [(h[0].body if h else None) for h in hits], n
@@ -160,3 +172,33 @@ def test_a_probe_ends_blocked_motions_early_with_the_same_verdicts(scene, monkey
     assert probed == crept
     assert probed.count(None) >= 2 and len(probed) - probed.count(None) >= 4
     assert n_probed < 0.5 * n_crept
+
+
+def test_a_motion_proved_free_is_not_checked_again_at_that_base(scene, monkeypatch):
+    """path_hits remembers the motions it proved free (per base): asked again, the same hits
+    and no FCL distance for the free motions; the same checker at another base remembers
+    nothing of them; a motion found blocked is checked again (never remembered)."""
+    robot, Tft, Q, chk = scene
+    chk = _fresh(chk)
+    path = Q[1] + np.linspace(0.0, 1.0, 61)[:, None] * (Q[2] - Q[1])  # through the block
+    Z = np.zeros(len(path) - 1, dtype=bool)
+    first = chk.path_hits(path, Z)
+    assert first, "the block stops the path"
+    free = np.setdiff1d(np.arange(len(path) - 1), [h.segment for h in first])
+    calls = _counting(monkeypatch, nearpart, "fcl_distance")
+    assert chk.path_hits(path, Z) == first
+    again = len(calls)
+    only = np.zeros(len(path) - 1, dtype=bool)
+    only[free] = True
+    assert chk.path_hits(path, Z, only=only) == []
+    assert len(calls) == again  # the free motions alone: nothing asked of FCL
+    moved = chk.with_robot(robot.with_base(robot.base @ _shift(1.0)))
+    assert moved.path_hits(path, Z, only=only) == _fresh(moved).path_hits(path, Z, only=only)
+    assert len(calls) > again  # another base: checked afresh
+
+
+def _shift(dz):
+    """A 4x4 translation by ``dz`` mm along z."""
+    T = np.eye(4)
+    T[2, 3] = dz
+    return T

@@ -151,3 +151,35 @@ def test_trajectory_csv_refuses_times_that_would_repeat():
     )  # fmt: skip
     with pytest.raises(PlanningError, match="samples 1 and 2"):
         trajectory_csv_text(fake)
+
+
+def test_toppra_is_imported_without_pyplot_and_its_plots_still_load_it() -> None:
+    """timing's toppra import leaves matplotlib.pyplot unloaded (toppra's own module-level
+    ``import matplotlib.pyplot`` is deferred), and both toppra's ``plt`` and a later ordinary
+    import get the real pyplot. In a fresh process: this one may have loaded pyplot already."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    import weldplan
+
+    code = (
+        "import sys\n"
+        "from weldplan.robot.timing import _toppra, time_route\n"
+        "import numpy as np\n"
+        "q = np.array([[0.0] * 6, [0.5] * 6])\n"
+        "t = time_route(q, np.ones(6), np.ones(6), weld_rows=[0, 1])\n"
+        "assert t.total > 0\n"
+        "assert 'matplotlib.pyplot' not in sys.modules\n"
+        "ta = _toppra()\n"
+        "import matplotlib\n"
+        "matplotlib.use('Agg')\n"
+        "import matplotlib.pyplot as plt\n"
+        "assert ta.algorithm.algorithm.plt.figure is plt.figure\n"
+        "assert sys.modules['matplotlib.pyplot'] is plt\n"
+    )
+    root = str(Path(weldplan.__file__).parent.parent)  # this weldplan, not another checkout's
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([root, os.environ.get("PYTHONPATH", "")])}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+    assert out.returncode == 0, out.stderr

@@ -203,3 +203,39 @@ def test_on_the_demo_part_gun_motions_the_fast_check_passes_keep_the_clearance(d
         pos, rots = interpolate(p0, q0, p1, q1, np.linspace(0.0, 1.0, 21))
         assert min(chk.slack(a, b, spots) for a, b in zip(pos, rots, strict=True)) >= 0.0
     assert passed > 5
+
+
+def test_slack_answers_a_repeated_query_from_memory_and_tells_the_crops_apart(monkeypatch):
+    """SweepChecker.slack keeps its answers: asked again (same pose, same spots, same part
+    object) it asks FCL nothing and says the same; with other spots, or against a focus' crop,
+    it measures afresh, and every answer is a fresh checker's."""
+    import fcl
+
+    part = _sheet_and_rib()
+    fork = _fork()
+    chk = SweepChecker(part, fork, clearance=5.0, contact_radius=20.0)
+    rng = np.random.default_rng(11)
+    P, Q = _random_poses(rng, part.bounds[0] - 50, part.bounds[1] + 50, 30)
+    spots = np.array([[30.0, -100, 0], [30, 100, 0]])
+    calls = []
+    real = fcl.distance
+
+    def spy(*a, **k):
+        calls.append(1)
+        return real(*a, **k)
+
+    monkeypatch.setattr(fcl, "distance", spy)
+    poses = [(p, quat_to_matrix(q)) for p, q in zip(P, Q, strict=True)]
+    first = [(chk.slack(p, R), chk.slack(p, R, spots)) for p, R in poses]
+    n = len(calls)
+    assert n >= 2 * len(poses)  # every one measured
+    assert [(chk.slack(p, R), chk.slack(p, R, spots)) for p, R in poses] == first
+    assert len(calls) == n  # from memory
+    fresh = SweepChecker(part, fork, clearance=5.0, contact_radius=20.0)
+    assert [(fresh.slack(p, R), fresh.slack(p, R, spots)) for p, R in poses] == first
+    chk.focus(P.min(axis=0), P.max(axis=0))  # every pose in the box: the crop answers
+    fresh.focus(P.min(axis=0), P.max(axis=0))
+    n = len(calls)
+    crop = [chk.slack(p, R, spots) for p, R in poses]
+    assert len(calls) > n  # another part object: measured afresh
+    assert crop == [fresh.slack(p, R, spots) for p, R in poses]

@@ -47,6 +47,7 @@ from __future__ import annotations
 
 import copy
 import logging
+import weakref
 from dataclasses import dataclass, field
 
 import fcl
@@ -146,6 +147,22 @@ class Hit:
     distance: float
 
 
+#: structures that depend on a part alone (its exact distance, its distance table), shared by
+#: every checker of it: by the part object's id and content hash (trimesh's, changed by any
+#: edit of the mesh), an entry dropped when its part is collected
+_BY_PART: dict[tuple[int, int], dict[str, object]] = {}
+
+
+def _of_part(part: trimesh.Trimesh) -> dict[str, object]:
+    """The shared structures of ``part`` (see :data:`_BY_PART`), an empty dict at first."""
+    key = (id(part), hash(part))
+    got = _BY_PART.get(key)
+    if got is None:
+        got = _BY_PART[key] = {}
+        weakref.finalize(part, _BY_PART.pop, key, None)
+    return got
+
+
 class RobotCollision:
     """Collision checks of a robot (and its tool) against a part (module docstring).
 
@@ -180,7 +197,10 @@ class RobotCollision:
         self.robot = robot
         self.part = part
         self.floor_z = None if floor_z is None else float(floor_z)
-        self.distance = SurfaceDistance(part)
+        by_part = _of_part(part)
+        if "distance" not in by_part:
+            by_part["distance"] = SurfaceDistance(part)
+        self.distance = by_part["distance"]
         # the part's derived structures, shared with every with_robot copy (made before or after
         # they are built): the distance table is filled lazily, and a table per copy refilled
         # the same blocks once for each base candidate of a search
@@ -188,24 +208,38 @@ class RobotCollision:
         self.part_obj = fcl.CollisionObject(bvh(part.vertices, part.faces), fcl.Transform())
         self.crops = PartCrops(part.vertices, part.faces, self.part_obj)
         self.flange_tcp = np.eye(4) if flange_tcp is None else np.asarray(flange_tcp, float)
-        links = [self._body(lk.name, lk.index, lk.vertices, lk.faces) for lk in robot.links]
+        # the bodies depend on the robot model and the tool alone: built once for every checker
+        # of them (kept on the robot's and the tool's caches; a with_robot copy shares them too)
+        if "collision_links" not in robot._cache:
+            robot._cache["collision_links"] = [
+                self._body(lk.name, lk.index, lk.vertices, lk.faces) for lk in robot.links
+            ]
+        links = robot._cache["collision_links"]
         self.zone_bodies = list(links)
         self._links = links
         self._tool = tool
         if tool is not None:
-            vz, fz = tool.outside_zone(contact_radius)
-            self.zone_bodies.append(
-                self._body("tool", 6, self._on_link6(vz), fz, TOOL_SPHERE_CELL_MM)
-            )
+            key = ("robot_zone_body", self._mount_key(), float(contact_radius))
+            if key not in tool._cache:
+                vz, fz = tool.outside_zone(contact_radius)
+                tool._cache[key] = self._body(
+                    "tool", 6, self._on_link6(vz), fz, TOOL_SPHERE_CELL_MM
+                )
+            self.zone_bodies.append(tool._cache[key])
         self.radii_zone = self._motion_radii(self.zone_bodies)
 
     @property
     def bound(self) -> DistanceBound:
         """The part's distance table (:class:`~weldplan.geometry.distbound.DistanceBound`, built on
-        first use and shared by all :meth:`with_robot` copies)."""
+        first use and shared by all :meth:`with_robot` copies and every other checker of the same
+        part (:func:`_of_part`): it depends on the part alone, and a station's reach test, joint
+        route and program each filled the same blocks of their own)."""
         if "bound" not in self._shared:
-            lo, hi = np.asarray(self.part.bounds, dtype=np.float64)
-            self._shared["bound"] = DistanceBound(self.distance, lo, hi)
+            by_part = _of_part(self.part)
+            if "bound" not in by_part:
+                lo, hi = np.asarray(self.part.bounds, dtype=np.float64)
+                by_part["bound"] = DistanceBound(self.distance, lo, hi)
+            self._shared["bound"] = by_part["bound"]
         return self._shared["bound"]  # type: ignore[return-value]
 
     def _clear(self, points: NDArray[np.float64], need: ArrayLike) -> NDArray[np.bool_]:
@@ -245,6 +279,10 @@ class RobotCollision:
         other.robot = robot
         return other
 
+    def _mount_key(self) -> bytes:
+        """The tool's mounting on the last link (``tip @ flange_tcp``), for the tool's cache."""
+        return (self.robot.tip @ self.flange_tcp).tobytes()
+
     def _on_link6(self, v: NDArray[np.float64]) -> NDArray[np.float64]:
         """Tool vertices (TCP frame, mm) in the last link's frame."""
         T6 = self.robot.tip @ self.flange_tcp
@@ -256,8 +294,13 @@ class RobotCollision:
         if not hasattr(self, "_bodies"):
             full = list(self._links)
             if self._tool is not None:
-                v = self._on_link6(self._tool.vertices)
-                full.append(self._body("tool", 6, v, self._tool.faces, TOOL_SPHERE_CELL_MM))
+                key = ("robot_whole_body", self._mount_key())
+                if key not in self._tool._cache:
+                    v = self._on_link6(self._tool.vertices)
+                    self._tool._cache[key] = self._body(
+                        "tool", 6, v, self._tool.faces, TOOL_SPHERE_CELL_MM
+                    )
+                full.append(self._tool._cache[key])
             self._bodies = full
             self.radii_full = self._motion_radii(full)
         return self._bodies
@@ -372,7 +415,12 @@ class RobotCollision:
                 return [Hit(0, 0.0, "?", 0.0)]
             return []
         Z = np.zeros(ns, dtype=bool) if zone is None else np.asarray(zone, dtype=bool)
-        use = np.ones(ns, dtype=bool) if only is None else np.asarray(only, dtype=bool)
+        use = np.ones(ns, dtype=bool) if only is None else np.array(only, dtype=bool)
+        # motions this checker proved free before (the final path's check repeats the first
+        # check's free motions and the detours' own): the same motion, the same verdict
+        memo = self._free_motions()
+        keys = [Q[i].tobytes() + Q[i + 1].tobytes() + bytes([bool(Z[i])]) for i in range(ns)]
+        use &= np.array([k not in memo for k in keys], dtype=bool)
         dq = np.abs(np.diff(Q, axis=0))  # (ns, 6)
         hits: list[Hit] = []
         for zflag in (False, True):
@@ -399,7 +447,18 @@ class RobotCollision:
         free = np.setdiff1d(np.flatnonzero(use), [h.segment for h in hits])
         for s, t, pair, d in self.selfcheck.motions(self.robot, Q, free, first_only=first_only):
             hits.append(Hit(s, t, pair, d))
+        if not first_only:  # every motion asked was checked: the ones not hit are free
+            memo.update(keys[i] for i in np.setdiff1d(free, [h.segment for h in hits]))
         return sorted(hits, key=lambda h: h.segment)
+
+    def _free_motions(self) -> set[bytes]:
+        """The motions :meth:`path_hits` proved free at this checker's base (rows' bytes and the
+        zone flag; kept with the shared structures, one set per base: a :meth:`with_robot`
+        copy at another base has its own)."""
+        key = ("free_motions", self.robot.base.tobytes())
+        if key not in self._shared:
+            self._shared[key] = set()
+        return self._shared[key]  # type: ignore[return-value]
 
     def _sphere_level(
         self, Q: NDArray, seg: NDArray[np.int64], D: NDArray, bodies: list[Body]

@@ -231,12 +231,17 @@ def score_bases(
     mins = np.full(c, -np.inf)
     if n == 0 or c == 0:
         return counts, mins
-    for i in np.flatnonzero(counts == counts.max()):
-        u = u_all[i]
+    top = np.flatnonzero(counts == counts.max())
+    # the usable branches of every leading candidate in one batch (the Jacobian and its SVD
+    # are taken matrix by matrix, so the values are those of one call per candidate)
+    idxs = [np.argwhere(u_all[i]) for i in top]
+    qs = [br.q[at[i, idx[:, 0]], idx[:, 1]] for i, idx in zip(top, idxs, strict=True)]
+    sizes = [len(q) for q in qs]
+    m_all = at_origin.manipulability(np.concatenate(qs)) if sum(sizes) else np.zeros(0)
+    m_each = np.split(m_all, np.cumsum(sizes)[:-1])
+    for i, idx, m in zip(top, idxs, m_each, strict=True):
         best = np.full(n, -np.inf)
-        if u.any():
-            idx = np.argwhere(u)
-            m = at_origin.manipulability(br.q[at[i, idx[:, 0]], idx[:, 1]])
+        if len(idx):
             np.maximum.at(best, idx[:, 0], m)
         if m_more is not None:
             best = np.where(served[i], best, np.where(got[i], m_more[i], -np.inf))

@@ -41,8 +41,11 @@ program with one ``v``-speed on every move would take if the robot had no accele
 
 from __future__ import annotations
 
+import importlib
 import logging
 import math
+import sys
+import types
 from dataclasses import dataclass
 from typing import Any
 
@@ -184,13 +187,47 @@ def check_weld_time(value: float) -> float:
     return v
 
 
+class _DeferredModule(types.ModuleType):
+    """Stands for a module not imported yet: its first attribute asked imports the module
+    (:func:`importlib.import_module`) and answers from it."""
+
+    def __getattr__(self, name: str) -> Any:
+        if sys.modules.get(self.__name__) is self:  # still standing in: not importable yet
+            raise AttributeError(name)
+        return getattr(importlib.import_module(self.__name__), name)
+
+
+def _toppra() -> Any:
+    """The ``toppra`` package, imported without loading ``matplotlib.pyplot``.
+
+    ``toppra.algorithm.algorithm`` imports pyplot at its top for its plotting helpers (about
+    0.45 s, most of toppra's import), which timing never calls. While toppra is imported, a
+    :class:`_DeferredModule` stands in ``sys.modules`` for pyplot, and is taken out at once:
+    toppra's ``plt`` imports the real pyplot on its first use, and anyone else's ``import
+    matplotlib.pyplot`` is the ordinary one.
+    """
+    name = "matplotlib.pyplot"
+    if "toppra.algorithm" in sys.modules or name in sys.modules:
+        import toppra
+
+        return toppra
+    stand_in = _DeferredModule(name)
+    sys.modules[name] = stand_in
+    try:
+        import toppra
+        import toppra.algorithm  # noqa: F401  (the module whose import wants pyplot)
+    finally:
+        if sys.modules.get(name) is stand_in:
+            del sys.modules[name]
+    return toppra
+
+
 def _spline_path(q: NDArray[np.float64], tolerance: float):
     """The spline through ``q (k, d)`` within ``tolerance`` of its polyline (module docstring).
 
     Returns ``(path, s_waypoints (k,), deviation, inserted)``.
     """
-    import toppra as ta
-
+    ta = _toppra()
     seg = np.linalg.norm(np.diff(q, axis=0), axis=1)
     s_way = np.concatenate([[0.0], np.cumsum(seg)])
     if len(q) == 2:  # a straight segment: the spline through two points is the line itself
@@ -234,24 +271,46 @@ def _gridpoints(path: Any, s_way: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.unique(np.concatenate([grid, knots[-1:], s_way]))
 
 
+#: toppra's constraints per pair of limits (:func:`_limits`)
+_LIMITS: dict[tuple[bytes, bytes], tuple[Any, Any]] = {}
+
+
+def _limits(velocity: NDArray, acceleration: NDArray) -> list[Any]:
+    """toppra's joint velocity and acceleration constraints of these limits ``(d,)`` (rad/s,
+    rad/s^2), built once per pair of limits: they hold no state of a path (toppra asks them per
+    path and grid), and a route's hundred segments built the same two, with their checks and
+    format strings, a hundred times."""
+    v = np.asarray(velocity, dtype=np.float64)
+    a = np.asarray(acceleration, dtype=np.float64)
+    key = (v.tobytes() + bytes(str(v.shape), "ascii"), a.tobytes() + bytes(str(a.shape), "ascii"))
+    got = _LIMITS.get(key)
+    if got is None:
+        constraint = _toppra().constraint
+        got = (
+            constraint.JointVelocityConstraint(v),
+            constraint.JointAccelerationConstraint(
+                np.column_stack([-a, a]),
+                discretization_scheme=constraint.DiscretizationType.Interpolation,
+            ),
+        )
+        if len(_LIMITS) >= 16:
+            _LIMITS.clear()
+        _LIMITS[key] = got
+    return list(got)
+
+
 def _time_segment(
     q: NDArray[np.float64], velocity: NDArray, acceleration: NDArray, tolerance: float
 ):
     """Rest-to-rest TOPP-RA over ``q (k, d)``: ``(at, arrival times (k,), deviation,
     inserted)``; ``at(t (m,)) -> (m, d)`` joint values at times ``t`` s."""
-    import toppra.algorithm as algo
-    import toppra.constraint as constraint
-    from toppra.algorithm.algorithm import ParameterizationReturnCode
+    ta = _toppra()
+    algo = ta.algorithm
+    ParameterizationReturnCode = ta.algorithm.algorithm.ParameterizationReturnCode
 
     path, s_way, dev, inserted = _spline_path(q, tolerance)
     grid = _gridpoints(path, s_way)
-    cons = [
-        constraint.JointVelocityConstraint(velocity),
-        constraint.JointAccelerationConstraint(
-            np.column_stack([-acceleration, acceleration]),
-            discretization_scheme=constraint.DiscretizationType.Interpolation,
-        ),
-    ]
+    cons = _limits(velocity, acceleration)
     inst = algo.TOPPRA(cons, path, gridpoints=grid, parametrizer="ParametrizeConstAccel")
     inst.compute_parameterization(0.0, 0.0)
     data = inst.problem_data

@@ -65,6 +65,9 @@ DEFAULT_MIN_STEP = 0.5
 #: mm of tool motion between the poses at which a motion is first tested for contact
 #: (:meth:`SweepChecker.first_touch`)
 TOUCH_GRID_MM = 5.0
+#: answers :meth:`SweepChecker.slack` keeps before it starts its memo afresh (about 200 bytes
+#: each)
+SLACK_MEMO_SIZE = 200_000
 #: mm: the zone's distance to the part outside a spot's sphere is measured up to this much
 #: (:meth:`SweepChecker.slack`); the zone needs only not touch, so a cap costs only step length
 ZONE_CAP_MM = 30.0
@@ -242,6 +245,8 @@ class SweepChecker:
         self._n_focus = 0
         #: crops built by :meth:`focus`
         self.crops_built = 0
+        #: :meth:`slack`'s answers, by pose, exempt spots and part object (the focus' number)
+        self._slack_memo: dict[tuple[bytes, bytes, int], float] = {}
 
     def _model(self, name: str) -> fcl.CollisionObject:
         """The python-fcl object of the whole ``"part"`` or the whole ``"tool"``, built once."""
@@ -329,12 +334,32 @@ class SweepChecker:
         p = np.asarray(p, dtype=np.float64)
         if focused is None:
             focused = self._inside(p)
-        part = self._focus[2] if focused and self._focus is not None else self._model("part")
+        on_focus = focused and self._focus is not None
+        part = self._focus[2] if on_focus else self._model("part")
         if part is None:
             return math.inf
-        tf = fcl.Transform(np.asarray(R, dtype=np.float64), p)
-        req = fcl.DistanceRequest()
+        R = np.ascontiguousarray(R, dtype=np.float64)
         ex = None if exempt is None else np.asarray(exempt, dtype=np.float64).reshape(-1, 3)
+        # the same pose, spots and part object: the same FCL answer (a quarter of the demo's
+        # samples are asked again: exits re-checked by the transitions, re-plans' paths)
+        key = (
+            p.tobytes() + R.tobytes(),
+            b"" if ex is None else ex.tobytes(),
+            self._focus[4] if on_focus else 0,  # type: ignore[index]
+        )
+        hit = self._slack_memo.get(key)
+        if hit is None:
+            if len(self._slack_memo) >= SLACK_MEMO_SIZE:
+                self._slack_memo.clear()
+            hit = self._slack_memo[key] = self._slack(p, R, ex, part)
+        return hit
+
+    def _slack(
+        self, p: NDArray[np.float64], R: NDArray[np.float64], ex: NDArray | None, part: Any
+    ) -> float:
+        """:meth:`slack` against the part object ``part``, without the memo."""
+        tf = fcl.Transform(R, p)
+        req = fcl.DistanceRequest()
         if ex is None or len(ex) == 0:
             whole = self._model("tool")
             whole.setTransform(tf)

@@ -146,7 +146,7 @@ class FastSweep:
         if L <= soft_range and any(soft):
             soft = (True, True)
         dp = float(np.linalg.norm(np.asarray(p1, dtype=np.float64) - np.asarray(p0, np.float64)))
-        R0, R1 = at([0.0])[1][0], at([1.0])[1][0]
+        R0, R1 = at([0.0, 1.0])[1]  # one call: scipy's rotations are the same bits batched
         theta = math.acos(min(1.0, max(-1.0, (np.trace(R0.T @ R1) - 1) / 2))) + THETA_PAD
         run = _Cover(at, L, (dp, theta), exempt, soft, soft_range, focused, cap, deadline)
         self._cover(run)
