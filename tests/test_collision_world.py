@@ -198,3 +198,23 @@ def test_pairs_an_srdf_disables_are_allowed_and_a_wrong_link_is_refused(tmp_path
     bad = srdf.replace('link2="link_4"', 'link2="link_9"')
     with pytest.raises(InputError, match=r"kr150r3100_2\.srdf.*line 3.*link2.*'link_9'"):
         _ = RobotCollision(_robot_copy(tmp_path / "b", urdf, bad), FAR_PART).world
+
+
+def test_the_tool_stage_registers_its_tool_and_part_in_a_world():
+    """SweepChecker's world: its own FCL objects, the one pair checked with the contact zone
+    exempt; the world's query agrees with FCL on a pose through the plate and one above it."""
+    from weldplan.tool import arc_torch
+    from weldplan.tool.sweep import SweepChecker
+
+    plate = make_plate([0.0, 0.0, 0.0], 2, size=200.0)
+    chk = SweepChecker(plate, arc_torch(), clearance=5.0, contact_radius=20.0)
+    world = chk.world
+    assert world.names == ("part", "tool") and world.body("tool").obj is chk._model("tool")
+    assert world.allowed("tool", "part") is None and world.zone("tool", "part") == "contact zone"
+    assert world.pairs_to_check() == (("tool", "part"),)
+    assert "tool/part: contact zone (a sphere of 20 mm" in world.describe()
+    down = np.diag([1.0, -1.0, -1.0, 1.0])  # TCP z down: the torch above the TCP
+    below, above = down.copy(), down.copy()
+    below[2, 3], above[2, 3] = -50.0, 50.0  # the TCP 50 mm under the plate: the torch through it
+    assert world.contacts({"tool": below, "part": np.eye(4)}) == (("tool", "part"),)
+    assert world.contacts({"tool": above}) == ()

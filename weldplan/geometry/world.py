@@ -73,7 +73,8 @@ class WorldBody:
         The index of the robot link frame it rides on (0 = the root link), ``None`` when it is
         fixed in the cell (the part, the floor).
     link
-        The name of that link (``""`` when fixed).
+        The name of that link; for a body that moves but not on a robot frame, what it moves
+        with (``"the TCP pose"``); ``""`` when fixed.
     shape
         Words for its geometry in :meth:`CollisionWorld.describe` (``"BVH, 1204 triangles"``).
     data
@@ -90,8 +91,11 @@ class WorldBody:
     data: Any = field(default=None, repr=False)
 
     def moves_with(self) -> str:
-        """``"link_6 (frame 6)"``, or ``"fixed"``."""
-        return "fixed" if self.frame is None else f"{self.link} (frame {self.frame})"
+        """``"link_6 (frame 6)"``; ``link`` alone for a body that moves but not on a robot
+        frame (a tool planned in SE(3)); ``"fixed"``."""
+        if self.frame is None:
+            return self.link or "fixed"
+        return f"{self.link} (frame {self.frame})"
 
 
 @dataclass(frozen=True, eq=False)
