@@ -125,10 +125,29 @@ class CollisionWorld:
 
     bodies: tuple[WorldBody, ...]
     allowed_pairs: Mapping[frozenset[str], Exemption]
-    zones: Mapping[frozenset[str], Exemption] = field(
-        default_factory=lambda: MappingProxyType({})
-    )
-    _index: Mapping[str, int] = field(default_factory=lambda: MappingProxyType({}), repr=False)
+    zones: Mapping[frozenset[str], Exemption] = field(default_factory=lambda: MappingProxyType({}))
+    _index: Mapping[str, int] = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        """Check the bodies and the pairs (:meth:`of`); the exemptions become read-only
+        mappings keyed by :func:`pair_key`."""
+        bodies = tuple(self.bodies)
+        index: dict[str, int] = {}
+        for i, b in enumerate(bodies):
+            if b.name in index:
+                raise ValueError(f"two bodies of the collision world are named {b.name!r}")
+            if b.kind not in BODY_KINDS:
+                raise ValueError(f"body {b.name!r}: kind {b.kind!r} is not one of {BODY_KINDS}")
+            index[b.name] = i
+        a = _exemptions(self.allowed_pairs, index)
+        z = _exemptions(self.zones, index)
+        both = set(a) & set(z)
+        if both:
+            raise ValueError(f"pairs both allowed and zoned: {sorted(map(sorted, both))}")
+        object.__setattr__(self, "bodies", bodies)
+        object.__setattr__(self, "allowed_pairs", MappingProxyType(a))
+        object.__setattr__(self, "zones", MappingProxyType(z))
+        object.__setattr__(self, "_index", MappingProxyType(index))
 
     @classmethod
     def of(
@@ -147,20 +166,7 @@ class CollisionWorld:
             Two bodies of one name, an unknown kind, a pair naming an unknown body or one body
             twice, a reason not in :data:`REASONS`, or a pair both allowed and zoned.
         """
-        bodies = tuple(bodies)
-        index: dict[str, int] = {}
-        for i, b in enumerate(bodies):
-            if b.name in index:
-                raise ValueError(f"two bodies of the collision world are named {b.name!r}")
-            if b.kind not in BODY_KINDS:
-                raise ValueError(f"body {b.name!r}: kind {b.kind!r} is not one of {BODY_KINDS}")
-            index[b.name] = i
-        a = _exemptions(allowed or {}, index)
-        z = _exemptions(zones or {}, index)
-        both = set(a) & set(z)
-        if both:
-            raise ValueError(f"pairs both allowed and zoned: {sorted(map(sorted, both))}")
-        return cls(bodies, MappingProxyType(a), MappingProxyType(z), MappingProxyType(index))
+        return cls(tuple(bodies), allowed or {}, zones or {})  # type: ignore[arg-type]
 
     # ------------------------------------------------------------------ lookups
     @property

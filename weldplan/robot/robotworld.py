@@ -322,12 +322,8 @@ def robot_world(
             if b.frame == 0:
                 allowed[(b.name, FLOOR)] = Exemption("on the floor", "the root link")
     world = CollisionWorld.of(world_bodies, allowed, zones)
-    log.debug(
-        "collision world: %d of %d robot body pairs checked; allowed: %s",
-        len(world.pairs_to_check(ROBOT_KINDS)),
-        len(bodies) * (len(bodies) - 1) // 2,
-        ", ".join(AllowedCollisions.of(world).describe()),
-    )
+    if log.isEnabledFor(logging.DEBUG):
+        log.debug("%s", world.describe())
     return world
 
 
