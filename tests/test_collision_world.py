@@ -72,6 +72,8 @@ def test_contacts_name_the_touching_pairs_and_skip_the_allowed_ones():
 def test_a_malformed_world_is_refused(bodies, allowed, words):
     with pytest.raises(ValueError, match=words):
         CollisionWorld.of([_box(n, k, 0) for n, k in bodies], allowed)
+    with pytest.raises(ValueError, match=words):  # made directly: the same checks
+        CollisionWorld(tuple(_box(n, k, 0) for n, k in bodies), allowed)
     world = CollisionWorld.of([_box("a", "link", 0)])
     with pytest.raises(ValueError, match="no body 'z'"):
         world.allowed("a", "z")
