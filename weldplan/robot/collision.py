@@ -40,7 +40,9 @@ matrix does not exempt (the whole tool against the links away from its mount, li
 links not adjacent in the chain) and, when the cell's floor is known (``floor_z``), for every body
 but the root link against the floor; with the same proof (bounding spheres, then FCL
 conservative advancement, closer than 1 mm counts). A hit names the pair (``"tool/link_3"``,
-``"link_2/floor"``).
+``"link_2/floor"``). The links, the whole tool, the part and the floor are one collision world of
+named bodies with the exempt pairs as data (:attr:`RobotCollision.world`,
+:mod:`weldplan.robot.robotworld`), which the self check reads.
 """
 
 from __future__ import annotations
@@ -58,6 +60,7 @@ from numpy.typing import ArrayLike, NDArray
 from weldplan.geometry.checker import advance
 from weldplan.geometry.distbound import DistanceBound
 from weldplan.geometry.spherecover import sphere_cover
+from weldplan.geometry.world import CollisionWorld, WorldBody
 from weldplan.robot.model import Robot
 from weldplan.robot.motionbound import (
     PROBE_AFTER,
@@ -67,7 +70,8 @@ from weldplan.robot.motionbound import (
     touches_ahead,
 )
 from weldplan.robot.nearpart import AlongMotion, PartCrops, fcl_distance, fcl_tf
-from weldplan.robot.selfcollision import SelfCheck, allowed_collisions
+from weldplan.robot.robotworld import WorldSettings, floor_box, robot_world
+from weldplan.robot.selfcollision import SelfCheck
 from weldplan.tool.model import Tool, bvh
 
 log = logging.getLogger(__name__)
@@ -197,6 +201,7 @@ class RobotCollision:
         self.robot = robot
         self.part = part
         self.floor_z = None if floor_z is None else float(floor_z)
+        self.contact_radius = float(contact_radius)
         by_part = _of_part(part)
         if "distance" not in by_part:
             by_part["distance"] = SurfaceDistance(part)
@@ -259,17 +264,35 @@ class RobotCollision:
         return ok
 
     @property
-    def selfcheck(self) -> SelfCheck:
-        """The self-collision and floor checks of the links and the whole tool
-        (:class:`~weldplan.robot.selfcollision.SelfCheck`; its allowed collision matrix computed
-        on first use, once per robot and tool)."""
-        key = ("self", self.floor_z)
+    def world(self) -> CollisionWorld:
+        """The collision world (:func:`~weldplan.robot.robotworld.robot_world`): the links,
+        the whole tool, the part and, when known, the floor, with the allowed pairs and the
+        tool's contact zone against the part as data; built on first use, once per robot, tool
+        and floor (shared by every :meth:`with_robot` copy)."""
+        key = ("world", self.floor_z)
         if key not in self._shared:
             bodies = self.bodies
-            acm = allowed_collisions(self.robot, bodies)
             t = np.linalg.norm(self.robot.origins[:, :3, 3], axis=1)
             reach = float(t[0] + self.radii_full[0].max())
-            self._shared[key] = SelfCheck(bodies, self.radii_full, acm, self.floor_z, reach)
+            n = len(self.part.faces)
+            part = WorldBody("part", "part", self.part_obj, shape=f"BVH, {n} triangles")
+            settings = WorldSettings(
+                part=part,
+                floor=None if self.floor_z is None else floor_box(reach),
+                floor_z=self.floor_z,
+                contact_radius=None if self._tool is None else self.contact_radius,
+            )
+            self._shared[key] = robot_world(self.robot, bodies, settings)
+        return self._shared[key]  # type: ignore[return-value]
+
+    @property
+    def selfcheck(self) -> SelfCheck:
+        """The self-collision and floor checks of the links and the whole tool
+        (:class:`~weldplan.robot.selfcollision.SelfCheck`), reading its bodies and the pairs it
+        checks from :attr:`world`."""
+        key = ("self", self.floor_z)
+        if key not in self._shared:
+            self._shared[key] = SelfCheck(self.world, self.radii_full, self.floor_z)
         return self._shared[key]  # type: ignore[return-value]
 
     def with_robot(self, robot: Robot) -> RobotCollision:

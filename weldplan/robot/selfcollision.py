@@ -3,29 +3,20 @@
 
 Bodies: the link collision meshes and the **whole** tool (no contact zone: the zone is exempt only
 against the part it welds), each riding on its link frame; where the cell has a floor, a large box
-(:class:`fcl.Box`) whose top face is the floor plane.
+(:class:`fcl.Box`) whose top face is the floor plane. They are registered, with the part, in one
+collision world (:func:`~weldplan.robot.robotworld.robot_world`,
+:class:`~weldplan.geometry.world.CollisionWorld`: named bodies and the allowed pairs as data, as
+Pinocchio's ``GeometryModel``), and :class:`SelfCheck` reads its bodies and the pairs it checks
+from there (:class:`~weldplan.robot.robotworld.AllowedCollisions`: that data by body index).
 
-Allowed collision matrix (:func:`allowed_collisions`, computed once per robot + tool and cached).
-A pair of bodies is not checked when it is
+Which pairs are checked is the world's data (:mod:`weldplan.robot.robotworld`: the chain's
+pairs, the description's disabled ones, MoveIt's contact rules); every other pair is checked.
 
-1. *adjacent*: on the same link frame or on consecutive ones (the tool rides on the last link
-   through the fixed mount, so it is adjacent to the last link and to the one before it, as
-   MoveIt's setup assistant merges links joined by fixed joints);
-2. *in contact at the zero pose* (every joint 0, clamped into its limits): closer than
-   :data:`SELF_GAP_MM` there (MoveIt's "default" pairs);
-3. *in contact at every one of* :data:`ACM_SAMPLES` *random configurations* (uniform inside the
-   joint limits, seed :data:`ACM_SEED`; MoveIt's "always" pairs).
-
-MoveIt's fourth rule ("never" in contact over the samples) is not used: a sample proves nothing
-about the configurations it missed, and the tool folded into the upper arm is exactly such a
-rare configuration. Every other pair is checked; on the shared KUKA with the gun only rule 1
-applies (no other pair touches at the zero pose, none touches at every sample): 20 of its 28
-pairs are checked.
-
-The floor: every body except those of the root link (it stands on the floor or on its pedestal)
-must stay more than :data:`SELF_GAP_MM` above it. Without a known floor it is not checked: a floor
-is known when it is given (``plan --floor-z``, :attr:`weldplan.robot.reach.BaseSearch.floor_z`,
-``plan_robot_route(floor_z=)``), not where the base search assumes one (:func:`cell_floor`).
+The floor: every body except those of the root link (it stands on the floor or on its pedestal:
+``"on the floor"``) must stay more than :data:`SELF_GAP_MM` above it. Without a known floor it is
+not checked (and the world has no floor): a floor is known when it is given (``plan --floor-z``,
+:attr:`weldplan.robot.reach.BaseSearch.floor_z`, ``plan_robot_route(floor_z=)``), not where the
+base search assumes one (:func:`cell_floor`).
 
 States: a pair whose bounding spheres are apart cannot touch; FCL collide judges the rest, as the
 part's state check does (likewise a body whose bounding sphere stays above the floor).
@@ -46,9 +37,7 @@ A hit names the pair ``"tool/link_3"`` (the body on the later link first) or ``"
 
 from __future__ import annotations
 
-import hashlib
 import logging
-from dataclasses import dataclass
 from typing import Any
 
 import fcl
@@ -56,28 +45,22 @@ import numpy as np
 from numpy.typing import NDArray
 
 from weldplan.geometry.checker import advance
+from weldplan.geometry.world import CollisionWorld
 from weldplan.robot.motionbound import PROBE_AFTER, Carry, touches_ahead
-from weldplan.robot.nearpart import fcl_distance, fcl_tf
+from weldplan.robot.nearpart import fcl_tf
+from weldplan.robot.robotworld import FLOOR, ROBOT_KINDS, SELF_GAP_MM, AllowedCollisions, FloorBox
+from weldplan.robot.robotworld import pair_distance as _pair_distance  # a name tests count calls of
 
 log = logging.getLogger(__name__)
 
-#: mm: two bodies (or a body and the floor) closer than this count as colliding (as the part's)
-SELF_GAP_MM = 1.0
-#: random configurations of the allowed-collision-matrix's "always in contact" rule, and their seed
-ACM_SAMPLES = 1000
-ACM_SEED = 0
 #: conservative-advancement steps per (motion, pair) before a motion is declared blocked
 MAX_SELF_STEPS = 400
 #: mm: the floor check of a motion splits it until no point moves more than this in a piece
 FLOOR_TOL_MM = 0.05
 #: pieces examined per (motion, body) against the floor before the motion is declared blocked
 MAX_FLOOR_SPLITS = 2000
-#: the floor's name in a hit
-FLOOR = "floor"
 #: a pair is carried whole (:class:`~weldplan.robot.motionbound.Carry` keeps sphere subsets)
 _WHOLE = np.zeros(1, dtype=np.int64)
-#: allowed collision matrices already computed (key: the bodies' names, frames and meshes)
-_ACM_CACHE: dict[str, AllowedCollisions] = {}
 
 
 def pair_label(a: str, b: str) -> str:
@@ -94,112 +77,6 @@ def hit_words(body: str) -> str:
     return f"{body} collide ({why})"
 
 
-@dataclass(frozen=True)
-class AllowedCollisions:
-    """Which body pairs are never checked, and why (module docstring).
-
-    Attributes
-    ----------
-    names
-        The bodies, in the checker's order.
-    reasons
-        ``{(i, j): "adjacent" | "zero pose" | "always"}`` for the allowed pairs ``i < j``.
-    checked
-        The pairs ``(i, j)`` that are checked, ``i`` on the later (or same) link.
-    samples
-        Random configurations of the "always" rule.
-    """
-
-    names: tuple[str, ...]
-    reasons: dict[tuple[int, int], str]
-    checked: tuple[tuple[int, int], ...]
-    samples: int
-
-    def allowed(self, a: str, b: str) -> str | None:
-        """Why the pair of bodies named ``a`` and ``b`` is not checked (``None``: it is)."""
-        i, j = sorted((self.names.index(a), self.names.index(b)))
-        return self.reasons.get((i, j))
-
-    def describe(self) -> list[str]:
-        """One line per allowed pair: ``"link_5/tool: adjacent"``."""
-        return [f"{self.names[i]}/{self.names[j]}: {w}" for (i, j), w in self.reasons.items()]
-
-
-def _pair_distance(bodies: list[Any], i: int, j: int, F: NDArray[np.float64]) -> float:
-    """mm: FCL distance of bodies ``i`` and ``j`` at link frames ``F (7, 4, 4)``; 0 on contact."""
-    a, b = bodies[i], bodies[j]
-    b.obj.setTransform(fcl_tf(F[b.frame]))
-    return fcl_distance(a.obj, F[a.frame], b.obj)
-
-
-def _key(bodies: list[Any], robot: Any, samples: int, seed: int, gap: float) -> str:
-    h = hashlib.sha1()
-    h.update(repr((samples, seed, gap, robot.lower.tolist(), robot.upper.tolist())).encode())
-    h.update(np.ascontiguousarray(robot.origins).tobytes())
-    for b in bodies:
-        h.update(f"{b.name}:{b.frame}".encode())
-        h.update(np.ascontiguousarray(b.vertices).tobytes())
-        h.update(np.ascontiguousarray(b.faces).tobytes())
-    return h.hexdigest()
-
-
-def allowed_collisions(
-    robot: Any,
-    bodies: list[Any],
-    *,
-    samples: int = ACM_SAMPLES,
-    seed: int = ACM_SEED,
-    gap: float = SELF_GAP_MM,
-) -> AllowedCollisions:
-    """The allowed collision matrix of ``bodies`` (``name``, ``frame``, ``obj``, ``centre``,
-    ``radius``, ``vertices``, ``faces``: :class:`~weldplan.robot.collision.Body`) on ``robot``
-    (module docstring: adjacent, in contact at the zero pose, in contact at every sample).
-    Cached per robot chain + limits + meshes."""
-    key = _key(bodies, robot, samples, seed, gap)
-    if key in _ACM_CACHE:
-        return _ACM_CACHE[key]
-    n = len(bodies)
-    reasons: dict[tuple[int, int], str] = {}
-    rest = []
-    at = robot.with_base(np.eye(4))
-    F0 = at.link_frames(np.clip(np.zeros(6), robot.lower, robot.upper))[0]
-    for i in range(n):
-        for j in range(i + 1, n):
-            if abs(bodies[i].frame - bodies[j].frame) <= 1:
-                reasons[(i, j)] = "adjacent"
-            elif _pair_distance(bodies, i, j, F0) <= gap:
-                reasons[(i, j)] = "zero pose"
-            else:
-                rest.append((i, j))
-    Q = np.random.default_rng(seed).uniform(robot.lower, robot.upper, (samples, 6))
-    F = at.link_frames(Q)
-    for i, j in rest:
-        # "always": stops at the first sample where the pair is apart (bounding spheres first)
-        for k in range(samples):
-            ci = F[k, bodies[i].frame, :3, :3] @ bodies[i].centre + F[k, bodies[i].frame, :3, 3]
-            cj = F[k, bodies[j].frame, :3, :3] @ bodies[j].centre + F[k, bodies[j].frame, :3, 3]
-            far = np.linalg.norm(ci - cj) > bodies[i].radius + bodies[j].radius + gap
-            if far or _pair_distance(bodies, i, j, F[k]) > gap:
-                break
-        else:
-            reasons[(i, j)] = "always"
-    checked = tuple(
-        (j, i) if bodies[j].frame >= bodies[i].frame else (i, j)
-        for i in range(n)
-        for j in range(i + 1, n)
-        if (i, j) not in reasons
-    )
-    acm = AllowedCollisions(tuple(b.name for b in bodies), reasons, checked, samples)
-    log.info(
-        "allowed collision matrix: %d of %d body pairs checked; allowed: %s",
-        len(checked),
-        n * (n - 1) // 2,
-        ", ".join(acm.describe()),
-    )
-    _ACM_CACHE[key] = acm
-    return acm
-
-
 def cell_floor(search: Any, base: Any) -> float | None:
     """mm: the floor (part frame) a base search was told it stands the robot on,
     ``search.floor_z``; ``None`` when no floor is known: a given base, no search, a search along
@@ -212,41 +89,38 @@ def cell_floor(search: Any, base: Any) -> float | None:
 
 
 class SelfCheck:
-    """Self-collision and floor checks of a checker's bodies (module docstring).
+    """Self-collision and floor checks of the robot's bodies in a collision world (module
+    docstring).
 
     Parameters
     ----------
-    bodies
-        The links and the whole tool (:class:`~weldplan.robot.collision.Body`).
+    world
+        The robot's world (:func:`robot_world`): its link and tool bodies (whose ``data`` are
+        :class:`~weldplan.robot.collision.Body`) are the bodies checked, its allowed pairs the
+        pairs not checked, its ``"floor"`` body the floor box.
     radii
         ``(6, b)`` mm: ``R[j, b]`` bounds the distance of body b's points from joint j's axis.
-    acm
-        The pairs to check (:func:`allowed_collisions`).
     floor_z
-        mm: the floor height in the part frame (``None``: not checked).
-    reach
-        mm: no body point is farther than this from the robot's base origin.
+        mm: the floor height in the part frame (``None``: not checked; the world then has no
+        floor).
     """
 
     def __init__(
-        self,
-        bodies: list[Any],
-        radii: NDArray[np.float64],
-        acm: AllowedCollisions,
-        floor_z: float | None,
-        reach: float,
+        self, world: CollisionWorld, radii: NDArray[np.float64], floor_z: float | None
     ) -> None:
-        self.bodies = bodies
+        self.world = world
+        self.bodies = [b.data for b in world.of_kind(*ROBOT_KINDS)]
         self.R = radii
-        self.acm = acm
+        self.acm = AllowedCollisions.of(world)
         self.floor_z = floor_z
-        self.radius = np.array([b.radius for b in bodies])
-        self.on_floor = [b for b, body in enumerate(bodies) if body.frame >= 1]
-        # a box whose top face is the floor, wider and deeper than anything the robot reaches:
-        # within the robot's reach it is the half-space below the floor (FCL's Halfspace crashed
-        # python-fcl's distance)
-        self.side = 2.0 * (reach + 1000.0)
-        self.floor = fcl.CollisionObject(fcl.Box(self.side, self.side, self.side), fcl.Transform())
+        self.radius = np.array([b.radius for b in self.bodies])
+        self.on_floor: list[int] = []
+        if floor_z is not None:
+            box: FloorBox = world.body(FLOOR).data
+            self.side, self.floor = box.side, box.obj
+            self.on_floor = [
+                b for b, body in enumerate(self.bodies) if world.allowed(body.name, FLOOR) is None
+            ]
 
     def _names(self, i: int, j: int) -> str:
         return pair_label(self.bodies[i].name, FLOOR if j < 0 else self.bodies[j].name)

@@ -55,6 +55,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from weldplan.geometry.checker import CheckVerdict, advance
+from weldplan.geometry.world import CollisionWorld, Exemption, WorldBody
 from weldplan.tool.model import Tool, bvh, outside_sphere
 
 log = logging.getLogger(__name__)
@@ -256,6 +257,23 @@ class SweepChecker:
                 bvh(np.asarray(mesh.vertices), np.asarray(mesh.faces)), fcl.Transform()
             )
         return self._models[name]
+
+    @property
+    def world(self) -> CollisionWorld:
+        """The part and the whole tool as a collision world (:mod:`weldplan.geometry.world`,
+        the FCL objects this checker judges with): one pair, checked with the tool's contact
+        zone exempt (module docstring), which :meth:`CollisionWorld.describe
+        <weldplan.geometry.world.CollisionWorld.describe>` prints. Builds the whole models."""
+        part = WorldBody(
+            "part", "part", self._model("part"), shape=f"BVH, {len(self.part.faces)} triangles"
+        )
+        n = len(self.tool.faces)
+        tool = WorldBody(
+            "tool", "tool", self._model("tool"), None, "the TCP pose", f"BVH, {n} triangles"
+        )
+        note = f"a sphere of {self.contact_radius:g} mm about the TCP and about the weld spot"
+        zone = {("tool", "part"): Exemption("contact zone", note)}
+        return CollisionWorld.of([part, tool], zones=zone)
 
     def focus(self, lo: ArrayLike, hi: ArrayLike) -> None:
         """Check motions whose TCP stays in the box ``[lo, hi] (3,)`` mm against only the part's
