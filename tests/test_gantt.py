@@ -110,3 +110,16 @@ def test_the_svg_names_the_welds_and_the_interlock_and_places_its_time_axis(sche
     assert abs(g.x_of(wait.start) * w - wait_px[0]) <= 1.5
     assert abs(g.x_of(wait.end) * w - (wait_px[-1] + 1)) <= 1.5
     assert 0 < g.y0 < top < bottom < g.y1 < 1
+
+
+def test_an_idle_robot_gets_an_empty_row_said_idle():
+    from weldplan.viz.gantt import KIND_COLORS, bar_rows, gantt_png_bytes, gantt_svg
+
+    s = station_schedule(["robot1", "robot2", "robot3"], [_timed(0.0), None, _timed(2.0, 2)])
+    img = _image(gantt_png_bytes(s))
+    h = img.shape[0]
+    for r, top, bottom in bar_rows(s):
+        band = img[int(top * h) + 2 : int(bottom * h) - 1]
+        bars = sum(_mask(band, c).sum() for c in KIND_COLORS.values())
+        assert (bars > 50) == (r != 1), r
+    assert "> idle</text>" in gantt_svg(s).svg
