@@ -155,3 +155,14 @@ def test_headless_chromium_draws_every_robot_and_the_chart(two_robots, tmp_path)
         dh = np.abs((hsv[:, 0] - h0 + 0.5) % 1.0 - 0.5)
         hit = (dh < 0.03) & (hsv[:, 1] > 0.5) & (hsv[:, 2] > 0.25)
         assert hit.sum() > 300, f"robot {k + 1} not drawn ({int(hit.sum())} pixels)"
+
+
+def test_the_camera_looks_across_the_line_of_the_robots():
+    from weldplan.viz.camera import AZIMUTH_DEG
+    from weldplan.viz.station_page import STATION_AZIMUTH_OFFSET_DEG as off
+    from weldplan.viz.station_page import station_azimuth
+
+    along_x = [[0.0, 0.0, 0.0], [2000.0, 0.0, 0.0]]
+    assert station_azimuth(along_x) == pytest.approx(-90.0 + off)
+    assert station_azimuth([[0.0, 0.0, 0.0], [0.0, -3000.0, 500.0]]) == pytest.approx(off)
+    assert station_azimuth([[1.0, 2.0, 0.0]]) == AZIMUTH_DEG

@@ -130,7 +130,7 @@ def _draw_row(ax: Any, schedule: Any, r: int, y: float, pt_per_s: float) -> None
     acts = schedule.of(r)
     h = BAR_SHARE
     for kind, color in KIND_COLORS.items():
-        spans = [(a.start, a.duration) for a in acts if a.kind == kind and a.duration > 0]
+        spans = _merged([(a.start, a.end) for a in acts if a.kind == kind and a.duration > 0])
         if spans:
             ax.broken_barh(spans, (y - h / 2, h), facecolors=color, linewidth=0)
     for a in acts:
@@ -145,6 +145,18 @@ def _draw_row(ax: Any, schedule: Any, r: int, y: float, pt_per_s: float) -> None
     end = schedule.cycle_times[r]
     text = "idle" if not acts else f"{end:.2f} s"
     ax.text(end, y, " " + text, ha="left", va="center", fontsize=LABEL_PT + 1)
+
+
+def _merged(spans: list[tuple[float, float]]) -> list[tuple[float, float]]:
+    """``(start, width)`` of ``spans`` ``(start, end)`` (s, in time order) with the ones that
+    touch joined: a robot's moves through its via stops are one bar (no seams between them)."""
+    out: list[list[float]] = []
+    for a, b in spans:
+        if out and a <= out[-1][1] + 1e-9:
+            out[-1][1] = max(out[-1][1], b)
+        else:
+            out.append([a, b])
+    return [(a, b - a) for a, b in out]
 
 
 def _draw_lines(ax: Any, cycle: float, bound: float | None) -> None:

@@ -50,6 +50,8 @@ log = logging.getLogger(__name__)
 #: the robots' colours, station order (then around again): KUKA orange, teal, magenta, olive,
 #: brown, cyan; none near the tool's blue, the part's grey or the welds' red
 ROBOT_COLORS = (0xF28C28, 0x1FA187, 0xB03A96, 0x9BBB1F, 0x8C564B, 0x17BECF)
+#: deg: the camera stands this far off square to the line the robots' bases spread along
+STATION_AZIMUTH_OFFSET_DEG = 20.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -213,7 +215,26 @@ def _frame(
             pts.append(np.asarray(r.route_points, dtype=np.float64))
     if mesh is not None:
         pts.append(np.asarray(mesh.vertices))
-    return frame_scene(vis, root, np.concatenate(pts, axis=0), camera=camera)
+    bases = np.array([r.robot.base[:3, 3] for r in robots]).reshape(-1, 3)
+    return frame_scene(vis, root, np.concatenate(pts, axis=0), camera=camera,
+                       azimuth_deg=station_azimuth(bases))  # fmt: skip
+
+
+def station_azimuth(bases: ArrayLike) -> float:
+    """The camera's azimuth (deg) for robots at ``bases (R, 3)`` mm: across the line the bases
+    spread along (their principal horizontal direction), :data:`STATION_AZIMUTH_OFFSET_DEG`
+    off square so the cell's depth reads, on the side nearer the pages' usual
+    :data:`~weldplan.viz.camera.AZIMUTH_DEG`; that one for a single robot or bases in one
+    spot."""
+    from weldplan.viz.camera import AZIMUTH_DEG
+
+    P = np.asarray(bases, dtype=float).reshape(-1, 3)[:, :2]
+    if len(P) < 2 or np.ptp(P, axis=0).max() < 1.0:
+        return AZIMUTH_DEG
+    d = np.linalg.svd(P - P.mean(axis=0))[2][0]
+    along = float(np.degrees(np.arctan2(d[1], d[0])))
+    sides = [along - 90.0 + STATION_AZIMUTH_OFFSET_DEG, along + 90.0 + STATION_AZIMUTH_OFFSET_DEG]
+    return min(sides, key=lambda a: abs((a - AZIMUTH_DEG + 180.0) % 360.0 - 180.0))
 
 
 def _draw_robot(node: Any, r: StationRobot, color: int, tool_mesh: Any, scale: float) -> None:
