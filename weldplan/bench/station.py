@@ -104,9 +104,10 @@ def _cpu() -> float:
 
 class _StationClock:
     """A ``progress`` callback for a station's :func:`weldplan.plan` that takes the CPU seconds
-    of each stage: the cell (until the first study), the studies, the allocation (from the
-    last study to the first robot's plan) and each robot's plan by stage (a robot's plan
-    begins with its ``cell`` stage, :func:`weldplan.multi.station.plan_station`)."""
+    of each stage, named as :attr:`weldplan.multi.station.StationPlan.stats` names their wall
+    seconds: the cell (until the first study), each robot's study, the allocation (from the
+    last study to the first robot's plan) and each robot's plan, whole and by stage (a
+    robot's plan begins with its ``cell`` stage, :func:`weldplan.multi.station.plan_station`)."""
 
     def __init__(self) -> None:
         self.t0 = _cpu()
@@ -122,11 +123,8 @@ class _StationClock:
         self.phase, self.mark = next_phase, now
 
     def __call__(self, name: str, done: int, total: int) -> None:
-        if name == "study":
-            if done == 0:
-                self._close_phase("study")
-            elif done >= total:
-                self._close_phase("allocation")
+        if name == "study":  # (study, k, R) as robot k's study starts; (study, R, R) at the end
+            self._close_phase(f"study robot{done + 1}" if done < total else "allocation")
             return
         if total != 1:
             return
@@ -168,6 +166,10 @@ def plan_row(station: Any, name: str, seed: int, pages: Path | None = None) -> S
         raise WeldplanError(f"{name}: one robot; `weldplan bench robot` measures single robots")
     rep, s = p.report, p.schedule
     replay = p.replay
+    wall = {k: round(v, 2) for k, v in p.stats.get("seconds", {}).items()}
+    for k, sub in enumerate(p.plans):
+        for stage in () if sub is None else sub.stages:
+            wall[f"robot{k + 1} {stage.name}"] = round(stage.seconds, 2)
     rows = []
     for r, rname in enumerate(s.robots):
         timed = p.timed_cycles[r]
@@ -182,8 +184,7 @@ def plan_row(station: Any, name: str, seed: int, pages: Path | None = None) -> S
         round(rep.bound.value, 3), rep.bound.name, round(s.cycle_time, 3),
         round(sum(s.waiting), 3), len(s.interlocks),
         None if replay is None else _finite(replay.min_distance),
-        None if replay is None else replay.ok, tuple(rows),
-        {k: round(v, 2) for k, v in p.stats.get("seconds", {}).items()}, cpu, wall_total,
+        None if replay is None else replay.ok, tuple(rows), wall, cpu, wall_total,
         cpu_total, tuple(round(v, 2) for v in os.getloadavg()), p.interference,
     )  # fmt: skip
 
