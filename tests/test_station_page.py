@@ -166,3 +166,34 @@ def test_the_camera_looks_across_the_line_of_the_robots():
     assert station_azimuth(along_x) == pytest.approx(-90.0 + off)
     assert station_azimuth([[0.0, 0.0, 0.0], [0.0, -3000.0, 500.0]]) == pytest.approx(off)
     assert station_azimuth([[1.0, 2.0, 0.0]]) == AZIMUTH_DEG
+
+
+def test_an_idle_robot_stands_at_its_base_with_its_tool_and_does_not_move(two_robots):
+    import meshcat
+    import umsgpack
+
+    from tests.conftest import require_shared
+    from weldplan.station.model import RobotSpec, ToolSpec
+    from weldplan.viz.station_page import _idle_robot, build_station_scene
+    from weldplan.viz.viewer import RecordingWindow
+
+    robots, s, part = two_robots
+    gun = require_shared("tools", "spot_welding_gun", "spot_welding_gun.urdf")
+    urdf = require_shared("robots", "kuka_kr150r3100_2", "kr150r3100_2.urdf")
+    spec = RobotSpec(tool=ToolSpec(file=gun), urdf=urdf, base=(0.0, 2500.0, -1000.0, -90.0))
+    idle = _idle_robot("robot3", spec)
+    np.testing.assert_allclose(idle.robot.base[:3, 3], [0.0, 2500.0, -1000.0])
+    assert idle.timing is None and idle.tool is not None
+    three = station_schedule(
+        ["robot1", "robot2", "robot3"], [r.timing for r in robots] + [None], s.interlocks
+    )
+    window = RecordingWindow()
+    build_station_scene(meshcat.Visualizer(window=window), [*robots, idle], three, part=part)
+    anim = umsgpack.unpackb(window.tree.animation)
+    clips = {a["path"]: a["clip"] for a in anim["animations"]}
+    tool = clips["/meshcat/weldplan_station/robot3/tool"]
+    pos = np.array(
+        [k["value"] for k in next(t for t in tool["tracks"] if t["name"] == ".position")["keys"]]
+    )
+    T = idle.robot.fk(np.zeros(6))[0] @ idle.flange_tcp  # its zero pose, held
+    np.testing.assert_allclose(pos, np.tile(T[:3, 3], (len(pos), 1)), atol=1e-3)
