@@ -126,3 +126,15 @@ file = "{data}/tools/spot_welding_gun/spot_welding_gun.urdf"
     html = (out / "two.html").read_text()
     assert "weldplan-gantt" in html and "robot2" in html
     assert (out / "two_gantt.png").read_bytes().startswith(b"\x89PNG")
+
+
+def test_the_bench_stations_read_as_two_robots_at_given_bases():
+    import weldplan
+
+    demo = bs.demo_two_robots()
+    assert [r.base for r in demo.robots] == list(bs.DEMO_BASES)
+    assert demo.part.welds.name == "joints.csv"
+    car2 = weldplan.load_station(ROOT / "examples" / "car2_two_robots.toml")
+    assert len(car2.robots) == 2 and all(r.base is not None for r in car2.robots)
+    assert {r.tool.builtin for r in car2.robots} == {"arc_torch"}
+    assert car2.part.welds.name == "car2_synthetic_200.csv" and car2.part_pose is None
