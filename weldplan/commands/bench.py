@@ -23,6 +23,7 @@ BENCHES: dict[str, str] = {
     "tool": "weldplan.bench.tool",
     "robot": "weldplan.bench.robot",
     "gun-oracle": "weldplan.bench.gun_oracle",
+    "station": "weldplan.bench.station",
 }
 
 

@@ -1,0 +1,140 @@
+"""``weldplan bench station`` (weldplan.bench.station): the synthetic stations are the allocation
+script's, the figures are the allocation report's, the stage clock attributes CPU to the
+stages a station's plan reports, the page says what was not checked; slow: the bench end to end
+on a two-robot demo station file with its page and Gantt chart."""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from weldplan.bench import station as bs
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_synthetic_stations_are_the_allocation_scripts():
+    spec = importlib.util.spec_from_file_location("ba", ROOT / "scripts" / "bench_allocation.py")
+    ba = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(ba)
+    for W, R in ((30, 2), (25, 4)):
+        ours, theirs = bs.synthetic_station(W, R, 3), ba.station(W, R, 3)
+        np.testing.assert_array_equal(ours[0].ok, theirs[0].ok)
+        np.testing.assert_array_equal(ours[1], theirs[1])
+        np.testing.assert_array_equal(ours[2], theirs[2])
+
+
+def test_a_synthetic_row_carries_the_allocation_reports_figures():
+    from weldplan.multi import allocation_report
+
+    row = bs.synthetic_row(20, 2, 0)
+    rep = allocation_report(*bs.synthetic_station(20, 2, 0), rng=0)
+    assert (row.welds, row.robots, row.kind) == (20, 2, "allocation only")
+    assert row.ours == pytest.approx(rep.ours.cycle_time, abs=1e-3)
+    assert row.bound == pytest.approx(rep.bound.value, abs=1e-3)
+    assert row.nearest == pytest.approx(rep.nearest.cycle_time, abs=1e-3)
+    # no synthetic robot reaches every weld here: no one-robot baseline, said as such
+    assert rep.one_robot is None and row.one_robot is None
+    assert row.bound <= row.ours + 1e-9
+    assert row.timed is None and row.replay_ok is None
+
+
+def test_the_synthetic_option_is_checked():
+    assert bs.parse_synthetic("100:2,400:4") == ((100, 2), (400, 4))
+    for bad in ("100", "100:5", "0:2", "a:b"):
+        with pytest.raises(argparse.ArgumentTypeError):
+            bs.parse_synthetic(bad)
+
+
+def test_the_clock_gives_each_stage_of_a_station_plan_its_cpu():
+    clock = bs._StationClock()
+    events = [("study", 0, 2), ("study", 1, 2), ("study", 2, 2)]
+    for _ in range(2):  # two robots, each plan a sequence of stages
+        for stage in ("cell", "route", "robot", "program"):
+            events += [(stage, 0, 1), ("pairs", 3, 10), (stage, 1, 1)]
+    for e in events:
+        sum(k * k for k in range(20000))  # some CPU in every stage
+        clock(*e)
+    cpu = clock.finish()
+    for key in ("cell", "study robot1", "study robot2", "allocation", "plan robot1", "plan robot2"):
+        assert cpu[key] >= 0.0, key
+    for r in (1, 2):
+        assert {f"robot{r} {s}" for s in ("cell", "route", "robot", "program")} <= set(cpu)
+    assert not any("pairs" in k for k in cpu)
+    # the phases cover the whole run: their sum is the CPU from start to finish
+    phases = ("cell", "study robot1", "study robot2", "allocation", "plan robot1", "plan robot2")
+    assert sum(cpu[k] for k in phases) == pytest.approx(bs._cpu() - clock.t0, abs=0.05)
+
+
+def test_the_page_puts_the_figures_side_by_side_and_says_what_was_not_checked():
+    row = bs.StationRow(
+        "st", "planned", 15, 2, 1, 5.5, 3.6, 2.2, 2.0, "LP", timed=2.6, waiting=0.4,
+        interlocks=1, robots_rows=(("robot1", 7, 2.2, 2.6, 0.9, 0.0),),
+        wall_s={"cell": 1.0}, cpu_s={"cell": 0.9}, load=(1.0, 1.0, 1.0),
+    )  # fmt: skip
+    page = bs.format_page([row], "weldplan bench station", "vm")
+    line = next(x for x in page.splitlines() if x.startswith("| st |"))
+    cells = [c.strip() for c in line.strip("|").split("|")]
+    assert cells[5:11] == ["5.50", "3.60", "2.20", "2.00", "+10.0 %", "-38.9 %"]
+    assert cells[11:15] == ["2.60", "0.40", "1", "not checked"]
+    assert "| robot1 | 7 | 2.20 | 2.60 | 90% | 0.00 |" in page
+    assert "| cell | 1.00 | 0.90 |" in page
+
+
+@pytest.mark.slow
+def test_the_bench_plans_a_two_robot_station_file_and_draws_it(tmp_path):
+    from tests.conftest import require_shared
+    from weldplan.io.joints import Joints, read_joints
+    from weldplan.weld import demo_part
+
+    data = require_shared()
+    ids = ("1", "5", "7", "9", "13", "15")
+    j = read_joints(demo_part.DEMO_JOINTS)
+    k = [j.ids.index(i) for i in ids]
+    Joints(ids=ids, xyz=np.asarray(j.xyz)[k], directions=np.asarray(j.directions)[k]).to_csv(
+        tmp_path / "welds.csv"
+    )
+    robots = "".join(
+        f"""
+[[robot]]
+urdf = "{data}/robots/kuka_kr150r3100_2/kr150r3100_2.urdf"
+weld_time = 0.5
+base = {list(b)}
+[robot.tool]
+file = "{data}/tools/spot_welding_gun/spot_welding_gun.urdf"
+"""
+        for b in bs.DEMO_BASES
+    )
+    toml = tmp_path / "two.toml"
+    toml.write_text(
+        f'seed = 0\n[part]\nmesh = "{demo_part.DEMO_PART}"\nwelds = "{tmp_path / "welds.csv"}"\n'
+        '[route]\nplanner = "exact"\n' + robots
+    )
+    out = tmp_path / "out"
+    args = argparse.Namespace(out=str(out), station=[str(toml)], no_demo=True, synthetic=(),
+                              seed=0, pages=True)  # fmt: skip
+    assert bs.run(args) == 0
+    page = (out / "station.md").read_text()
+    row = next(x for x in page.splitlines() if x.startswith("| two |"))
+    cells = [c.strip() for c in row.strip("|").split("|")]
+    assert cells[1:5] == ["planned", "6", "2", "1"]  # weld 15: no robot reaches it
+    assert float(cells[7]) >= float(cells[8])  # ours >= bound
+    html = (out / "two.html").read_text()
+    assert "weldplan-gantt" in html and "robot2" in html
+    assert (out / "two_gantt.png").read_bytes().startswith(b"\x89PNG")
+
+
+def test_the_bench_stations_read_as_two_robots_at_given_bases():
+    import weldplan
+
+    demo = bs.demo_two_robots()
+    assert [r.base for r in demo.robots] == list(bs.DEMO_BASES)
+    assert demo.part.welds.name == "joints.csv"
+    car2 = weldplan.load_station(ROOT / "examples" / "car2_two_robots.toml")
+    assert len(car2.robots) == 2 and all(r.base is not None for r in car2.robots)
+    assert {r.tool.builtin for r in car2.robots} == {"arc_torch"}
+    assert car2.part.welds.name == "car2_synthetic_200.csv" and car2.part_pose is None
