@@ -1,12 +1,11 @@
-"""``weldplan bench station`` (weldplan.bench.station): the synthetic stations are the allocation
-script's, the figures are the allocation report's, the stage clock attributes CPU to the
-stages a station's plan reports, the page says what was not checked; slow: the bench end to end
-on a two-robot demo station file with its page and Gantt chart."""
+"""``weldplan bench station`` (weldplan.bench.station): the figures are the allocation report's,
+the stage clock attributes CPU to the stages a station's plan reports, the page says what was
+not checked; slow: the bench end to end on a two-robot demo station file with its page and Gantt
+chart."""
 
 from __future__ import annotations
 
 import argparse
-import importlib.util
 from pathlib import Path
 
 import numpy as np
@@ -15,17 +14,6 @@ import pytest
 from weldplan.bench import station as bs
 
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def test_synthetic_stations_are_the_allocation_scripts():
-    spec = importlib.util.spec_from_file_location("ba", ROOT / "scripts" / "bench_allocation.py")
-    ba = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(ba)
-    for W, R in ((30, 2), (25, 4)):
-        ours, theirs = bs.synthetic_station(W, R, 3), ba.station(W, R, 3)
-        np.testing.assert_array_equal(ours[0].ok, theirs[0].ok)
-        np.testing.assert_array_equal(ours[1], theirs[1])
-        np.testing.assert_array_equal(ours[2], theirs[2])
 
 
 def test_a_synthetic_row_carries_the_allocation_reports_figures():

@@ -17,7 +17,7 @@ Stations:
   (:func:`weldplan.viz.station_page.station_page`) and its Gantt chart
   (:func:`weldplan.viz.gantt.gantt_png`) in ``--out``;
 - **synthetic** ones (``--synthetic W:R,...``) run the allocation only, on the synthetic
-  stations of ``scripts/bench_allocation.py`` (:func:`synthetic_station`): no part, no
+  stations of :func:`synthetic_station`: no part, no
   programs, so no timed cycle; they show how the allocation and its bound scale.
 
 Writes ``station.md`` (the page docs/bench-station.md is a copy of) and ``station.json`` to
@@ -46,7 +46,7 @@ ROOT = Path(__file__).resolve().parents[2]
 #: (x, y, z mm, yaw deg), part frame: behind the demo part facing it, and in front facing back
 DEMO_BASES = ((448.1, 95.3, 652.7, -7.5), (2450.0, -150.0, 652.7, 180.0))
 #: rad/s: joint velocity limits of a heavy six-axis arm (KR 150 class) for the synthetic
-#: stations; accelerations 3x (scripts/bench_allocation.py)
+#: stations; accelerations 3x
 SYNTH_VEL = np.radians([105.0, 101.0, 107.0, 136.0, 129.0, 206.0])
 #: mm: the synthetic robots' bases (up to four), at the corners of a 2.4 x 3.6 m rectangle
 SYNTH_BASES = np.array([[-1200, -1800, 0], [1200, -1800, 0], [-1200, 1800, 0], [1200, 1800, 0.0]])
@@ -208,11 +208,11 @@ def _write_pages(p: Any, name: str, folder: Path) -> None:
 
 
 def synthetic_station(W: int, R: int, seed: int) -> tuple[Any, np.ndarray, np.ndarray]:
-    """``(ReachMap, weld_time (R, W) s, travel (R, W, W) s)`` of ``scripts/bench_allocation.py``:
-    ``W`` welds spread over a 3 x 1.6 x 0.6 m body, ``R`` robots at :data:`SYNTH_BASES`, a weld
-    served by every robot within :data:`SYNTH_REACH_MM` (and always by the nearest); move
-    times the rest-to-rest joint-space bounds (:func:`weldplan.robot.legtime.rest_to_rest_bound`)
-    between synthetic configurations that vary smoothly with the weld's position."""
+    """``(ReachMap, weld_time (R, W) s, travel (R, W, W) s)``: ``W`` welds spread over a
+    3 x 1.6 x 0.6 m body, ``R`` robots at :data:`SYNTH_BASES`, a weld served by every robot
+    within :data:`SYNTH_REACH_MM` (and always by the nearest); move times the rest-to-rest
+    joint-space bounds (:func:`weldplan.robot.legtime.rest_to_rest_bound`) between synthetic
+    configurations that vary smoothly with the weld's position."""
     from weldplan.multi import ReachMap
     from weldplan.robot.legtime import rest_to_rest_bound
 
