@@ -25,17 +25,19 @@ under any timing. It is proven, with no sample-pair left out, by three levels:
 1. *Robots.* Each robot lies within its reach sphere (base origin, the chain's link offsets plus
    the largest body extent); two robots whose spheres are ``clearance`` apart have no conflict and
    cost nothing more.
-2. *Spheres.* Each body (link or tool) of each sample carries its bounding sphere grown by how far
-   any of its points can move over the half intervals to the neighbouring samples
-   (:func:`weldplan.robot.motionbound.sphere_rates`, a bound on the path length of any point of a
-   sphere over a linear joint motion). Blocks of samples carry the sphere grown by the bound of
-   the block; a pair of blocks whose spheres are ``clearance`` apart is clear, else its samples
-   are compared.
-3. *FCL.* A pair of samples whose spheres are not apart gets the FCL distance ``d`` of the two
-   bodies' meshes at those samples: ``d - h_a - h_b >= clearance`` (``h``: the half-interval
-   motion bounds) proves the two half intervals clear. ``d < clearance`` is a **conflict**
-   witnessed at two samples; ``d >= clearance`` without the proof is a conflict too, marked
-   *unproven* (the motions pass within the motion bound of each other): conservative.
+2. *Motion spheres.* Each body (link or tool) over a whole motion lies in its bounding sphere
+   at the motion's middle sample grown by how far any of its points can move from there
+   (:func:`weldplan.robot.motionbound.sphere_rates` per pair of consecutive samples, a bound on
+   the path length of any point of a sphere over a linear joint motion, summed). Two motions
+   whose body spheres are all ``clearance`` apart are clear.
+3. *FCL, by bisection.* For the bodies that are not, the two sample ranges are halved
+   recursively. A node (a range of each motion) is clear when the bodies' spheres at the two
+   middle samples, or their FCL distance ``d`` there, exceed the clearance by how far each body
+   can be from there over its range (the same bound, conservative advancement's argument). At
+   two single samples the range is the half intervals to their neighbours: ``d < clearance``
+   there is a **conflict** witnessed at two samples; ``d >= clearance`` without the proof is a
+   conflict too, marked *unproven* (the motions pass within the motion bound of each other):
+   conservative.
 
 The bound is the planner's own (:mod:`weldplan.robot.motionbound`, FK by
 :meth:`weldplan.robot.model.Robot.link_frames`); the replay checks with its own FK and bound.
@@ -59,8 +61,6 @@ from weldplan.robot.nearpart import fcl_tf
 
 log = logging.getLogger(__name__)
 
-#: samples per block of the second level (spheres of blocks before spheres of samples)
-BLOCK_SAMPLES = 8
 #: relative slack of a time window when the samples of a move are picked by their times
 TIME_EPS = 1e-9
 
@@ -73,18 +73,13 @@ class InterferenceSettings:
     ----------
     clearance
         mm: the smallest distance allowed between any two bodies (links, tools) of two robots.
-    block
-        Samples per block of the sphere level (:data:`BLOCK_SAMPLES`).
     """
 
     clearance: float = 5.0
-    block: int = BLOCK_SAMPLES
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.clearance) and self.clearance >= 0):
             raise ConfigError(f"clearance must be >= 0 mm, got {self.clearance}", field="clearance")
-        if self.block < 1:
-            raise ConfigError(f"block must be >= 1, got {self.block}", field="block")
 
 
 @dataclass(frozen=True, eq=False)
@@ -217,6 +212,7 @@ class _Swept:
     centres: NDArray[np.float64]  # (m, b, 3) mm body sphere centres per sample
     radii: NDArray[np.float64]  # (b,) mm
     step: NDArray[np.float64]  # (m - 1, b) mm motion bound between consecutive samples
+    cum: NDArray[np.float64]  # (m, b) mm its running sum from the first sample
     spans: tuple[tuple[int, int], ...]  # per motion, its samples [i0, i1]
     origin: NDArray[np.float64]  # (3,) base origin
     reach: float  # mm
@@ -286,40 +282,22 @@ def _swept(mover: MovingRobot) -> tuple[tuple[Motion, ...], _Swept]:
     origin = np.asarray(mover.robot.base)[:3, 3]
     offsets = np.linalg.norm(np.asarray(mover.robot.origins)[:, :3, 3], axis=1).sum()
     extent = max(float(np.linalg.norm(b.vertices, axis=1).max()) for b in bodies)
-    sw = _Swept(bodies, F, C, radii, step, spans, origin, float(offsets + extent))
+    cum = np.vstack([np.zeros((1, len(bodies))), np.cumsum(step, axis=0)])
+    sw = _Swept(bodies, F, C, radii, step, cum, spans, origin, float(offsets + extent))
     return motions, sw
 
 
 # ---------------------------------------------------------------------------- spheres
-def _halves(sw: _Swept, i0: int, i1: int) -> NDArray[np.float64]:
-    """``(i1 - i0 + 1, b)`` mm: per sample of ``[i0, i1]``, how far a body point moves over the
-    half intervals to its neighbours inside the span."""
-    n = i1 - i0 + 1
-    h = np.zeros((n, sw.step.shape[1]))
-    if n > 1:
-        d = sw.step[i0:i1] / 2
-        h[:-1] = d
-        h[1:] = np.maximum(h[1:], d)
-    return h
-
-
-def _blocks(sw: _Swept, i0: int, i1: int, size: int) -> tuple[NDArray, NDArray, list]:
-    """Spheres of blocks of ``size`` samples of ``[i0, i1]``: ``(centres (k, b, 3), radii
-    (k, b), [(j0, j1)] sample ranges)``; a block's sphere holds the bodies over its samples and
-    the half intervals at its ends."""
-    h = _halves(sw, i0, i1)
-    cum = np.zeros((i1 - i0 + 1, sw.step.shape[1]))
-    if i1 > i0:
-        cum[1:] = np.cumsum(sw.step[i0:i1], axis=0)
-    cs, rs, ranges = [], [], []
-    for j0 in range(0, i1 - i0 + 1, size):
-        j1 = min(j0 + size - 1, i1 - i0)
-        mid = (j0 + j1) // 2
-        reach = np.maximum(cum[mid] - cum[j0] + h[j0], cum[j1] - cum[mid] + h[j1])
-        cs.append(sw.centres[i0 + mid])
-        rs.append(sw.radii + reach)
-        ranges.append((i0 + j0, i0 + j1))
-    return np.array(cs), np.array(rs), ranges
+def _reach(sw: _Swept, span: tuple[int, int], lo: int, hi: int) -> tuple[int, NDArray]:
+    """``(mid, (b,) mm)``: the middle sample of ``[lo, hi]`` (inside the motion's ``span``) and,
+    per body, how far any of its points can be from where it is at ``mid`` over the samples
+    ``lo .. hi`` and the half intervals beyond them that are inside the span."""
+    mid = (lo + hi) // 2
+    out_lo = sw.step[lo - 1] / 2 if lo > span[0] else 0.0
+    out_hi = sw.step[hi] / 2 if hi < span[1] else 0.0
+    back = sw.cum[mid] - sw.cum[lo] + out_lo
+    ahead = sw.cum[hi] - sw.cum[mid] + out_hi
+    return mid, np.maximum(back, ahead)
 
 
 def _gaps(ca: NDArray, ra: NDArray, cb: NDArray, rb: NDArray) -> NDArray[np.float64]:
@@ -346,56 +324,70 @@ class _Tally:
     min_distance: float = float("inf")
 
 
-def _near_samples(
-    sa: _Swept,
-    span_a: tuple[int, int],
-    sb: _Swept,
-    span_b: tuple[int, int],
-    s: InterferenceSettings,
-) -> list[tuple[float, int, int, int, int, float]]:
-    """``(gap, sample a, sample b, body a, body b, h_a + h_b)`` of every sample pair whose
-    grown spheres are not ``clearance`` apart, closest first."""
-    ca, ra, ga = _blocks(sa, *span_a, s.block)
-    cb, rb, gb = _blocks(sb, *span_b, s.block)
-    ha_all, hb_all = _halves(sa, *span_a), _halves(sb, *span_b)
-    near = np.argwhere((_gaps(ca, ra, cb, rb) < s.clearance).any(axis=(2, 3)))
-    out = []
-    for ka, kb in near.tolist():
-        (a0, a1), (b0, b1) = ga[ka], gb[kb]
-        ha = ha_all[a0 - span_a[0] : a1 - span_a[0] + 1]
-        hb = hb_all[b0 - span_b[0] : b1 - span_b[0] + 1]
-        g = _gaps(sa.centres[a0 : a1 + 1], sa.radii + ha, sb.centres[b0 : b1 + 1], sb.radii + hb)
-        for i, j, p, q in np.argwhere(g < s.clearance):
-            out.append((float(g[i, j, p, q]), a0 + int(i), b0 + int(j), int(p), int(q),
-                        float(ha[i, p] + hb[j, q])))  # fmt: skip
-    return sorted(out)
+def _bodies_apart(
+    sa: _Swept, span_a: tuple[int, int], p: int, sb: _Swept, span_b: tuple[int, int], q: int,
+    s: InterferenceSettings, tally: _Tally,
+) -> tuple[float, bool] | None:  # fmt: skip
+    """Body ``p`` of ``sa`` over ``span_a`` against body ``q`` of ``sb`` over ``span_b``:
+    ``None`` when proven ``clearance`` apart, else ``(distance, proven closer)``.
+
+    Bisection of the two sample ranges: a node (two ranges) is proven by the bounding spheres,
+    else by the FCL distance ``d`` at its middle samples less how far each body can be from
+    there over its range (:func:`_reach`); else the longer range is halved. Two single samples
+    not proven: a conflict (witnessed when ``d < clearance``)."""
+    ba, bb = sa.bodies[p], sb.bodies[q]
+    stack = [(span_a[0], span_a[1], span_b[0], span_b[1])]
+    worst: tuple[float, bool] | None = None
+    while stack:
+        a0, a1, b0, b1 = stack.pop()
+        ma, ra = _reach(sa, span_a, a0, a1)
+        mb, rb = _reach(sb, span_b, b0, b1)
+        gap = np.linalg.norm(sa.centres[ma, p] - sb.centres[mb, q]) - ba.radius - bb.radius
+        if gap - ra[p] - rb[q] >= s.clearance:
+            continue
+        d = pair_distance(ba.obj, sa.frames[ma, ba.frame], bb.obj, sb.frames[mb, bb.frame])
+        tally.fcl_calls += 1
+        tally.min_distance = min(tally.min_distance, d)
+        if d < s.clearance:
+            return d, True
+        if d - ra[p] - rb[q] >= s.clearance:
+            continue
+        if a0 == a1 and b0 == b1:
+            worst = (d, False) if worst is None or d < worst[0] else worst
+        elif b0 == b1 or (a0 < a1 and ra[p] >= rb[q]):
+            stack += [(a0, ma, b0, b1), (ma + 1, a1, b0, b1)] if a1 > a0 else []
+        else:
+            stack += [(a0, a1, b0, mb), (a0, a1, mb + 1, b1)]
+    return worst
 
 
 def _pair(
     sa: _Swept, span_a: tuple[int, int], sb: _Swept, span_b: tuple[int, int],
-    s: InterferenceSettings, tally: _Tally,
+    near: NDArray, s: InterferenceSettings, tally: _Tally,
 ) -> tuple[float, bool, str] | None:  # fmt: skip
-    """``None`` when the two motions are proven clear, else ``(distance, proven, bodies)``."""
+    """``None`` when the two motions are proven clear, else ``(distance, proven, bodies)``;
+    ``near``: the body pairs ``(p, q)`` whose motion spheres are not apart, closest first."""
     worst: tuple[float, bool, str] | None = None
-    for _, i, j, p, q, h in _near_samples(sa, span_a, sb, span_b, s):
-        ba, bb = sa.bodies[p], sb.bodies[q]
-        d = pair_distance(ba.obj, sa.frames[i, ba.frame], bb.obj, sb.frames[j, bb.frame])
-        tally.fcl_calls += 1
-        tally.min_distance = min(tally.min_distance, d)
-        if d < s.clearance:
-            return d, True, f"{ba.name}/{bb.name}"
-        if d - h < s.clearance and (worst is None or d < worst[0]):
-            worst = (d, False, f"{ba.name}/{bb.name}")
+    for p, q in near:
+        got = _bodies_apart(sa, span_a, int(p), sb, span_b, int(q), s, tally)
+        if got is None:
+            continue
+        names = f"{sa.bodies[p].name}/{sb.bodies[q].name}"
+        if got[1]:
+            return got[0], True, names
+        if worst is None or got[0] < worst[0]:
+            worst = (got[0], False, names)
     return worst
 
 
 def _motion_spheres(sw: _Swept) -> tuple[NDArray, NDArray]:
-    """Per motion, per body, one sphere holding the body over the whole motion."""
+    """Per motion, per body, one sphere holding the body over the whole motion:
+    ``(motions, b, 3)`` centres, ``(motions, b)`` radii, mm."""
     cs, rs = [], []
-    for i0, i1 in sw.spans:
-        c, r, _ = _blocks(sw, i0, i1, i1 - i0 + 1)
-        cs.append(c[0])
-        rs.append(r[0])
+    for span in sw.spans:
+        mid, r = _reach(sw, span, *span)
+        cs.append(sw.centres[mid])
+        rs.append(sw.radii + r)
     return np.array(cs), np.array(rs)
 
 
@@ -405,10 +397,13 @@ def _robot_pair(
     """The conflicts of robots ``a`` and ``b`` and the motion pairs compared."""
     ca, ra = _motion_spheres(sa)
     cb, rb = _motion_spheres(sb)
-    near = np.argwhere((_gaps(ca, ra, cb, rb) < s.clearance).any(axis=(2, 3)))
+    gaps = _gaps(ca, ra, cb, rb)
     out = []
-    for x, y in near.tolist():
-        found = _pair(sa, sa.spans[x], sb, sb.spans[y], s, tally)
+    for x, y in np.argwhere((gaps < s.clearance).any(axis=(2, 3))).tolist():
+        g = gaps[x, y]
+        near = np.argwhere(g < s.clearance)
+        near = near[np.argsort(g[near[:, 0], near[:, 1]])]
+        found = _pair(sa, sa.spans[x], sb, sb.spans[y], near, s, tally)
         if found is not None:
             out.append(Conflict(a, x, b, y, found[0], found[1], found[2]))
     return out, len(ca) * len(cb)
@@ -425,7 +420,7 @@ def find_interference(
         Per robot of the station its :class:`MovingRobot` (``None``: an idle robot, left out:
         where it stands is not known).
     settings
-        The clearance (mm) and the block size.
+        The clearance (mm).
 
     Returns
     -------
