@@ -182,5 +182,11 @@ def test_an_implied_interlock_is_dropped_and_an_unorderable_pair_is_an_error():
     lock = zones.interlocks[0]
     assert (lock.first, lock.release_row, lock.second, lock.wait_row) == (1, 1, 0, 0)
     # both robots' first rests: at the cycle's start together, no interlock can part them
-    with pytest.raises(PlanningError, match="robots 1 and 2 cannot be kept apart"):
+    with pytest.raises(
+        PlanningError, match="robot 1 at rest at row 0 and robot 2 at rest at row 0"
+    ):
         resolve_zones(_synthetic([(0, 0)])[0])
+    # not strict: that pair is listed, the others ordered
+    zones = resolve_zones(_synthetic([(0, 0), (3, 3)])[0], strict=False)
+    assert [(c.x, c.y) for c in zones.unresolved] == [(0, 0)] and len(zones.interlocks) == 1
+    assert "1 that no interlock can order" in zones.line()

@@ -94,20 +94,24 @@ class ZonePlan:
         Conflicting motion pairs ordered.
     dropped
         Interlocks removed as implied by the others.
+    unresolved
+        Conflicts no interlock can order (only with ``strict=False``; else a PlanningError).
     """
 
     interlocks: tuple[Interlock, ...]
     zones: tuple[Zone, ...]
     conflicts: int
     dropped: int
+    unresolved: tuple[Conflict, ...] = ()
 
     def line(self) -> str:
         """One line: conflicts, zones, interlocks."""
         rev = sum(z.reversed for z in self.zones)
+        left = f", {len(self.unresolved)} that no interlock can order" if self.unresolved else ""
         return (
             f"{self.conflicts} conflicting motion pairs in {len(self.zones)} zones, "
             f"{len(self.interlocks)} interlocks ({self.dropped} implied dropped, "
-            f"{rev} zones against the nominal order to avoid a deadlock)"
+            f"{rev} zones against the nominal order to avoid a deadlock){left}"
         )
 
 
@@ -221,10 +225,13 @@ def _components(conflicts: list[Conflict]) -> list[list[Conflict]]:
 
 
 def _zone_edges(
-    comp: list[Conflict], sizes: list[int], times: list[np.ndarray], edges: list[Edge]
-) -> tuple[list[Edge], Zone] | None:
+    comp: list[Conflict], motions: Any, times: list[np.ndarray], edges: list[Edge],
+    unresolved: list[Conflict] | None,
+) -> tuple[list[Edge], Zone] | None:  # fmt: skip
     """The edge(s) that order zone ``comp`` given ``edges``, and its :class:`Zone`; ``None``
-    when ``edges`` already order it."""
+    when ``edges`` already order it. ``unresolved``: where to put the cells no order can part
+    (``None``: a PlanningError)."""
+    sizes = _sizes(motions)
     vc = happens_before(sizes, edges)
     a, b = comp[0].a, comp[0].b
     if all(ordered(vc, a, c.x, b, c.y) for c in comp):
@@ -237,13 +244,27 @@ def _zone_edges(
         edge = _edge(sizes, f, f_hi, s, s_lo)
         if edge is not None and not _closes_cycle(vc, edge):
             return [edge], Zone(f, (f_lo, f_hi), s, (s_lo, s_hi), len(comp), k == 1)
-    return _cell_edges(comp, sizes, times, edges), Zone(a, box[0], b, box[1], len(comp), True)
+    new = _cell_edges(comp, motions, times, edges, unresolved)
+    return new, Zone(a, box[0], b, box[1], len(comp), True)
+
+
+def _sizes(motions: Any) -> list[int]:
+    """Events per robot: one more than its motions (0: an idle robot)."""
+    return [len(m) + 1 if len(m) else 0 for m in motions]
+
+
+def _what(motion: Motion) -> str:
+    if motion.kind == "rest":
+        return f"at rest at row {motion.start_row}"
+    return f"moving rows {motion.start_row} -> {motion.end_row}"
 
 
 def _cell_edges(
-    comp: list[Conflict], sizes: list[int], times: list[np.ndarray], edges: list[Edge]
-) -> list[Edge]:
+    comp: list[Conflict], motions: Any, times: list[np.ndarray], edges: list[Edge],
+    unresolved: list[Conflict] | None,
+) -> list[Edge]:  # fmt: skip
     """A zone whose block order closes a cycle either way: each cell ordered alone."""
+    sizes = _sizes(motions)
     new: list[Edge] = []
     for c in sorted(comp, key=lambda c: (times[c.a][c.x], c.x, c.y)):
         vc = happens_before(sizes, edges + new)
@@ -258,25 +279,37 @@ def _cell_edges(
                 new.append(e)
                 break
         else:
+            if unresolved is not None:
+                unresolved.append(c)
+                continue
             raise PlanningError(
-                f"robots {c.a + 1} and {c.b + 1} cannot be kept apart by interlocks: their "
-                f"motions {c.x} and {c.y} (closer than the clearance, {c.bodies}) are forced "
-                "to overlap by the programs' order and the other interlocks"
+                f"robots {c.a + 1} and {c.b + 1} cannot be kept apart by interlocks: robot "
+                f"{c.a + 1} {_what(motions[c.a][c.x])} and robot {c.b + 1} "
+                f"{_what(motions[c.b][c.y])} come within {c.distance:.1f} mm ({c.bodies}), and "
+                "the programs' order and the other interlocks make them overlap"
             )
     return new
 
 
-def resolve_zones(interference: Interference) -> ZonePlan:
+def resolve_zones(interference: Interference, *, strict: bool = True) -> ZonePlan:
     """The interlocks that order every conflict of ``interference`` (module docstring).
+
+    Parameters
+    ----------
+    interference
+        What :func:`~weldplan.multi.interference.find_interference` found.
+    strict
+        ``False``: conflicts no interlock can order are listed in :attr:`ZonePlan.unresolved`
+        (and the others ordered) instead of raising.
 
     Raises
     ------
     PlanningError
-        Two motions that no interlock can order (e.g. two robots' start configurations closer
-        than the clearance).
+        ``strict`` and two motions that no interlock can order (e.g. two robots' start
+        configurations closer than the clearance).
     """
     motions = interference.motions
-    sizes = [len(m) + 1 if len(m) else 0 for m in motions]
+    sizes = _sizes(motions)
     by_pair: dict[tuple[int, int], list[Conflict]] = {}
     for c in interference.conflicts:
         by_pair.setdefault((c.a, c.b), []).append(c)
@@ -285,20 +318,25 @@ def resolve_zones(interference: Interference) -> ZonePlan:
     comps.sort(key=lambda cp: min(min(t0[c.a][c.x], t0[c.b][c.y]) for c in cp))
     edges: list[Edge] = []
     zones: list[Zone] = []
+    unresolved: list[Conflict] | None = None if strict else []
     for comp in comps:
-        got = _zone_edges(comp, sizes, nominal_times(motions, edges), edges)
+        got = _zone_edges(comp, motions, nominal_times(motions, edges), edges, unresolved)
         if got is not None:
             edges += got[0]
             zones.append(got[1])
     kept, dropped = _reduce(sizes, edges)
     vc = happens_before(sizes, kept)
-    bad = [c for c in interference.conflicts if not ordered(vc, c.a, c.x, c.b, c.y)]
+    left = tuple(unresolved or ())
+    bad = [
+        c for c in interference.conflicts
+        if not ordered(vc, c.a, c.x, c.b, c.y) and not any(c is u for u in left)
+    ]  # fmt: skip
     if bad:  # the construction orders each; a failure here is a bug, said plainly
         raise PlanningError(f"interlocks leave {len(bad)} conflicts unordered: {bad[:3]}")
     locks = _interlocks(motions, kept)
     log.info("zones: %d conflicts, %d zones, %d interlocks", len(interference.conflicts),
              len(zones), len(locks))  # fmt: skip
-    return ZonePlan(locks, tuple(zones), len(interference.conflicts), dropped)
+    return ZonePlan(locks, tuple(zones), len(interference.conflicts), dropped, left)
 
 
 def _reduce(sizes: list[int], edges: list[Edge]) -> tuple[list[Edge], int]:
