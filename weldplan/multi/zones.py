@@ -33,7 +33,8 @@ The choice
    interlocks already chosen (a deadlock) or is impossible (a robot cannot leave its first rest
    after another, nor release from its last), then the other. When both close a cycle, each cell
    of the zone is ordered alone the same way; a cell that cannot be ordered either way is a
-   :class:`~weldplan.errors.PlanningError` naming the robots and rows.
+   :class:`~weldplan.errors.PlanningError` naming the robots and rows (or, not ``strict``,
+   listed in :attr:`ZonePlan.unresolved`).
 3. Interlocks implied by the others (transitive reduction) are dropped; the rest are numbered in
    the order of their nominal release: zone ``Z<k>``, signal ``k``.
 """
@@ -367,10 +368,3 @@ def _interlocks(
         wait = motions[b][v - 1].start_row  # the rest at the departure's stop
         out.append(Interlock(f"Z{k}", a, release, b, wait, k))
     return tuple(out)
-
-
-def interlocked_schedule(names: Any, timings: Any, plan: ZonePlan, weld_ids: Any = None) -> Any:
-    """The nominal :class:`~weldplan.multi.schedule.StationSchedule` with ``plan``'s waits."""
-    from weldplan.multi.schedule import station_schedule
-
-    return station_schedule(names, timings, plan.interlocks, weld_ids=weld_ids)
