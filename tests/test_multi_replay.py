@@ -86,3 +86,17 @@ def test_interlocks_that_wait_in_a_circle_or_name_a_moving_row_are_refused():
         overlapping(stops, circle)
     with pytest.raises(InputError, match="not a stop"):
         overlapping(stops, (Interlock("Z1", 0, 1, 1, 0, 1),))
+
+
+def test_the_replay_is_conservative_against_a_fine_brute_force_sampling():
+    from tests.test_multi_interference import _brute
+    from weldplan.multi.replay import _check_pair, _Found, _run
+
+    robots, timings = mf.pair()
+    ra, rb = (_run(r) for r in mf.replayed(robots, timings))
+    # robot 1 resting at its start while robot 2 swings into the middle (motions 0 and 1)
+    D = _brute(robots, timings, 0, 1)
+    assert _check_pair(ra, 0, rb, 1, D + 1.0, _Found()) is not None  # cannot be called clear
+    found = _Found()
+    assert _check_pair(ra, 0, rb, 1, D - 30.0, found) is None  # proven, its bound is tight
+    assert found.low >= D - 30.0  # what it found there is no closer than what it proved
