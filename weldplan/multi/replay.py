@@ -280,13 +280,12 @@ def overlapping(
 # ---------------------------------------------------------------------------- distances
 @dataclass(frozen=True, eq=False)
 class _Run:
-    """One robot replayed: its bodies, per sample their frames and sphere centres, the motion
-    bound between consecutive samples, its stops and motions."""
+    """One robot replayed: its bodies, per sample their frames, the motion bound between
+    consecutive samples, its stops and motions."""
 
     name: str
     chain: _Chain
     frames: NDArray[np.float64]  # (n, L + 1, 4, 4)
-    centres: NDArray[np.float64]  # (n, B, 3)
     radii: NDArray[np.float64]  # (B,)
     step: NDArray[np.float64]  # (n - 1, B)
     stops: NDArray[np.int64]
@@ -301,14 +300,13 @@ def _run(rr: ReplayRobot) -> _Run:
     chain = _read_chain(rr)
     Q = np.asarray(rr.timing.q, dtype=np.float64)
     F = _fk(chain, rr.base, Q)
-    C = np.stack([F[:, k, :3, :3] @ c + F[:, k, :3, 3] for _, k, _, c, _, _ in chain.bodies], 1)
     rho = np.array([b[5] for b in chain.bodies])  # (B, 6)
     step = np.abs(np.diff(Q, axis=0)) @ rho.T
     stops, spans = _motions(rr.timing)
     radii = np.array([b[4] for b in chain.bodies])
     cum = np.vstack([np.zeros((1, len(radii))), np.cumsum(step, axis=0)])
     base = np.asarray(rr.base, float)
-    return _Run(rr.name, chain, F, C, radii, step, stops, spans, Q, base, cum, {})
+    return _Run(rr.name, chain, F, radii, step, stops, spans, Q, base, cum, {})
 
 
 def _bound(run: _Run, u: float) -> NDArray[np.float64]:
