@@ -1,7 +1,8 @@
 """``weldplan.plan`` on a station of two robots (weldplan.multi.station): the demo part, the
 shared spot gun on two KUKA KR 150 at given bases on either side of the part, six of the demo's
 welds (15 among them: no robot reaches it). Slow: it runs the whole single-robot pipeline once
-per robot (about 3 min wall, 70 s CPU on a loaded machine)."""
+per robot (about 3 min wall, 70 s CPU on a loaded machine). The station's interference stage is
+tested fast on two crossing robots with synthetic routes (tests/multi_fixtures.py)."""
 
 from __future__ import annotations
 
@@ -54,6 +55,63 @@ def test_a_searched_base_among_several_robots_is_refused_by_name():
     assert e.value.field == "base"
 
 
+def _synthetic_plan(robot, timing):
+    """A :class:`~weldplan.station.pipeline.Plan` holding only what the station's interference
+    stage reads: the robot at its base and a program over ``timing``'s rows (no tool)."""
+    from weldplan.io.posts.program import RobotProgram, Target
+    from weldplan.robot.program import ProgramBuild
+    from weldplan.station.pipeline import Plan
+    from weldplan.station.robotstage import RobotResult
+
+    Q = timing.q[[int(np.argmin(np.abs(timing.t - t))) for t in timing.row_times]]
+    welds = set(timing.weld_rows.tolist())
+    targets = tuple(
+        Target("weld" if r in welds else "via", r, f"w{r}" if r in welds else "", np.eye(4), q,
+               np.zeros(3, bool), "joint", 0.0, 1000.0)
+        for r, q in enumerate(Q)
+    )  # fmt: skip
+    program = RobotProgram(
+        "p", robot.name, robot.joint_names, targets, np.eye(4), 0.0, np.zeros(3), np.eye(4)
+    )
+    build = ProgramBuild(program, timing, timing.total, 1000.0, 0.0)
+    return Plan(None, 0, None, None, None, robot=RobotResult(None, None, None, robot),
+                program=build)  # fmt: skip
+
+
+def test_the_interference_stage_interlocks_two_crossing_robots_and_the_replay_proves_it():
+    from tests import multi_fixtures as mf
+    from weldplan.io.posts.program import SignalAction
+    from weldplan.multi.station import _interference
+
+    robots, timings = mf.pair()
+    st = _station()
+    assert Path(st.robots[0].urdf).resolve() == mf.urdf().resolve()  # the same KR 150
+    bases = ((-1500.0, 0.0, 0.0, 0.0), (1500.0, 0.0, 0.0, 180.0))  # as mf.pair places them
+    station = dataclasses.replace(
+        st, robots=tuple(dataclasses.replace(st.robots[0], base=b) for b in bases)
+    )
+    plans = [_synthetic_plan(r, t) for r, t in zip(robots, timings, strict=True)]
+    seconds: dict[str, float] = {}
+    out, schedule, verdict, line = _interference(station, plans, ("robot1", "robot2"), seconds)
+    assert verdict.ok and verdict.min_distance >= station.clearance
+    assert {"interference", "zones", "replay"} <= set(seconds)
+    (lock,) = schedule.interlocks
+    # each program carries its side of the interlock, at the route row of the timed row
+    first, second = out[lock.first].program.program, out[lock.second].program.program
+    assert first.signals == (SignalAction(lock.release_row, "set", 1, lock.name),)
+    assert second.signals == (SignalAction(lock.wait_row, "wait", 1, lock.name),)
+    assert all(
+        p.program.program.targets is q.program.program.targets
+        for p, q in zip(out, plans, strict=True)
+    )
+    # the waiting robot's cycle grows by its wait, exactly
+    w = schedule.waiting
+    assert w[lock.first] == 0.0 and w[lock.second] > 0.0
+    for r, t in enumerate(timings):
+        assert schedule.cycle_times[r] == pytest.approx(t.total + w[r], abs=1e-9)
+    assert "1 interlocks" in line and "replay ok" in line
+
+
 @pytest.mark.slow
 def test_two_robots_share_the_demo_welds_and_each_plans_its_share(tmp_path):
     import weldplan
@@ -72,17 +130,29 @@ def test_two_robots_share_the_demo_welds_and_each_plans_its_share(tmp_path):
         assert len(sub.station.robots) == 1 and sub.station.robots[0].base == BASES[r]
         timing = sub.program.timing
         assert timing.total >= timing.weld_time * len(sub.robot.robot_route.weld_ids) - 1e-9
-    assert p.cycle_time == max(p.timed_cycles)
     assert p.report.bound.value <= a.cycle_time + 1e-9
     rows = dict(p.summary_rows())
-    assert rows["interference"] == NO_INTERFERENCE
     assert {f"robot robot{k}" for k in (1, 2)} <= set(rows)
     assert np.isfinite(p.cycle_time) and p.cycle_time > 0
-    # the schedule runs each robot's own timing (no interlocks yet): the same cycles, no waits,
-    # and every weld of every program on the clock under its id
+    # the schedule runs each robot's own timing and its waits at the interlocks: the station's
+    # cycle is the last robot's end, each robot's end its own cycle plus its waits, and every
+    # weld of every program on the clock under its id
     s = p.schedule
-    assert s is not None and s.interlocks == () and s.waiting == (0.0, 0.0)
-    assert s.cycle_times == pytest.approx(p.timed_cycles, abs=1e-9)
+    assert s is not None and p.cycle_time == s.cycle_time >= max(p.timed_cycles)
     for r, sub in enumerate(p.plans):
+        assert s.cycle_times[r] == pytest.approx(p.timed_cycles[r] + s.waiting[r], abs=1e-9)
         welded = {t.joint_id for t in sub.program.program.targets if t.kind == "weld"}
         assert {a.label for a in s.of(r) if a.kind == "weld"} == welded
+        # each program carries its side of every interlock, named by route row
+        prog = sub.program.program
+        mine = [(i.signal, "set") for i in s.interlocks if i.first == r]
+        mine += [(i.signal, "wait") for i in s.interlocks if i.second == r]
+        assert sorted((x.signal, x.action) for x in prog.signals) == sorted(mine)
+        assert {x.row for x in prog.signals} <= {t.row for t in prog.targets}
+    # on this station the two guns at their first welds (where the programs start) overlap:
+    # no interlock can part two robots at rest at the cycle's start, so the plan comes back
+    # whole and its replay says where they meet
+    assert p.replay is not None and not p.replay.ok
+    assert p.replay.failures[0].startswith("robot1 at rest at row 0 and robot2 at rest at row 0")
+    assert rows["interference"] != NO_INTERFERENCE and "REPLAY FAILED" in rows["interference"]
+    assert "no interlock can order" in rows["interference"]

@@ -14,9 +14,22 @@
    a sub-station: the same station with that robot alone and the welds file restricted to its
    share (written in the file's own units beside nothing: a temporary folder, removed after).
 
-The result (:class:`StationPlan`) holds each robot's :class:`~weldplan.station.pipeline.Plan`,
-the allocation report and the studies. **Robot-robot interference is not handled yet**: every
-robot is planned alone against the part (:data:`NO_INTERFERENCE`; issue 30, item 4).
+5. robot-robot interference (issue 30, item 4): the pairs of motions of two robots whose swept
+   robots come closer than the station's ``clearance``
+   (:func:`weldplan.multi.interference.find_interference`), the interlocks that order each such
+   pair under any timing (:func:`weldplan.multi.zones.resolve_zones`), each robot's program
+   rebuilt with its interlock signals (:attr:`~weldplan.io.posts.program.RobotProgram.signals`),
+   the schedule with the waits, and the independent replay
+   (:func:`weldplan.multi.replay.replay_station`). Conflicts no interlock can order (two robots
+   whose first rows, where each program starts, or last rows are closer than the clearance) are
+   left unordered rather than refused: the plan is returned whole, and its replay says
+   ``ok=False`` naming the two robots and rows (the interference line too), so that a caller
+   (the CLI: a partial result) reports it instead of losing the plan.
+
+The result (:class:`StationPlan`) holds each robot's :class:`~weldplan.station.pipeline.Plan`
+(its program carrying its signals), the allocation report, the studies, the schedule with the
+waits and the replay's verdict. An idle robot (no weld) is left out of the interference check:
+where it stands is not planned.
 
 Limits of this first version (each a :class:`~weldplan.errors.ConfigError` naming the key):
 every robot needs a ``urdf`` and a given ``base``, and the part stays in the part frame
@@ -44,7 +57,7 @@ from weldplan.multi.schedule import ReplayVerdict, StationSchedule, station_sche
 
 log = logging.getLogger(__name__)
 
-#: what every station plan says of robot-robot interference until issue 30, item 4 lands
+#: what a station plan built without the interference stage says of it
 NO_INTERFERENCE = (
     "robot-robot interference not checked: each robot is planned alone against the part"
 )
@@ -69,16 +82,17 @@ class StationPlan:
     studies
         Per robot its :class:`~weldplan.study.FeasibilityStudy` (part frame).
     interference
-        :data:`NO_INTERFERENCE`.
+        One line: the motion pairs checked, the conflicts, zones and interlocks, the replay's
+        smallest distance (:data:`NO_INTERFERENCE` when not checked).
     schedule
         The nominal :class:`~weldplan.multi.schedule.StationSchedule` of the timed programs
-        (moves, welds, waits on one clock; no interlocks yet), ``None`` before it is built.
+        (moves, welds, waits on one clock, under the interlocks), ``None`` before it is built.
     replay
         The independent robot-robot replay's :class:`~weldplan.multi.schedule.ReplayVerdict`,
         ``None`` while interference is not checked.
     stats
         ``{"seconds": {stage: wall s}}``: the cell, each robot's study, the allocation, each
-        robot's plan.
+        robot's plan, the interference, the zones, the replay.
     """
 
     station: Any
@@ -102,26 +116,35 @@ class StationPlan:
 
     @property
     def cycle_time(self) -> float:
-        """s: the station's timed cycle, the slowest robot's."""
+        """s: the station's cycle: the schedule's (the last robot's end, its waits at the
+        interlocks counted) when there is one, else the slowest robot's timed cycle."""
+        if self.schedule is not None:
+            return self.schedule.cycle_time
         return max((c for c in self.timed_cycles if c is not None), default=0.0)
 
     def summary_rows(self) -> list[tuple[str, str]]:
-        """``(label, text)`` rows: per robot its welds, allocated and timed cycle, utilisation;
-        the station's cycle beside the bound and the baselines; the interference note."""
+        """``(label, text)`` rows: per robot its welds, allocated and timed cycle, its waits at
+        the interlocks, utilisation; the station's cycle beside the bound and the baselines; the
+        interference note."""
         a, top = self.allocation, self.cycle_time
+        waits = self.schedule.waiting if self.schedule is not None else (0.0,) * len(a.robots)
         rows = []
         for r, name in enumerate(a.robots):
             c = self.timed_cycles[r]
             welded = len(a.shares[r].order)
             util = c / top if c is not None and top > 0 else 0.0
-            timed = "idle" if c is None else f"timed {c:.2f} s, utilisation {util:.0%}"
+            timed = (
+                "idle"
+                if c is None
+                else f"timed {c:.2f} s, waits {waits[r]:.2f} s, utilisation {util:.0%}"
+            )
             rows.append(
                 (
                     f"robot {name}",
                     f"{welded} welds, allocated {a.shares[r].cycle_time:.2f} s; {timed}",
                 )
             )
-        rows.append(("station cycle", f"{top:.2f} s timed (the slowest robot)"))
+        rows.append(("station cycle", f"{top:.2f} s timed (the last robot, waits included)"))
         rows += [("allocation", line) for line in self.report.lines()]
         rows.append(("interference", self.interference))
         return rows
@@ -232,16 +255,89 @@ def plan_station(
             t = time.perf_counter()
             plans.append(plan(sub, rng=seed, executor=executor, progress=progress))
             seconds[f"plan robot{k + 1}"] = time.perf_counter() - t
-    stats = {"seconds": seconds}
     names = report.ours.robots
-    schedule = station_schedule(
-        names,
-        [None if p is None else p.program.timing for p in plans],
-        weld_ids=[None if p is None else timed_weld_ids(p.program) for p in plans],
-    )
+    plans, schedule, replay, line = _interference(station, plans, names, seconds)
     return StationPlan(
-        station, seed, report, tuple(plans), tuple(studies), stats=stats, schedule=schedule
-    )
+        station, seed, report, tuple(plans), tuple(studies), interference=line,
+        stats={"seconds": seconds}, schedule=schedule, replay=replay,
+    )  # fmt: skip
+
+
+def _interference(
+    station: Any, plans: list[Any], names: tuple[str, ...], seconds: dict[str, float]
+) -> tuple[list[Any], StationSchedule, ReplayVerdict, str]:
+    """Step 5 of the module docstring: ``(plans with their signals, schedule with the waits,
+    replay verdict, the interference line)``."""
+    from weldplan.multi.interference import InterferenceSettings, MovingRobot, find_interference
+    from weldplan.multi.replay import replay_station
+    from weldplan.multi.zones import resolve_zones
+
+    movers = [
+        None if p is None else MovingRobot(
+            names[k], p.robot.robot, p.program.timing, p.tool.tool if p.tool else None,
+            p.tool.flange_tcp if p.tool else None,
+        )
+        for k, p in enumerate(plans)
+    ]  # fmt: skip
+    t = time.perf_counter()
+    found = find_interference(movers, InterferenceSettings(clearance=station.clearance))
+    seconds["interference"] = time.perf_counter() - t
+    t = time.perf_counter()
+    zones = resolve_zones(found, strict=False)
+    seconds["zones"] = time.perf_counter() - t
+    plans = _with_signals(plans, zones.interlocks)
+    timings = [None if p is None else p.program.timing for p in plans]
+    schedule = station_schedule(
+        names, timings, zones.interlocks,
+        weld_ids=[None if p is None else timed_weld_ids(p.program) for p in plans],
+    )  # fmt: skip
+    t = time.perf_counter()
+    verdict = replay_station(_replay_robots(station, plans, names), zones.interlocks,
+                             station.clearance)  # fmt: skip
+    seconds["replay"] = time.perf_counter() - t
+    md = "no pair may overlap" if np.isinf(verdict.min_distance) else (
+        f"min distance {verdict.min_distance:.1f} mm")  # fmt: skip
+    if verdict.ok:
+        said = f"replay ok over {verdict.pairs} pairs, {md}"
+    else:
+        said = f"REPLAY FAILED over {verdict.pairs} pairs: {verdict.failures[0]}"
+        log.warning("station: %s", said)
+    return plans, schedule, verdict, f"{found.line()}; {zones.line()}; {said}"
+
+
+def _with_signals(plans: list[Any], interlocks: tuple[Any, ...]) -> list[Any]:
+    """Each plan with its program carrying its interlock signals, in program order (at one
+    row: the signal it sets before the one it waits for)."""
+    rows = [None if p is None else p.program.row for p in plans]
+    acts: dict[int, list[Any]] = {}
+    for lock in interlocks:
+        for robot, action in lock.actions(rows):
+            acts.setdefault(robot, []).append(action)
+    out = list(plans)
+    for k, got in acts.items():
+        build = plans[k].program
+        got.sort(key=lambda s: (s.row, s.action != "set", s.signal))
+        program = dataclasses.replace(build.program, signals=tuple(got))
+        out[k] = dataclasses.replace(plans[k], program=dataclasses.replace(build, program=program))
+    return out
+
+
+def _replay_robots(station: Any, plans: list[Any], names: tuple[str, ...]) -> list[Any]:
+    """The robots as the replay reads them: the station's URDF and base, the tool's mesh."""
+    from weldplan.multi.replay import ReplayRobot
+    from weldplan.robot.reach import base_pose
+
+    out = []
+    for k, (spec, p) in enumerate(zip(station.robots, plans, strict=True)):
+        tool = None if p is None or p.tool is None else p.tool
+        out.append(ReplayRobot(
+            names[k], Path(spec.urdf), base_pose(*spec.base),
+            None if p is None else p.program.timing,
+            None if tool is None else np.asarray(tool.tool.vertices),
+            None if tool is None else np.asarray(tool.tool.faces),
+            None if tool is None else tool.flange_tcp,
+        ))  # fmt: skip
+    return out
 
 
 def timed_weld_ids(build: Any) -> dict[int, str]:
