@@ -14,7 +14,7 @@ import argparse
 import contextlib
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from typing import Any
 
 from weldplan.commands._planning_args import (
@@ -34,6 +34,7 @@ __all__ = [
     "_gap_rounds",
     "add_planning_arguments",
     "config_from_args",
+    "plan_and_write",
     "positive_gb",
     "positive_mm",
     "run_planning",
@@ -66,26 +67,38 @@ def _executor(args: argparse.Namespace, jobs: int) -> Iterator[Any]:
         yield ex
 
 
-def run_planning(
-    args: argparse.Namespace, station: Any, *, title: str, note: str | None = None,
-    show_cell: bool = False,
-) -> int:  # fmt: skip
-    """Plan ``station``, write its files, print the summary; returns the exit code."""
+def plan_and_write(
+    args: argparse.Namespace, station: Any, write: Callable[[Any], None]
+) -> tuple[Any, dict[str, float]]:
+    """:func:`weldplan.plan` on ``station`` (one robot or several) with the run's options (the
+    seed, ``--jobs`` / ``--dask``, progress bars unless ``--quiet``), then ``write(plan)`` as
+    the ``export`` stage; returns the plan and the seconds of ``export`` and of the whole run
+    (``total``)."""
     import weldplan
-    from weldplan.station.outputs import write_plan
 
-    station, outputs = _prepare(args, station)
     bars = ProgressBars(enabled=False if args.quiet else None)
     t_all = time.perf_counter()
     with _executor(args, station.jobs) as executor:
         try:
             rng = station.seed if args.seed is None else args.seed
-            result = weldplan.plan(station, rng=rng, executor=executor, progress=bars)
+            plan = weldplan.plan(station, rng=rng, executor=executor, progress=bars)
         finally:
             bars.close()
     with bars.stage("export") as st:
-        write_plan(result, outputs)
-    times = {**result.times, "export": st.seconds, "total": time.perf_counter() - t_all}
+        write(plan)
+    return plan, {"export": st.seconds, "total": time.perf_counter() - t_all}
+
+
+def run_planning(
+    args: argparse.Namespace, station: Any, *, title: str, note: str | None = None,
+    show_cell: bool = False,
+) -> int:  # fmt: skip
+    """Plan ``station``, write its files, print the summary; returns the exit code."""
+    from weldplan.station.outputs import write_plan
+
+    station, outputs = _prepare(args, station)
+    result, seconds = plan_and_write(args, station, lambda plan: write_plan(plan, outputs))
+    times = {**result.times, **seconds}
     if not args.quiet:
         if show_cell and hasattr(result.cell, "format_summary"):
             print(result.cell.format_summary() + "\n")

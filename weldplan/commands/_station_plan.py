@@ -9,35 +9,22 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import sys
-import time
 from typing import Any
 
 
 def run_station(args: argparse.Namespace, station: Any, *, title: str) -> int:
     """Plan ``station`` (several robots), write its files, print the summary; the exit code."""
-    import weldplan
-    from weldplan.commands._planning import _executor
-    from weldplan.commands._progress import ProgressBars
+    from weldplan.commands._planning import plan_and_write
     from weldplan.multi.bases import check_bases
     from weldplan.multi.saved import robot_plans, station_paths, write_station
 
     station = _named(station)
     paths = station_paths(station.outputs, len(station.robots))  # checked before any work
     check_bases(station)
-    bars = ProgressBars(enabled=False if args.quiet else None)
-    t_all = time.perf_counter()
-    with _executor(args, station.jobs) as executor:
-        try:
-            rng = station.seed if args.seed is None else args.seed
-            splan = weldplan.plan(station, rng=rng, executor=executor, progress=bars)
-        finally:
-            bars.close()
-    with bars.stage("export") as st:
-        write_station(splan, paths)
+    splan, seconds = plan_and_write(args, station, lambda plan: write_station(plan, paths))
     plans = robot_plans(splan)
     if not args.quiet:
-        times = {**splan.stats.get("seconds", {}), "export": st.seconds}
-        times["total"] = time.perf_counter() - t_all
+        times = {**splan.stats.get("seconds", {}), **seconds}
         print(_summary(splan, plans, paths, times, title))
     return _exit_code(splan, plans)
 

@@ -45,7 +45,6 @@ import logging
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any
 
 import fcl
@@ -54,9 +53,10 @@ import trimesh
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from weldplan.geometry.checker import CheckVerdict, advance
+from weldplan.geometry.checker import advance
 from weldplan.geometry.world import CollisionWorld, Exemption, WorldBody
 from weldplan.tool.model import Tool, bvh, outside_sphere
+from weldplan.tool.sweep_motion import SweepCheck, SweepMotion, SweptChecks
 
 log = logging.getLogger(__name__)
 
@@ -142,58 +142,7 @@ def tool_zone(tool: Tool, radius: float) -> tuple[NDArray[np.float64], NDArray[n
     return tool.vertices[used], inv.reshape(-1, 3).astype(np.int64)
 
 
-@dataclass(frozen=True)
-class SweepCheck:
-    """Outcome of one motion's check.
-
-    Attributes
-    ----------
-    ok
-        The tool keeps ``clearance`` from the part along the whole motion.
-    samples
-        FCL distance samples taken.
-    min_slack
-        mm: the least :meth:`SweepChecker.slack` measured at a sample (``inf``: nothing near).
-    blocked_at
-        The motion parameter in [0, 1] where the check stopped (NaN when ``ok``).
-    bound
-        mm: the motion bound ``L``.
-    out_of_budget
-        The caller's cap or deadline (:meth:`SweepChecker.check`) stopped the check.
-    min_step
-        mm: the checker's least step away from a weld pose (a slack below it blocks there).
-    """
-
-    ok: bool
-    samples: int
-    min_slack: float
-    blocked_at: float = float("nan")
-    bound: float = 0.0
-    out_of_budget: bool = False
-    min_step: float = 0.0
-
-    @property
-    def verdict(self) -> CheckVerdict:
-        """This check as a :class:`~weldplan.geometry.checker.CheckVerdict` (the place: where
-        it was blocked, as a share of the motion)."""
-        fails = () if self.ok else ((f"{100 * self.blocked_at:.0f} %", self.describe()),)
-        return CheckVerdict.of("tool motion", 1, fails, ok=self.ok)
-
-    def describe(self) -> str:
-        if self.ok:
-            return f"free ({self.samples} samples, least slack {self.min_slack:.1f} mm)"
-        if self.out_of_budget:
-            return f"not shown free at {100 * self.blocked_at:.0f} %: the caller's budget ran out"
-        if self.min_slack < 0:
-            how = "collides or lacks clearance"
-        elif self.min_slack < self.min_step:
-            how = f"within {self.min_step:g} mm of lacking clearance away from a weld pose"
-        else:
-            how = "grazes: sample budget spent"
-        return f"blocked at {100 * self.blocked_at:.0f} % of the motion ({how})"
-
-
-class SweepChecker:
+class SweepChecker(SweptChecks):
     """The planner's swept-tool checker: python-fcl models of the part and the tool, kept.
 
     Parameters
@@ -439,41 +388,28 @@ class SweepChecker:
         """Whether one pose (TCP ``p (3,)`` mm, ``q`` wxyz) clears (:meth:`slack` >= 0)."""
         return self.slack(p, quat_to_matrix(q), exempt) >= 0.0
 
-    def check(
-        self,
-        p0: ArrayLike,
-        q0: ArrayLike,
-        p1: ArrayLike,
-        q1: ArrayLike,
-        exempt: ArrayLike | None = None,
-        soft: tuple[bool, bool] = (True, True),
-        *,
-        cap: int | None = None,
-        deadline: float | None = None,
-    ) -> SweepCheck:
-        """Check the motion ``(p0, q0) -> (p1, q1)`` by conservative advancement (module
-        docstring) on :meth:`slack`. ``exempt (m, 3)``: the weld spots whose zones apply.
-        ``soft``: whether the advancement from the start (from the end) may take steps shorter
-        than ``min_step`` over its first ``max(contact_radius, 10 min_step)`` mm of tool motion
-        (a weld pose's slack may be small; a motion that short from a weld pose is soft at both
-        ends); elsewhere a slack below ``min_step`` blocks the motion at once (fail fast: OMPL
-        asks about many motions). Softness changes only where the check gives up early, never
-        what it shows: a passed motion keeps the clearance throughout.
-
-        ``cap`` (samples) and ``deadline`` (a :func:`time.perf_counter` value) bound the check's
-        own work: when either is spent before the motion is shown free, the motion is reported
-        not free (``out_of_budget``), never free. The SE(3) re-plan uses them so that its time
-        budget holds for the gun (one motion of a large turn may ask for thousands of samples)."""
+    def _motion(
+        self, p0: ArrayLike, q0: ArrayLike, p1: ArrayLike, q1: ArrayLike, soft: tuple[bool, bool]
+    ) -> SweepMotion:
+        """The motion ``(p0, q0) -> (p1, q1)`` as :meth:`check` takes it (:class:`SweepMotion`)."""
         L = motion_bound(p0, q0, p1, q1, self.reach)
         soft_range = max(self.contact_radius, 10 * self.min_step)
         if L <= soft_range and any(soft):  # a short motion off a weld pose lies wholly in its
             soft = (True, True)  # soft range: its far end may have a small slack too
+        a, b = np.asarray(p0, dtype=np.float64), np.asarray(p1, dtype=np.float64)
+        at = _interpolator(p0, q0, p1, q1)
+        return SweepMotion(a, b, at, L, soft, soft_range, self._inside(p0, p1))
+
+    def _advance(
+        self, m: SweepMotion, exempt: ArrayLike | None, cap: int | None, deadline: float | None
+    ) -> SweepCheck:
+        """:meth:`check`'s advancement, one FCL sample at a time (module docstring); ``deadline``
+        is a :func:`time.perf_counter` value."""
+        L, soft, soft_range, focused, pose_at = m.L, m.soft, m.soft_range, m.focused, m.at
         budget = [max_samples(L, self.min_step)]
         smin = [math.inf]
-        focused = self._inside(p0, p1)
         late = [False]
         first = budget[0]
-        pose_at = _interpolator(p0, q0, p1, q1)
         if L > 0 and cap is None and deadline is None:
             # FCL's collide first (tens of times cheaper than a distance): a motion on which
             # the tool touches the part cannot pass, wherever the advancement would stop
@@ -524,10 +460,8 @@ class SweepChecker:
         the soft range of the start, a weld pose maybe; the same sample budget), so it keeps the
         clearance on ``[0, t]`` and ``1.0`` means all of it. Not the planner's check (that one
         meets in the middle and tries FCL's collide first: it fails faster, and says less)."""
-        L = motion_bound(a[0], a[1], b[0], b[1], self.reach)
-        soft_range = max(self.contact_radius, 10 * self.min_step)
-        pose_at = _interpolator(a[0], a[1], b[0], b[1])
-        focused = self._inside(a[0], b[0])
+        m = self._motion(a[0], a[1], b[0], b[1], (True, False))
+        L, soft_range, pose_at, focused = m.L, m.soft_range, m.at, m.focused
 
         def slack_at(s: float) -> float:
             pos, rot = pose_at([s])

@@ -45,14 +45,13 @@ from weldplan.tool.sweep import (
     SweepCheck,
     SweepChecker,
     _bisection_order,
-    _interpolator,
     max_samples,
-    motion_bound,
     quat_to_matrix,
 )
 
 __all__ = ["COVER_GRID_MM", "FLOOR_MM", "TOUCH_GRID_MM", "FastSweep", "_bisection_order"]
 from weldplan.tool.sweep_bound import THETA_PAD, Interpolator, SweepBound
+from weldplan.tool.sweep_motion import SweepMotion, SweptChecks
 
 #: mm: a sphere whose bound is below ``min_step`` plus this asks FCL (a sphere just above it
 #: would make tiny steps)
@@ -90,7 +89,7 @@ class _Cover:
         )
 
 
-class FastSweep:
+class FastSweep(SweptChecks):
     """:class:`~weldplan.tool.sweep.SweepChecker`'s state and motion checks with the sphere
     bound first (module docstring); the same guarantees, FCL asked far less often.
 
@@ -121,34 +120,25 @@ class FastSweep:
         self.exact_samples += 1
         return self.checker.slack(p, R, exempt) >= 0.0
 
-    def check(
-        self,
-        p0: ArrayLike,
-        q0: ArrayLike,
-        p1: ArrayLike,
-        q1: ArrayLike,
-        exempt: NDArray | None = None,
-        soft: tuple[bool, bool] = (True, True),
-        *,
-        cap: int | None = None,
-        deadline: float | None = None,
+    def _motion(
+        self, p0: ArrayLike, q0: ArrayLike, p1: ArrayLike, q1: ArrayLike, soft: tuple[bool, bool]
+    ) -> SweepMotion:
+        """The checker's own set-up of the motion (its crop answers for the whole motion only
+        when both ends lie in its box: the box is convex; a sample's own position in it is not
+        enough for a step)."""
+        return self.checker._motion(p0, q0, p1, q1, soft)
+
+    def _advance(
+        self, m: SweepMotion, exempt: ArrayLike | None, cap: int | None, deadline: float | None
     ) -> SweepCheck:
-        """:meth:`SweepChecker.check`'s contract (``cap`` counts FCL samples only; ``deadline``
-        is a :func:`time.process_time` value, the SE(3) re-plan's CPU budget): free only when
-        the tool keeps the clearance along the whole motion (module docstring)."""
-        chk = self.checker
-        L = motion_bound(p0, q0, p1, q1, chk.reach)
-        at = _interpolator(p0, q0, p1, q1)
-        # the checker's crop answers for the whole motion only when both ends lie in its box
-        # (the box is convex); a sample's own position in it is not enough for a step
-        focused = chk._inside(p0, p1)
-        soft_range = max(chk.contact_radius, 10 * chk.min_step)
-        if L <= soft_range and any(soft):
-            soft = (True, True)
-        dp = float(np.linalg.norm(np.asarray(p1, dtype=np.float64) - np.asarray(p0, np.float64)))
+        """:meth:`check`'s advancement, coarse to fine (:meth:`_cover`): free only when the tool
+        keeps the clearance along the whole motion (module docstring). ``cap`` counts FCL
+        samples only; ``deadline`` is a :func:`time.process_time` value."""
+        chk, L, at = self.checker, m.L, m.at
+        dp = float(np.linalg.norm(m.p1 - m.p0))
         R0, R1 = at([0.0, 1.0])[1]  # one call: scipy's rotations are the same bits batched
         theta = math.acos(min(1.0, max(-1.0, (np.trace(R0.T @ R1) - 1) / 2))) + THETA_PAD
-        run = _Cover(at, L, (dp, theta), exempt, soft, soft_range, focused, cap, deadline)
+        run = _Cover(at, L, (dp, theta), exempt, m.soft, m.soft_range, m.focused, cap, deadline)
         self._cover(run)
         self.exact_samples += run.exact
         self.bound_samples += run.taken - run.exact
