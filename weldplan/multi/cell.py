@@ -241,7 +241,7 @@ def _search(
     try:
         study = check_spots(
             cell.part, cell.joints, [tool], [StudyRobot(name, robot, True, search=opts)],
-            study_settings(station),
+            study_settings(station), frame=cell.frame,
         )  # fmt: skip
     except PlanningError as exc:
         raise ConfigError(

@@ -165,7 +165,7 @@ def _study(cell: Any, station: Any, k: int, mounted: Any, robot: Any) -> Any:
     tool = StudyTool(f"tool{k + 1}", mounted.tool, mounted.spec)  # mounted as the robot stage does
     return check_spots(
         cell.part, cell.joints, [tool], [StudyRobot(f"robot{k + 1}", robot)],
-        study_settings(station),
+        study_settings(station), frame=cell.frame,
     )  # fmt: skip
 
 

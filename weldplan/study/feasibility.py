@@ -51,6 +51,7 @@ from weldplan.io.joints import Joints
 from weldplan.robot.model import Robot
 from weldplan.station.model import ToolSpec, setting
 from weldplan.study.result import (
+    FRAME,
     NO_GUN_POSE,
     NO_SURFACE,
     NOT_ANALYSED,
@@ -260,6 +261,7 @@ def check_spots(
     settings: StudySettings | None = None,
     *,
     stacks: StackFinder | None = None,
+    frame: str = FRAME,
 ) -> FeasibilityStudy:
     """The feasibility study of ``spots`` on ``part`` (module docstring).
 
@@ -277,6 +279,9 @@ def check_spots(
         :class:`StudySettings` (defaults when ``None``).
     stacks
         The per-spot stack hook (:data:`StackFinder`).
+    frame
+        The frame ``part`` and ``spots`` are in, as the result records it: ``"part"``, or
+        ``"cell"`` for a part placed in a cell (module docstring).
 
     Returns
     -------
@@ -336,6 +341,7 @@ def check_spots(
         robots=tuple(infos),
         settings=asdict(settings),
         stats=stats,
+        frame=frame,
     )
     log.info("feasibility study: %d / %d spots feasible", int(study.feasible.sum()), len(out))
     return study
