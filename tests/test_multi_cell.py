@@ -240,3 +240,25 @@ def test_a_search_region_with_no_base_serving_a_weld_is_refused_by_robot(demo):
     with pytest.raises(ConfigError, match="robot 2: no base in its search region") as e:
         place_robots(cell_stage(st), st, _robots(st))
     assert e.value.field == "search"
+
+
+@pytest.mark.slow
+def test_weldplan_plan_keeps_the_part_pose_and_the_searched_base_in_every_robots_plan(demo):
+    """The whole station through ``weldplan.plan``: robot 1 given in the cell frame, robot 2
+    searched; each robot's plan is in the cell frame with the station's pose, at the base its
+    study used, and its program's work object carries the pose (several minutes wall)."""
+    import weldplan
+
+    st = _posed(demo, [_to_cell(PART_BASES[0]), None])
+    p = weldplan.plan(st, rng=0)
+    pose = p.plans[0].cell.part_pose if p.plans[0] is not None else p.plans[1].cell.part_pose
+    for r, sub in enumerate(p.plans):
+        if sub is None:
+            continue
+        assert sub.cell.frame == "cell" and sub.station.part_pose is st.part_pose
+        assert sub.cell.part_pose.same_as(pose)
+        assert np.allclose(sub.robot.robot.base, p.studies[r].robots[0].base_matrix(), atol=1e-9)
+        assert np.allclose(sub.program.program.part_pose, pose.matrix)
+        assert set(sub.cell.joints.ids) == set(p.allocation.welds_of(r))
+    assert p.plans[0].station.robots[0].base == _to_cell(PART_BASES[0])
+    assert p.studies[1].robots[0].searched
