@@ -119,7 +119,9 @@ def check_apart(robots: Any, settings: LayoutSettings | None = None) -> None:
     """Refuse two robots whose given bases stand closer in x, y than
     :meth:`LayoutSettings.apart` (ConfigError ``base`` naming both)."""
     settings = settings or LayoutSettings()
-    given = [(k, s.base, footprint_radius(r)) for k, (s, _, r) in enumerate(robots) if s.base]
+    given = [
+        (k, s.base, footprint_radius(r)) for k, (s, _, r) in enumerate(robots) if s.base is not None
+    ]
     for j, (kb, b, rb) in enumerate(given):
         for ka, a, ra in given[:j]:
             d = math.hypot(b[0] - a[0], b[1] - a[1])
