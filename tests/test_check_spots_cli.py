@@ -103,6 +103,33 @@ def test_every_spot_feasible_exits_0(tmp_path):
     assert study["robots"] == []
 
 
+def test_a_part_pose_studies_in_the_cell_frame_what_the_part_frame_gives(partial, tmp_path):
+    """``--part-pose`` (moved and lifted, not turned) with the base and the floor in the cell
+    frame: the same verdicts as the part-frame run of ``partial``, every position moved by the
+    pose, the table and the JSON saying "cell"."""
+    import numpy as np
+
+    part_tmp, _ = partial
+    spots = _spots_with_directions(tmp_path, off=True)
+    argv = [
+        "check-spots", PART, str(spots), "--tool", _gun(), "--tcp", "nozzle_tip",
+        "--robot", _robot(), "--robot-base=1048.1,-304.7,500,-7.5", "--quiet",
+        "--part-pose=600,-400,-152.7,0,0,0", "--floor-z", "0",
+        "-o", str(tmp_path / "t.csv"), "--json", str(tmp_path / "s.json"),
+    ]  # fmt: skip
+    assert run_cli(argv) == EXIT_PARTIAL
+    assert "cell frame" in (tmp_path / "t.csv").read_text().splitlines()[0]
+    cell = FeasibilityStudy.from_json((tmp_path / "s.json").read_text())
+    part = FeasibilityStudy.from_json((part_tmp / "s.json").read_text())
+    assert cell.frame == "cell" and part.frame == "part"
+    for c, p in zip(cell.spots, part.spots, strict=True):
+        assert c.id == p.id and c.feasible == p.feasible
+        assert [g.status for g in c.guns] == [g.status for g in p.guns]
+        assert [r.status for r in c.robots] == [r.status for r in p.robots]
+        assert np.allclose(c.position, np.add(p.position, (600.0, -400.0, -152.7)), atol=1e-6)
+    assert np.allclose(cell.robots[0].xyz_yaw(), (1048.1, -304.7, 500.0, -7.5))
+
+
 @pytest.mark.parametrize("value", ["oops", "nan", "inf"])
 def test_a_bad_spot_line_is_one_line_naming_file_line_and_field(tmp_path, capsys, value):
     bad = tmp_path / "bad.csv"

@@ -42,19 +42,6 @@ def _station(folder: Path | None = None):
     return dataclasses.replace(st, part=part)
 
 
-def test_a_searched_base_among_several_robots_is_refused_by_name():
-    import weldplan
-    from weldplan.errors import ConfigError
-
-    st = _station()
-    st = dataclasses.replace(
-        st, robots=(st.robots[0], dataclasses.replace(st.robots[1], base=None))
-    )
-    with pytest.raises(ConfigError, match="robot 2 needs a urdf and a given base") as e:
-        weldplan.plan(st, rng=0)
-    assert e.value.field == "base"
-
-
 def _synthetic_plan(robot, timing):
     """A :class:`~weldplan.station.pipeline.Plan` holding only what the station's interference
     stage reads: the robot at its base and a program over ``timing``'s rows (no tool)."""

@@ -15,6 +15,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from weldplan.commands._planning_args import add_part_pose_arguments, part_pose_from_args
 from weldplan.commands._settings_args import add_settings_options, settings_from_args
 from weldplan.commands._types import finite_mm
 from weldplan.commands.plan import add_cell_arguments
@@ -41,6 +42,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("mesh", help="part mesh (STL, OBJ, PLY, OFF, GLB/GLTF)")
     p.add_argument("spots", help="spots CSV (id, x, y, z[, nx, ny, nz]; part frame)")
     add_cell_arguments(p)
+    add_part_pose_arguments(p)
     p.add_argument("-o", "--output", required=True, help="the table to write (CSV)")
     p.add_argument("--json", metavar="F", help="also write the whole study as JSON")
     p.add_argument("--html", metavar="F", help="also write a 3D page coloured by verdict")
@@ -96,15 +98,17 @@ def _add_robot_arguments(p: argparse.ArgumentParser) -> None:
         "--robot-base",
         action="append",
         metavar="X,Y,Z,YAW|searched",
-        help="per --robot, in order: its base in the part frame (mm, deg about +z) "
+        help="per --robot, in order: its base in the part frame, or the cell frame with "
+        "--up / --part-pose (mm, deg about +z) "
         "or 'searched' on the floor (default searched)",
     )
     r.add_argument(
         "--floor-z",
         metavar="MM",
         type=finite_mm,
-        help="the floor height in the part frame: searched bases stand on it, no "
-        "link may reach below it (default: the part's lowest point, not checked)",
+        help="the floor height in the part frame, or in the cell frame with --up / --part-pose "
+        "(default 0 there): searched bases stand on it, no link may reach below it (default "
+        "without a pose: the part's lowest point, not checked)",
     )
 
 
@@ -171,13 +175,23 @@ def run(args: argparse.Namespace) -> int:
         if getattr(args, kind):
             outputs[kind] = Path(getattr(args, kind))
     check_outputs(outputs)
-    settings = settings_from_args(StudySettings, args, floor_z=args.floor_z)
+    pose = part_pose_from_args(args)
+    floor = args.floor_z if args.floor_z is not None or pose is None else pose.floor_z
+    settings = settings_from_args(StudySettings, args, floor_z=floor)
     spots = read_joints(args.spots, units=args.units)
     tools, robots = _tools(args), _robots(args)
     part = load_part(args.mesh, units=args.units, scale=args.scale, length=args.length)
+    frame = "part"
+    if pose is not None:  # the study in the cell frame (weldplan.cellframe)
+        from weldplan.cellframe import place_part
+
+        part, spots, _ = place_part(part, spots, pose)
+        frame = "cell"
     from weldplan.study.stacks import flange_stacks
 
-    study = check_spots(part, spots, tools, robots, settings, stacks=flange_stacks(args.walls))
+    study = check_spots(
+        part, spots, tools, robots, settings, stacks=flange_stacks(args.walls), frame=frame
+    )
     title = f"weldplan check-spots {args.mesh} {args.spots}"
     texts = {outputs["csv"]: study_csv_text(study, title=title)}
     if "json" in outputs:

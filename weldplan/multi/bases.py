@@ -19,7 +19,9 @@ from weldplan.errors import InputError
 
 def check_bases(station: Any) -> None:
     """Raise :class:`~weldplan.errors.InputError` naming the first robot whose given base is
-    inside the part (module docstring). Robots without a given base or URDF are skipped."""
+    inside the part (module docstring). Robots without a given base or URDF are skipped, and so
+    is a station with a part pose (checked in the cell frame by
+    :func:`weldplan.multi.cell.place_robots`, after the cell stage)."""
     import fcl
 
     from weldplan.io.mesh import load_part
@@ -28,7 +30,9 @@ def check_bases(station: Any) -> None:
     from weldplan.tool.model import bvh
 
     given = [(k, s) for k, s in enumerate(station.robots) if s.base is not None and s.urdf]
-    if not given:
+    if not given or station.part_pose is not None:
+        # with a part pose the bases are in the cell frame, where the part stands only once the
+        # cell stage has placed it: weldplan.multi.cell.place_robots checks them there
         return
     part = _part(station, load_part)
     part_obj = fcl.CollisionObject(bvh(part.vertices, part.faces), fcl.Transform())

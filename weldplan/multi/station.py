@@ -2,17 +2,22 @@
 
 :func:`plan_station` runs, in order:
 
-1. the cell (:func:`weldplan.station.pipeline.cell_stage`): the part and every weld;
-2. per robot, at its given base with its own tool, the feasibility study
+1. the cell (:func:`weldplan.station.pipeline.cell_stage`): the part and every weld, in the
+   planning frame (the cell frame when the station has a ``part_pose``);
+2. every robot's base (:func:`weldplan.multi.cell.place_robots`): a given one checked against
+   the part, a missing one searched in the robot's region, in station order, away from the
+   robots already placed;
+3. per robot, at its base with its own tool, the feasibility study
    (:func:`weldplan.study.check_spots`: a free gun pose on a usable branch with the links
    clear, else why not) and its leg times between the welds it reaches
    (:func:`weldplan.multi.inputs.study_inputs`);
-3. the allocation (:func:`weldplan.multi.allocation_report`: ours, the lower bound, the
+4. the allocation (:func:`weldplan.multi.allocation_report`: ours, the lower bound, the
    one-robot and nearest-robot baselines) over the station-branch leg times, the bound over
    the all-branch ones;
-4. per robot with welds, the single-robot pipeline (:func:`weldplan.station.pipeline.plan`) on
-   a sub-station: the same station with that robot alone and the welds file restricted to its
-   share (written in the file's own units beside nothing: a temporary folder, removed after).
+5. per robot with welds, the single-robot pipeline (:func:`weldplan.station.pipeline.plan`) on
+   a sub-station: the same station (its part pose kept) with that robot alone at its base and
+   the welds file restricted to its share (written in the file's own units and frame beside
+   nothing: a temporary folder, removed after).
 
 5. robot-robot interference (issue 30, item 4): the pairs of motions of two robots whose swept
    robots come closer than the station's ``clearance``
@@ -31,9 +36,10 @@ The result (:class:`StationPlan`) holds each robot's :class:`~weldplan.station.p
 waits and the replay's verdict. An idle robot (no weld) is left out of the interference check:
 where it stands is not planned.
 
-Limits of this first version (each a :class:`~weldplan.errors.ConfigError` naming the key):
-every robot needs a ``urdf`` and a given ``base``, and the part stays in the part frame
-(no ``part_pose``).
+Frames: every base, study, leg time and plan is in the planning frame, one for all robots
+(:mod:`weldplan.multi.cell`). Every robot needs a ``urdf``; two given bases closer than their
+footprints are refused before anything slow is loaded (each a
+:class:`~weldplan.errors.ConfigError` naming the key).
 """
 
 from __future__ import annotations
@@ -80,7 +86,7 @@ class StationPlan:
         Per robot its :class:`~weldplan.station.pipeline.Plan`, ``None`` for a robot with no
         weld.
     studies
-        Per robot its :class:`~weldplan.study.FeasibilityStudy` (part frame).
+        Per robot its :class:`~weldplan.study.FeasibilityStudy` (planning frame).
     interference
         One line: the motion pairs checked, the conflicts, zones and interlocks, the replay's
         smallest distance (:data:`NO_INTERFERENCE` when not checked).
@@ -151,43 +157,44 @@ class StationPlan:
 
 
 def _robots(station: Any) -> list[tuple[Any, Any, Any]]:
-    """``(spec, MountedTool, Robot)`` per robot, refusing what this version cannot plan."""
+    """``(spec, MountedTool, Robot)`` per robot (a searched one at the origin until
+    :func:`weldplan.multi.cell.place_robots` places it), refusing a robot without a urdf and
+    given bases too close together (:func:`weldplan.multi.cell.check_apart`)."""
+    from weldplan.multi.cell import check_apart
     from weldplan.robot import load_robot
     from weldplan.robot.reach import base_pose
     from weldplan.station.mount import mount_tool
 
-    if station.part_pose is not None:
-        raise ConfigError("several robots: a part_pose is not supported yet", field="part_pose")
     for k, spec in enumerate(station.robots):  # every refusal before any (slow) load
-        if spec.urdf is None or spec.base is None:
+        if spec.urdf is None:
             raise ConfigError(
-                f"{len(station.robots)} robots: robot {k + 1} needs a urdf and a given base "
-                "(a station of several robots does not search bases yet)",
-                field="base",
+                f"{len(station.robots)} robots: robot {k + 1} needs a urdf", field="urdf"
             )
     out = []
     for spec in station.robots:
-        robot = load_robot(spec.urdf, spec.opw, base=base_pose(*spec.base))
+        base = None if spec.base is None else base_pose(*spec.base)
+        robot = load_robot(spec.urdf, spec.opw, base=base)
         out.append((spec, mount_tool(spec.tool, robot), robot))
+    check_apart(out)
     return out
 
 
 def _study(cell: Any, station: Any, k: int, mounted: Any, robot: Any) -> Any:
-    """Robot ``k``'s feasibility study of every weld with its own tool."""
-    from weldplan.study import StudyRobot, StudySettings, StudyTool, check_spots
+    """Robot ``k``'s feasibility study of every weld with its own tool, at its base, in the
+    planning frame (the cell's part and welds, the planning frame's floor)."""
+    from weldplan.multi.cell import study_settings
+    from weldplan.study import StudyRobot, StudyTool, check_spots
 
-    ts = station.tool
-    settings = StudySettings(
-        cone=ts.cone, contact_radius=ts.contact_radius, floor_z=station.floor_z
-    )
     tool = StudyTool(f"tool{k + 1}", mounted.tool, mounted.spec)  # mounted as the robot stage does
     return check_spots(
-        cell.part, cell.joints, [tool], [StudyRobot(f"robot{k + 1}", robot)], settings
-    )
+        cell.part, cell.joints, [tool], [StudyRobot(f"robot{k + 1}", robot)],
+        study_settings(station), frame=cell.frame,
+    )  # fmt: skip
 
 
 def _welds_file(station: Any, ids: tuple[str, ...], folder: Path, k: int) -> Path:
-    """The station's welds file restricted to ``ids``, in the file's own units."""
+    """The station's welds file restricted to ``ids``, in the file's own units and frame (the
+    part frame: the sub-station places them with the station's part pose)."""
     from weldplan.io.joints import Joints, read_joints
     from weldplan.io.mesh import unit_scale
 
@@ -202,7 +209,8 @@ def _welds_file(station: Any, ids: tuple[str, ...], folder: Path, k: int) -> Pat
 
 
 def _sub_station(station: Any, spec: Any, welds: Path) -> Any:
-    """The station with robot ``spec`` alone and ``welds`` as its welds file."""
+    """The station with robot ``spec`` alone (its base fixed: :class:`~weldplan.multi.cell.
+    Layout`) and ``welds`` as its welds file; the part pose, the floor and the settings kept."""
     part = dataclasses.replace(station.part, welds=welds)
     return dataclasses.replace(station, part=part, robots=(spec,))
 
@@ -218,6 +226,7 @@ def plan_station(
     """Plan a station of several robots (module docstring); ``seed`` as
     :func:`weldplan.station.pipeline.plan` draws it."""
     from weldplan.multi.baselines import allocation_report
+    from weldplan.multi.cell import place_robots
     from weldplan.station.pipeline import cell_stage, plan
 
     say = progress or (lambda stage, done, total: None)
@@ -228,11 +237,13 @@ def plan_station(
     t = time.perf_counter()
     cell = cell_stage(station)
     seconds["cell"] = time.perf_counter() - t
+    layout = place_robots(cell, station, robots, seconds)
+    robots = list(layout.robots)
     studies, inputs = [], []
     for k, (spec, mounted, robot) in enumerate(robots):
         say("study", k, len(robots))
         t = time.perf_counter()
-        study = _study(cell, station, k, mounted, robot)
+        study = layout.studies[k] or _study(cell, station, k, mounted, robot)
         studies.append(study)
         inputs.append(study_inputs(study, [robot], [spec.settings.weld_time]))
         seconds[f"study robot{k + 1}"] = time.perf_counter() - t

@@ -135,6 +135,10 @@ class BaseSearch:
         mm: pedestal heights tried at every floor position (the base at ``floor_z + h``; the
         pedestal is the base column's extension down to the floor). Default
         :data:`DEFAULT_HEIGHTS`. Not used with ``line`` (its points are the base).
+    keep_out
+        ``((x, y, r), ...)`` mm: discs of the floor where no base may stand (a base closer than
+        ``r`` to ``(x, y)`` in the plane is no candidate): the footprints of robots already
+        placed in a station of several (:mod:`weldplan.multi.cell`). Empty: none.
     """
 
     floor_z: float | None = None
@@ -143,6 +147,7 @@ class BaseSearch:
     extra_yaws: tuple[float, ...] = DEFAULT_EXTRA_YAWS
     half_width: float | None = None
     heights: tuple[float, ...] = DEFAULT_HEIGHTS
+    keep_out: tuple[tuple[float, float, float], ...] = ()
 
     def __post_init__(self) -> None:
         if self.floor_z is not None and not math.isfinite(self.floor_z):
@@ -155,6 +160,20 @@ class BaseSearch:
                 f"pedestal heights must be finite numbers >= 0 mm, got {self.heights!r}",
                 field="heights",
             )
+        k = np.asarray(self.keep_out, dtype=np.float64).reshape(-1, 3)
+        if not np.all(np.isfinite(k)) or np.any(k[:, 2] < 0):
+            raise InputError(
+                f"keep-out discs must be finite (x, y, r >= 0) mm, got {self.keep_out!r}",
+                field="keep_out",
+            )
+
+    def outside(self, pts: NDArray[np.float64]) -> NDArray[np.bool_]:
+        """``(k,) bool``: which of ``pts (k, 3)`` mm stand outside every :attr:`keep_out` disc
+        (distance in x, y at least its radius)."""
+        ok = np.ones(len(pts), dtype=bool)
+        for x, y, r in self.keep_out:
+            ok &= np.hypot(pts[:, 0] - x, pts[:, 1] - y) >= r
+        return ok
 
 
 @dataclass(frozen=True)
@@ -313,7 +332,7 @@ def candidate_bases(
         a, b = (np.asarray(p, dtype=np.float64) for p in opts.line)
         k = max(2, int(math.ceil(np.linalg.norm(b - a) / opts.step)) + 1)
         pts = a + np.linspace(0.0, 1.0, k)[:, None] * (b - a)
-        pts = pts[_column_free(robot, pts, part)]
+        pts = pts[column_free(robot, pts, part)]
     else:
         z = opts.floor_z
         if z is None:
@@ -328,7 +347,8 @@ def candidate_bases(
         wc = T_flange[:, :3, 3]
         d = np.linalg.norm(wc[None] - (pts + [0.0, 0.0, robot.opw.c1])[:, None], axis=2).min(axis=1)
         pts = pts[d <= arm_reach(robot) + robot.opw.a1 + robot.opw.c4]
-        pts = pts[_column_free(robot, pts, part, floor=z)]
+        pts = pts[column_free(robot, pts, part, floor=z)]
+    pts = pts[opts.outside(pts)]  # robots already placed
     yaws = []
     for p in pts:
         face = math.degrees(math.atan2(centre[1] - p[1], centre[0] - p[0]))
@@ -338,7 +358,7 @@ def candidate_bases(
     return np.array([base_pose(*p, yaw) for p, yaw in yaws])
 
 
-def _column_free(
+def column_free(
     robot: Robot, pts: NDArray[np.float64], part: object | None, floor: float | None = None
 ) -> NDArray[np.bool_]:
     """``(k,) bool``: the capsule about A1 (from ``floor``, default the base itself: a pedestal

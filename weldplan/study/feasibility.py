@@ -16,13 +16,18 @@ projection and gun search of Siemens Process Simulate): per spot,
    it reaches one of the spot's free gun poses on a usable IK branch with its links and the tool
    clear of the part, itself and the floor, and else why not (:mod:`weldplan.study.robot_reach`).
 
-A searched base (:func:`_search_base`): :func:`weldplan.robot.reach.search_base` ranks floor
-candidates by the spots whose verified pose or one of its alternatives is usable, with the arm's
+A searched base (:func:`_search_base`): :func:`weldplan.robot.reach.search_base` ranks the
+candidates of the robot's region (:attr:`StudyRobot.search`, default the floor about the
+spots) by the spots whose verified pose or one of its alternatives is usable, with the arm's
 chord clear of the part, then by manipulability; the best ``base_pool`` are judged by the study
 itself (the spots served, links and tool checked) and the one serving most wins (ties: the
 search's order). The study is deterministic: no random draw, every search budgeted by work.
 
-The result (:class:`~weldplan.study.result.FeasibilityStudy`) is in the part frame; its
+Frames: the study is in the frame of the part and spots it is given, and the robots' bases
+and the floor are in that frame too: the part frame, or the cell frame when the part was placed
+in a cell (:mod:`weldplan.cellframe`; a station of several robots gives it the cell's part and
+welds, :mod:`weldplan.multi.station`). The result
+(:class:`~weldplan.study.result.FeasibilityStudy`) is in that frame; its
 :meth:`~weldplan.study.result.FeasibilityStudy.reach_matrix` (spots x robots) is the input of
 a multi-robot allocation (issue 30).
 """
@@ -46,6 +51,7 @@ from weldplan.io.joints import Joints
 from weldplan.robot.model import Robot
 from weldplan.station.model import ToolSpec, setting
 from weldplan.study.result import (
+    FRAME,
     NO_GUN_POSE,
     NO_SURFACE,
     NOT_ANALYSED,
@@ -109,8 +115,9 @@ class StudySettings:
     max_spot_distance
         mm: a spot farther from the part's surface is ``no_surface``.
     floor_z
-        mm: the cell's floor height in the part frame: searched bases stand on it and no link
-        may reach below it (``None``: bases on the part's lowest point, the floor not checked).
+        mm: the floor's height in the study's frame (module docstring): searched bases stand on
+        it and no link may reach below it (``None``: bases on the part's lowest point, the floor
+        not checked).
     singular_deg
         A5 within this many degrees of 0 is near-singular.
     robot_poses, robot_branches
@@ -233,12 +240,17 @@ class StudyRobot:
         Search its base on the floor (module docstring) instead of using ``robot.base``.
     source
         Where it was read from (for the result).
+    search
+        With ``searched``: where (:class:`~weldplan.robot.reach.BaseSearch`: the floor grid or
+        a line, and the discs kept out); ``None``: the floor about the spots, on
+        :attr:`StudySettings.floor_z`.
     """
 
     name: str
     robot: Robot
     searched: bool = False
     source: str = ""
+    search: Any = None
 
 
 def check_spots(
@@ -249,6 +261,7 @@ def check_spots(
     settings: StudySettings | None = None,
     *,
     stacks: StackFinder | None = None,
+    frame: str = FRAME,
 ) -> FeasibilityStudy:
     """The feasibility study of ``spots`` on ``part`` (module docstring).
 
@@ -266,6 +279,9 @@ def check_spots(
         :class:`StudySettings` (defaults when ``None``).
     stacks
         The per-spot stack hook (:data:`StackFinder`).
+    frame
+        The frame ``part`` and ``spots`` are in, as the result records it: ``"part"``, or
+        ``"cell"`` for a part placed in a cell (module docstring).
 
     Returns
     -------
@@ -325,6 +341,7 @@ def check_spots(
         robots=tuple(infos),
         settings=asdict(settings),
         stats=stats,
+        frame=frame,
     )
     log.info("feasibility study: %d / %d spots feasible", int(study.feasible.sum()), len(out))
     return study
@@ -536,7 +553,7 @@ def _search_base(
             sr.robot,
             T,
             part,
-            BaseSearch(floor_z=s.floor_z),
+            sr.search if sr.search is not None else BaseSearch(floor_z=s.floor_z),
             singular_deg=s.singular_deg,
             top=POOL_SPREAD * s.base_pool,
             alternatives=alts,

@@ -289,7 +289,8 @@ class FeasibilityStudy:
     stats
         Figures of the run (seconds per stage, candidate counts).
     frame
-        The frame of every position and pose: :data:`FRAME` (the part's).
+        The frame of every position and pose: :data:`FRAME` (the part's), or ``"cell"`` when
+        the part was placed in a cell (:mod:`weldplan.cellframe`).
     """
 
     spots: tuple[SpotVerdict, ...]
