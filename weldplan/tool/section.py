@@ -3,11 +3,15 @@
 A route planned with a tool carries, in its ``tool`` section (the route JSON's), the tool's
 ``provenance``, the weld ``poses`` (:class:`~weldplan.tool.result.WeldPoses`) and the tool's
 ``transitions`` (:class:`~weldplan.tool.transit.ToolPath`), and, with a robot, the robot's route.
-:class:`ToolSection` reads the tool stage's three once, as the readers of this layer need them
-(the route's frames, the re-checks of a saved route, the exporters); the whole section with the
-robot's route is :class:`weldplan.robot.toolroute.ToolRoute`, which reads its first three keys
-here. The keys not read here (``robot``, and any this version does not know) are kept as they
-were in :attr:`ToolSection.rest`.
+:class:`ToolSection` reads the tool stage's three, as the readers of this layer need them (the
+route's frames, the re-checks of a saved route, the exporters, the viewer), once per route
+(:meth:`ToolSection.of`). The whole section with the robot's route is
+:class:`weldplan.robot.toolroute.ToolRoute`, which reads its first three keys here. The keys not
+read here (``robot``, and any this version does not know) are kept as they were in
+:attr:`ToolSection.rest`.
+
+No module reads a route's ``tool`` section as a dict but these two views
+(``tests/test_code_shape.py``).
 """
 
 from __future__ import annotations
@@ -18,6 +22,7 @@ from typing import Any
 
 from weldplan.tool.result import WeldPoses
 from weldplan.tool.transit import ToolPath
+from weldplan.weld.route import Route
 
 #: the keys of the tool section the tool stage writes, in the order it writes them
 TOOL_STAGE_KEYS = ("provenance", "poses", "transitions")
@@ -66,6 +71,19 @@ class ToolSection:
         )
 
     @classmethod
-    def of(cls, route: Any) -> ToolSection:
-        """The tool section of a :class:`~weldplan.weld.route.Route` (its ``tool``)."""
-        return cls.from_dict(route.tool)
+    def of(cls, route: Route) -> ToolSection:
+        """The tool section of a :class:`~weldplan.weld.route.Route` (its ``tool``), read once
+        per route (:meth:`~weldplan.weld.route.Route.tool_view`): the readers of a route share
+        one parse.
+
+        Raises
+        ------
+        KeyError, TypeError, ValueError
+            As :meth:`from_dict` (nothing is cached then).
+        """
+        return route.tool_view(_read)
+
+
+def _read(route: Route) -> ToolSection:
+    """The view :meth:`ToolSection.of` caches on a route."""
+    return ToolSection.from_dict(route.tool)
