@@ -225,7 +225,9 @@ class ToolRoute:
         KeyError, TypeError, ValueError
             As :meth:`from_dict` (nothing is cached then).
         """
-        return route.tool_view(_read)
+        from weldplan.tool.section import cached_view
+
+        return cached_view(route, _read)
 
     @classmethod
     def from_json(cls, text: str) -> ToolRoute:
