@@ -82,3 +82,88 @@ def test_no_tool_signature_over_ten():
     (weldplan.tool.settings)."""
     wide = wide_signatures(ROBOT.parent / "tool", MAX_PARAMS)
     assert not wide, f"functions over {MAX_PARAMS} parameters in weldplan/tool: {wide}"
+
+
+#: the modules that may read a route's ``tool`` section as a dict: the Route that holds it and
+#: its two typed views (weldplan.tool.section.ToolSection, weldplan.robot.toolroute.ToolRoute)
+TOOL_SECTION_VIEWS = ("weld/route.py", "tool/section.py", "robot/toolroute.py")
+#: the methods that read a mapping
+MAPPING_METHODS = frozenset({"get", "items", "keys", "values", "copy", "pop", "setdefault"})
+
+
+def _names_a_route(node: ast.expr) -> bool:
+    """``route``, ``plan.route``, ``gun_route``: an expression named as a route."""
+    name = node.id if isinstance(node, ast.Name) else getattr(node, "attr", "")
+    return name.lower().endswith("route")
+
+
+def _reads_as_mapping(node: ast.Attribute, parent: ast.AST | None) -> bool:
+    """``x.tool`` read as a dict: subscripted, a mapping method called on it, unpacked into a
+    dict (``{**x.tool}``), defaulted to one (``x.tool or {}``), copied (``dict(x.tool)``) or
+    searched (``"k" in x.tool``)."""
+    if isinstance(parent, ast.Subscript):
+        return parent.value is node
+    if isinstance(parent, ast.Attribute):
+        return parent.attr in MAPPING_METHODS
+    if isinstance(parent, ast.Dict):
+        return any(k is None and v is node for k, v in zip(parent.keys, parent.values, strict=True))
+    if isinstance(parent, ast.BoolOp):
+        return any(isinstance(v, ast.Dict) for v in parent.values)
+    if isinstance(parent, ast.Call):
+        return isinstance(parent.func, ast.Name) and parent.func.id == "dict"
+    if isinstance(parent, ast.Compare):
+        return any(isinstance(op, (ast.In, ast.NotIn)) for op in parent.ops)
+    return False
+
+
+def tool_section_dict_reads(root: Path) -> list[str]:
+    """``file:line`` of every read of a route's ``tool`` section outside
+    :data:`TOOL_SECTION_VIEWS` in the ``.py`` files under ``root``: any ``<route>.tool``
+    (:func:`_names_a_route`: ``if route.tool:`` asks the dict whether a tool is there), and any
+    ``<x>.tool`` read as a mapping (:func:`_reads_as_mapping`), whatever ``x`` is named."""
+    out = []
+    for path in sorted(root.rglob("*.py")):
+        rel = path.relative_to(root).as_posix()
+        if rel in TOOL_SECTION_VIEWS:
+            continue
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        parents = {c: p for p in ast.walk(tree) for c in ast.iter_child_nodes(p)}
+        for node in ast.walk(tree):
+            if not (isinstance(node, ast.Attribute) and node.attr == "tool"):
+                continue
+            if _names_a_route(node.value) or _reads_as_mapping(node, parents.get(node)):
+                out.append(f"{rel}:{node.lineno}")
+    return out
+
+
+def test_no_module_reads_the_route_tool_section_as_a_dict():
+    """Issue 28, "Results travel as dicts": a route's tool section is read typed, once per
+    route (ToolSection.of, ToolRoute.of), never re-parsed from the dict by its readers."""
+    reads = tool_section_dict_reads(COMMANDS.parent)
+    assert not reads, f"reads of route.tool as a dict outside the typed views: {reads}"
+
+
+def test_the_tool_section_rule_finds_each_way_of_reading_the_dict(tmp_path):
+    bad = [
+        "if route.tool:\n    pass",
+        "x = plan.route.tool",
+        "x = r.tool.get('poses')",
+        "x = r.tool['robot']",
+        "x = {**r.tool, 'robot': 1}",
+        "x = r.tool or {}",
+        "x = dict(r.tool)",
+        "x = 'poses' in r.tool",
+        "x = (r.tool or {}).get('robot')",
+    ]
+    for k, src in enumerate(bad):
+        (tmp_path / f"bad{k}.py").write_text(src + "\n")
+    ok = (
+        "import dataclasses\nx = mounted.tool\ny = args.tool.startswith('builtin:')\n"
+        "z = dataclasses.replace(route, tool={})\nw = ToolSection.of(route).poses\n"
+        "v = len(args.tool)\n"
+    )
+    (tmp_path / "ok.py").write_text(ok)
+    (tmp_path / "weld").mkdir()
+    (tmp_path / "weld" / "route.py").write_text("x = self.tool or {}\n")  # the Route's own
+    found = tool_section_dict_reads(tmp_path)
+    assert sorted(found) == sorted(f"bad{k}.py:1" for k in range(len(bad)))

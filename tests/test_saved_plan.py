@@ -239,3 +239,37 @@ def test_the_tool_layer_reads_the_tool_stage_keys_as_the_tool_route_does():
     with pytest.raises(InputError, match="unreadable tool section") as e:
         check_tool_provenance(bad, dict(section.provenance), "bad.json")
     assert e.value.field == "tool" and "bad.json" in str(e.value)
+
+
+def test_a_route_reads_its_tool_section_once_and_a_new_route_reads_its_own():
+    """ToolSection.of and ToolRoute.of parse a route's section once (Route.tool_view), share
+    the poses and the transitions, leave the route's JSON as it was, and a route made from it
+    (dataclasses.replace) reads its own section; an unreadable robot section is bad input
+    naming the file and the field, for the robot's check and for the re-check's plan of checks,
+    each time it is read (nothing cached)."""
+    import dataclasses
+
+    from weldplan.robot.routejson import saved_robot_route
+    from weldplan.station.recheck import recheck
+    from weldplan.tool.section import ToolSection
+    from weldplan.weld.route import Route
+
+    text = OLD_ROBOT.read_text()
+    route = Route.from_json(text)
+    section, full = ToolSection.of(route), ToolRoute.of(route)
+    assert ToolSection.of(route) is section and ToolRoute.of(route) is full
+    assert full.poses is section.poses and full.transitions is section.transitions
+    assert full.robot.to_dict() == json.loads(text)["tool"]["robot"]
+    assert Route.from_json(route.to_json()) == route and "_tool_views" not in route.to_json()
+    bare = dataclasses.replace(route, tool={})
+    assert ToolSection.of(bare).poses is None and ToolRoute.of(bare).robot is None
+    assert ToolRoute.of(route) is full and saved_robot_route(route) is full.robot
+    bad = dataclasses.replace(route, tool={**route.tool, "robot": {"q": [[0.0]]}})
+    assert ToolSection.of(bad).poses is not None  # the tool stage's part still reads
+    for _ in range(2):
+        with pytest.raises(InputError, match="robot route is not valid") as e:
+            saved_robot_route(bad, "bad.json")
+        assert e.value.field == "tool.robot" and "bad.json" in str(e.value)
+    with pytest.raises(InputError, match="robot route is not valid") as e:
+        recheck(bad, None, path="bad.json")
+    assert "bad.json" in str(e.value)

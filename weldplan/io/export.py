@@ -175,19 +175,19 @@ def to_csv_text(route: Route, header: Sequence[str] = ()) -> str:
     """The CSV text of :func:`write_csv`; ``header``: lines written first as ``#`` comments
     (what produced the file and what was verified, :func:`weldplan.station.outputs.producer`).
 
-    A route that carries weld poses (``route.tool``, ``weldplan plan --tool``) gains the columns
-    :data:`POSE_FIELDS`, filled on weld rows only: the weld's verified TCP orientation (empty
-    at a weld without a free pose) and its status (``ok`` or ``no free pose``). Other rows
-    carry no orientation: nothing verified the tool there (the verified path between welds is
-    the ``--tool-csv`` file, :mod:`weldplan.tool.path_csv`).
+    A route that carries weld poses (``weldplan plan --tool``; read typed,
+    :func:`weldplan.tool.route_frames.route_poses`) gains the columns :data:`POSE_FIELDS`,
+    filled on weld rows only: the weld's verified TCP orientation (empty at a weld without a
+    free pose) and its status (``ok`` or ``no free pose``). Other rows carry no orientation:
+    nothing verified the tool there (the verified path between welds is the ``--tool-csv``
+    file, :mod:`weldplan.tool.path_csv`).
     """
+    from weldplan.tool.route_frames import route_poses, weld_rows
+
     rows = route_rows(route, smooth=True)
     quats, status = None, None
-    if route.tool.get("poses"):
-        from weldplan.tool.route_frames import route_poses, weld_rows
-
-        poses = route_poses(route)
-        assert poses is not None
+    poses = route_poses(route)
+    if poses is not None:
         quats = np.full((len(rows), 4), np.nan)  # only the verified weld poses are written
         status = [""] * len(rows)
         for i, r in enumerate(weld_rows(travel_route(route))):

@@ -1,15 +1,16 @@
 """The robot route in the route JSON, and its re-check by ``weldplan verify``.
 
 ``weldplan plan --robot ... --json F`` writes the joint route the program was built from into the
-route's tool section (``route.tool["robot"]``: :meth:`~weldplan.robot.configs.RobotRoute.to_dict`
-with per waypoint row ``q``, ``row``, ``exact``, ``branch``; per weld ``weld_ids``, ``status``
-and ``weld_branch``; plus the robot file and its sha256, the contact radius of the check; and,
-when the robot followed the gun's transitions, ``follows``: that route, its TCP orientations per
-waypoint, the motions whose contact zone was exempt, how each leg goes:
-:meth:`weldplan.robot.gunpath.GunRoute.to_dict`; the robot route's rows are then its rows).
-:func:`weldplan.io.export.read_route` reads it back with the rest of the route (the tool section
-is carried as it is); :func:`robot_route_of` turns it into a
-:class:`~weldplan.robot.configs.RobotRoute`.
+route's tool section (its ``robot`` key, :attr:`weldplan.robot.toolroute.ToolRoute.robot`:
+:meth:`~weldplan.robot.configs.RobotRoute.to_dict` with per waypoint row ``q``, ``row``,
+``exact``, ``branch``; per weld ``weld_ids``, ``status`` and ``weld_branch``; plus the robot file
+and its sha256, the contact radius of the check; and, when the robot followed the gun's
+transitions, ``follows``: that route, its TCP orientations per waypoint, the motions whose
+contact zone was exempt, how each leg goes: :meth:`weldplan.robot.gunpath.GunRoute.to_dict`; the
+robot route's rows are then its rows). :func:`weldplan.io.export.read_route` reads it back with
+the rest of the route; this module reads it typed, once per route
+(:meth:`weldplan.robot.toolroute.ToolRoute.of`), and :func:`robot_route_of` checks the
+:class:`~weldplan.robot.configs.RobotRoute` in it.
 
 :func:`verify_robot_route` re-checks it with nothing from the planner but the joint values:
 forward kinematics of the URDF chain at every exact row puts the TCP on its route waypoint,
@@ -57,30 +58,40 @@ def attach_robot_route(
     contact_radius: float | None = None,
     gun: Any = None,
 ) -> Any:
-    """``route`` with ``rr`` (a :class:`~weldplan.robot.configs.RobotRoute`) in
-    ``route.tool["robot"]`` (module docstring). ``gun``: the route along the gun's transitions
+    """``route`` with ``rr`` (a :class:`~weldplan.robot.configs.RobotRoute`) in its tool
+    section's ``robot`` (module docstring). ``gun``: the route along the gun's transitions
     the robot followed (:class:`~weldplan.robot.gunpath.GunRoute`), stored as ``follows``; the
     robot route's rows are then rows of that route."""
     from weldplan.io.mesh import file_sha256
-    from weldplan.robot.toolroute import FollowedRoute, SavedRobotRoute
+    from weldplan.robot.toolroute import FollowedRoute, SavedRobotRoute, ToolRoute
 
     follows = None
     if gun is not None:
         follows = FollowedRoute(gun.route, gun.quaternions(), gun.zone, tuple(gun.via))
     saved = SavedRobotRoute(rr, str(urdf), file_sha256(urdf), contact_radius, follows)
-    return dataclasses.replace(route, tool={**route.tool, "robot": saved.to_dict()})
+    return dataclasses.replace(ToolRoute.of(route), robot=saved).on(route)
 
 
 def saved_robot_route(route: Any, path: str | PathLike[str] | None = None) -> Any:
     """The robot section of ``route`` (:class:`~weldplan.robot.toolroute.SavedRobotRoute`),
     ``None`` without one; :class:`InputError` (naming ``path``) when it is not readable."""
-    from weldplan.robot.toolroute import SavedRobotRoute
+    return tool_route(route, path).robot
 
-    d = (route.tool or {}).get("robot")
-    if not d:
-        return None
+
+def tool_route(route: Any, path: str | PathLike[str] | None = None) -> Any:
+    """``route``'s :class:`~weldplan.robot.toolroute.ToolRoute` (read once per route);
+    :class:`InputError` naming ``path`` and the field when its tool section is not readable:
+    ``tool`` (the tool stage's part) or ``tool.robot``."""
+    from weldplan.robot.toolroute import ToolRoute
+    from weldplan.tool.section import ToolSection
+
     try:
-        return SavedRobotRoute.from_dict(d)
+        ToolSection.of(route)
+    except (KeyError, TypeError, ValueError) as exc:
+        why = f"the tool section is not valid ({exc})"
+        raise InputError(why, path=path, field="tool") from None
+    try:
+        return ToolRoute.of(route)
     except (KeyError, TypeError, ValueError) as exc:
         raise InputError(
             f"the robot route is not valid ({exc})", path=path, field="tool.robot"
@@ -221,7 +232,8 @@ def verify_robot_route(
         (rr.q >= rb.lower - LIMIT_SLACK_RAD) & (rr.q <= rb.upper + LIMIT_SLACK_RAD), axis=1
     )
     if contact_radius is None:
-        stored = (route.tool or {}).get("robot", {}).get("contact_radius")
+        saved = tool_route(route).robot
+        stored = None if saved is None else saved.contact_radius
         contact_radius = stored if stored is not None else poses_contact_radius(route)
     floor = (rr.stats or {}).get("floor_z")
     checker = RobotCollision(
@@ -282,16 +294,11 @@ def _followed(route: Any) -> tuple[Any, Any, Any] | None:
         must weld at the verified poses, whatever it did between them.
     """
     from weldplan.tool.route_frames import route_poses, weld_rows
-    from weldplan.weld.route import Route
 
-    d = ((route.tool or {}).get("robot") or {}).get("follows")
-    if not d:
+    saved = tool_route(route).robot
+    if saved is None or saved.follows is None:
         return None
-    try:
-        fr = Route.from_dict(d["route"])
-        Q = np.asarray(d["quaternions"], dtype=np.float64).reshape(-1, 4)
-    except (KeyError, TypeError, ValueError) as exc:
-        raise InputError(f"the robot's route is not valid ({exc})", field="tool.robot") from None
+    fr, Q = saved.follows.route, saved.follows.quaternions
     pts = fr.waypoints()
     poses = route_poses(route)
     want = [p for p in (poses.poses if poses else ()) if p.ok]
@@ -321,10 +328,15 @@ def _angle_between(tcp: Any, quats: Any) -> float:
 
 
 def poses_contact_radius(route: Any) -> float:
+    """mm: the contact radius the route's weld poses were verified with
+    (:data:`~weldplan.tool.poses.DEFAULT_CONTACT_RADIUS` without poses, or when they name
+    none)."""
     from weldplan.tool.poses import DEFAULT_CONTACT_RADIUS
+    from weldplan.tool.section import ToolSection
 
-    poses = (route.tool or {}).get("poses") or {}
-    return float((poses.get("settings") or {}).get("contact_radius", DEFAULT_CONTACT_RADIUS))
+    poses = ToolSection.of(route).poses
+    settings = {} if poses is None else poses.settings
+    return float((settings or {}).get("contact_radius", DEFAULT_CONTACT_RADIUS))
 
 
 def _angle_error(route: Any, rr: Any, tcp: Any) -> float:

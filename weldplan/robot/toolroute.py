@@ -11,7 +11,7 @@ sha256, the contact radius of the check, and the route along the gun's transitio
 is unchanged, so the files written before :class:`ToolRoute` existed still load, and a route
 read and written again gives the same bytes (``tests/test_saved_plan.py``). The tool stage's
 keys are read by :class:`weldplan.tool.section.ToolSection`, what the layers below the robot's
-read.
+read; :meth:`ToolRoute.of` reads a route's section once, on that view's parse.
 
 Keys this version does not know are kept as they were (``extra``), so a newer file is not
 silently stripped when it is re-written.
@@ -176,14 +176,27 @@ class ToolRoute:
         """
         from weldplan.tool.section import ToolSection
 
-        d = d or {}
-        tool, robot = ToolSection.from_dict(d), d.get("robot")
+        return cls.from_section(ToolSection.from_dict(d))
+
+    @classmethod
+    def from_section(cls, tool: Any) -> ToolRoute:
+        """The whole section from its tool stage's part (a
+        :class:`~weldplan.tool.section.ToolSection`, whose ``rest`` holds the robot's route and
+        the keys this version does not know); the poses and the transitions are ``tool``'s own
+        objects.
+
+        Raises
+        ------
+        KeyError, TypeError, ValueError
+            A robot section that is not what the planner writes.
+        """
+        robot = tool.rest.get("robot")
         return cls(
             provenance=tool.provenance,
             poses=tool.poses,
             transitions=tool.transitions,
             robot=SavedRobotRoute.from_dict(robot) if robot else None,
-            extra=_extra(d, TOOL_KEYS),
+            extra=_extra(tool.rest, TOOL_KEYS),
         )
 
     def to_dict(self) -> dict[str, Any]:
@@ -202,8 +215,19 @@ class ToolRoute:
 
     @classmethod
     def of(cls, route: Any) -> ToolRoute:
-        """The tool section of a :class:`~weldplan.weld.route.Route`."""
-        return cls.from_dict(route.tool)
+        """The tool section of a :class:`~weldplan.weld.route.Route`, read once per route
+        (:meth:`~weldplan.weld.route.Route.tool_view`) on the route's
+        :meth:`ToolSection.of <weldplan.tool.section.ToolSection.of>`: the poses and the
+        transitions are parsed once for both views.
+
+        Raises
+        ------
+        KeyError, TypeError, ValueError
+            As :meth:`from_dict` (nothing is cached then).
+        """
+        from weldplan.tool.section import cached_view
+
+        return cached_view(route, _read)
 
     @classmethod
     def from_json(cls, text: str) -> ToolRoute:
@@ -223,3 +247,10 @@ class ToolRoute:
     @property
     def is_empty(self) -> bool:
         return not self.to_dict()
+
+
+def _read(route: Any) -> ToolRoute:
+    """The view :meth:`ToolRoute.of` caches on a route."""
+    from weldplan.tool.section import ToolSection
+
+    return ToolRoute.from_section(ToolSection.of(route))

@@ -198,7 +198,8 @@ def recheck(
     Raises
     ------
     InputError
-        The route was planned with another tool, or its robot section is unreadable.
+        The route was planned with another tool, or its tool section (the robot's route
+        included) is unreadable.
     """
     from weldplan.tool.check_route import check_tool_provenance
     from weldplan.weld.verify import verify_route
@@ -207,7 +208,7 @@ def recheck(
     if tool is not None:  # another tool is bad input, whatever the route
         tool_obj, provenance = (tool.tool, tool.provenance) if hasattr(tool, "tool") else tool
         check_tool_provenance(route, same_tcp_spelling(route, provenance, tool_obj), path)
-    run = _Run([] if part_pose is None else [part_pose], _carried(route))
+    run = _Run([] if part_pose is None else [part_pose], _carried(route, path))
     if part_pose is not None and not part_pose.ok:
         return run.verdict("an earlier check failed")
     rep = verify_route(route, part, clearance=clearance, joints=joints)
@@ -237,7 +238,8 @@ def same_tcp_spelling(route: Any, provenance: dict[str, Any], tool: Any) -> dict
     Parameters
     ----------
     route
-        The route, with the provenance of the tool it was planned with (``route.tool``).
+        The route, with the provenance of the tool it was planned with (its
+        :attr:`~weldplan.tool.section.ToolSection.provenance`).
     provenance
         The given tool's provenance.
     tool
@@ -245,8 +247,12 @@ def same_tcp_spelling(route: Any, provenance: dict[str, Any], tool: Any) -> dict
     """
     from weldplan.errors import InputError
     from weldplan.tool.load import PROVENANCE_KEYS, load_tool
+    from weldplan.tool.section import ToolSection
 
-    planned = (route.tool or {}).get("provenance") or {}
+    try:
+        planned = ToolSection.of(route).provenance
+    except (KeyError, TypeError, ValueError):  # check_tool_provenance names what is wrong
+        return provenance
     if planned.get("tcp") == provenance.get("tcp") or not provenance.get("file"):
         return provenance
     if any(planned.get(k) != provenance.get(k) for k in PROVENANCE_KEYS if k != "tcp"):
@@ -281,11 +287,18 @@ class _Run:
         return Verdict(tuple(self.checks), rest)
 
 
-def _carried(route: Any) -> set[str]:
-    """The checks ``route`` carries something for."""
-    tool = route.tool or {}
-    keys = {"tool poses": "poses", "tool transitions": "transitions", "robot route": "robot"}
-    return {"route"} | {name for name, k in keys.items() if tool.get(k)}
+def _carried(route: Any, path: str | PathLike[str] | None) -> set[str]:
+    """The checks ``route`` carries something for (its tool section read typed:
+    :class:`InputError` naming ``path`` when it is not readable)."""
+    from weldplan.robot.routejson import tool_route
+
+    tool = tool_route(route, path)
+    carried = {
+        "tool poses": tool.poses is not None,
+        "tool transitions": tool.transitions is not None,
+        "robot route": tool.robot is not None,
+    }
+    return {"route"} | {name for name, has in carried.items() if has}
 
 
 def _tool_checks(run: _Run, route: Any, part: Any, tool: Any) -> bool:

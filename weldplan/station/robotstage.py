@@ -222,7 +222,7 @@ def program_stage(
 
 
 def with_robot(route: Any, joint: RobotResult, urdf: Any) -> Any:
-    """``route`` carrying the robot route (``route.tool["robot"]``, for the route JSON)."""
+    """``route`` carrying the robot route (its tool section's ``robot``, for the route JSON)."""
     from weldplan.robot.routejson import attach_robot_route, poses_contact_radius
 
     return attach_robot_route(

@@ -3,21 +3,28 @@
 A route planned with a tool carries, in its ``tool`` section (the route JSON's), the tool's
 ``provenance``, the weld ``poses`` (:class:`~weldplan.tool.result.WeldPoses`) and the tool's
 ``transitions`` (:class:`~weldplan.tool.transit.ToolPath`), and, with a robot, the robot's route.
-:class:`ToolSection` reads the tool stage's three once, as the readers of this layer need them
-(the route's frames, the re-checks of a saved route, the exporters); the whole section with the
-robot's route is :class:`weldplan.robot.toolroute.ToolRoute`, which reads its first three keys
-here. The keys not read here (``robot``, and any this version does not know) are kept as they
-were in :attr:`ToolSection.rest`.
+:class:`ToolSection` reads the tool stage's three, as the readers of this layer need them (the
+route's frames, the re-checks of a saved route, the exporters, the viewer), once per route
+(:meth:`ToolSection.of`). The whole section with the robot's route is
+:class:`weldplan.robot.toolroute.ToolRoute`, which reads its first three keys here. The keys not
+read here (``robot``, and any this version does not know) are kept as they were in
+:attr:`ToolSection.rest`.
+
+No module reads a route's ``tool`` section as a dict but these two views
+(``tests/test_code_shape.py``).
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeVar
 
 from weldplan.tool.result import WeldPoses
 from weldplan.tool.transit import ToolPath
+from weldplan.weld.route import Route
+
+_View = TypeVar("_View")
 
 #: the keys of the tool section the tool stage writes, in the order it writes them
 TOOL_STAGE_KEYS = ("provenance", "poses", "transitions")
@@ -66,6 +73,27 @@ class ToolSection:
         )
 
     @classmethod
-    def of(cls, route: Any) -> ToolSection:
-        """The tool section of a :class:`~weldplan.weld.route.Route` (its ``tool``)."""
-        return cls.from_dict(route.tool)
+    def of(cls, route: Route | Any) -> ToolSection:
+        """The tool section of a :class:`~weldplan.weld.route.Route` (its ``tool``), read once
+        per route (:meth:`~weldplan.weld.route.Route.tool_view`): the readers of a route share
+        one parse. Another object with a ``tool`` mapping is read each time.
+
+        Raises
+        ------
+        KeyError, TypeError, ValueError
+            As :meth:`from_dict` (nothing is cached then).
+        """
+        return cached_view(route, _read)
+
+
+def cached_view(route: Any, read: Callable[[Any], _View]) -> _View:
+    """``read(route)``, cached on ``route`` when it is a :class:`~weldplan.weld.route.Route`
+    (:meth:`~weldplan.weld.route.Route.tool_view`); computed each time for another object
+    with a ``tool`` mapping (a stand-in for a route)."""
+    view = getattr(route, "tool_view", None)
+    return read(route) if view is None else view(read)
+
+
+def _read(route: Any) -> ToolSection:
+    """The view :meth:`ToolSection.of` caches on a route."""
+    return ToolSection.from_dict(route.tool)

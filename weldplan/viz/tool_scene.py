@@ -5,11 +5,12 @@ free pose; the page's weld slider (:class:`~weldplan.viz.overlay.WeldSlider`, re
 :func:`draw_tool`) moves it to any other weld's pose, so the welds and the route stay visible
 instead of being covered by a copy at every weld. ``tool_miss/<id>`` is a red halo about each
 weld without a free pose.
-With transitions (``route.tool["transitions"]``, :mod:`weldplan.tool.transitions`):
-``path/<k>`` the TCP path of transition ``k`` (free ones in :data:`TOOL_COLOR`, blocked ones in
-magenta), and the same ``gun`` animated along the whole path (:func:`animate_tool`: one keyframe
-per waypoint, so the viewer's linear position and slerped rotation between keyframes are the
-motion that was checked), loaded paused: the viewer's *Animations* panel plays it.
+With transitions (:attr:`weldplan.tool.section.ToolSection.transitions`,
+:mod:`weldplan.tool.transitions`): ``path/<k>`` the TCP path of transition ``k`` (free ones in
+:data:`TOOL_COLOR`, blocked ones in magenta), and the same ``gun`` animated along the whole path
+(:func:`animate_tool`: one keyframe per waypoint, so the viewer's linear position and slerped
+rotation between keyframes are the motion that was checked), loaded paused: the viewer's
+*Animations* panel plays it.
 
 The displayed mesh is a quadric decimation (open3d) of the tool to at most
 :data:`DISPLAY_TRIANGLES` triangles, for the page's size only: every check used the full mesh.
@@ -93,8 +94,9 @@ def draw_tool(root: Any, route: Route, tool: Any, r_joint: float) -> WeldSlider 
     docstring).
 
     ``root`` is the meshcat node of the route (part frame, mm); ``r_joint`` the joint marker
-    radius (mm). Without poses in ``route.tool`` nothing is drawn. Returns the weld slider over
-    the welds with a pose (None without a ``tool`` mesh or without such a weld).
+    radius (mm). Without weld poses (:func:`~weldplan.tool.route_frames.route_poses`) nothing
+    is drawn. Returns the weld slider over the welds with a pose (None without a ``tool`` mesh
+    or without such a weld).
     """
     import meshcat.geometry as g
 

@@ -299,7 +299,7 @@ def build_scene(
     _draw_joints(root, route, r_joint, scale if labels else 0.0)
     _draw_legs(root, route, r_via)
     slider = None
-    if route.tool:
+    if ToolSection.of(route).poses is not None:  # the tool at its weld poses
         from weldplan.viz.tool_scene import draw_tool
 
         slider = draw_tool(root, route, tool, r_joint)
@@ -316,13 +316,13 @@ def _frame(
     and via sphere radii (mm, :func:`joint_radius`) and the scene's scale (viewer units per
     mm)."""
     pts = [route.joint_xyz, *(leg.points for leg in route.legs)]
-    path = ToolSection.of(route).transitions
-    if path is not None:  # the tool's path too: its retracts and exits
-        pts += [t.positions for t in path.transitions]
+    section = ToolSection.of(route)
+    if section.transitions is not None:  # the tool's path too: its retracts and exits
+        pts += [t.positions for t in section.transitions.transitions]
     framed = [np.concatenate(pts, axis=0)]
     if mesh is not None:
         framed.append(np.asarray(mesh.vertices))
-    if route.tool and tool is not None:
+    if section.poses is not None and tool is not None:
         from weldplan.viz.tool_scene import tool_corners
 
         framed.append(tool_corners(route, tool))
@@ -408,7 +408,7 @@ def _draw_torch(
         for f, p in zip(frames, W, strict=True):
             with anim.at_frame(torch, int(f)) as frame:
                 frame.set_transform(_torch_pose(p, r_joint))
-        if route.tool:
+        if ToolSection.of(route).transitions is not None:
             from weldplan.viz.tool_scene import animate_tool
 
             animate_tool(anim, root, route, tool, ANIMATION_SECONDS, 30)

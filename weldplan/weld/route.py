@@ -30,13 +30,16 @@ the part (see :func:`weldplan.weld.verify.verify_route` for exactly how they are
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from weldplan.geometry.pathcore import polyline_length as _polyline_length
+
+_View = TypeVar("_View")
 
 #: format tag written into the JSON, bumped when the layout changes
 ROUTE_FORMAT = "weldplan.route/1"
@@ -193,7 +196,11 @@ class Route:
         Empty for the point-tip route; with a tool (``weldplan plan --tool``): ``provenance``
         (:func:`weldplan.tool.load.load_tool`: files, sha256, TCP, units) and ``poses``
         (:meth:`weldplan.tool.result.WeldPoses.to_dict`: a pose or the closest miss per weld, in
-        route order). Written to the JSON only when not empty.
+        route order), ``transitions`` and, with a robot, ``robot``: the route JSON's section as
+        written. The stages above read it typed, never as a dict:
+        :class:`weldplan.tool.section.ToolSection` (the tool stage's keys) and
+        :class:`weldplan.robot.toolroute.ToolRoute` (the whole section), each read once per
+        route (:meth:`tool_view`). Written to the JSON only when not empty.
     """
 
     order: tuple[str, ...]
@@ -231,6 +238,23 @@ class Route:
                     f"leg {k} runs {leg.from_id}->{leg.to_id}, "
                     f"the order says {self.order[k]}->{self.order[k + 1]}"
                 )
+
+    def tool_view(self, read: Callable[[Route], _View]) -> _View:
+        """``read(self)``, computed once per route: the typed view of the ``tool`` section that
+        ``read`` builds (:meth:`weldplan.tool.section.ToolSection.of`,
+        :meth:`weldplan.robot.toolroute.ToolRoute.of`; the typed views live in the layers above
+        this one, which cannot import them).
+
+        Kept beside the route's fields as :func:`functools.cached_property` keeps its values
+        (the instance's ``__dict__``): not a field, so not compared, not serialised and not
+        carried by :func:`dataclasses.replace`, whose new route reads its own section again.
+        The route is frozen and its section is never changed in place, so the view stays the
+        section's. A ``read`` that raises caches nothing.
+        """
+        views: dict[Callable[[Route], Any], Any] = self.__dict__.setdefault("_tool_views", {})
+        if read not in views:
+            views[read] = read(self)
+        return views[read]
 
     # ------------------------------------------------------------------ figures
     @property
