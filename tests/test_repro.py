@@ -74,10 +74,11 @@ def test_the_summary_names_every_clock_cap_and_nothing_else():
     assert clock_caps(_route(stats={"sequence_method": "fast-tsp"})) == [
         "the weld order came from fast-tsp (no seed)"
     ]
-    tool = {
-        "transitions": {"stats": {"se3_runs": [{"clock": False}, {"clock": True}]}},
-        "robot": {"stats": {"ompl": {"runs": 3.0, "clock": 2.0}}},
-    }
+    # a real route's tool section (the box with the KR 150, tests/data), its clock marks set
+    saved = json.loads((ROOT / "tests" / "data" / "route_box_kr150_v1.json").read_text())
+    tool = saved["tool"]
+    tool["transitions"]["stats"]["se3_runs"] = [{"clock": False}, {"clock": True}]
+    tool["robot"]["stats"]["ompl"] = {"runs": 3.0, "clock": 2.0}
     caps = clock_caps(_route(tool=tool, settings={"local_time_budget": 1.5}))
     assert caps == [
         "the local paths had a clock budget (1.5 s)",
