@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -282,3 +283,65 @@ def test_the_summary_and_the_exit_say_what_is_left_out_and_a_failed_replay(splan
     lines = station_partial(failed, plans)
     assert len(lines) == 2 and "min robot-robot distance 3.5 mm" in lines[1]
     assert dict(station_rows(failed, plans))["interference"].startswith("replay FAILED")
+
+
+# ------------------------------------------- verify re-runs the replay from the files (fast)
+def _crossing_saved(tmp_path):
+    """Two KR 150 4 m apart crossing in the middle (tests/multi_fixtures.py), each with the
+    station's spot gun, through the live interference stage; saved as a station plan would record them:
+    ``(station, SavedStationPlan, live verdict, live ReplayRobots)`` (trajectory CSVs in
+    ``tmp_path``)."""
+    from tests import multi_fixtures as mf
+    from tests.test_multi_plan import _synthetic_plan
+    from weldplan import load_station
+    from weldplan.io.trajectory import trajectory_csv_text
+    from weldplan.multi.saved import SavedRobot, SavedStationPlan
+    from weldplan.multi.station import _interference, _replay_robots
+    from weldplan.station.mount import mount_tool
+
+    robots, timings = mf.pair(distance=4000.0)  # 3 m apart the guns touch at the start
+    bases = ((-2000.0, 0.0, 0.0, 0.0), (2000.0, 0.0, 0.0, 180.0))  # as mf.pair places them
+    station = load_station(_station_toml(tmp_path, ["1", "9"], bases=bases))
+    plans = [
+        dataclasses.replace(_synthetic_plan(r, t), tool=mount_tool(spec.tool, r))
+        for r, t, spec in zip(robots, timings, station.robots, strict=True)
+    ]
+    names = ("robot1", "robot2")
+    out, schedule, verdict, _ = _interference(station, plans, names, {})
+    saved_robots = []
+    for k, t in enumerate(timings):
+        f = tmp_path / f"route_robot{k + 1}_trajectory.csv"
+        f.write_text(trajectory_csv_text(t, header=["written by the test"]))
+        saved_robots.append(SavedRobot(names[k], None, bases[k], (), None, f, (), t.total))
+    saved = SavedStationPlan(
+        tmp_path / "route_station.json", None, tuple(saved_robots), None, schedule,
+        schedule.cycle_time, "", verdict,
+    )  # fmt: skip
+    return station, saved, verdict, _replay_robots(station, out, names)
+
+
+def test_verify_re_runs_the_replay_from_the_files_and_fails_without_the_interlocks(tmp_path):
+    from weldplan.multi.recheck import interference_check
+    from weldplan.multi.replay import replay_station
+
+    station, saved, live, rr = _crossing_saved(tmp_path)
+    assert live.ok and saved.schedule.interlocks  # the gun's crossing needs an interlock
+    check = interference_check(saved, station)
+    assert check.ok and check.left_out == ()
+    # the recorded distance re-found from the files (joints to 1e-8 rad in the CSV)
+    found = float(re.search(r"min ([0-9.]+) mm", check.text).group(1))
+    assert found == pytest.approx(live.min_distance, abs=1e-3) and found > station.clearance
+    # the interlocks edited away: the re-run finds the two robots too close, against the record
+    bare = dataclasses.replace(saved, schedule=dataclasses.replace(saved.schedule, interlocks=()))
+    check = interference_check(bare, station)
+    assert not check.ok and "robots closer than" in check.text and "recorded: ok" in check.text
+    assert "robot1" in check.text and "robot2" in check.text
+    # a recorded minimum distance off by more than the tolerance does not agree
+    off = dataclasses.replace(live, min_distance=live.min_distance + 0.01)
+    assert not interference_check(dataclasses.replace(saved, replay=off), station).ok
+    # a record of robots too close that the re-run confirms: a partial plan naming the pair
+    bad = dataclasses.replace(saved.replay, ok=False)
+    bare_live = replay_station(rr, (), station.clearance)
+    check = interference_check(dataclasses.replace(bare, replay=bare_live), station)
+    assert check.ok and len(check.left_out) == 1 and "robot1" in check.left_out[0]
+    assert not interference_check(dataclasses.replace(saved, replay=bad), station).ok
