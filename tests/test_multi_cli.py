@@ -197,9 +197,10 @@ def splan(tmp_path_factory):
 
 def _interlocked(splan):
     """``splan`` with one interlock: robot 2 may not leave its first stop before robot 1 is
-    at rest, its weld done, at its last stop."""
+    at rest, its weld done, at its last stop (in the schedule and, as the planner puts it, in
+    both programs)."""
     from weldplan.multi.schedule import Interlock, station_schedule
-    from weldplan.multi.station import timed_weld_ids
+    from weldplan.multi.station import timed_weld_ids, with_signals
 
     timings = [p.program.timing for p in splan.plans]
     last = int(np.flatnonzero(timings[0].stops)[-1])
@@ -207,7 +208,8 @@ def _interlocked(splan):
     lock = Interlock("Z1", first=0, release_row=last, second=1, wait_row=first, signal=7)
     ids = [timed_weld_ids(p.program) for p in splan.plans]
     sched = station_schedule(splan.allocation.robots, timings, [lock], weld_ids=ids)
-    return dataclasses.replace(splan, schedule=sched), lock
+    plans = with_signals(list(splan.plans), [lock], splan.allocation.robots)
+    return dataclasses.replace(splan, schedule=sched, plans=tuple(plans)), lock
 
 
 @pytest.mark.slow
@@ -288,9 +290,9 @@ def test_the_summary_and_the_exit_say_what_is_left_out_and_a_failed_replay(splan
 # ------------------------------------------- verify re-runs the replay from the files (fast)
 def _crossing_saved(tmp_path):
     """Two KR 150 4 m apart crossing in the middle (tests/multi_fixtures.py), each with the
-    station's spot gun, through the live interference stage; saved as a station plan would record them:
-    ``(station, SavedStationPlan, live verdict, live ReplayRobots)`` (trajectory CSVs in
-    ``tmp_path``)."""
+    station's spot gun, through the live interference stage; saved as a station plan would
+    record them: ``(station, SavedStationPlan, live verdict, live ReplayRobots)`` (trajectory
+    CSVs in ``tmp_path``)."""
     from tests import multi_fixtures as mf
     from tests.test_multi_plan import _synthetic_plan
     from weldplan import load_station

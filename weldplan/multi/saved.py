@@ -4,7 +4,8 @@
 :class:`~weldplan.station.model.OutputSpec` (each robot's files are the station's names with
 ``_robot1``, ``_robot2`` ... before the suffix; the route JSON and the trajectory CSV of every
 robot are always written, since the station JSON points at them); :func:`write_station` renders
-them in memory (each robot's program carrying its interlock signals, :func:`robot_plans`) and
+them in memory (each robot's program with the interlock signals the plan gave it,
+:func:`robot_plans`) and
 writes them as one set, whole or not at all (:func:`weldplan.io.outputset.write_outputs`).
 
 The station JSON (``route_station.json`` beside ``route.json``) holds what no robot's file
@@ -114,35 +115,23 @@ def _robot_outputs(out: Any, k: int) -> Any:
 
 def robot_plans(splan: Any) -> tuple[Any, ...]:
     """Per robot its :class:`~weldplan.station.pipeline.Plan` as written (``None``: idle): the
-    program named ``<station>_robot<k>`` and carrying its interlock signals (each
-    :class:`~weldplan.multi.schedule.Interlock` of the schedule, a ``set`` in the first
-    robot's program, a ``wait`` in the second's, :meth:`Interlock.actions`)."""
-    names = splan.allocation.robots
-    rows = [None if p is None else p.program.row for p in splan.plans]
-    acts: list[list[Any]] = [[] for _ in splan.plans]
-    locks = () if splan.schedule is None else splan.schedule.interlocks
-    for lock in locks:
-        (a, set_), (b, wait) = lock.actions(rows)
-        acts[a].append(dataclasses.replace(set_, peer=names[b]))
-        acts[b].append(dataclasses.replace(wait, peer=names[a]))
+    program named ``<station>_robot<k>``, its interlock signals as the plan's program carries
+    them (:func:`weldplan.multi.station.with_signals`, the one mapping from the schedule's
+    interlocks to signals), a note naming the station."""
     base = splan.station.name or "weldplan_route"
     return tuple(
-        None if p is None else _robot_plan(splan, p, f"{base}_robot{k + 1}", k, acts[k])
+        None if p is None else _robot_plan(splan, p, f"{base}_robot{k + 1}", k)
         for k, p in enumerate(splan.plans)
     )
 
 
-def _robot_plan(splan: Any, plan: Any, name: str, k: int, acts: list[Any]) -> Any:
+def _robot_plan(splan: Any, plan: Any, name: str, k: int) -> Any:
     build = plan.program
-    order = {t.row: i for i, t in reversed(list(enumerate(build.program.targets)))}
-    acts = sorted(acts, key=lambda a: (order.get(a.row, -1), a.action != "set"))
     note = (
         f"Station '{splan.station.name or 'weldplan_route'}': robot {k + 1} of "
         f"{len(splan.plans)}; {splan.interference}."
     )
-    prog = dataclasses.replace(
-        build.program, name=name, signals=tuple(acts), notes=(*build.program.notes, note)
-    )
+    prog = dataclasses.replace(build.program, name=name, notes=(*build.program.notes, note))
     station = dataclasses.replace(plan.station, name=name)
     return dataclasses.replace(
         plan, station=station, program=dataclasses.replace(build, program=prog)
@@ -214,7 +203,7 @@ def write_station(splan: Any, paths: StationPaths) -> None:
 def save_station_plan(splan: Any, path: str | PathLike[str]) -> Path:
     """Write the station JSON ``path`` and beside it, per robot with welds, its route JSON
     (``<stem>_robot<k>.json`` and its timings) and trajectory CSV, as one set. Returns
-    ``path``. The programs are the CLI's (``--post``); their signals come from the schedule."""
+    ``path``. The programs are the CLI's (``--post``); their signals are the plan's programs'."""
     from weldplan.station.model import OutputSpec
 
     path = Path(path)

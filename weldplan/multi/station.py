@@ -42,7 +42,7 @@ import dataclasses
 import logging
 import tempfile
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -285,7 +285,7 @@ def _interference(
     t = time.perf_counter()
     zones = resolve_zones(found, strict=False)
     seconds["zones"] = time.perf_counter() - t
-    plans = _with_signals(plans, zones.interlocks)
+    plans = with_signals(plans, zones.interlocks, names)
     timings = [None if p is None else p.program.timing for p in plans]
     schedule = station_schedule(
         names, timings, zones.interlocks,
@@ -305,14 +305,17 @@ def _interference(
     return plans, schedule, verdict, f"{found.line()}; {zones.line()}; {said}"
 
 
-def _with_signals(plans: list[Any], interlocks: tuple[Any, ...]) -> list[Any]:
+def with_signals(plans: list[Any], interlocks: Sequence[Any], names: Sequence[str]) -> list[Any]:
     """Each plan with its program carrying its interlock signals, in program order (at one
-    row: the signal it sets before the one it waits for)."""
+    row: the signal it sets before the one it waits for), each naming the other robot
+    (``names``: station order). The one mapping from interlocks to program signals: the
+    station's files write the programs as the plan holds them (:mod:`weldplan.multi.saved`)."""
     rows = [None if p is None else p.program.row for p in plans]
     acts: dict[int, list[Any]] = {}
     for lock in interlocks:
-        for robot, action in lock.actions(rows):
-            acts.setdefault(robot, []).append(action)
+        (a, set_), (b, wait) = lock.actions(rows)
+        acts.setdefault(a, []).append(dataclasses.replace(set_, peer=names[b]))
+        acts.setdefault(b, []).append(dataclasses.replace(wait, peer=names[a]))
     out = list(plans)
     for k, got in acts.items():
         build = plans[k].program
