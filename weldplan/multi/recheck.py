@@ -24,7 +24,8 @@ reads the files back):
     samples from its trajectory CSV, its stop rows and their arrivals from the schedule (each
     arrival on a sample of the CSV within :data:`CYCLE_TOL`), the schedule's interlocks and the
     station's ``clearance``. It passes when the re-run agrees with the recorded replay (the
-    same verdict, the minimum distance within :data:`DISTANCE_TOL`); agreeing on robots too
+    same verdict, clearance and pairs of motions that may overlap, the minimum distance within
+    :data:`DISTANCE_TOL`); agreeing on robots too
     close, the plan is partial (exit 3) and the pair is named. A plan that records no replay
     (``null``) is re-run all the same, with nothing to agree with.
 
@@ -302,7 +303,7 @@ def interference_check(saved: Any, station: Any) -> CheckResult:
     else:
         same = rec.min_distance == v.min_distance or (
             abs(rec.min_distance - v.min_distance) <= DISTANCE_TOL)  # fmt: skip
-        agree = rec.ok == v.ok and same and rec.clearance == v.clearance
+        agree = rec.ok == v.ok and same and (rec.clearance, rec.pairs) == (v.clearance, v.pairs)
         was = "" if agree else f"; recorded: {_replay_line(rec, saved.robots)}"
         text = f"re-run: {said}{was}"
     pair = () if v.ok else (v.failures[0] if v.failures else said,)
