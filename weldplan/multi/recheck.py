@@ -31,7 +31,7 @@ reads the files back):
 
 A check that fails does not stop the later ones (each reads its own files); the verdict is a
 :class:`~weldplan.station.recheck.Verdict` (exit 0 ok, 1 a check failed, 3 ok but welds left
-out).
+out, or robots too close as recorded: the pair is then in :attr:`Verdict.left_out`).
 """
 
 from __future__ import annotations
