@@ -2,15 +2,19 @@
 station JSON (issue 30, item 5): the demo part, the shared spot gun on two KUKA KR 150 at given
 bases (tests/test_multi_plan.py's), a station file written in ``tmp_path``.
 
-The fast tests are the bad inputs (one line, exit 2, naming the file and the key). The slow ones
-plan: the command line on five welds both robots reach (exit 0, every file, verify exit 0, a
-corrupted station JSON refused by name), and the library on six (weld 15 no robot reaches) with
-an interlock made by hand, written into both programs and re-checked against the schedule."""
+The fast tests are the bad inputs (one line, exit 2, naming the file and the key) and verify's
+re-run of the replay on two crossing robots (tests/multi_fixtures.py) saved by hand. The slow ones
+plan: the command line on five welds both robots reach (exit 3: the two guns at their first welds
+overlap, which no interlock can order; every file; verify re-runs the replay, agrees, exit 3
+naming the pair; a corrupted station JSON refused by name), and the library on six (weld 15 no
+robot reaches) with an interlock made by hand, written into both programs and re-checked
+against the schedule."""
 
 from __future__ import annotations
 
 import dataclasses
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -89,11 +93,25 @@ def test_verify_refuses_a_station_json_that_is_not_json_naming_the_line(tmp_path
     assert "field 'allocation'" in one_line_error(capsys)
 
 
+def test_the_station_page_and_its_gantt_png_are_named_and_checked_before_any_work(tmp_path):
+    from weldplan.errors import InputError
+    from weldplan.multi.saved import station_paths
+    from weldplan.station.model import OutputSpec
+
+    out = OutputSpec(csv=tmp_path / "r.csv", html=tmp_path / "cell.html")
+    paths = station_paths(out, 2)
+    assert (paths.html, paths.gantt) == (tmp_path / "cell.html", tmp_path / "cell_gantt.png")
+    assert all("html" not in kinds for kinds in paths.robots)  # one page, the station's
+    bad = dataclasses.replace(out, html=tmp_path / "nowhere" / "cell.html")
+    with pytest.raises(InputError, match="field 'station html': folder .* does not exist"):
+        station_paths(bad, 2)
+
+
 # --------------------------------------------------------------- the command line, planned once
 @pytest.fixture(scope="module")
 def cli_run(tmp_path_factory):
-    """``weldplan plan station.toml -o out/route.csv --json out/route.json --post krl`` on five
-    demo welds both robots can serve; ``(exit code, out folder, stdout)``."""
+    """``weldplan plan station.toml -o out/route.csv --json out/route.json --post krl --html
+    out/route.html`` on five demo welds both robots can serve; ``(exit code, out folder)``."""
     import contextlib
     import io
 
@@ -104,7 +122,8 @@ def cli_run(tmp_path_factory):
     buf = io.StringIO()
     with contextlib.redirect_stdout(buf):
         code = run_cli(["plan", str(f), "-o", str(out / "route.csv"), "--json",
-                        str(out / "route.json"), "--post", "krl", "--quiet"])  # fmt: skip
+                        str(out / "route.json"), "--post", "krl", "--html",
+                        str(out / "route.html"), "--quiet"])  # fmt: skip
     return code, out
 
 
@@ -114,8 +133,9 @@ def test_the_command_line_writes_every_robots_files_and_the_station_json(cli_run
     from weldplan.multi.saved import load_station_plan
 
     code, out = cli_run
-    assert code == 0
     saved = load_station_plan(out / "route_station.json")
+    assert code == 3 and not saved.report.ours.unreached  # exit 3: the replay's, see below
+    locks = saved.schedule.interlocks
     assert [r.name for r in saved.robots] == ["robot1", "robot2"]
     shares = [set(r.welds) for r in saved.robots]
     assert shares[0] | shares[1] == {"1", "5", "7", "9", "13"} and not shares[0] & shares[1]
@@ -129,20 +149,32 @@ def test_the_command_line_writes_every_robots_files_and_the_station_json(cli_run
         assert prog.name == f"route_robot{k}"
         welds = [ln.split("; weld ")[1] for ln in dat.splitlines() if "; weld " in ln]
         assert set(welds) == set(r.welds)
-        assert prog.signals == [] and prog.resets == []  # no interlocks (none planned yet)
-    assert saved.replay is None and "not checked" in saved.interference
-    assert saved.schedule is not None and saved.schedule.interlocks == ()
+        # the program carries its side of every interlock of the schedule, and no other signal
+        mine = [("set", i.signal, i.name) for i in locks if i.first == k - 1]
+        mine += [("wait", i.signal, i.name) for i in locks if i.second == k - 1]
+        assert sorted(s[1:] for s in prog.signals) == sorted(mine)
+    assert saved.replay is not None and not saved.replay.ok
+    assert saved.replay.closest == (0, 0, 1, 0) and "REPLAY FAILED" in saved.interference
+    # --html: the station's page (both robots on one slider, the Gantt chart under it) and the
+    # chart as a PNG beside it; no robot's own page
+    page = (out / "route.html").read_text()
+    assert "weldplan-gantt" in page and "robot2" in page
+    assert (out / "route_gantt.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert not list(out.glob("route_robot*.html"))
 
 
 @pytest.mark.slow
-def test_verify_of_the_station_json_exits_0_and_names_every_check(cli_run, capsys):
+def test_verify_of_the_station_json_re_runs_the_replay_and_names_the_pair(cli_run, capsys):
     _, out = cli_run
     capsys.readouterr()
-    assert run_cli(["verify", str(out / "route_station.json")]) == 0
-    said = capsys.readouterr().out
+    assert run_cli(["verify", str(out / "route_station.json")]) == 3
+    said = capsys.readouterr()
     for name in ("allocation ok", "robot1 ok", "robot2 ok", "schedule ok"):
-        assert name in said
-    assert "interference ok: interference not re-checked" in said
+        assert name in said.out
+    # the re-run agrees with the record: robots too close, a partial plan naming where
+    assert "interference ok: re-run: robots closer than 5 mm" in said.out
+    assert "(robot1 row 0 / robot2 row 0)" in said.out
+    assert "robot1 at rest at row 0 and robot2 at rest at row 0" in said.err
 
 
 def _corrupt(out: Path, tmp: Path, edit) -> Path:
@@ -174,12 +206,16 @@ def test_a_corrupted_station_json_is_refused_naming_the_field_or_the_check(
         acts = [a for a in d["schedule"]["activities"] if a[0] == 0]
         acts[-1][3] += 0.5
 
-    def replay(d):  # a plan that says interference was checked: not re-checkable here
-        d["replay"] = {"ok": True, "clearance": 10.0, "min_distance": 50.0, "closest": None,
-                       "pairs": 3}  # fmt: skip
+    def replay(d):  # a replay recorded clear: the re-run finds the robots too close
+        d["replay"].update(ok=True, min_distance=50.0, failures=[])
+
+    def unlocked(d):  # the interlocks deleted: the re-run checks more pairs than recorded
+        assert d["schedule"]["interlocks"]
+        d["schedule"]["interlocks"] = []
 
     for name, edit, check in (("b", twice, "allocation"), ("c", late, "schedule"),
-                              ("d", replay, "interference")):  # fmt: skip
+                              ("d", replay, "interference"),
+                              ("e", unlocked, "interference")):  # fmt: skip
         capsys.readouterr()
         assert run_cli(["verify", str(_corrupt(out, tmp_path / name, edit))]) == 1
         assert f"{check} FAILED" in capsys.readouterr().err
@@ -196,9 +232,11 @@ def splan(tmp_path_factory):
 
 def _interlocked(splan):
     """``splan`` with one interlock: robot 2 may not leave its first stop before robot 1 is
-    at rest, its weld done, at its last stop."""
+    at rest, its weld done, at its last stop (in the schedule, in both programs as the planner
+    puts it, and the replay run again under it, as the planner runs it)."""
+    from weldplan.multi.replay import replay_station
     from weldplan.multi.schedule import Interlock, station_schedule
-    from weldplan.multi.station import timed_weld_ids
+    from weldplan.multi.station import _replay_robots, timed_weld_ids, with_signals
 
     timings = [p.program.timing for p in splan.plans]
     last = int(np.flatnonzero(timings[0].stops)[-1])
@@ -206,7 +244,11 @@ def _interlocked(splan):
     lock = Interlock("Z1", first=0, release_row=last, second=1, wait_row=first, signal=7)
     ids = [timed_weld_ids(p.program) for p in splan.plans]
     sched = station_schedule(splan.allocation.robots, timings, [lock], weld_ids=ids)
-    return dataclasses.replace(splan, schedule=sched), lock
+    names = splan.allocation.robots
+    plans = with_signals(list(splan.plans), [lock], names)
+    st = splan.station
+    replay = replay_station(_replay_robots(st, plans, names), (lock,), st.clearance)
+    return dataclasses.replace(splan, schedule=sched, plans=tuple(plans), replay=replay), lock
 
 
 @pytest.mark.slow
@@ -244,7 +286,10 @@ def test_the_saved_station_round_trips_and_verify_checks_the_interlock(splan, tm
     assert saved.schedule.cycle_times == pytest.approx(sp.schedule.cycle_times, abs=1e-6)
     assert saved.report.ours.unreached[0].weld == UNREACHED
     v = saved.verify()
-    assert v.ok and v.exit_code == 3 and v.left_out == (UNREACHED,)
+    # left out: the weld no robot reaches, and the two robots the replay (recorded and re-run)
+    # finds too close at their first welds
+    assert v.ok and v.exit_code == 3 and v.left_out[0] == UNREACHED and len(v.left_out) == 2
+    assert v.left_out[1].startswith("robot1 at rest at row 0 and robot2 at rest at row 0")
     assert "1 interlock(s) hold" in v["schedule"].text
     # robot 2's wait taken out and its later activities moved up: it leaves before robot 1 is
     # ready, and only the interlock says so (its moves and welds still match its trajectory)
@@ -270,15 +315,99 @@ def test_the_summary_and_the_exit_say_what_is_left_out_and_a_failed_replay(splan
 
     plans = robot_plans(splan)
     rows = dict(station_rows(splan, plans))
+    locks = splan.schedule.interlocks
     for r, name in enumerate(splan.allocation.robots):
         n = len(splan.allocation.welds_of(r))
         assert rows[f"robot {name}"].startswith(f"{n} welds, cycle ")
-        assert "interlocks: 0 set, 0 wait" in rows[f"robot {name}"]
+        sets, waits = sum(i.first == r for i in locks), sum(i.second == r for i in locks)
+        assert f"interlocks: {sets} set, {waits} wait" in rows[f"robot {name}"]
     assert rows["station cycle"].startswith(f"{splan.schedule.cycle_time:.2f} s")
-    assert "not checked" in rows["interference"]
-    assert station_partial(splan, plans) == [f"1 weld(s) no robot reaches ({UNREACHED})"]
-    bad = ReplayVerdict(False, 10.0, 3.5, (0, 4, 1, 2), 12, ("robot1 row 4 / robot2 row 2",))
-    failed = dataclasses.replace(splan, replay=bad)
-    lines = station_partial(failed, plans)
-    assert len(lines) == 2 and "min robot-robot distance 3.5 mm" in lines[1]
-    assert dict(station_rows(failed, plans))["interference"].startswith("replay FAILED")
+    unreached = f"1 weld(s) no robot reaches ({UNREACHED})"
+    # the guns at the two robots' first welds overlap: the replay failed, said and exit 3
+    assert rows["interference"].startswith("replay FAILED")
+    lines = station_partial(splan, plans)
+    assert lines[0] == unreached and len(lines) == 2
+    assert lines[1].startswith("the replay found robots too close") and "0.0 mm" in lines[1]
+    clear = ReplayVerdict(True, 5.0, 12.5, (0, 4, 1, 2), 12)
+    assert station_partial(dataclasses.replace(splan, replay=clear), plans) == [unreached]
+
+
+@pytest.mark.slow
+def test_the_command_line_exits_3_on_a_failed_replay_alone(splan, capsys):
+    from weldplan.commands._station_plan import _exit_code
+    from weldplan.multi.saved import robot_plans
+    from weldplan.multi.schedule import ReplayVerdict
+
+    plans = robot_plans(splan)
+    assert _exit_code(splan, plans) == 3
+    assert "the replay found robots too close" in capsys.readouterr().err
+    reached = dataclasses.replace(splan.report.ours, unreached=())
+    report = dataclasses.replace(splan.report, ours=reached)
+    clear = ReplayVerdict(True, 5.0, 12.5, (0, 4, 1, 2), 12)
+    assert _exit_code(dataclasses.replace(splan, report=report, replay=clear), plans) == 0
+    assert capsys.readouterr().err == ""
+    assert _exit_code(dataclasses.replace(splan, report=report), plans) == 3
+    (line,) = capsys.readouterr().err.splitlines()
+    assert line.startswith("weldplan: the replay found robots too close")
+
+
+# ------------------------------------------- verify re-runs the replay from the files (fast)
+def _crossing_saved(tmp_path):
+    """Two KR 150 4 m apart crossing in the middle (tests/multi_fixtures.py), each with the
+    station's spot gun, through the live interference stage; saved as a station plan would
+    record them: ``(station, SavedStationPlan, live verdict, live ReplayRobots)`` (trajectory
+    CSVs in ``tmp_path``)."""
+    from tests import multi_fixtures as mf
+    from tests.test_multi_plan import _synthetic_plan
+    from weldplan import load_station
+    from weldplan.io.trajectory import trajectory_csv_text
+    from weldplan.multi.saved import SavedRobot, SavedStationPlan
+    from weldplan.multi.station import _interference, _replay_robots
+    from weldplan.station.mount import mount_tool
+
+    robots, timings = mf.pair(distance=4000.0)  # 3 m apart the guns touch at the start
+    bases = ((-2000.0, 0.0, 0.0, 0.0), (2000.0, 0.0, 0.0, 180.0))  # as mf.pair places them
+    station = load_station(_station_toml(tmp_path, ["1", "9"], bases=bases))
+    plans = [
+        dataclasses.replace(_synthetic_plan(r, t), tool=mount_tool(spec.tool, r))
+        for r, t, spec in zip(robots, timings, station.robots, strict=True)
+    ]
+    names = ("robot1", "robot2")
+    out, schedule, verdict, _ = _interference(station, plans, names, {})
+    saved_robots = []
+    for k, t in enumerate(timings):
+        f = tmp_path / f"route_robot{k + 1}_trajectory.csv"
+        f.write_text(trajectory_csv_text(t, header=["written by the test"]))
+        saved_robots.append(SavedRobot(names[k], None, bases[k], (), None, f, (), t.total))
+    saved = SavedStationPlan(
+        tmp_path / "route_station.json", None, tuple(saved_robots), None, schedule,
+        schedule.cycle_time, "", verdict,
+    )  # fmt: skip
+    return station, saved, verdict, _replay_robots(station, out, names)
+
+
+def test_verify_re_runs_the_replay_from_the_files_and_fails_without_the_interlocks(tmp_path):
+    from weldplan.multi.recheck import interference_check
+    from weldplan.multi.replay import replay_station
+
+    station, saved, live, rr = _crossing_saved(tmp_path)
+    assert live.ok and saved.schedule.interlocks  # the gun's crossing needs an interlock
+    check = interference_check(saved, station)
+    assert check.ok and check.left_out == ()
+    # the recorded distance re-found from the files (joints to 1e-8 rad in the CSV)
+    found = float(re.search(r"min ([0-9.]+) mm", check.text).group(1))
+    assert found == pytest.approx(live.min_distance, abs=1e-3) and found > station.clearance
+    # the interlocks edited away: the re-run finds the two robots too close, against the record
+    bare = dataclasses.replace(saved, schedule=dataclasses.replace(saved.schedule, interlocks=()))
+    check = interference_check(bare, station)
+    assert not check.ok and "robots closer than" in check.text and "recorded: ok" in check.text
+    assert "robot1" in check.text and "robot2" in check.text
+    # a recorded minimum distance off by more than the tolerance does not agree
+    off = dataclasses.replace(live, min_distance=live.min_distance + 0.01)
+    assert not interference_check(dataclasses.replace(saved, replay=off), station).ok
+    # a record of robots too close that the re-run confirms: a partial plan naming the pair
+    bad = dataclasses.replace(saved.replay, ok=False)
+    bare_live = replay_station(rr, (), station.clearance)
+    check = interference_check(dataclasses.replace(bare, replay=bare_live), station)
+    assert check.ok and len(check.left_out) == 1 and "robot1" in check.left_out[0]
+    assert not interference_check(dataclasses.replace(saved, replay=bad), station).ok

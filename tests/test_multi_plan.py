@@ -85,8 +85,8 @@ def test_the_interference_stage_interlocks_two_crossing_robots_and_the_replay_pr
     (lock,) = schedule.interlocks
     # each program carries its side of the interlock, at the route row of the timed row
     first, second = out[lock.first].program.program, out[lock.second].program.program
-    assert first.signals == (SignalAction(lock.release_row, "set", 1, lock.name),)
-    assert second.signals == (SignalAction(lock.wait_row, "wait", 1, lock.name),)
+    assert first.signals == (SignalAction(lock.release_row, "set", 1, lock.name, "robot2"),)
+    assert second.signals == (SignalAction(lock.wait_row, "wait", 1, lock.name, "robot1"),)
     assert all(
         p.program.program.targets is q.program.program.targets
         for p, q in zip(out, plans, strict=True)

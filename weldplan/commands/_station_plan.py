@@ -1,8 +1,9 @@
 """``weldplan plan station.toml`` with several ``[[robot]]``: plan the station through
 :func:`weldplan.plan` (a :class:`~weldplan.multi.station.StationPlan`), write every robot's
-files and the station JSON as one set (:mod:`weldplan.multi.saved`), print the station's
-summary. Exit 0, or 3 when welds are left out (unreached, or left out by a robot's plan) or
-the replay found robots too close."""
+files and the station JSON (and, with ``--html``, the station's page and Gantt PNG) as one set,
+whole or not at all (:mod:`weldplan.multi.saved`), print the station's summary. Exit 0, or 3
+when welds are left out (unreached, or left out by a robot's plan) or the replay found robots
+too close."""
 
 from __future__ import annotations
 
@@ -46,6 +47,8 @@ def _summary(splan: Any, plans: Any, paths: Any, times: dict[str, float], title:
     rows = station_rows(splan, plans)
     rows.append(("time", ", ".join(f"{k} {v:.2f} s" for k, v in times.items())))
     rows.append(("station JSON", str(paths.station)))
+    if paths.html is not None:
+        rows.append(("station page", f"{paths.html}, Gantt chart {paths.gantt}"))
     for k, files in enumerate(paths.robots):
         if plans[k] is not None:
             rows.append((f"robot{k + 1} files", ", ".join(str(p) for p in files.values())))

@@ -18,30 +18,39 @@ reads the files back):
     waiting robot leaves its row no earlier than the releasing robot is at rest, its weld
     done, at its own); the recorded cycle is the last robot's end.
 ``interference``
-    the replay. This version has no independent replay of its own: a plan that says
-    robot-robot interference was not checked (``replay`` null) passes with that said; a plan
-    that records a replay fails here ("not re-checked"), since its claim cannot be re-checked.
+    the independent replay (:func:`weldplan.multi.replay.replay_station`: its own URDF
+    reading, FK and FCL) run again from the files: per robot the station file's URDF, base
+    and tool (:func:`weldplan.multi.station.replay_robot`, as the live plan builds it), its
+    samples from its trajectory CSV, its stop rows and their arrivals from the schedule (each
+    arrival on a sample of the CSV within :data:`CYCLE_TOL`), the schedule's interlocks and the
+    station's ``clearance``. It passes when the re-run agrees with the recorded replay (the
+    same verdict, clearance and pairs of motions that may overlap, the minimum distance within
+    :data:`DISTANCE_TOL`); agreeing on robots too
+    close, the plan is partial (exit 3) and the pair is named. A plan that records no replay
+    (``null``) is re-run all the same, with nothing to agree with.
 
 A check that fails does not stop the later ones (each reads its own files); the verdict is a
 :class:`~weldplan.station.recheck.Verdict` (exit 0 ok, 1 a check failed, 3 ok but welds left
-out).
+out, or robots too close as recorded: the pair is then in :attr:`Verdict.left_out`).
 """
 
 from __future__ import annotations
 
 import csv
 from collections import Counter
+from dataclasses import dataclass
 from typing import Any
 
-from weldplan.errors import InputError
+import numpy as np
+from numpy.typing import NDArray
+
+from weldplan.errors import InputError, PlanningError
 from weldplan.station.recheck import CheckResult, Verdict
 
 #: s: the schedule (6 decimals) against a trajectory CSV's ``t`` (4 decimals)
 CYCLE_TOL = 1e-3
-#: what the interference check says of a plan that did not check interference
-NOT_RECHECKED = (
-    "interference not re-checked: the plan says robot-robot interference was not checked"
-)
+#: mm: the re-run replay's minimum robot-robot distance against the recorded one
+DISTANCE_TOL = 1e-3
 
 
 def verify_station(saved: Any, *, station: Any = None) -> Verdict:
@@ -64,7 +73,7 @@ def verify_station(saved: Any, *, station: Any = None) -> Verdict:
             checks.append(check)
         routes.append(route)
     checks.append(schedule_check(saved, routes))
-    checks.append(interference_check(saved))
+    checks.append(interference_check(saved, station))
     return Verdict(tuple(checks))
 
 
@@ -154,6 +163,11 @@ def _mesh(station: Any) -> Any:
 
 def _trajectory_end(path: Any) -> float:
     """s: the last ``t`` of a trajectory CSV (``#`` lines skipped)."""
+    return float(_trajectory_rows(path)[-1][0])
+
+
+def _trajectory_rows(path: Any) -> list[list[str]]:
+    """A trajectory CSV's rows, its header first (``#`` lines skipped)."""
     try:
         lines = [ln for ln in path.read_text().splitlines() if ln and not ln.startswith("#")]
     except OSError as exc:
@@ -161,7 +175,7 @@ def _trajectory_end(path: Any) -> float:
     rows = list(csv.reader(lines))
     if len(rows) < 2 or rows[0][:1] != ["t"]:
         raise InputError("not a trajectory CSV (no t column or no row)", path=path)
-    return float(rows[-1][0])
+    return rows
 
 
 def schedule_check(saved: Any, routes: list[Any]) -> CheckResult:
@@ -223,12 +237,99 @@ def _interlock_problem(s: Any, lock: Any) -> str:
     return ""
 
 
-def interference_check(saved: Any) -> CheckResult:
-    """The replay (module docstring)."""
-    if saved.replay is None:
-        return CheckResult("interference", True, f"{NOT_RECHECKED}: {saved.interference}")
-    return CheckResult(
-        "interference", False,
-        "not re-checked: the plan records a replay of robot-robot interference, and this "
-        "weldplan has no independent replay to re-check it",
-    )  # fmt: skip
+@dataclass(frozen=True, eq=False)
+class FileTiming:
+    """A robot's timed route as the saved files give it: what the replay reads of a
+    :class:`~weldplan.robot.timing.TimedTrajectory`.
+
+    Attributes
+    ----------
+    t, q
+        ``(m,)`` s and ``(m, 6)`` rad: the trajectory CSV's samples.
+    stops
+        ``(n,) bool``: the timed rows where the robot rests (the schedule's: row 0 and the
+        rows its moves end at).
+    row_times
+        ``(n,)`` s: the arrival at each stop row on the robot's own clock (its moves and welds
+        before it, its waits taken out); 0 at the other rows.
+    """
+
+    t: NDArray[np.float64]
+    q: NDArray[np.float64]
+    stops: NDArray[np.bool_]
+    row_times: NDArray[np.float64]
+
+
+def file_timing(schedule: Any, k: int, trajectory: Any) -> FileTiming:
+    """Robot ``k``'s :class:`FileTiming` from ``schedule`` and its ``trajectory`` CSV.
+
+    Raises :class:`~weldplan.errors.InputError` naming the CSV when it is not a trajectory or
+    an arrival falls on none of its samples."""
+    rows = _trajectory_rows(trajectory)
+    t = np.array([float(r[0]) for r in rows[1:]])
+    q = np.array([[float(v) for v in r[2:]] for r in rows[1:]])
+    own, arrive = 0.0, {0: 0.0}
+    for a in schedule.of(k):
+        if a.kind != "wait":
+            own += a.duration
+        if a.kind == "move":
+            arrive.setdefault(a.row, own)
+    n = max(arrive) + 1
+    stops, times = np.zeros(n, bool), np.zeros(n)
+    for r, at in arrive.items():
+        stops[r], times[r] = True, at
+        if np.min(np.abs(t - at)) > CYCLE_TOL:
+            raise InputError(f"no sample at {at:.4f} s, robot {k + 1}'s arrival at row {r}",
+                             path=trajectory)  # fmt: skip
+    return FileTiming(t, q, stops, times)
+
+
+def interference_check(saved: Any, station: Any) -> CheckResult:
+    """The replay re-run from the files and compared with the recorded one (module
+    docstring)."""
+    from weldplan.multi.replay import replay_station
+
+    if saved.schedule is None:
+        return CheckResult("interference", False, "the plan records no schedule to replay")
+    try:
+        robots = [_replay_robot(saved, station, k) for k in range(len(saved.robots))]
+        v = replay_station(robots, saved.schedule.interlocks, station.clearance)
+    except (InputError, PlanningError) as exc:
+        return CheckResult("interference", False, f"the replay cannot run: {exc}")
+    rec = saved.replay
+    said = _replay_line(v, saved.robots)
+    if rec is None:
+        agree, text = True, f"re-run (the plan records none): {said}"
+    else:
+        same = rec.min_distance == v.min_distance or (
+            abs(rec.min_distance - v.min_distance) <= DISTANCE_TOL)  # fmt: skip
+        agree = rec.ok == v.ok and same and (rec.clearance, rec.pairs) == (v.clearance, v.pairs)
+        was = "" if agree else f"; recorded: {_replay_line(rec, saved.robots)}"
+        text = f"re-run: {said}{was}"
+    pair = () if v.ok else (v.failures[0] if v.failures else said,)
+    return CheckResult("interference", agree, text, left_out=pair if agree else ())
+
+
+def _replay_robot(saved: Any, station: Any, k: int) -> Any:
+    """Robot ``k`` as the replay reads it from the files (module docstring)."""
+    from weldplan.multi.station import replay_robot
+    from weldplan.robot import load_robot
+    from weldplan.station.mount import mount_tool
+
+    spec, robot = station.robots[k], saved.robots[k]
+    if robot.trajectory is None or not saved.schedule.of(k):
+        return replay_robot(robot.name, spec, None, None)
+    timing = file_timing(saved.schedule, k, robot.trajectory)
+    tool = mount_tool(spec.tool, load_robot(spec.urdf, spec.opw))
+    return replay_robot(robot.name, spec, timing, tool)
+
+
+def _replay_line(v: Any, robots: Any) -> str:
+    """One line of a :class:`~weldplan.multi.schedule.ReplayVerdict`: ok or not, the pairs,
+    the minimum distance and where."""
+    md = "no pair may overlap" if np.isinf(v.min_distance) else f"min {v.min_distance:.4f} mm"
+    if v.closest is not None:
+        a, x, b, y = v.closest
+        md += f" ({robots[a].name} row {x} / {robots[b].name} row {y})"
+    head = "ok" if v.ok else f"robots closer than {v.clearance:g} mm"
+    return f"{head} over {v.pairs} pairs of motions, {md}"

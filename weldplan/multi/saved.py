@@ -3,8 +3,11 @@
 :func:`station_paths` names every file a station plan writes from the station's
 :class:`~weldplan.station.model.OutputSpec` (each robot's files are the station's names with
 ``_robot1``, ``_robot2`` ... before the suffix; the route JSON and the trajectory CSV of every
-robot are always written, since the station JSON points at them); :func:`write_station` renders
-them in memory (each robot's program carrying its interlock signals, :func:`robot_plans`) and
+robot are always written, since the station JSON points at them; the ``html`` name is the
+station's page, :func:`weldplan.viz.station_page.station_page_text`, with its Gantt chart as a
+PNG beside it, ``<stem>_gantt.png``, :func:`weldplan.viz.gantt.gantt_png_bytes`);
+:func:`write_station` renders them in memory (each robot's program with the interlock signals
+the plan gave it, :func:`robot_plans`) and
 writes them as one set, whole or not at all (:func:`weldplan.io.outputset.write_outputs`).
 
 The station JSON (``route_station.json`` beside ``route.json``) holds what no robot's file
@@ -59,15 +62,21 @@ class StationPaths:
         ``trajectory``, ``post``, ``post_dat``...).
     post
         The programs' language (``"rapid"``, ``"krl"``; ``None``: no program).
+    html, gantt
+        The station's page and its Gantt chart (PNG) beside it (``None``: not written).
     """
 
     station: Path
     robots: tuple[dict[str, Path], ...]
     post: str | None = None
+    html: Path | None = None
+    gantt: Path | None = None
 
     def all(self) -> dict[str, Path]:
         """``{"station": ..., "robot1 csv": ...}``: every file, named for messages."""
         out = {"station": self.station}
+        if self.html is not None and self.gantt is not None:
+            out |= {"station html": self.html, "station gantt": self.gantt}
         for k, paths in enumerate(self.robots):
             out |= {f"robot{k + 1} {kind}": p for kind, p in paths.items()}
         return out
@@ -89,24 +98,28 @@ def station_paths(out: Any, n_robots: int) -> StationPaths:
     robots = tuple(
         output_paths(_robot_outputs(out, k), robot=True, tool=True) for k in range(n_robots)
     )
-    paths = StationPaths(station, robots, out.post)
+    html = out.html
+    gantt = None if html is None else html.with_name(f"{html.stem}_gantt.png")
+    paths = StationPaths(station, robots, out.post, html, gantt)
     seen: dict[Path, str] = {}
     for kind, p in paths.all().items():
         if p.resolve() in seen:
             raise WeldplanError(f"{p}: given for both {seen[p.resolve()]} and {kind}")
         seen[p.resolve()] = kind
-    check_outputs({"station json": station})
+    check_outputs({k: p for k, p in paths.all().items() if k.startswith("station")})
     return paths
 
 
 def _robot_outputs(out: Any, k: int) -> Any:
     """Robot ``k``'s :class:`~weldplan.station.model.OutputSpec`: every name with
-    ``_robot<k+1>``; the route JSON and the trajectory always."""
+    ``_robot<k+1>`` (but ``html``, the station's page); the route JSON and the trajectory
+    always."""
     kw = {
         f.name: robot_path(getattr(out, f.name), k)
         for f in dataclasses.fields(out)
-        if f.name != "post" and getattr(out, f.name) is not None
+        if f.name not in ("post", "html") and getattr(out, f.name) is not None
     }
+    kw["html"] = None
     kw.setdefault("json", robot_path(out.csv.with_suffix(".json"), k))
     kw.setdefault("trajectory", robot_path(out.csv.with_name(f"{out.csv.stem}_trajectory.csv"), k))
     return dataclasses.replace(out, **kw)
@@ -114,35 +127,23 @@ def _robot_outputs(out: Any, k: int) -> Any:
 
 def robot_plans(splan: Any) -> tuple[Any, ...]:
     """Per robot its :class:`~weldplan.station.pipeline.Plan` as written (``None``: idle): the
-    program named ``<station>_robot<k>`` and carrying its interlock signals (each
-    :class:`~weldplan.multi.schedule.Interlock` of the schedule, a ``set`` in the first
-    robot's program, a ``wait`` in the second's, :meth:`Interlock.actions`)."""
-    names = splan.allocation.robots
-    rows = [None if p is None else p.program.row for p in splan.plans]
-    acts: list[list[Any]] = [[] for _ in splan.plans]
-    locks = () if splan.schedule is None else splan.schedule.interlocks
-    for lock in locks:
-        (a, set_), (b, wait) = lock.actions(rows)
-        acts[a].append(dataclasses.replace(set_, peer=names[b]))
-        acts[b].append(dataclasses.replace(wait, peer=names[a]))
+    program named ``<station>_robot<k>``, its interlock signals as the plan's program carries
+    them (:func:`weldplan.multi.station.with_signals`, the one mapping from the schedule's
+    interlocks to signals), a note naming the station."""
     base = splan.station.name or "weldplan_route"
     return tuple(
-        None if p is None else _robot_plan(splan, p, f"{base}_robot{k + 1}", k, acts[k])
+        None if p is None else _robot_plan(splan, p, f"{base}_robot{k + 1}", k)
         for k, p in enumerate(splan.plans)
     )
 
 
-def _robot_plan(splan: Any, plan: Any, name: str, k: int, acts: list[Any]) -> Any:
+def _robot_plan(splan: Any, plan: Any, name: str, k: int) -> Any:
     build = plan.program
-    order = {t.row: i for i, t in reversed(list(enumerate(build.program.targets)))}
-    acts = sorted(acts, key=lambda a: (order.get(a.row, -1), a.action != "set"))
     note = (
         f"Station '{splan.station.name or 'weldplan_route'}': robot {k + 1} of "
         f"{len(splan.plans)}; {splan.interference}."
     )
-    prog = dataclasses.replace(
-        build.program, name=name, signals=tuple(acts), notes=(*build.program.notes, note)
-    )
+    prog = dataclasses.replace(build.program, name=name, notes=(*build.program.notes, note))
     station = dataclasses.replace(plan.station, name=name)
     return dataclasses.replace(
         plan, station=station, program=dataclasses.replace(build, program=prog)
@@ -201,6 +202,14 @@ def station_texts(splan: Any, paths: StationPaths) -> dict[Path, str | bytes]:
         texts |= {p: rendered[kind] for kind, p in files.items()}
     d = station_dict(splan, paths)
     texts[paths.station] = json.dumps(d, indent=1, allow_nan=False) + "\n"
+    if paths.html is not None and paths.gantt is not None:
+        from weldplan.viz.gantt import gantt_png_bytes
+        from weldplan.viz.station_page import station_page_text
+
+        texts[paths.html] = station_page_text(splan)
+        bound = float(splan.report.bound.value)
+        title = f"{splan.station.name or 'weldplan_route'}: {len(splan.plans)} robots"
+        texts[paths.gantt] = gantt_png_bytes(splan.schedule, bound=bound, title=title)
     return texts
 
 
@@ -214,7 +223,7 @@ def write_station(splan: Any, paths: StationPaths) -> None:
 def save_station_plan(splan: Any, path: str | PathLike[str]) -> Path:
     """Write the station JSON ``path`` and beside it, per robot with welds, its route JSON
     (``<stem>_robot<k>.json`` and its timings) and trajectory CSV, as one set. Returns
-    ``path``. The programs are the CLI's (``--post``); their signals come from the schedule."""
+    ``path``. The programs are the CLI's (``--post``); their signals are the plan's programs'."""
     from weldplan.station.model import OutputSpec
 
     path = Path(path)

@@ -48,7 +48,7 @@ import dataclasses
 import logging
 import tempfile
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -296,7 +296,7 @@ def _interference(
     t = time.perf_counter()
     zones = resolve_zones(found, strict=False)
     seconds["zones"] = time.perf_counter() - t
-    plans = _with_signals(plans, zones.interlocks)
+    plans = with_signals(plans, zones.interlocks, names)
     timings = [None if p is None else p.program.timing for p in plans]
     schedule = station_schedule(
         names, timings, zones.interlocks,
@@ -316,14 +316,17 @@ def _interference(
     return plans, schedule, verdict, f"{found.line()}; {zones.line()}; {said}"
 
 
-def _with_signals(plans: list[Any], interlocks: tuple[Any, ...]) -> list[Any]:
+def with_signals(plans: list[Any], interlocks: Sequence[Any], names: Sequence[str]) -> list[Any]:
     """Each plan with its program carrying its interlock signals, in program order (at one
-    row: the signal it sets before the one it waits for)."""
+    row: the signal it sets before the one it waits for), each naming the other robot
+    (``names``: station order). The one mapping from interlocks to program signals: the
+    station's files write the programs as the plan holds them (:mod:`weldplan.multi.saved`)."""
     rows = [None if p is None else p.program.row for p in plans]
     acts: dict[int, list[Any]] = {}
     for lock in interlocks:
-        for robot, action in lock.actions(rows):
-            acts.setdefault(robot, []).append(action)
+        (a, set_), (b, wait) = lock.actions(rows)
+        acts.setdefault(a, []).append(dataclasses.replace(set_, peer=names[b]))
+        acts.setdefault(b, []).append(dataclasses.replace(wait, peer=names[a]))
     out = list(plans)
     for k, got in acts.items():
         build = plans[k].program
@@ -335,20 +338,29 @@ def _with_signals(plans: list[Any], interlocks: tuple[Any, ...]) -> list[Any]:
 
 def _replay_robots(station: Any, plans: list[Any], names: tuple[str, ...]) -> list[Any]:
     """The robots as the replay reads them: the station's URDF and base, the tool's mesh."""
+    return [
+        replay_robot(names[k], spec, None if p is None else p.program.timing,
+                     None if p is None else p.tool)
+        for k, (spec, p) in enumerate(zip(station.robots, plans, strict=True))
+    ]  # fmt: skip
+
+
+def replay_robot(name: str, spec: Any, timing: Any, tool: Any) -> Any:
+    """One robot as the replay reads it (:class:`~weldplan.multi.replay.ReplayRobot`): the
+    URDF and base (x, y, z mm, yaw deg) of its :class:`~weldplan.station.model.RobotSpec`
+    ``spec``, its ``timing`` (``None``: idle) and its mounted tool (``.tool`` the mesh in the TCP
+    frame, ``.flange_tcp``; ``None``: links only). The live plan and ``weldplan verify`` of a
+    saved station (:mod:`weldplan.multi.recheck`) both build it here."""
     from weldplan.multi.replay import ReplayRobot
     from weldplan.robot.reach import base_pose
 
-    out = []
-    for k, (spec, p) in enumerate(zip(station.robots, plans, strict=True)):
-        tool = None if p is None or p.tool is None else p.tool
-        out.append(ReplayRobot(
-            names[k], Path(spec.urdf), base_pose(*spec.base),
-            None if p is None else p.program.timing,
-            None if tool is None else np.asarray(tool.tool.vertices),
-            None if tool is None else np.asarray(tool.tool.faces),
-            None if tool is None else tool.flange_tcp,
-        ))  # fmt: skip
-    return out
+    mesh = None if timing is None or tool is None else tool.tool
+    return ReplayRobot(
+        name, Path(spec.urdf), base_pose(*spec.base), timing,
+        None if mesh is None else np.asarray(mesh.vertices),
+        None if mesh is None else np.asarray(mesh.faces),
+        None if mesh is None else tool.flange_tcp,
+    )  # fmt: skip
 
 
 def timed_weld_ids(build: Any) -> dict[int, str]:

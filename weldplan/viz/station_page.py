@@ -18,8 +18,9 @@ One self-contained HTML page (issue 30, item 5; the meshcat page of
 Under ``weldplan_station``: ``part`` and per robot ``robot<k>/links/<link>``, ``robot<k>/tool``,
 ``robot<k>/route``, ``robot<k>/welds/<n>``, ``robot<k>/labels/<n>`` (k from 1). The page opens
 framed on the whole cell (the part, the routes, every link's and tool's box at every frame:
-:func:`weldplan.viz.camera.frame_scene`). :func:`station_page` writes it; the CLI calls that one
-function. Consumes results only: it imports no planner.
+:func:`weldplan.viz.camera.frame_scene`). :func:`station_page` writes it; the CLI renders it with
+:func:`station_page_text` and writes it with the station's other files as one set. Consumes
+results only: it imports no planner.
 """
 
 from __future__ import annotations
@@ -321,13 +322,18 @@ def station_page(station_plan: Any, path: str | PathLike[str]) -> Path:
     not at all; returns the path. The chart carries the allocation's lower bound."""
     from weldplan.io.export import write_text_atomic
 
+    return write_text_atomic(path, station_page_text(station_plan))
+
+
+def station_page_text(station_plan: Any) -> str:
+    """The page of a :class:`~weldplan.multi.station.StationPlan` (:func:`station_page`) as
+    text, for a caller that writes it with other files as one set."""
     robots = station_robots(station_plan)
     part = next((p.cell.part for p in station_plan.plans if p is not None), None)
-    page = station_html(
+    return station_html(
         robots, station_plan.schedule, part=part, bound=float(station_plan.report.bound.value),
         title=f"weldplan station: {len(robots)} robots",
     )  # fmt: skip
-    return write_text_atomic(path, page)
 
 
 _OVERLAY = """<div id="weldplan-gantt"
