@@ -7,13 +7,13 @@ Usage (from the repository root)::
                                        [--cost length,time] [--moves linear,joint]
 
 For each station: the route, the weld poses, the robot route (base searched unless given,
-:func:`weldplan.robot.plan.plan_robot_route`), then the program and its timing
+:func:`weldplan.robot.route.plan_robot_route`), then the program and its timing
 (:func:`weldplan.robot.program.robot_program`) with linear and with joint moves. Prints a
 markdown table: welds served, whether the robot route is collision-free, the cycle time (toppra)
 beside the same route at a constant TCP speed, the moving time, the TCP's largest distance from
 the Cartesian lines, the emitted programs' FK round trip (RAPID and KRL parsed back), seconds of
 each stage, and the load average. With ``--cost time`` the order minimises the robot's leg
-times (:func:`weldplan.robot.legtime.cell_leg_times`, the base fixed before the order) and the
+times (:func:`weldplan.robot.route.cell_leg_times`, the base fixed before the order) and the
 row also gives the order's seconds over those bounds and the proved lower bound of the cycle.
 A robot route that is not collision-free is timed all the same
 and said so: its figures are not those of a program weldplan would write.
@@ -34,14 +34,13 @@ from weldplan.commands._robot import check_program
 from weldplan.io.posts.krl import render_krl
 from weldplan.io.posts.rapid import render_rapid
 from weldplan.robot import load_robot
-from weldplan.robot.legtime import cell_leg_times, time_stats
-from weldplan.robot.payload import urdf_payload
-from weldplan.robot.plan import plan_robot_route, tool_flange_tcp
+from weldplan.robot.model import urdf_payload
+from weldplan.robot.placement import BaseSearch, parse_base
 from weldplan.robot.program import robot_program
-from weldplan.robot.reach import BaseSearch, parse_base
+from weldplan.robot.route import cell_leg_times, plan_robot_route, time_stats, tool_flange_tcp
 from weldplan.robot.settings import ProgramSettings, RobotCell, ToolOnRobot
 from weldplan.tool import plan_weld_poses, verify_poses
-from weldplan.tool.load import load_tool
+from weldplan.tool.model import load_tool
 from weldplan.weld.verify import verify_route
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -24,8 +24,7 @@ import numpy as np
 
 import weldplan
 from weldplan.tool import shared_spot_gun
-from weldplan.tool.orient import candidate_rotations, local_candidates
-from weldplan.tool.pose_search import PoseSearch
+from weldplan.tool.poses import PoseSearch, candidate_rotations, local_candidates
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -6,7 +6,7 @@ station, the same seed) and compare the answers field by field::
     python scripts/robot_route_dump.py dump OUT/before.json -n 200 --tool torch --cache C
     python scripts/robot_route_dump.py compare OUT/before.json OUT/after.json
 
-The dump holds what :func:`weldplan.robot.plan.plan_robot_route` decides: the base, the status,
+The dump holds what :func:`weldplan.robot.route.plan_robot_route` decides: the base, the status,
 detail and branch of every weld, every row's joint vector, branch, exactness and owner, the
 first check's blocked motions and bodies, and the verification's verdict. Timings are left out.
 """
@@ -36,10 +36,10 @@ ANSWER_STATS = (
 def dump(n: int, tool: str, cache: Path | None, step: float, base: str | None) -> dict:
     from weldplan.bench.robot import TORCH_REACH_MM, station
     from weldplan.robot import load_robot
-    from weldplan.robot.plan import plan_robot_route, tool_flange_tcp
-    from weldplan.robot.reach import BaseSearch, parse_base
+    from weldplan.robot.placement import BaseSearch, parse_base
+    from weldplan.robot.route import plan_robot_route, tool_flange_tcp
     from weldplan.robot.settings import JointRouteSettings, RobotCell, ToolOnRobot
-    from weldplan.tool.torch import SHARED_GUN_DIR
+    from weldplan.tool.model import SHARED_GUN_DIR
     from weldplan.weld.synthetic import CAR2
 
     part, route, poses, gun = station(n, cache, tool)
@@ -58,7 +58,7 @@ def dump(n: int, tool: str, cache: Path | None, step: float, base: str | None) -
 
 
 def answers(rr) -> dict:
-    """What a :class:`~weldplan.robot.configs.RobotRoute` decides, as JSON-ready lists."""
+    """What a :class:`~weldplan.robot.route.RobotRoute` decides, as JSON-ready lists."""
     return {
         "base": rr.base.tolist(),
         "status": list(rr.status),

@@ -2,7 +2,7 @@
 zones and replay): each robot swings its first axis through a weld row, its arm stretched
 forward (A2 -90 deg, A3 +90 deg). ``facing``: the bases 3 m apart, facing each other, so the arms
 cross in the middle; ``far``: the second robot 12 m away. Test scaffolding, not the planner's
-routes: the timing is the real one (weldplan.robot.timing.time_route, the URDF's limits)."""
+routes: the timing is the real one (weldplan.robot.program.time_route, the URDF's limits)."""
 
 from __future__ import annotations
 
@@ -30,7 +30,7 @@ def base(x: float, yaw: float) -> np.ndarray:
 
 def sweep(robot, a1, weld_rows=(1,), weld_time=WELD_S):
     """The timed route through the A1 values ``a1`` (rad) from :data:`HOME`, every row a stop."""
-    from weldplan.robot.timing import time_route
+    from weldplan.robot.program import time_route
 
     Q = np.array([HOME + [a, 0, 0, 0, 0, 0] for a in a1])
     return time_route(

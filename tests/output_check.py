@@ -1,10 +1,11 @@
 """An independent check of the poses a run writes: python-fcl on the meshes, nothing else.
 
-Shares no code with weldplan's checkers (tool/verify_*, tool/sweep*, robot/collision): the tool's
-triangles are placed here from the file's position and quaternion, the part is one BVH of the
-whole mesh, and a pose is *inside the part* when any tool triangle that is not wholly inside the
-contact zone (the sphere of the contact radius about a weld spot, where the tool touches the
-sheet by design) collides with the part (``fcl.collide``; touching counts).
+Shares no code with weldplan's checkers (tool/verify_*, tool/transitions/sweep*,
+robot/collision/checker): the tool's triangles are placed here from the file's position and
+quaternion, the part is one BVH of the whole mesh, and a pose is *inside the part* when any tool
+triangle that is not wholly inside the contact zone (the sphere of the contact radius about a weld
+spot, where the tool touches the sheet by design) collides with the part (``fcl.collide``; touching
+counts).
 """
 
 from __future__ import annotations

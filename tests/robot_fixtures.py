@@ -3,7 +3,7 @@
 The joint route here is test scaffolding, not the planner's: one IK solution per waypoint (TCP
 straight down, the gun's TCP), each the solution nearest the previous one, starting from the
 branch of the robot's usual pose (elbow up, wrist positive). The robot engineer's branch choice
-(weldplan.robot.configs) replaces it in the pipeline.
+(weldplan.robot.route.configs) replaces it in the pipeline.
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ def shared_robot():
 
 def gun_tcp(robot):
     """``(T_flange_tcp (4, 4) mm, gun URDF path)``."""
-    from weldplan.robot.urdf import chain_transform
+    from weldplan.robot.model import chain_transform
 
     gun = require_shared("tools", "spot_welding_gun", "spot_welding_gun.urdf")
     return robot.tool_transform(chain_transform(gun, "nozzle_tip")), gun

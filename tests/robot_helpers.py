@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import trimesh
 
-from weldplan.robot.configs import OK
-from weldplan.robot.reach import base_pose
-from weldplan.tool.result import WeldPose, WeldPoses
+from weldplan.robot.placement import base_pose
+from weldplan.robot.route import OK
+from weldplan.tool.poses import WeldPose, WeldPoses
 
 #: the arc torch of :func:`weldplan.tool.arc_torch` (straight): TCP 425 mm out along the
 #: flange's z axis

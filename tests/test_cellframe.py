@@ -208,8 +208,8 @@ def test_the_base_search_stands_the_robot_on_the_cell_floor(car2):
     from tests.robot_fixtures import shared_robot
     from weldplan.geometry.distance import SurfaceDistance
     from weldplan.io.joints import read_joints
-    from weldplan.robot.reach import BaseSearch, candidate_bases, search_base
-    from weldplan.robot.selfcollision import cell_floor
+    from weldplan.robot.collision import cell_floor
+    from weldplan.robot.placement import BaseSearch, candidate_bases, search_base
 
     robot = shared_robot()
     cell_part, joints, _ = place_part(car2, read_joints(CAR2_50), PartPose.from_up("y"))
@@ -239,7 +239,7 @@ def test_the_base_search_stands_the_robot_on_the_cell_floor(car2):
 def program_build():
     from tests.robot_fixtures import box_joint_route, gun_tcp, shared_robot
     from tests.route_fixtures import box_part
-    from weldplan.robot.payload import urdf_payload
+    from weldplan.robot.model import urdf_payload
     from weldplan.robot.program import robot_program
     from weldplan.robot.settings import ProgramSettings, ToolOnRobot
 

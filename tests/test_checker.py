@@ -22,9 +22,8 @@ from weldplan.geometry.checker import (
 from weldplan.geometry.collision import CollisionModel
 from weldplan.io.joints import read_joints
 from weldplan.io.mesh import load_part
-from weldplan.tool.model import bvh
-from weldplan.tool.sweep import SweepChecker, ToolStateChecker, interpolate
-from weldplan.tool.torch import arc_torch
+from weldplan.tool.model import arc_torch, bvh
+from weldplan.tool.transitions import SweepChecker, ToolStateChecker, interpolate
 
 DEMO = Path(__file__).resolve().parents[1] / "assets" / "demo"
 
@@ -211,11 +210,14 @@ def test_robot_checker_satisfies_the_protocol_and_agrees_with_sampled_states():
 
 
 def test_every_report_exposes_one_verdict():
-    from weldplan.robot.routejson import RobotCheck
+    from weldplan.robot.program import RobotCheck
     from weldplan.station.recheck import CheckResult, Verdict
-    from weldplan.tool.check_route import RoutePosesCheck
-    from weldplan.tool.verify_poses import PoseCheck, PosesVerification
-    from weldplan.tool.verify_sweeps import SweepsVerification
+    from weldplan.tool.verify import (
+        PoseCheck,
+        PosesVerification,
+        RoutePosesCheck,
+        SweepsVerification,
+    )
     from weldplan.weld.verify import VerifyReport, Violation
 
     bad_seg = Violation("segment", "collides", leg=2, segment=4, from_id="3", to_id="7")
@@ -236,7 +238,7 @@ def test_every_report_exposes_one_verdict():
     assert v["tool transitions"].left_out == ("1->2",) and v["tool transitions"].ok
     assert [f.place for f in v["robot route"].failures] == ["row 3", "motion 5"]
     assert "floor" in v["robot route"].failures[1].cause
-    from weldplan.tool.sweep import SweepCheck
+    from weldplan.tool.transitions.sweep import SweepCheck
 
     blocked = SweepCheck(False, 12, -0.5, 0.25, 80.0, False, 0.5).verdict
     assert blocked.failures[0].place == "25 %" and "blocked at 25 %" in blocked.failures[0].cause

@@ -85,8 +85,8 @@ def test_no_tool_signature_over_ten():
 
 
 #: the modules that may read a route's ``tool`` section as a dict: the Route that holds it and
-#: its two typed views (weldplan.tool.section.ToolSection, weldplan.robot.toolroute.ToolRoute)
-TOOL_SECTION_VIEWS = ("weld/route.py", "tool/section.py", "robot/toolroute.py")
+#: its two typed views (weldplan.tool.section.ToolSection, weldplan.robot.program.ToolRoute)
+TOOL_SECTION_VIEWS = ("weld/route.py", "tool/section.py", "robot/program/toolroute.py")
 #: the methods that read a mapping
 MAPPING_METHODS = frozenset({"get", "items", "keys", "values", "copy", "pop", "setdefault"})
 

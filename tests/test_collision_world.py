@@ -90,9 +90,9 @@ def gun_checker(urdf):
     """The gun on the KUKA (base at the origin on the floor z = 0), the part far away."""
     from weldplan.robot import load_robot
     from weldplan.robot.collision import RobotCollision
-    from weldplan.robot.plan import tool_flange_tcp
+    from weldplan.robot.route import tool_flange_tcp
     from weldplan.tool import shared_spot_gun
-    from weldplan.tool.torch import SHARED_GUN_DIR
+    from weldplan.tool.model import SHARED_GUN_DIR
 
     require_shared("tools", "spot_welding_gun")
     robot = load_robot(urdf)
@@ -206,7 +206,7 @@ def test_the_tool_stage_registers_its_tool_and_part_in_a_world():
     """SweepChecker's world: its own FCL objects, the one pair checked with the contact zone
     exempt; the world's query agrees with FCL on a pose through the plate and one above it."""
     from weldplan.tool import arc_torch
-    from weldplan.tool.sweep import SweepChecker
+    from weldplan.tool.transitions import SweepChecker
 
     plate = make_plate([0.0, 0.0, 0.0], 2, size=200.0)
     chk = SweepChecker(plate, arc_torch(), clearance=5.0, contact_radius=20.0)

@@ -1,4 +1,4 @@
-"""``--cost time`` (weldplan.robot.legtime, the PairPlanning cost hook): bounds and orders."""
+"""``--cost time`` (weldplan.robot.route.legtime, the PairPlanning cost hook): bounds and orders."""
 
 from __future__ import annotations
 
@@ -11,8 +11,8 @@ import trimesh
 
 from weldplan.errors import ConfigError
 from weldplan.io.joints import Joints
-from weldplan.robot.legtime import LegTimes, rest_to_rest_bound, time_stats
-from weldplan.robot.timing import pair_time, time_route
+from weldplan.robot.program import pair_time, time_route
+from weldplan.robot.route import LegTimes, rest_to_rest_bound, time_stats
 from weldplan.weld.cell import build_cell
 from weldplan.weld.pipeline import PlanConfig, plan_route
 
@@ -109,7 +109,7 @@ def _spin_station():
     from scipy.spatial.transform import Rotation
 
     from tests.robot_fixtures import gun_tcp, shared_robot
-    from weldplan.robot.legtime import leg_times, weld_configurations
+    from weldplan.robot.route import leg_times, weld_configurations
 
     robot = shared_robot()
     Tft, _ = gun_tcp(robot)
@@ -126,8 +126,8 @@ def _spin_station():
 
 def _timed_cycle(robot, configs, order):
     """Toppra over the welds in ``order``: the configurations chosen by the robot route's own
-    branch choice (weldplan.robot.configs), a rest at every weld."""
-    from weldplan.robot.configs import choose_configurations
+    branch choice (weldplan.robot.route.configs), a rest at every weld."""
+    from weldplan.robot.route import choose_configurations
 
     o = np.asarray(order)
     ch = choose_configurations(configs.q[o], configs.branch[o], configs.valid[o], robot.velocity)
@@ -161,7 +161,7 @@ def test_cost_time_beats_cost_length_on_the_timed_cycle():
 def test_leg_times_are_the_least_bound_over_configurations_pair_by_pair():
     """Random configuration sets (seeded) against a plain double loop; a weld without any
     configuration costs 0 s to and from it; ``cost`` (station branch) is never below ``bound``."""
-    from weldplan.robot.legtime import WeldConfigurations, leg_times
+    from weldplan.robot.route import WeldConfigurations, leg_times
 
     rng = np.random.default_rng(5)
     n, K = 5, 6

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from weldplan.multi.schedule import Interlock, station_schedule
-from weldplan.robot.timing import time_route
+from weldplan.robot.program import time_route
 
 pytest.importorskip("matplotlib")
 Image = pytest.importorskip("PIL.Image")

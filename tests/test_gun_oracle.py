@@ -17,8 +17,8 @@ from weldplan.bench.gun_oracle import (
 )
 from weldplan.io.joints import Joints
 from weldplan.tool import plan_weld_poses, shared_spot_gun
-from weldplan.tool.result import quat_wxyz
-from weldplan.tool.verify_poses import PoseChecker
+from weldplan.tool.poses import quat_wxyz
+from weldplan.tool.verify import PoseChecker
 from weldplan.weld.sheetmetal import generate_side_frame
 
 
@@ -129,7 +129,7 @@ def test_oracle_closes_on_the_deep_frame_misses(gun, deep_frame, spot):
 
 @pytest.mark.xfail(
     strict=True,
-    reason="completeness misses of tool/pose_search (reported, not fixed here): the oracle's "
+    reason="completeness misses of tool/poses/search (reported, not fixed here): the oracle's "
     "verified frame tilts 15 deg at an azimuth between the search's 8 (every 45 deg)",
 )
 @pytest.mark.parametrize("spot", DEEP_MISSES)

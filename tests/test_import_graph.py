@@ -100,10 +100,10 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("weld", ("weldplan.weld",)),
     ("tool", ("weldplan.tool",)),
     # the exporters read the route and its poses (weld, tool) and are what the robot's program
-    # is written with; tool/path_csv is the tool path's writer, an exporter beside its model
+    # is written with; io/tool_csv is the tool path's writer, an exporter beside its model
     ("exporters", ("weldplan.io.export", "weldplan.io.blending", "weldplan.io.smooth_moves",
                    "weldplan.io.timings", "weldplan.io.trajectory", "weldplan.io.posts",
-                   "weldplan.tool.path_csv")),
+                   "weldplan.io.tool_csv")),
     ("robot", ("weldplan.robot",)),
     # the allocation of welds among robots: reach and leg times of the robot models
     ("multi", ("weldplan.multi",)),
@@ -201,7 +201,7 @@ def test_the_graph_sees_lazy_and_relative_imports(tmp_path):
 
 
 def test_exporting_a_route_with_poses_does_not_load_the_pose_planner():
-    """io/export reads a route's poses through weldplan.tool.route_frames, which runs the tool
+    """io/export reads a route's poses through weldplan.tool.poses.route_frames, which runs the tool
     package's ``__init__`` first: that ``__init__`` is lazy (PEP 562), so the pose planner, the
     sweep checker and their FCL models stay unloaded (a fresh interpreter: other tests import
     them)."""
@@ -209,7 +209,7 @@ def test_exporting_a_route_with_poses_does_not_load_the_pose_planner():
     import sys
 
     code = (
-        "import sys, weldplan.io.export, weldplan.tool.route_frames; "
+        "import sys, weldplan.io.export, weldplan.tool.poses.route_frames; "
         "print(sorted(m for m in sys.modules if m.startswith('weldplan.tool')))"
     )
     out = subprocess.run(
@@ -217,8 +217,12 @@ def test_exporting_a_route_with_poses_does_not_load_the_pose_planner():
         cwd=PACKAGE.parent,
     ).stdout  # fmt: skip
     loaded = set(eval(out))
-    assert "weldplan.tool.route_frames" in loaded  # the import ran
-    assert not loaded & {"weldplan.tool.poses", "weldplan.tool.sweep", "weldplan.tool.model"}
+    assert "weldplan.tool.poses.route_frames" in loaded  # the import ran
+    assert not loaded & {
+        "weldplan.tool.poses.plan",
+        "weldplan.tool.transitions.sweep",
+        "weldplan.tool.model.tool",
+    }
 
 
 def test_the_tool_package_still_exports_every_name():
@@ -235,13 +239,14 @@ def test_the_tool_package_still_exports_every_name():
 
 
 def test_a_tool_module_imported_first_does_not_hide_its_function():
-    """``weldplan.tool.verify_poses`` is a module and the function the package exports; importing
+    """``weldplan.tool.verify.poses`` is a module and the function the package exports; importing
     the module first must leave the function as the package's name (fresh interpreter)."""
     import subprocess
     import sys
 
     code = (
-        "import weldplan.tool.verify_poses, weldplan.tool.tool_order, weldplan.tool.verify_sweeps; "
+        "import weldplan.tool.verify.poses, weldplan.tool.transitions.order, "
+        "weldplan.tool.verify.sweeps; "
         "from weldplan.tool import tool_order, verify_poses, verify_sweeps; "
         "print([type(f).__name__ for f in (tool_order, verify_poses, verify_sweeps)])"
     )

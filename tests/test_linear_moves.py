@@ -1,4 +1,4 @@
-"""Checked linear moves (weldplan.robot.linear) and where the program emits LIN / MoveL."""
+"""Checked linear moves (weldplan.robot.route.linear) and where the program emits LIN / MoveL."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import pytest
 import trimesh
 
 from tests.robot_fixtures import box_joint_route, gun_tcp, shared_robot
-from weldplan.robot.linear import check_linear_moves, line_poses
+from weldplan.robot.route import check_linear_moves, line_poses
 from weldplan.weld.route import Leg, Route
 
 

@@ -25,7 +25,7 @@ from weldplan.multi import (
 )
 from weldplan.multi.bound import is_metric
 from weldplan.multi.problem import AllocationProblem
-from weldplan.robot.legtime import rest_to_rest_bound
+from weldplan.robot.route import rest_to_rest_bound
 
 #: rad/s and rad/s^2: joint limits of a heavy six-axis arm (KR 150 class)
 VEL = np.radians([105.0, 101.0, 107.0, 136.0, 129.0, 206.0])

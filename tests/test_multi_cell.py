@@ -20,7 +20,7 @@ from tests.conftest import require_shared
 ROOT = Path(__file__).resolve().parents[1]
 #: the part pose: moved, its lowest point (z 652.7 in the part frame) lifted to 500 mm above the
 #: cell's floor (z 0). Not turned: the tool stage's candidate poses start from the planning
-#: frame's x axis (weldplan.tool.orient.nominal_frames), so a turned part gets other (equally
+#: frame's x axis (weldplan.tool.poses.orient.nominal_frames), so a turned part gets other (equally
 #: valid) gun poses, and an exact comparison holds for a moved and lifted part only
 POSE = (600.0, -400.0, -152.7, 0.0, 0.0, 0.0)
 #: a turned one: a quarter turn about z, lifted the same
@@ -192,7 +192,7 @@ def test_a_given_base_in_the_part_is_refused_saying_which(demo):
 def test_the_base_search_keeps_out_of_the_discs_it_is_given():
     """BaseSearch.keep_out: no candidate within a disc, the same grid elsewhere."""
     from weldplan.robot import load_robot
-    from weldplan.robot.reach import BaseSearch, candidate_bases
+    from weldplan.robot.placement import BaseSearch, candidate_bases
 
     robot = load_robot(require_shared("robots", "kuka_kr150r3100_2", "kr150r3100_2.urdf"))
     T = np.tile(np.eye(4), (2, 1, 1))

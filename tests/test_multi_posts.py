@@ -24,7 +24,7 @@ from weldplan.multi.schedule import Interlock
 
 @pytest.fixture(scope="module")
 def build():
-    from weldplan.robot.payload import urdf_payload
+    from weldplan.robot.model import urdf_payload
     from weldplan.robot.program import robot_program
     from weldplan.robot.settings import ProgramSettings, ToolOnRobot
 

@@ -8,7 +8,7 @@ import pytest
 
 from weldplan.errors import PlanningError
 from weldplan.multi.schedule import Interlock, StationSchedule, station_schedule
-from weldplan.robot.timing import time_route
+from weldplan.robot.program import time_route
 
 VEL = np.full(6, 2.0)
 ACC = np.full(6, 8.0)

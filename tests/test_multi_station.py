@@ -1,6 +1,6 @@
 """Allocation on real models (weldplan.multi.inputs): the demo part, the shared spot gun, two
 KUKA KR 150 at given bases on either side of the part. The study's reach and the leg times of
-weldplan.robot.legtime go into the allocation; the exact optimum over those times (brute force
+weldplan.robot.route.legtime go into the allocation; the exact optimum over those times (brute force
 of tests/test_multi_allocation.py) checks the answer and the bound."""
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ WELD_TIME = (0.5, 0.6)
 def station():
     from weldplan.multi.inputs import study_inputs
     from weldplan.robot import load_robot
-    from weldplan.robot.reach import base_pose
+    from weldplan.robot.placement import base_pose
     from weldplan.study import StudyRobot, check_spots, load_study_tool
 
     gun_path = require_shared("tools", "spot_welding_gun", "spot_welding_gun.urdf")
@@ -56,7 +56,7 @@ def test_the_reach_is_the_study_and_the_unreached_weld_says_why(station):
 def test_leg_times_bound_the_studys_own_configurations(station):
     """The leg time between the study's configurations is one the robot can take: never
     below the bound over every configuration; the station-branch cost never below either."""
-    from weldplan.robot.legtime import rest_to_rest_bound
+    from weldplan.robot.route import rest_to_rest_bound
 
     study, robots, gun, inp = station
     for r, robot in enumerate(robots):

@@ -30,7 +30,7 @@ def _angle_deg(Ra, Rb):
 
 @pytest.fixture(scope="module")
 def build():
-    from weldplan.robot.payload import urdf_payload
+    from weldplan.robot.model import urdf_payload
     from weldplan.robot.program import robot_program
 
     robot = shared_robot()

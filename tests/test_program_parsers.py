@@ -94,7 +94,7 @@ def robot_programs():
     from tests.robot_fixtures import box_joint_route, gun_tcp, shared_robot
     from weldplan.cellframe import PartPose
     from weldplan.io.posts.program import SignalAction
-    from weldplan.robot.payload import urdf_payload
+    from weldplan.robot.model import urdf_payload
     from weldplan.robot.program import robot_program
     from weldplan.robot.settings import ProgramSettings, ToolOnRobot
 

@@ -19,7 +19,7 @@ from types import SimpleNamespace
 import pytest
 
 from tests.conftest import ROOT, require_shared
-from tests.test_robot_cli import _torch_urdf
+from tests.robot.test_robot_cli import _torch_urdf
 from weldplan.station.summary import clock_caps
 
 

@@ -18,12 +18,12 @@ import weldplan
 from tests.conftest import ROOT, require_shared
 from tests.route_fixtures import box_route, write_box_station
 from weldplan.errors import EXIT_PARTIAL, InputError
-from weldplan.robot.configs import RobotRoute
-from weldplan.robot.toolroute import ToolRoute
+from weldplan.robot.program import ToolRoute
+from weldplan.robot.route import RobotRoute
 from weldplan.station.recheck import CheckResult, RobotFiles, Verdict
 from weldplan.station.saved import load_plan
-from weldplan.tool.result import WeldPoses
-from weldplan.tool.transit import ToolPath
+from weldplan.tool.poses import WeldPoses
+from weldplan.tool.transitions import ToolPath
 
 DATA = Path(__file__).resolve().parent / "data"
 #: route JSON files written by weldplan before ToolRoute (commit 6bc50f8): the box of
@@ -220,9 +220,9 @@ def test_the_tool_layer_reads_the_tool_stage_keys_as_the_tool_route_does():
     route whose tool section is unreadable is bad input naming the file and the field."""
     import dataclasses
 
-    from weldplan.tool.check_route import check_tool_provenance
-    from weldplan.tool.route_frames import route_poses, route_tool_path
+    from weldplan.tool.poses import route_poses, route_tool_path
     from weldplan.tool.section import ToolSection
+    from weldplan.tool.verify import check_tool_provenance
     from weldplan.weld.route import Route
 
     d = json.loads(OLD_ROBOT.read_text())
@@ -249,7 +249,7 @@ def test_a_route_reads_its_tool_section_once_and_a_new_route_reads_its_own():
     each time it is read (nothing cached)."""
     import dataclasses
 
-    from weldplan.robot.routejson import saved_robot_route
+    from weldplan.robot.program import saved_robot_route
     from weldplan.station.recheck import recheck
     from weldplan.tool.section import ToolSection
     from weldplan.weld.route import Route

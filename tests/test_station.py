@@ -450,7 +450,7 @@ def test_a_tool_path_that_fails_its_re_check_stops_the_plan_and_writes_nothing(
 
     from weldplan.cli import main
 
-    vs = importlib.import_module("weldplan.tool.verify_sweeps")  # the package exports the function
+    vs = importlib.import_module("weldplan.tool.verify.sweeps")  # the package exports the function
 
     tmp, mesh, joints, head = box
     real = vs.verify_sweeps

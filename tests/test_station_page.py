@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from weldplan.multi.schedule import Interlock, station_schedule
-from weldplan.robot.timing import time_route
+from weldplan.robot.program import time_route
 
 VEL = np.full(6, 2.0)
 ACC = np.full(6, 8.0)
@@ -64,7 +64,7 @@ def two_robots():
     from tests.route_fixtures import box_part
     from weldplan.io.export import route_rows
     from weldplan.robot import load_robot
-    from weldplan.tool.load import load_tool
+    from weldplan.tool.model import load_tool
     from weldplan.viz.station_page import StationRobot
 
     urdf = require_shared("robots", "kuka_kr150r3100_2", "kr150r3100_2.urdf")

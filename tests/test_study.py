@@ -51,7 +51,7 @@ def _gun():
 
 def _robot(base):
     from weldplan.robot import load_robot
-    from weldplan.robot.reach import base_pose
+    from weldplan.robot.placement import base_pose
 
     urdf = require_shared("robots", "kuka_kr150r3100_2", "kr150r3100_2.urdf")
     return load_robot(urdf, base=base_pose(*base))
@@ -115,7 +115,7 @@ def test_the_reported_configuration_reaches_the_pose_within_limits_with_its_link
 ):
     """FK of the reported q equals the TCP pose; q inside the limits, A5 off 0; each link's
     mesh (python-fcl at the FK frames) does not touch the part."""
-    from weldplan.robot.urdf import chain_transform
+    from weldplan.robot.model import chain_transform
 
     part, _, _ = cell
     robot = _robot(BASE)

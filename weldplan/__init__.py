@@ -50,7 +50,7 @@ _LAZY: dict[str, str] = {
     "load_plan": "weldplan.station.saved",
     "SavedPlan": "weldplan.station.saved",
     "Verdict": "weldplan.station.recheck",
-    "ToolRoute": "weldplan.robot.toolroute",
+    "ToolRoute": "weldplan.robot.program.toolroute",
     "allocate": "weldplan.multi.allocate",
     "StationPlan": "weldplan.multi.station",
     "save_station_plan": "weldplan.multi.saved",

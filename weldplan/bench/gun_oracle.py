@@ -20,7 +20,7 @@ every orientation of a dense grid is tried until one is free:
 Free means what the pose search means (docs/tool.md, "A pose for every weld"): the tool less
 its part inside the contact sphere (``contact_radius`` about the spot) is at least
 ``clearance`` from the part. The oracle shares none of the search's machinery: its own
-orientation grid (scipy rotations, not :mod:`weldplan.tool.orient`), its own cut of the tool
+orientation grid (scipy rotations, not :mod:`weldplan.tool.poses.orient`), its own cut of the tool
 by the sphere (:func:`tool_outside_sphere`: triangles reaching into the sphere subdivided to
 0.5 mm edges, those wholly inside dropped; the search's cut uses 1 mm), its own python-fcl
 BVHs of the **whole** part (no cropping, no BVH shared between spots), and for every candidate
@@ -211,7 +211,7 @@ def completeness(
 ) -> Completeness:
     """Run the oracle and :func:`~weldplan.tool.poses.plan_weld_poses` (its defaults: the same
     cone, contact radius and clearance as :class:`OracleSettings`) on the same spots."""
-    from weldplan.tool.poses import plan_weld_poses
+    from weldplan.tool.poses.plan import plan_weld_poses
     from weldplan.tool.settings import PoseSearchSettings
 
     s = settings or OracleSettings()

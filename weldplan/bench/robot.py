@@ -154,7 +154,7 @@ def car2_station(
     ``kw``: ``search_step`` (mm), ``cone`` (deg, the gun-pose search's tilt)."""
     from weldplan.cellframe import PartPose
     from weldplan.station import model as m
-    from weldplan.tool.torch import SHARED_GUN_DIR
+    from weldplan.tool.model.torch import SHARED_GUN_DIR
     from weldplan.weld.synthetic import CAR2
 
     welds = Path(__file__).resolve().parents[2] / "assets" / "car2" / f"car2_synthetic_{n}.csv"

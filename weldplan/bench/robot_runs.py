@@ -9,9 +9,9 @@ that offset. Each run gives a :class:`RunRow`:
   program);
 - **reachable**: the welds whose chosen tool pose the robot reaches at that base on a usable IK
   branch with its links clear of the part (the reach stage's test,
-  :class:`weldplan.robot.posechoice.ReachTest`, run again on the poses the plan chose);
+  :class:`weldplan.robot.placement.ReachTest`, run again on the poses the plan chose);
 - **total**: the station's welds; **flips**: IK branch changes on the path;
-- **verified**: the robot route re-checked by :func:`weldplan.robot.routejson.verify_robot_route`
+- **verified**: the robot route re-checked by :func:`weldplan.robot.program.verify_robot_route`
   (FK, joint limits, robot + tool collision on the whole path, the code ``weldplan verify --robot``
   runs): ``ok``, ``partial`` (checked, but welds are left out) or ``FAIL``;
 - the robot walk's work (detours, transfers, OMPL runs, traps: what a slow robot stage spent);
@@ -94,8 +94,8 @@ class _StageClock:
 
 def reachable_welds(p: Any) -> int:
     """Welds whose chosen tool pose the robot reaches at the plan's base (module docstring)."""
-    from weldplan.robot.collision import RobotCollision
-    from weldplan.robot.posechoice import ReachTest
+    from weldplan.robot.collision.checker import RobotCollision
+    from weldplan.robot.placement.posechoice import ReachTest
 
     rr = p.robot.robot_route
     ok = [w for w in p.poses.poses.poses if w.ok]
@@ -114,7 +114,7 @@ def reachable_welds(p: Any) -> int:
 
 def _verified(p: Any) -> str:
     """``ok``, ``partial (k left out)`` or ``FAIL: why`` of the robot route's re-check."""
-    from weldplan.robot.routejson import verify_robot_route
+    from weldplan.robot.program.routejson import verify_robot_route
 
     rr = p.robot.robot_route
     check = verify_robot_route(p.route, rr, p.robot.robot, p.cell.part, p.tool.tool)
@@ -247,7 +247,7 @@ def table_head(title: str = "") -> list[str]:
 def format_row(r: RunRow) -> str:
     """One run as a table row; a stage cell is ``wall s (CPU s)``; walk: the robot walk's
     detours; transfers found / tried; OMPL runs solved / run and their CPU s; welds set aside
-    as traps (:class:`~weldplan.robot.walkstats.WalkStats`); load the 1-min average at the
+    as traps (:class:`~weldplan.robot.route.WalkStats`); load the 1-min average at the
     run's end."""
     base = "-" if r.base is None else ", ".join(f"{v:.1f}" for v in r.base[:3])
     if r.base is not None:

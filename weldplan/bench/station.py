@@ -211,10 +211,10 @@ def synthetic_station(W: int, R: int, seed: int) -> tuple[Any, np.ndarray, np.nd
     """``(ReachMap, weld_time (R, W) s, travel (R, W, W) s)``: ``W`` welds spread over a
     3 x 1.6 x 0.6 m body, ``R`` robots at :data:`SYNTH_BASES`, a weld served by every robot
     within :data:`SYNTH_REACH_MM` (and always by the nearest); move times the rest-to-rest
-    joint-space bounds (:func:`weldplan.robot.legtime.rest_to_rest_bound`) between synthetic
+    joint-space bounds (:func:`weldplan.robot.route.rest_to_rest_bound`) between synthetic
     configurations that vary smoothly with the weld's position."""
     from weldplan.multi import ReachMap
-    from weldplan.robot.legtime import rest_to_rest_bound
+    from weldplan.robot.route.legtime import rest_to_rest_bound
 
     if not 1 <= R <= len(SYNTH_BASES):
         raise WeldplanError(f"synthetic stations have 1 to {len(SYNTH_BASES)} robots, not {R}")

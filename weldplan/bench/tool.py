@@ -6,10 +6,10 @@ planning time on 2 cores. For each station, from one run:
 - point tip: building the cell and planning the verified point-tip route (``plan_route``);
 - gun: the same plus the pose search (:func:`~weldplan.tool.poses.plan_weld_poses`, which
   re-checks every chosen pose), the independent re-check of all poses
-  (:func:`~weldplan.tool.verify_poses.verify_poses`), the order on the tool's costs
-  (:func:`~weldplan.tool.tool_order.tool_order`), the transitions of the swept gun
+  (:func:`~weldplan.tool.verify.verify_poses`), the order on the tool's costs
+  (:func:`~weldplan.tool.transitions.tool_order`), the transitions of the swept gun
   (:func:`~weldplan.tool.transitions.plan_transitions`) and their independent re-check
-  (:func:`~weldplan.tool.verify_sweeps.verify_sweeps`): what ``weldplan plan --tool`` runs
+  (:func:`~weldplan.tool.verify.verify_sweeps`): what ``weldplan plan --tool`` runs
   (``--no-transitions``: the poses only);
 - the ratio of the two, welds with a verified pose / total (and how many of those are turned
   over), transitions free / total by how they go (axial retract, slide along the flange, side
@@ -78,12 +78,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "--no-exit-check",
         dest="exit_check",
         action="store_false",
-        help="choose the poses without the exit test (weldplan.tool.exits; the choice before it)",
+        help="choose the poses without the exit test (weldplan.tool.poses.exits; the choice before "
+        "it)",
     )
     p.add_argument(
         "--exits",
         default="lift,axial,side",
-        help="the exits the exit test counts, in the order tried (weldplan.tool.exits)",
+        help="the exits the exit test counts, in the order tried (weldplan.tool.poses.exits)",
     )
     p.add_argument(
         "--order-axial",
@@ -172,13 +173,13 @@ def _transition_settings(args: Any) -> Any:
 
 
 def _exit_test(cell: Any, route: Any, gun: Any, args: Any) -> Any:
-    """The exit test (:class:`~weldplan.tool.exits.ExitTest`) with the planner the transitions
+    """The exit test (:class:`~weldplan.tool.poses.ExitTest`) with the planner the transitions
     use (same settings: :func:`_transitions`), or ``None`` with ``--no-exit-check``."""
     if not args.exit_check:
         return None
-    from weldplan.tool.exits import ExitTest
+    from weldplan.tool.poses.exits import ExitTest
     from weldplan.tool.settings import DEFAULT_CONTACT_RADIUS
-    from weldplan.tool.transitions import TransitionPlanner
+    from weldplan.tool.transitions.plan import TransitionPlanner
 
     planner = TransitionPlanner(
         cell.part, gun, _transition_settings(args), clearance=float(cell.clearance),
@@ -190,11 +191,11 @@ def _exit_test(cell: Any, route: Any, gun: Any, args: Any) -> Any:
 def _transitions(
     cell: Any, route: Any, poses: Any, gun: Any, args: Any, reuse: Any = None
 ) -> dict[str, Any]:
-    """Order, transitions (re-ordered round blocked pairs, :mod:`weldplan.tool.reorder`) and
-    their re-check for one station (timed together); ``reuse``: the exit test's planner."""
-    from weldplan.tool.reorder import plan_ordered_transitions
+    """Order, transitions (re-ordered round blocked pairs, :mod:`weldplan.tool.transitions.reorder`)
+    and their re-check for one station (timed together); ``reuse``: the exit test's planner."""
     from weldplan.tool.settings import OrderSettings
-    from weldplan.tool.verify_sweeps import verify_sweeps
+    from weldplan.tool.transitions.reorder import plan_ordered_transitions
+    from weldplan.tool.verify.sweeps import verify_sweeps
 
     t0 = time.perf_counter()
     path = plan_ordered_transitions(

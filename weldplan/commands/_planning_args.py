@@ -74,7 +74,7 @@ def _add_output_arguments(p: argparse.ArgumentParser, default_output: str | None
         metavar="F",
         help="with --tool: also write the tool's verified path as CSV (the transitions in "
         "the tool's order, one row per TCP pose with its quaternion: the motion the swept "
-        "check proved free; weldplan.tool.path_csv)",
+        "check proved free; weldplan.io.tool_csv)",
     )
     g.add_argument(
         "--trajectory", metavar="F", help="with --robot: write the timed joint trajectory as CSV"

@@ -143,7 +143,7 @@ def _robot_spec(args: argparse.Namespace) -> m.RobotSpec | None:
             path=args.tool,
             field="--tool-mass",
         )
-    from weldplan.robot.reach import parse_base
+    from weldplan.robot.placement.reach import parse_base
 
     base = None
     if args.robot_base:

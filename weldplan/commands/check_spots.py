@@ -149,7 +149,7 @@ def _robots(args: argparse.Namespace) -> list[Any]:
             raise InputError("--robot-base, --opw and --floor-z need --robot", field="--robot")
         return []
     from weldplan.robot import load_robot
-    from weldplan.robot.reach import parse_base
+    from weldplan.robot.placement.reach import parse_base
     from weldplan.study.feasibility import StudyRobot
 
     bases = _paired(args.robot_base, len(args.robot), "--robot-base", "--robot")

@@ -50,7 +50,7 @@ def run(args: argparse.Namespace) -> int:
     route = read_route(args.route)
     tool = tool_from_args(args)
     if tool is not None:  # draw the route's poses only with the tool they were planned for
-        from weldplan.tool.check_route import check_tool_provenance
+        from weldplan.tool.verify.check_route import check_tool_provenance
 
         check_tool_provenance(route, tool[1], args.route)
     part = None

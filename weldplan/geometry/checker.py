@@ -3,7 +3,7 @@ advancement under every swept check, and the verdict every re-check returns.
 
 :class:`StateChecker` is OMPL's ``base::StateValidityChecker`` (``isValid``, ``clearance``) and
 ``base::MotionValidator`` (``checkMotion(s1, s2, lastValid)``) in one protocol. It is implemented
-by the tool's SE(3) checker (:class:`weldplan.tool.sweep.SweepChecker`: a state is a TCP pose
+by the tool's SE(3) checker (:class:`weldplan.tool.transitions.SweepChecker`: a state is a TCP pose
 ``(p (3,) mm, q (4,) wxyz)``), the robot's joint-space checker
 (:class:`weldplan.robot.collision.RobotCollision`: a state is ``q (6,) rad``) and the point-tip
 checker (:class:`PointChecker`: a state is a point ``(3,) mm``).
@@ -13,18 +13,18 @@ OMPL's discrete motion validators use it): at motion parameter ``t`` the distanc
 obstacles is measured; when no point of the moving body moves more than ``bound`` mm over the
 whole motion (the **motion bound**), none can use up the slack ``d - gap`` before
 ``t + (d - gap) / bound``, so the next measurement is taken there. The motion bound is the
-caller's: :func:`weldplan.tool.sweep.motion_bound` for a rigid tool in SE(3) (TCP displacement
-plus the turn times the tool's reach), :func:`weldplan.robot.motionbound.sphere_rates` for the
-robot's links in joint space (each joint's turn times the lever of the points it carries), the
+caller's: :func:`weldplan.tool.transitions.motion_bound` for a rigid tool in SE(3) (TCP displacement
+plus the turn times the tool's reach), :func:`weldplan.robot.collision.motionbound.sphere_rates` for
+the robot's links in joint space (each joint's turn times the lever of the points it carries), the
 relative bound of two links for a self-collision pair, the segment's length for a point. One
 loop serves them all; the rules that end it (what slack blocks, a step cap, a probe ahead) are
 parameters.
 
 :class:`CheckVerdict` is the one outcome of a check: ok, what was checked, how many, the first
 failures with their place and cause, the least clearance measured. Every re-check's report
-(:mod:`weldplan.weld.verify`, :mod:`weldplan.tool.verify_poses`,
-:mod:`weldplan.tool.verify_sweeps`, :mod:`weldplan.tool.check_route`,
-:mod:`weldplan.robot.routejson`) exposes one as ``.verdict``;
+(:mod:`weldplan.weld.verify`, :mod:`weldplan.tool.verify.poses`,
+:mod:`weldplan.tool.verify.sweeps`, :mod:`weldplan.tool.verify.check_route`,
+:mod:`weldplan.robot.program.routejson`) exposes one as ``.verdict``;
 :class:`weldplan.station.recheck.Verdict` collects them.
 """
 
@@ -96,7 +96,7 @@ class Advance:
         mm: the last distance measured (``nan``: none).
     left
         mm: free: a lower bound of the slack at ``stop``, ``distance - gap - bound |stop - t|``
-        (what a next motion may use up: :class:`weldplan.robot.motionbound.Carry`);
+        (what a next motion may use up: :class:`weldplan.robot.collision.Carry`);
         ``-inf`` when blocked.
     steps
         Distances measured.

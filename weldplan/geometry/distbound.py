@@ -1,11 +1,11 @@
 """A conservative broad phase for "is this point farther than ``need`` from the part?".
 
 Used by the robot's collision proof and by the tool's swept check in SE(3) re-plans
-(:mod:`weldplan.tool.sweep_bound`). The robot's collision proof (:mod:`weldplan.robot.collision`)
-asks, for many sphere centres at many samples of a motion, whether each centre is farther from
-the part than a threshold (its radius, half its motion between samples and the gap). Most of
-them are far: asking open3d for the exact distance of every one dominated the check (18 ms a
-call, 60 % of an OMPL re-plan).
+(:mod:`weldplan.tool.transitions.sweep_bound`). The robot's collision proof
+(:mod:`weldplan.robot.collision.checker`) asks, for many sphere centres at many samples of a motion,
+whether each centre is farther from the part than a threshold (its radius, half its motion between
+samples and the gap). Most of them are far: asking open3d for the exact distance of every one
+dominated the check (18 ms a call, 60 % of an OMPL re-plan).
 
 :class:`DistanceBound` answers most of them from a table, and soundly: the distance to a set is
 1-Lipschitz, so with ``D(g)`` the exact distance at a grid node ``g``

@@ -28,7 +28,7 @@ the weld has no free pose) and the weld's pose status (docs/tool.md). Via, appro
 rows leave the four orientation cells empty: no orientation between welds was checked along
 the point-tip route, so none is written there (no file carries a pose that was not checked).
 The tool's verified path between welds is a file of its own (``--tool-csv``,
-:mod:`weldplan.tool.path_csv`). The
+:mod:`weldplan.io.tool_csv`). The
 robot posts point the tool's z axis (the torch axis, towards the work) against that direction,
 into the surface; they do not use the tool poses yet.
 
@@ -176,13 +176,13 @@ def to_csv_text(route: Route, header: Sequence[str] = ()) -> str:
     (what produced the file and what was verified, :func:`weldplan.station.outputs.producer`).
 
     A route that carries weld poses (``weldplan plan --tool``; read typed,
-    :func:`weldplan.tool.route_frames.route_poses`) gains the columns :data:`POSE_FIELDS`,
+    :func:`weldplan.tool.poses.route_poses`) gains the columns :data:`POSE_FIELDS`,
     filled on weld rows only: the weld's verified TCP orientation (empty at a weld without a
     free pose) and its status (``ok`` or ``no free pose``). Other rows carry no orientation:
     nothing verified the tool there (the verified path between welds is the ``--tool-csv``
-    file, :mod:`weldplan.tool.path_csv`).
+    file, :mod:`weldplan.io.tool_csv`).
     """
-    from weldplan.tool.route_frames import route_poses, weld_rows
+    from weldplan.tool.poses.route_frames import route_poses, weld_rows
 
     rows = route_rows(route, smooth=True)
     quats, status = None, None

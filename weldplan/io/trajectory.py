@@ -7,17 +7,18 @@ Layout (one row per sample, time increasing)::
     0.0100,1,...
 
 ``t`` in s from the arrival at the first weld; ``step`` the row of the robot's route the robot is
-moving to or resting at (:attr:`~weldplan.robot.configs.RobotRoute.row`, not a row of the route CSV:
+moving to or resting at (:attr:`~weldplan.robot.route.RobotRoute.row`, not a row of the route CSV:
 the robot's route is the gun's path, the route JSON's ``tool.robot.follows``, when the robot follows
 the tool stage's order, else the point-tip route's waypoints;
-:class:`~weldplan.robot.timing.TimedTrajectory`; joint-space vias of a re-planned leg belong to the
+:class:`~weldplan.robot.program.TimedTrajectory`; joint-space vias of a re-planned leg belong to the
 row the leg leaves from); one column per robot joint, named as in the URDF, in radians. Samples are
-:data:`~weldplan.robot.timing.DEFAULT_DT` apart plus one at every waypoint arrival and at both ends
-of every weld dwell, so a replay that interpolates linearly between rows stays within the timing's
-tolerance of the path. ``t`` strictly increases, as written (a regular sample that would share an
-arrival's time is not taken, :data:`~weldplan.robot.timing.MIN_GAP_DT`; a trajectory whose written
-times would repeat is refused, nothing written), so a replay may divide by the step. The CLI writes
-it with the other outputs as one set (:mod:`weldplan.io.outputset`): whole or not at all.
+:data:`~weldplan.robot.program.timing.DEFAULT_DT` apart plus one at every waypoint arrival and at
+both ends of every weld dwell, so a replay that interpolates linearly between rows stays within the
+timing's tolerance of the path. ``t`` strictly increases, as written (a regular sample that would
+share an arrival's time is not taken, :data:`~weldplan.robot.program.timing.MIN_GAP_DT`; a
+trajectory whose written times would repeat is refused, nothing written), so a replay may divide by
+the step. The CLI writes it with the other outputs as one set (:mod:`weldplan.io.outputset`): whole
+or not at all.
 """
 
 from __future__ import annotations
@@ -44,7 +45,7 @@ Q_DECIMALS = 8
 def trajectory_csv_text(
     timing: Any, row: ArrayLike | None = None, header: Sequence[str] = ()
 ) -> str:
-    """The CSV text of a :class:`~weldplan.robot.timing.TimedTrajectory` (module docstring);
+    """The CSV text of a :class:`~weldplan.robot.program.TimedTrajectory` (module docstring);
     ``header``: lines written first as ``#`` comments (what produced it, what was verified).
 
     ``row`` ``(k,) int`` maps the timing's joint rows to the rows of the robot's route (the

@@ -86,7 +86,7 @@ def allocation_report(
     the two baselines (module docstring), every order by the same sequencer and polish.
 
     ``bound_travel``: move times (``R`` matrices ``(W, W)`` s) never above the
-    real ones, for the bound only (e.g. :mod:`weldplan.robot.legtime`'s ``bound`` over every
+    real ones, for the bound only (e.g. :mod:`weldplan.robot.route.legtime`'s ``bound`` over every
     branch while ``travel`` is its ``cost`` on the station branch): the bound is then one of
     the timed cycle, not only of the cycle over ``travel``. Default: ``travel``."""
     settings = settings or AllocationSettings()

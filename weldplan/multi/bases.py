@@ -26,8 +26,8 @@ def check_bases(station: Any) -> None:
 
     from weldplan.io.mesh import load_part
     from weldplan.robot import load_robot
-    from weldplan.robot.reach import base_pose
-    from weldplan.tool.model import bvh
+    from weldplan.robot.placement.reach import base_pose
+    from weldplan.tool.model.tool import bvh
 
     given = [(k, s) for k, s in enumerate(station.robots) if s.base is not None and s.urdf]
     if not given or station.part_pose is not None:

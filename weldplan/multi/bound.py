@@ -31,7 +31,7 @@ other welds gives a route over ``U_r`` alone that is no longer, so the optimal r
 ``U_r`` bounds it: Held-Karp up to :data:`UNIQUE_EXACT_MAX` welds, the 1-tree bound
 (:func:`weldplan.optim.discrete.bounds.one_tree_bound`) above for symmetric times. Otherwise (or
 when better) the shares of ``U_r`` bound it as above. Leg-time *bounds* between welds
-(:mod:`weldplan.robot.legtime`) minimise over configurations per pair, which can break the
+(:mod:`weldplan.robot.route.legtime`) minimise over configurations per pair, which can break the
 triangle inequality, hence the check.
 
 Spensieri et al. (IEEE T-ASE 2016) bound the min-max multiple generalised TSP the same way in

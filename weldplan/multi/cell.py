@@ -19,10 +19,10 @@ one frame.
   but the robots;
 * a **searched** base (a robot without ``base``), in station order, after every given one: the
   single-robot study's base search (:func:`weldplan.study.check_spots` with a searched
-  :class:`~weldplan.study.StudyRobot`: :func:`weldplan.robot.reach.search_base` on the robot's
+  :class:`~weldplan.study.StudyRobot`: :func:`weldplan.robot.placement.search_base` on the robot's
   ``[robot.search]`` region, then the best few judged by the study itself, links and tool
   checked) on the welds its tool has a free pose at, the footprints of the robots already placed
-  kept out (:attr:`weldplan.robot.reach.BaseSearch.keep_out`). It takes the base serving most
+  kept out (:attr:`weldplan.robot.placement.BaseSearch.keep_out`). It takes the base serving most
   welds; a region where no base serves any weld is a :class:`~weldplan.errors.ConfigError`
   naming the robot. Greedy and deterministic: no random draw, the search budgeted by its grid
   and pool (robot-robot interference along the routes is the station's later stage).
@@ -110,7 +110,7 @@ def study_settings(station: Any) -> Any:
 
 def footprint_radius(robot: Any) -> float:
     """mm: the radius about A1 of the robot's base column in x, y (its base and A1 links; the
-    radius the base search's :func:`weldplan.robot.reach.column_free` keeps clear of the
+    radius the base search's :func:`weldplan.robot.placement.reach.column_free` keeps clear of the
     part)."""
     return max(float(np.linalg.norm(lk.vertices[:, :2], axis=1).max()) for lk in robot.links[:2])
 
@@ -160,7 +160,7 @@ def _base_link_hits(part: Any, robot: Any) -> bool:
     """Whether the robot's root link at its base touches the part (FCL on both meshes)."""
     import fcl
 
-    from weldplan.tool.model import bvh
+    from weldplan.tool.model.tool import bvh
 
     link = robot.links[0]
     F = robot.link_frames(np.zeros((1, 6)))[0, link.index]

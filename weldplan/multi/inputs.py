@@ -6,10 +6,11 @@ bases) into what :func:`weldplan.multi.allocate` takes:
 * the :class:`~weldplan.multi.problem.ReachMap` of the study (:meth:`ReachMap.from_study`:
   a free gun pose on a usable branch with the links clear, else the study's reason);
 * ``weld_time (R, W)``: each robot's dwell per spot;
-* per robot, leg times between the spots it reaches (:mod:`weldplan.robot.legtime`): the flange
+* per robot, leg times between the spots it reaches (:mod:`weldplan.robot.route.legtime`): the
+flange
   pose of the configuration the study found (forward kinematics of ``RobotVerdict.q``), every
-  usable IK configuration of that pose (:func:`~weldplan.robot.legtime.weld_configurations`),
-  and the rest-to-rest times between them (:func:`~weldplan.robot.legtime.leg_times`):
+  usable IK configuration of that pose (:func:`~weldplan.robot.route.weld_configurations`),
+  and the rest-to-rest times between them (:func:`~weldplan.robot.route.leg_times`):
   ``cost`` (on the station branch, what the sequencer minimises) or ``bound`` (over every
   branch: a proved lower bound of any timed leg, so that the allocation's bound is a bound of
   the timed cycle of that pose choice).
@@ -84,7 +85,7 @@ def study_inputs(
     ConfigError
         Lists of the wrong length, or a negative weld time.
     """
-    from weldplan.robot.legtime import leg_times, weld_configurations
+    from weldplan.robot.route.legtime import leg_times, weld_configurations
 
     infos = study.robots  # type: ignore[attr-defined]
     R = len(infos)
@@ -102,7 +103,7 @@ def study_inputs(
     reach = ReachMap.from_study(study, t)
     cost, bound, branch = np.zeros((R, W, W)), np.zeros((R, W, W)), []
     wt = np.zeros((R, W))
-    from weldplan.robot.timing import check_weld_time
+    from weldplan.robot.program.timing import check_weld_time
 
     for r, (robot, info) in enumerate(zip(robots, infos, strict=True)):
         wt[r] = check_weld_time(weld_time[r])

@@ -1,6 +1,6 @@
 """Which motions of two robots come closer than the clearance: the planner's interference check.
 
-Every robot of a station runs its timed route (:class:`~weldplan.robot.timing.TimedTrajectory`)
+Every robot of a station runs its timed route (:class:`~weldplan.robot.program.TimedTrajectory`)
 alone; two robots that share the space around the part may meet. This module finds, per pair of
 robots, the pairs of **motions** whose swept robots (every link and the whole tool, their
 collision meshes through python-fcl) come closer than the station's clearance, whatever the two
@@ -14,7 +14,7 @@ is the sequence of :class:`Motion` ``0 .. 2S``: motion ``2i`` is the **rest** at
 (one configuration, for as long as the robot welds or waits there; the rest at ``s_0`` begins
 with the cycle, the rest at ``s_S`` lasts to its end), motion ``2i + 1`` the **move** from
 ``s_i`` to ``s_{i+1}`` (the timing's dense samples, taken as linear in joint space between two
-samples, as :mod:`weldplan.robot.collision` takes the motion between two rows).
+samples, as :mod:`weldplan.robot.collision.checker` takes the motion between two rows).
 
 What is proven, what is sampled
 -------------------------------
@@ -27,9 +27,9 @@ under any timing. It is proven, with no sample-pair left out, by three levels:
    cost nothing more.
 2. *Motion spheres.* Each body (link or tool) over a whole motion lies in its bounding sphere
    at the motion's middle sample grown by how far any of its points can move from there
-   (:func:`weldplan.robot.motionbound.sphere_rates` per pair of consecutive samples, a bound on
-   the path length of any point of a sphere over a linear joint motion, summed). Two motions
-   whose body spheres are all ``clearance`` apart are clear.
+   (:func:`weldplan.robot.collision.motionbound.sphere_rates` per pair of consecutive samples, a
+   bound on the path length of any point of a sphere over a linear joint motion, summed). Two
+   motions whose body spheres are all ``clearance`` apart are clear.
 3. *FCL, by bisection.* For the bodies that are not, the two sample ranges are halved
    recursively. A node (a range of each motion) is clear when the bodies' spheres at the two
    middle samples, or their FCL distance ``d`` there, exceed the clearance by how far each body
@@ -39,7 +39,7 @@ under any timing. It is proven, with no sample-pair left out, by three levels:
    conflict too, marked *unproven* (the motions pass within the motion bound of each other):
    conservative.
 
-The bound is the planner's own (:mod:`weldplan.robot.motionbound`, FK by
+The bound is the planner's own (:mod:`weldplan.robot.collision.motionbound`, FK by
 :meth:`weldplan.robot.model.Robot.link_frames`); the replay checks with its own FK and bound.
 """
 
@@ -55,9 +55,9 @@ from numpy.typing import NDArray
 
 from weldplan.errors import ConfigError
 from weldplan.geometry.spherecover import sphere_cover
-from weldplan.robot.collision import SPHERE_CELL_MM, Body
-from weldplan.robot.motionbound import sphere_rates
-from weldplan.robot.nearpart import fcl_tf
+from weldplan.robot.collision.checker import SPHERE_CELL_MM, Body
+from weldplan.robot.collision.motionbound import sphere_rates
+from weldplan.robot.collision.nearpart import fcl_tf
 
 log = logging.getLogger(__name__)
 
@@ -93,7 +93,7 @@ class MovingRobot:
     robot
         :class:`~weldplan.robot.model.Robot` at its base (part frame, mm).
     timing
-        Its :class:`~weldplan.robot.timing.TimedTrajectory`.
+        Its :class:`~weldplan.robot.program.TimedTrajectory`.
     tool
         Its tool (``vertices (v, 3)`` mm and ``faces (f, 3)`` in the TCP frame, e.g.
         :class:`weldplan.tool.model.Tool`), or ``None``.

@@ -9,7 +9,7 @@ slowest robot finishes first. It sees three things, all indexed by robot ``r`` a
   the nearest-robot baseline uses them);
 * ``weld_time (R, W)`` s: the dwell of weld ``i`` on robot ``r``;
 * ``travel``: per robot a ``(W, W)`` matrix of joint-space move times (s) between the welds it
-  serves (:func:`weldplan.robot.legtime.leg_times`, or any estimator); the entries of welds it
+  serves (:func:`weldplan.robot.route.leg_times`, or any estimator); the entries of welds it
   does not serve are ignored.
 
 :class:`AllocationProblem` holds them checked (a bad shape or a negative time is a

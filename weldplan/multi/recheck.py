@@ -240,7 +240,7 @@ def _interlock_problem(s: Any, lock: Any) -> str:
 @dataclass(frozen=True, eq=False)
 class FileTiming:
     """A robot's timed route as the saved files give it: what the replay reads of a
-    :class:`~weldplan.robot.timing.TimedTrajectory`.
+    :class:`~weldplan.robot.program.TimedTrajectory`.
 
     Attributes
     ----------

@@ -73,7 +73,7 @@ class ReplayRobot:
         ``(4, 4)`` mm: the root of the arm's chain (the parent link of its first revolute
         joint) in the part frame.
     timing
-        Its :class:`~weldplan.robot.timing.TimedTrajectory` (``None``: an idle robot, left out).
+        Its :class:`~weldplan.robot.program.TimedTrajectory` (``None``: an idle robot, left out).
     tool_vertices, tool_faces
         The tool's mesh in its TCP frame (mm), or ``None``.
     flange_tcp

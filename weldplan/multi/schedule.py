@@ -10,7 +10,7 @@ written by :mod:`weldplan.io.posts`). Both rows are stop rows of their robot's t
 (the robot is at rest there), so the signal has one meaning whatever the blending.
 
 :func:`station_schedule` turns every robot's timed route
-(:class:`weldplan.robot.timing.TimedTrajectory`) and the interlocks into the nominal
+(:class:`weldplan.robot.program.TimedTrajectory`) and the interlocks into the nominal
 :class:`StationSchedule`: each robot runs its own timing and waits where an interlock holds it,
 until the robot it waits for is ready. The cycle time is the last robot's end; the waits are
 counted in it. Interlocks that wait on each other in a circle (a deadlock) are a
@@ -47,7 +47,7 @@ class Interlock:
     first, second
         Robot indices (station order, 0-based), ``first != second``.
     release_row, wait_row
-        Rows of the timed routes (:class:`~weldplan.robot.timing.TimedTrajectory` rows, the
+        Rows of the timed routes (:class:`~weldplan.robot.program.TimedTrajectory` rows, the
         program's joint rows) of ``first`` and of ``second``; each a stop row of its robot's
         timed route. :meth:`actions` names them by route row for the programs.
     signal
@@ -135,7 +135,7 @@ class Activity:
         s from the station's cycle start, ``start <= end``.
     row
         ``move``: the timed row it moves to; ``weld``, ``wait``: the timed row it rests at
-        (:class:`~weldplan.robot.timing.TimedTrajectory` rows).
+        (:class:`~weldplan.robot.program.TimedTrajectory` rows).
     label
         The weld's id (``weld``), the interlock's name (``wait``), else ``""``.
     """
@@ -341,7 +341,7 @@ def station_schedule(
     names
         Robot names, station order.
     timings
-        Per robot its :class:`~weldplan.robot.timing.TimedTrajectory` (``None``: an idle robot).
+        Per robot its :class:`~weldplan.robot.program.TimedTrajectory` (``None``: an idle robot).
     interlocks
         Each ties a stop row of one robot to a stop row of another (module docstring).
     weld_ids

@@ -162,7 +162,7 @@ def _robots(station: Any) -> list[tuple[Any, Any, Any]]:
     given bases too close together (:func:`weldplan.multi.cell.check_apart`)."""
     from weldplan.multi.cell import check_apart
     from weldplan.robot import load_robot
-    from weldplan.robot.reach import base_pose
+    from weldplan.robot.placement.reach import base_pose
     from weldplan.station.mount import mount_tool
 
     for k, spec in enumerate(station.robots):  # every refusal before any (slow) load
@@ -352,7 +352,7 @@ def replay_robot(name: str, spec: Any, timing: Any, tool: Any) -> Any:
     frame, ``.flange_tcp``; ``None``: links only). The live plan and ``weldplan verify`` of a
     saved station (:mod:`weldplan.multi.recheck`) both build it here."""
     from weldplan.multi.replay import ReplayRobot
-    from weldplan.robot.reach import base_pose
+    from weldplan.robot.placement.reach import base_pose
 
     mesh = None if timing is None or tool is None else tool.tool
     return ReplayRobot(

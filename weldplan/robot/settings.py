@@ -16,9 +16,9 @@ flange -> TCP transform and the tool's load travel together in :class:`ToolOnRob
 
 The defaults are the stages' own, each documented where it is defined: :data:`REPLAN_PLANNER`,
 :data:`SEARCH_TOP`, :data:`LINE_TOLERANCE_MM` here;
-:data:`~weldplan.robot.reach.DEFAULT_SINGULAR_DEG`, :data:`~weldplan.robot.configs.FLIP_PENALTY_S`,
-:data:`~weldplan.robot.timing.DEFAULT_TOLERANCE_RAD`,
-:data:`~weldplan.robot.timing.DEFAULT_TCP_SPEED`.
+:data:`~weldplan.robot.placement.DEFAULT_SINGULAR_DEG`,
+:data:`~weldplan.robot.route.FLIP_PENALTY_S`, :data:`~weldplan.robot.program.DEFAULT_TOLERANCE_RAD`,
+:data:`~weldplan.robot.program.DEFAULT_TCP_SPEED`.
 """
 
 from __future__ import annotations
@@ -32,12 +32,12 @@ from numpy.typing import ArrayLike, NDArray
 
 from weldplan.errors import ConfigError
 from weldplan.motion.roadmap import RoadmapSettings
-from weldplan.robot.configs import FLIP_PENALTY_S
-from weldplan.robot.reach import DEFAULT_SINGULAR_DEG, BaseSearch
-from weldplan.robot.timing import DEFAULT_TCP_SPEED, DEFAULT_TOLERANCE_RAD
+from weldplan.robot.placement.reach import DEFAULT_SINGULAR_DEG, BaseSearch
+from weldplan.robot.program.timing import DEFAULT_TCP_SPEED, DEFAULT_TOLERANCE_RAD
+from weldplan.robot.route.configs import FLIP_PENALTY_S
 
 #: default OMPL planner for a blocked leg, and the wall-clock safety net of its first run in s
-#: (:meth:`weldplan.robot.replan.Detour._ompl`: WALL_FACTOR times this, a retry's in proportion
+#: (:meth:`weldplan.robot.route.Detour._ompl`: WALL_FACTOR times this, a retry's in proportion
 #: to its checks). The budget is the run's checks; the net must lie well above what they take:
 #: on car2_200 a joint-space motion check of the KR 150 with the torch took ~0.1 s, and at 5 s
 #: (50 s a first run) the net stopped 2 of 5 runs before their checks were spent, which made
@@ -162,11 +162,11 @@ class RobotCell:
         ``(4, 4)`` mm: the robot base in the part frame. ``None``: searched (``search``), or the
         robot's own base when ``search`` is ``None`` too.
     search
-        Where to search for the base (:class:`~weldplan.robot.reach.BaseSearch`).
+        Where to search for the base (:class:`~weldplan.robot.placement.BaseSearch`).
     floor_z
         mm: the floor (part frame) no link nor the tool may reach
-        (:mod:`weldplan.robot.selfcollision`); ``None``: ``search.floor_z`` for a searched base,
-        else none (not checked).
+        (:mod:`weldplan.robot.collision.selfcollision`); ``None``: ``search.floor_z`` for a searched
+        base, else none (not checked).
     """
 
     part: Any = None
@@ -192,7 +192,7 @@ class PlacementSettings:
     singular_deg
         deg: A5 within this of 0 is near-singular and avoided.
     flip_penalty
-        s of joint motion a branch change costs (:mod:`weldplan.robot.configs`).
+        s of joint motion a branch change costs (:mod:`weldplan.robot.route.configs`).
     top
         The best candidates of the search re-scored along the whole route.
     joins
@@ -214,7 +214,7 @@ class PlacementSettings:
 
 @dataclass(frozen=True)
 class JointRouteSettings:
-    """The joint route's settings (:func:`weldplan.robot.plan.plan_robot_route`).
+    """The joint route's settings (:func:`weldplan.robot.route.plan_robot_route`).
 
     Attributes
     ----------
@@ -281,7 +281,7 @@ class ProgramSettings:
     Attributes
     ----------
     moves
-        ``"linear"`` or ``"joint"`` between exact rows (:mod:`weldplan.robot.program`).
+        ``"linear"`` or ``"joint"`` between exact rows (:mod:`weldplan.robot.program.build`).
     line_tolerance
         mm: with ``"linear"``, a move is linear only where the checked joint path's TCP stays
         this close to the Cartesian segment; ``None``: the Cartesian check alone (the timing may
@@ -292,7 +292,7 @@ class ProgramSettings:
         mm: the blend radii's clearance; ``None``: the route's own.
     tolerance
         rad: the timed spline's largest deviation from the joint polyline
-        (:func:`weldplan.robot.timing.time_route`).
+        (:func:`weldplan.robot.program.time_route`).
     tcp_speed
         mm/s: the constant TCP speed the cycle time is compared with.
     name

@@ -167,7 +167,7 @@ class RobotSpec:
     base
         ``(x, y, z, yaw)`` mm and degrees about +z, in the part frame; None: searched.
     search
-        Where the base is searched (:class:`weldplan.robot.reach.BaseSearch` keywords but the
+        Where the base is searched (:class:`weldplan.robot.placement.BaseSearch` keywords but the
         floor, which is the station's): ``step``, ``half_width``, ``heights``, ``extra_yaws``,
         ``line``. Empty: the defaults.
     settings
@@ -198,8 +198,8 @@ class RobotSpec:
         _normalise(self, "search", dict(self.search))
 
     def base_search(self, floor_z: float | None) -> Any:
-        """The :class:`~weldplan.robot.reach.BaseSearch` on the station's floor."""
-        from weldplan.robot.reach import BaseSearch
+        """The :class:`~weldplan.robot.placement.BaseSearch` on the station's floor."""
+        from weldplan.robot.placement.reach import BaseSearch
 
         if "floor_z" in self.search:
             raise ConfigError(

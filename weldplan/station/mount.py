@@ -3,7 +3,7 @@
 As roboticstoolbox keeps ``robot.tool`` with the robot (../shared/DESIGN.md), the flange-to-TCP
 transform and the tool's load travel with the tool here instead of beside every call.
 
-- A URDF tool's root link is its mounting frame (:func:`weldplan.robot.plan.tool_flange_tcp`),
+- A URDF tool's root link is its mounting frame (:func:`weldplan.robot.route.tool_flange_tcp`),
   its mass and centre of gravity from ``<inertial>`` (``mass`` overrides the mass).
 - A mesh tool (``file`` a mesh, ``tcp = "x,y,z,rx,ry,rz"``) is mounted by its mesh frame in the
   same way; ``mass`` is required and its centre of gravity is the centre of mass of the mesh at
@@ -56,7 +56,7 @@ class MountedTool:
 
 
 def load_tool_spec(spec: ToolSpec) -> tuple[Any, dict[str, Any]]:
-    """The tool of ``spec`` and its provenance (:func:`weldplan.tool.load.load_tool` for a file,
+    """The tool of ``spec`` and its provenance (:func:`weldplan.tool.model.load_tool` for a file,
     :func:`weldplan.tool.arc_torch` for the builtin)."""
     if spec.builtin is not None:
         from weldplan.tool import arc_torch
@@ -73,7 +73,7 @@ def load_tool_spec(spec: ToolSpec) -> tuple[Any, dict[str, Any]]:
             "builtin": tool.source,
         }
     else:
-        from weldplan.tool.load import load_tool
+        from weldplan.tool.model.load import load_tool
 
         tool, prov = load_tool(spec.file, tcp=spec.tcp, units=spec.units, mesh=spec.mesh)  # type: ignore[arg-type]
     if spec.tip_cone is not None:
@@ -121,13 +121,13 @@ def flange_tcp(spec: ToolSpec, robot: Any) -> NDArray[np.float64]:
     if spec.builtin is not None:
         return torch_flange_tcp(dict(spec.params))
     if spec.is_urdf:
-        from weldplan.robot.plan import tool_flange_tcp
+        from weldplan.robot.route.plan import tool_flange_tcp
 
         return tool_flange_tcp(robot, spec.file, spec.tcp)  # type: ignore[arg-type]
     from scipy.spatial.transform import Rotation
 
-    from weldplan.tool.load import parse_tcp
-    from weldplan.tool.model import UNITS
+    from weldplan.tool.model.load import parse_tcp
+    from weldplan.tool.model.tool import UNITS
 
     vals = parse_tcp(spec.tcp or "")
     T = np.eye(4)
@@ -141,7 +141,7 @@ def tool_load(
 ) -> tuple[float, NDArray[np.float64]]:
     """Tool mass (kg) and centre of gravity in the flange frame (mm), module docstring."""
     if spec.is_urdf:
-        from weldplan.robot.payload import urdf_payload
+        from weldplan.robot.model.payload import urdf_payload
 
         load = urdf_payload(spec.file)  # type: ignore[arg-type]
         if spec.mass is None and load is None:

@@ -85,17 +85,17 @@ def producer(plan: Any) -> dict[str, Any]:
     if plan.poses is not None:
         checks.append(
             f"tool poses: {plan.poses.check.checked} weld poses free outside the contact zone "
-            "(FCL, weldplan.tool.verify_poses)"
+            "(FCL, weldplan.tool.verify.poses)"
         )
     if plan.transitions is not None:
         checks.append(
             f"tool transitions: {plan.transitions.sweeps.checked} swept-tool motions free "
-            "(FCL, weldplan.tool.verify_sweeps)"
+            "(FCL, weldplan.tool.verify.sweeps)"
         )
     if plan.robot is not None:
         checks.append(
             "robot: FK of the URDF chain puts the TCP on every exact route row; links and "
-            "tool clear of the part along the joint path (FCL, weldplan.robot.plan)"
+            "tool clear of the part along the joint path (FCL, weldplan.robot.route.plan)"
         )
     name = plan.station.name or "weldplan_route"
     return {"weldplan": __version__, "station": name, "verified": checks}
@@ -137,7 +137,7 @@ def render_outputs(plan: Any, kinds: set[str], post: str | None) -> dict[str, st
     if "html" in kinds:
         texts["html"] = static_html(route, plan.cell.part, tool=plan.tool and plan.tool.tool)
     if "tool_csv" in kinds:
-        from weldplan.tool.path_csv import route_tool_csv
+        from weldplan.io.tool_csv import route_tool_csv
 
         texts["tool_csv"] = route_tool_csv(route, head)
     if plan.robot is not None:

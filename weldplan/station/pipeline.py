@@ -139,9 +139,9 @@ class Plan:
 
     @property
     def tool_route(self) -> Any:
-        """The route's tool section typed (:class:`~weldplan.robot.toolroute.ToolRoute`:
+        """The route's tool section typed (:class:`~weldplan.robot.program.ToolRoute`:
         weld poses, tool path, robot route; empty without a tool), as the route JSON saves it."""
-        from weldplan.robot.toolroute import ToolRoute
+        from weldplan.robot.program.toolroute import ToolRoute
 
         return ToolRoute.of(self.route)
 
@@ -383,7 +383,7 @@ def _load_robot(spec: Any) -> tuple[Any, Any]:
     if spec.urdf is None:
         return mount_tool(spec.tool), None
     from weldplan.robot import load_robot
-    from weldplan.robot.reach import base_pose
+    from weldplan.robot.placement.reach import base_pose
 
     base = None if spec.base is None else base_pose(*spec.base)
     robot = load_robot(spec.urdf, spec.opw, base=base)
@@ -480,7 +480,7 @@ def _tool_robot(p: Plan, st: _Stages, ctx: _RobotContext | None) -> Plan:
 
 def check_sweeps(sweeps: Any) -> None:
     """Refuse a tool path whose free transitions failed their independent re-check
-    (:class:`~weldplan.tool.verify_sweeps.SweepsVerification`): nothing is written."""
+    (:class:`~weldplan.tool.verify.SweepsVerification`): nothing is written."""
     if not sweeps.ok:
         raise PlanningError(
             f"the tool path failed its independent re-check: {sweeps.describe(5)}; "

@@ -12,16 +12,16 @@
     (:func:`weldplan.weld.verify.verify_route`);
 ``tool poses``
     the weld poses belong to the route and each pose reported free is free, fresh FCL models of
-    the whole part and tool (:func:`weldplan.tool.check_route.verify_route_poses`), after the
+    the whole part and tool (:func:`weldplan.tool.verify.verify_route_poses`), after the
     tool's provenance is matched (a route planned with another tool is bad input; two spellings
     of one TCP, a joint's name and none for a URDF's last fixed joint, are one tool:
     :func:`same_tcp_spelling`);
 ``tool transitions``
-    the swept tool along every transition (:func:`weldplan.tool.check_route.verify_route_sweeps`);
+    the swept tool along every transition (:func:`weldplan.tool.verify.verify_route_sweeps`);
 ``robot route``
     forward kinematics of the URDF chain on every exact row, the joint limits, robot and tool
     against the part, themselves and the floor
-    (:func:`weldplan.robot.routejson.verify_robot_route`).
+    (:func:`weldplan.robot.program.verify_robot_route`).
 
 A check that fails stops the run (the later ones are listed in :attr:`Verdict.not_run`): a later
 check reads what the earlier one vouched for. A weld left out (no pose, a blocked transition, not
@@ -64,9 +64,9 @@ class CheckResult:
         Welds (or transitions) the plan leaves out, found by this check: a partial plan.
     report
         The check's own report (:class:`~weldplan.weld.verify.VerifyReport`,
-        :class:`~weldplan.tool.check_route.RoutePosesCheck`,
-        :class:`~weldplan.tool.verify_sweeps.SweepsVerification`,
-        :class:`~weldplan.robot.routejson.RobotCheck`; None for the part pose); each exposes
+        :class:`~weldplan.tool.verify.RoutePosesCheck`,
+        :class:`~weldplan.tool.verify.SweepsVerification`,
+        :class:`~weldplan.robot.program.RobotCheck`; None for the part pose); each exposes
         the one verdict type, :attr:`verdict`.
     """
 
@@ -176,7 +176,7 @@ def recheck(
     ----------
     route
         :class:`~weldplan.weld.route.Route`, with its ``tool`` section (read as a
-        :class:`~weldplan.robot.toolroute.ToolRoute`).
+        :class:`~weldplan.robot.program.ToolRoute`).
     part
         The part mesh (trimesh, mm) in the route's frame (the cell frame when it was planned
         with a part pose).
@@ -201,7 +201,7 @@ def recheck(
         The route was planned with another tool, or its tool section (the robot's route
         included) is unreadable.
     """
-    from weldplan.tool.check_route import check_tool_provenance
+    from weldplan.tool.verify.check_route import check_tool_provenance
     from weldplan.weld.verify import verify_route
 
     tool_obj = provenance = None
@@ -230,10 +230,10 @@ def same_tcp_spelling(route: Any, provenance: dict[str, Any], tool: Any) -> dict
     joint or link name, or six numbers. ``--tcp nozzle_tip`` and no ``--tcp`` name the same joint
     of the shared gun, and are one tool. So, when the route and ``provenance`` differ in the
     ``tcp`` only, the route's spelling is resolved again in the given files
-    (:func:`weldplan.tool.load.load_tool`) and the tool it gives is compared with ``tool``: the
+    (:func:`weldplan.tool.model.load_tool`) and the tool it gives is compared with ``tool``: the
     same triangles in the TCP frame to :data:`SAME_TCP_MM` is the same TCP transform, and the
     route's spelling is returned. Otherwise ``provenance`` is returned unchanged (and
-    :func:`weldplan.tool.check_route.check_tool_provenance` names the difference).
+    :func:`weldplan.tool.verify.check_tool_provenance` names the difference).
 
     Parameters
     ----------
@@ -246,7 +246,7 @@ def same_tcp_spelling(route: Any, provenance: dict[str, Any], tool: Any) -> dict
         The given :class:`~weldplan.tool.model.Tool` (mm, TCP frame).
     """
     from weldplan.errors import InputError
-    from weldplan.tool.load import PROVENANCE_KEYS, load_tool
+    from weldplan.tool.model.load import PROVENANCE_KEYS, load_tool
     from weldplan.tool.section import ToolSection
 
     try:
@@ -290,7 +290,7 @@ class _Run:
 def _carried(route: Any, path: str | PathLike[str] | None) -> set[str]:
     """The checks ``route`` carries something for (its tool section read typed:
     :class:`InputError` naming ``path`` when it is not readable)."""
-    from weldplan.robot.routejson import tool_route
+    from weldplan.robot.program.routejson import tool_route
 
     tool = tool_route(route, path)
     carried = {
@@ -303,7 +303,7 @@ def _carried(route: Any, path: str | PathLike[str] | None) -> set[str]:
 
 def _tool_checks(run: _Run, route: Any, part: Any, tool: Any) -> bool:
     """The poses, then the transitions; False when one fails."""
-    from weldplan.tool.check_route import verify_route_poses, verify_route_sweeps
+    from weldplan.tool.verify.check_route import verify_route_poses, verify_route_sweeps
 
     check = verify_route_poses(route, part, tool)
     if not run.add(CheckResult("tool poses", check.ok, check.describe(), check.missing, check)):
@@ -317,7 +317,11 @@ def _tool_checks(run: _Run, route: Any, part: Any, tool: Any) -> bool:
 
 def _robot_check(run: _Run, route: Any, part: Any, tool: Any, robot: Any, path: Any) -> None:
     """The robot route, when the route carries one."""
-    from weldplan.robot.routejson import robot_route_of, saved_robot_route, verify_robot_route
+    from weldplan.robot.program.routejson import (
+        robot_route_of,
+        saved_robot_route,
+        verify_robot_route,
+    )
 
     rr = robot_route_of(route, path)
     if rr is None:

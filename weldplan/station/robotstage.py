@@ -6,13 +6,13 @@ With a robot (and its tool: the tool's mounting frame on the robot's flange,
 1. chooses the weld poses with the robot's reach test (:func:`reach_test`, from the base given
    or searched on the poses chosen without it, then kept: a gun pose the robot cannot take on a
    usable branch with its links clear of the part gives way to the next least-rotation free
-   pose; :mod:`weldplan.robot.posechoice`);
-2. plans the joint route (:func:`joint_route_stage`, :func:`weldplan.robot.plan.plan_robot_route`:
+   pose; :mod:`weldplan.robot.placement.posechoice`);
+2. plans the joint route (:func:`joint_route_stage`, :func:`weldplan.robot.route.plan_robot_route`:
    one continuous IK branch, robot + tool collision check, blocked legs re-planned in joint
    space). When the tool stage planned transitions, the robot follows them: the welds in the
-   tool's order, each leg the gun's TCP path as Cartesian steps (:mod:`weldplan.robot.gunpath`).
-   A path that still collides is an error; a weld the robot cannot serve is passed without
-   welding and listed with its reason;
+   tool's order, each leg the gun's TCP path as Cartesian steps
+   (:mod:`weldplan.robot.route.gunpath`). A path that still collides is an error; a weld the robot
+   cannot serve is passed without welding and listed with its reason;
 3. times it and builds the program (:func:`program_stage`,
    :func:`weldplan.robot.program.robot_program`: toppra under the URDF velocities x
    ``vel_scale`` and accelerations x ``acc_scale``, ``weld_time`` a spot).
@@ -43,7 +43,7 @@ log = logging.getLogger(__name__)
 class RobotAcceptance:
     """The robot's side of the pose stage (:func:`reach_test`)."""
 
-    #: the pose choice's acceptance test (:class:`weldplan.robot.posechoice.ReachTest`)
+    #: the pose choice's acceptance test (:class:`weldplan.robot.placement.ReachTest`)
     accept: Any
     #: the robot at the base the test judges from
     robot: Any
@@ -55,7 +55,7 @@ class RobotAcceptance:
 
 @dataclass(frozen=True, eq=False)
 class RobotResult:
-    """The joint route stage: the :class:`~weldplan.robot.configs.RobotRoute`, the gun route it
+    """The joint route stage: the :class:`~weldplan.robot.route.RobotRoute`, the gun route it
     follows (None: the point-tip route), the route followed, the robot at its base with the
     scaled limits the timing uses, the reach test (if any)."""
 
@@ -97,9 +97,9 @@ def program_settings(settings: RobotSettings, name: str) -> ProgramSettings:
 
 def time_leg_cost(cell: Any, mounted: Any, robot: Any, base_fixed: bool, **kw: Any) -> Any:
     """``(LegTimes, robot placed)`` for ``cost = "time"``
-    (:func:`weldplan.robot.legtime.cell_leg_times`). ``kw``: ``settings`` (RobotSettings),
+    (:func:`weldplan.robot.route.cell_leg_times`). ``kw``: ``settings`` (RobotSettings),
     ``tool`` (ToolSettings), ``floor_z``, ``search`` (BaseSearch)."""
-    from weldplan.robot.legtime import cell_leg_times
+    from weldplan.robot.route.legtime import cell_leg_times
 
     rs: RobotSettings = kw["settings"]
     ts: ToolSettings = kw["tool"]
@@ -112,8 +112,8 @@ def time_leg_cost(cell: Any, mounted: Any, robot: Any, base_fixed: bool, **kw: A
 
 
 def with_time_stats(route: Any, legs: Any, joint_ids: tuple[str, ...]) -> Any:
-    """The route with :func:`weldplan.robot.legtime.time_stats` in ``stats["cost_time"]``."""
-    from weldplan.robot.legtime import time_stats
+    """The route with :func:`weldplan.robot.route.time_stats` in ``stats["cost_time"]``."""
+    from weldplan.robot.route.legtime import time_stats
 
     stats = dict(route.stats)
     stats["cost_time"] = time_stats(legs, joint_ids, route.order)
@@ -125,11 +125,11 @@ def reach_test(
 ) -> RobotAcceptance | None:
     """The robot's reach test for the weld poses (step 1 of the module docstring), from the
     robot's base when ``base_fixed``, else the base searched for the poses chosen without the
-    robot (:func:`weldplan.robot.posechoice.place_for_poses`). ``kw``: ``tool``
+    robot (:func:`weldplan.robot.placement.place_for_poses`). ``kw``: ``tool``
     (ToolSettings), ``floor_z``, ``search``. None (logged) when no base candidate serves a
     weld: the robot stage then searches as without the test."""
-    from weldplan.robot.collision import RobotCollision
-    from weldplan.robot.posechoice import ReachTest, place_for_poses
+    from weldplan.robot.collision.checker import RobotCollision
+    from weldplan.robot.placement.posechoice import ReachTest, place_for_poses
     from weldplan.station.toolstage import pose_settings
     from weldplan.tool import plan_weld_poses
 
@@ -161,9 +161,9 @@ def joint_route_stage(
     """Step 2 of the module docstring. ``kw``: ``reach`` (:class:`RobotAcceptance` or None),
     ``settings`` (RobotSettings), ``floor_z``, ``search`` (BaseSearch), ``seed``. Raises
     :class:`PlanningError` when the robot serves no weld or its path still collides."""
-    from weldplan.robot.plan import plan_robot_route
+    from weldplan.robot.route.plan import plan_robot_route
     from weldplan.robot.settings import RobotCell
-    from weldplan.tool.route_frames import route_poses
+    from weldplan.tool.poses.route_frames import route_poses
 
     reach: RobotAcceptance | None = kw["reach"]
     poses = route_poses(route)
@@ -204,8 +204,8 @@ def program_stage(
 ) -> Any:
     """Step 3 of the module docstring: the :class:`~weldplan.robot.program.ProgramBuild`.
     Raises :class:`PlanningError` when it serves none of the welds."""
-    from weldplan.robot.program import robot_program
-    from weldplan.robot.routejson import poses_contact_radius
+    from weldplan.robot.program.build import robot_program
+    from weldplan.robot.program.routejson import poses_contact_radius
 
     rr = joint.robot_route
     build = robot_program(
@@ -223,7 +223,7 @@ def program_stage(
 
 def with_robot(route: Any, joint: RobotResult, urdf: Any) -> Any:
     """``route`` carrying the robot route (its tool section's ``robot``, for the route JSON)."""
-    from weldplan.robot.routejson import attach_robot_route, poses_contact_radius
+    from weldplan.robot.program.routejson import attach_robot_route, poses_contact_radius
 
     return attach_robot_route(
         route, joint.robot_route, urdf=urdf, contact_radius=poses_contact_radius(route),
@@ -266,10 +266,10 @@ def _none_served(rr: Any) -> str:
 
 def _gun_route(route: Any, poses: Any) -> Any:
     """The route along the tool stage's transitions, in its order
-    (:func:`weldplan.robot.gunpath.gun_route`); None when the route carries none."""
-    from weldplan.robot.gunpath import gun_route
-    from weldplan.robot.routejson import poses_contact_radius
-    from weldplan.tool.route_frames import route_tool_path
+    (:func:`weldplan.robot.route.gun_route`); None when the route carries none."""
+    from weldplan.robot.program.routejson import poses_contact_radius
+    from weldplan.robot.route.gunpath import gun_route
+    from weldplan.tool.poses.route_frames import route_tool_path
 
     path = route_tool_path(route)
     if path is None or not path.order:

@@ -1,7 +1,7 @@
 """A plan as a saved, re-loadable, re-checkable result: :func:`save_plan`, :func:`load_plan`.
 
 The route JSON is the plan's saved form (docs/outputs.md): the point-tip route and, in its
-``tool`` section (:class:`~weldplan.robot.toolroute.ToolRoute`), the weld poses, the tool path
+``tool`` section (:class:`~weldplan.robot.program.ToolRoute`), the weld poses, the tool path
 and the robot route. :func:`save_plan` writes it with its measured times beside it
 (``route.timings.json``, :func:`weldplan.io.timings.route_json_texts`) as one set, whole or not
 at all (:func:`weldplan.io.outputset.write_outputs`, as :func:`~weldplan.station.outputs.write_plan`
@@ -22,7 +22,7 @@ from os import PathLike
 from pathlib import Path
 from typing import Any
 
-from weldplan.robot.toolroute import ToolRoute
+from weldplan.robot.program.toolroute import ToolRoute
 
 
 def save_route(route: Any, path: str | PathLike[str]) -> Path:
@@ -58,7 +58,7 @@ class SavedPlan:
         The :class:`~weldplan.weld.route.Route` (the point-tip route, in the frame it was planned
         in: the cell frame with a part pose).
     tool_route
-        The :class:`~weldplan.robot.toolroute.ToolRoute`: weld poses, tool path, robot route
+        The :class:`~weldplan.robot.program.ToolRoute`: weld poses, tool path, robot route
         (all None for a point-tip route).
     part
         The part mesh (trimesh, mm) in the route's frame; None when none was given.
@@ -78,17 +78,17 @@ class SavedPlan:
 
     @property
     def poses(self) -> Any:
-        """The :class:`~weldplan.tool.result.WeldPoses` (None without a tool)."""
+        """The :class:`~weldplan.tool.poses.WeldPoses` (None without a tool)."""
         return self.tool_route.poses
 
     @property
     def tool_path(self) -> Any:
-        """The :class:`~weldplan.tool.transit.ToolPath` (None without transitions)."""
+        """The :class:`~weldplan.tool.transitions.ToolPath` (None without transitions)."""
         return self.tool_route.transitions
 
     @property
     def robot_route(self) -> Any:
-        """The :class:`~weldplan.robot.configs.RobotRoute` (None without a robot)."""
+        """The :class:`~weldplan.robot.route.RobotRoute` (None without a robot)."""
         return None if self.tool_route.robot is None else self.tool_route.robot.route
 
     def save(self, path: str | PathLike[str]) -> Path:

@@ -155,7 +155,7 @@ class RouteSettings:
 @dataclass(frozen=True)
 class ToolSettings:
     """The tool stage: weld poses (:func:`weldplan.tool.plan_weld_poses`) and transitions
-    (:func:`weldplan.tool.reorder.plan_ordered_transitions`); docs/tool.md.
+    (:func:`weldplan.tool.transitions.plan_ordered_transitions`); docs/tool.md.
 
     Attributes
     ----------
@@ -256,8 +256,8 @@ class RobotSettings:
         What the sequencer minimises: ``"length"`` or ``"time"`` (the robot's leg times).
     roadmap
         Judge a searched base by the welds one joint-space roadmap joins, and ask it before
-        OMPL for a blocked leg (:mod:`weldplan.robot.roadmaps`; off by default: on car2_50 it
-        found the same base at twice the CPU time).
+        OMPL for a blocked leg (:mod:`weldplan.robot.placement.roadmaps`; off by default: on car2_50
+        it found the same base at twice the CPU time).
     """
 
     weld_time: float = setting(

@@ -9,8 +9,8 @@ from typing import Any
 
 
 def _tool_route(route: Any) -> Any:
-    """The route's tool section, typed (:class:`~weldplan.robot.toolroute.ToolRoute`)."""
-    from weldplan.robot.toolroute import ToolRoute
+    """The route's tool section, typed (:class:`~weldplan.robot.program.ToolRoute`)."""
+    from weldplan.robot.program.toolroute import ToolRoute
 
     return ToolRoute.of(route)
 
@@ -232,7 +232,7 @@ def partial_lines(plan: Any) -> list[str]:
 
 
 def transition_rows(path: Any, check: Any) -> list[tuple[str, str]]:
-    """Summary rows of the transitions (:class:`~weldplan.tool.transit.ToolPath`, None: none):
+    """Summary rows of the transitions (:class:`~weldplan.tool.transitions.ToolPath`, None: none):
     free / total, re-planned, length and rotation versus the point-tip order, and each blocked
     transition."""
     if path is None:
@@ -343,8 +343,8 @@ def floor_words(stats: dict[str, Any]) -> str:
 
 def _walk_rows(rr: Any) -> list[tuple[str, str]]:
     """The summary row of the walk over the welds: its work and the welds it left out, by
-    cause (:class:`weldplan.robot.walkstats.WalkStats`)."""
-    from weldplan.robot.walkstats import WalkStats
+    cause (:class:`weldplan.robot.route.WalkStats`)."""
+    from weldplan.robot.route.walkstats import WalkStats
 
     walk = rr.stats.get("walk")
     return [("robot walk", WalkStats.from_dict(walk).describe())] if walk else []
@@ -361,7 +361,7 @@ def _ends(rr: Any) -> str:
 
 def _legs(rr: Any, gun: Any) -> list[tuple[str, str, str]]:
     """``(from, to, how)`` of each leg between consecutive served welds."""
-    from weldplan.robot.gunpath import legs_taken
+    from weldplan.robot.route.gunpath import legs_taken
 
     served = [w for w, s in zip(rr.weld_ids, rr.status, strict=True) if s == "ok"]
     taken = legs_taken(gun.via, rr.status, rr.replanned)

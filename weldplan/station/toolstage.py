@@ -2,16 +2,16 @@
 
 After the point-tip route has been planned and verified, :func:`poses_stage` plans a pose of
 the whole tool at every weld in the route's order (:func:`weldplan.tool.plan_weld_poses`),
-accepted by the caller's test (the robot's reach, :mod:`weldplan.robot.posechoice`) and by the
-exit test (:class:`weldplan.tool.exits.ExitTest`: the tool can leave the pose), and re-checks
-them independently (:func:`weldplan.tool.verify_poses.verify_poses`, fresh FCL models). A weld
+accepted by the caller's test (the robot's reach, :mod:`weldplan.robot.placement.posechoice`) and by
+the exit test (:class:`weldplan.tool.poses.ExitTest`: the tool can leave the pose), and re-checks
+them independently (:func:`weldplan.tool.verify.verify_poses`, fresh FCL models). A weld
 without a free pose is listed with its closest miss.
 
 :func:`transitions_stage` orders the welds with a pose on the tool's own costs
-(:func:`weldplan.tool.reorder.plan_ordered_transitions`; ``order = "route"`` keeps the point-tip
+(:func:`weldplan.tool.transitions.plan_ordered_transitions`; ``order = "route"`` keeps the point-tip
 order): the tool retracts, moves and approaches, every motion checked for the swept tool,
 blocked ones re-planned in SE(3) with OMPL; the whole path is re-checked independently
-(:func:`weldplan.tool.verify_sweeps.verify_sweeps`). A blocked transition is listed.
+(:func:`weldplan.tool.verify.verify_sweeps`). A blocked transition is listed.
 """
 
 from __future__ import annotations
@@ -26,8 +26,8 @@ from weldplan.tool.settings import OrderSettings, PoseSearchSettings, Transition
 
 @dataclass(frozen=True, eq=False)
 class PosesResult:
-    """The weld poses (:class:`~weldplan.tool.result.WeldPoses`), their re-check
-    (:class:`~weldplan.tool.verify_poses.PosesVerification`), and the exit test's transition
+    """The weld poses (:class:`~weldplan.tool.poses.WeldPoses`), their re-check
+    (:class:`~weldplan.tool.verify.PosesVerification`), and the exit test's transition
     planner (its checked exits are reused by the transitions; None without the exit test)."""
 
     poses: Any
@@ -37,8 +37,8 @@ class PosesResult:
 
 @dataclass(frozen=True, eq=False)
 class TransitionsResult:
-    """The tool path (:class:`~weldplan.tool.transit.ToolPath`) and its re-check
-    (:class:`~weldplan.tool.verify_sweeps.SweepsVerification`)."""
+    """The tool path (:class:`~weldplan.tool.transitions.ToolPath`) and its re-check
+    (:class:`~weldplan.tool.verify.SweepsVerification`)."""
 
     path: Any
     sweeps: Any
@@ -94,12 +94,12 @@ def poses_stage(
     with ``settings.exit_check`` false); the exit test's planner is handed to the transitions.
     """
     from weldplan.tool import plan_weld_poses, verify_poses
-    from weldplan.tool.pose_choice import all_of
+    from weldplan.tool.poses.choice import all_of
 
     exits = None
     if settings.exit_check:
-        from weldplan.tool.exits import ExitTest
-        from weldplan.tool.transitions import TransitionPlanner
+        from weldplan.tool.poses.exits import ExitTest
+        from weldplan.tool.transitions.plan import TransitionPlanner
 
         planner = TransitionPlanner(
             cell.part, tool, transition_settings(settings, seed),
@@ -125,8 +125,8 @@ def transitions_stage(
 ) -> TransitionsResult:
     """Order the welds on the tool's costs and plan the transitions, re-ordering round blocked
     pairs, then re-check them independently (module docstring)."""
-    from weldplan.tool.reorder import plan_ordered_transitions
-    from weldplan.tool.verify_sweeps import verify_sweeps
+    from weldplan.tool.transitions.reorder import plan_ordered_transitions
+    from weldplan.tool.verify.sweeps import verify_sweeps
 
     path = plan_ordered_transitions(
         part, tool, poses.poses, transition_settings(settings, seed), order_settings(settings),

@@ -16,7 +16,7 @@ projection and gun search of Siemens Process Simulate): per spot,
    it reaches one of the spot's free gun poses on a usable IK branch with its links and the tool
    clear of the part, itself and the floor, and else why not (:mod:`weldplan.study.robot_reach`).
 
-A searched base (:func:`_search_base`): :func:`weldplan.robot.reach.search_base` ranks the
+A searched base (:func:`_search_base`): :func:`weldplan.robot.placement.search_base` ranks the
 candidates of the robot's region (:attr:`StudyRobot.search`, default the floor about the
 spots) by the spots whose verified pose or one of its alternatives is usable, with the arm's
 chord clear of the part, then by manipulability; the best ``base_pool`` are judged by the study
@@ -48,7 +48,7 @@ from numpy.typing import NDArray
 
 from weldplan.errors import ConfigError, PlanningError
 from weldplan.io.joints import Joints
-from weldplan.robot.model import Robot
+from weldplan.robot.model.arm import Robot
 from weldplan.station.model import ToolSpec, setting
 from weldplan.study.result import (
     FRAME,
@@ -69,7 +69,7 @@ from weldplan.study.robot_reach import (
     tcp_matrices,
     tool_recheck,
 )
-from weldplan.tool.model import Tool
+from weldplan.tool.model.tool import Tool
 from weldplan.tool.settings import (
     DEFAULT_AZIMUTHS,
     DEFAULT_CLEARANCE,
@@ -85,7 +85,7 @@ log = logging.getLogger(__name__)
 #: lies on it; 5 mm allows for a CSV rounded to the mm and a spot given on the far skin of a
 #: 2 x 2 mm stack)
 DEFAULT_MAX_SPOT_DISTANCE = 5.0
-#: searched bases judged by the study itself (the best of weldplan.robot.reach.search_base)
+#: searched bases judged by the study itself (the best of weldplan.robot.placement.search_base)
 DEFAULT_BASE_POOL = 6
 #: the search ranks this many times ``base_pool`` candidates, of which the study judges the best
 #: at distinct floor positions first (the kinematic ranking puts several yaws of one position
@@ -241,7 +241,7 @@ class StudyRobot:
     source
         Where it was read from (for the result).
     search
-        With ``searched``: where (:class:`~weldplan.robot.reach.BaseSearch`: the floor grid or
+        With ``searched``: where (:class:`~weldplan.robot.placement.BaseSearch`: the floor grid or
         a line, and the discs kept out); ``None``: the floor about the spots, on
         :attr:`StudySettings.floor_z`.
     """
@@ -394,7 +394,7 @@ def _gun_stage(
     s: StudySettings,
 ) -> tuple[list[GunVerdict], list[SpotPoses]]:
     """Per spot the tool's :class:`GunVerdict` and its free poses (verified one first)."""
-    from weldplan.tool.poses import plan_weld_poses
+    from weldplan.tool.poses.plan import plan_weld_poses
     from weldplan.tool.settings import PoseSearchSettings
 
     n = len(spots)
@@ -496,8 +496,8 @@ class _Kit:
 
     @classmethod
     def build(cls, part: trimesh.Trimesh, robot: Robot, st: StudyTool, s: StudySettings) -> _Kit:
-        from weldplan.robot.collision import RobotCollision
-        from weldplan.tool.verify_poses import PoseChecker
+        from weldplan.robot.collision.checker import RobotCollision
+        from weldplan.tool.verify.poses import PoseChecker
 
         F = st.flange_tcp(robot)
         checker = RobotCollision(
@@ -535,8 +535,8 @@ def _search_base(
     PlanningError
         No floor candidate reaches any spot.
     """
-    from weldplan.robot.altreach import spread
-    from weldplan.robot.reach import BaseSearch, search_base
+    from weldplan.robot.placement.altreach import spread
+    from weldplan.robot.placement.reach import BaseSearch, search_base
 
     inv = np.linalg.inv(kit.flange_tcp)
     has = [k for k, p in enumerate(free) if len(p.quaternions)]

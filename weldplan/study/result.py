@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from weldplan.tool.result import Miss
+from weldplan.tool.poses.result import Miss
 
 #: verdict words. A spot with a free gun pose (the gun closes on it)
 OK = "ok"
@@ -75,7 +75,7 @@ class GunVerdict(_Verdict):
         :data:`OK`, :data:`NO_GUN_POSE` or :data:`NO_SURFACE`.
     n_free
         Candidate poses of the pose search that do not collide with the part (of
-        ``n_candidates``; :attr:`weldplan.tool.result.WeldPose.n_collision_free`).
+        ``n_candidates``; :attr:`weldplan.tool.poses.WeldPose.n_collision_free`).
     n_candidates
         Candidate poses per spot (spins x tilts, both sides for a tool that straddles).
     quaternion

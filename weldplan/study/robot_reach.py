@@ -1,22 +1,22 @@
 """Whether a robot at its base reaches a free gun pose of each spot, and why not.
 
 A spot's gun poses are the tool stage's verified pose first, then its other free candidates
-(:attr:`weldplan.tool.result.WeldPoses.alternatives`, spread in rotation by
-:func:`weldplan.robot.altreach.spread` to at most ``poses`` per spot). For all of them at once:
+(:attr:`weldplan.tool.poses.WeldPoses.alternatives`, spread in rotation by
+:func:`weldplan.robot.placement.spread` to at most ``poses`` per spot). For all of them at once:
 IK (:meth:`~weldplan.robot.model.Robot.ik_all`), the reach rule of
-:func:`weldplan.robot.reach.usable` (a branch inside the joint limits, A5 away from its
-singularity) and, per pose without a usable branch, :func:`weldplan.robot.reach.classify`'s
+:func:`weldplan.robot.placement.usable` (a branch inside the joint limits, A5 away from its
+singularity) and, per pose without a usable branch, :func:`weldplan.robot.placement.classify`'s
 reason. The usable (pose, branch) pairs of every spot are then checked in rounds (one batched
 call a round, the spot's pairs in the order of its poses): the links and the tool minus its
 contact zone against the part, the robot against itself and against the floor
 (:meth:`weldplan.robot.collision.RobotCollision.states_blocked`, FCL judges), until one is clear
 or ``branches`` pairs of the spot were checked (a work budget, not a clock). A pose other than
-the verified one is re-checked for the tool (:class:`weldplan.tool.verify_poses.PoseChecker`:
+the verified one is re-checked for the tool (:class:`weldplan.tool.verify.PoseChecker`:
 fresh FCL models of the whole part and tool, clearance measured) before it is reported.
 
 Without a clear pair, the spot's verdict is the reason closest to feasible over its poses:
 ``collision`` (usable branches exist, each blocked: the body named), then ``singular``, then
-``joint_limit`` (the joints and their limits named, :func:`weldplan.robot.posechoice.
+``joint_limit`` (the joints and their limits named, :func:`weldplan.robot.placement.posechoice.
 joint_limit_reason`), then ``out_of_reach``.
 """
 
@@ -30,11 +30,11 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from weldplan.robot.altreach import spread
-from weldplan.robot.model import Robot
-from weldplan.robot.posechoice import joint_limit_reason
-from weldplan.robot.reach import classify, usable
-from weldplan.robot.selfcollision import hit_words
+from weldplan.robot.collision.selfcollision import hit_words
+from weldplan.robot.model.arm import Robot
+from weldplan.robot.placement.altreach import spread
+from weldplan.robot.placement.posechoice import joint_limit_reason
+from weldplan.robot.placement.reach import classify, usable
 from weldplan.study.result import (
     COLLISION,
     JOINT_LIMIT,
@@ -76,7 +76,7 @@ class ReachBudget:
     branches
         Usable (pose, branch) pairs collision-checked per spot before it is declared blocked.
     singular_deg
-        A5 within this many degrees of 0 is near-singular (:func:`weldplan.robot.reach.usable`).
+        A5 within this many degrees of 0 is near-singular (:func:`weldplan.robot.placement.usable`).
     """
 
     poses: int = 64
@@ -209,7 +209,7 @@ def _clear_pairs(
 
 
 def tool_recheck(pose_checker: object) -> Callable[[NDArray[np.float64]], bool]:
-    """``tool_clear(T)``: :class:`~weldplan.tool.verify_poses.PoseChecker` ``pose_checker``'s
+    """``tool_clear(T)``: :class:`~weldplan.tool.verify.PoseChecker` ``pose_checker``'s
     verdict on TCP pose ``T (4, 4)`` mm, remembered per pose (a pose's verdict does not depend
     on the robot's base)."""
     memo: dict[bytes, bool] = {}

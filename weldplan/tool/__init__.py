@@ -14,8 +14,8 @@
     path = plan_transitions(cell.part, gun, poses, TransitionSettings(se3=False))
 
 The names above are loaded on first use (PEP 562 module ``__getattr__``): importing a module of
-this package (``weldplan.tool.route_frames``, as :mod:`weldplan.io.export` does for a route with
-poses) runs this ``__init__`` first, and an eager one would load the pose planner, the sweep
+this package (``weldplan.tool.poses.route_frames``, as :mod:`weldplan.io.export` does for a route
+with poses) runs this ``__init__`` first, and an eager one would load the pose planner, the sweep
 checker and FCL with it.
 
 See docs/tool.md.
@@ -30,41 +30,41 @@ from typing import TYPE_CHECKING, Any
 from weldplan.lazy import lazy_exports
 
 if TYPE_CHECKING:  # the same names, for type checkers and readers
-    from weldplan.tool.model import Tool, load_tool_urdf, tool_from_mesh
-    from weldplan.tool.poses import plan_weld_poses, surface_approach
-    from weldplan.tool.result import Miss, WeldPose, WeldPoses
+    from weldplan.tool.model.tool import Tool, load_tool_urdf, tool_from_mesh
+    from weldplan.tool.model.torch import arc_torch, shared_spot_gun
+    from weldplan.tool.poses.plan import plan_weld_poses, surface_approach
+    from weldplan.tool.poses.result import Miss, WeldPose, WeldPoses
     from weldplan.tool.settings import OrderSettings, PoseSearchSettings, TransitionSettings
-    from weldplan.tool.tool_order import tool_order
-    from weldplan.tool.torch import arc_torch, shared_spot_gun
-    from weldplan.tool.transit import ToolPath, Transition
-    from weldplan.tool.transitions import plan_transitions
-    from weldplan.tool.verify_poses import PoseChecker, PosesVerification, verify_poses
-    from weldplan.tool.verify_sweeps import SweepsVerification, verify_sweeps
+    from weldplan.tool.transitions.order import tool_order
+    from weldplan.tool.transitions.plan import plan_transitions
+    from weldplan.tool.transitions.result import ToolPath, Transition
+    from weldplan.tool.verify.poses import PoseChecker, PosesVerification, verify_poses
+    from weldplan.tool.verify.sweeps import SweepsVerification, verify_sweeps
 
 #: exported name -> the module of this package that defines it
 _EXPORTS = {
-    "Miss": "result",
+    "Miss": "poses.result",
     "OrderSettings": "settings",
-    "PoseChecker": "verify_poses",
+    "PoseChecker": "verify.poses",
     "PoseSearchSettings": "settings",
-    "PosesVerification": "verify_poses",
-    "SweepsVerification": "verify_sweeps",
-    "Tool": "model",
-    "ToolPath": "transit",
-    "Transition": "transit",
+    "PosesVerification": "verify.poses",
+    "SweepsVerification": "verify.sweeps",
+    "Tool": "model.tool",
+    "ToolPath": "transitions.result",
+    "Transition": "transitions.result",
     "TransitionSettings": "settings",
-    "WeldPose": "result",
-    "WeldPoses": "result",
-    "arc_torch": "torch",
-    "load_tool_urdf": "model",
-    "plan_transitions": "transitions",
-    "plan_weld_poses": "poses",
-    "shared_spot_gun": "torch",
-    "surface_approach": "poses",
-    "tool_from_mesh": "model",
-    "tool_order": "tool_order",
-    "verify_poses": "verify_poses",
-    "verify_sweeps": "verify_sweeps",
+    "WeldPose": "poses.result",
+    "WeldPoses": "poses.result",
+    "arc_torch": "model.torch",
+    "load_tool_urdf": "model.tool",
+    "plan_transitions": "transitions.plan",
+    "plan_weld_poses": "poses.plan",
+    "shared_spot_gun": "model.torch",
+    "surface_approach": "poses.plan",
+    "tool_from_mesh": "model.tool",
+    "tool_order": "transitions.order",
+    "verify_poses": "verify.poses",
+    "verify_sweeps": "verify.sweeps",
 }
 
 __all__ = [
@@ -101,7 +101,7 @@ class _ToolPackage(types.ModuleType):
     ``verify_poses``, ``verify_sweeps``), and importing such a module anywhere binds the module
     to the package's attribute of that name (``setattr(package, "tool_order", module)``), which
     would hide the function from ``__getattr__``. Bind the function instead, as the eager
-    ``from weldplan.tool.tool_order import tool_order`` did."""
+    ``from weldplan.tool.transitions.order import tool_order`` did."""
 
     def __setattr__(self, name: str, value: Any) -> None:
         if (

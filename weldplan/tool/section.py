@@ -1,12 +1,12 @@
 """The tool stage's part of a route's ``tool`` section, typed: :class:`ToolSection`.
 
 A route planned with a tool carries, in its ``tool`` section (the route JSON's), the tool's
-``provenance``, the weld ``poses`` (:class:`~weldplan.tool.result.WeldPoses`) and the tool's
-``transitions`` (:class:`~weldplan.tool.transit.ToolPath`), and, with a robot, the robot's route.
-:class:`ToolSection` reads the tool stage's three, as the readers of this layer need them (the
-route's frames, the re-checks of a saved route, the exporters, the viewer), once per route
+``provenance``, the weld ``poses`` (:class:`~weldplan.tool.poses.WeldPoses`) and the tool's
+``transitions`` (:class:`~weldplan.tool.transitions.ToolPath`), and, with a robot, the robot's
+route. :class:`ToolSection` reads the tool stage's three, as the readers of this layer need them
+(the route's frames, the re-checks of a saved route, the exporters, the viewer), once per route
 (:meth:`ToolSection.of`). The whole section with the robot's route is
-:class:`weldplan.robot.toolroute.ToolRoute`, which reads its first three keys here. The keys not
+:class:`weldplan.robot.program.ToolRoute`, which reads its first three keys here. The keys not
 read here (``robot``, and any this version does not know) are kept as they were in
 :attr:`ToolSection.rest`.
 
@@ -20,8 +20,8 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
-from weldplan.tool.result import WeldPoses
-from weldplan.tool.transit import ToolPath
+from weldplan.tool.poses.result import WeldPoses
+from weldplan.tool.transitions.result import ToolPath
 from weldplan.weld.route import Route
 
 _View = TypeVar("_View")
@@ -37,14 +37,14 @@ class ToolSection:
     Attributes
     ----------
     provenance
-        The tool the route was planned with (:func:`weldplan.tool.load.load_tool`: files and
+        The tool the route was planned with (:func:`weldplan.tool.model.load_tool`: files and
         their sha256, the TCP, the units); metadata, compared, never computed on. Empty for a
         route planned without a tool.
     poses
-        :class:`~weldplan.tool.result.WeldPoses`, one per visited weld in the route's order
+        :class:`~weldplan.tool.poses.WeldPoses`, one per visited weld in the route's order
         (None: none saved).
     transitions
-        :class:`~weldplan.tool.transit.ToolPath` (None: the route was planned without them).
+        :class:`~weldplan.tool.transitions.ToolPath` (None: the route was planned without them).
     rest
         The section's other keys (the robot's route, keys this version does not know), as read.
     """

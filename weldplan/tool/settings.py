@@ -3,7 +3,7 @@
 :class:`PoseSearchSettings` (the weld poses, :func:`weldplan.tool.plan_weld_poses`),
 :class:`TransitionSettings` (the transitions, :class:`~weldplan.tool.transitions.TransitionPlanner`
 and :func:`~weldplan.tool.transitions.plan_transitions`) and :class:`OrderSettings` (the weld
-order they are planned in, :func:`weldplan.tool.reorder.plan_ordered_transitions`). A search
+order they are planned in, :func:`weldplan.tool.transitions.plan_ordered_transitions`). A search
 takes its inputs and one of these (../shared/DESIGN.md: "a stage takes its inputs and one frozen,
 validated settings object"); each is checked once, when it is made, and a bad field is a
 :class:`~weldplan.errors.ConfigError` naming it. A station's
@@ -36,7 +36,7 @@ DEFAULT_CONTACT_RADIUS = 20.0
 #: default clearance (mm) when neither the call nor a cell gives one: the cell's torch-tip default
 DEFAULT_CLEARANCE = 5.0
 #: vetoes a weld may take before the test is lifted for it (each costs one more DP round,
-#: :mod:`weldplan.tool.pose_choice`)
+#: :mod:`weldplan.tool.poses.choice`)
 DEFAULT_MAX_VETOES = 12
 
 #: mm: default retract distance along the TCP axis before leaving a weld (issue 16)
@@ -48,7 +48,8 @@ DEFAULT_SE3_PLANNER = "rrtconnect"
 DEFAULT_SIDE_EXIT = 250.0
 #: default CPU seconds of one transition's SE(3) re-plan, a safety net only (the CLI's and the
 #: bench's too): the work budget is :data:`DEFAULT_SE3_CHECKS`; the clock stops a re-plan only
-#: at :data:`~weldplan.tool.se3_replan.CLOCK_SAFETY` times this, and says so (not reproducible)
+#: at :data:`~weldplan.tool.transitions.se3_replan.CLOCK_SAFETY` times this, and says so (not
+#: reproducible)
 DEFAULT_SE3_TIME = 10.0
 #: state and motion checks one SE(3) re-plan may make (OMPL's ``max_checks``): the demo's three
 #: re-plans took 191, 291 and about 1,900 (the last at 5 CPU s a thousand, cut by the old 10 CPU s
@@ -65,7 +66,7 @@ DEFAULT_SE3_RANGE = 150.0
 #: as much as 200 mm of TCP travel: about what a 0.7 m gun's far end sweeps through); also the
 #: SE(3) planner's metric weight
 DEFAULT_ROT_WEIGHT = 200.0
-#: orders tried when transitions are found blocked (:mod:`weldplan.tool.reorder`)
+#: orders tried when transitions are found blocked (:mod:`weldplan.tool.transitions.reorder`)
 REORDER_ROUNDS = 3
 
 
@@ -91,7 +92,7 @@ class PoseSearchSettings:
     Attributes
     ----------
     cone, tilt_step, spin_step, azimuths
-        The candidate orientations (degrees; :func:`~weldplan.tool.orient.local_candidates`):
+        The candidate orientations (degrees; :func:`~weldplan.tool.poses.local_candidates`):
         tilts up to ``cone`` off the approach axis in rings ``tilt_step`` apart, ``azimuths``
         directions a ring, spins ``spin_step`` apart.
     contact_radius
@@ -107,7 +108,7 @@ class PoseSearchSettings:
         against one BVH of the whole part (the same answers).
     max_vetoes
         Vetoes of the acceptance test a weld may take before the test is lifted for it
-        (:mod:`weldplan.tool.pose_choice`).
+        (:mod:`weldplan.tool.poses.choice`).
     """
 
     cone: float = DEFAULT_CONE
@@ -156,7 +157,8 @@ class TransitionSettings:
     rot_weight
         mm per rad: the SE(3) planner's metric weight on rotation (> 0).
     min_step
-        mm: the swept check's least step (None: :data:`weldplan.tool.sweep.DEFAULT_MIN_STEP`).
+        mm: the swept check's least step (None:
+        :data:`weldplan.tool.transitions.sweep.DEFAULT_MIN_STEP`).
     se3_samples
         FCL distance samples one SE(3) re-plan may take in all (``None``: no cap but the
         checks): its state and motion checks answer "not free" once it is spent, so OMPL stops.
@@ -204,18 +206,18 @@ class TransitionSettings:
 
 @dataclass(frozen=True)
 class OrderSettings:
-    """The weld order the transitions are planned in (:mod:`weldplan.tool.reorder`).
+    """The weld order the transitions are planned in (:mod:`weldplan.tool.transitions.reorder`).
 
     Attributes
     ----------
     rot_weight
         mm per rad: the order's leg costs weigh the orientation change by this
-        (:func:`~weldplan.tool.tool_order.tool_order`; 0: TCP length only).
+        (:func:`~weldplan.tool.transitions.tool_order`; 0: TCP length only).
     keep_order
         Keep the poses' own order (the point-tip route's) and never re-order.
     price_lifts
         With the exit test's planner: a weld that planner leaves by a lift is priced at the
-        lift, not the axial retract (:func:`weldplan.tool.exits.leave_distances`).
+        lift, not the axial retract (:func:`weldplan.tool.poses.leave_distances`).
     rounds
         At most this many orders, each pricing out the pairs found blocked before.
     """

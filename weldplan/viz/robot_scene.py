@@ -5,9 +5,9 @@ Drawn under ``weldplan_robot``: ``part``, ``links/<link name>`` (the robot's col
 each link frame), ``tool`` (the tool mesh in its TCP frame, decimated for display by
 :func:`weldplan.viz.tool_scene.display_mesh`) and ``route`` (the TCP polyline). Every link and the
 tool get one keyframe per frame of :data:`FRAME_RATE` along the trajectory's own time axis
-(:class:`~weldplan.robot.timing.TimedTrajectory`, joint values interpolated linearly between its
-samples, which are :data:`~weldplan.robot.timing.DEFAULT_DT` apart), so the animation plays at
-the cycle's real speed. ``welds/<k>`` and ``labels/<k>`` mark the TCP at each weld (forward
+(:class:`~weldplan.robot.program.TimedTrajectory`, joint values interpolated linearly between its
+samples, which are :data:`~weldplan.robot.program.timing.DEFAULT_DT` apart), so the animation plays
+at the cycle's real speed. ``welds/<k>`` and ``labels/<k>`` mark the TCP at each weld (forward
 kinematics at the weld's dwell), labelled with the weld's id.
 
 The page opens framed on the part, the route, and the robot and the tool over the whole cycle
@@ -92,7 +92,7 @@ def build_robot_scene(
     robot
         :class:`~weldplan.robot.model.Robot` placed in the part frame (``robot.base``).
     timing
-        :class:`~weldplan.robot.timing.TimedTrajectory` of the robot's joint route.
+        :class:`~weldplan.robot.program.TimedTrajectory` of the robot's joint route.
     flange_tcp
         ``(4, 4)`` mm: the TCP in the flange frame.
     part

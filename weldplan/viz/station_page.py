@@ -68,7 +68,7 @@ class StationRobot:
     flange_tcp
         ``(4, 4)`` mm: the TCP in the flange frame.
     timing
-        Its :class:`~weldplan.robot.timing.TimedTrajectory`, or None for an idle robot (drawn
+        Its :class:`~weldplan.robot.program.TimedTrajectory`, or None for an idle robot (drawn
         at ``rest``).
     tool
         :class:`~weldplan.tool.model.Tool` (mesh in its TCP frame, mm), or None.
@@ -142,7 +142,7 @@ def station_robots(station_plan: Any) -> list[StationRobot]:
 
 def _idle_robot(name: str, spec: Any) -> StationRobot:
     from weldplan.robot import load_robot
-    from weldplan.robot.reach import base_pose
+    from weldplan.robot.placement.reach import base_pose
     from weldplan.station.mount import mount_tool
 
     robot = load_robot(spec.urdf, spec.opw, base=base_pose(*spec.base))

@@ -6,7 +6,7 @@ free pose; the page's weld slider (:class:`~weldplan.viz.overlay.WeldSlider`, re
 instead of being covered by a copy at every weld. ``tool_miss/<id>`` is a red halo about each
 weld without a free pose.
 With transitions (:attr:`weldplan.tool.section.ToolSection.transitions`,
-:mod:`weldplan.tool.transitions`): ``path/<k>`` the TCP path of transition ``k`` (free ones in
+:mod:`weldplan.tool.transitions.plan`): ``path/<k>`` the TCP path of transition ``k`` (free ones in
 :data:`TOOL_COLOR`, blocked ones in magenta), and the same ``gun`` animated along the whole path
 (:func:`animate_tool`: one keyframe per waypoint, so the viewer's linear position and slerped
 rotation between keyframes are the motion that was checked), loaded paused: the viewer's
@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from weldplan.tool.route_frames import route_poses
+from weldplan.tool.poses.route_frames import route_poses
 from weldplan.viz.overlay import WeldSlider
 from weldplan.weld.route import Route
 
@@ -94,7 +94,7 @@ def draw_tool(root: Any, route: Route, tool: Any, r_joint: float) -> WeldSlider 
     docstring).
 
     ``root`` is the meshcat node of the route (part frame, mm); ``r_joint`` the joint marker
-    radius (mm). Without weld poses (:func:`~weldplan.tool.route_frames.route_poses`) nothing
+    radius (mm). Without weld poses (:func:`~weldplan.tool.poses.route_poses`) nothing
     is drawn. Returns the weld slider over the welds with a pose (None without a ``tool`` mesh
     or without such a weld).
     """
@@ -137,7 +137,7 @@ def keyframe_times(positions: NDArray[np.float64], quaternions: NDArray[np.float
                    reach: float) -> NDArray[np.float64]:  # fmt: skip
     """``(m,)`` from 0 to 1: each waypoint's share of the path, by the motion bound of each
     motion (TCP distance + rotation angle x ``reach`` mm), so a turn on the spot takes time."""
-    from weldplan.tool.transit import path_rotation
+    from weldplan.tool.transitions.result import path_rotation
 
     step = np.linalg.norm(np.diff(positions, axis=0), axis=1)
     turn = np.array(
@@ -154,7 +154,7 @@ def animate_tool(anim: Any, root: Any, route: Route, tool: Any, seconds: float, 
     """
     import meshcat.geometry as g
 
-    from weldplan.tool.route_frames import route_tool_path
+    from weldplan.tool.poses.route_frames import route_tool_path
 
     path = route_tool_path(route)
     if path is None or not path.transitions:

@@ -55,7 +55,7 @@ class PairPlanning:
         ``subset[k]`` there.
     leg_cost
         ``(N, N)`` over the cell's joints: what the sequencer minimises instead of the legs'
-        lengths (``--cost time``: seconds, :func:`weldplan.robot.legtime.leg_times`). A leg
+        lengths (``--cost time``: seconds, :func:`weldplan.robot.route.leg_times`). A leg
         whose local path failed stays infinite; the lazy rounds still plan exactly the legs an
         order uses. ``self.C`` stays in mm (the route's length and its proved length bounds);
         the order's own cost over ``leg_cost`` and its proved bound are the caller's to state.

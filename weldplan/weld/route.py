@@ -194,12 +194,12 @@ class Route:
         mesh, scale or clearance. Empty in routes written before it existed.
     tool
         Empty for the point-tip route; with a tool (``weldplan plan --tool``): ``provenance``
-        (:func:`weldplan.tool.load.load_tool`: files, sha256, TCP, units) and ``poses``
-        (:meth:`weldplan.tool.result.WeldPoses.to_dict`: a pose or the closest miss per weld, in
+        (:func:`weldplan.tool.model.load_tool`: files, sha256, TCP, units) and ``poses``
+        (:meth:`weldplan.tool.poses.WeldPoses.to_dict`: a pose or the closest miss per weld, in
         route order), ``transitions`` and, with a robot, ``robot``: the route JSON's section as
         written. The stages above read it typed, never as a dict:
         :class:`weldplan.tool.section.ToolSection` (the tool stage's keys) and
-        :class:`weldplan.robot.toolroute.ToolRoute` (the whole section), each read once per
+        :class:`weldplan.robot.program.ToolRoute` (the whole section), each read once per
         route (:meth:`tool_view`). Written to the JSON only when not empty.
     """
 
@@ -242,7 +242,7 @@ class Route:
     def tool_view(self, read: Callable[[Route], _View]) -> _View:
         """``read(self)``, computed once per route: the typed view of the ``tool`` section that
         ``read`` builds (:meth:`weldplan.tool.section.ToolSection.of`,
-        :meth:`weldplan.robot.toolroute.ToolRoute.of`; the typed views live in the layers above
+        :meth:`weldplan.robot.program.ToolRoute.of`; the typed views live in the layers above
         this one, which cannot import them).
 
         Kept beside the route's fields as :func:`functools.cached_property` keeps its values

@@ -38,7 +38,7 @@ log = logging.getLogger(__name__)
 def elbow_phi(opw: Any) -> float:
     """rad: the joint value of axis 3 where A2, A3 and the wrist centre are in line: OPW
     ``theta3 = -atan2(a2, c3)`` turned into the robot's joint value ``sign3 * (theta3 +
-    offset3)`` (``opw``: :class:`~weldplan.robot.ik.OPWParams`)."""
+    offset3)`` (``opw``: :class:`~weldplan.robot.model.OPWParams`)."""
     return float(opw.signs[2] * (-np.arctan2(opw.a2, opw.c3) + opw.offsets[2]))
 
 
