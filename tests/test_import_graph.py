@@ -109,8 +109,8 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("multi", ("weldplan.multi",)),
     ("station", ("weldplan.station",)),
     ("study", ("weldplan.study",)),
-    # several robots: the study per robot, then the single-robot station pipeline per share
-    ("stations", ("weldplan.multi.station",)),
+    # several robots: their bases and the study per robot, then the single-robot pipeline per share
+    ("stations", ("weldplan.multi.station", "weldplan.multi.cell")),
     ("viz", ("weldplan.viz",)),
     # a plan's files: rendered by the exporters and the viewers
     ("outputs", ("weldplan.station.outputs",)),

@@ -163,6 +163,17 @@ def _robots(args: argparse.Namespace) -> list[Any]:
     return out
 
 
+def _placed(part: Any, spots: Any, pose: Any) -> tuple[Any, Any, str]:
+    """``(part, spots, frame)``: in the cell frame with a part pose (weldplan.cellframe), else
+    as given, in the part frame."""
+    if pose is None:
+        return part, spots, "part"
+    from weldplan.cellframe import place_part
+
+    part, spots, _ = place_part(part, spots, pose)
+    return part, spots, "cell"
+
+
 def run(args: argparse.Namespace) -> int:
     from weldplan.io.joints import read_joints
     from weldplan.io.mesh import load_part
@@ -181,12 +192,7 @@ def run(args: argparse.Namespace) -> int:
     spots = read_joints(args.spots, units=args.units)
     tools, robots = _tools(args), _robots(args)
     part = load_part(args.mesh, units=args.units, scale=args.scale, length=args.length)
-    frame = "part"
-    if pose is not None:  # the study in the cell frame (weldplan.cellframe)
-        from weldplan.cellframe import place_part
-
-        part, spots, _ = place_part(part, spots, pose)
-        frame = "cell"
+    part, spots, frame = _placed(part, spots, pose)
     from weldplan.study.stacks import flange_stacks
 
     study = check_spots(

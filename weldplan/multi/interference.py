@@ -55,7 +55,8 @@ from numpy.typing import NDArray
 
 from weldplan.errors import ConfigError
 from weldplan.geometry.spherecover import sphere_cover
-from weldplan.robot.collision.checker import SPHERE_CELL_MM, Body
+from weldplan.robot.collision.bodies import Body
+from weldplan.robot.collision.checker import SPHERE_CELL_MM
 from weldplan.robot.collision.motionbound import sphere_rates
 from weldplan.robot.collision.nearpart import fcl_tf
 

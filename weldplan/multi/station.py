@@ -19,7 +19,7 @@
    the welds file restricted to its share (written in the file's own units and frame beside
    nothing: a temporary folder, removed after).
 
-5. robot-robot interference (issue 30, item 4): the pairs of motions of two robots whose swept
+6. robot-robot interference (issue 30, item 4): the pairs of motions of two robots whose swept
    robots come closer than the station's ``clearance``
    (:func:`weldplan.multi.interference.find_interference`), the interlocks that order each such
    pair under any timing (:func:`weldplan.multi.zones.resolve_zones`), each robot's program

@@ -15,11 +15,11 @@ from weldplan.lazy import lazy_exports
 _EXPORTS = {
     "AllowedCollisions": "world",
     "AlongMotion": "nearpart",
-    "Body": "checker",
+    "Body": "bodies",
     "Carry": "motionbound",
     "FLOOR": "world",
     "FloorBox": "world",
-    "Hit": "checker",
+    "Hit": "bodies",
     "MIN_GAP_MM": "checker",
     "PROBE_AFTER": "motionbound",
     "PartCrops": "nearpart",

@@ -49,8 +49,6 @@ from __future__ import annotations
 
 import copy
 import logging
-import weakref
-from dataclasses import dataclass, field
 
 import fcl
 import numpy as np
@@ -61,6 +59,7 @@ from weldplan.geometry.checker import advance
 from weldplan.geometry.distbound import DistanceBound
 from weldplan.geometry.spherecover import sphere_cover
 from weldplan.geometry.world import CollisionWorld, WorldBody
+from weldplan.robot.collision.bodies import Body, Hit, of_part
 from weldplan.robot.collision.motionbound import (
     PROBE_AFTER,
     Carry,
@@ -91,80 +90,6 @@ MAX_ADVANCE_STEPS = 400
 #: the car body, 2.6 ms to a crop); for a link (at most 1000) FCL on the whole part took 0.6 ms a
 #: distance, less than a crop costs to build
 CROP_MIN_TRIANGLES = 2000
-
-
-@dataclass(frozen=True, eq=False)
-class Body:
-    """A rigid body of the robot: mesh in the frame of link ``frame`` (0 = base), its sphere
-    cover and its FCL object."""
-
-    name: str
-    frame: int
-    vertices: NDArray[np.float64]
-    faces: NDArray[np.int64]
-    centres: NDArray[np.float64]
-    radii: NDArray[np.float64]
-    group: NDArray[np.int64]
-    centre: NDArray[np.float64]
-    radius: float
-    parts: dict[tuple[int, ...], fcl.CollisionObject] = field(default_factory=dict, repr=False)
-    groups: list[tuple[NDArray, ...]] = field(default_factory=list, repr=False)
-
-    @property
-    def obj(self) -> fcl.CollisionObject:
-        """The FCL object of the whole body (built once)."""
-        if () not in self.parts:
-            self.parts[()] = fcl.CollisionObject(bvh(self.vertices, self.faces), fcl.Transform())
-        return self.parts[()]
-
-    def union(self, spheres: NDArray[np.int64]) -> fcl.CollisionObject:
-        """An FCL object of the triangles in ``spheres`` (cached per set of spheres)."""
-        key = tuple(int(x) for x in np.sort(spheres))
-        if key not in self.parts:
-            f = self.faces[np.isin(self.group, key)]
-            used, inv = np.unique(f, return_inverse=True)
-            sub = bvh(self.vertices[used], inv.reshape(-1, 3))
-            self.parts[key] = fcl.CollisionObject(sub, fcl.Transform())
-        return self.parts[key]
-
-
-@dataclass(frozen=True)
-class Hit:
-    """Where a motion was found blocked.
-
-    Attributes
-    ----------
-    segment
-        The motion's index (rows ``segment -> segment + 1``).
-    t
-        Fraction of the motion (0..1) where the body came within :data:`MIN_GAP_MM`.
-    body
-        The body's name (a link name or ``tool``), or the pair that met (``"tool/link_3"``,
-        ``"link_2/floor"``: :mod:`weldplan.robot.collision.selfcollision`).
-    distance
-        mm: FCL distance there (0 when the meshes intersect).
-    """
-
-    segment: int
-    t: float
-    body: str
-    distance: float
-
-
-#: structures that depend on a part alone (its exact distance, its distance table), shared by
-#: every checker of it: by the part object's id and content hash (trimesh's, changed by any
-#: edit of the mesh), an entry dropped when its part is collected
-_BY_PART: dict[tuple[int, int], dict[str, object]] = {}
-
-
-def _of_part(part: trimesh.Trimesh) -> dict[str, object]:
-    """The shared structures of ``part`` (see :data:`_BY_PART`), an empty dict at first."""
-    key = (id(part), hash(part))
-    got = _BY_PART.get(key)
-    if got is None:
-        got = _BY_PART[key] = {}
-        weakref.finalize(part, _BY_PART.pop, key, None)
-    return got
 
 
 class RobotCollision:
@@ -202,7 +127,7 @@ class RobotCollision:
         self.part = part
         self.floor_z = None if floor_z is None else float(floor_z)
         self.contact_radius = float(contact_radius)
-        by_part = _of_part(part)
+        by_part = of_part(part)
         if "distance" not in by_part:
             by_part["distance"] = SurfaceDistance(part)
         self.distance = by_part["distance"]
@@ -237,10 +162,11 @@ class RobotCollision:
     def bound(self) -> DistanceBound:
         """The part's distance table (:class:`~weldplan.geometry.distbound.DistanceBound`, built on
         first use and shared by all :meth:`with_robot` copies and every other checker of the same
-        part (:func:`_of_part`): it depends on the part alone, and a station's reach test, joint
-        route and program each filled the same blocks of their own)."""
+        part (:func:`~weldplan.robot.collision.bodies.of_part`): it depends on the part alone,
+        and a station's reach test, joint route and program each filled the same blocks of their
+        own)."""
         if "bound" not in self._shared:
-            by_part = _of_part(self.part)
+            by_part = of_part(self.part)
             if "bound" not in by_part:
                 lo, hi = np.asarray(self.part.bounds, dtype=np.float64)
                 by_part["bound"] = DistanceBound(self.distance, lo, hi)

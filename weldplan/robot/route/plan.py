@@ -35,7 +35,8 @@ from scipy.spatial.transform import Rotation
 
 from weldplan.errors import ConfigError, InputError, PlanningError
 from weldplan.motion.roadmap import RoadmapSettings
-from weldplan.robot.collision.checker import Hit, RobotCollision
+from weldplan.robot.collision.bodies import Hit
+from weldplan.robot.collision.checker import RobotCollision
 from weldplan.robot.collision.selfcollision import cell_floor, hit_words
 from weldplan.robot.model.arm import Robot
 from weldplan.robot.model.urdf import chain_transform
