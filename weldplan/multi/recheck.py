@@ -37,6 +37,7 @@ out, or robots too close as recorded: the pair is then in :attr:`Verdict.left_ou
 from __future__ import annotations
 
 import csv
+import dataclasses
 from collections import Counter
 from dataclasses import dataclass
 from typing import Any
@@ -317,6 +318,8 @@ def _replay_robot(saved: Any, station: Any, k: int) -> Any:
     from weldplan.station.mount import mount_tool
 
     spec, robot = station.robots[k], saved.robots[k]
+    if spec.base is None and robot.base is not None:  # a searched base: the plan records it
+        spec = dataclasses.replace(spec, base=robot.base)
     if robot.trajectory is None or not saved.schedule.of(k):
         return replay_robot(robot.name, spec, None, None)
     timing = file_timing(saved.schedule, k, robot.trajectory)

@@ -239,6 +239,9 @@ def plan_station(
     seconds["cell"] = time.perf_counter() - t
     layout = place_robots(cell, station, robots, seconds)
     robots = list(layout.robots)
+    # from here on the station holds every robot at its base, the searched ones included: the
+    # interference stage, the replay and the saved station read it
+    station = dataclasses.replace(station, robots=tuple(spec for spec, _, _ in robots))
     studies, inputs = [], []
     for k, (spec, mounted, robot) in enumerate(robots):
         say("study", k, len(robots))
