@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.conftest import require_shared
 from weldplan.bench import station as bs
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -119,6 +120,7 @@ file = "{data}/tools/spot_welding_gun/spot_welding_gun.urdf"
 def test_the_bench_stations_read_as_two_robots_at_given_bases():
     import weldplan
 
+    require_shared("robots")  # the stations name the shared KR 150 and gun
     demo = bs.demo_two_robots()
     assert [r.base for r in demo.robots] == list(bs.DEMO_BASES)
     assert demo.part.welds.name == "joints.csv"
