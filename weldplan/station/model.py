@@ -165,7 +165,8 @@ class RobotSpec:
         The arm's URDF (6 revolute joints with limits) and OPW parameters (default
         ``opw_parameters.yaml`` beside it); ``urdf`` None: no arm, the tool stage only.
     base
-        ``(x, y, z, yaw)`` mm and degrees about +z, in the part frame; None: searched.
+        ``(x, y, z, yaw)`` mm and degrees about +z, in the planning frame (the cell frame when
+        the station has a ``part_pose``, else the part frame); None: searched.
     search
         Where the base is searched (:class:`weldplan.robot.placement.BaseSearch` keywords but the
         floor, which is the station's): ``step``, ``half_width``, ``heights``, ``extra_yaws``,
@@ -257,8 +258,8 @@ class Station:
     part_pose
         The part's pose in the cell; None is the identity (module docstring).
     floor_z
-        mm: the floor's height in the part frame (None: not known, not checked; the base search
-        then stands the robot at the part's lowest point).
+        mm: the floor's height in the planning frame (None: not known, not checked; the base
+        search then stands the robot at the part's lowest point).
     cell, route, tool
         The settings of the cell, the point-tip route and the tool stage.
     jobs
@@ -308,11 +309,12 @@ class Station:
 
     @property
     def robot(self) -> RobotSpec | None:
-        """The one robot (None without any); several: a ConfigError until issue 30 lands."""
+        """The one robot (None without any); several: a ConfigError (a station of several
+        robots is planned robot by robot: :attr:`robots`, :mod:`weldplan.multi.station`)."""
         if len(self.robots) > 1:
             raise ConfigError(
-                f"{len(self.robots)} robots: planning several robots in one station is not "
-                "implemented yet (issue 30); give one",
+                f"{len(self.robots)} robots: this step plans one robot; a station of several "
+                "is planned by weldplan.plan (weldplan plan STATION.toml)",
                 field="robot",
             )
         return self.robots[0] if self.robots else None
