@@ -288,3 +288,31 @@ def test_bad_settings_name_the_field():
     with pytest.raises(ConfigError) as e:
         ReachMap.of(np.ones((2, 3), dtype=bool), robots=("a", "a"))
     assert e.value.field == "robots"
+
+
+def test_a_milp_stopped_by_its_clock_is_named_and_nothing_else():
+    """The allocation's HiGHS calls are budgeted by nodes; their wall-clock safety net, when it
+    fires, makes the report say so (the station summary's ``reproducible`` row reads it)."""
+    import dataclasses
+
+    from weldplan.multi import allocation_report
+
+    rng = np.random.default_rng(0)
+    reach = np.ones((2, 6), bool)
+    travel = rng.uniform(0.5, 2.0, (2, 6, 6))
+    travel = (travel + travel.transpose(0, 2, 1)) / 2
+    rep = allocation_report(reach, np.full((2, 6), 0.5), travel, rng=0)
+    assert rep.clock_caps() == []
+    ours = dataclasses.replace(
+        rep.ours,
+        stats={
+            **rep.ours.stats,
+            "milp_status": "Time limit reached. (HiGHS Status 13: Time limit reached)",
+        },
+    )
+    bound = dataclasses.replace(rep.bound, status="Time limit reached")
+    late = dataclasses.replace(rep, ours=ours, bound=bound)
+    assert late.clock_caps() == [
+        "the allocation's assignment MILP stopped by its clock",
+        "the lower bound's MILP stopped by its clock",
+    ]

@@ -251,6 +251,16 @@ class AllocationReport:
         b = self.bound.value
         return self.ours.cycle_time / b - 1.0 if b > 0 else float("nan")
 
+    def clock_caps(self) -> list[str]:
+        """Which HiGHS call its wall-clock safety net stopped (empty: every MILP ended on its
+        node budget or optimal, so the same inputs and seed give the same report anywhere)."""
+        runs = [(a.stats.get("milp_status", ""), f"the {what} assignment MILP")
+                for what, a in (("allocation's", self.ours), ("nearest robot's", self.nearest))
+                if a is not None]  # fmt: skip
+        runs.append((self.bound.status, "the lower bound's MILP"))
+        return [f"{what} stopped by its clock" for status, what in runs
+                if "time limit" in str(status).lower()]  # fmt: skip
+
     def rows(self) -> list[tuple[str, float | None, float | None]]:
         """``(what, cycle s or None, over the bound or None)`` for the table a run prints:
         one robot, nearest robot, ours, the bound (:attr:`LowerBound.name` says which)."""

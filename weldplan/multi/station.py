@@ -131,7 +131,7 @@ class StationPlan:
     def summary_rows(self) -> list[tuple[str, str]]:
         """``(label, text)`` rows: per robot its welds, allocated and timed cycle, its waits at
         the interlocks, utilisation; the station's cycle beside the bound and the baselines; the
-        interference note."""
+        interference note; whether a clock stopped a MILP (:meth:`AllocationReport.clock_caps`)."""
         a, top = self.allocation, self.cycle_time
         waits = self.schedule.waiting if self.schedule is not None else (0.0,) * len(a.robots)
         rows = []
@@ -153,6 +153,8 @@ class StationPlan:
         rows.append(("station cycle", f"{top:.2f} s timed (the last robot, waits included)"))
         rows += [("allocation", line) for line in self.report.lines()]
         rows.append(("interference", self.interference))
+        caps = self.report.clock_caps()
+        rows.append(("reproducible", "NOT reproducible: " + "; ".join(caps) if caps else "yes"))
         return rows
 
 
