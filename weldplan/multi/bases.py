@@ -22,12 +22,9 @@ def check_bases(station: Any) -> None:
     inside the part (module docstring). Robots without a given base or URDF are skipped, and so
     is a station with a part pose (checked in the cell frame by
     :func:`weldplan.multi.cell.place_robots`, after the cell stage)."""
-    import fcl
-
     from weldplan.io.mesh import load_part
     from weldplan.robot import load_robot
     from weldplan.robot.placement.reach import base_pose
-    from weldplan.tool.model.tool import bvh
 
     given = [(k, s) for k, s in enumerate(station.robots) if s.base is not None and s.urdf]
     if not given or station.part_pose is not None:
@@ -35,15 +32,10 @@ def check_bases(station: Any) -> None:
         # cell stage has placed it: weldplan.multi.cell.place_robots checks them there
         return
     part = _part(station, load_part)
-    part_obj = fcl.CollisionObject(bvh(part.vertices, part.faces), fcl.Transform())
     for k, spec in given:
         robot = load_robot(spec.urdf, spec.opw, base=base_pose(*spec.base))
         link = robot.links[0]
-        F = robot.link_frames(np.zeros((1, 6)))[0, link.index]
-        obj = fcl.CollisionObject(
-            bvh(link.vertices, link.faces), fcl.Transform(F[:3, :3], F[:3, 3])
-        )
-        touch = fcl.collide(obj, part_obj, fcl.CollisionRequest(), fcl.CollisionResult())
+        touch = base_link_hits(part, robot)
         inside = part.is_watertight and bool(part.contains(np.asarray([spec.base[:3]]))[0])
         if touch or inside:
             what = "touches the part" if touch else "is inside the part"
@@ -61,3 +53,16 @@ def _part(station: Any, load_part: Any) -> Any:
 
         return load_part(demo_part.DEMO_PART)
     return load_part(p.mesh, units=p.units, scale=p.scale, length=p.length)
+
+
+def base_link_hits(part: Any, robot: Any) -> bool:
+    """Whether the robot's root link at its base touches the part (FCL on both meshes)."""
+    import fcl
+
+    from weldplan.tool.model.tool import bvh
+
+    link = robot.links[0]
+    F = robot.link_frames(np.zeros((1, 6)))[0, link.index]
+    a = fcl.CollisionObject(bvh(link.vertices, link.faces), fcl.Transform(F[:3, :3], F[:3, 3]))
+    b = fcl.CollisionObject(bvh(part.vertices, part.faces), fcl.Transform())
+    return bool(fcl.collide(a, b, fcl.CollisionRequest(), fcl.CollisionResult()))

@@ -43,6 +43,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from weldplan.errors import ConfigError, PlanningError
+from weldplan.multi.bases import base_link_hits
 
 log = logging.getLogger(__name__)
 
@@ -140,7 +141,7 @@ def check_in_part(part: Any, k: int, spec: Any, robot: Any) -> None:
     footprint on the floor (module docstring; ConfigError ``base``)."""
     p = np.asarray([spec.base[:3]], dtype=np.float64)
     where = ", ".join(f"{v:.0f}" for v in spec.base[:3])
-    hit = _base_link_hits(part, robot)
+    hit = base_link_hits(part, robot)
     if hit or (part.is_watertight and bool(part.contains(p)[0])):
         what = f"its base link {robot.links[0].name!r} meets the part" if hit else "inside it"
         raise ConfigError(
@@ -154,19 +155,6 @@ def check_in_part(part: Any, k: int, spec: Any, robot: Any) -> None:
             "robot cannot stand under the part",
             field="base",
         )
-
-
-def _base_link_hits(part: Any, robot: Any) -> bool:
-    """Whether the robot's root link at its base touches the part (FCL on both meshes)."""
-    import fcl
-
-    from weldplan.tool.model.tool import bvh
-
-    link = robot.links[0]
-    F = robot.link_frames(np.zeros((1, 6)))[0, link.index]
-    a = fcl.CollisionObject(bvh(link.vertices, link.faces), fcl.Transform(F[:3, :3], F[:3, 3]))
-    b = fcl.CollisionObject(bvh(part.vertices, part.faces), fcl.Transform())
-    return bool(fcl.collide(a, b, fcl.CollisionRequest(), fcl.CollisionResult()))
 
 
 def xyz_yaw(B: NDArray[np.float64]) -> tuple[float, float, float, float]:
