@@ -39,7 +39,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from weldplan.errors import ConfigError, PlanningError
-from weldplan.motion.sampling import (
+from weldplan.motion.ompl_base import (
     MotionCheck,
     SamplingArgumentError,
     StateCheck,

@@ -32,7 +32,6 @@ Conventions
 
 from __future__ import annotations
 
-import functools
 import logging
 import time
 from collections.abc import Callable
@@ -42,9 +41,23 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from weldplan.errors import ConfigError, PlanningError
 from weldplan.geometry.pathcore import polyline_length
 from weldplan.motion.budget import Checks
+
+# the OMPL plumbing shared with roadmap.py; its public names are re-exported from here
+from weldplan.motion.ompl_base import (
+    QUAT_NORM_TOL,  # noqa: F401 - re-exported
+    MotionCheck,
+    SamplingArgumentError,
+    StateCheck,
+    _check_box,
+    _import_ompl,
+    _motion_validator,
+    _ompl_seed,
+    _unit_quat,
+    _vector,
+    ompl_available,  # noqa: F401 - re-exported
+)
 
 log = logging.getLogger(__name__)
 
@@ -60,26 +73,10 @@ PLANNERS: dict[str, str] = {
 
 #: OMPL's default state-validity checking resolution (fraction of the space's maximum extent)
 DEFAULT_RESOLUTION = 0.01
-#: largest deviation of a quaternion's norm from 1 that is accepted (and then normalised away)
-QUAT_NORM_TOL = 1e-6
-#: OMPL seeds must be positive 32-bit integers (0 is ignored by OMPL)
-_SEED_MOD = 2**32 - 1
-
 #: OMPL's own wall-clock limit where a caller budgets work (``max_checks`` or its own ``stop``),
 #: in seconds per second of the run's expected time: a safety net only (the gun's SE(3)
 #: re-plan, the robot's joint-space transfers)
 WALL_FACTOR = 10.0
-
-StateCheck = Callable[[NDArray[np.float64]], bool]
-MotionCheck = Callable[[NDArray[np.float64], NDArray[np.float64]], bool]
-
-
-class SamplingArgumentError(PlanningError, ValueError):
-    """A bad argument to :func:`plan_rn` / :func:`plan_se3` (shapes, bounds, planner name, time).
-
-    A :class:`~weldplan.errors.PlanningError` (the agreed interface of this module) and a
-    ``ValueError`` (the project's rule for input errors of the public API).
-    """
 
 
 @dataclass(frozen=True)
@@ -158,61 +155,7 @@ class SampledPath:
         )
 
 
-def ompl_available() -> bool:
-    """True when OMPL's Python bindings can be imported."""
-    try:
-        _import_ompl()
-    except ConfigError:
-        return False
-    return True
-
-
-def _import_ompl() -> tuple[Any, Any, Any]:
-    try:
-        from ompl import base as ob
-        from ompl import geometric as og
-        from ompl import util as ou
-    except ImportError as exc:  # pragma: no cover - exercised only without the extra
-        raise ConfigError(
-            f"OMPL is not installed ({exc}); install the extra: pip install 'weldplan[ompl]'",
-            field="planner",
-        ) from exc
-    return ob, og, ou
-
-
 # --------------------------------------------------------------------------- argument checks
-
-
-def _vector(name: str, value: ArrayLike, d: int | None = None) -> NDArray[np.float64]:
-    arr = np.asarray(value, dtype=np.float64)
-    if arr.ndim != 1 or (d is not None and arr.shape[0] != d) or arr.shape[0] == 0:
-        want = f"({d},)" if d is not None else "(d,) with d >= 1"
-        raise SamplingArgumentError(f"{name} must have shape {want}, got {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        raise SamplingArgumentError(f"{name} must be finite, got {arr.tolist()}")
-    return arr
-
-
-def _check_box(lower: NDArray, upper: NDArray, points: dict[str, NDArray]) -> None:
-    if np.any(upper <= lower):
-        raise SamplingArgumentError(
-            f"upper must exceed lower on every axis: lower {lower.tolist()}, upper {upper.tolist()}"
-        )
-    for name, p in points.items():
-        if np.any(p < lower) or np.any(p > upper):
-            raise SamplingArgumentError(
-                f"{name} {p.tolist()} lies outside the bounds [{lower.tolist()}, {upper.tolist()}]"
-            )
-
-
-def _unit_quat(name: str, value: ArrayLike) -> NDArray[np.float64]:
-    q = _vector(name, value, 4)
-    norm = float(np.linalg.norm(q))
-    if abs(norm - 1.0) > QUAT_NORM_TOL:
-        raise SamplingArgumentError(
-            f"{name} must be a unit quaternion (w, x, y, z), got norm {norm:.9g}"
-        )
-    return q / norm
 
 
 def _check_common(
@@ -230,17 +173,6 @@ def _check_common(
         )
     if max_checks is not None and (isinstance(max_checks, bool) or int(max_checks) < 1):
         raise SamplingArgumentError(f"max_checks must be a positive count, got {max_checks!r}")
-
-
-def _ompl_seed(seed: int | np.random.Generator | None) -> int | None:
-    """OMPL seed (positive 32-bit) for ``seed``; a Generator contributes one draw."""
-    if seed is None:
-        return None
-    if isinstance(seed, np.random.Generator):
-        seed = int(seed.integers(0, _SEED_MOD))
-    if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool):
-        raise SamplingArgumentError(f"seed must be an int, a numpy Generator or None, got {seed!r}")
-    return int(seed) % _SEED_MOD + 1
 
 
 # --------------------------------------------------------------------------- the shared solve
@@ -312,29 +244,6 @@ def _solve(
     )
     log.debug("%s, %.3g s", line, wall)
     return SampledPath(pts, length, solved, planner, wall, line, checks.n, ended)
-
-
-@functools.cache
-def _validator_class() -> type:
-    """An OMPL ``MotionValidator`` subclass calling a Python ``check(a, b)`` on numpy states
-    (built once: OMPL is imported lazily)."""
-    ob = _import_ompl()[0]
-
-    class _Validator(ob.MotionValidator):  # type: ignore[misc, name-defined]
-        def __init__(self, si: Any, read: Callable, check: MotionCheck) -> None:
-            super().__init__(si)
-            self._read = read
-            self._check = check
-
-        def checkMotion(self, s1: Any, s2: Any) -> bool:  # OMPL's virtual method
-            return bool(self._check(self._read(s1), self._read(s2)))
-
-    return _Validator
-
-
-def _motion_validator(si: Any, read: Callable, check: MotionCheck) -> Any:
-    """An OMPL MotionValidator for ``si`` that calls the Python ``check(a, b)``."""
-    return _validator_class()(si, read, check)
 
 
 # --------------------------------------------------------------------------- R^n
