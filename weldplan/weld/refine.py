@@ -16,8 +16,7 @@ against any :class:`~weldplan.geometry.pathcore.PathObstacle` (the 3D FCL body, 
    program a round, trust region, every round judged by the check), with ``taut=False`` one
    vertex at a time (:func:`tighten_path`, below). The joint program is what reaches the
    optimum on curved surfaces, where a vertex held on both of its segments must slide along the
-   surface: on the 32 blocked pairs of ``weldplan bench local --peers`` it took the mean length
-   from 1.006 to under 1.0 x OMPL BIT* 10 s (docs/bench-local-peers.md).
+   surface (its lengths against OMPL BIT* 10 s: docs/bench-local-peers.md).
 
    :func:`tighten_path`: the shortest path subject to "every segment is
    free at the clearance" is a taut string. Each interior vertex ``v`` between its neighbours

@@ -5,8 +5,8 @@ vertices toward the clearance surface").
 The vertex sweeps of :func:`weldplan.weld.refine.tighten_path` move one vertex at a time toward
 its chord; on a rounded or curved surface a vertex held by the clearance on both of its segments
 cannot move in any of those directions although the path is not taut (it should slide *along*
-the surface). Measured on car2 (docs/bench-local-peers.md), that jam left paths 1-4 % longer than
-OMPL BIT* 10 s in the same homotopy class. :func:`tauten_path` moves every vertex together, by
+the surface), so such paths stay longer than OMPL BIT* 10 s finds in the same homotopy class
+(docs/bench-local-peers.md). :func:`tauten_path` moves every vertex together, by
 sequential linearised programs (the trust-region scheme of sequential convex planners such as
 TrajOpt, Schulman et al., IJRR 2014, section IV; here with exact separating planes instead of
 signed-distance gradients):
