@@ -14,6 +14,7 @@ from weldplan.motion import (  # noqa: E402
     PLANNERS,
     SampledPath,
     SamplingArgumentError,
+    SamplingSettings,
     plan_rn,
     plan_se3,
 )
@@ -340,3 +341,47 @@ def test_se3_on_a_work_budget_is_reproducible():
     a, b = run(3), run(3)
     assert a.solved and a.checks == b.checks
     np.testing.assert_array_equal(a.points, b.points)
+
+
+# --------------------------------------------------------------------------- settings
+
+
+def test_a_settings_object_and_its_keyword_conveniences_are_one_call():
+    # rrtconnect on a work budget: the same seed gives the same path, whichever way it is asked
+    settings = SamplingSettings(planner="rrtconnect", time_s=60.0, max_checks=5000)
+    a = plan_rn(START, GOAL, LO, HI, lambda x: not in_wall(x), settings=settings, seed=4)
+    b = plan_rn(
+        START, GOAL, LO, HI, lambda x: not in_wall(x),
+        planner="rrtconnect", time_s=60.0, max_checks=5000, seed=4,
+    )  # fmt: skip
+    # a keyword overrides its field of the settings given
+    c = plan_rn(
+        START, GOAL, LO, HI, lambda x: not in_wall(x),
+        settings=SamplingSettings(planner="bitstar"), planner="rrtconnect", time_s=60.0,
+        max_checks=5000, seed=4,
+    )  # fmt: skip
+    assert a.solved and a.planner == b.planner == c.planner == "rrtconnect"
+    np.testing.assert_array_equal(a.points, b.points)
+    np.testing.assert_array_equal(a.points, c.points)
+    assert a.checks == b.checks == c.checks
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [
+        ("planner", "astar"),
+        ("time_s", float("nan")),
+        ("resolution", 1.5),
+        ("max_checks", 0),
+        ("reach", -1.0),
+        ("rot_weight", 0.0),
+    ],
+)
+def test_bad_settings_fail_once_when_made_naming_the_field(field, value):
+    with pytest.raises(SamplingArgumentError, match=field):
+        SamplingSettings(**{field: value})
+
+
+def test_an_unknown_keyword_is_a_type_error_naming_it():
+    with pytest.raises(TypeError, match="'planer'"):
+        plan_rn(START, GOAL, LO, HI, lambda x: True, planer="rrtconnect")

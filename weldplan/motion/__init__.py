@@ -12,11 +12,13 @@ from weldplan.motion.sampling import (
     plan_rn,
     plan_se3,
 )
+from weldplan.motion.settings import SamplingSettings
 
 __all__ = [
     "PLANNERS",
     "SampledPath",
     "SamplingArgumentError",
+    "SamplingSettings",
     "ompl_available",
     "plan_rn",
     "plan_se3",

@@ -36,7 +36,7 @@ import logging
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Unpack
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -48,7 +48,7 @@ from weldplan.motion.budget import Checks
 from weldplan.motion.ompl_base import (
     QUAT_NORM_TOL,  # noqa: F401 - re-exported
     MotionCheck,
-    SamplingArgumentError,
+    SamplingArgumentError,  # noqa: F401 - re-exported
     StateCheck,
     _check_box,
     _import_ompl,
@@ -58,21 +58,16 @@ from weldplan.motion.ompl_base import (
     _vector,
     ompl_available,  # noqa: F401 - re-exported
 )
+from weldplan.motion.settings import (
+    DEFAULT_RESOLUTION,  # noqa: F401 - re-exported
+    PLANNERS,
+    SamplingOptions,
+    SamplingSettings,
+    resolve_options,
+)
 
 log = logging.getLogger(__name__)
 
-#: weldplan's planner names -> OMPL ``ompl.geometric`` classes. Every planner here was checked to
-#: work with a Python motion validator (OMPL's two-state ``checkMotion``).
-PLANNERS: dict[str, str] = {
-    "bitstar": "BITstar",
-    "rrtstar": "RRTstar",
-    "informedrrtstar": "InformedRRTstar",
-    "rrtconnect": "RRTConnect",
-    "prmstar": "PRMstar",
-}
-
-#: OMPL's default state-validity checking resolution (fraction of the space's maximum extent)
-DEFAULT_RESOLUTION = 0.01
 #: OMPL's own wall-clock limit where a caller budgets work (``max_checks`` or its own ``stop``),
 #: in seconds per second of the run's expected time: a safety net only (the gun's SE(3)
 #: re-plan, the robot's joint-space transfers)
@@ -155,26 +150,6 @@ class SampledPath:
         )
 
 
-# --------------------------------------------------------------------------- argument checks
-
-
-def _check_common(
-    planner: str, time_s: float, resolution: float, max_checks: int | None = None
-) -> None:
-    if planner not in PLANNERS:
-        raise SamplingArgumentError(
-            f"unknown planner {planner!r}; choose one of {', '.join(PLANNERS)}"
-        )
-    if not (np.isfinite(time_s) and time_s > 0):
-        raise SamplingArgumentError(f"time_s must be a positive number of seconds, got {time_s}")
-    if not (0.0 < resolution <= 1.0):
-        raise SamplingArgumentError(
-            f"resolution is a fraction of the space's extent in (0, 1], got {resolution}"
-        )
-    if max_checks is not None and (isinstance(max_checks, bool) or int(max_checks) < 1):
-        raise SamplingArgumentError(f"max_checks must be a positive count, got {max_checks!r}")
-
-
 # --------------------------------------------------------------------------- the shared solve
 
 
@@ -183,25 +158,23 @@ def _solve(
     *,
     read: Callable[[Any], NDArray[np.float64]],
     motion_valid: MotionCheck | None,
-    resolution: float,
-    planner: str,
-    time_s: float,
+    settings: SamplingSettings,
     seed: int | np.random.Generator | None,
-    simplify: bool,
     measure: Callable[[NDArray[np.float64]], float],
     dim: int,
     checks: Checks,
-    reach: float | None = None,
 ) -> SampledPath:
-    """Run ``planner`` on the prepared SimpleSetup ``ss`` and read the path back; it stops at
-    ``time_s`` seconds or as soon as ``checks`` is spent or its caller's ``stop()`` is true
-    (OMPL asks in its own thread between its steps: :mod:`weldplan.motion.budget`).
-    ``reach``: the planner's ``range`` (the longest motion it adds in one step, in the space's
-    metric), where the planner has one; ``None``: OMPL's default."""
+    """Run ``settings.planner`` on the prepared SimpleSetup ``ss`` and read the path back; it
+    stops at ``settings.time_s`` seconds or as soon as ``checks`` is spent or its caller's
+    ``stop()`` is true (OMPL asks in its own thread between its steps:
+    :mod:`weldplan.motion.budget`). ``settings.reach``: the planner's ``range`` (the longest
+    motion it adds in one step, in the space's metric), where the planner has one; ``None``:
+    OMPL's default."""
+    planner, time_s, reach = settings.planner, settings.time_s, settings.reach
     ob, og, ou = _import_ompl()
     si = ss.getSpaceInformation()
     if motion_valid is None:
-        si.setStateValidityCheckingResolution(resolution)
+        si.setStateValidityCheckingResolution(settings.resolution)
     else:
         si.setMotionValidator(_motion_validator(si, read, motion_valid))
     ss.setOptimizationObjective(ob.PathLengthOptimizationObjective(si))
@@ -223,7 +196,7 @@ def _solve(
         used = checks.n
         solved = bool(ss.haveExactSolutionPath())
         simplified = False
-        if solved and simplify:
+        if solved and settings.simplify:
             ss.simplifySolution(0.0)  # 0: simplifyMax, deterministic and complete
             simplified = True
         if solved:
@@ -257,13 +230,8 @@ def plan_rn(
     is_valid: StateCheck,
     *,
     motion_valid: MotionCheck | None = None,
-    resolution: float = DEFAULT_RESOLUTION,
-    planner: str = "bitstar",
-    time_s: float = 1.0,
-    seed: int | np.random.Generator | None = None,
-    simplify: bool = True,
-    stop: Callable[[], bool] | None = None,
-    max_checks: int | None = None,
+    settings: SamplingSettings | None = None,
+    **options: Unpack[SamplingOptions],
 ) -> SampledPath:
     """Plan a path from ``start`` to ``goal`` in the box ``[lower, upper]`` of R^d with OMPL.
 
@@ -278,27 +246,17 @@ def plan_rn(
     motion_valid
         ``motion_valid(a (d,), b (d,)) -> bool``: whether the straight segment a -> b (ends
         included) is free, e.g. weldplan's FCL capsule check. ``None``: OMPL's discrete check of
-        ``is_valid`` every ``resolution`` x the box's diagonal.
-    resolution
-        Fraction of the box's diagonal between the states OMPL checks on a motion when
-        ``motion_valid`` is ``None`` (OMPL's default 0.01).
-    planner
-        A name in :data:`PLANNERS`; ``bitstar`` (Gammell et al., BIT*) by default.
-    time_s
-        Wall-clock limit, s: with ``max_checks`` a safety net (a run it ends is reported
-        ``ended="clock"``, not reproducible); without, anytime planners use all of it and
-        ``rrtconnect`` stops at its first solution.
-    seed
-        Seeds OMPL's process-wide RNG (see the module notes); ``None`` leaves it alone.
-    simplify
-        Run OMPL's path simplifier to convergence (``simplifyMax``: shortcutting, vertex
-        reduction, B-spline smoothing with validity checks) after planning.
-    stop
-        ``stop() -> bool``: planning also ends as soon as it is true (OMPL asks between its own
-        steps); ``time_s`` stays the wall-clock limit.
-    max_checks
-        Work budget: planning ends once ``is_valid`` and ``motion_valid`` together have been
-        called this often (module notes: the same count on any machine); ``None``: no budget.
+        ``is_valid`` every ``settings.resolution`` x the box's diagonal.
+    settings
+        How the run searches (:class:`~weldplan.motion.settings.SamplingSettings`: planner,
+        ``time_s``, resolution, simplification, ``max_checks`` work budget, reach); ``None``:
+        the defaults (BIT*, 1 s, no work budget).
+    **options
+        ``seed``: seeds OMPL's process-wide RNG (see the module notes); ``None`` (the default)
+        leaves it alone. ``stop``: ``stop() -> bool``, planning also ends as soon as it is true
+        (OMPL asks between its own steps); ``time_s`` stays the wall-clock limit. And any field
+        of :class:`~weldplan.motion.settings.SamplingSettings` by name (``planner="rrtconnect"``,
+        ``max_checks=400``...), laid over ``settings``.
 
     Returns
     -------
@@ -309,18 +267,20 @@ def plan_rn(
     ------
     SamplingArgumentError
         For bad shapes, bounds, planner names, times or seeds.
+    TypeError
+        For a keyword that is neither ``seed``, ``stop`` nor a settings field.
     weldplan.errors.ConfigError
         When OMPL is not installed.
     """
+    cfg, seed, stop = resolve_options("plan_rn", settings, dict(options))
     s = _vector("start", start)
     d = s.shape[0]
     g = _vector("goal", goal, d)
     lo = _vector("lower", lower, d)
     hi = _vector("upper", upper, d)
     _check_box(lo, hi, {"start": s, "goal": g})
-    _check_common(planner, time_s, resolution, max_checks)
     ob, og, _ = _import_ompl()
-    checks = Checks(max_checks, stop)
+    checks = Checks(cfg.max_checks, stop)
     is_valid = checks.state(is_valid)
 
     space = ob.RealVectorStateSpace(d)
@@ -346,11 +306,8 @@ def plan_rn(
         ss,
         read=read,
         motion_valid=checks.motion(motion_valid),
-        resolution=resolution,
-        planner=planner,
-        time_s=time_s,
+        settings=cfg,
         seed=seed,
-        simplify=simplify,
         measure=polyline_length,
         dim=d,
         checks=checks,
@@ -395,15 +352,8 @@ def plan_se3(
     is_valid: Callable[[NDArray[np.float64], NDArray[np.float64]], bool],
     *,
     motion_valid: MotionCheck | None = None,
-    rot_weight: float = 100.0,
-    resolution: float = DEFAULT_RESOLUTION,
-    planner: str = "bitstar",
-    time_s: float = 1.0,
-    seed: int | np.random.Generator | None = None,
-    simplify: bool = True,
-    stop: Callable[[], bool] | None = None,
-    reach: float | None = None,
-    max_checks: int | None = None,
+    settings: SamplingSettings | None = None,
+    **options: Unpack[SamplingOptions],
 ) -> SampledPath:
     """Plan a rigid-body path (a torch or a gun) between two poses with OMPL in SE(3).
 
@@ -420,20 +370,16 @@ def plan_se3(
     motion_valid
         ``motion_valid(a (7,), b (7,)) -> bool`` on rows ``x, y, z, qw, qx, qy, qz``: whether the
         motion a -> b (position linear, rotation slerp, ends included) is free, e.g. a swept FCL
-        check. ``None``: OMPL's discrete check of ``is_valid`` every ``resolution`` x the space's
-        maximum extent.
-    rot_weight
-        mm per rad: the metric is position distance + ``rot_weight`` x rotation angle. (OMPL's
-        SO(3) distance is half the rotation angle, so its subspace weight is ``2 rot_weight``.)
-    resolution, planner, time_s, seed, simplify, max_checks
-        As in :func:`plan_rn`.
-    stop
-        ``stop() -> bool``: the planner also stops as soon as this is true (a caller's own
-        budget, e.g. of collision samples), besides ``time_s``.
-    reach
-        The planner's ``range`` where it has one (the longest motion one step adds, in the
-        metric's mm): shorter motions are cheaper to check and pass more often near the part.
-        ``None``: OMPL's default (a fifth of the space's extent).
+        check. ``None``: OMPL's discrete check of ``is_valid`` every ``settings.resolution`` x
+        the space's maximum extent.
+    settings
+        As in :func:`plan_rn`; here ``rot_weight`` (mm per rad) makes the metric position
+        distance + ``rot_weight`` x rotation angle (OMPL's SO(3) distance is half the rotation
+        angle, so its subspace weight is ``2 rot_weight``), and ``reach`` is in the metric's mm:
+        shorter motions are cheaper to check and pass more often near the part.
+    **options
+        As in :func:`plan_rn`: ``seed``, ``stop`` (a caller's own budget, e.g. of collision
+        samples) and any settings field by name.
 
     Returns
     -------
@@ -445,7 +391,10 @@ def plan_se3(
     ------
     SamplingArgumentError
         For bad shapes, bounds, quaternions, weights, planner names, times or seeds.
+    TypeError
+        For a keyword that is neither ``seed``, ``stop`` nor a settings field.
     """
+    cfg, seed, stop = resolve_options("plan_se3", settings, dict(options))
     p0 = _vector("start_pos", start_pos, 3)
     p1 = _vector("goal_pos", goal_pos, 3)
     q0 = _unit_quat("start_quat_wxyz", start_quat_wxyz)
@@ -453,26 +402,19 @@ def plan_se3(
     lo = _vector("lower", lower, 3)
     hi = _vector("upper", upper, 3)
     _check_box(lo, hi, {"start_pos": p0, "goal_pos": p1})
-    _check_common(planner, time_s, resolution, max_checks)
-    if not (np.isfinite(rot_weight) and rot_weight > 0):
-        raise SamplingArgumentError(f"rot_weight must be a positive mm per rad, got {rot_weight}")
-    checks = Checks(max_checks, stop)
+    checks = Checks(cfg.max_checks, stop)
     ss, read = _se3_setup(
-        lo, hi, rot_weight, checks.state(is_valid), np.r_[p0, q0], np.r_[p1, q1]
+        lo, hi, cfg.rot_weight, checks.state(is_valid), np.r_[p0, q0], np.r_[p1, q1]
     )
     return _solve(
         ss,
         read=read,
         motion_valid=checks.motion(motion_valid),
-        resolution=resolution,
-        planner=planner,
-        time_s=time_s,
+        settings=cfg,
         seed=seed,
-        simplify=simplify,
-        measure=lambda pts: se3_length(pts, rot_weight),
+        measure=lambda pts: se3_length(pts, cfg.rot_weight),
         dim=7,
         checks=checks,
-        reach=reach,
     )
 
 

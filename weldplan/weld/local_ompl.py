@@ -33,6 +33,7 @@ from weldplan.geometry.collision import CollisionModel
 from weldplan.geometry.pathcore import polyline_length
 from weldplan.geometry.solids import ClosedSolids
 from weldplan.motion.sampling import plan_rn
+from weldplan.motion.settings import SamplingSettings
 from weldplan.random import RNGLike, seed_of
 
 log = logging.getLogger(__name__)
@@ -204,10 +205,8 @@ def plan_pair_ompl(
         hi,
         ch.state_free,
         motion_valid=ch.segment_free,
-        planner=planner,
-        time_s=time_s,
+        settings=SamplingSettings(planner=planner, time_s=time_s, simplify=simplify),
         seed=rng,
-        simplify=simplify,
     )
     if not sp.solved:
         return done(None, f"OMPL found no path: {sp.status}")
