@@ -8,7 +8,7 @@ import itertools
 import numpy as np
 import pytest
 
-from weldplan.errors import PlanningError
+from weldplan.errors import ConfigError, PlanningError
 from weldplan.optim.discrete.costs import cost_matrix, order_cost, reduce_to_tour
 from weldplan.optim.discrete.held_karp import held_karp_tour
 from weldplan.optim.discrete.local_search import (
@@ -18,7 +18,7 @@ from weldplan.optim.discrete.local_search import (
     polish,
     tour_cost,
 )
-from weldplan.optim.discrete.sequence import Sequence, solve_sequence
+from weldplan.optim.discrete.sequence import Sequence, SequenceSettings, solve_sequence
 from weldplan.optim.discrete.tsp_pso import (
     PSOParams,
     apply_velocity,
@@ -335,3 +335,25 @@ def test_warm_start_polishes_the_given_order():
     assert again.cost == pytest.approx(best.cost)
     with pytest.raises(ValueError, match="permutation"):
         solve_sequence(C, method="pso", initial=[0, 1, 2])
+
+
+def test_a_settings_object_and_its_keywords_give_the_same_order():
+    rng = np.random.default_rng(11)
+    C = cost_matrix(rng.uniform(0, 100, size=(25, 2)))
+    st = SequenceSettings(method="pso", closed=True, first=3)
+    a = solve_sequence(C, st, rng=5)
+    b = solve_sequence(C, method="pso", closed=True, first=3, rng=5)
+    c = solve_sequence(C, SequenceSettings(method="nn"), method="pso", closed=True, first=3, rng=5)
+    assert a.order == b.order == c.order and a.order[0] == 3
+    assert a.method == b.method == c.method == "pso+polish" and a.closed
+
+
+def test_bad_settings_name_the_field_and_unknown_keywords_are_type_errors():
+    with pytest.raises(ConfigError) as info:
+        SequenceSettings(method="ga")
+    assert info.value.field == "method"
+    with pytest.raises(ConfigError) as info:
+        SequenceSettings(time_budget="1 s")  # type: ignore[arg-type]
+    assert info.value.field == "time_budget"
+    with pytest.raises(TypeError, match="'clossed'"):
+        solve_sequence(np.zeros((3, 3)), clossed=True)

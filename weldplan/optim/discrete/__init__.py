@@ -7,13 +7,14 @@ Held-Karp, 2-opt/Or-opt polish).
 
 from weldplan.optim.discrete.costs import cost_matrix, euclidean
 from weldplan.optim.discrete.local_search import PolishParams
-from weldplan.optim.discrete.sequence import Sequence, solve_sequence
+from weldplan.optim.discrete.sequence import Sequence, SequenceSettings, solve_sequence
 from weldplan.optim.discrete.tsp_pso import PSOParams
 
 __all__ = [
     "PSOParams",
     "PolishParams",
     "Sequence",
+    "SequenceSettings",
     "cost_matrix",
     "euclidean",
     "solve_sequence",

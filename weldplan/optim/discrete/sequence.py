@@ -40,12 +40,12 @@ import logging
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field, replace
-from typing import Any
+from typing import Any, TypedDict, Unpack
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from weldplan.errors import PlanningError
+from weldplan.errors import ConfigError, PlanningError
 from weldplan.optim.discrete.costs import (
     Reduction,
     check_cost,
@@ -180,29 +180,13 @@ def _no_finite_order(red: Reduction, exact: bool) -> PlanningError:
     return PlanningError(msg + ("; " + "; ".join(detail) if detail else ""))
 
 
-def solve_sequence(
-    cost: ArrayLike,
-    *,
-    method: str = "auto",
-    closed: bool = False,
-    first: int | None = None,
-    last: int | None = None,
-    polish: bool = True,
-    rng: RNGLike = None,
-    pso: PSOParams | None = None,
-    polish_params: PolishParams | None = None,
-    callback: Callable[[int, float], bool | None] | None = None,
-    time_budget: float | None = None,
-    initial: ArrayLike | None = None,
-    avoid: ArrayLike | None = None,
-) -> Sequence:
-    """Order the nodes of ``cost`` to minimise the total cost.
+@dataclass(frozen=True)
+class SequenceSettings:
+    """What order :func:`solve_sequence` looks for and how it searches: one frozen object,
+    validated once (../shared/DESIGN.md: a stage takes its inputs and one settings object).
 
-    Parameters
+    Attributes
     ----------
-    cost
-        ``(n, n) float``: ``cost[i, j]`` of going from node ``i`` to node ``j`` (mm of path in the
-        weld pipeline). May be asymmetric; ``inf`` marks an unreachable pair; NaN is an error.
     method
         ``"auto"`` (exact up to :data:`EXACT_MAX_NODES` nodes, else ``"nn"``),
         ``"exact"``, ``"fast-tsp"``, ``"pso"`` or ``"nn"``; see the module docstring.
@@ -210,18 +194,15 @@ def solve_sequence(
         Return to the first node (a tour) instead of an open path (the default for welding).
     first, last
         Node indices fixed at the start and/or end of the order (``last`` of a closed tour is the
-        node visited before returning to ``first``).
+        node visited before returning to ``first``); checked against the matrix when solving
+        (a ``ValueError``).
     polish
         Run 2-opt + Or-opt iterated local search after ``"pso"`` / ``"nn"`` (ignored by
         ``"exact"``).
-    rng
-        Seed or Generator for the swarm and the kicks.
     pso
-        Swarm settings; :class:`PSOParams` defaults are Table 4 of Wang et al. (2017).
+        Swarm settings; ``None``: :class:`PSOParams`, Table 4 of Wang et al. (2017).
     polish_params
-        Polish settings (:class:`PolishParams`).
-    callback
-        ``callback(iteration, best_cost)`` from the swarm; return ``True`` to stop it early.
+        Polish settings; ``None``: :class:`PolishParams`.
     time_budget
         Seconds for the whole solve: the polish stops kicking when they are spent (and, unless
         ``polish_params.kicks`` is set, kicks until then). The swarm always runs its iterations.
@@ -230,6 +211,78 @@ def solve_sequence(
         for what the checks and the integer conversion leave of it (default
         :func:`~weldplan.optim.discrete.tsp_engine.default_seconds`: 1 ms a node), on every
         available core.
+    """
+
+    method: str = "auto"
+    closed: bool = False
+    first: int | None = None
+    last: int | None = None
+    polish: bool = True
+    pso: PSOParams | None = None
+    polish_params: PolishParams | None = None
+    time_budget: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.method not in METHODS:
+            raise ConfigError(
+                f"unknown method {self.method!r}; choose one of {METHODS}", field="method"
+            )
+        b = self.time_budget
+        if b is not None and not (isinstance(b, (int, float)) and not isinstance(b, bool)):
+            raise ConfigError(
+                f"time_budget must be None or seconds, got {b!r}", field="time_budget"
+            )
+
+    @property
+    def swarm(self) -> PSOParams:
+        """The swarm's settings (:attr:`pso` or the paper's defaults)."""
+        return PSOParams() if self.pso is None else self.pso
+
+    @property
+    def polishing(self) -> PolishParams:
+        """The polish's settings (:attr:`polish_params` or the defaults)."""
+        return PolishParams() if self.polish_params is None else self.polish_params
+
+
+class SequenceOptions(TypedDict, total=False):
+    """The keyword conveniences of :func:`solve_sequence`: any field of
+    :class:`SequenceSettings` by name, laid over the ``settings`` given."""
+
+    method: str
+    closed: bool
+    first: int | None
+    last: int | None
+    polish: bool
+    pso: PSOParams | None
+    polish_params: PolishParams | None
+    time_budget: float | None
+
+
+def solve_sequence(
+    cost: ArrayLike,
+    settings: SequenceSettings | None = None,
+    *,
+    rng: RNGLike = None,
+    callback: Callable[[int, float], bool | None] | None = None,
+    initial: ArrayLike | None = None,
+    avoid: ArrayLike | None = None,
+    **options: Unpack[SequenceOptions],
+) -> Sequence:
+    """Order the nodes of ``cost`` to minimise the total cost.
+
+    Parameters
+    ----------
+    cost
+        ``(n, n) float``: ``cost[i, j]`` of going from node ``i`` to node ``j`` (mm of path in the
+        weld pipeline). May be asymmetric; ``inf`` marks an unreachable pair; NaN is an error.
+    settings
+        The order wanted and the search (:class:`SequenceSettings`: method, open or closed,
+        fixed first / last node, polish, swarm and polish parameters, time budget); ``None``:
+        the defaults (an open path, ``"auto"``).
+    rng
+        Seed or Generator for the swarm and the kicks.
+    callback
+        ``callback(iteration, best_cost)`` from the swarm; return ``True`` to stop it early.
     initial
         ``(n,) int`` a visiting order to start from (a warm start, e.g. the previous order after
         a few costs changed): the swarm / nearest-neighbour construction is skipped and only the
@@ -242,6 +295,10 @@ def solve_sequence(
         ``"nn"`` add a penalty larger than any order over the other pairs. The returned ``cost``
         is over ``cost`` itself; ``params["avoided_edges"]`` counts those the order uses.
         Ignored by ``"exact"``.
+    **options
+        Any field of :class:`SequenceSettings` by name (``method="exact"``, ``closed=True``,
+        ``first=0``...), laid over ``settings``: ``solve_sequence(C, method="exact")`` is
+        ``solve_sequence(C, SequenceSettings(method="exact"))``.
 
     Returns
     -------
@@ -253,19 +310,22 @@ def solve_sequence(
         When no order of finite cost exists (or none was found by a heuristic on an instance too
         large to settle exactly).
     ValueError
-        For a malformed matrix, an unknown method or bad ``first`` / ``last``.
+        For a malformed matrix or bad ``first`` / ``last``; a
+        :class:`~weldplan.errors.ConfigError` (a ``ValueError``) naming the field for a bad
+        setting (an unknown method...).
+    TypeError
+        For a keyword that is not a settings field.
     """
     t0 = time.perf_counter()
-    if method not in METHODS:
-        raise ValueError(f"unknown method {method!r}; choose one of {METHODS}")
+    st = _settings(settings, dict(options))
     C = check_cost(cost)
     n = C.shape[0]
+    closed, first, last = st.closed, st.first, st.last
     red = reduce_to_tour(C, closed, first, last)
     gen = as_generator(rng)
     seed = seed_of(rng)
-    pso = PSOParams() if pso is None else pso
-    pp = PolishParams() if polish_params is None else polish_params
-    method = resolve_method(method, n)
+    pp = st.polishing
+    method = resolve_method(st.method, n)
     av = _reduced_avoid(avoid, n, red.m)
     if method == "exact" and red.m > MAX_NODES:
         raise ValueError(
@@ -283,24 +343,14 @@ def solve_sequence(
             raise _no_finite_order(red, exact=True)
         name = "exact"
     elif method == "fast-tsp":
-        left = None if time_budget is None else max(0.0, time_budget - (time.perf_counter() - t0))
+        budget = st.time_budget
+        left = None if budget is None else max(0.0, budget - (time.perf_counter() - t0))
         tour, params = _fast_tsp(red, left, av, pp, gen)
         name = "fast-tsp"
     else:
+        deadline = None if st.time_budget is None else t0 + st.time_budget
         tour, name, history, evaluations, start_cost = _heuristic(
-            C,
-            red,
-            method,
-            closed,
-            initial,
-            av,
-            polish,
-            pso,
-            pp,
-            gen,
-            callback,
-            params,
-            None if time_budget is None else t0 + time_budget,
+            C, red, st, method, initial, av, gen, callback, params, deadline
         )
     if name != "exact" and not np.isfinite(order_cost(red.A, tour, True)):
         tour, name = _exact_fallback(red)
@@ -326,16 +376,30 @@ def solve_sequence(
     )
 
 
-def _heuristic(
-    C, red, method, closed, initial, av, polish, pso, pp, gen, callback, params, deadline
-):
-    """The paper's swarm (or nearest neighbour, or a warm start), then the polish.
+_FIELDS = frozenset(SequenceOptions.__annotations__)
+
+
+def _settings(settings: SequenceSettings | None, options: dict[str, Any]) -> SequenceSettings:
+    """``options`` laid over ``settings`` (default :class:`SequenceSettings`), validated once;
+    an unknown keyword is a ``TypeError``, as Python's own."""
+    extra = set(options) - _FIELDS
+    if extra:
+        raise TypeError(f"solve_sequence() got an unexpected keyword argument {sorted(extra)[0]!r}")
+    base = SequenceSettings() if settings is None else settings
+    return replace(base, **options) if options else base
+
+
+def _heuristic(C, red, st, method, initial, av, gen, callback, params, deadline):
+    """The paper's swarm (or nearest neighbour, or a warm start), then the polish, as ``st``
+    (a :class:`SequenceSettings`) asks; ``method`` is ``st.method`` resolved (``"pso"`` or
+    ``"nn"``).
 
     Returns ``(tour, name, history, evaluations, start_cost)`` on the reduced matrix; fills
     ``params`` with the swarm's and the polish's settings. ``deadline``: the
     ``time.perf_counter()`` at which the whole solve's budget ends (None: no budget); the
     polish gets what the swarm leaves of it.
     """
+    pso, pp, closed = st.swarm, st.polishing, st.closed
     n = C.shape[0]
     history: tuple[float, ...] = ()
     evaluations = 0
@@ -356,7 +420,7 @@ def _heuristic(
     else:
         tour = nearest_neighbour_tour(Ap, red.start)
     name = method
-    if polish:
+    if st.polish:
         start_cost = order_cost(C, red.to_order(tour), closed)
         if deadline is not None:
             pp = replace(pp, time_budget=max(0.0, deadline - time.perf_counter()))
