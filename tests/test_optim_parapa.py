@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from weldplan.optim.algorithms.parapa import ParaPA, distance_cross
+from weldplan.errors import ConfigError
+from weldplan.optim.algorithms.parapa import ParaPA, ParaPASettings, distance_cross
 from weldplan.optim.core import Context, minimize
 from weldplan.optim.functions import get_function
 from weldplan.optim.operators import chaotic_population
@@ -127,3 +128,17 @@ def test_parapa_starved_budget_does_worse():
     full = [minimize(problem, ParaPA(pop_size=30), max_evals=30000, rng=s).f for s in range(3)]
     starved = [minimize(problem, ParaPA(pop_size=30), max_evals=900, rng=s).f for s in range(3)]
     assert min(starved) > 1e3 * max(full)
+
+
+def test_settings_object_and_keywords_are_one_optimiser_and_bad_fields_are_named():
+    a = ParaPA(60, ParaPASettings(n_swarms=2, w_max=1))
+    b = ParaPA(60, n_swarms=2, w_max=1)
+    assert a.params() == b.params() and a.n_swarms == 2 and a.w_max == 1.0
+    assert list(a.params())[:3] == ["pop_size", "n_swarms", "w_max"]
+    with pytest.raises(ConfigError) as info:
+        ParaPASettings(exchange_interval=0)
+    assert info.value.field == "exchange_interval"
+    with pytest.raises(ConfigError, match="pop_size >= n_swarms"):
+        ParaPA(2, n_swarms=3)
+    with pytest.raises(TypeError):
+        ParaPA(60, n_swarm=2)

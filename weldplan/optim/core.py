@@ -21,6 +21,7 @@ solution ever evaluated, so no optimiser has to. Schedules that depend on the it
 
 from __future__ import annotations
 
+import dataclasses
 import inspect
 import json
 import math
@@ -224,8 +225,10 @@ class Optimizer(ABC):
     def params(self) -> dict[str, Any]:
         """The settings of this optimiser, for reports and JSON.
 
-        The arguments of ``__init__`` stored under the same attribute name; run state kept in
-        attributes (``best_f``, counters) is not a setting and is left out.
+        The arguments of ``__init__`` stored under the same attribute name, a settings
+        dataclass (e.g. :class:`~weldplan.optim.algorithms.parapa.ParaPASettings`) by its
+        fields in order; run state kept in attributes (``best_f``, counters) is not a setting
+        and is left out.
         """
         names = [
             n
@@ -235,7 +238,11 @@ class Optimizer(ABC):
         out = {}
         for n in names:
             v = getattr(self, n, None)
-            if hasattr(self, n) and _is_param(v):
+            if dataclasses.is_dataclass(v) and not isinstance(v, type):
+                out.update(
+                    (f.name, x) for f in dataclasses.fields(v) if _is_param(x := getattr(v, f.name))
+                )
+            elif hasattr(self, n) and _is_param(v):
                 out[n] = v
         return out
 

@@ -59,10 +59,13 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
+from dataclasses import dataclass, fields, replace
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from weldplan.errors import ConfigError
 from weldplan.optim.algorithms._common import iteration_fraction
 from weldplan.optim.algorithms.bee import abc_fitness, roulette_rows
 from weldplan.optim.core import Context, Optimizer
@@ -81,13 +84,12 @@ def distance_cross(
     return -np.sqrt(np.einsum("mek,mek->me", d, d)).mean(axis=1)
 
 
-class ParaPA(Optimizer):
-    """Parasitism-relation PSO-ABC with multi-swarm elite exchange (003 section 3).
+@dataclass(frozen=True)
+class ParaPASettings:
+    """ParaPA's parameters (003 section 3 and the settings of section 5.2), validated once.
 
-    Parameters
+    Attributes
     ----------
-    pop_size
-        Particles over all swarms (003: NP = 50 per swarm; default 3 swarms, 150).
     n_swarms
         Number of swarms (not stated in 003; 3).
     w_max, w_min
@@ -112,43 +114,62 @@ class ParaPA(Optimizer):
         Logistic map parameter of the initialisation (eq. 4: mu = 4).
     """
 
+    n_swarms: int = 3
+    w_max: float = 0.9
+    w_min: float = 0.1
+    r_max: float = 2.0
+    onlooker_fraction: float = 0.2
+    limit_factor: float = 3.0
+    v_max_fraction: float = 0.1
+    n_elites: int = 10
+    n_cross: int = 3
+    n_worst: int = 3
+    exchange_interval: int = 1
+    cross: CrossFunction | None = None
+    chaos_mu: float = 4.0
+
+    def __post_init__(self) -> None:
+        if self.n_swarms < 1:
+            raise ConfigError(f"n_swarms must be >= 1, got {self.n_swarms}", field="n_swarms")
+        if self.exchange_interval < 1:
+            raise ConfigError("exchange_interval must be >= 1", field="exchange_interval")
+        for f in fields(self):  # the types the algorithm computes with
+            if f.type in ("int", "float"):
+                cast = int if f.type == "int" else float
+                object.__setattr__(self, f.name, cast(getattr(self, f.name)))
+
+
+class ParaPA(Optimizer):
+    """Parasitism-relation PSO-ABC with multi-swarm elite exchange (003 section 3).
+
+    Parameters
+    ----------
+    pop_size
+        Particles over all swarms (003: NP = 50 per swarm; default 3 swarms, 150).
+    settings
+        The algorithm's parameters (:class:`ParaPASettings`, the paper's by default).
+    **options
+        Any field of :class:`ParaPASettings` by name (``n_swarms=4``, ``cross=f``...), laid over
+        ``settings``: the registry builds every optimiser from keywords.
+
+    Each field of the settings is also an attribute of the optimiser (``self.n_swarms``...).
+    """
+
     name = "parapa"
 
     def __init__(
-        self,
-        pop_size: int = 150,
-        n_swarms: int = 3,
-        w_max: float = 0.9,
-        w_min: float = 0.1,
-        r_max: float = 2.0,
-        onlooker_fraction: float = 0.2,
-        limit_factor: float = 3.0,
-        v_max_fraction: float = 0.1,
-        n_elites: int = 10,
-        n_cross: int = 3,
-        n_worst: int = 3,
-        exchange_interval: int = 1,
-        cross: CrossFunction | None = None,
-        chaos_mu: float = 4.0,
+        self, pop_size: int = 150, settings: ParaPASettings | None = None, **options: Any
     ) -> None:
         super().__init__(pop_size)
-        if n_swarms < 1 or pop_size < n_swarms:
-            raise ValueError(f"need pop_size >= n_swarms >= 1, got {pop_size} and {n_swarms}")
-        if exchange_interval < 1:
-            raise ValueError("exchange_interval must be >= 1")
-        self.n_swarms = int(n_swarms)
-        self.w_max = float(w_max)
-        self.w_min = float(w_min)
-        self.r_max = float(r_max)
-        self.onlooker_fraction = float(onlooker_fraction)
-        self.limit_factor = float(limit_factor)
-        self.v_max_fraction = float(v_max_fraction)
-        self.n_elites = int(n_elites)
-        self.n_cross = int(n_cross)
-        self.n_worst = int(n_worst)
-        self.exchange_interval = int(exchange_interval)
-        self.cross = cross
-        self.chaos_mu = float(chaos_mu)
+        st = replace(settings or ParaPASettings(), **options)
+        if pop_size < st.n_swarms:
+            raise ConfigError(
+                f"need pop_size >= n_swarms >= 1, got {pop_size} and {st.n_swarms}",
+                field="pop_size",
+            )
+        self.settings = st
+        for f in fields(st):
+            setattr(self, f.name, getattr(st, f.name))
 
     def initialize(self, ctx: Context) -> None:
         S = self.n_swarms
