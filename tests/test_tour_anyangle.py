@@ -8,11 +8,12 @@ import itertools
 import numpy as np
 import pytest
 
-from weldplan.errors import InputError
+from weldplan.errors import ConfigError
 from weldplan.planar.exact import visibility_shortest_path
 from weldplan.planar.multigoal import build_tour_graph, load_tour, segments_clear, tour_lengths
 from weldplan.planar.tour_anyangle import build_anyangle_graph
 from weldplan.planar.tour_planner import ground_truth, plan_tour
+from weldplan.planar.tour_settings import TourSettings
 
 
 @pytest.fixture(scope="module")
@@ -103,14 +104,27 @@ def test_as_printed_is_paper_002_and_further_from_the_optimum(tour1):
     assert q.pipeline == "as-printed" and q.order == p.order and q.length == p.length
 
 
-def test_contradictory_keywords_are_input_errors(tour1):
+def test_contradictory_settings_are_config_errors_naming_the_field(tour1):
     task, mesh_g, g = tour1
-    with pytest.raises(InputError, match="taut"):
+    with pytest.raises(ConfigError, match="taut") as info:
         plan_tour(task, anyangle=g, metric="any-angle", taut=False, pop_size=4, max_iter=2)
-    with pytest.raises(InputError, match="metric"):
+    assert info.value.field == "taut"
+    with pytest.raises(ConfigError, match="metric"):
         plan_tour(task, anyangle=g, metric="octile", pop_size=4, max_iter=2)
-    with pytest.raises(InputError, match="as_printed"):
-        plan_tour(task, anyangle=g, as_printed=True, metric="any-angle")
+    with pytest.raises(ConfigError, match="as_printed") as info:
+        TourSettings(as_printed=True, metric="any-angle")
+    assert info.value.field == "metric"
+
+
+def test_a_settings_object_and_its_keywords_plan_the_same_tour(tour1):
+    task, mesh_g, g = tour1
+    st = TourSettings(metric="mesh", pop_size=20, max_iter=15, polish=False)
+    a = plan_tour(task, "sma", st, graph=mesh_g, anyangle=g, rng=2, smooth=False)
+    b = plan_tour(task, "sma", graph=mesh_g, anyangle=g, rng=2, metric="mesh", pop_size=20,
+                  max_iter=15, polish=False, smooth=False)  # fmt: skip
+    assert a.order == b.order and a.length == b.length and a.params == b.params
+    assert a.metric == "mesh" and a.pipeline == "custom" and not a.polished
+    assert a.params["max_iter"] == 15 and a.params["pop_size"] == 20
 
 
 def test_cli_tour_default_and_as_printed_summaries(capsys):

@@ -16,8 +16,12 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from typing import TYPE_CHECKING
 
 from weldplan.errors import WeldplanError
+
+if TYPE_CHECKING:
+    from weldplan.planar.tour_settings import TourSettings
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -105,11 +109,13 @@ def run(args: argparse.Namespace) -> int:
     task = load_tour(args.more[0])
     anyangle = build_anyangle_graph(task)
     ex_order, ex_len, ex_method = ground_truth(anyangle)
-    metric = args.metric
-    uses_mesh = as_printed or metric == "mesh" or (metric is None and args.no_funnel)
-    graph = build_tour_graph(task, args.max_edge) if uses_mesh else None
-    kw = {"graph": graph, "anyangle": anyangle, "metric": metric, "as_printed": as_printed}
-    results = [plan_tour(task, a, exact=(ex_order, ex_len), **kw, **_tour_kw(args)) for a in algos]
+    st = _tour_settings(args, as_printed)
+    graph = build_tour_graph(task, args.max_edge) if st.resolved()[0] == "mesh" else None
+    results = [
+        plan_tour(task, a, st, graph=graph, anyangle=anyangle, exact=(ex_order, ex_len),
+                  rng=args.seed)
+        for a in algos
+    ]  # fmt: skip
     if args.json:
         sys.stdout.write(json.dumps([json.loads(r.to_json()) for r in results]) + "\n")
     else:
@@ -123,14 +129,15 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _tour_kw(args: argparse.Namespace) -> dict:
-    """The options of :func:`weldplan.planar.tour_planner.plan_tour` a run sets."""
+def _tour_settings(args: argparse.Namespace, as_printed: bool) -> TourSettings:
+    """The :class:`~weldplan.planar.tour_settings.TourSettings` a run's options give."""
     from weldplan.planar.multigoal import PAPER_ITER, PAPER_POP
+    from weldplan.planar.tour_settings import TourSettings
 
-    return dict(
-        pop_size=args.pop or PAPER_POP, max_iter=args.iters or PAPER_ITER,
-        two_opt=args.two_opt, polish=not args.no_polish, taut=not args.no_funnel,
-        smooth=not args.no_smooth, rng=args.seed,
+    return TourSettings(
+        metric=args.metric, as_printed=as_printed, pop_size=args.pop or PAPER_POP,
+        max_iter=args.iters or PAPER_ITER, two_opt=args.two_opt, polish=not args.no_polish,
+        taut=not args.no_funnel, smooth=not args.no_smooth,
     )  # fmt: skip
 
 

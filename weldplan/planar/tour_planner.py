@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from weldplan.errors import InputError, PlanningError
+from weldplan.errors import PlanningError
 from weldplan.geometry.pathmetrics import path_length
 from weldplan.optim.core import minimize
 from weldplan.optim.discrete.sequence import solve_sequence
@@ -40,8 +40,6 @@ from weldplan.optim.registry import get_optimizer
 from weldplan.planar.tour_anyangle import AnyAngleTourGraph, build_anyangle_graph
 from weldplan.planar.tour_order import (
     EXACT_STOPS,
-    PAPER_ITER,
-    PAPER_POP,
     RandomKeyTourProblem,
     TourGraph,
     build_tour_graph,
@@ -49,13 +47,13 @@ from weldplan.planar.tour_order import (
     tour_lengths,
 )
 from weldplan.planar.tour_scenarios import TourScenario
+from weldplan.planar.tour_settings import METRICS, TourSettings, split_options
 from weldplan.planar.tour_smooth import segments_clear, smooth_tour
 from weldplan.random import RNGLike, as_generator, seed_of
 
 log = logging.getLogger(__name__)
 
-#: the leg metrics: exact any-angle (Polyanya) or mesh-edge Dijkstra (paper 002)
-METRICS = ("any-angle", "mesh")
+__all__ = ["METRICS", "TourResult", "TourSettings", "ground_truth", "plan_tour"]
 
 
 @dataclass(frozen=True)
@@ -240,25 +238,6 @@ def _ordering(
     }
 
 
-def _resolve(
-    metric: str | None, as_printed: bool, polish: bool, taut: bool
-) -> tuple[str, bool, bool, str]:
-    """``(metric, polish, taut, pipeline name)`` from the keywords (see :func:`plan_tour`)."""
-    if as_printed:
-        if metric not in (None, "mesh"):
-            raise InputError("as_printed uses paper 002's mesh metric", field="metric")
-        return "mesh", False, False, "as-printed"
-    if metric is None:
-        metric = "any-angle" if taut else "mesh"  # mesh-edge legs need the mesh's paths
-    if metric not in METRICS:
-        raise InputError(f"unknown metric {metric!r}; one of {METRICS}", field="metric")
-    if metric == "any-angle" and not taut:
-        raise InputError("any-angle legs are taut; taut=False needs metric='mesh'", field="taut")
-    if metric == "mesh" and not polish and not taut:
-        return metric, polish, taut, "as-printed"
-    return metric, polish, taut, "default" if metric == "any-angle" and polish else "custom"
-
-
 def _graphs(
     task: TourScenario,
     metric: str,
@@ -321,20 +300,10 @@ def _join_and_smooth(
 def plan_tour(
     task: TourScenario,
     algorithm: str = "isma",
+    settings: TourSettings | None = None,
     *,
     graph: TourGraph | None = None,
     anyangle: AnyAngleTourGraph | None = None,
-    metric: str | None = None,
-    as_printed: bool = False,
-    pop_size: int = PAPER_POP,
-    max_iter: int = PAPER_ITER,
-    max_evals: int | None = None,
-    time_budget: float | None = None,
-    two_opt: bool = False,
-    polish: bool = True,
-    polish_kicks: int | None = None,
-    taut: bool = True,
-    smooth: bool = True,
     optimum: float | None = None,
     exact: tuple[tuple[int, ...], float] | None = None,
     rng: RNGLike = None,
@@ -347,31 +316,14 @@ def plan_tour(
     algorithm
         A registered optimiser name (``isma``, ``sma``, ``woa``, ``lso``, ...) for the random-key
         order, or ``"exact"`` for the ground-truth sequencer on the same distances.
+    settings
+        The leg metric, the pipeline's stages and the optimiser's budget
+        (:class:`~weldplan.planar.tour_settings.TourSettings`); ``None``: the default pipeline
+        with paper 002's budget (500 x 500).
     graph, anyangle
         A prebuilt mesh-edge :class:`TourGraph` and any-angle
         :class:`~weldplan.planar.tour_anyangle.AnyAngleTourGraph` (to share them between runs);
         built when needed and not given.
-    metric
-        ``"any-angle"`` (default: Polyanya's exact leg lengths and paths) or ``"mesh"``
-        (paper 002's Dijkstra along mesh edges; the default when ``taut=False``).
-    as_printed
-        Paper 002 exactly: mesh metric, no polish, no funnel (overrides ``polish``, ``taut``).
-    pop_size, max_iter, max_evals, time_budget
-        Optimiser budget; paper 002 uses 500 and 500.
-    two_opt
-        2-opt decoding of every key (memetic; named deviation, see
-        :mod:`weldplan.planar.multigoal`).
-    polish
-        Polish the optimiser's best order once with the sequencer's 2-opt + Or-opt iterated
-        local search (default on; a named deviation). ``False`` gives the optimiser as printed.
-    polish_kicks
-        Kicks of that polish (default :data:`~weldplan.planar.tour_order.POLISH_KICKS_PER_STOP`
-        per stop).
-    taut
-        With the mesh metric: pull each mesh-edge leg tight in its triangle corridor (funnel)
-        before smoothing; ``False`` keeps the zig-zag (as paper 002). Any-angle legs are taut.
-    smooth
-        B-spline smoothing with the collision fallback (else the polyline is returned).
     optimum
         The ground-truth length over the ordering metric's distances, when already known.
     exact
@@ -379,17 +331,20 @@ def plan_tour(
     rng
         Seed or Generator.
     params
-        Optimiser parameters.
+        A keyword naming a :class:`~weldplan.planar.tour_settings.TourSettings` field
+        (``metric="mesh"``, ``pop_size=60``, ``polish=False``...) is laid over ``settings``;
+        the others are the optimiser's parameters.
 
     Raises
     ------
-    InputError
-        For contradictory keywords (``as_printed`` with ``metric='any-angle'``, ``taut=False``
-        with any-angle legs, an unknown metric).
+    ConfigError
+        For contradictory settings (``as_printed`` with ``metric='any-angle'``, ``taut=False``
+        with any-angle legs, an unknown metric), naming the field.
     PlanningError
         When some stop cannot be reached.
     """
-    metric, polish, taut, pipeline = _resolve(metric, as_printed, polish, taut)
+    st, params = split_options(settings, params)
+    metric, polish, taut = st.resolved()
     gen = as_generator(rng)
     seed = seed_of(rng)
     g, exact = _graphs(task, metric, graph, anyangle, exact)
@@ -400,18 +355,14 @@ def plan_tour(
         gt = (gt_order, gt_len, gt_method, time.perf_counter() - t0)
         optimum = gt_len
     stages: list[tuple[str, float, float, str]] = []
-    budget = {"pop_size": pop_size, "max_iter": max_iter, "max_evals": max_evals,
-              "time_budget": time_budget}  # fmt: skip
     run = _order_stage(task, g, algorithm, gen, metric, gt, stages, polish=polish,
-                       polish_kicks=polish_kicks, two_opt=two_opt, budget=budget,
+                       polish_kicks=st.polish_kicks, two_opt=st.two_opt, budget=st.budget,
                        params=params)  # fmt: skip
     t1 = time.perf_counter()
-    joined = _join_and_smooth(task, g, run["order"], metric, taut, smooth, stages)
+    joined = _join_and_smooth(task, g, run["order"], metric, taut, st.smooth, stages)
     smooth_seconds = time.perf_counter() - t1
-    return _tour_result(task, g, run, joined, stages, metric=metric, pipeline=pipeline,
-                        optimum=optimum, exact=exact, seed=seed,
-                        polished=bool(polish and algorithm != "exact"),
-                        smooth_seconds=smooth_seconds)  # fmt: skip
+    return _tour_result(task, g, run, joined, stages, st=st, optimum=optimum, exact=exact,
+                        seed=seed, smooth_seconds=smooth_seconds)  # fmt: skip
 
 
 def _order_stage(
@@ -427,7 +378,8 @@ def _order_stage(
     """The stops' order: the ground truth ``gt`` ``(order, length, method, seconds)`` for
     ``"exact"``, else the optimiser (and the polish) by :func:`_ordering` (``**ordering``: its
     keywords). Appends the ``order`` (and ``polish``) stages; returns ``order``, ``length``,
-    ``name``, ``seconds``, ``used`` (the parameters) and ``o`` (:func:`_ordering`'s record)."""
+    ``name``, ``seconds``, ``used`` (the parameters), ``o`` (:func:`_ordering`'s record) and
+    ``polished`` (whether the final polish ran)."""
     if algorithm == "exact":
         assert gt is not None
         order, length, gt_method, seconds = gt
@@ -435,7 +387,7 @@ def _order_stage(
                              "cpu_opt": 0.0, "n_eval": 0}  # fmt: skip
         stages.append(("order", length, seconds, f"sequencer ({gt_method}) over {metric} costs"))
         return {"order": order, "length": length, "name": gt_method, "seconds": seconds,
-                "used": {}, "o": o}  # fmt: skip
+                "used": {}, "o": o, "polished": False}  # fmt: skip
     o = _ordering(g, algorithm, gen, name=task.name, **ordering)
     stages.append(("order", o["opt_length"], o["opt_seconds"],
                    f"{algorithm}'s own order over {metric} costs"))  # fmt: skip
@@ -443,7 +395,7 @@ def _order_stage(
         stages.append(("polish", o["length"], o["polish_seconds"], "2-opt/Or-opt ILS"))
     return {"order": o["order"], "length": o["length"], "name": algorithm,
             "seconds": o["opt_seconds"] + o["polish_seconds"], "used": o["params"],
-            "o": o}  # fmt: skip
+            "o": o, "polished": bool(ordering["polish"])}  # fmt: skip
 
 
 def _tour_result(
@@ -453,16 +405,16 @@ def _tour_result(
     joined: tuple[NDArray[np.float64], bool, NDArray[np.float64], bool],
     stages: list[tuple[str, float, float, str]],
     *,
-    metric: str,
-    pipeline: str,
+    st: TourSettings,
     optimum: float,
     exact: tuple[tuple[int, ...], float],
     seed: int | None,
-    polished: bool,
     smooth_seconds: float,
 ) -> TourResult:
     """The final independent check of the returned curve and the :class:`TourResult` of
-    :func:`plan_tour` (``run``: :func:`_order_stage`; ``joined``: :func:`_join_and_smooth`)."""
+    :func:`plan_tour` (``run``: :func:`_order_stage`; ``joined``: :func:`_join_and_smooth`;
+    ``st``: the run's settings)."""
+    metric, pipeline = st.resolved()[0], st.pipeline
     poly, legs_free, curve, smoothed = joined
     order, length, name, seconds, o = (run[k] for k in ("order", "length", "name", "seconds", "o"))
     # the independent final check is exact, also where the loop sampled (grid maps)
@@ -492,7 +444,7 @@ def _tour_result(
         params=run["used"],
         optimizer_length=o["opt_length"],
         polyline_length=float(path_length(poly)),
-        polished=polished,
+        polished=bool(run["polished"]),
         polish_seconds=float(o["polish_seconds"]),
         cpu_seconds=float(o["cpu"]),
         optimizer_cpu_seconds=float(o["cpu_opt"]),
