@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from weldplan.cli import main
+from weldplan.errors import ConfigError
 from weldplan.geometry.pathmetrics import measure
 from weldplan.optim.core import minimize
 from weldplan.optim.registry import get_optimizer
@@ -14,7 +15,7 @@ from weldplan.planar.encodings import make_problem
 from weldplan.planar.freespace import free_space_mesh
 from weldplan.planar.pipeline import STAGES, polish_path, repair_path
 from weldplan.planar.scenarios import load_scenario
-from weldplan.planar.solve import PlanarRun, exact_optimum, solve
+from weldplan.planar.solve import PlanarRun, PlanarSettings, exact_optimum, solve
 
 
 def _check_default(name: str, seed: int) -> PlanarRun:
@@ -80,6 +81,21 @@ def test_as_printed_is_the_optimiser_alone_bit_for_bit() -> None:
     assert np.array_equal(np.array(r.points), prob.path(res.x_array))
     assert r.history == res.history and r.n_eval == res.n_eval and r.fitness == res.f
     assert r.optimum_method == exact_optimum(sc).method
+
+
+def test_a_settings_object_and_its_keywords_are_one_run() -> None:
+    sc = load_scenario("map20-1")
+    st = PlanarSettings(pop_size=12, max_iter=15, as_printed=True, with_optimum=False)
+    a = solve(sc, "pso", st, rng=7)
+    b = solve(sc, "pso", rng=7, pop_size=12, max_iter=15, as_printed=True, with_optimum=False)
+    c = solve(sc, "pso", PlanarSettings(pop_size=3), rng=7, pop_size=12, max_iter=15,
+              as_printed=True, with_optimum=False)  # fmt: skip
+    assert a.points == b.points == c.points and a.n_eval == b.n_eval == 12 * 16
+    with pytest.raises(ConfigError) as info:
+        PlanarSettings(max_iter=0)
+    assert info.value.field == "max_iter"
+    with pytest.raises(TypeError, match="'max_iters'"):
+        solve(sc, "pso", max_iters=3)
 
 
 def test_as_printed_grid_keeps_the_octile_baseline() -> None:

@@ -28,21 +28,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def _one(task: tuple) -> dict:
     from weldplan.planar.multimodal import DEFAULT_SWARMS, PAPER_NP, plan_multimodal
     from weldplan.planar.scenarios import load_scenario
-    from weldplan.planar.solve import solve
+    from weldplan.planar.solve import PlanarSettings, solve
 
     name, k, iters, seed = task
     sc = load_scenario(name)
     r = plan_multimodal(sc, k, iterations=iters, rng=seed, with_optimum=False)
-    s = solve(
-        sc,
-        "parapa",
+    single = PlanarSettings(
         pop_size=DEFAULT_SWARMS * PAPER_NP,
         max_iter=iters,
-        rng=seed,
         with_optimum=False,
         optimizer_params={"n_swarms": DEFAULT_SWARMS},
         as_printed=True,  # the paper's ParaPA alone, as the multimodal planner is
     )
+    s = solve(sc, "parapa", single, rng=seed)
     return {
         "map": name,
         "seed": seed,

@@ -21,7 +21,7 @@ def run_one(task: tuple) -> dict:
     from weldplan.planar.encodings import make_problem
     from weldplan.planar.freespace import _MESH_CACHE
     from weldplan.planar.scenarios import load_scenario
-    from weldplan.planar.solve import solve
+    from weldplan.planar.solve import PlanarSettings, solve
 
     name, algo, enc, frame, pop, iters, seed = task[:7]
     opt_params = task[7] if len(task) > 7 else {}
@@ -33,18 +33,9 @@ def run_one(task: tuple) -> dict:
     sc = load_scenario(name)
     params = {"frame": frame} if enc == "segments" else {}
     prob = make_problem(sc, enc, **params)
-    r = solve(
-        sc,
-        algo,
-        encoding=enc,
-        pop_size=pop,
-        max_iter=iters,
-        rng=seed,
-        problem=prob,
-        with_optimum=False,
-        optimizer_params=opt_params,
-        as_printed=as_printed,
-    )
+    settings = PlanarSettings(encoding=enc, pop_size=pop, max_iter=iters, with_optimum=False,
+                              optimizer_params=opt_params, as_printed=as_printed)  # fmt: skip
+    r = solve(sc, algo, settings, rng=seed, problem=prob)
     cpu = time.process_time() - c0
     return {
         "map": name,

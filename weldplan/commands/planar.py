@@ -76,7 +76,7 @@ def run(args: argparse.Namespace) -> int:
         raise WeldplanError(f"unexpected arguments: {' '.join(args.more)}")
     from weldplan.optim.registry import ALGORITHMS, available
     from weldplan.planar.scenarios import load_scenario
-    from weldplan.planar.solve import solve
+    from weldplan.planar.solve import PlanarSettings, solve
 
     if args.algorithm.lower() not in ALGORITHMS:
         raise WeldplanError(
@@ -85,16 +85,14 @@ def run(args: argparse.Namespace) -> int:
         )
     optimizer_params = _optimizer_params(args)
     scenario = load_scenario(args.scenario)
-    r = solve(
-        scenario,
-        args.algorithm,
+    settings = PlanarSettings(
         encoding=args.encoding,
         pop_size=args.pop,
         max_iter=args.iters,
-        rng=args.seed,
         optimizer_params=optimizer_params,
         as_printed=args.as_printed,
     )
+    r = solve(scenario, args.algorithm, settings, rng=args.seed)
     if args.json:
         sys.stdout.write(r.to_json() + "\n")
     else:

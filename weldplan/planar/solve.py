@@ -19,11 +19,13 @@ from __future__ import annotations
 import json
 import logging
 import time
-from dataclasses import asdict, dataclass
-from typing import Any
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass, replace
+from typing import Any, TypedDict, Unpack
 
 import numpy as np
 
+from weldplan.errors import ConfigError
 from weldplan.geometry.pathcore import at_fractions
 from weldplan.geometry.pathmetrics import measure
 from weldplan.optim.core import minimize
@@ -223,19 +225,68 @@ class PlanarRun:
         return cls(**d)
 
 
+@dataclass(frozen=True)
+class PlanarSettings:
+    """How :func:`solve` plans: one frozen, validated settings object (../shared/DESIGN.md: a
+    stage takes its inputs and one settings object).
+
+    Attributes
+    ----------
+    encoding
+        ``"spline"``, ``"segments"`` or ``"grid"``; ``None``: the scenario's.
+    pop_size, max_iter
+        The optimiser's budget; ``None``: :data:`DEFAULT_BUDGET` (or :data:`PAPER_BUDGET` with
+        ``as_printed``) for the encoding.
+    with_optimum
+        Compute the exact optimum beside the run (for its gap).
+    encoding_params
+        Keywords of the encoding's Problem (:func:`~weldplan.planar.encodings.make_problem`).
+    optimizer_params
+        The optimiser's parameters; ``init`` overrides the default pipeline's roadmap seeding.
+    as_printed
+        The paper's algorithm alone with the paper's budget (module docstring).
+    """
+
+    encoding: str | None = None
+    pop_size: int | None = None
+    max_iter: int | None = None
+    with_optimum: bool = True
+    encoding_params: Mapping[str, Any] | None = None
+    optimizer_params: Mapping[str, Any] | None = None
+    as_printed: bool = False
+
+    def __post_init__(self) -> None:
+        if self.encoding is not None and self.encoding not in PAPER_BUDGET:
+            raise ConfigError(
+                f"unknown encoding {self.encoding!r}; one of {', '.join(PAPER_BUDGET)}",
+                field="encoding",
+            )
+        for name in ("pop_size", "max_iter"):
+            v = getattr(self, name)
+            if v is not None and (isinstance(v, bool) or int(v) < 1):
+                raise ConfigError(f"{name} must be >= 1, got {v!r}", field=name)
+
+
+class PlanarOptions(TypedDict, total=False):
+    """The keyword conveniences of :func:`solve`: any :class:`PlanarSettings` field by name."""
+
+    encoding: str | None
+    pop_size: int | None
+    max_iter: int | None
+    with_optimum: bool
+    encoding_params: Mapping[str, Any] | None
+    optimizer_params: Mapping[str, Any] | None
+    as_printed: bool
+
+
 def solve(
     scenario: Scenario,
     algorithm: str,
+    settings: PlanarSettings | None = None,
     *,
-    encoding: str | None = None,
-    pop_size: int | None = None,
-    max_iter: int | None = None,
     rng: RNGLike = None,
-    with_optimum: bool = True,
     problem: PathProblem | None = None,
-    encoding_params: dict[str, Any] | None = None,
-    optimizer_params: dict[str, Any] | None = None,
-    as_printed: bool = False,
+    **options: Unpack[PlanarOptions],
 ) -> PlanarRun:
     """Plan a path on ``scenario`` with the registered ``algorithm``.
 
@@ -243,16 +294,36 @@ def solve(
     :data:`DEFAULT_BUDGET`), repair, polish; ``optimizer_params`` given ``init`` overrides the
     seeding. ``as_printed=True`` runs the paper's algorithm alone with the paper's budget
     (:data:`PAPER_BUDGET`): the same result, bit for bit, as before the pipeline existed.
+
+    Parameters
+    ----------
+    scenario, algorithm
+        The map and a registered optimiser name.
+    settings
+        :class:`PlanarSettings` (encoding, budget, optimum, parameters, pipeline); ``None``:
+        the defaults.
+    rng
+        Seed or Generator.
+    problem
+        A prebuilt Problem of the encoding (to share it between runs); built when ``None``.
+    **options
+        Any :class:`PlanarSettings` field by name (``as_printed=True``, ``pop_size=12``...),
+        laid over ``settings``; an unknown keyword is a ``TypeError``.
     """
-    enc = encoding or scenario.encoding
-    prob = problem or make_problem(scenario, enc, **(encoding_params or {}))
+    unknown = set(options) - set(PlanarOptions.__annotations__)
+    if unknown:
+        raise TypeError(f"solve() got an unexpected keyword argument {sorted(unknown)[0]!r}")
+    st = replace(settings or PlanarSettings(), **options)
+    as_printed = st.as_printed
+    enc = st.encoding or scenario.encoding
+    prob = problem or make_problem(scenario, enc, **(st.encoding_params or {}))
     pop_default, iter_default = (PAPER_BUDGET if as_printed else DEFAULT_BUDGET)[enc]
-    params = dict(optimizer_params or {})
+    params = dict(st.optimizer_params or {})
     if not as_printed and "init" not in params and _takes_problem_init(algorithm):
         params["init"] = "problem"
-    opt = get_optimizer(algorithm, pop_size=pop_size or pop_default, **params)
+    opt = get_optimizer(algorithm, pop_size=st.pop_size or pop_default, **params)
     t0 = time.perf_counter()
-    res = minimize(prob, opt, max_iter=max_iter or iter_default, rng=rng)
+    res = minimize(prob, opt, max_iter=st.max_iter or iter_default, rng=rng)
     seconds = time.perf_counter() - t0
     pts = prob.path(res.x_array)
     X = getattr(opt, "X", None)
@@ -270,7 +341,7 @@ def solve(
     # as printed: the encoding's own criterion (graze-tolerant for splines); default: strict
     success = bool(prob.success(res.x_array[None])[0]) if as_printed else m.collisions == 0
     optimum, method = float("nan"), ""
-    if with_optimum:
+    if st.with_optimum:
         ex = exact_optimum(scenario, exact_enc)
         optimum, method = ex.length, ex.method
     return PlanarRun(
