@@ -10,11 +10,12 @@ from _boxcell import J3, J7, BoxCell, box_cell, box_distance, panel_cell
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from weldplan.errors import PlanningError
+from weldplan.errors import ConfigError, PlanningError
 from weldplan.geometry.collision import CollisionModel
 from weldplan.weld.local import (
     LocalParams,
     LocalPath,
+    LocalSearchSettings,
     plan_local_path,
     polyline_length,
     secondary_optimization,
@@ -104,6 +105,23 @@ def test_same_seed_same_path(cell: BoxCell) -> None:
     assert np.array_equal(a.points, b.points) and a.history == b.history and a.seed == 7
     c = plan_local_path(cell.grid, cell.collision, J3, J7, s, g, rng=8, **kw)
     assert c.history != a.history or not np.array_equal(c.points, a.points)
+
+
+def test_a_settings_object_and_its_keywords_plan_the_same_path(cell: BoxCell) -> None:
+    s, g = cell.virtual(J3), cell.virtual(J7)
+    st = LocalSearchSettings("so-aco", {"n_iterations": 4, "n_ants": 5})
+    assert isinstance(st.params, LocalParams) and st.params.colony.n_ants == 5
+    a = plan_local_path(cell.grid, cell.collision, J3, J7, s, g, st, rng=7)
+    b = plan_local_path(cell.grid, cell.collision, J3, J7, s, g, rng=7, method="so-aco",
+                        params={"n_iterations": 4, "n_ants": 5})  # fmt: skip
+    assert np.array_equal(a.points, b.points) and a.history == b.history
+    e = plan_local_path(cell.grid, cell.collision, J3, J7, s, g, st, method="exact")
+    assert e.method == "exact"
+    with pytest.raises(ConfigError) as info:
+        LocalSearchSettings(method="rrt")
+    assert info.value.field == "method"
+    with pytest.raises(TypeError, match="'time_budgett'"):
+        plan_local_path(cell.grid, cell.collision, J3, J7, s, g, time_budgett=1.0)
 
 
 def test_starved_colony_is_measurably_worse(cell: BoxCell) -> None:

@@ -68,7 +68,8 @@ import logging
 import math
 import time
 from collections.abc import Callable, Mapping
-from typing import Any
+from dataclasses import dataclass, replace
+from typing import Any, TypedDict, Unpack
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -85,6 +86,7 @@ from weldplan.weld.localpath import (
     METHODS,
     LocalParams,
     LocalPath,
+    LocalSearchSettings,
     SearchLimitError,
 )
 from weldplan.weld.searchbox import _connected, _search_grid
@@ -97,6 +99,7 @@ __all__ = [
     "METHODS",
     "LocalParams",
     "LocalPath",
+    "LocalSearchSettings",
     "SearchLimitError",
     "SecondaryResult",
     "plan_local_path",
@@ -146,17 +149,27 @@ class _Checks:
         return self.collision.segments_free(A, B, r, method="fcl")
 
 
+@dataclass(frozen=True)
+class _Search:
+    """One pair's search, as :func:`plan_local_path` set it up: the grid and the padded search
+    box ``pg`` (its ``origin`` in the grid's indices), the virtual joints ``s`` and ``g`` (grid
+    indices), the settings, the FCL checks (counted), the colony's generator and the deadline
+    (``time.perf_counter()``, ``None``: none)."""
+
+    grid: ObstacleGrid
+    pg: PaddedGrid
+    origin: NDArray[np.int64]
+    s: NDArray[np.int64]
+    g: NDArray[np.int64]
+    prm: LocalParams
+    checks: _Checks
+    gen: np.random.Generator
+    deadline: float | None
+
+
 def _grid_route(
-    grid: ObstacleGrid,
-    pg: PaddedGrid,
-    origin: NDArray[np.int64],
-    s: NDArray[np.int64],
-    g: NDArray[np.int64],
+    sr: _Search,
     method: str,
-    prm: LocalParams,
-    checks: _Checks,
-    gen: np.random.Generator,
-    deadline: float | None,
     callback: Callable[[int, float], None] | None,
     stats: dict[str, Any],
     forbidden: NDArray[np.int64] | None = None,
@@ -174,6 +187,8 @@ def _grid_route(
     directions): forbidding only the first one, as before, let a route that runs along a long
     sheet edge graze again at the next move, and three repairs were not enough.
     """
+    grid, pg, origin, s, g, prm = sr.grid, sr.pg, sr.origin, sr.s, sr.g, sr.prm
+    checks, gen, deadline = sr.checks, sr.gen, sr.deadline
     conn = 6 if method != "exact" else prm.connectivity
     blocked: set[tuple[int, int]] = set()
     limit = math.inf if prm.max_repairs is None else prm.max_repairs
@@ -250,6 +265,26 @@ def _refine_inner(
     return np.asarray(rp.points), rp.refined
 
 
+class LocalSearchOptions(TypedDict, total=False):
+    """The keyword conveniences of :func:`plan_local_path`: the fields of
+    :class:`~weldplan.weld.localpath.LocalSearchSettings` by name."""
+
+    method: str
+    params: LocalParams | AntColonyParams | Mapping[str, Any] | None
+    time_budget: float | None
+
+
+def _settings(settings: LocalSearchSettings | None, options: dict[str, Any]) -> LocalSearchSettings:
+    """``options`` laid over ``settings`` (default :class:`LocalSearchSettings`), validated."""
+    unknown = set(options) - set(LocalSearchOptions.__annotations__)
+    if unknown:
+        raise TypeError(
+            f"plan_local_path() got an unexpected keyword argument {sorted(unknown)[0]!r}"
+        )
+    base = LocalSearchSettings() if settings is None else settings
+    return replace(base, **options) if options else base
+
+
 def plan_local_path(
     grid: ObstacleGrid,
     collision: CollisionModel,
@@ -257,12 +292,11 @@ def plan_local_path(
     goal_xyz: ArrayLike,
     start_idx: ArrayLike,
     goal_idx: ArrayLike,
+    settings: LocalSearchSettings | None = None,
     *,
-    method: str = "so-aco",
-    params: LocalParams | AntColonyParams | Mapping[str, Any] | None = None,
     rng: RNGLike = None,
-    time_budget: float | None = None,
     callback: Callable[[int, float], None] | None = None,
+    **options: Unpack[LocalSearchOptions],
 ) -> LocalPath:
     """Plan the local path from a real joint to another through their virtual joints.
 
@@ -276,18 +310,18 @@ def plan_local_path(
         ``(3,)`` real joints (mm).
     start_idx, goal_idx
         ``(3,) int`` grid indices of their virtual joints (free voxels).
-    method
-        ``"so-aco"`` (default), ``"aco"`` or ``"exact"``.
-    params
-        :class:`LocalParams`, :class:`AntColonyParams` or a flat mapping of their fields
-        (``refine=True`` adds the continuous refinement, module docstring).
+    settings
+        The method (``"so-aco"`` by default, ``"aco"`` or ``"exact"``), the planners'
+        :class:`LocalParams` (``refine=True`` adds the continuous refinement, module docstring)
+        and the time budget: :class:`~weldplan.weld.localpath.LocalSearchSettings`; ``None``:
+        the defaults.
     rng
         Seed or generator (the colony's only source of randomness).
-    time_budget
-        Seconds; the colony stops between steps, A* between expansions, the secondary
-        optimisation between passes. Without a route when time runs out: ``success=False``.
     callback
         ``callback(iteration, best_length)`` after each colony iteration.
+    **options
+        ``method=``, ``params=`` and ``time_budget=``, laid over ``settings`` (the keywords of
+        this function before the settings object existed).
 
     Returns
     -------
@@ -303,13 +337,15 @@ def plan_local_path(
         A :class:`PlanningError`: no search box within ``max_search_voxels`` connects the pair
         (:class:`LocalParams`); the pipeline records the pair as unreachable.
     ValueError
-        For an unknown method or parameter.
+        For an unknown method or parameter (a :class:`~weldplan.errors.ConfigError` naming the
+        field for a bad setting).
+    TypeError
+        For a keyword that is not a setting.
     """
     t0 = time.perf_counter()
     c0 = time.process_time()
-    if method not in METHODS:
-        raise ValueError(f"unknown local-path method {method!r}; choose one of {METHODS}")
-    prm = LocalParams.coerce(params)
+    search = _settings(settings, dict(options))
+    method, prm, time_budget = search.method, search.params, search.time_budget
     seed = seed_of(rng)
     gen = as_generator(rng)
     deadline = None if time_budget is None else t0 + float(time_budget)
@@ -367,9 +403,8 @@ def plan_local_path(
     pg, origin, search_voxels, search_boxes = _search_grid(grid, s, g, method, prm, label_conn)
     stats: dict[str, Any] = {"iterations": 0, "ants": 0, "evaluations": 0, "history": ()}
     stats.update(search_voxels=search_voxels, search_boxes=search_boxes, repairs=0)
-    inner, raw_len, so_passes, reason, route = _grid_route(
-        grid, pg, origin, s, g, method, prm, checks, gen, deadline, callback, stats
-    )
+    sr = _Search(grid, pg, origin, s, g, prm, checks, gen, deadline)
+    inner, raw_len, so_passes, reason, route = _grid_route(sr, method, callback, stats)
     if inner is None:
         return done(inner_length=math.inf, reason=reason, **stats)
     so_length = polyline_length(inner)
@@ -381,10 +416,7 @@ def plan_local_path(
         # CLASS_GAIN of it, another class cannot gain more than that and is not searched
         near = polyline_length(inner) <= (1.0 + CLASS_GAIN) * float(np.linalg.norm(vg - vs))
         if prm.second_class and method == "exact" and route is not None and not near:
-            alt = _second_class(
-                grid, pg, origin, s, g, route, so_length, polyline_length(inner), prm, checks,
-                gen, deadline, stats,
-            )  # fmt: skip
+            alt = _second_class(sr, route, so_length, polyline_length(inner), stats)
             if alt is not None:
                 classes = 2
                 if alt[0] is not None:
@@ -404,18 +436,10 @@ def plan_local_path(
 
 
 def _second_class(
-    grid: ObstacleGrid,
-    pg: PaddedGrid,
-    origin: NDArray[np.int64],
-    s: NDArray[np.int64],
-    g: NDArray[np.int64],
+    sr: _Search,
     route: NDArray[np.int64],
     so_first: float,
     best: float,
-    prm: LocalParams,
-    checks: _Checks,
-    gen: np.random.Generator,
-    deadline: float | None,
     stats: dict[str, Any],
 ) -> tuple[Any, ...] | None:
     """The second-class stage (:mod:`weldplan.weld.homotopy`): A* outside the first route's
@@ -428,15 +452,15 @@ def _second_class(
     """
     from weldplan.weld.homotopy import CLASS_EXPANSIONS, corridor, second_class_wins
 
-    ban = corridor(pg, route, prm.class_radius, grid.pitch)
+    grid, prm, checks = sr.grid, sr.prm, sr.checks
+    ban = corridor(sr.pg, route, prm.class_radius, grid.pitch)
     if len(ban) == 0:
         return None
     st: dict[str, Any] = {"iterations": 0, "ants": 0, "evaluations": 0, "history": ()}
     cap = CLASS_EXPANSIONS[0] * stats["evaluations"] + CLASS_EXPANSIONS[1]
     inner, raw, passes, reason, _ = _grid_route(
-        grid, pg, origin, s, g, "exact", prm, checks, gen, deadline, None, st, forbidden=ban,
-        max_expansions=cap,
-    )  # fmt: skip
+        sr, "exact", None, st, forbidden=ban, max_expansions=cap
+    )
     stats["evaluations"] += st["evaluations"]
     stats["repairs"] += st.get("repairs", 0)
     if inner is None:
@@ -477,19 +501,11 @@ def plan_pair(
         if not 0 <= int(k) < n:
             raise IndexError(f"joint position {name}={k} out of range 0..{n - 1}")
     try:
+        settings = LocalSearchSettings(method, LocalParams.coerce(params), time_budget)
         return plan_local_path(
-            cell.grid,
-            cell.collision,
-            xyz[i],
-            xyz[j],
-            vidx[i],
-            vidx[j],
-            method=method,
-            params=params,
-            rng=rng,
-            time_budget=time_budget,
-            callback=callback,
-        )
+            cell.grid, cell.collision, xyz[i], xyz[j], vidx[i], vidx[j], settings,
+            rng=rng, callback=callback,
+        )  # fmt: skip
     except SearchLimitError as exc:
         ids = getattr(getattr(cell, "joints", None), "ids", None)
         name = f"{ids[i]} -> {ids[j]}" if ids is not None else f"{i} -> {j}"

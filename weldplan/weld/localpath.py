@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from weldplan.errors import PlanningError
+from weldplan.errors import ConfigError, PlanningError
 from weldplan.optim.discrete.aco_grid import AntColonyParams
 from weldplan.weld.homotopy import CLASS_RADIUS, CLASS_SLACK
 
@@ -204,6 +204,43 @@ def _f(x: float) -> float | None:
 
 def _uf(x: float | None) -> float:
     return math.inf if x is None else float(x)
+
+
+@dataclass(frozen=True)
+class LocalSearchSettings:
+    """How :func:`~weldplan.weld.local.plan_local_path` searches one pair: one frozen object,
+    validated once (../shared/DESIGN.md: a stage takes its inputs and one settings object).
+
+    Attributes
+    ----------
+    method
+        ``"so-aco"`` (default), ``"aco"`` or ``"exact"`` (:mod:`weldplan.weld.local`).
+    params
+        The planners' settings: a :class:`LocalParams`, or anything
+        :meth:`LocalParams.coerce` takes (an :class:`AntColonyParams`, a flat mapping of their
+        fields, ``None``), turned into one when the settings are made.
+    time_budget
+        Seconds; the colony stops between steps, A* between expansions, the secondary
+        optimisation between passes. Without a route when time runs out: ``success=False``.
+        ``None``: no limit.
+    """
+
+    method: str = "so-aco"
+    params: LocalParams = field(default_factory=LocalParams)
+    time_budget: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.method not in METHODS:
+            raise ConfigError(
+                f"unknown local-path method {self.method!r}; choose one of {METHODS}",
+                field="method",
+            )
+        object.__setattr__(self, "params", LocalParams.coerce(self.params))
+        b = self.time_budget
+        if b is not None and not (isinstance(b, (int, float)) and not isinstance(b, bool)):
+            raise ConfigError(
+                f"time_budget must be seconds or None, got {b!r}", field="time_budget"
+            )
 
 
 @dataclass(frozen=True, eq=False)
