@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 import trimesh
 
-from weldplan.errors import InputError
+from weldplan.errors import ConfigError, InputError
 from weldplan.geometry.collision import CollisionModel
 from weldplan.geometry.pathcore import PathObstacle, polyline_length
-from weldplan.weld.refine import REFINE_MARGIN, RefinedPath, refine_path
+from weldplan.weld.refine import REFINE_MARGIN, RefinedPath, RefineSettings, refine_path
 
 R = 5.0  # mm clearance
 
@@ -138,13 +138,28 @@ def test_round_trip(cube: CollisionModel) -> None:
     assert np.array_equal(back.points, r.points) and back.status == r.status
 
 
-@pytest.mark.parametrize(
-    "kw", [{"clearance": float("nan")}, {"clearance": -1.0}, {"margin": math.inf}]
-)
-def test_bad_settings_are_input_errors(cube: CollisionModel, kw: dict) -> None:
+@pytest.mark.parametrize("kw", [{"clearance": float("nan")}, {"clearance": -1.0}])
+def test_a_bad_clearance_is_an_input_error(cube: CollisionModel, kw: dict) -> None:
     args = {"clearance": R} | kw
     with pytest.raises(InputError):
         refine_path(detour(), cube, **args)
+
+
+@pytest.mark.parametrize("kw", [{"margin": math.inf}, {"tol": -1.0}, {"levels": -1}])
+def test_bad_settings_are_config_errors_naming_the_field(cube: CollisionModel, kw: dict) -> None:
+    with pytest.raises(ConfigError) as info:
+        refine_path(detour(), cube, R, **kw)
+    assert info.value.field == next(iter(kw))
+    with pytest.raises(TypeError, match="'tautt'"):
+        refine_path(detour(), cube, R, tautt=False)
+
+
+def test_a_settings_object_and_its_keywords_refine_the_same(cube: CollisionModel) -> None:
+    a = refine_path(detour(), cube, R, RefineSettings(levels=2, taut=False))
+    b = refine_path(detour(), cube, R, levels=2, taut=False)
+    c = refine_path(detour(), cube, R, RefineSettings(levels=5), levels=2, taut=False)
+    assert a.refined and np.array_equal(a.points, b.points) and np.array_equal(a.points, c.points)
+    assert a.checks == b.checks == c.checks
 
 
 def test_bad_points_are_input_errors(cube: CollisionModel) -> None:

@@ -252,13 +252,13 @@ def _refine_inner(
 ) -> tuple[NDArray[np.float64], bool]:
     """:func:`weldplan.weld.refine.refine_path` on the path between the virtual joints, its
     checks and final check through python-fcl (counted in ``checks``)."""
-    from weldplan.weld.refine import refine_path
+    from weldplan.weld.refine import RefineSettings, refine_path
 
     rp = refine_path(
         inner, collision, clearance,
+        RefineSettings(taut=prm.refine_taut, time_budget=prm.refine_budget),
         check=lambda A, B, rad: checks.many(A, B, rad),
         final_check=lambda A, B, rad: checks.many(A, B, rad),
-        taut=prm.refine_taut, time_budget=prm.refine_budget,
     )  # fmt: skip
     if not rp.refined:
         log.debug("refinement kept the grid path: %s", rp.status)

@@ -56,13 +56,13 @@ import logging
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, fields
-from typing import Any
+from dataclasses import dataclass, fields, replace
+from typing import Any, TypedDict, Unpack
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from weldplan.errors import InputError
+from weldplan.errors import ConfigError, InputError
 from weldplan.geometry.pathcore import PathObstacle, as_path, polyline_length
 
 log = logging.getLogger(__name__)
@@ -373,19 +373,70 @@ def _drop_straight(P: FloatArray) -> FloatArray:
     return P[keep]
 
 
+@dataclass(frozen=True)
+class RefineSettings:
+    """How :func:`refine_path` refines, validated once (a ConfigError naming the field).
+
+    Attributes
+    ----------
+    margin
+        mm added to the clearance for every segment the refinement creates
+        (:data:`REFINE_MARGIN`).
+    levels, max_sweeps, tol
+        Midpoint-splitting levels, sweeps per level and the gain (mm) under which a level ends
+        (the one-vertex sweeps, ``taut=False``).
+    time_budget
+        CPU seconds of the calling thread (:func:`time.thread_time`) for the vertex optimisation
+        (it stops between sweeps or rounds; the result is still checked). Not wall time: other
+        work on a loaded machine must not change the path. ``None``: no cap.
+    taut
+        Stage 2 is the joint vertex optimisation (:func:`weldplan.weld.taut.tauten_path`: every
+        vertex at once, by second-order cone programs; the default) instead of the one-vertex
+        sweeps of :func:`tighten_path` (``False``: the stage as it was, ``levels`` and
+        ``max_sweeps`` apply to it). On the 32 blocked pairs of ``weldplan bench local --peers``
+        the program brought the mean length from 1.006 to 0.995 x OMPL BIT* 10 s
+        (docs/bench-local-peers.md); the sweeps jam where a vertex should slide along a curved
+        surface.
+    """
+
+    margin: float = REFINE_MARGIN
+    levels: int = LEVELS
+    max_sweeps: int = MAX_SWEEPS
+    tol: float = TOL
+    time_budget: float | None = None
+    taut: bool = True
+
+    def __post_init__(self) -> None:
+        for name in ("margin", "tol"):
+            v = getattr(self, name)
+            ok = isinstance(v, (int, float, np.floating, np.integer)) and not isinstance(v, bool)
+            if not (ok and math.isfinite(v) and v >= 0):
+                raise ConfigError(f"{name} must be a finite number >= 0, got {v!r}", field=name)
+        for name in ("levels", "max_sweeps"):
+            if int(getattr(self, name)) < 0:
+                raise ConfigError(f"{name} must be >= 0, got {getattr(self, name)!r}", field=name)
+
+
+class RefineOptions(TypedDict, total=False):
+    """The keyword conveniences of :func:`refine_path`: :class:`RefineSettings` fields."""
+
+    margin: float
+    levels: int
+    max_sweeps: int
+    tol: float
+    time_budget: float | None
+    taut: bool
+
+
 def refine_path(
     points: ArrayLike,
     obstacle: PathObstacle,
     clearance: float,
+    settings: RefineSettings | None = None,
     *,
-    margin: float = REFINE_MARGIN,
-    levels: int = LEVELS,
-    max_sweeps: int = MAX_SWEEPS,
-    tol: float = TOL,
     check: SegmentsCheck | None = None,
     final_check: SegmentsCheck | None = None,
-    time_budget: float | None = None,
-    taut: bool = True,
+    **options: Unpack[RefineOptions],
 ) -> RefinedPath:
     """Refine a collision-free polyline off the grid (module docstring).
 
@@ -400,28 +451,18 @@ def refine_path(
         :class:`~weldplan.geometry.planar_obstacle.PlanarObstacle` (2D).
     clearance
         Radius of the swept ball (the torch-tip radius, mm).
-    margin
-        Added to ``clearance`` for every segment the refinement creates (:data:`REFINE_MARGIN`).
-    levels, max_sweeps, tol
-        Midpoint-splitting levels, sweeps per level and the gain (mm) under which a level ends.
+    settings
+        :class:`RefineSettings` (margin, levels, sweeps, tolerance, CPU budget, taut); ``None``:
+        the defaults.
     check
         ``check(A, B, radius) -> (m,) bool``, the segment check of the refinement; default
         ``obstacle.segments_free``.
     final_check
         ``final_check(A, B, radius) -> (m,) bool``, the check the result must pass at
         ``clearance``; default ``obstacle.segments_free``. The 3D planner passes python-fcl.
-    time_budget
-        CPU seconds of the calling thread (:func:`time.thread_time`) for the vertex optimisation
-        (it stops between sweeps or rounds; the result is still checked). Not wall time: other
-        work on a loaded machine must not change the path.
-    taut
-        Stage 2 is the joint vertex optimisation (:func:`weldplan.weld.taut.tauten_path`: every
-        vertex at once, by second-order cone programs; the default) instead of the one-vertex
-        sweeps of :func:`tighten_path` (``False``: the stage as it was, ``levels`` and
-        ``max_sweeps`` apply to it). On the 32 blocked pairs of ``weldplan bench local --peers``
-        the program brought the mean length from 1.006 to 0.995 x OMPL BIT* 10 s
-        (docs/bench-local-peers.md); the sweeps jam where a vertex should slide along a curved
-        surface.
+    **options
+        Any :class:`RefineSettings` field by name (``taut=False``, ``margin=0.05``...), laid
+        over ``settings``; an unknown keyword is a ``TypeError``.
 
     Returns
     -------
@@ -432,21 +473,27 @@ def refine_path(
     Raises
     ------
     InputError
-        A ``ValueError``: points that are not a finite ``(n, d)`` array, or a clearance/margin
-        that is not a finite number >= 0.
+        A ``ValueError``: points that are not a finite ``(n, d)`` array, or a clearance that is
+        not a finite number >= 0.
+    ConfigError
+        A ``ValueError``: a bad setting (a margin that is not a finite number >= 0...), naming
+        it.
     """
     t0 = time.perf_counter()
+    unknown = set(options) - set(RefineOptions.__annotations__)
+    if unknown:
+        raise TypeError(f"refine_path() got an unexpected keyword argument {sorted(unknown)[0]!r}")
+    st = replace(settings or RefineSettings(), **options)
+    margin, time_budget = st.margin, st.time_budget
     try:
         P = as_path(points)
     except ValueError as exc:
         raise InputError(str(exc), field="points") from None
-    for name, val in (("clearance", clearance), ("margin", margin)):
-        if not (
-            isinstance(val, (int, float, np.floating, np.integer))
-            and math.isfinite(val)
-            and val >= 0
-        ):
-            raise InputError(f"{name} must be a finite number >= 0, got {val!r}", field=name)
+    ok = isinstance(clearance, (int, float, np.floating, np.integer))
+    if not (ok and math.isfinite(clearance) and clearance >= 0):
+        raise InputError(
+            f"clearance must be a finite number >= 0, got {clearance!r}", field="clearance"
+        )
     L0 = polyline_length(P)
     free = _Counter(check or obstacle.segments_free, float(clearance) + float(margin))
 
@@ -463,7 +510,7 @@ def refine_path(
     deadline = None if time_budget is None else c0 + float(time_budget)
     S = shortcut_path(P, free)
     Ls = polyline_length(S)
-    if taut:
+    if st.taut:
         from weldplan.weld.taut import tauten_path
 
         left = None if deadline is None else deadline - time.thread_time()
@@ -472,7 +519,7 @@ def refine_path(
         Q = _drop_straight(Q)
     else:
         Q, sweeps = tighten_path(
-            S, free, obstacle.distance, levels=levels, max_sweeps=max_sweeps, tol=tol,
+            S, free, obstacle.distance, levels=st.levels, max_sweeps=st.max_sweeps, tol=st.tol,
             deadline=deadline,
         )  # fmt: skip
     Q[0], Q[-1] = P[0], P[-1]
@@ -518,9 +565,8 @@ def refine_local_path(
                 a, b = lo, hi
     fcl = lambda A, B, r: col.segments_free(A, B, r, method="fcl")  # noqa: E731
     budget = REFINE_BUDGET if time_budget is None else time_budget
-    rp = refine_path(
-        P[a:b], col, clearance, check=fcl, final_check=fcl, taut=taut, time_budget=budget
-    )
+    st = RefineSettings(taut=taut, time_budget=budget)
+    rp = refine_path(P[a:b], col, clearance, st, check=fcl, final_check=fcl)
     if not rp.refined:
         return lp
     pts = np.concatenate([P[:a], rp.points, P[b:]])
