@@ -13,7 +13,7 @@ from tests.route_fixtures import box_part
 from weldplan.cli import main
 from weldplan.errors import InputError
 from weldplan.io.joints import Joints
-from weldplan.weld.cell import build_cell, default_max_joint_distance, load_cell
+from weldplan.weld.cell import build_cell, default_max_joint_distance, demo_cell, load_cell
 
 #: joints on the floor of tests/route_fixtures' box scene, in mm
 JOINTS_MM = "id,x,y,z\nA,-40,0,0\nB,40,0,0\nC,-40,60,0\n"
@@ -140,3 +140,21 @@ def test_cli_plan_names_the_far_joint_and_takes_max_joint_distance(files, capsys
     with pytest.raises(SystemExit) as e:
         main([*argv, "--max-joint-distance", "nan"])
     assert e.value.code == 2
+
+
+def test_a_settings_object_and_its_keywords_build_the_same_cell():
+    from weldplan.weld.cellsettings import CellSettings
+
+    cell = demo_cell(settings=CellSettings(pitch=10.0, margin=40.0))
+    same = demo_cell(pitch=10.0, margin=40.0)
+    over = demo_cell(settings=CellSettings(pitch=5.0), pitch=10.0, margin=40.0)
+    for c in (same, over):
+        assert c.grid.shape == cell.grid.shape and c.pitch == cell.pitch == 10.0
+        assert np.array_equal(c.virtual_index, cell.virtual_index)
+    # the default joint distance follows the pitch it is laid over
+    assert CellSettings(pitch=10.0).joint_distance_limit == default_max_joint_distance(5.0, 10.0)
+    with pytest.raises(InputError) as info:
+        CellSettings(margin=-1.0)
+    assert info.value.field == "margin"
+    with pytest.raises(TypeError, match="'pich'"):
+        demo_cell(pich=10.0)

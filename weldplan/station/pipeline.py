@@ -270,17 +270,22 @@ def _weld_points(station: Station) -> Any:
 def cell_stage(station: Station) -> Any:
     """The :class:`~weldplan.weld.cell.Cell` of the station's part and welds."""
     from weldplan.weld.cell import demo_cell, load_cell
+    from weldplan.weld.cellsettings import CellSettings
 
     c, p = station.cell, station.part
     if p.is_demo:
         return demo_cell(
-            pitch=c.pitch, clearance=station.clearance, margin=c.margin, spot_depth=c.spot_depth
-        )
-    return load_cell(
-        p.mesh, p.welds, units=p.units, scale=p.scale, length=p.length, pitch=c.pitch,  # type: ignore[arg-type]
-        clearance=station.clearance, margin=c.margin, approach_cone=c.approach_cone,
-        max_joint_distance=c.max_joint_distance, part_pose=station.part_pose,
+            settings=CellSettings(pitch=c.pitch, clearance=station.clearance, margin=c.margin,
+                                  spot_depth=c.spot_depth)
+        )  # fmt: skip
+    settings = CellSettings(
+        pitch=c.pitch, clearance=station.clearance, margin=c.margin,
+        approach_cone=c.approach_cone, max_joint_distance=c.max_joint_distance,
         spot_depth=c.spot_depth,
+    )  # fmt: skip
+    return load_cell(
+        p.mesh, p.welds, units=p.units, scale=p.scale, length=p.length,  # type: ignore[arg-type]
+        part_pose=station.part_pose, settings=settings,
     )  # fmt: skip
 
 

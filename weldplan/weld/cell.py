@@ -25,9 +25,9 @@ faces the loader removed.
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from os import PathLike
-from typing import Any
+from typing import Any, Unpack
 
 import numpy as np
 import trimesh
@@ -36,17 +36,16 @@ from numpy.typing import ArrayLike, NDArray
 from weldplan.cellframe import PartPose, place_part
 from weldplan.errors import InputError
 from weldplan.geometry.collision import CollisionModel
-from weldplan.geometry.grid import (
-    DEFAULT_CLEARANCE,
-    DEFAULT_MARGIN,
-    DEFAULT_PITCH,
-    ObstacleGrid,
-    build_grid,
-)
+from weldplan.geometry.grid import ObstacleGrid, build_grid
 from weldplan.geometry.solids import ClosedSolids
 from weldplan.io.joints import COINCIDENT_MM, Joints, coincident_joints, read_joints
 from weldplan.io.mesh import geometry_hash, load_part
-from weldplan.weld.validate import _is_real
+from weldplan.weld.cellsettings import (  # noqa: F401 - their home was this module
+    JOINT_DISTANCE_MIN_MM,
+    CellOptions,
+    CellSettings,
+    default_max_joint_distance,
+)
 from weldplan.weld.virtual import (  # noqa: F401 - virtual_joints' home was this module
     _SEARCH_FACTOR,
     APPROACH_CONE_DEG,
@@ -55,24 +54,6 @@ from weldplan.weld.virtual import (  # noqa: F401 - virtual_joints' home was thi
 )
 
 log = logging.getLogger(__name__)
-
-#: floor (mm) of the default largest distance from a joint to the part's surface
-JOINT_DISTANCE_MIN_MM = 20.0
-
-
-def default_max_joint_distance(
-    clearance: float, pitch: float, search_radius: float | None = None
-) -> float:
-    """Default largest distance (mm) from a weld joint to the part's surface.
-
-    A weld joint lies on the part; its approach runs to a virtual joint at most the search
-    radius away (``4 * (clearance + pitch)``, 40 mm at 5/5 mm, or ``search_radius`` when
-    given). A joint farther from the surface than that, and than :data:`JOINT_DISTANCE_MIN_MM`,
-    belongs to another part, another unit or another scale. On the committed sets the farthest
-    joint is 0.13 mm off car2's surface (1000-joint set) and 3e-5 mm off the demo part.
-    """
-    radius = _SEARCH_FACTOR * (clearance + pitch) if search_radius is None else search_radius
-    return float(max(JOINT_DISTANCE_MIN_MM, radius))
 
 
 @dataclass(frozen=True, eq=False)
@@ -270,16 +251,10 @@ def _fmt(v: ArrayLike) -> str:
 def build_cell(
     part: trimesh.Trimesh,
     joints: Joints,
+    settings: CellSettings | None = None,
     *,
-    pitch: float = DEFAULT_PITCH,
-    clearance: float = DEFAULT_CLEARANCE,
-    margin: float = DEFAULT_MARGIN,
-    region: str | ArrayLike = "joints",
-    search_radius: float | None = None,
-    approach_cone: float = APPROACH_CONE_DEG,
-    max_joint_distance: float | None = None,
     part_pose: PartPose | None = None,
-    spot_depth: float = 0.0,
+    **options: Unpack[CellOptions],
 ) -> Cell:
     """Model a welding cell (Wang et al. 2017, section 3).
 
@@ -290,21 +265,20 @@ def build_cell(
     joints
         The weld joints (mm); their approach directions, when given, restrict each virtual
         joint to a cone of ``approach_cone`` degrees around them.
-    pitch, clearance, margin, region
-        Grid settings, see :func:`weldplan.geometry.grid.build_grid`. The interior of the part's
-        closed components is obstacle too (:mod:`weldplan.geometry.solids`).
-    search_radius, approach_cone
-        See :func:`virtual_joints`.
-    max_joint_distance
-        Largest distance (mm) from a joint to the part's surface; default
-        :func:`default_max_joint_distance` (40 mm at the default clearance and pitch).
+    settings
+        :class:`~weldplan.weld.cellsettings.CellSettings`: the grid (pitch, clearance, margin,
+        region; see :func:`weldplan.geometry.grid.build_grid`: the interior of the part's closed
+        components is obstacle too, :mod:`weldplan.geometry.solids`), the virtual joints'
+        search (:func:`virtual_joints`), the largest joint-to-part distance and the spots'
+        depth; ``None``: the defaults.
     part_pose
         The part's pose in the cell (:class:`~weldplan.cellframe.PartPose`): ``part`` and
         ``joints`` are given in the part frame and moved into the cell frame (the fixture
         height resolved on the part) before anything else; every stage then plans in the cell
         frame. ``None``: the part frame is the planning frame.
-    spot_depth
-        mm (>= 0, below the surface along the approach): :attr:`Cell.spot_depth`.
+    **options
+        Any :class:`~weldplan.weld.cellsettings.CellSettings` field by name (``pitch=2.0``,
+        ``clearance=3.0``...), laid over ``settings``; an unknown keyword is a ``TypeError``.
 
     Returns
     -------
@@ -319,12 +293,12 @@ def build_cell(
     PlanningError
         A joint has no free voxel centre near it (:func:`virtual_joints`).
     """
-    pitch, clearance, margin, search_radius, max_joint_distance = _settings(
-        pitch, clearance, margin, search_radius, max_joint_distance
-    )
-    spot_depth = _finite_mm(
-        "spot_depth", spot_depth, minimum=0.0, text="spot_depth must be >= 0 mm"
-    )
+    unknown = set(options) - set(CellOptions.__annotations__)
+    if unknown:
+        raise TypeError(f"build_cell() got an unexpected keyword argument {sorted(unknown)[0]!r}")
+    st = replace(settings or CellSettings(), **options)
+    pitch, clearance, spot_depth = st.pitch, st.clearance, st.spot_depth
+    max_joint_distance = st.joint_distance_limit
     if not isinstance(joints, Joints):
         raise InputError(f"joints must be weldplan Joints, got {type(joints).__name__}")
     if not isinstance(part, trimesh.Trimesh) or len(part.faces) == 0:
@@ -346,9 +320,9 @@ def build_cell(
         part,
         pitch=pitch,
         clearance=clearance,
-        region=region,
+        region=st.region,
         points=joints.xyz,
-        margin=margin,
+        margin=st.margin,
         distance=collision.distance,
         solids=solids,
     )
@@ -358,9 +332,9 @@ def build_cell(
         grid,
         joints.xyz,
         ids=joints.ids,
-        search_radius=search_radius,
+        search_radius=st.search_radius,
         directions=joints.directions,
-        approach_cone=approach_cone,
+        approach_cone=st.approach_cone,
         approach_free=lambda p, c: approach_free(collision, p, c, clearance, depth=spot_depth),
     )
     return Cell(
@@ -397,27 +371,6 @@ def _diagnostics(
         "joint_distance_max_mm": round(far, 6),
         "max_joint_distance_mm": max_joint_distance,
     }
-
-
-def _settings(
-    pitch: Any,
-    clearance: Any,
-    margin: Any,
-    search_radius: Any,
-    max_joint_distance: Any,
-) -> tuple[float, float, float, float | None, float]:
-    """:func:`build_cell`'s settings checked (InputError naming the setting) and
-    ``max_joint_distance`` defaulted."""
-    pitch = _positive_mm("pitch", pitch)
-    clearance = _positive_mm("clearance", clearance)
-    margin = _finite_mm("margin", margin, minimum=0.0, text="margin must be >= 0 mm")
-    if search_radius is not None:
-        search_radius = _positive_mm("search_radius", search_radius)
-    if max_joint_distance is None:
-        max_joint_distance = default_max_joint_distance(clearance, pitch, search_radius)
-    else:
-        max_joint_distance = _positive_mm("max_joint_distance", max_joint_distance)
-    return pitch, clearance, margin, search_radius, max_joint_distance
 
 
 def _coincident(joints: Joints) -> list[tuple[int, int]]:
@@ -457,22 +410,6 @@ def check_joint_distances(
     return float(d.max())
 
 
-def _finite_mm(name: str, value: Any, *, minimum: float, text: str) -> float:
-    # a number, not something float() happens to accept ("5", True): the API says what it takes
-    v = float(value) if _is_real(value) else float("nan")
-    if not (np.isfinite(v) and v >= minimum):
-        raise InputError(f"{text}, got {value}", field=name)
-    return v
-
-
-def _positive_mm(name: str, value: Any) -> float:
-    """The messages of :class:`weldplan.weld.pipeline.PlanConfig`, as InputErrors."""
-    v = _finite_mm(name, value, minimum=0.0, text=f"{name} must be a positive number of mm")
-    if v == 0:
-        raise InputError(f"{name} must be a positive number of mm, got {value}", field=name)
-    return v
-
-
 def load_cell(
     mesh_path: str | PathLike[str],
     joints_path: str | PathLike[str],
@@ -500,8 +437,10 @@ def load_cell(
         :func:`build_cell`): the mesh and the joints CSV are in the part frame (the mesh after
         ``units``/``scale``/``length``), the cell is in the cell frame.
     **kw
-        Passed to :func:`build_cell` (``pitch``, ``clearance``, ``margin``, ``region``,
-        ``search_radius``, ``approach_cone``, ``max_joint_distance``).
+        Passed to :func:`build_cell`: ``settings`` (a
+        :class:`~weldplan.weld.cellsettings.CellSettings`) and any of its fields by name
+        (``pitch``, ``clearance``, ``margin``, ``region``, ``search_radius``,
+        ``approach_cone``, ``max_joint_distance``, ``spot_depth``).
 
     Raises
     ------
