@@ -17,6 +17,7 @@ import json
 import math
 import os
 import time
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -78,6 +79,62 @@ def _stats(x: list[float]) -> dict[str, float]:
         "min": float(a.min()),
         "max": float(a.max()),
     }
+
+
+@dataclass(frozen=True)
+class Table3Run:
+    """The figures of one ``weldplan bench local`` run: what ``local.md`` and ``local.json``
+    report.
+
+    Attributes
+    ----------
+    cell, pair, runs
+        The cell's note, the joint ids of the pair (start, goal) and the seeded runs per row.
+    exact, first
+        The exact baseline's :class:`~weldplan.weld.localpath.LocalPath` (its last repeat) and
+        the first call on the cell (which builds the per-grid caches).
+    exact_times, exact_cpu
+        Wall and CPU seconds of the exact baseline's repeats.
+    straight_virtual, straight_real
+        mm between the virtual joints and between the real joints.
+    rows
+        Per (N, M) and method (ACO, SO-ACO): lengths (mm), times and CPU (s) with their stats.
+    load_before, load_after
+        The load average (1, 5, 15 min) before and after the runs.
+    calibration
+        Wall and CPU seconds of a 10^6-iteration Python loop before and after the runs.
+    """
+
+    cell: str
+    pair: tuple[str, str]
+    runs: int
+    exact: Any
+    first: Any
+    exact_times: tuple[float, ...]
+    exact_cpu: tuple[float, ...]
+    straight_virtual: float
+    straight_real: float
+    rows: tuple[dict[str, Any], ...]
+    load_before: tuple[float, ...]
+    load_after: tuple[float, ...]
+    calibration: tuple[tuple[float, float], tuple[float, float]]
+
+    def to_dict(self) -> dict[str, Any]:
+        """``local.json``'s content (its keys in the order the file has always had them)."""
+        return {
+            "cell": self.cell,
+            "pair": list(self.pair),
+            "exact": self.exact.to_dict(),
+            "exact_first_call": [self.first.seconds, self.first.cpu_seconds],
+            "exact_times": list(self.exact_times),
+            "exact_cpu": list(self.exact_cpu),
+            "straight_virtual": self.straight_virtual,
+            "straight_real": self.straight_real,
+            "rows": list(self.rows),
+            "load_before": self.load_before,
+            "load_after": self.load_after,
+            "loop_1e6_wall_cpu": list(self.calibration),
+        }
 
 
 def run(args: argparse.Namespace) -> int:
@@ -153,49 +210,25 @@ def run(args: argparse.Namespace) -> int:
     load1 = os.getloadavg()
     cal1 = _calibrate()
 
-    md = _markdown(
-        rows, exact, first, ex_times, ex_cpu, straight_virtual, straight_real, cell_note, runs,
-        load0, load1, (cal0, cal1),
+    table = Table3Run(
+        cell=cell_note, pair=(args.src, args.dst), runs=runs, exact=exact, first=first,
+        exact_times=tuple(ex_times), exact_cpu=tuple(ex_cpu), straight_virtual=straight_virtual,
+        straight_real=straight_real, rows=tuple(rows), load_before=load0, load_after=load1,
+        calibration=(cal0, cal1),
     )  # fmt: skip
-    (out / "local.md").write_text(md)
-    (out / "local.json").write_text(
-        json.dumps(
-            {
-                "cell": cell_note,
-                "pair": [args.src, args.dst],
-                "exact": exact.to_dict(),
-                "exact_first_call": [first.seconds, first.cpu_seconds],
-                "exact_times": ex_times,
-                "exact_cpu": ex_cpu,
-                "straight_virtual": straight_virtual,
-                "straight_real": straight_real,
-                "rows": rows,
-                "load_before": load0,
-                "load_after": load1,
-                "loop_1e6_wall_cpu": [cal0, cal1],
-            },
-            indent=1,
-        )
-    )
+    (out / "local.md").write_text(_markdown(table))
+    (out / "local.json").write_text(json.dumps(table.to_dict(), indent=1))
     _plot(curves, exact.inner_length, out / "local-convergence.png")
     print(f"wrote {out / 'local.md'}, {out / 'local.json'}, {out / 'local-convergence.png'}")
     return 0
 
 
-def _markdown(
-    rows: list[dict[str, Any]],
-    exact: Any,
-    first: Any,
-    ex_times: list[float],
-    ex_cpu: list[float],
-    straight_virtual: float,
-    straight_real: float,
-    cell_note: str,
-    runs: int,
-    load0: tuple[float, ...],
-    load1: tuple[float, ...],
-    cal: tuple[tuple[float, float], tuple[float, float]],
-) -> str:
+def _markdown(t3: Table3Run) -> str:
+    """``local.md``: the run's setting, the exact baseline, the table and the targets."""
+    rows, exact, first, runs = t3.rows, t3.exact, t3.first, t3.runs
+    ex_times, ex_cpu, cell_note = t3.exact_times, t3.exact_cpu, t3.cell
+    straight_virtual, straight_real = t3.straight_virtual, t3.straight_real
+    load0, load1, cal = t3.load_before, t3.load_after, t3.calibration
     ex = exact.inner_length
     lines = [
         "# Table 3 reproduction: ACO and SO-ACO, joint 3 to joint 7",
