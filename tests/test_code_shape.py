@@ -1,7 +1,8 @@
 """The code keeps its shape (issue 28, "Done when"), read from the source (ast): no function in
 weldplan/commands/ over :data:`MAX_LINES` lines, decorators and docstrings included; no function
-in weldplan/robot/ over :data:`MAX_PARAMS` parameters (a stage takes its data and one settings
-object, weldplan/robot/settings.py)."""
+in the package over :data:`MAX_PARAMS` parameters (a stage takes its data and one settings
+object: weldplan/robot/settings.py, weldplan/tool/settings.py,
+weldplan/motion/settings.py...), but in the files of :data:`WIDE_FILES`, each with its reason."""
 
 from __future__ import annotations
 
@@ -9,13 +10,19 @@ import ast
 from pathlib import Path
 
 COMMANDS = Path(__file__).resolve().parents[1] / "weldplan" / "commands"
-ROBOT = COMMANDS.parent / "robot"
 #: the longest function the command layer may hold, lines from ``def`` to its last line
 MAX_LINES = 40
 #: functions allowed over the limit, each with its reason
 ALLOWED: dict[str, str] = {}
 #: the most parameters a function may take, ``self`` and ``cls`` not counted
 MAX_PARAMS = 10
+#: files (relative to weldplan/) whose functions may take more, each with its reason
+WIDE_FILES: dict[str, str] = {
+    "planar/_polyanya_kernel.py": (
+        "numba-compiled kernels: nopython functions take flat arrays and scalars, not "
+        "dataclasses, so the mesh's arrays and the search's state are passed one by one"
+    ),
+}
 
 
 def long_functions(root: Path, limit: int) -> dict[str, int]:
@@ -31,12 +38,15 @@ def long_functions(root: Path, limit: int) -> dict[str, int]:
     return out
 
 
-def wide_signatures(root: Path, limit: int) -> dict[str, int]:
+def wide_signatures(root: Path, limit: int, skip: tuple[str, ...] = ()) -> dict[str, int]:
     """``file:function`` -> parameters, for every function (methods and nested ones too) in the
-    ``.py`` files under ``root`` that takes more than ``limit``: positional, keyword-only,
-    ``*args`` and ``**kwargs`` each count one; ``self`` and ``cls`` do not."""
+    ``.py`` files under ``root`` (but the files ``skip`` names, relative to ``root``) that takes
+    more than ``limit``: positional, keyword-only, ``*args`` and ``**kwargs`` each count one;
+    ``self`` and ``cls`` do not."""
     out = {}
     for path in sorted(root.rglob("*.py")):
+        if path.relative_to(root).as_posix() in skip:
+            continue
         for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
             if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
                 a = node.args
@@ -62,9 +72,21 @@ def test_the_rule_counts_nested_functions_and_methods(tmp_path):
     assert long_functions(tmp_path, 6) == {}
 
 
-def test_no_robot_signature_over_ten():
-    wide = wide_signatures(ROBOT, MAX_PARAMS)
-    assert not wide, f"functions over {MAX_PARAMS} parameters in weldplan/robot: {wide}"
+def test_no_signature_in_the_package_over_ten():
+    """Issue 28's rule for tool/ and robot/, on the whole package: a search takes its inputs
+    and one settings object (keyword conveniences go through ``**options``, one parameter)."""
+    wide = wide_signatures(COMMANDS.parent, MAX_PARAMS, skip=tuple(WIDE_FILES))
+    assert not wide, f"functions over {MAX_PARAMS} parameters in weldplan: {wide}"
+
+
+def test_each_file_let_through_still_needs_it():
+    """Each file of :data:`WIDE_FILES` still has a function over the limit, so an exception
+    cannot outlive its reason."""
+    wide = wide_signatures(COMMANDS.parent, MAX_PARAMS)
+    for rel in WIDE_FILES:
+        assert any(k.startswith(f"{rel}:") for k in wide), (
+            f"{rel} no longer needs its exception: remove it from WIDE_FILES"
+        )
 
 
 def test_the_signature_rule_counts_keyword_only_and_star_arguments(tmp_path):
@@ -75,13 +97,7 @@ def test_the_signature_rule_counts_keyword_only_and_star_arguments(tmp_path):
     assert wide_signatures(tmp_path, 6) == {"a.py:f": 7}
     assert wide_signatures(tmp_path, 1) == {"a.py:f": 7, "a.py:m": 2}
     assert wide_signatures(tmp_path, 7) == {}
-
-
-def test_no_tool_signature_over_ten():
-    """Issue 28, "Done when": a tool search takes its inputs and one settings object
-    (weldplan.tool.settings)."""
-    wide = wide_signatures(ROBOT.parent / "tool", MAX_PARAMS)
-    assert not wide, f"functions over {MAX_PARAMS} parameters in weldplan/tool: {wide}"
+    assert wide_signatures(tmp_path, 1, skip=("a.py",)) == {}
 
 
 #: the modules that may read a route's ``tool`` section as a dict: the Route that holds it and
