@@ -12,7 +12,7 @@ import pytest
 
 from tests.route_fixtures import SPOTS, box_part, box_route
 from weldplan.errors import InputError, WeldplanError
-from weldplan.io import export
+from weldplan.io import atomic, export
 from weldplan.io.export import (
     POSTS,
     euler_zyx_deg,
@@ -200,7 +200,7 @@ def test_failed_write_leaves_the_old_file_and_no_temp(tmp_path, monkeypatch):
     def boom(*a, **k):
         raise OSError("disk full")
 
-    monkeypatch.setattr(export.os, "fsync", boom)
+    monkeypatch.setattr(atomic.os, "fsync", boom)
     with pytest.raises(OSError, match="disk full"):
         write_csv(box_route(), p)
     assert p.read_text() == "good"

@@ -355,12 +355,12 @@ def test_write_protected_output_file_is_named(tmp_path):
 def test_a_full_disk_in_the_middle_leaves_every_previous_output(tmp_path, monkeypatch):
     """The second output's write fails (ENOSPC): one line, exit 1, and the route CSV and JSON
     of the previous run are both as they were."""
-    from weldplan.io import export
+    from weldplan.io import atomic
 
     sc = make_scene(tmp_path)
     sc.csv.write_text("old csv\n")
     sc.json.write_text("old json\n")
-    real = export.os.fsync
+    real = atomic.os.fsync
     calls = []
 
     def fsync(fd):
@@ -369,7 +369,7 @@ def test_a_full_disk_in_the_middle_leaves_every_previous_output(tmp_path, monkey
             raise OSError(errno.ENOSPC, "No space left on device")
         return real(fd)
 
-    monkeypatch.setattr(export.os, "fsync", fsync)
+    monkeypatch.setattr(atomic.os, "fsync", fsync)
     o = run_cli(sc.plan_argv())
     assert_one_line_error(o, FAILURE, "space")
     assert sc.csv.read_text() == "old csv\n" and sc.json.read_text() == "old json\n"

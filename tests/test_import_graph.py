@@ -91,7 +91,8 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("base", ("weldplan.errors", "weldplan.random", "weldplan.lazy", "weldplan._version")),
     ("geometry", ("weldplan.geometry",)),
     ("optim", ("weldplan.optim",)),
-    # the readers of the inputs and the all-or-nothing file writer: every stage uses them
+    # the readers of the inputs and the all-or-nothing file writers (io.atomic, io.outputset):
+    # every stage uses them
     ("readers", ("weldplan.io", "weldplan.io.joints", "weldplan.io.mesh", "weldplan.io.tsplib",
                  "weldplan.io.outputset")),
     ("planar", ("weldplan.planar",)),
@@ -101,9 +102,9 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("tool", ("weldplan.tool",)),
     # the exporters read the route and its poses (weld, tool) and are what the robot's program
     # is written with; io/tool_csv is the tool path's writer, an exporter beside its model
-    ("exporters", ("weldplan.io.export", "weldplan.io.blending", "weldplan.io.smooth_moves",
-                   "weldplan.io.timings", "weldplan.io.trajectory", "weldplan.io.posts",
-                   "weldplan.io.tool_csv")),
+    ("exporters", ("weldplan.io.export", "weldplan.io.route_rows", "weldplan.io.route_posts",
+                   "weldplan.io.blending", "weldplan.io.smooth_moves", "weldplan.io.timings",
+                   "weldplan.io.trajectory", "weldplan.io.posts", "weldplan.io.tool_csv")),
     ("robot", ("weldplan.robot",)),
     # the allocation of welds among robots: reach and leg times of the robot models
     ("multi", ("weldplan.multi",)),
