@@ -183,3 +183,52 @@ def test_the_tool_section_rule_finds_each_way_of_reading_the_dict(tmp_path):
     (tmp_path / "weld" / "route.py").write_text("x = self.tool or {}\n")  # the Route's own
     found = tool_section_dict_reads(tmp_path)
     assert sorted(found) == sorted(f"bad{k}.py:1" for k in range(len(bad)))
+
+
+#: the modules that may write a route's ``tool`` section: its two typed views
+#: (:meth:`weldplan.tool.section.ToolSection.on`, :meth:`weldplan.robot.program.ToolRoute.on`)
+#: and the Route that holds it
+TOOL_SECTION_WRITERS = ("weld/route.py", "tool/section.py", "robot/program/toolroute.py")
+
+
+def tool_section_dict_writes(root: Path) -> list[str]:
+    """``file:line`` of every call that sets a route's ``tool`` section, ``replace(..., tool=...)``
+    or ``Route(..., tool=...)``, outside :data:`TOOL_SECTION_WRITERS` in the ``.py`` files under
+    ``root``: a section is written through its typed view, never built as a dict by its
+    writers."""
+    out = []
+    for path in sorted(root.rglob("*.py")):
+        rel = path.relative_to(root).as_posix()
+        if rel in TOOL_SECTION_WRITERS:
+            continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if not isinstance(node, ast.Call):
+                continue
+            f = node.func
+            name = f.id if isinstance(f, ast.Name) else getattr(f, "attr", "")
+            if name in ("replace", "Route") and any(k.arg == "tool" for k in node.keywords):
+                out.append(f"{rel}:{node.lineno}")
+    return out
+
+
+def test_no_module_writes_the_route_tool_section_as_a_dict():
+    """The tool stage and the robot stage write a route's tool section typed
+    (ToolSection.on, ToolRoute.on), as they read it."""
+    writes = tool_section_dict_writes(COMMANDS.parent)
+    assert not writes, f"writes of route.tool outside the typed views: {writes}"
+
+
+def test_the_tool_section_write_rule_finds_each_way_of_setting_it(tmp_path):
+    bad = [
+        "import dataclasses\nx = dataclasses.replace(route, tool={})",
+        "from dataclasses import replace\nx = replace(r, order=o, tool=data)",
+        "x = Route(order=o, tool={'poses': p})",
+    ]
+    for k, src in enumerate(bad):
+        (tmp_path / f"bad{k}.py").write_text(src + "\n")
+    ok = "x = ToolSection(poses=p).on(route)\ny = replace(route, legs=legs)\nz = f(tool=t)\n"
+    (tmp_path / "ok.py").write_text(ok)
+    (tmp_path / "tool").mkdir()
+    (tmp_path / "tool" / "section.py").write_text("x = replace(route, tool=self.to_dict())\n")
+    found = tool_section_dict_writes(tmp_path)
+    assert sorted(found) == sorted(f"bad{k}.py:{1 + (k < 2)}" for k in range(len(bad)))

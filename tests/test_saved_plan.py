@@ -273,3 +273,28 @@ def test_a_route_reads_its_tool_section_once_and_a_new_route_reads_its_own():
     with pytest.raises(InputError, match="robot route is not valid") as e:
         recheck(bad, None, path="bad.json")
     assert "bad.json" in str(e.value)
+
+
+def test_the_tool_stage_writes_its_section_typed_with_the_same_bytes():
+    """ToolSection.to_dict gives back the section it read, key for key and in order (so a
+    route written through ToolSection.on has the JSON bytes it had when the tool stage built
+    the dict itself), an empty section writes nothing, and the tool stage's writer
+    (station.toolstage.with_tool) lays the section over the route's."""
+    from weldplan.station.toolstage import PosesResult, TransitionsResult, with_tool
+    from weldplan.tool.section import ToolSection
+    from weldplan.weld.route import Route
+
+    d = json.loads(OLD_ROBOT.read_text())
+    section = ToolSection.from_dict(d["tool"])
+    assert json.dumps(section.to_dict()) == json.dumps(d["tool"])
+    route = Route.from_dict(d)
+    assert section.on(route).to_json() == route.to_json()
+    assert ToolSection().to_dict() == {} and ToolSection().on(route).tool == {}
+    stage = {k: d["tool"][k] for k in ("provenance", "poses", "transitions")}
+    poses = PosesResult(section.poses, None)
+    path = TransitionsResult(section.transitions, None)
+    assert json.dumps(with_tool(route, d["tool"]["provenance"], poses, path).tool) == json.dumps(
+        stage
+    )
+    no_path = with_tool(route, d["tool"]["provenance"], poses, None).tool
+    assert list(no_path) == ["provenance", "poses"]

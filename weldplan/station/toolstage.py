@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from weldplan.station.model import ToolSettings
+from weldplan.tool.section import ToolSection
 from weldplan.tool.settings import OrderSettings, PoseSearchSettings, TransitionSettings
 
 
@@ -139,11 +140,14 @@ def with_tool(
     route: Any, provenance: dict[str, Any], poses: PosesResult, path: TransitionsResult | None
 ) -> Any:
     """``route`` carrying the tool stage's results in ``route.tool`` (what the route JSON and
-    the exporters read)."""
-    data: dict[str, Any] = {"provenance": provenance, "poses": poses.poses.to_dict()}
-    if path is not None:
-        data["transitions"] = path.path.to_dict()
-    return dataclasses.replace(route, tool=data)
+    the exporters read), written through its typed view
+    (:class:`~weldplan.tool.section.ToolSection`)."""
+    section = ToolSection(
+        provenance=provenance,
+        poses=poses.poses,
+        transitions=None if path is None else path.path,
+    )
+    return section.on(route)
 
 
 def tool_checks(poses: PosesResult, path: TransitionsResult | None) -> Any:

@@ -10,8 +10,9 @@ route. :class:`ToolSection` reads the tool stage's three, as the readers of this
 read here (``robot``, and any this version does not know) are kept as they were in
 :attr:`ToolSection.rest`.
 
-No module reads a route's ``tool`` section as a dict but these two views
-(``tests/test_code_shape.py``).
+No module reads a route's ``tool`` section as a dict but these two views, and none writes one
+but through them (:meth:`ToolSection.on`, :meth:`ToolRoute.on
+<weldplan.robot.program.ToolRoute.on>`; ``tests/test_code_shape.py``).
 """
 
 from __future__ import annotations
@@ -71,6 +72,29 @@ class ToolSection:
             transitions=ToolPath.from_dict(path) if path else None,
             rest={k: v for k, v in d.items() if k not in TOOL_STAGE_KEYS},
         )
+
+    def to_dict(self) -> dict[str, Any]:
+        """The ``tool`` section in the planner's layout: ``provenance``, ``poses`` and
+        ``transitions`` (where there are some), then :attr:`rest`; ``{}`` for an empty section
+        (a point-tip route)."""
+        d: dict[str, Any] = {}
+        if self.provenance or self.poses is not None or self.transitions is not None:
+            d["provenance"] = dict(self.provenance)
+        if self.poses is not None:
+            d["poses"] = self.poses.to_dict()
+        if self.transitions is not None:
+            d["transitions"] = self.transitions.to_dict()
+        d.update(self.rest)
+        return d
+
+    def on(self, route: Route | Any) -> Any:
+        """``route`` carrying this section in its ``tool`` (a new route, which reads its
+        section again: :meth:`of`). The one way the tool stage writes a route's section
+        (``tests/test_code_shape.py``); :class:`weldplan.robot.program.ToolRoute` writes the
+        whole section with the robot's route the same way."""
+        import dataclasses
+
+        return dataclasses.replace(route, tool=self.to_dict())
 
     @classmethod
     def of(cls, route: Route | Any) -> ToolSection:

@@ -121,6 +121,7 @@ def gun_route(
     import dataclasses
 
     from weldplan.tool.poses.route_frames import weld_rows
+    from weldplan.tool.section import ToolSection
     from weldplan.weld.route import Leg
 
     if not path.order:
@@ -140,7 +141,7 @@ def gun_route(
     first = by_id[path.order[0]]
     P = np.concatenate(P_all) if P_all else np.asarray([first.position], dtype=np.float64)
     Q = np.concatenate(Q_all) if Q_all else np.asarray([first.quaternion], dtype=np.float64)
-    gr = dataclasses.replace(route, order=tuple(path.order), legs=tuple(legs), tool={})
+    gr = ToolSection().on(dataclasses.replace(route, order=tuple(path.order), legs=tuple(legs)))
     gposes = dataclasses.replace(poses, poses=tuple(by_id[i] for i in path.order))
     T = np.tile(np.eye(4), (len(P), 1, 1))
     T[:, :3, :3] = Rotation.from_quat(np.roll(Q, -1, axis=1)).as_matrix()
