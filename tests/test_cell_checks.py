@@ -143,18 +143,19 @@ def test_cli_plan_names_the_far_joint_and_takes_max_joint_distance(files, capsys
 
 
 def test_a_settings_object_and_its_keywords_build_the_same_cell():
-    from weldplan.weld.cellsettings import CellSettings
+    from weldplan.weld.cellsettings import CellBuildSettings
 
-    cell = demo_cell(settings=CellSettings(pitch=10.0, margin=40.0))
+    cell = demo_cell(settings=CellBuildSettings(pitch=10.0, margin=40.0))
     same = demo_cell(pitch=10.0, margin=40.0)
-    over = demo_cell(settings=CellSettings(pitch=5.0), pitch=10.0, margin=40.0)
+    over = demo_cell(settings=CellBuildSettings(pitch=5.0), pitch=10.0, margin=40.0)
     for c in (same, over):
         assert c.grid.shape == cell.grid.shape and c.pitch == cell.pitch == 10.0
         assert np.array_equal(c.virtual_index, cell.virtual_index)
     # the default joint distance follows the pitch it is laid over
-    assert CellSettings(pitch=10.0).joint_distance_limit == default_max_joint_distance(5.0, 10.0)
+    limit = CellBuildSettings(pitch=10.0).joint_distance_limit
+    assert limit == default_max_joint_distance(5.0, 10.0)
     with pytest.raises(InputError) as info:
-        CellSettings(margin=-1.0)
+        CellBuildSettings(margin=-1.0)
     assert info.value.field == "margin"
     with pytest.raises(TypeError, match="'pich'"):
         demo_cell(pich=10.0)

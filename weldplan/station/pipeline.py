@@ -270,15 +270,15 @@ def _weld_points(station: Station) -> Any:
 def cell_stage(station: Station) -> Any:
     """The :class:`~weldplan.weld.cell.Cell` of the station's part and welds."""
     from weldplan.weld.cell import demo_cell, load_cell
-    from weldplan.weld.cellsettings import CellSettings
+    from weldplan.weld.cellsettings import CellBuildSettings
 
     c, p = station.cell, station.part
     if p.is_demo:
         return demo_cell(
-            settings=CellSettings(pitch=c.pitch, clearance=station.clearance, margin=c.margin,
+            settings=CellBuildSettings(pitch=c.pitch, clearance=station.clearance, margin=c.margin,
                                   spot_depth=c.spot_depth)
         )  # fmt: skip
-    settings = CellSettings(
+    settings = CellBuildSettings(
         pitch=c.pitch, clearance=station.clearance, margin=c.margin,
         approach_cone=c.approach_cone, max_joint_distance=c.max_joint_distance,
         spot_depth=c.spot_depth,

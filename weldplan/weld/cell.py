@@ -42,8 +42,8 @@ from weldplan.io.joints import COINCIDENT_MM, Joints, coincident_joints, read_jo
 from weldplan.io.mesh import geometry_hash, load_part
 from weldplan.weld.cellsettings import (  # noqa: F401 - their home was this module
     JOINT_DISTANCE_MIN_MM,
-    CellOptions,
-    CellSettings,
+    CellBuildOptions,
+    CellBuildSettings,
     default_max_joint_distance,
 )
 from weldplan.weld.virtual import (  # noqa: F401 - virtual_joints' home was this module
@@ -251,10 +251,10 @@ def _fmt(v: ArrayLike) -> str:
 def build_cell(
     part: trimesh.Trimesh,
     joints: Joints,
-    settings: CellSettings | None = None,
+    settings: CellBuildSettings | None = None,
     *,
     part_pose: PartPose | None = None,
-    **options: Unpack[CellOptions],
+    **options: Unpack[CellBuildOptions],
 ) -> Cell:
     """Model a welding cell (Wang et al. 2017, section 3).
 
@@ -266,18 +266,18 @@ def build_cell(
         The weld joints (mm); their approach directions, when given, restrict each virtual
         joint to a cone of ``approach_cone`` degrees around them.
     settings
-        :class:`~weldplan.weld.cellsettings.CellSettings`: the grid (pitch, clearance, margin,
-        region; see :func:`weldplan.geometry.grid.build_grid`: the interior of the part's closed
-        components is obstacle too, :mod:`weldplan.geometry.solids`), the virtual joints'
-        search (:func:`virtual_joints`), the largest joint-to-part distance and the spots'
-        depth; ``None``: the defaults.
+        :class:`~weldplan.weld.cellsettings.CellBuildSettings`: the grid (pitch, clearance,
+        margin, region; see :func:`weldplan.geometry.grid.build_grid`: the interior of the
+        part's closed components is obstacle too, :mod:`weldplan.geometry.solids`), the
+        virtual joints' search (:func:`virtual_joints`), the largest joint-to-part distance and
+        the spots' depth; ``None``: the defaults.
     part_pose
         The part's pose in the cell (:class:`~weldplan.cellframe.PartPose`): ``part`` and
         ``joints`` are given in the part frame and moved into the cell frame (the fixture
         height resolved on the part) before anything else; every stage then plans in the cell
         frame. ``None``: the part frame is the planning frame.
     **options
-        Any :class:`~weldplan.weld.cellsettings.CellSettings` field by name (``pitch=2.0``,
+        Any :class:`~weldplan.weld.cellsettings.CellBuildSettings` field by name (``pitch=2.0``,
         ``clearance=3.0``...), laid over ``settings``; an unknown keyword is a ``TypeError``.
 
     Returns
@@ -293,10 +293,10 @@ def build_cell(
     PlanningError
         A joint has no free voxel centre near it (:func:`virtual_joints`).
     """
-    unknown = set(options) - set(CellOptions.__annotations__)
+    unknown = set(options) - set(CellBuildOptions.__annotations__)
     if unknown:
         raise TypeError(f"build_cell() got an unexpected keyword argument {sorted(unknown)[0]!r}")
-    st = replace(settings or CellSettings(), **options)
+    st = replace(settings or CellBuildSettings(), **options)
     pitch, clearance, spot_depth = st.pitch, st.clearance, st.spot_depth
     max_joint_distance = st.joint_distance_limit
     if not isinstance(joints, Joints):
@@ -438,7 +438,7 @@ def load_cell(
         ``units``/``scale``/``length``), the cell is in the cell frame.
     **kw
         Passed to :func:`build_cell`: ``settings`` (a
-        :class:`~weldplan.weld.cellsettings.CellSettings`) and any of its fields by name
+        :class:`~weldplan.weld.cellsettings.CellBuildSettings`) and any of its fields by name
         (``pitch``, ``clearance``, ``margin``, ``region``, ``search_radius``,
         ``approach_cone``, ``max_joint_distance``, ``spot_depth``).
 

@@ -2,7 +2,9 @@
 object (../shared/DESIGN.md: a stage takes its inputs and one settings object).
 
 The grid (pitch, clearance, margin, region of interest), the virtual joints' search (radius,
-approach cone), the input check (the largest joint-to-part distance) and the spots' depth. A
+approach cone), the input check (the largest joint-to-part distance) and the spots' depth: the
+library's side of a station's :class:`weldplan.station.settings.CellSettings` (its ``[cell]``
+table and options), which :func:`weldplan.station.pipeline.cell_stage` maps onto this. A
 bad value is an :class:`~weldplan.errors.InputError` naming the setting, raised once, when the
 settings are made: the cell's settings come from the user's input (the CLI's options, a
 station file's ``[cell]`` table), and their messages are those of
@@ -42,7 +44,7 @@ def default_max_joint_distance(
 
 
 @dataclass(frozen=True)
-class CellSettings:
+class CellBuildSettings:
     """The settings of :func:`~weldplan.weld.cell.build_cell`.
 
     Attributes
@@ -93,9 +95,9 @@ class CellSettings:
         return default_max_joint_distance(self.clearance, self.pitch, self.search_radius)
 
 
-class CellOptions(TypedDict, total=False):
+class CellBuildOptions(TypedDict, total=False):
     """The keyword conveniences of :func:`~weldplan.weld.cell.build_cell`: any
-    :class:`CellSettings` field by name."""
+    :class:`CellBuildSettings` field by name."""
 
     pitch: float
     clearance: float
