@@ -35,7 +35,7 @@ from numpy.typing import NDArray
 from weldplan.errors import PlanningError
 from weldplan.geometry.pathmetrics import path_length
 from weldplan.optim.core import minimize
-from weldplan.optim.discrete.sequence import solve_sequence
+from weldplan.optim.discrete.sequence import SequenceSettings, solve_sequence
 from weldplan.optim.registry import get_optimizer
 from weldplan.planar.tour_anyangle import AnyAngleTourGraph, build_anyangle_graph
 from weldplan.planar.tour_order import (
@@ -187,7 +187,7 @@ def ground_truth(
     method)``; Held-Karp (exact) up to :data:`EXACT_STOPS` stops."""
     n = graph.dist.shape[0]
     method = "exact" if n <= EXACT_STOPS else "nn"
-    seq = solve_sequence(graph.dist, method=method, closed=True, first=0, rng=rng)
+    seq = solve_sequence(graph.dist, SequenceSettings(method, closed=True, first=0), rng=rng)
     order = list(seq.order)
     k = order.index(0)
     order = order[k:] + order[:k]

@@ -281,25 +281,25 @@ class PairPlanning:
         """One run of the sequencer over the current costs (warm from ``initial`` if given)."""
         from weldplan.optim.discrete.costs import order_cost
         from weldplan.optim.discrete.local_search import PolishParams
-        from weldplan.optim.discrete.sequence import solve_sequence
+        from weldplan.optim.discrete.sequence import SequenceSettings, solve_sequence
 
         t = time.perf_counter()
         self._stranded_check()
         self.report("sequence", round_, round_ + 1)
         config = self.config
         try:
-            extra: dict[str, Any] = {}
-            if config.sequence_time_budget is not None:
-                extra["time_budget"] = config.sequence_time_budget
-            if initial is not None:
-                extra["initial"] = initial
-                extra["polish_params"] = PolishParams(kicks=kicks)
-            if self.known_first and method == "fast-tsp":
-                extra["avoid"] = ~self.known[self.pair_index] & (self.pair_index >= 0)
-            Cs = self._sequencing_costs(method)
-            seq = solve_sequence(
-                Cs, method=method, polish=config.polish, rng=self.gen, pso=self.pso, **extra
+            settings = SequenceSettings(
+                method=method,
+                polish=config.polish,
+                pso=self.pso,
+                polish_params=None if initial is None else PolishParams(kicks=kicks),
+                time_budget=config.sequence_time_budget,
             )
+            avoid = None
+            if self.known_first and method == "fast-tsp":
+                avoid = ~self.known[self.pair_index] & (self.pair_index >= 0)
+            Cs = self._sequencing_costs(method)
+            seq = solve_sequence(Cs, settings, rng=self.gen, initial=initial, avoid=avoid)
             if Cs is not self.C:
                 seq = replace(seq, cost=float(order_cost(self.C, np.asarray(seq.order), False)))
         except PlanningError as exc:
@@ -383,7 +383,11 @@ class PairPlanning:
         """With fast-tsp or nn above Held-Karp size in the lazy mode: plan the legs that optimistic
         orders use until the route is within ``config.gap_target`` of one
         (:func:`weldplan.weld.converge.close_gap`); ``self.gap_rounds`` records the rounds."""
-        from weldplan.optim.discrete.sequence import resolve_method, solve_sequence
+        from weldplan.optim.discrete.sequence import (
+            SequenceSettings,
+            resolve_method,
+            solve_sequence,
+        )
         from weldplan.weld.converge import close_gap
 
         config = self.config
@@ -395,19 +399,16 @@ class PairPlanning:
             or self.n <= self.exact_max
         ):
             return seq
-        budget = (
-            {}
-            if config.sequence_time_budget is None
-            else {"time_budget": config.sequence_time_budget}
+        settings = SequenceSettings(
+            method=resolve_method(config.sequencer, self.n),
+            time_budget=config.sequence_time_budget,
         )
         seq, self.gap_rounds = close_gap(
             seq,
             self.C,
             self.known,
             self.pair_index,
-            optimistic=lambda Cb: solve_sequence(
-                Cb, method=resolve_method(config.sequencer, self.n), rng=self.gen, **budget
-            ),
+            optimistic=lambda Cb: solve_sequence(Cb, settings, rng=self.gen),
             plan=self.plan,
             resequence=lambda: self.settle(config.sequencer),
             near=self.near_unknown,
