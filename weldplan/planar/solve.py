@@ -20,7 +20,7 @@ import json
 import logging
 import time
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass, fields, replace
 from typing import Any, TypedDict, Unpack
 
 import numpy as np
@@ -266,6 +266,17 @@ class PlanarSettings:
             if v is not None and (isinstance(v, bool) or int(v) < 1):
                 raise ConfigError(f"{name} must be >= 1, got {v!r}", field=name)
 
+    @classmethod
+    def laid_over(
+        cls, settings: PlanarSettings | None, options: Mapping[str, Any]
+    ) -> PlanarSettings:
+        """``options`` (fields by name) laid over ``settings`` (default: the defaults); an
+        unknown name is a ``TypeError``, as Python's own."""
+        unknown = set(options) - {f.name for f in fields(cls)}
+        if unknown:
+            raise TypeError(f"solve() got an unexpected keyword argument {sorted(unknown)[0]!r}")
+        return replace(settings or cls(), **options)
+
 
 class PlanarOptions(TypedDict, total=False):
     """The keyword conveniences of :func:`solve`: any :class:`PlanarSettings` field by name."""
@@ -295,25 +306,11 @@ def solve(
     seeding. ``as_printed=True`` runs the paper's algorithm alone with the paper's budget
     (:data:`PAPER_BUDGET`): the same result, bit for bit, as before the pipeline existed.
 
-    Parameters
-    ----------
-    scenario, algorithm
-        The map and a registered optimiser name.
-    settings
-        :class:`PlanarSettings` (encoding, budget, optimum, parameters, pipeline); ``None``:
-        the defaults.
-    rng
-        Seed or Generator.
-    problem
-        A prebuilt Problem of the encoding (to share it between runs); built when ``None``.
-    **options
-        Any :class:`PlanarSettings` field by name (``as_printed=True``, ``pop_size=12``...),
-        laid over ``settings``; an unknown keyword is a ``TypeError``.
+    ``settings``: :class:`PlanarSettings` (encoding, budget, optimum, parameters, pipeline;
+    ``None``: the defaults), any of its fields also by name in ``options`` (``pop_size=12``...),
+    laid over it; ``problem``: a prebuilt Problem of the encoding (to share it between runs).
     """
-    unknown = set(options) - set(PlanarOptions.__annotations__)
-    if unknown:
-        raise TypeError(f"solve() got an unexpected keyword argument {sorted(unknown)[0]!r}")
-    st = replace(settings or PlanarSettings(), **options)
+    st = PlanarSettings.laid_over(settings, options)
     as_printed = st.as_printed
     enc = st.encoding or scenario.encoding
     prob = problem or make_problem(scenario, enc, **(st.encoding_params or {}))
