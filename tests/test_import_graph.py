@@ -88,7 +88,8 @@ def _describe(g: nx.DiGraph, comp: set[str]) -> str:
 #: robot); the exporters after the models they write ("io and viz never import the planners");
 #: the station that runs the stages; the study and the pictures; the commands on top.
 LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
-    ("base", ("weldplan.errors", "weldplan.random", "weldplan.lazy", "weldplan._version")),
+    ("base", ("weldplan.errors", "weldplan.random", "weldplan.lazy", "weldplan._version",
+              "weldplan.options")),
     ("geometry", ("weldplan.geometry",)),
     ("optim", ("weldplan.optim",)),
     # the readers of the inputs and the all-or-nothing file writers (io.atomic, io.outputset):

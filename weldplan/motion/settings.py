@@ -17,7 +17,6 @@ field of :class:`SamplingSettings` laid over the ``settings`` given
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -26,6 +25,7 @@ from typing import Any, TypedDict
 import numpy as np
 
 from weldplan.motion.ompl_base import SamplingArgumentError
+from weldplan.options import laid_over
 
 #: weldplan's planner names -> OMPL ``ompl.geometric`` classes. Every planner here was checked to
 #: work with a Python motion validator (OMPL's two-state ``checkMotion``).
@@ -133,19 +133,11 @@ class SamplingOptions(TypedDict, total=False):
     rot_weight: float
 
 
-_FIELDS = frozenset(f.name for f in dataclasses.fields(SamplingSettings))
-
-
 def resolve_options(
     caller: str, settings: SamplingSettings | None, options: dict[str, Any]
 ) -> tuple[SamplingSettings, int | np.random.Generator | None, Callable[[], bool] | None]:
     """``(settings, seed, stop)`` of a planner call: ``options``' settings fields laid over
-    ``settings`` (default :class:`SamplingSettings`), validated once; an unknown keyword is a
-    ``TypeError`` naming ``caller``, as Python's own."""
-    extra = set(options) - _FIELDS - {"seed", "stop"}
-    if extra:
-        raise TypeError(f"{caller}() got an unexpected keyword argument {sorted(extra)[0]!r}")
-    base = SamplingSettings() if settings is None else settings
-    fields = {k: v for k, v in options.items() if k in _FIELDS}
-    merged = dataclasses.replace(base, **fields) if fields else base
-    return merged, options.get("seed"), options.get("stop")
+    ``settings`` (default :class:`SamplingSettings`, :func:`weldplan.options.laid_over`),
+    validated once; an unknown keyword is a ``TypeError`` naming ``caller``, as Python's own."""
+    seed, stop = options.pop("seed", None), options.pop("stop", None)
+    return laid_over(SamplingSettings, settings, options, caller), seed, stop

@@ -20,7 +20,7 @@ import json
 import logging
 import time
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass, fields, replace
+from dataclasses import asdict, dataclass
 from typing import Any, TypedDict, Unpack
 
 import numpy as np
@@ -30,6 +30,7 @@ from weldplan.geometry.pathcore import at_fractions
 from weldplan.geometry.pathmetrics import measure
 from weldplan.optim.core import minimize
 from weldplan.optim.registry import get_optimizer
+from weldplan.options import laid_over
 from weldplan.planar.encodings import PathProblem, make_problem, population_diversity
 from weldplan.planar.exact import ExactPath, astar_grid
 from weldplan.planar.pipeline import PlanarStage, run_stages
@@ -266,17 +267,6 @@ class PlanarSettings:
             if v is not None and (isinstance(v, bool) or int(v) < 1):
                 raise ConfigError(f"{name} must be >= 1, got {v!r}", field=name)
 
-    @classmethod
-    def laid_over(
-        cls, settings: PlanarSettings | None, options: Mapping[str, Any]
-    ) -> PlanarSettings:
-        """``options`` (fields by name) laid over ``settings`` (default: the defaults); an
-        unknown name is a ``TypeError``, as Python's own."""
-        unknown = set(options) - {f.name for f in fields(cls)}
-        if unknown:
-            raise TypeError(f"solve() got an unexpected keyword argument {sorted(unknown)[0]!r}")
-        return replace(settings or cls(), **options)
-
 
 class PlanarOptions(TypedDict, total=False):
     """The keyword conveniences of :func:`solve`: any :class:`PlanarSettings` field by name."""
@@ -310,7 +300,7 @@ def solve(
     ``None``: the defaults), any of its fields also by name in ``options`` (``pop_size=12``...),
     laid over it; ``problem``: a prebuilt Problem of the encoding (to share it between runs).
     """
-    st = PlanarSettings.laid_over(settings, options)
+    st = laid_over(PlanarSettings, settings, options, "solve")
     as_printed = st.as_printed
     enc = st.encoding or scenario.encoding
     prob = problem or make_problem(scenario, enc, **(st.encoding_params or {}))

@@ -25,7 +25,7 @@ faces the loader removed.
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from os import PathLike
 from typing import Any, Unpack
 
@@ -40,6 +40,7 @@ from weldplan.geometry.grid import ObstacleGrid, build_grid
 from weldplan.geometry.solids import ClosedSolids
 from weldplan.io.joints import COINCIDENT_MM, Joints, coincident_joints, read_joints
 from weldplan.io.mesh import geometry_hash, load_part
+from weldplan.options import laid_over
 from weldplan.weld.cellsettings import (  # noqa: F401 - their home was this module
     JOINT_DISTANCE_MIN_MM,
     CellBuildOptions,
@@ -293,10 +294,7 @@ def build_cell(
     PlanningError
         A joint has no free voxel centre near it (:func:`virtual_joints`).
     """
-    unknown = set(options) - set(CellBuildOptions.__annotations__)
-    if unknown:
-        raise TypeError(f"build_cell() got an unexpected keyword argument {sorted(unknown)[0]!r}")
-    st = replace(settings or CellBuildSettings(), **options)
+    st = laid_over(CellBuildSettings, settings, options, "build_cell")
     pitch, clearance, spot_depth = st.pitch, st.clearance, st.spot_depth
     max_joint_distance = st.joint_distance_limit
     if not isinstance(joints, Joints):

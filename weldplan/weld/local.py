@@ -68,7 +68,7 @@ import logging
 import math
 import time
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any, TypedDict, Unpack
 
 import numpy as np
@@ -79,6 +79,7 @@ from weldplan.geometry.collision import CollisionModel
 from weldplan.geometry.grid import ObstacleGrid
 from weldplan.geometry.gridsearch import PaddedGrid, shortest_grid_path
 from weldplan.optim.discrete.aco_grid import AntColonyParams, ant_colony_grid
+from weldplan.options import laid_over
 from weldplan.random import RNGLike, as_generator, seed_of
 from weldplan.weld.homotopy import CLASS_GAIN
 from weldplan.weld.localpath import (
@@ -274,17 +275,6 @@ class LocalSearchOptions(TypedDict, total=False):
     time_budget: float | None
 
 
-def _settings(settings: LocalSearchSettings | None, options: dict[str, Any]) -> LocalSearchSettings:
-    """``options`` laid over ``settings`` (default :class:`LocalSearchSettings`), validated."""
-    unknown = set(options) - set(LocalSearchOptions.__annotations__)
-    if unknown:
-        raise TypeError(
-            f"plan_local_path() got an unexpected keyword argument {sorted(unknown)[0]!r}"
-        )
-    base = LocalSearchSettings() if settings is None else settings
-    return replace(base, **options) if options else base
-
-
 def plan_local_path(
     grid: ObstacleGrid,
     collision: CollisionModel,
@@ -344,7 +334,7 @@ def plan_local_path(
     """
     t0 = time.perf_counter()
     c0 = time.process_time()
-    search = _settings(settings, dict(options))
+    search = laid_over(LocalSearchSettings, settings, options, "plan_local_path")
     method, prm, time_budget = search.method, search.params, search.time_budget
     seed = seed_of(rng)
     gen = as_generator(rng)

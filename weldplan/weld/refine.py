@@ -56,7 +56,7 @@ import logging
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, fields
 from typing import Any, TypedDict, Unpack
 
 import numpy as np
@@ -64,6 +64,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from weldplan.errors import ConfigError, InputError
 from weldplan.geometry.pathcore import PathObstacle, as_path, polyline_length
+from weldplan.options import laid_over
 
 log = logging.getLogger(__name__)
 
@@ -480,10 +481,7 @@ def refine_path(
         it.
     """
     t0 = time.perf_counter()
-    unknown = set(options) - set(RefineOptions.__annotations__)
-    if unknown:
-        raise TypeError(f"refine_path() got an unexpected keyword argument {sorted(unknown)[0]!r}")
-    st = replace(settings or RefineSettings(), **options)
+    st = laid_over(RefineSettings, settings, options, "refine_path")
     margin, time_budget = st.margin, st.time_budget
     try:
         P = as_path(points)

@@ -57,6 +57,7 @@ from weldplan.optim.discrete.held_karp import MAX_NODES, held_karp_tour
 from weldplan.optim.discrete.local_search import PolishParams
 from weldplan.optim.discrete.local_search import polish as polish_tour
 from weldplan.optim.discrete.tsp_pso import PSOParams, tsp_pso
+from weldplan.options import laid_over
 from weldplan.random import RNGLike, as_generator, seed_of
 
 log = logging.getLogger(__name__)
@@ -317,7 +318,7 @@ def solve_sequence(
         For a keyword that is not a settings field.
     """
     t0 = time.perf_counter()
-    st = _settings(settings, dict(options))
+    st = laid_over(SequenceSettings, settings, options, "solve_sequence")
     C = check_cost(cost)
     n = C.shape[0]
     closed, first, last = st.closed, st.first, st.last
@@ -374,19 +375,6 @@ def solve_sequence(
         start_cost=start_cost,
         params=params,
     )
-
-
-_FIELDS = frozenset(SequenceOptions.__annotations__)
-
-
-def _settings(settings: SequenceSettings | None, options: dict[str, Any]) -> SequenceSettings:
-    """``options`` laid over ``settings`` (default :class:`SequenceSettings`), validated once;
-    an unknown keyword is a ``TypeError``, as Python's own."""
-    extra = set(options) - _FIELDS
-    if extra:
-        raise TypeError(f"solve_sequence() got an unexpected keyword argument {sorted(extra)[0]!r}")
-    base = SequenceSettings() if settings is None else settings
-    return replace(base, **options) if options else base
 
 
 def _heuristic(C, red, st, method, initial, av, gen, callback, params, deadline):
