@@ -61,3 +61,21 @@ def test_the_upper_bound_is_never_below_open3ds_own_distance():
     inside = np.all((P > part.bounds[0] - 150) & (P < part.bounds[1] + 150), axis=1)
     # within the table it is as tight as the lower one: the way to the nearest node, twice
     assert np.all(up[inside] - exact[inside] <= bound.cell * np.sqrt(3) + 2 * bound.tol + 1e-6)
+
+
+def test_the_robot_checkers_coarser_table_gives_the_finest_tables_verdicts():
+    # RobotCollision's table keeps cells of at least TABLE_CELL_MM: fewer nodes to fill, the
+    # same verdicts as the 5 mm table (and open3d), thresholds close to the distances included
+    from weldplan.robot.collision.checker import TABLE_CELL_MM
+
+    part = _part()
+    dist = SurfaceDistance(part)
+    fine = DistanceBound(dist, *part.bounds)
+    coarse = DistanceBound(dist, *part.bounds, min_cell=TABLE_CELL_MM)
+    assert coarse.cell >= TABLE_CELL_MM > fine.cell and coarse.table.size < fine.table.size / 4
+    rng = np.random.default_rng(5)
+    P = rng.uniform(part.bounds[0] - 250.0, part.bounds[1] + 250.0, (20_000, 3))
+    exact = dist(P)
+    need = np.clip(exact + rng.normal(0.0, 3.0, len(P)), 0.0, None)
+    np.testing.assert_array_equal(coarse.clear(P, need), fine.clear(P, need))
+    np.testing.assert_array_equal(coarse.clear(P, need), exact > need)

@@ -328,3 +328,40 @@ def test_the_se3_check_budget_starves_and_a_seeded_replan_repeats_exactly():
     assert t1.status == t2.status == "replanned"
     np.testing.assert_array_equal(t1.positions, t2.positions)
     assert tp1.se3_runs == tp2.se3_runs and not tp1.se3_runs[0]["clock"]
+
+
+@pytest.mark.parametrize("gap", [-1.0, 1.0, 3.0, 40.0])
+def test_the_recheck_passes_a_move_past_a_post_exactly_when_it_keeps_the_clearance(gap):
+    # a 10 mm square stick (cut to 5 mm triangles, so only its tip is in the contact zone)
+    # moves 200 mm past a post whose face is 10 + gap mm from its axis, spinning 90 deg about
+    # its axis: half-way, turned 45 deg, its corners reach 5 sqrt(2) mm from the axis, so its
+    # least slack is gap - 2.07 mm. The coarse grid is bisected near the post down to the
+    # verdict the geometry gives, and agrees with a dense grid (4 mm, 8 bisections)
+    import weldplan.tool.verify.sweeps as vs
+
+    post = _box((30, 20, 300), (10 + gap + 15, 0, 150))
+    v, f = trimesh.remesh.subdivide_to_size(
+        _stick().vertices, _stick().faces, max_edge=5.0, max_iter=10
+    )
+    stick = Tool("stick", np.asarray(v), np.asarray(f))
+    spun = _q(DOWN @ Rotation.from_rotvec([0, 0, math.pi / 2]).as_matrix())
+    q = _q(DOWN)
+    poses = WeldPoses(
+        (WeldPose("a", OK, (0.0, -100.0, 50.0), (0.0, 0.0, -1.0), tuple(map(float, q))),
+         WeldPose("b", OK, (0.0, 100.0, 50.0), (0.0, 0.0, -1.0), tuple(map(float, spun)))),
+        "t", 0.0, {"clearance": 5.0, "contact_radius": 8.0},
+    )  # fmt: skip
+    move = Transition("a", "b", [[0, -100, 50], [0, 100, 50]], [q, spun], ("move",), DIRECT)
+    path = ToolPath(("a", "b"), (move,))
+    coarse = verify_sweeps(path, poses, post, stick)
+    assert coarse.ok == (gap - 5 * (math.sqrt(2) - 1) > 0), coarse.describe()
+    old = vs.MAX_DEPTH
+    try:
+        vs.MAX_DEPTH = 8
+        dense = verify_sweeps(path, poses, post, stick, spacing=4.0)
+    finally:
+        vs.MAX_DEPTH = old
+    assert dense.ok == coarse.ok
+    if coarse.ok:
+        assert coarse.samples < dense.samples
+        assert coarse.min_clearance == pytest.approx(5 + gap - 5 * (math.sqrt(2) - 1), abs=0.3)

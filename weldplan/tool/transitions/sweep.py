@@ -180,8 +180,8 @@ class SweepChecker(SweptChecks):
         # the whole part and the whole tool are built when first asked for (:meth:`_model`):
         # a focused planner whose motions all exempt a weld may need neither
         self._models: dict[str, fcl.CollisionObject] = {}
-        v, f = tool.outside_zone(self.contact_radius)
-        self._outside = fcl.CollisionObject(bvh(v, f), fcl.Transform())
+        # the pose search's BVH of the tool outside its zone (the same mesh, built once a tool)
+        self._outside = fcl.CollisionObject(tool.fcl_model(self.contact_radius)[0], fcl.Transform())
         zv, zf = tool_zone(tool, self.contact_radius)
         self._zone = None if len(zf) == 0 else fcl.CollisionObject(bvh(zv, zf), fcl.Transform())
         #: mm: the zone's reach from the TCP, and the radius of the part kept about a spot

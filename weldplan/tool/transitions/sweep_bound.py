@@ -45,7 +45,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from weldplan.geometry.distance import SurfaceDistance
 from weldplan.geometry.distbound import DistanceBound
-from weldplan.geometry.spherecover import sphere_cover
+from weldplan.geometry.spherecover import cell_groups, group_reduce, sphere_cover
 from weldplan.tool.model.tool import Tool
 from weldplan.tool.transitions.sweep import tool_zone
 
@@ -99,17 +99,12 @@ class SphereTree:
         c, r, _ = sphere_cover(np.asarray(v), np.asarray(f), levels[0])
         centres, radii, children = [c], [r], []
         for cell in levels[1:]:
-            key = np.floor(c / cell).astype(np.int64)
-            _, group = np.unique(key, axis=0, return_inverse=True)
-            group = group.ravel()
+            group = cell_groups(np.floor(c / cell).astype(np.int64))
             g = int(group.max()) + 1
-            lo = np.full((g, 3), np.inf)
-            hi = np.full((g, 3), -np.inf)
-            np.minimum.at(lo, group, c - r[:, None])
-            np.maximum.at(hi, group, c + r[:, None])
+            lo = group_reduce(np.minimum, c - r[:, None], group, g)
+            hi = group_reduce(np.maximum, c + r[:, None], group, g)
             cc = (lo + hi) / 2
-            rr = np.zeros(g)
-            np.maximum.at(rr, group, np.linalg.norm(c - cc[group], axis=1) + r)
+            rr = group_reduce(np.maximum, np.linalg.norm(c - cc[group], axis=1) + r, group, g)
             order = np.argsort(group, kind="stable")
             starts = np.searchsorted(group[order], np.arange(g + 1))
             children.append((starts.astype(np.int64), order.astype(np.int64)))

@@ -16,6 +16,13 @@ each weld's zone; it interpolates each motion with :class:`scipy.spatial.transfo
   interval, and an interval where it is not is bisected (at most :data:`MAX_DEPTH` times) before
   the motion is declared failed.
 
+The first grid is coarse (:data:`DEFAULT_SPACING`, 32 mm) and the bisections go deep
+(:data:`MAX_DEPTH`, 11): the finest interval is the one a 4 mm grid bisected 8 times gives
+(1/64 mm of tool motion), but only where the bound asks for it. Away from the part one sample
+in 32 mm of tool motion proves the interval; near a weld, where the slack is small, the
+bisections reach the fine samples a dense grid would have taken. The guarantee is the bound's,
+whatever the grid: a passed motion keeps the slack between every two samples.
+
 It also checks that the path is the route's: each transition starts and ends at the weld poses
 the route reports (spot and quaternion), the transitions chain in the reported order, and the
 order visits exactly the welds with a pose.
@@ -42,10 +49,13 @@ from weldplan.tool.transitions.sweep import outside_sphere
 
 log = logging.getLogger(__name__)
 
-#: mm: default largest tool-point motion between two uniform samples
-DEFAULT_SPACING = 4.0
-#: bisections of an interval the bound cannot clear before the motion fails
-MAX_DEPTH = 8
+#: mm: default largest tool-point motion between two samples of a motion's first, uniform grid
+#: (on the demo station's 14 transitions: 1,079 samples against 1,879 with a 4 mm grid bisected
+#: at most 8 times, the same finest interval)
+DEFAULT_SPACING = 32.0
+#: bisections of an interval the bound cannot clear before the motion fails (an interval of
+#: ``spacing`` mm of tool motion halved this many times: 32 mm / 2^11 = 1/64 mm)
+MAX_DEPTH = 11
 #: mm: slack on positions and the clearance for floating-point round-off
 TOLERANCE_MM = 1e-6
 
