@@ -179,9 +179,10 @@ def plan_weld_poses(
     both_sides = tool.straddles if s.both_sides is None else s.both_sides
     local, params = local_candidates(s.cone, s.tilt_step, s.spin_step, s.azimuths)
     params = np.column_stack([params, np.zeros(len(params))])  # spin, tilt, azimuth, flipped
-    rots = candidate_rotations(axes, local)  # (n, c, 3, 3)
+    frame = _part_axes(cell)
+    rots = candidate_rotations(axes, local, frame)  # (n, c, 3, 3)
     if both_sides:
-        rots = np.concatenate([rots, candidate_rotations(-axes, local)], axis=1)
+        rots = np.concatenate([rots, candidate_rotations(-axes, local, frame)], axis=1)
         params = np.concatenate([params, params + [0.0, 0.0, 0.0, 1.0]])
     n, c = len(welds.ids), len(params)
     quats = quat_wxyz(rots.reshape(-1, 3, 3)).reshape(n, c, 4)
@@ -251,6 +252,14 @@ def plan_weld_poses(
     )
     log.info("%s (%.1f s)", result.summary().splitlines()[0], elapsed)
     return result
+
+
+def _part_axes(cell: Any) -> NDArray[np.float64] | None:
+    """``(3, 3)``: the part frame's axes in the cell frame when ``cell`` placed the part by a
+    pose (:attr:`~weldplan.weld.cell.Cell.part_pose`), else ``None``: the candidates' frames
+    turn with the part (:func:`~weldplan.tool.poses.orient.nominal_frames`)."""
+    pose = None if cell is None else getattr(cell, "part_pose", None)
+    return None if pose is None else np.asarray(pose.matrix, dtype=np.float64)[:3, :3]
 
 
 class Rechecks:
