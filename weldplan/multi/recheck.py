@@ -73,9 +73,19 @@ def verify_station(saved: Any, *, station: Any = None) -> Verdict:
         if check is not None:
             checks.append(check)
         routes.append(route)
+    checks += signal_checks(saved)
     checks.append(schedule_check(saved, routes))
     checks.append(interference_check(saved, station))
     return Verdict(tuple(checks))
+
+
+def signal_checks(saved: Any) -> list[CheckResult]:
+    """Per robot with a program, its interlock signals parsed back against the schedule
+    (:func:`weldplan.multi.programcheck.signals_check`)."""
+    from weldplan.multi.programcheck import signals_check
+
+    checks = (signals_check(saved, k) for k in range(len(saved.robots)))
+    return [c for c in checks if c is not None]
 
 
 def _station(saved: Any) -> Any:
