@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import csv
 import dataclasses
+import re
 from collections import Counter
 from dataclasses import dataclass
 from typing import Any
@@ -317,8 +318,51 @@ def interference_check(saved: Any, station: Any) -> CheckResult:
         agree = rec.ok == v.ok and same and (rec.clearance, rec.pairs) == (v.clearance, v.pairs)
         was = "" if agree else f"; recorded: {_replay_line(rec, saved.robots)}"
         text = f"re-run: {said}{was}"
-    pair = () if v.ok else (v.failures[0] if v.failures else said,)
+    pair = () if v.ok else (too_close_line(saved, v),)
     return CheckResult("interference", agree, text, left_out=pair if agree else ())
+
+
+#: the replay's line of a pair too close (weldplan.multi.replay): where each robot is, then
+#: the distance found, the bodies and the clearance
+_FAILURE = re.compile(r"^(.*) and (.*): ([0-9.]+) mm \((.*)\), not proven ([0-9.eE+-]+) mm apart$")
+_AT = re.compile(r"^(\S+) (at rest at row (\d+)|moving rows (\d+) -> (\d+))$")
+
+
+def too_close_line(saved: Any, v: Any) -> str:
+    """What failed in a replay ``v`` (:class:`~weldplan.multi.schedule.ReplayVerdict`, not
+    ok), in one line: the two robots, where each was (the row it rests at, or the rows it
+    moves between, with the weld there from the schedule), the distance found against the
+    clearance, the bodies, and how many more pairs failed. ``weldplan verify`` prints it as
+    the robots too close (never as welds left out)."""
+    if not v.failures:
+        return f"robots closer than {v.clearance:g} mm: {_replay_line(v, saved.robots)}"
+    m = _FAILURE.match(v.failures[0])
+    if m is None:  # a line this reader does not know: as the replay wrote it
+        return v.failures[0]
+    a, b, dist, bodies, clearance = m.groups()
+    more = len(v.failures) - 1
+    tail = f"; {more} more pair(s) too close" if more else ""
+    return (
+        f"{_where(saved, a)} and {_where(saved, b)}: {dist} mm apart ({bodies}), clearance "
+        f"{clearance} mm{tail}"
+    )
+
+
+def _where(saved: Any, text: str) -> str:
+    """``robot1 at rest at row 3`` -> ``robot1 at rest at row 3 (weld 12)``: the weld the
+    schedule records at that row (a move: ``(to weld 12)``, at the row it moves to)."""
+    m = _AT.match(text)
+    if m is None or saved.schedule is None:
+        return text
+    names = [r.name for r in saved.robots]
+    if m.group(1) not in names:
+        return text
+    k = names.index(m.group(1))
+    row = int(m.group(3) if m.group(3) is not None else m.group(5))
+    weld = next((a.label for a in saved.schedule.of(k) if a.kind == "weld" and a.row == row), "")
+    if not weld:
+        return text
+    return f"{text} (to weld {weld})" if m.group(3) is None else f"{text} (weld {weld})"
 
 
 def _replay_robot(saved: Any, station: Any, k: int) -> Any:

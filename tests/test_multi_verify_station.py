@@ -3,7 +3,8 @@ its interlock signals must be exactly its side of the schedule's interlocks, eac
 target of its row. Two KR 150 crossing in the middle (tests/multi_fixtures.py) through the live
 interference stage, which interlocks them; their programs rendered by the real posts (KRL and
 RAPID) and then edited as a user might: a WAIT dropped, a set moved to another target, a signal
-renumbered. Fast: no planning."""
+renumbered. And what verify says when the replay finds two robots too close: the robots, where
+they are, the distance against the clearance, never "welds left out". Fast: no planning."""
 
 from __future__ import annotations
 
@@ -161,3 +162,28 @@ def test_signals_at_weld_rows_follow_the_weld_target_named_by_the_schedule(tmp_p
     src.write_text("\n".join(lines) + "\n")
     c = signals_check(saved, 1)
     assert not c.ok and "no WAIT FOR $IN[5] after XP0001 (weld w1)" in c.text
+
+
+def test_robots_too_close_are_said_as_such_with_rows_distance_and_clearance(tmp_path):
+    from tests.test_multi_cli import _crossing_saved
+    from weldplan.commands.verify import _partial_lines
+    from weldplan.multi.recheck import interference_check
+    from weldplan.multi.replay import replay_station
+    from weldplan.station.recheck import CheckResult, Verdict
+
+    station, saved, _, rr = _crossing_saved(tmp_path)
+    # the plan without its interlocks, recorded as the replay finds it: robots too close
+    bare = dataclasses.replace(saved, schedule=dataclasses.replace(saved.schedule, interlocks=()))
+    v = replay_station(rr, (), station.clearance)
+    assert not v.ok
+    check = interference_check(dataclasses.replace(bare, replay=v), station)
+    assert check.ok  # the re-run agrees with the record: a partial plan, exit 3
+    (line,) = check.left_out
+    at = r"(robot\d) (at rest at row \d+|moving rows \d+ -> \d+)( \((?:to )?weld w\d\))?"
+    where = re.match(at + " and " + at + r": ([0-9.]+) mm apart \((.+)\), clearance 5 mm", line)
+    assert where is not None, line
+    assert {where.group(1), where.group(4)} == {"robot1", "robot2"}
+    assert float(where.group(7)) < station.clearance
+    unreached = CheckResult("allocation", True, "", left_out=("15",))
+    said = _partial_lines(Verdict((unreached, check)))
+    assert said == ["welds left out: 15", f"robots too close by the replay: {line}"]
