@@ -90,16 +90,7 @@ def signal_checks(saved: Any) -> list[CheckResult]:
 
 
 def _station(saved: Any) -> Any:
-    from pathlib import Path
-
-    from weldplan.station.load import load_station
-
-    if saved.station_file is None:
-        raise InputError("the plan records no station file: give the station", path=saved.path)
-    f = Path(saved.station_file)
-    if not f.is_file() and (saved.path.parent / f).is_file():
-        f = saved.path.parent / f
-    return load_station(f)
+    return saved.load_station()
 
 
 def _weld_ids(station: Any) -> list[str]:

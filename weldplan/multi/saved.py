@@ -287,6 +287,28 @@ class SavedStationPlan:
     interference: str
     replay: ReplayVerdict | None
 
+    def load_station(self) -> Any:
+        """The :class:`~weldplan.station.model.Station` the plan records (its station file,
+        as given or beside the station JSON), read again. Raises
+        :class:`~weldplan.errors.InputError` when it records none."""
+        from weldplan.station.load import load_station
+
+        if self.station_file is None:
+            raise InputError("the plan records no station file: give the station", path=self.path)
+        f = Path(self.station_file)
+        if not f.is_file() and (self.path.parent / f).is_file():
+            f = self.path.parent / f
+        return load_station(f)
+
+    def page_text(self, *, station: Any = None) -> str:
+        """The station's page (:func:`weldplan.viz.station_page.saved_station_page_text`)
+        rebuilt from the saved files; ``station`` default :meth:`load_station`."""
+        from weldplan.viz.station_page import saved_station_page_text
+
+        return saved_station_page_text(
+            self, station if station is not None else self.load_station()
+        )
+
     def verify(self, *, station: Any = None) -> Any:
         """Re-check the saved plan (:func:`weldplan.multi.recheck.verify_station`; ``station``:
         the :class:`~weldplan.station.model.Station`, default the recorded station file).
