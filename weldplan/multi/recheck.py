@@ -11,6 +11,9 @@ reads the files back):
     each robot's route JSON through the single-robot re-check
     (:meth:`weldplan.station.saved.SavedPlan.verify`: the route by FCL, the gun's poses and
     transitions, the robot route by FK + FCL) with the station's part, tool and robot.
+``robot<k> signals``
+    each robot's program as written (with ``--post``), parsed back: exactly its side of the
+    schedule's interlocks, after the right targets (:mod:`weldplan.multi.programcheck`).
 ``schedule``
     the station's schedule against the saved trajectories: per robot its moves and welds
     (the waits taken out) last as long as its trajectory CSV, its welds are its route's, its
@@ -26,12 +29,14 @@ reads the files back):
     station's ``clearance``. It passes when the re-run agrees with the recorded replay (the
     same verdict, clearance and pairs of motions that may overlap, the minimum distance within
     :data:`DISTANCE_TOL`); agreeing on robots too
-    close, the plan is partial (exit 3) and the pair is named. A plan that records no replay
+    close, the plan is partial (exit 3) and the pair is named (:func:`too_close_line`: the two
+    robots, where each was, the distance against the clearance). A plan that records no replay
     (``null``) is re-run all the same, with nothing to agree with.
 
 A check that fails does not stop the later ones (each reads its own files); the verdict is a
 :class:`~weldplan.station.recheck.Verdict` (exit 0 ok, 1 a check failed, 3 ok but welds left
-out, or robots too close as recorded: the pair is then in :attr:`Verdict.left_out`).
+out, or robots too close as recorded: the pair's line is then in the ``interference`` check's
+``left_out``, which ``weldplan verify`` says apart from the welds).
 """
 
 from __future__ import annotations
