@@ -14,11 +14,12 @@ import re
 import pytest
 
 
-def _saved(tmp_path, post: str, locks=None):
+def _saved(tmp_path, post: str, locks=None, rows: bool = True):
     """The :class:`~weldplan.multi.saved.SavedStationPlan` of the crossing pair: the schedule
     and replay as the interference stage made them (or the schedule under ``locks``, made by
     hand), each robot's trajectory CSV and program (its signals as
-    :func:`weldplan.multi.station.with_signals` gives them) written in ``tmp_path``."""
+    :func:`weldplan.multi.station.with_signals` gives them) written in ``tmp_path``; ``rows``:
+    the route row of each timed row recorded (the identity here), as a station JSON has it."""
     from tests import multi_fixtures as mf
     from tests.test_multi_cli import _station_toml
     from tests.test_multi_plan import _synthetic_plan
@@ -58,7 +59,10 @@ def _saved(tmp_path, post: str, locks=None):
         else:
             files = (stem.with_suffix(".mod"),)
             files[0].write_text(render_rapid(prog))
-        saved_robots.append(SavedRobot(names[k], None, bases[k], (), None, traj, files, t.total))
+        ids = tuple(range(len(t.row_times))) if rows else None
+        saved_robots.append(
+            SavedRobot(names[k], None, bases[k], (), None, traj, files, t.total, ids)
+        )
     saved = SavedStationPlan(
         tmp_path / "route_station.json", None, tuple(saved_robots), None, schedule,
         schedule.cycle_time, "", verdict,
@@ -66,11 +70,13 @@ def _saved(tmp_path, post: str, locks=None):
     return saved
 
 
-@pytest.mark.parametrize("post", ["krl", "rapid"])
-def test_each_program_carries_exactly_its_side_of_the_interlocks(tmp_path, post):
+@pytest.mark.parametrize(("post", "rows"), [("krl", True), ("rapid", True), ("krl", False)])
+def test_each_program_carries_exactly_its_side_of_the_interlocks(tmp_path, post, rows):
     from weldplan.multi.recheck import signal_checks
 
-    saved = _saved(tmp_path, post)
+    # rows False: a station JSON saved before it recorded the route rows; the trajectory CSV's
+    # step column stands in (every stop of these routes is reached by a motion)
+    saved = _saved(tmp_path, post, rows=rows)
     locks = saved.schedule.interlocks
     assert locks  # the crossing needs at least one
     checks = signal_checks(saved)

@@ -34,7 +34,7 @@ def _station_json(tmp_path):
         {
             "name": r.name, "urdf": None, "base": list(r.base), "welds": [], "route": None,
             "trajectory": r.trajectory.name, "program": [p.name for p in r.program],
-            "timed_cycle": r.timed_cycle,
+            "timed_cycle": r.timed_cycle, "rows": list(r.rows),
         }
         for r in saved.robots
     ]  # fmt: skip

@@ -9,9 +9,9 @@ and its signals must be exactly its side of the schedule's interlocks
 - robot ``first`` sets the output ``signal`` once at rest at ``release_row`` (KRL ``WAIT SEC 0``
   then ``$OUT[n] = TRUE``, RAPID ``SetDO``), robot ``second`` waits on the input ``signal`` at
   ``wait_row`` before it leaves (KRL ``WAIT FOR $IN[n]``, RAPID ``WaitDI``); each after the
-  target that stands for that row: the weld target of the weld the schedule records there, else
-  the last target of the route row the trajectory CSV records at the robot's arrival there (its
-  ``step`` column, the route row of each sample);
+  target that stands for that row's route row (the station JSON records the route row of each
+  timed row): the weld target of the weld the schedule records on that route row, else the last
+  target of the route row, as the posts place them;
 - the same signal number and interlock name on both sides, no signal the schedule does not
   hold, and every output the program sets switched off before its first move.
 
@@ -105,11 +105,14 @@ def expected_signals(saved: Any, k: int) -> list[tuple[int, str, int, str]]:
 
 def row_targets(saved: Any, k: int, program: Program, rows: set[int]) -> dict[int, str]:
     """``{timed row: the program's target}`` for the stop ``rows`` of robot ``k`` (module
-    docstring); a row with no such target is left out."""
-    from weldplan.multi.recheck import _trajectory_rows, file_timing
+    docstring); a row with no such target is left out.
 
-    s, robot = saved.schedule, saved.robots[k]
-    welds = {a.row: a.label for a in s.of(k) if a.kind == "weld" and a.label}
+    A timed row stands for a route row (the station JSON's ``rows``; a plan saved without
+    them: the trajectory CSV's ``step`` at the arrival, which a stop reached without motion
+    does not have). Its target is the weld target of the weld the schedule records on that
+    route row, else the last target of the route row."""
+    s = saved.schedule
+    route = _route_row(saved, k)
     by_weld: dict[str, str] = {}
     by_row: dict[int, str] = {}
     for name, _ in program.moves:  # the last target of each weld and route row, in order
@@ -119,17 +122,35 @@ def row_targets(saved: Any, k: int, program: Program, rows: set[int]) -> dict[in
             by_weld[tag[5:]] = name
         elif m:
             by_row[int(m.group(1))] = name
-    timing = file_timing(s, k, robot.trajectory)
-    step = [int(r[1]) for r in _trajectory_rows(robot.trajectory)[1:]]
+    welds = {route(a.row): a.label for a in s.of(k) if a.kind == "weld" and a.label}
     out = {}
     for r in sorted(rows):
-        if welds.get(r) in by_weld:
-            out[r] = by_weld[welds[r]]
-        elif r < len(timing.stops) and timing.stops[r]:
-            at = int(np.argmin(np.abs(timing.t - timing.row_times[r])))
-            if step[at] in by_row:
-                out[r] = by_row[step[at]]
+        R = route(r)
+        if welds.get(R) in by_weld:
+            out[r] = by_weld[welds[R]]
+        elif R in by_row:
+            out[r] = by_row[R]
     return out
+
+
+def _route_row(saved: Any, k: int) -> Any:
+    """Robot ``k``'s ``timed row -> route row`` (``-1``: not known), from the station JSON's
+    ``rows``, else from its trajectory CSV (:func:`row_targets`)."""
+    from weldplan.multi.recheck import _trajectory_rows, file_timing
+
+    robot = saved.robots[k]
+    if robot.rows is not None:
+        rows = robot.rows
+        return lambda r: rows[r] if 0 <= r < len(rows) else -1
+    timing = file_timing(saved.schedule, k, robot.trajectory)
+    step = [int(r[1]) for r in _trajectory_rows(robot.trajectory)[1:]]
+
+    def from_csv(r: int) -> int:
+        if not (r < len(timing.stops) and timing.stops[r]):
+            return -1
+        return step[int(np.argmin(np.abs(timing.t - timing.row_times[r])))]
+
+    return from_csv
 
 
 def signals_check(saved: Any, k: int) -> CheckResult | None:
