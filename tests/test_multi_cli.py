@@ -181,7 +181,7 @@ def test_verify_of_the_station_json_re_runs_the_replay_and_names_the_pair(cli_ru
         r"clearance 5 mm",
         said.err,
     )
-    assert "welds left out" not in said.err
+    assert "welds left out" not in said.err  # every weld is in a share
 
 
 def _corrupt(out: Path, tmp: Path, edit) -> Path:

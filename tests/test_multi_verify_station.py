@@ -191,5 +191,10 @@ def test_robots_too_close_are_said_as_such_with_rows_distance_and_clearance(tmp_
     assert {where.group(1), where.group(4)} == {"robot1", "robot2"}
     assert float(where.group(7)) < station.clearance
     unreached = CheckResult("allocation", True, "", left_out=("15",))
-    said = _partial_lines(Verdict((unreached, check)))
-    assert said == ["welds left out: 15", f"robots too close by the replay: {line}"]
+    legs = CheckResult("robot1", True, "", left_out=("7->1", "1->5"))
+    said = _partial_lines(Verdict((unreached, legs, check)))
+    assert said == [
+        "welds left out: 15",
+        "transitions left out: 7->1, 1->5",
+        f"robots too close by the replay: {line}",
+    ]
