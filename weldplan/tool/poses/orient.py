@@ -19,13 +19,6 @@ from scipy.spatial.transform import Rotation
 
 log = logging.getLogger(__name__)
 
-#: deg: summed rotations closer than this are a tie in :func:`least_rotation_choice`, which then
-#: goes to the lower candidate index. ``2 arccos |qa . qb|`` carries up to ~2e-6 deg of rounding
-#: an angle near 0, so exact ties (a free spin that costs the same at every weld) come out a few
-#: ulps apart, and apart differently when the part is turned in the cell; without a tolerance the
-#: choice among them would follow the rounding. 1e-3 deg of turning is nothing a robot feels.
-TIE_DEG = 1e-3
-
 
 def nominal_frames(axes: ArrayLike, frame: ArrayLike | None = None) -> NDArray[np.float64]:
     """``(n, 3, 3)``: a right-handed frame per unit axis ``(n, 3)``, its z column the axis.
@@ -122,10 +115,8 @@ def least_rotation_choice(
 
     Dynamic programming over the stages (a shortest path through a layered graph whose edge
     weights are :func:`rotation_angles`): ``cost[k][j] = min_i cost[k-1][i] + angle(i, j)``,
-    exact, ``O(sum c_k c_{k+1})`` with one vectorised ``(c_k, c_{k+1})`` step per stage. Ties,
-    costs within :data:`TIE_DEG` of the least, go to the lower candidate index (the candidates
-    come untilted first), so the choice does not follow rounding: it is at most ``TIE_DEG`` a
-    stage above the optimum.
+    exact, ``O(sum c_k c_{k+1})`` with one vectorised ``(c_k, c_{k+1})`` step per stage. Ties go
+    to the lower candidate index (the candidates come untilted first).
 
     Parameters
     ----------
@@ -151,19 +142,13 @@ def least_rotation_choice(
     for k in range(1, len(quats)):
         ang = rotation_angles(quats[k - 1], quats[k]) if angles is None else angles(k)
         step = cost[:, None] + ang
-        arg = _first_least(step)
+        arg = np.argmin(step, axis=0)
         back.append(arg)
         cost = step[arg, np.arange(step.shape[1])]
-    j = int(_first_least(cost[:, None])[0])
+    j = int(np.argmin(cost))
     total = float(cost[j])
     choice = [j]
     for arg in reversed(back):
         j = int(arg[j])
         choice.append(j)
     return choice[::-1], total
-
-
-def _first_least(cost: NDArray[np.float64]) -> NDArray[np.int64]:
-    """``(m,)``: per column of ``cost (k, m)`` the first row within :data:`TIE_DEG` of its
-    least."""
-    return np.argmax(cost <= cost.min(axis=0) + TIE_DEG, axis=0)
