@@ -174,7 +174,14 @@ def test_verify_of_the_station_json_re_runs_the_replay_and_names_the_pair(cli_ru
     # the re-run agrees with the record: robots too close, a partial plan naming where
     assert "interference ok: re-run: robots closer than 5 mm" in said.out
     assert "(robot1 row 0 / robot2 row 0)" in said.out
-    assert "robot1 at rest at row 0 and robot2 at rest at row 0" in said.err
+    # said as robots too close, where each stands (its first weld), distance and clearance
+    assert re.search(
+        r"weldplan verify: ok, robots too close by the replay: robot1 at rest at row 0 "
+        r"\(weld \d+\) and robot2 at rest at row 0 \(weld \d+\): [0-9.]+ mm apart \(.+\), "
+        r"clearance 5 mm",
+        said.err,
+    )
+    assert "welds left out" not in said.err  # every weld is in a share
 
 
 def _corrupt(out: Path, tmp: Path, edit) -> Path:
@@ -289,7 +296,9 @@ def test_the_saved_station_round_trips_and_verify_checks_the_interlock(splan, tm
     # left out: the weld no robot reaches, and the two robots the replay (recorded and re-run)
     # finds too close at their first welds
     assert v.ok and v.exit_code == 3 and v.left_out[0] == UNREACHED and len(v.left_out) == 2
-    assert v.left_out[1].startswith("robot1 at rest at row 0 and robot2 at rest at row 0")
+    assert re.match(
+        r"robot1 at rest at row 0 \(weld \d+\) and robot2 at rest at row 0 ", v.left_out[1]
+    )
     assert "1 interlock(s) hold" in v["schedule"].text
     # robot 2's wait taken out and its later activities moved up: it leaves before robot 1 is
     # ready, and only the interlock says so (its moves and welds still match its trajectory)

@@ -98,10 +98,24 @@ def _verify_station(args: argparse.Namespace) -> int:
         line = f"{c.name} {'ok' if c.ok else 'FAILED'}: {c.text}"
         print(line, file=sys.stdout if c.ok else sys.stderr)
     if verdict.partial:
-        print(
-            f"weldplan verify: ok, welds left out: {', '.join(verdict.left_out)}", file=sys.stderr
-        )
+        for line in _partial_lines(verdict):
+            print(f"weldplan verify: ok, {line}", file=sys.stderr)
     return int(verdict.exit_code)
+
+
+def _partial_lines(verdict: object) -> list[str]:
+    """Why a station's verdict is partial, one line a cause: the welds left out (unreached,
+    or left out by a robot's plan), the transitions a robot's plan left out (``a->b``), and
+    the robots the replay found too close (the two robots, where each was, the distance
+    against the clearance), never called welds."""
+    left, close = [], []
+    for c in verdict.checks:  # type: ignore[attr-defined]
+        (close if c.name == "interference" else left).extend(c.left_out)
+    welds = [x for x in left if "->" not in x]
+    legs = [x for x in left if "->" in x]
+    out = [f"welds left out: {', '.join(welds)}"] if welds else []
+    out += [f"transitions left out: {', '.join(legs)}"] if legs else []
+    return out + [f"robots too close by the replay: {x}" for x in close]
 
 
 def _say(verdict: object) -> int:

@@ -1,4 +1,9 @@
-"""``weldplan view ROUTE MESH``: the route in meshcat, live, as a static page or as a PNG."""
+"""``weldplan view ROUTE MESH``: the route in meshcat, live, as a static page or as a PNG.
+
+``weldplan view route_station.json``: a station of several robots, its page rebuilt from the
+saved files (:meth:`weldplan.multi.saved.SavedStationPlan.page_text`: the station file's part,
+robots and tools, each robot's trajectory CSV, the schedule), as ``weldplan plan --html``
+writes it; live, the same scene without the Gantt chart."""
 
 from __future__ import annotations
 
@@ -7,20 +12,29 @@ import contextlib
 import signal
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 from weldplan.commands.plan import add_cell_arguments
 
 HELP = (
-    "show a route JSON over its part in meshcat (live server, --html for a static page, "
-    "--png for a picture)"
+    "show a route JSON over its part, or a station JSON of several robots, in meshcat (live "
+    "server, --html for a static page, --png for a picture)"
 )
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("route", help="route JSON written by `weldplan plan --json`")
-    p.add_argument("mesh", nargs="?", help="the part mesh (optional: without it, the route only)")
+    p.add_argument(
+        "route",
+        help="route JSON written by `weldplan plan --json`, or the station JSON of a station "
+        "of several robots (route_station.json)",
+    )
+    p.add_argument(
+        "mesh",
+        nargs="?",
+        help="the part mesh (optional: without it, the route only; not with a station JSON)",
+    )
     add_cell_arguments(p)
     p.add_argument("--html", metavar="F", help="write a self-contained page instead of serving")
     p.add_argument(
@@ -34,6 +48,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "0.0.0.0 opens it to the network)",
     )
     p.add_argument("--port", type=int, help="web port of the live viewer (default: 7000 or next)")
+    p.add_argument(
+        "--station",
+        metavar="TOML",
+        help="with a station JSON: the station file (default: the one the plan records)",
+    )
     from weldplan.commands._tool import add_tool_arguments
 
     add_tool_arguments(p, search=False)
@@ -42,11 +61,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from weldplan.commands._tool import tool_from_args
     from weldplan.io.export import read_route
+    from weldplan.multi.saved import is_station_json
 
     if args.png:  # no Chromium: say so before any work
         from weldplan.viz.png import find_chromium
 
         find_chromium()
+    if is_station_json(args.route):
+        return _view_station(args)
     route = read_route(args.route)
     tool = tool_from_args(args)
     if tool is not None:  # draw the route's poses only with the tool they were planned for
@@ -63,7 +85,10 @@ def run(args: argparse.Namespace) -> int:
         if pose is not None:  # a route planned in the cell: the part drawn where it stood
             part = pose.mesh_to_cell(part)
     if args.html or args.png:
-        return _write_pages(args, route, part, None if tool is None else tool[0])
+        from weldplan.viz.viewer import static_html
+
+        mounted = None if tool is None else tool[0]
+        return _write_pages(args, lambda: static_html(route, part, tool=mounted))
     from weldplan.viz.viewer import live_view
 
     vis, server = live_view(
@@ -72,14 +97,69 @@ def run(args: argparse.Namespace) -> int:
     return _serve(vis, server, args.no_browser)
 
 
-def _write_pages(args: argparse.Namespace, route: Any, part: Any, tool: Any) -> int:
-    """Write ``--html`` and ``--png`` as one set (both or neither), checked before rendering."""
+def _view_station(args: argparse.Namespace) -> int:
+    """A station JSON: its page rebuilt from the saved files, written (``--html``, ``--png``)
+    or served live (the scene without the chart)."""
+    from weldplan.errors import WeldplanError
+    from weldplan.multi.saved import load_station_plan
+
+    if args.mesh is not None:
+        raise WeldplanError(f"{args.route} is a station JSON: give no mesh (its station names it)")
+    saved = load_station_plan(args.route)
+    if args.station is not None:
+        from weldplan.station.load import load_station
+
+        station = load_station(args.station)
+    else:
+        station = saved.load_station()
+    if len(station.robots) != len(saved.robots):
+        from weldplan.errors import InputError
+
+        raise InputError(
+            f"the station has {len(station.robots)} robots, the plan {len(saved.robots)}",
+            path=saved.path, field="robots",
+        )  # fmt: skip
+    if args.html or args.png:
+        return _write_pages(args, lambda: saved.page_text(station=station))
+    return _serve_station(args, saved, station)
+
+
+def _serve_station(args: argparse.Namespace, saved: Any, station: Any) -> int:
+    """The station's scene (:func:`weldplan.viz.station_page.build_station_scene`) on a live
+    meshcat server until Ctrl-C."""
+    import contextlib
+    import io
+
+    import meshcat
+
+    from weldplan.viz.live import MeshcatServer
+    from weldplan.viz.station_page import (
+        build_station_scene,
+        saved_station_part,
+        saved_station_robots,
+    )
+
+    robots = saved_station_robots(saved, station)
+    part = saved_station_part(station)
+    server = MeshcatServer(args.host, args.port)
+    try:
+        with contextlib.redirect_stdout(io.StringIO()):  # meshcat prints its URL
+            vis = meshcat.Visualizer(zmq_url=server.zmq_url)
+        build_station_scene(vis, robots, saved.schedule, part=part)
+    except BaseException:
+        server.close()
+        raise
+    return _serve(vis, server, args.no_browser)
+
+
+def _write_pages(args: argparse.Namespace, render: Callable[[], str]) -> int:
+    """Write ``--html`` and ``--png`` as one set (both or neither), checked before ``render``
+    makes the page's text."""
     from weldplan.io.outputset import check_outputs, write_outputs
-    from weldplan.viz.viewer import static_html
 
     paths = {k: Path(getattr(args, k)) for k in ("html", "png") if getattr(args, k)}
     check_outputs(paths)
-    page = static_html(route, part, tool=tool)
+    page = render()
     files: dict[Path, str | bytes] = {}
     if "html" in paths:
         files[paths["html"]] = page

@@ -11,6 +11,9 @@ reads the files back):
     each robot's route JSON through the single-robot re-check
     (:meth:`weldplan.station.saved.SavedPlan.verify`: the route by FCL, the gun's poses and
     transitions, the robot route by FK + FCL) with the station's part, tool and robot.
+``robot<k> signals``
+    each robot's program as written (with ``--post``), parsed back: exactly its side of the
+    schedule's interlocks, after the right targets (:mod:`weldplan.multi.programcheck`).
 ``schedule``
     the station's schedule against the saved trajectories: per robot its moves and welds
     (the waits taken out) last as long as its trajectory CSV, its welds are its route's, its
@@ -26,18 +29,21 @@ reads the files back):
     station's ``clearance``. It passes when the re-run agrees with the recorded replay (the
     same verdict, clearance and pairs of motions that may overlap, the minimum distance within
     :data:`DISTANCE_TOL`); agreeing on robots too
-    close, the plan is partial (exit 3) and the pair is named. A plan that records no replay
+    close, the plan is partial (exit 3) and the pair is named (:func:`too_close_line`: the two
+    robots, where each was, the distance against the clearance). A plan that records no replay
     (``null``) is re-run all the same, with nothing to agree with.
 
 A check that fails does not stop the later ones (each reads its own files); the verdict is a
 :class:`~weldplan.station.recheck.Verdict` (exit 0 ok, 1 a check failed, 3 ok but welds left
-out, or robots too close as recorded: the pair is then in :attr:`Verdict.left_out`).
+out, or robots too close as recorded: the pair's line is then in the ``interference`` check's
+``left_out``, which ``weldplan verify`` says apart from the welds).
 """
 
 from __future__ import annotations
 
 import csv
 import dataclasses
+import re
 from collections import Counter
 from dataclasses import dataclass
 from typing import Any
@@ -73,22 +79,23 @@ def verify_station(saved: Any, *, station: Any = None) -> Verdict:
         if check is not None:
             checks.append(check)
         routes.append(route)
+    checks += signal_checks(saved)
     checks.append(schedule_check(saved, routes))
     checks.append(interference_check(saved, station))
     return Verdict(tuple(checks))
 
 
+def signal_checks(saved: Any) -> list[CheckResult]:
+    """Per robot with a program, its interlock signals parsed back against the schedule
+    (:func:`weldplan.multi.programcheck.signals_check`)."""
+    from weldplan.multi.programcheck import signals_check
+
+    checks = (signals_check(saved, k) for k in range(len(saved.robots)))
+    return [c for c in checks if c is not None]
+
+
 def _station(saved: Any) -> Any:
-    from pathlib import Path
-
-    from weldplan.station.load import load_station
-
-    if saved.station_file is None:
-        raise InputError("the plan records no station file: give the station", path=saved.path)
-    f = Path(saved.station_file)
-    if not f.is_file() and (saved.path.parent / f).is_file():
-        f = saved.path.parent / f
-    return load_station(f)
+    return saved.load_station()
 
 
 def _weld_ids(station: Any) -> list[str]:
@@ -307,8 +314,51 @@ def interference_check(saved: Any, station: Any) -> CheckResult:
         agree = rec.ok == v.ok and same and (rec.clearance, rec.pairs) == (v.clearance, v.pairs)
         was = "" if agree else f"; recorded: {_replay_line(rec, saved.robots)}"
         text = f"re-run: {said}{was}"
-    pair = () if v.ok else (v.failures[0] if v.failures else said,)
+    pair = () if v.ok else (too_close_line(saved, v),)
     return CheckResult("interference", agree, text, left_out=pair if agree else ())
+
+
+#: the replay's line of a pair too close (weldplan.multi.replay): where each robot is, then
+#: the distance found, the bodies and the clearance
+_FAILURE = re.compile(r"^(.*) and (.*): ([0-9.]+) mm \((.*)\), not proven ([0-9.eE+-]+) mm apart$")
+_AT = re.compile(r"^(\S+) (at rest at row (\d+)|moving rows (\d+) -> (\d+))$")
+
+
+def too_close_line(saved: Any, v: Any) -> str:
+    """What failed in a replay ``v`` (:class:`~weldplan.multi.schedule.ReplayVerdict`, not
+    ok), in one line: the two robots, where each was (the row it rests at, or the rows it
+    moves between, with the weld there from the schedule), the distance found against the
+    clearance, the bodies, and how many more pairs failed. ``weldplan verify`` prints it as
+    the robots too close (never as welds left out)."""
+    if not v.failures:
+        return f"robots closer than {v.clearance:g} mm: {_replay_line(v, saved.robots)}"
+    m = _FAILURE.match(v.failures[0])
+    if m is None:  # a line this reader does not know: as the replay wrote it
+        return v.failures[0]
+    a, b, dist, bodies, clearance = m.groups()
+    more = len(v.failures) - 1
+    tail = f"; {more} more pair(s) too close" if more else ""
+    return (
+        f"{_where(saved, a)} and {_where(saved, b)}: {dist} mm apart ({bodies}), clearance "
+        f"{clearance} mm{tail}"
+    )
+
+
+def _where(saved: Any, text: str) -> str:
+    """``robot1 at rest at row 3`` -> ``robot1 at rest at row 3 (weld 12)``: the weld the
+    schedule records at that row (a move: ``(to weld 12)``, at the row it moves to)."""
+    m = _AT.match(text)
+    if m is None or saved.schedule is None:
+        return text
+    names = [r.name for r in saved.robots]
+    if m.group(1) not in names:
+        return text
+    k = names.index(m.group(1))
+    row = int(m.group(3) if m.group(3) is not None else m.group(5))
+    weld = next((a.label for a in saved.schedule.of(k) if a.kind == "weld" and a.row == row), "")
+    if not weld:
+        return text
+    return f"{text} (to weld {weld})" if m.group(3) is None else f"{text} (weld {weld})"
 
 
 def _replay_robot(saved: Any, station: Any, k: int) -> Any:

@@ -171,6 +171,7 @@ def station_dict(splan: Any, paths: StationPaths) -> dict[str, Any]:
             "trajectory": rel(files.get("trajectory")),
             "program": [rel(files[x]) for x in ("post", "post_dat") if x in files],
             "timed_cycle": splan.timed_cycles[k],
+            "rows": _route_rows(splan.plans[k]),
         })  # fmt: skip
     sched = splan.schedule
     return {
@@ -186,6 +187,18 @@ def station_dict(splan: Any, paths: StationPaths) -> dict[str, Any]:
         "interference": splan.interference,
         "replay": None if splan.replay is None else splan.replay.to_dict(),
     }
+
+
+def _route_rows(plan: Any) -> list[int] | None:
+    """The route row of each timed row of a robot's program (its
+    :attr:`~weldplan.robot.program.ProgramBuild.row`; the identity when it has none), which
+    names the program's target of each row the schedule's interlocks name; ``None`` for an
+    idle robot."""
+    if plan is None or plan.program is None:
+        return None
+    build = plan.program
+    rows = build.row if build.row is not None else range(len(build.timing.row_times))
+    return [int(r) for r in rows]
 
 
 def station_texts(splan: Any, paths: StationPaths) -> dict[Path, str | bytes]:
@@ -241,7 +254,8 @@ def save_station_plan(splan: Any, path: str | PathLike[str]) -> Path:
 class SavedRobot:
     """One robot of a saved station: its name, given base and URDF, its share of the welds
     (visiting order), and its files (absolute, ``None``: not written; ``program``: empty
-    without ``--post``)."""
+    without ``--post``); ``rows``: the route row of each timed row of its program (``None``:
+    not recorded, an idle robot or a plan saved before they were)."""
 
     name: str
     urdf: str | None
@@ -251,6 +265,7 @@ class SavedRobot:
     trajectory: Path | None
     program: tuple[Path, ...]
     timed_cycle: float | None
+    rows: tuple[int, ...] | None = None
 
 
 @dataclass(frozen=True)
@@ -286,6 +301,28 @@ class SavedStationPlan:
     cycle_time: float
     interference: str
     replay: ReplayVerdict | None
+
+    def load_station(self) -> Any:
+        """The :class:`~weldplan.station.model.Station` the plan records (its station file,
+        as given or beside the station JSON), read again. Raises
+        :class:`~weldplan.errors.InputError` when it records none."""
+        from weldplan.station.load import load_station
+
+        if self.station_file is None:
+            raise InputError("the plan records no station file: give the station", path=self.path)
+        f = Path(self.station_file)
+        if not f.is_file() and (self.path.parent / f).is_file():
+            f = self.path.parent / f
+        return load_station(f)
+
+    def page_text(self, *, station: Any = None) -> str:
+        """The station's page (:func:`weldplan.viz.station_page.saved_station_page_text`)
+        rebuilt from the saved files; ``station`` default :meth:`load_station`."""
+        from weldplan.viz.station_page import saved_station_page_text
+
+        return saved_station_page_text(
+            self, station if station is not None else self.load_station()
+        )
 
     def verify(self, *, station: Any = None) -> Any:
         """Re-check the saved plan (:func:`weldplan.multi.recheck.verify_station`; ``station``:
@@ -361,10 +398,12 @@ def _robot(path: Path, r: dict[str, Any]) -> SavedRobot:
 
     base = r.get("base")
     cycle = r.get("timed_cycle")
+    rows = r.get("rows")
     return SavedRobot(
         str(r["name"]), None if r.get("urdf") is None else str(r["urdf"]),
         None if base is None else tuple(float(v) for v in base),
         tuple(str(w) for w in r["welds"]), file(r.get("route")), file(r.get("trajectory")),
         tuple(p for p in (file(x) for x in r.get("program", ())) if p is not None),
         None if cycle is None else float(cycle),
+        None if rows is None else tuple(int(v) for v in rows),
     )  # fmt: skip

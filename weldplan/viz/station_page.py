@@ -25,6 +25,7 @@ results only: it imports no planner.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import logging
 from collections.abc import Sequence
@@ -332,6 +333,98 @@ def station_page_text(station_plan: Any) -> str:
     part = next((p.cell.part for p in station_plan.plans if p is not None), None)
     return station_html(
         robots, station_plan.schedule, part=part, bound=float(station_plan.report.bound.value),
+        title=f"weldplan station: {len(robots)} robots",
+    )  # fmt: skip
+
+
+@dataclass(frozen=True, eq=False)
+class SavedTiming:
+    """A robot's timed route as its saved files give it: what the page reads of a
+    :class:`~weldplan.robot.program.TimedTrajectory`.
+
+    Attributes
+    ----------
+    t, q
+        ``(m,)`` s and ``(m, 6)`` rad: its trajectory CSV's samples, on its own clock.
+    row_times
+        ``(n,)`` s: the arrival at each stop row on its own clock (the schedule's moves and
+        welds before it, its waits taken out; :func:`weldplan.multi.recheck.file_timing`).
+    weld_rows
+        ``(w,)``: the timed rows the schedule records a weld at, in order.
+    weld_time
+        s per weld (the schedule's weld activities).
+    """
+
+    t: NDArray[np.float64]
+    q: NDArray[np.float64]
+    row_times: NDArray[np.float64]
+    weld_rows: NDArray[np.int64]
+    weld_time: float
+
+
+def saved_station_robots(saved: Any, station: Any) -> list[StationRobot]:
+    """Per robot of a saved station plan (:class:`~weldplan.multi.saved.SavedStationPlan`)
+    what the page draws, from its files alone: the URDF, OPW and tool of ``station`` (its
+    :class:`~weldplan.station.model.Station`) at the recorded base, its trajectory CSV timed
+    by the schedule (:class:`SavedTiming`), its TCP path by forward kinematics of the CSV's
+    samples, its welds labelled as the schedule labels them; an idle robot at rest."""
+    from weldplan.multi.recheck import file_timing
+    from weldplan.robot import load_robot
+    from weldplan.robot.placement.reach import base_pose
+    from weldplan.station.mount import mount_tool
+
+    out = []
+    for k, (rec, spec) in enumerate(zip(saved.robots, station.robots, strict=True)):
+        base = rec.base if rec.base is not None else spec.base
+        spec = dataclasses.replace(spec, base=base)
+        acts = saved.schedule.of(k)
+        if rec.trajectory is None or not acts:
+            out.append(_idle_robot(rec.name, spec))
+            continue
+        robot = load_robot(spec.urdf, spec.opw, base=base_pose(*base))
+        mounted = mount_tool(spec.tool, robot)
+        ft = file_timing(saved.schedule, k, rec.trajectory)
+        welds = [a for a in acts if a.kind == "weld"]
+        timing = SavedTiming(
+            ft.t, ft.q, ft.row_times, np.array([a.row for a in welds], dtype=np.int64),
+            welds[0].duration if welds else 0.0,
+        )  # fmt: skip
+        Tft = np.asarray(mounted.flange_tcp, dtype=float).reshape(4, 4)
+        path = (robot.fk(ft.q) @ Tft)[:, :3, 3]
+        ids = tuple(a.label or str(n + 1) for n, a in enumerate(welds))
+        out.append(StationRobot(rec.name, robot, Tft, timing, mounted.tool, path, ids))
+    return out
+
+
+def saved_station_part(station: Any) -> Any:
+    """The part of ``station`` where the plan had it: its mesh loaded as the station gives it
+    and placed in the cell by its part pose (the demo's without a mesh)."""
+    from weldplan.io.mesh import load_part
+
+    p = station.part
+    if p.is_demo:
+        from weldplan.weld import demo_part
+
+        part = load_part(demo_part.DEMO_PART)
+    else:
+        part = load_part(p.mesh, units=p.units, scale=p.scale, length=p.length)
+    pose = station.part_pose
+    return part if pose is None else pose.placed(part.vertices).mesh_to_cell(part)
+
+
+def saved_station_page_text(saved: Any, station: Any) -> str:
+    """The page of a saved station plan (:class:`~weldplan.multi.saved.SavedStationPlan`)
+    rebuilt from its files (:func:`saved_station_robots`, :func:`saved_station_part`) and
+    ``station``: what ``weldplan view route_station.json --html`` writes; the chart carries
+    the recorded lower bound."""
+    if saved.schedule is None:
+        from weldplan.errors import InputError
+
+        raise InputError("the plan records no schedule to draw", path=saved.path, field="schedule")
+    robots = saved_station_robots(saved, station)
+    bound = None if saved.report is None else float(saved.report.bound.value)
+    return station_html(
+        robots, saved.schedule, part=saved_station_part(station), bound=bound,
         title=f"weldplan station: {len(robots)} robots",
     )  # fmt: skip
 

@@ -61,6 +61,12 @@ class RapidModule:
     signals: list[tuple[str, str, int, str]] = field(default_factory=list)
     #: ``(signal number, signal name)`` of the outputs switched off before the first move
     resets: list[tuple[int, str]] = field(default_factory=list)
+    #: each target's comment (``weld <id>``, ``<kind>, route row <row>``), by target name
+    tags: dict[str, str] = field(default_factory=dict)
+    #: the line (1-based) of each move and of each signal, parallel to :attr:`moves` and
+    #: :attr:`signals`: what a check of the program names
+    move_lines: list[int] = field(default_factory=list)
+    signal_lines: list[int] = field(default_factory=list)
 
 
 _RAPID = [
@@ -83,7 +89,7 @@ _RAPID = [
         "target",
         re.compile(
             rf"^CONST robtarget (\w+) := {_POSE[:-2]},\[(-?\d+),(-?\d+),(-?\d+),(\d+)\],"
-            r"\[9E\+09,9E\+09,9E\+09,9E\+09,9E\+09,9E\+09\]\];(?: !.*)?$"
+            r"\[9E\+09,9E\+09,9E\+09,9E\+09,9E\+09,9E\+09\]\];(?: ! (.*))?$"
         ),
     ),
     ("proc", re.compile(r"^PROC \w+\((?:string id)?\)$")),
@@ -125,10 +131,13 @@ def parse_rapid(text: str, *, path: str = "<rapid>") -> RapidModule:
             mod.speeds[g[0]] = float(g[1])
         elif kind == "target":
             mod.targets[g[0]] = (_pose_wxyz(list(g[1:8])), tuple(int(v) for v in g[8:12]))  # type: ignore[misc]
+            if g[12] is not None:
+                mod.tags[g[0]] = g[12]
         elif kind == "move":
             if g[1] not in mod.targets or g[2] not in mod.speeds:
                 raise InputError(f"undeclared target or speed in {line!r}", path=path, line=lineno)
             mod.moves.append(g)  # type: ignore[arg-type]
+            mod.move_lines.append(lineno)
         elif kind == "waittime":
             mod.weld_time = float(g[0])
         elif kind in ("setdo", "waitdi"):
@@ -150,6 +159,7 @@ def _rapid_signal(mod: RapidModule, kind: str, g: tuple, path: str, lineno: int)
         raise InputError(f"a signal before the first move: {name}", path=path, line=lineno)
     action = "set" if kind == "setdo" else "wait"
     mod.signals.append((mod.moves[-1][1], action, number, interlock))
+    mod.signal_lines.append(lineno)
 
 
 @dataclass
@@ -170,6 +180,12 @@ class KrlProgram:
     signals: list[tuple[str, str, int, str]] = field(default_factory=list)
     #: ``(signal number, interlock name)`` of the outputs switched off before the first move
     resets: list[tuple[int, str]] = field(default_factory=list)
+    #: each point's comment in the ``.dat`` (``weld <id>``, ``<kind>, route row <row>``)
+    tags: dict[str, str] = field(default_factory=dict)
+    #: the ``.src`` line (1-based) of each move and of each signal, parallel to :attr:`moves`
+    #: and :attr:`signals`: what a check of the program names
+    move_lines: list[int] = field(default_factory=list)
+    signal_lines: list[int] = field(default_factory=list)
 
 
 _FRAME = rf"\{{X ({_NUM}), Y ({_NUM}), Z ({_NUM}), A ({_NUM}), B ({_NUM}), C ({_NUM})"
@@ -196,7 +212,7 @@ def parse_krl(src: str, dat: str, *, path: str = "<krl>") -> KrlProgram:
             "e6pos",
             re.compile(
                 rf"^DECL E6POS (\w+)={_FRAME}, S (\d+), T (\d+), E1 0\.0, E2 0\.0, E3 0\.0, "
-                r"E4 0\.0, E5 0\.0, E6 0\.0\}(?: ;.*)?$"
+                r"E4 0\.0, E5 0\.0, E6 0\.0\}(?: ; (.*))?$"
             ),
         ),
     ]
@@ -214,6 +230,8 @@ def parse_krl(src: str, dat: str, *, path: str = "<krl>") -> KrlProgram:
             frames[g[0]] = krl_frame(list(g[1:7]))
         elif kind == "e6pos":
             prog.points[g[0]] = (krl_frame(list(g[1:7])), int(g[7]), int(g[8]))
+            if g[9] is not None:
+                prog.tags[g[0]] = g[9]
     vel, cdis = float("nan"), 0.0
     src_rules = [
         ("def", re.compile(r"^DEF (\w+)\(\)$")),
@@ -264,6 +282,7 @@ def parse_krl(src: str, dat: str, *, path: str = "<krl>") -> KrlProgram:
             if g[1] not in prog.points:
                 raise InputError(f"undeclared point {g[1]}", path=f"{path}.src", line=lineno)
             prog.moves.append((g[0], g[1], vel, cdis if g[2] else 0.0))
+            prog.move_lines.append(lineno)
         elif kind == "def" and prog.name and g[0] != prog.name:
             raise InputError(f"DEF {g[0]} but DEFDAT {prog.name}", path=f"{path}.src", line=lineno)
         elif kind in ("out", "waitin"):
@@ -279,6 +298,7 @@ def _krl_signal(prog: KrlProgram, g: tuple, prev: str, path: str, lineno: int) -
         if not prog.moves:
             raise InputError("WAIT FOR $IN before the first move", path=path, line=lineno)
         prog.signals.append((prog.moves[-1][1], "wait", int(g[0]), g[1]))
+        prog.signal_lines.append(lineno)
         return
     number, on, name = int(g[0]), g[1] == "TRUE", g[2]
     if not on:
@@ -292,3 +312,4 @@ def _krl_signal(prog: KrlProgram, g: tuple, prev: str, path: str, lineno: int) -
             line=lineno,
         )  # fmt: skip
     prog.signals.append((prog.moves[-1][1], "set", number, name))
+    prog.signal_lines.append(lineno)

@@ -115,12 +115,18 @@ class Candidates:
         The welds' names (for the log).
     rots, quats
         ``(n, c, 3, 3)`` and ``(n, c, 4)`` (wxyz): each weld's candidate TCP orientations.
+    own
+        ``(n, c, 4)``: the same orientations in the part's own frame, whose rotation angles the
+        choice minimises (``None``: ``quats``, the part frame is the planning frame). The
+        angles do not depend on the frame, but their rounding does: measured in the part frame,
+        the choice among equal rotations is the same wherever the part stands in the cell.
     """
 
     xyz: NDArray[np.float64]
     ids: tuple[str, ...]
     rots: NDArray[np.float64]
     quats: NDArray[np.float64]
+    own: NDArray[np.float64] | None = None
 
 
 class ChoiceState:
@@ -301,6 +307,7 @@ def choose(
     rotation (deg); counts go to ``state``.
     """
     xyz, ids, rots, quats = cands.xyz, cands.ids, cands.rots, cands.quats
+    own = quats if cands.own is None else cands.own  # the DP's angles (Candidates)
     clearance = search.clearance
     counts = state.counts
     for _ in range(3 * dists.size + 1):
@@ -312,8 +319,8 @@ def choose(
         welds_ok = [i for i in range(len(dists)) if ok[i].any()]
         cand = [np.flatnonzero(ok[i]) for i in welds_ok]
         pick, total = least_rotation_choice(
-            [quats[i, c] for i, c in zip(welds_ok, cand, strict=True)],
-            lambda k, w=welds_ok, c=cand: state.angles(quats, w[k - 1], c[k - 1], w[k], c[k]),
+            [own[i, c] for i, c in zip(welds_ok, cand, strict=True)],
+            lambda k, w=welds_ok, c=cand: state.angles(own, w[k - 1], c[k - 1], w[k], c[k]),
         )
         choice = {i: int(c[j]) for i, c, j in zip(welds_ok, cand, pick, strict=True)}
         todo = [(i, k) for i, k in choice.items() if np.isnan(dists[i, k])]
@@ -327,9 +334,9 @@ def choose(
             for i in short:
                 j = chain.index(i)
                 nbrs = [chain[m] for m in (j - 1, j + 1) if 0 <= m < len(chain)]
-                ref = quats[nbrs, [choice[m] for m in nbrs]] if nbrs else quats[i, [choice[i]]]
+                ref = own[nbrs, [choice[m] for m in nbrs]] if nbrs else own[i, [choice[i]]]
                 counts["distance_queries"] += _first_free(
-                    i, ref, dists, allowed, rots, quats, search, objs[i], xyz[i]
+                    i, ref, dists, allowed, rots, own, search, objs[i], xyz[i]
                 )
             continue
         if _recheck(choice, xyz, ids, quats, checker, state):

@@ -1,7 +1,8 @@
 """Candidate tool orientations about an approach axis, and the least-rotation choice along a route.
 
-A candidate is the nominal frame of a weld (TCP +z along the approach axis) turned by a spin
-``psi`` about that axis and tilted by ``t`` about an axis perpendicular to it at azimuth ``phi``:
+A candidate is the nominal frame of a weld (TCP +z along the approach axis, x from the part's
+own axes: :func:`nominal_frames`) turned by a spin ``psi`` about that axis and tilted by ``t``
+about an axis perpendicular to it at azimuth ``phi``:
 ``R = R0 @ Rot(cos(phi) x + sin(phi) y, t) @ Rot(z, psi)``, with ``R0`` the nominal frame. The
 local part (everything right of ``R0``) is the same for every weld, so it is built once and the
 candidates of all welds come from one ``einsum``.
@@ -19,19 +20,36 @@ from scipy.spatial.transform import Rotation
 log = logging.getLogger(__name__)
 
 
-def nominal_frames(axes: ArrayLike) -> NDArray[np.float64]:
+def nominal_frames(axes: ArrayLike, frame: ArrayLike | None = None) -> NDArray[np.float64]:
     """``(n, 3, 3)``: a right-handed frame per unit axis ``(n, 3)``, its z column the axis.
 
-    The x column is the part frame's x (or y, when the axis is within 0.9 of x) made
-    perpendicular to the axis, so the frame is a fixed function of the axis alone.
+    The x column is the part's own x axis (or its y, when the axis is within 0.9 of x) made
+    perpendicular to the axis, so the frame is a fixed function of the axis and the part alone:
+    a part turned in the cell gets its frames turned with it, and so the same candidates, the
+    same poses and the same reach (../shared/DESIGN.md, "Frames": the part frame is where the
+    welds are given).
+
+    Parameters
+    ----------
+    axes
+        ``(n, 3)`` approach axes in the planning frame (need not be unit).
+    frame
+        ``(3, 3)`` rotation: the part frame's axes (columns) in the planning frame, the
+        rotation of the part's pose in the cell (:attr:`weldplan.cellframe.PartPose.matrix`);
+        ``None``: the part frame is the planning frame. The frames are built in the part
+        frame and turned back: ``frame @ nominal_frames(frame.T @ axes)``.
     """
     a = np.asarray(axes, dtype=np.float64).reshape(-1, 3)
     a = a / np.linalg.norm(a, axis=1, keepdims=True)
+    R = None if frame is None else np.asarray(frame, dtype=np.float64).reshape(3, 3)
+    if R is not None:
+        a = a @ R  # each row R.T @ a: the axis in the part frame
     ref = np.where(np.abs(a[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
     x = ref - np.sum(ref * a, axis=1, keepdims=True) * a
     x /= np.linalg.norm(x, axis=1, keepdims=True)
     y = np.cross(a, x)
-    return np.stack([x, y, a], axis=2)
+    F = np.stack([x, y, a], axis=2)
+    return F if R is None else np.einsum("ij,njk->nik", R, F)
 
 
 def local_candidates(
@@ -73,9 +91,13 @@ def local_candidates(
     return (R_tilt * R_spin).as_matrix(), params
 
 
-def candidate_rotations(axes: ArrayLike, local: ArrayLike) -> NDArray[np.float64]:
-    """``(n, c, 3, 3)``: every local candidate ``(c, 3, 3)`` applied to each axis ``(n, 3)``."""
-    return np.einsum("nij,cjk->ncik", nominal_frames(axes), np.asarray(local, dtype=np.float64))
+def candidate_rotations(
+    axes: ArrayLike, local: ArrayLike, frame: ArrayLike | None = None
+) -> NDArray[np.float64]:
+    """``(n, c, 3, 3)``: every local candidate ``(c, 3, 3)`` applied to each axis ``(n, 3)``,
+    its nominal frame built from the part's axes ``frame`` (:func:`nominal_frames`)."""
+    F = nominal_frames(axes, frame)
+    return np.einsum("nij,cjk->ncik", F, np.asarray(local, dtype=np.float64))
 
 
 def rotation_angles(qa: ArrayLike, qb: ArrayLike) -> NDArray[np.float64]:

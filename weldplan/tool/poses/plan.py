@@ -179,12 +179,14 @@ def plan_weld_poses(
     both_sides = tool.straddles if s.both_sides is None else s.both_sides
     local, params = local_candidates(s.cone, s.tilt_step, s.spin_step, s.azimuths)
     params = np.column_stack([params, np.zeros(len(params))])  # spin, tilt, azimuth, flipped
-    rots = candidate_rotations(axes, local)  # (n, c, 3, 3)
+    frame = _part_axes(cell)
+    rots = candidate_rotations(axes, local, frame)  # (n, c, 3, 3)
     if both_sides:
-        rots = np.concatenate([rots, candidate_rotations(-axes, local)], axis=1)
+        rots = np.concatenate([rots, candidate_rotations(-axes, local, frame)], axis=1)
         params = np.concatenate([params, params + [0.0, 0.0, 0.0, 1.0]])
     n, c = len(welds.ids), len(params)
     quats = quat_wxyz(rots.reshape(-1, 3, 3)).reshape(n, c, 4)
+    own = None if frame is None else _own_quats(axes @ frame, local, both_sides)
     search = PoseSearch(part, tool, contact_radius, clearance, crop=s.crop)
     t_near = time.perf_counter()
     near = [search.part_near(p) for p in welds.xyz]
@@ -198,7 +200,7 @@ def plan_weld_poses(
     checker = Rechecks.of(part, tool, contact_radius, clearance)
     state = ChoiceState(dists.shape)
 
-    cands = Candidates(welds.xyz, tuple(welds.ids), rots, quats)
+    cands = Candidates(welds.xyz, tuple(welds.ids), rots, quats, own)
 
     def pick() -> tuple[dict[int, int], float]:
         return choose(
@@ -211,7 +213,7 @@ def plan_weld_poses(
         choice, total = _turn_over(table, state, choice, total, pick)
     t_miss = time.perf_counter()
     alts = _alternatives(
-        dists, table.allowed & table.tried, state.rejected, quats, choice, clearance
+        dists, table.allowed & table.tried, state.rejected, quats, choice, clearance, own
     )
     misses = {i: table.miss(i, near[i][1], params) for i in range(n) if i not in choice}
     dists[~table.tried] = 0.0  # not tried: counted as not free below
@@ -251,6 +253,23 @@ def plan_weld_poses(
     )
     log.info("%s (%.1f s)", result.summary().splitlines()[0], elapsed)
     return result
+
+
+def _own_quats(axes: NDArray[np.float64], local: NDArray[np.float64], both: bool) -> NDArray:
+    """``(n, c, 4)``: the candidates of the approach ``axes (n, 3)`` given in the part's own
+    frame, as quaternions in that frame (:attr:`~weldplan.tool.poses.choice.Candidates.own`)."""
+    rots = candidate_rotations(axes, local)
+    if both:
+        rots = np.concatenate([rots, candidate_rotations(-axes, local)], axis=1)
+    return quat_wxyz(rots.reshape(-1, 3, 3)).reshape(rots.shape[0], rots.shape[1], 4)
+
+
+def _part_axes(cell: Any) -> NDArray[np.float64] | None:
+    """``(3, 3)``: the part frame's axes in the cell frame when ``cell`` placed the part by a
+    pose (:attr:`~weldplan.weld.cell.Cell.part_pose`), else ``None``: the candidates' frames
+    turn with the part (:func:`~weldplan.tool.poses.orient.nominal_frames`)."""
+    pose = None if cell is None else getattr(cell, "part_pose", None)
+    return None if pose is None else np.asarray(pose.matrix, dtype=np.float64)[:3, :3]
 
 
 class Rechecks:
@@ -456,12 +475,15 @@ def _alternatives(
     quats: NDArray[np.float64],
     choice: dict[int, int],
     clearance: float,
+    own: NDArray[np.float64] | None = None,
 ) -> tuple[NDArray[np.float64], ...]:
     """Per weld, the quaternions of its candidates not known to fail for the tool
     (:attr:`~weldplan.tool.poses.WeldPoses.alternatives`): tried and still allowed (``live``),
     not colliding (``dists != 0``), clearance not measured short (NaN or at least the clearance:
     :func:`_first_free` stops at the first that keeps it), not rejected by the re-check; the
-    chosen one first, then by rotation from it."""
+    chosen one first, then by rotation from it (measured on ``own``, the candidates in the
+    part's frame, when given)."""
+    own = quats if own is None else own
     out: list[NDArray[np.float64]] = []
     for i in range(len(dists)):
         if i not in choice:
@@ -472,7 +494,7 @@ def _alternatives(
         with np.errstate(invalid="ignore"):
             k = np.flatnonzero(live[i] & ~rejected[i] & (d != 0) & ~(d < clearance))
         k = k[k != c]
-        ang = rotation_angles(quats[i, k], quats[i, c][None])[:, 0]
+        ang = rotation_angles(own[i, k], own[i, c][None])[:, 0]
         out.append(np.concatenate([quats[i, [c]], quats[i, k[np.argsort(ang, kind="stable")]]]))
     return tuple(out)
 
