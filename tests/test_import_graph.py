@@ -117,7 +117,8 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     # a plan's files: rendered by the exporters and the viewers
     ("outputs", ("weldplan.station.outputs",)),
     # a station of several robots as files: every robot's outputs, the station JSON, its re-check
-    ("station files", ("weldplan.multi.saved", "weldplan.multi.recheck")),
+    ("station files", ("weldplan.multi.saved", "weldplan.multi.recheck",
+                       "weldplan.multi.programcheck")),
     ("api", ("weldplan",)),
     ("bench", ("weldplan.bench",)),
     ("commands", ("weldplan.commands",)),

@@ -136,7 +136,7 @@ def row_targets(saved: Any, k: int, program: Program, rows: set[int]) -> dict[in
 def _route_row(saved: Any, k: int) -> Any:
     """Robot ``k``'s ``timed row -> route row`` (``-1``: not known), from the station JSON's
     ``rows``, else from its trajectory CSV (:func:`row_targets`)."""
-    from weldplan.multi.recheck import _trajectory_rows, file_timing
+    from weldplan.multi.filetiming import _trajectory_rows, file_timing
 
     robot = saved.robots[k]
     if robot.rows is not None:

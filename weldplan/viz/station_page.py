@@ -348,7 +348,7 @@ class SavedTiming:
         ``(m,)`` s and ``(m, 6)`` rad: its trajectory CSV's samples, on its own clock.
     row_times
         ``(n,)`` s: the arrival at each stop row on its own clock (the schedule's moves and
-        welds before it, its waits taken out; :func:`weldplan.multi.recheck.file_timing`).
+        welds before it, its waits taken out; :func:`weldplan.multi.filetiming.file_timing`).
     weld_rows
         ``(w,)``: the timed rows the schedule records a weld at, in order.
     weld_time
@@ -368,7 +368,7 @@ def saved_station_robots(saved: Any, station: Any) -> list[StationRobot]:
     :class:`~weldplan.station.model.Station`) at the recorded base, its trajectory CSV timed
     by the schedule (:class:`SavedTiming`), its TCP path by forward kinematics of the CSV's
     samples, its welds labelled as the schedule labels them; an idle robot at rest."""
-    from weldplan.multi.recheck import file_timing
+    from weldplan.multi.filetiming import file_timing
     from weldplan.robot import load_robot
     from weldplan.robot.placement.reach import base_pose
     from weldplan.station.mount import mount_tool
