@@ -98,7 +98,11 @@ class StationPlan:
         ``None`` while interference is not checked.
     stats
         ``{"seconds": {stage: wall s}}``: the cell, each robot's study, the allocation, each
-        robot's plan, the interference, the zones, the replay.
+        robot's plan, the interference, the zones, the replay (the allocation and the plans
+        summed over the rounds).
+    rounds
+        The :class:`~weldplan.multi.calibrate.CalibrationRound` of every allocate-plan round
+        (the model's and the timed cycle); ``report`` and ``plans`` are the best round's.
     """
 
     station: Any
@@ -110,6 +114,7 @@ class StationPlan:
     stats: dict[str, Any] = field(default_factory=dict)
     schedule: StationSchedule | None = None
     replay: ReplayVerdict | None = None
+    rounds: tuple[Any, ...] = ()
 
     @property
     def allocation(self) -> Any:
@@ -227,9 +232,8 @@ def plan_station(
 ) -> StationPlan:
     """Plan a station of several robots (module docstring); ``seed`` as
     :func:`weldplan.station.pipeline.plan` draws it."""
-    from weldplan.multi.baselines import allocation_report
     from weldplan.multi.cell import place_robots
-    from weldplan.station.pipeline import cell_stage, plan
+    from weldplan.station.pipeline import cell_stage
 
     say = progress or (lambda stage, done, total: None)
     seconds: dict[str, float] = {}
@@ -254,29 +258,67 @@ def plan_station(
         seconds[f"study robot{k + 1}"] = time.perf_counter() - t
     say("study", len(robots), len(robots))
     inp: StudyInputs = stack_inputs(inputs, [f"robot{k + 1}" for k in range(len(robots))])
-    t = time.perf_counter()
-    report = allocation_report(
-        inp.reach, inp.weld_time, inp.cost, rng=seed, settings=settings, bound_travel=inp.bound
-    )
-    seconds["allocation"] = time.perf_counter() - t
-    plans: list[Any] = []
-    with tempfile.TemporaryDirectory(prefix="weldplan-station-") as tmp:
-        for k, (spec, _, _) in enumerate(robots):
-            ids = report.ours.welds_of(k)
-            if not ids:
-                plans.append(None)
-                continue
-            sub = _sub_station(station, spec, _welds_file(station, ids, Path(tmp), k))
-            log.info("station: robot %d plans its %d welds", k + 1, len(ids))
-            t = time.perf_counter()
-            plans.append(plan(sub, rng=seed, executor=executor, progress=progress))
-            seconds[f"plan robot{k + 1}"] = time.perf_counter() - t
+    plans, report, rounds = _allocate_and_plan(station, robots, inp, seed, settings, executor,
+                                               progress, seconds)  # fmt: skip
     names = report.ours.robots
     plans, schedule, replay, line = _interference(station, plans, names, seconds)
     return StationPlan(
         station, seed, report, tuple(plans), tuple(studies), interference=line,
-        stats={"seconds": seconds}, schedule=schedule, replay=replay,
+        stats={"seconds": seconds}, schedule=schedule, replay=replay, rounds=rounds,
     )  # fmt: skip
+
+
+def _allocate_and_plan(
+    station: Any,
+    robots: list[Any],
+    inp: StudyInputs,
+    seed: int | None,
+    settings: AllocationSettings | None,
+    executor: Any,
+    progress: Callable[[str, int, int], None] | None,
+    seconds: dict[str, float],
+) -> tuple[list[Any], AllocationReport, tuple[Any, ...]]:
+    """Steps 4-5 of the module docstring, iterated (:func:`weldplan.multi.calibrate.
+    allocate_and_plan`, ``settings.rounds``): ``(plans, the best round's report, the rounds)``.
+    The bound is computed once, over the all-branch leg times."""
+    from weldplan.multi.baselines import allocation_report
+    from weldplan.multi.bound import lower_bound
+    from weldplan.multi.calibrate import allocate_and_plan
+    from weldplan.multi.problem import AllocationProblem
+    from weldplan.station.pipeline import plan
+
+    settings = settings or AllocationSettings()
+    say = progress or (lambda stage, done, total: None)
+    t = time.perf_counter()
+    problem = AllocationProblem.build(inp.reach, inp.weld_time, inp.bound, settings.closed)
+    bound = lower_bound(problem, nodes=settings.milp_nodes, seconds=settings.milp_seconds)
+    seconds["allocation"] = time.perf_counter() - t
+    calls = [0]
+
+    def allocate_once(travel: Any) -> AllocationReport:
+        say("allocation", calls[0], settings.rounds)
+        calls[0] += 1
+        t = time.perf_counter()
+        out = allocation_report(inp.reach, inp.weld_time, travel, rng=seed, settings=settings,
+                                bound=bound)  # fmt: skip
+        seconds["allocation"] += time.perf_counter() - t
+        return out
+
+    with tempfile.TemporaryDirectory(prefix="weldplan-station-") as tmp:
+
+        def plan_share(k: int, ids: tuple[str, ...]) -> Any:
+            spec = robots[k][0]
+            say("plan", k, len(robots))
+            sub = _sub_station(station, spec, _welds_file(station, ids, Path(tmp), k))
+            log.info("station: robot %d plans its %d welds", k + 1, len(ids))
+            t = time.perf_counter()
+            out = plan(sub, rng=seed, executor=executor, progress=progress)
+            key = f"plan robot{k + 1}"
+            seconds[key] = seconds.get(key, 0.0) + time.perf_counter() - t
+            return out
+
+        got = allocate_and_plan(allocate_once, plan_share, inp.cost, settings.rounds)
+    return list(got.plans), got.report, got.rounds
 
 
 def _interference(
