@@ -176,3 +176,48 @@ def test_the_loop_is_deterministic_and_budgeted():
     assert len(_loop(2)[0].rounds) <= 2
     with pytest.raises(ConfigError):
         _loop(0)
+
+
+def test_the_approach_term_is_the_rest_to_rest_move_to_the_lifted_pose():
+    """:func:`approach_times` against forward kinematics: the configuration it times puts the
+    flange exactly ``lift`` away with the same orientation, and its time is the straight
+    rest-to-rest move to it; no lift, (next to) no time."""
+    from tests.robot_fixtures import shared_robot
+    from weldplan.multi.inputs import approach_times
+    from weldplan.robot.program.timing import pair_time
+
+    robot = shared_robot()
+    q = np.array([[0.3, -1.4, 1.6, 0.2, 0.9, -0.4], [-0.5, -1.2, 1.3, -0.3, 1.1, 0.6]])
+    v, a = np.asarray(robot.velocity), np.asarray(robot.acceleration)
+    # no lift: the IK round trip (1e-10 rad) is all that moves
+    assert np.all(approach_times(robot, q, np.zeros((2, 3)), v, a) < 1e-4)
+    lift = np.array([[0.0, 0.0, 50.0], [30.0, -40.0, 0.0]])
+    got = approach_times(robot, q, lift, v, a)
+    T0 = robot.fk(q)
+    T_lift = T0.copy()
+    T_lift[:, :3, 3] += lift
+    br = robot.ik_all(T_lift)
+    for k in range(2):
+        # the lifted configuration the term times: the solution nearest q[k]
+        d = np.angle(np.exp(1j * (br.q[k] - q[k])))
+        j = int(np.nanargmin(np.where(br.exists[k], np.abs(d).max(axis=1), np.inf)))
+        T1 = robot.fk((q[k] + d[j])[None])[0]
+        assert np.allclose(T1[:3, 3] - T0[k, :3, 3], lift[k], atol=1e-6)
+        assert np.allclose(T1[:3, :3], T0[k, :3, :3], atol=1e-9)
+        assert got[k] == pytest.approx(float(pair_time(d[j], v, a)), rel=1e-12)
+        assert 0.0 < got[k] < 1.0
+
+
+def test_the_model_adds_the_approach_at_both_ends_and_the_bound_does_not():
+    from weldplan.multi.inputs import StudyInputs
+
+    cost = np.arange(18, dtype=float).reshape(2, 3, 3)
+    cost[:, [0, 1, 2], [0, 1, 2]] = 0.0
+    app = np.array([[0.1, 0.2, 0.3], [1.0, 2.0, 3.0]])
+    inp = StudyInputs(ReachMap.of(np.ones((2, 3), bool)), np.zeros((2, 3)), cost, cost / 2,
+                      (0, 0), app)  # fmt: skip
+    m = inp.model
+    assert m[0, 0, 2] == pytest.approx(cost[0, 0, 2] + 0.1 + 0.3)
+    assert m[1, 2, 1] == pytest.approx(cost[1, 2, 1] + 3.0 + 2.0)
+    assert np.all(m[:, [0, 1, 2], [0, 1, 2]] == 0.0)
+    assert np.array_equal(inp.bound, cost / 2)

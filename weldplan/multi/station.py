@@ -10,14 +10,18 @@
 3. per robot, at its base with its own tool, the feasibility study
    (:func:`weldplan.study.check_spots`: a free gun pose on a usable branch with the links
    clear, else why not) and its leg times between the welds it reaches
-   (:func:`weldplan.multi.inputs.study_inputs`);
+   (:func:`weldplan.multi.inputs.study_inputs`: the model, station-branch leg times with the
+   approach to each weld's virtual joint at both ends, and their all-branch lower bound);
 4. the allocation (:func:`weldplan.multi.allocation_report`: ours, the lower bound, the
-   one-robot and nearest-robot baselines) over the station-branch leg times, the bound over
-   the all-branch ones;
+   one-robot and nearest-robot baselines) over the model, the bound over the all-branch
+   times;
 5. per robot with welds, the single-robot pipeline (:func:`weldplan.station.pipeline.plan`) on
    a sub-station: the same station (its part pose kept) with that robot alone at its base and
    the welds file restricted to its share (written in the file's own units and frame beside
-   nothing: a temporary folder, removed after).
+   nothing: a temporary folder, removed after). Steps 4-5 are repeated
+   (:func:`weldplan.multi.calibrate.allocate_and_plan`, at most ``settings.rounds`` times)
+   with the planned legs' timed values in place of their model times while the station's
+   timed cycle drops; the best round is kept.
 
 6. robot-robot interference (issue 30, item 4): the pairs of motions of two robots whose swept
    robots come closer than the station's ``clearance``
@@ -249,12 +253,13 @@ def plan_station(
     # interference stage, the replay and the saved station read it
     station = dataclasses.replace(station, robots=tuple(spec for spec, _, _ in robots))
     studies, inputs = [], []
+    lift = cell.virtual_xyz - np.asarray(cell.joints.xyz)  # each weld to its virtual joint, mm
     for k, (spec, mounted, robot) in enumerate(robots):
         say("study", k, len(robots))
         t = time.perf_counter()
         study = layout.studies[k] or _study(cell, station, k, mounted, robot)
         studies.append(study)
-        inputs.append(study_inputs(study, [robot], [spec.settings.weld_time]))
+        inputs.append(study_inputs(study, [robot], [spec.settings.weld_time], lift=lift))
         seconds[f"study robot{k + 1}"] = time.perf_counter() - t
     say("study", len(robots), len(robots))
     inp: StudyInputs = stack_inputs(inputs, [f"robot{k + 1}" for k in range(len(robots))])
@@ -317,7 +322,7 @@ def _allocate_and_plan(
             seconds[key] = seconds.get(key, 0.0) + time.perf_counter() - t
             return out
 
-        got = allocate_and_plan(allocate_once, plan_share, inp.cost, settings.rounds)
+        got = allocate_and_plan(allocate_once, plan_share, inp.model, settings.rounds)
     return list(got.plans), got.report, got.rounds
 
 
