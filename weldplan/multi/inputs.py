@@ -205,6 +205,7 @@ def stack_inputs(parts: Sequence[StudyInputs], names: Sequence[str]) -> StudyInp
         np.concatenate([p.cost for p in parts]),
         np.concatenate([p.bound for p in parts]),
         tuple(b for p in parts for b in p.branch),
-        np.vstack([np.zeros(p.weld_time.shape) if p.approach is None else p.approach
-                   for p in parts]),  # fmt: skip
+        np.vstack(
+            [np.zeros(p.weld_time.shape) if p.approach is None else p.approach for p in parts]
+        ),  # fmt: skip
     )
