@@ -221,3 +221,53 @@ def test_the_model_adds_the_approach_at_both_ends_and_the_bound_does_not():
     assert m[1, 2, 1] == pytest.approx(cost[1, 2, 1] + 3.0 + 2.0)
     assert np.all(m[:, [0, 1, 2], [0, 1, 2]] == 0.0)
     assert np.array_equal(inp.bound, cost / 2)
+
+
+def test_the_tcp_bound_is_below_toppra_for_any_configurations_of_the_two_welds():
+    """The pose-free bound of :func:`weldplan.multi.bound.tcp_leg_bound` between two TCP
+    positions is below toppra's time of a straight joint move between any two configurations
+    that put the TCP there (random ones of the KR 150 with a gun 500 mm out), and it is the
+    closed form on one lever: a single joint with lever L covering d in ``2 sqrt(d / (L a))``."""
+    from tests.robot_fixtures import shared_robot
+    from weldplan.multi.bound import lever_arms, tcp_leg_bound
+
+    robot = shared_robot()
+    v, a = np.asarray(robot.velocity), np.asarray(robot.acceleration)
+    tcp = np.eye(4)
+    tcp[2, 3] = 500.0
+    L = lever_arms(robot.opw, 500.0)
+    g = np.random.default_rng(5)
+    lo, hi = np.asarray(robot.lower), np.asarray(robot.upper)
+    for _ in range(10):
+        q = g.uniform(lo, hi, (2, 6))
+        p = (robot.fk(q) @ tcp)[:, :3, 3]
+        T = tcp_leg_bound(p, L, v, a)
+        assert T[0, 0] == 0.0 and T[0, 1] == pytest.approx(T[1, 0])
+        got = time_route(q, v, a, weld_rows=[]).total
+        assert 0.0 < T[0, 1] <= got
+    one = tcp_leg_bound([[0, 0, 0], [10.0, 0, 0]], [1000.0], [1.0], [2.0])
+    assert one[0, 1] == pytest.approx(2 * np.sqrt(10.0 / (1000.0 * 2.0)), rel=1e-9)
+
+
+def test_the_lever_arms_bound_the_tcp_speed_of_the_arm():
+    """Finite differences of the KR 150's forward kinematics: in random configurations, a
+    joint velocity ``dq`` moves a TCP 500 mm out of the flange at most ``sum_k L_k |dq_k|``."""
+    from tests.robot_fixtures import shared_robot
+    from weldplan.multi.bound import lever_arms
+
+    robot = shared_robot()
+    tcp = np.eye(4)
+    tcp[:3, 3] = [120.0, -60.0, 480.0]
+    L = lever_arms(robot.opw, float(np.linalg.norm(tcp[:3, 3])))
+    g = np.random.default_rng(6)
+    q = g.uniform(robot.lower, robot.upper, (200, 6))
+    eps = 1e-6
+    for k in range(6):  # each joint alone: its speed times its lever arm at most
+        dq = np.zeros(6)
+        dq[k] = 1.0
+        p0 = (robot.fk(q) @ tcp)[:, :3, 3]
+        p1 = (robot.fk(q + eps * dq) @ tcp)[:, :3, 3]
+        speed = np.linalg.norm(p1 - p0, axis=1) / eps
+        assert speed.max() <= L[k] * (1 + 1e-6), k
+        if k < 5:  # and not loose by 2x (axis 6 runs near this TCP: its arm is 134 mm)
+            assert speed.max() >= 0.5 * L[k], k

@@ -273,6 +273,21 @@ def plan_station(
     )  # fmt: skip
 
 
+def _tcp_bounds(robots: list[Any], inp: StudyInputs) -> Any:
+    """``(R, W, W)`` s: per robot the pose-free leg bounds between the welds
+    (:func:`weldplan.multi.bound.tcp_leg_bound`: its lever arms with its tool's TCP, its joint
+    limits, the welds' positions)."""
+    from weldplan.multi.bound import lever_arms, tcp_leg_bound
+
+    out = []
+    for _, mounted, robot in robots:
+        F = mounted.flange_tcp
+        tcp = 0.0 if F is None else float(np.linalg.norm(np.asarray(F)[:3, 3]))
+        L = lever_arms(robot.opw, tcp)
+        out.append(tcp_leg_bound(inp.reach.positions, L, robot.velocity, robot.acceleration))
+    return np.stack(out)
+
+
 def _allocate_and_plan(
     station: Any,
     robots: list[Any],
@@ -285,7 +300,10 @@ def _allocate_and_plan(
 ) -> tuple[list[Any], AllocationReport, tuple[Any, ...]]:
     """Steps 4-5 of the module docstring, iterated (:func:`weldplan.multi.calibrate.
     allocate_and_plan`, ``settings.rounds``): ``(plans, the best round's report, the rounds)``.
-    The bound is computed once, over the all-branch leg times."""
+    The bound is computed once, over the pose-free leg bounds (:func:`_tcp_bounds`: true of
+    the timed cycle whatever gun poses the robots' plans choose), with the bound over the
+    study's poses beside it (``LowerBound.at_study_poses``: the planned gun poses may differ
+    from the study's, and then beat it leg by leg)."""
     from weldplan.multi.baselines import allocation_report
     from weldplan.multi.bound import lower_bound
     from weldplan.multi.calibrate import allocate_and_plan
@@ -295,8 +313,12 @@ def _allocate_and_plan(
     settings = settings or AllocationSettings()
     say = progress or (lambda stage, done, total: None)
     t = time.perf_counter()
-    problem = AllocationProblem.build(inp.reach, inp.weld_time, inp.bound, settings.closed)
-    bound = lower_bound(problem, nodes=settings.milp_nodes, seconds=settings.milp_seconds)
+    bounds = []
+    for travel in (_tcp_bounds(robots, inp), inp.bound):
+        problem = AllocationProblem.build(inp.reach, inp.weld_time, travel, settings.closed)
+        bounds.append(lower_bound(problem, nodes=settings.milp_nodes,
+                                  seconds=settings.milp_seconds))  # fmt: skip
+    bound = dataclasses.replace(bounds[0], at_study_poses=bounds[1].value)
     seconds["allocation"] = time.perf_counter() - t
     calls = [0]
 
