@@ -94,6 +94,7 @@ class StationRow:
     load: tuple[float, ...] = ()
     note: str = ""
     rounds: tuple[tuple[float, float, tuple[int, ...]], ...] = ()
+    bound_study: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return dataclasses.asdict(self)
@@ -196,6 +197,7 @@ def plan_row(station: Any, name: str, seed: int, pages: Path | None = None) -> S
         None if replay is None else replay.ok, tuple(rows), wall, cpu, wall_total,
         cpu_total, tuple(round(v, 2) for v in os.getloadavg()), p.interference,
         tuple((round(c.model_cycle, 3), round(c.timed_cycle, 3), c.planned) for c in p.rounds),
+        None if rep.bound.at_study_poses is None else round(rep.bound.at_study_poses, 3),
     )  # fmt: skip
 
 
@@ -301,6 +303,10 @@ def format_page(rows: list[StationRow], command: str, machine: str) -> str:
     out += [table(head, body), ""]
     for r in rows:
         out += [f"## {r.name}", "", f"Bound: {r.bound_name}.", ""]
+        if r.bound_study is not None:
+            out += [f"The same bound over the study's gun poses (all IK branches): "
+                    f"{r.bound_study:.2f} s; it holds only where the plans keep those poses.",
+                    ""]  # fmt: skip
         if r.note:
             out += [f"Note: {r.note}.", ""]
         if r.rounds:

@@ -22,8 +22,9 @@ planned times back, repeat; Åblad et al., IEEE T-ASE 2022, iterate the same way
 3. :func:`allocate_and_plan`: allocate, plan every robot's share, calibrate, and again while
    the station's timed cycle (the slowest robot's timed program) drops, within a budget of
    rounds (:attr:`~weldplan.multi.problem.AllocationSettings.rounds`); the best round is kept.
-   Each round's allocation is seeded with the same seed, and a robot whose share did not
-   change is not planned again (its plan is the same), so the loop is deterministic.
+   Each round's allocation is seeded with the same seed, and a robot whose share is a set of
+   welds it has planned before is not planned again (its plan sequences the share itself: the
+   earlier plan is kept), so the loop is deterministic.
 
 The lower bound printed beside the answer is computed once, over the all-branch rest-to-rest
 bounds (:func:`weldplan.robot.route.legtime.rest_to_rest_bound`), never over calibrated times:
@@ -222,10 +223,11 @@ def allocate_and_plan(
         plans, fresh = [], []
         for r in range(len(report.ours.robots)):
             ids = report.ours.welds_of(r)
-            if ids and (r, ids) not in cache:
-                cache[(r, ids)] = plan_share(r, ids)
+            key = (r, tuple(sorted(ids)))  # the robot's plan sequences its share itself
+            if ids and key not in cache:
+                cache[key] = plan_share(r, ids)
                 fresh.append(r)
-            plans.append(cache[(r, ids)] if ids else None)
+            plans.append(cache[key] if ids else None)
         legs = [timed_legs(r, p.program, report.ours.welds) for r, p in enumerate(plans) if p]
         times = [0.0 if p is None else float(p.program.timing.total) for p in plans]
         out.append(CalibrationRound(report.ours.cycle_time, max(times), tuple(times), tuple(fresh)))
