@@ -16,9 +16,9 @@ planned times back, repeat; Åblad et al., IEEE T-ASE 2022, iterate the same way
 2. :func:`calibrated_travel`: the allocation's move times with every planned leg replaced by
    its timed value, both ways (a rest-to-rest motion under symmetric velocity and acceleration
    limits takes as long backwards: the reversed time law is admissible), and, per robot, every
-   leg not planned yet scaled by the median ratio of timed to model time over the legs that
-   were (:func:`leg_scale`: the model's systematic part, approach, retract and path shape,
-   carried to the legs the robot has not flown yet);
+   leg not planned yet scaled by the median ratio of timed to model time over the legs timed
+   so far (:func:`leg_scales`: the model's systematic part, the transfer's stops and path
+   shape, carried to the legs the robot has not flown yet);
 3. :func:`allocate_and_plan`: allocate, plan every robot's share, calibrate, and again while
    the station's timed cycle (the slowest robot's timed program) drops, within a budget of
    rounds (:attr:`~weldplan.multi.problem.AllocationSettings.rounds`); the best round is kept.
@@ -105,13 +105,22 @@ def timed_legs(robot: int, build: Any, welds: Sequence[str]) -> TimedLegs:
     )
 
 
-def leg_scale(travel: NDArray[np.float64], legs: TimedLegs) -> float:
-    """The median of timed over model time over ``legs``' legs whose model time is > 0 (1 when
-    there is none): how much slower than its model the robot flies a leg."""
-    a, b = legs.welds[:-1], legs.welds[1:]
-    model = travel[a, b]
-    keep = model > 0
-    return float(np.median(legs.legs[keep] / model[keep])) if keep.any() else 1.0
+def leg_scales(
+    model: NDArray[np.float64], known: NDArray[np.bool_], timed: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """``(R,)``: per robot the median of timed over model time over its timed legs whose model
+    time is > 0: how much slower than its model it flies a leg. A robot with no timed leg
+    takes the median of the others' (robots of one station are alike more often than not), 1
+    when no robot has one."""
+    R = len(model)
+    scale, has = np.ones(R), np.zeros(R, bool)
+    for r in range(R):
+        m = known[r] & (model[r] > 0)
+        if m.any():
+            scale[r], has[r] = float(np.median(timed[r][m] / model[r][m])), True
+    if has.any():
+        scale[~has] = float(np.median(scale[has]))
+    return scale
 
 
 def calibrated_travel(
@@ -140,14 +149,13 @@ def calibrated_travel(
     model = np.asarray(model, dtype=np.float64)
     known = np.zeros(model.shape, bool) if known is None else known.copy()
     timed = np.zeros(model.shape) if timed is None else timed.copy()
-    scale = np.ones(len(model))
     for tl in planned:
         if not 0 <= tl.robot < len(model):
             raise ConfigError(f"no robot {tl.robot} in the station", field="robot")
         a, b = tl.welds[:-1], tl.welds[1:]
         known[tl.robot, a, b] = known[tl.robot, b, a] = True
         timed[tl.robot, a, b] = timed[tl.robot, b, a] = tl.legs
-        scale[tl.robot] = leg_scale(model[tl.robot], tl)
+    scale = leg_scales(model, known, timed)
     travel = np.where(known, timed, model * scale[:, None, None])
     return travel, known, timed
 
