@@ -273,3 +273,16 @@ def test_the_lever_arms_bound_the_tcp_speed_of_the_arm():
         assert speed.max() <= L[k] * (1 + 1e-6), k
         if k < 5:  # and not loose by 2x (axis 6 runs near this TCP: its arm is 134 mm)
             assert speed.max() >= 0.5 * L[k], k
+
+
+def test_the_station_summary_gives_every_round():
+    from weldplan.multi.station import StationPlan
+
+    got, _ = _loop(1)
+    p = StationPlan(None, 0, got.report, got.plans, rounds=got.rounds)
+    rows = dict(p.summary_rows())
+    c = got.rounds[0]
+    assert rows["allocate-plan rounds"] == (
+        f"1: model {c.model_cycle:.2f} s, timed {c.timed_cycle:.2f} s"
+    )
+    assert p.cycle_time == pytest.approx(c.timed_cycle)  # no schedule: the slowest program

@@ -160,6 +160,10 @@ class StationPlan:
                 )
             )
         rows.append(("station cycle", f"{top:.2f} s timed (the last robot, waits included)"))
+        if self.rounds:
+            said = "; ".join(f"{k + 1}: model {c.model_cycle:.2f} s, timed {c.timed_cycle:.2f} s"
+                             for k, c in enumerate(self.rounds))  # fmt: skip
+            rows.append(("allocate-plan rounds", said))
         rows += [("allocation", line) for line in self.report.lines()]
         rows.append(("interference", self.interference))
         caps = self.report.clock_caps()
