@@ -48,18 +48,21 @@ def test_the_clock_gives_each_stage_of_a_station_plan_its_cpu():
         events.append(("plan", k, 2))
         for stage in ("cell", "route", "robot", "program"):
             events += [(stage, 0, 1), ("pairs", 3, 10), (stage, 1, 1)]
+    events.append(("interference", 0, 2))
     for e in events:
         sum(k * k for k in range(20000))  # some CPU in every stage
         clock(*e)
     cpu = clock.finish()
-    for key in ("cell", "study robot1", "study robot2", "allocation", "plan robot1", "plan robot2"):
+    for key in ("cell", "study robot1", "study robot2", "allocation", "plan robot1", "plan robot2",
+                "interference"):  # fmt: skip
         assert cpu[key] >= 0.0, key
     for r in (1, 2):
         assert {f"robot{r} {s}" for s in ("cell", "route", "robot", "program")} <= set(cpu)
     assert not any("pairs" in k for k in cpu)
     assert not any("robot3" in k for k in cpu)  # a re-plan adds to its robot's phase
     # the phases cover the whole run: their sum is the CPU from start to finish
-    phases = ("cell", "study robot1", "study robot2", "allocation", "plan robot1", "plan robot2")
+    phases = ("cell", "study robot1", "study robot2", "allocation", "plan robot1", "plan robot2",
+              "interference")  # fmt: skip
     assert sum(cpu[k] for k in phases) == pytest.approx(bs._cpu() - clock.t0, abs=0.05)
 
 

@@ -286,3 +286,23 @@ def test_the_station_summary_gives_every_round():
         f"1: model {c.model_cycle:.2f} s, timed {c.timed_cycle:.2f} s"
     )
     assert p.cycle_time == pytest.approx(c.timed_cycle)  # no schedule: the slowest program
+
+
+def test_a_round_that_plans_nothing_new_ends_the_loop_with_its_calibrated_report():
+    """The same shares again (here: an allocation that ignores the calibrated times): no robot
+    is planned again, the timed cycle is the same, the loop stops and keeps that round, whose
+    model was calibrated; it was handed the timed legs in place of the model's."""
+    Q, model, reach, wt = _station()
+    seen = []
+
+    def once(travel):
+        seen.append(travel)
+        return allocation_report(reach, wt, model, rng=0, settings=AllocationSettings(moves=200))
+
+    got = allocate_and_plan(once, lambda r, ids: _plan(Q, r, ids, 0.5), model, 3)
+    assert len(got.rounds) == 2 and got.rounds[1].planned == () and got.best == 1
+    assert got.rounds[1].timed_cycle == got.rounds[0].timed_cycle
+    assert got.report is not got.first
+    legs = timed_legs(0, got.plans[0].program, reach.welds)
+    a, b = legs.welds[:-1], legs.welds[1:]
+    assert np.allclose(seen[1][0, a, b], legs.legs) and np.array_equal(seen[0], model)

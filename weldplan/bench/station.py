@@ -112,8 +112,9 @@ class _StationClock:
     seconds: the cell (until the first study), each robot's study, the allocation (every
     round's, :mod:`weldplan.multi.calibrate`) and each robot's plan (summed over the rounds
     that plan it), whole and by stage. :func:`weldplan.multi.station.plan_station` says
-    ``("allocation", round, rounds)`` as an allocation starts and ``("plan", k, R)`` as robot
-    ``k``'s plan does."""
+    ``("allocation", round, rounds)`` as an allocation starts, ``("plan", k, R)`` as robot
+    ``k``'s plan does and ``("interference", 0, R)`` as the robot-robot stages do (their CPU is
+    one figure, ``interference``, beside their wall seconds)."""
 
     def __init__(self) -> None:
         self.t0 = _cpu()
@@ -132,8 +133,8 @@ class _StationClock:
         if name == "study":  # (study, k, R) as robot k's study starts; (study, R, R) at the end
             self._close_phase(f"study robot{done + 1}" if done < total else "allocation")
             return
-        if name == "allocation":
-            self._close_phase("allocation")
+        if name in ("allocation", "interference"):
+            self._close_phase(name)
             return
         if name == "plan":
             self.robot = done + 1

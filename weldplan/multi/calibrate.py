@@ -21,7 +21,9 @@ planned times back, repeat; Åblad et al., IEEE T-ASE 2022, iterate the same way
    shape, carried to the legs the robot has not flown yet);
 3. :func:`allocate_and_plan`: allocate, plan every robot's share, calibrate, and again while
    the station's timed cycle (the slowest robot's timed program) drops, within a budget of
-   rounds (:attr:`~weldplan.multi.problem.AllocationSettings.rounds`); the best round is kept.
+   rounds (:attr:`~weldplan.multi.problem.AllocationSettings.rounds`); the best round is kept
+   (a later round that planned nothing new and times the same is taken for its report: its
+   model is the calibrated one).
    Each round's allocation is seeded with the same seed, and a robot whose share is a set of
    welds it has planned before is not planned again (its plan sequences the share itself: the
    earlier plan is kept), so the loop is deterministic.
@@ -242,6 +244,9 @@ def allocate_and_plan(
         log.info("round %d: model cycle %.3f s, timed cycle %.3f s (robots %s planned)",
                  k + 1, report.ours.cycle_time, max(times), fresh)  # fmt: skip
         if best is not None and max(times) >= best[0] - EPS_S:
+            if not fresh and max(times) <= best[0] + EPS_S:
+                # the plans of the best round again: keep this round's calibrated report
+                best = (best[0], report, tuple(plans), k)
             break  # no better than the best round: stop
         best = (max(times), report, tuple(plans), k)
         travel, known, timed = calibrated_travel(model, legs, known, timed)

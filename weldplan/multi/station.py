@@ -270,6 +270,7 @@ def plan_station(
     plans, report, rounds = _allocate_and_plan(station, robots, inp, seed, settings, executor,
                                                progress, seconds)  # fmt: skip
     names = report.ours.robots
+    say("interference", 0, len(robots))
     plans, schedule, replay, line = _interference(station, plans, names, seconds)
     return StationPlan(
         station, seed, report, tuple(plans), tuple(studies), interference=line,
