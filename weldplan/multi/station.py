@@ -13,8 +13,9 @@
    (:func:`weldplan.multi.inputs.study_inputs`: the model, station-branch leg times with the
    approach to each weld's virtual joint at both ends, and their all-branch lower bound);
 4. the allocation (:func:`weldplan.multi.allocation_report`: ours, the lower bound, the
-   one-robot and nearest-robot baselines) over the model, the bound over the all-branch
-   times;
+   one-robot and nearest-robot baselines) over the model; the bound over pose-free leg
+   bounds (:func:`weldplan.multi.bound.tcp_leg_bound`), the one over the study's poses (all
+   branches) beside it;
 5. per robot with welds, the single-robot pipeline (:func:`weldplan.station.pipeline.plan`) on
    a sub-station: the same station (its part pose kept) with that robot alone at its base and
    the welds file restricted to its share (written in the file's own units and frame beside
