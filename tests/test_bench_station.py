@@ -41,21 +41,28 @@ def test_the_synthetic_option_is_checked():
 
 def test_the_clock_gives_each_stage_of_a_station_plan_its_cpu():
     clock = bs._StationClock()
-    events = [("study", 0, 2), ("study", 1, 2), ("study", 2, 2)]
-    for _ in range(2):  # two robots, each plan a sequence of stages
+    events = [("study", 0, 2), ("study", 1, 2), ("study", 2, 2), ("allocation", 0, 3)]
+    for k in (0, 1, 0):  # two robots' plans, each a sequence of stages; round 2 re-plans robot1
+        if k == 0 and len(events) > 4:
+            events.append(("allocation", 1, 3))
+        events.append(("plan", k, 2))
         for stage in ("cell", "route", "robot", "program"):
             events += [(stage, 0, 1), ("pairs", 3, 10), (stage, 1, 1)]
+    events.append(("interference", 0, 2))
     for e in events:
         sum(k * k for k in range(20000))  # some CPU in every stage
         clock(*e)
     cpu = clock.finish()
-    for key in ("cell", "study robot1", "study robot2", "allocation", "plan robot1", "plan robot2"):
+    for key in ("cell", "study robot1", "study robot2", "allocation", "plan robot1", "plan robot2",
+                "interference"):  # fmt: skip
         assert cpu[key] >= 0.0, key
     for r in (1, 2):
         assert {f"robot{r} {s}" for s in ("cell", "route", "robot", "program")} <= set(cpu)
     assert not any("pairs" in k for k in cpu)
+    assert not any("robot3" in k for k in cpu)  # a re-plan adds to its robot's phase
     # the phases cover the whole run: their sum is the CPU from start to finish
-    phases = ("cell", "study robot1", "study robot2", "allocation", "plan robot1", "plan robot2")
+    phases = ("cell", "study robot1", "study robot2", "allocation", "plan robot1", "plan robot2",
+              "interference")  # fmt: skip
     assert sum(cpu[k] for k in phases) == pytest.approx(bs._cpu() - clock.t0, abs=0.05)
 
 
@@ -64,12 +71,14 @@ def test_the_page_puts_the_figures_side_by_side_and_says_what_was_not_checked():
         "st", "planned", 15, 2, 1, 5.5, 3.6, 2.2, 2.0, "LP", timed=2.6, waiting=0.4,
         interlocks=1, robots_rows=(("robot1", 7, 2.2, 2.6, 0.9, 0.0),),
         wall_s={"cell": 1.0}, cpu_s={"cell": 0.9}, load=(1.0, 1.0, 1.0),
+        rounds=((2.0, 3.1, (0, 1)), (2.2, 2.6, (0,))),
     )  # fmt: skip
     page = bs.format_page([row], "weldplan bench station", "vm")
     line = next(x for x in page.splitlines() if x.startswith("| st |"))
     cells = [c.strip() for c in line.strip("|").split("|")]
     assert cells[5:11] == ["5.50", "3.60", "2.20", "2.00", "+10.0 %", "-38.9 %"]
-    assert cells[11:15] == ["2.60", "0.40", "1", "not checked"]
+    assert cells[11:17] == ["2.60", "0.40", "1", "not checked", "2.00 / 3.10", "2"]
+    assert "| 2 | 2.20 | 2.60 | robot1 |" in page  # the rounds: the second re-planned robot1
     assert "| robot1 | 7 | 2.20 | 2.60 | 90% | 0.00 |" in page
     assert "| cell | 1.00 | 0.90 |" in page
 

@@ -118,6 +118,11 @@ def test_two_robots_share_the_demo_welds_and_each_plans_its_share(tmp_path):
         timing = sub.program.timing
         assert timing.total >= timing.weld_time * len(sub.robot.robot_route.weld_ids) - 1e-9
     assert p.report.bound.value <= a.cycle_time + 1e-9
+    # the allocate-plan rounds (weldplan.multi.calibrate): the plans are the best round's, and
+    # the pose-free bound is below the timed cycle of every round
+    assert 1 <= len(p.rounds) <= 3
+    assert max(p.timed_cycles) == pytest.approx(min(r.timed_cycle for r in p.rounds))
+    assert p.report.bound.value <= min(r.timed_cycle for r in p.rounds)
     rows = dict(p.summary_rows())
     assert {f"robot robot{k}" for k in (1, 2)} <= set(rows)
     assert np.isfinite(p.cycle_time) and p.cycle_time > 0

@@ -65,9 +65,11 @@ HELP = (
 class StationRow:
     """One station's figures (module docstring); cycle times in s, distances in mm.
 
-    ``timed``, ``waiting``, ``interlocks``, ``replay_*`` and ``robots_rows`` are empty or None
-    for an allocation-only (synthetic) station. ``robots_rows``: per robot ``(name, welds,
-    allocated s, timed s or None, utilisation, waiting s)``."""
+    ``timed``, ``waiting``, ``interlocks``, ``replay_*``, ``robots_rows`` and ``rounds`` are
+    empty or None for an allocation-only (synthetic) station. ``robots_rows``: per robot
+    ``(name, welds, allocated s, timed s or None, utilisation, waiting s)``; ``rounds``: per
+    allocate-plan round (:mod:`weldplan.multi.calibrate`) ``(model cycle s, timed cycle s,
+    robots planned)``, ``ours`` being the best round's model cycle."""
 
     name: str
     kind: str
@@ -91,6 +93,8 @@ class StationRow:
     cpu_total: float = 0.0
     load: tuple[float, ...] = ()
     note: str = ""
+    rounds: tuple[tuple[float, float, tuple[int, ...]], ...] = ()
+    bound_study: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return dataclasses.asdict(self)
@@ -105,9 +109,12 @@ def _cpu() -> float:
 class _StationClock:
     """A ``progress`` callback for a station's :func:`weldplan.plan` that takes the CPU seconds
     of each stage, named as :attr:`weldplan.multi.station.StationPlan.stats` names their wall
-    seconds: the cell (until the first study), each robot's study, the allocation (from the
-    last study to the first robot's plan) and each robot's plan, whole and by stage (a
-    robot's plan begins with its ``cell`` stage, :func:`weldplan.multi.station.plan_station`)."""
+    seconds: the cell (until the first study), each robot's study, the allocation (every
+    round's, :mod:`weldplan.multi.calibrate`) and each robot's plan (summed over the rounds
+    that plan it), whole and by stage. :func:`weldplan.multi.station.plan_station` says
+    ``("allocation", round, rounds)`` as an allocation starts, ``("plan", k, R)`` as robot
+    ``k``'s plan does and ``("interference", 0, R)`` as the robot-robot stages do (their CPU is
+    one figure, ``interference``, beside their wall seconds)."""
 
     def __init__(self) -> None:
         self.t0 = _cpu()
@@ -126,16 +133,20 @@ class _StationClock:
         if name == "study":  # (study, k, R) as robot k's study starts; (study, R, R) at the end
             self._close_phase(f"study robot{done + 1}" if done < total else "allocation")
             return
+        if name in ("allocation", "interference"):
+            self._close_phase(name)
+            return
+        if name == "plan":
+            self.robot = done + 1
+            self._close_phase(f"plan robot{self.robot}")
+            return
         if total != 1:
             return
-        if name == "cell" and done == 0:
-            self.robot += 1
-            self._close_phase(f"plan robot{self.robot}")
         key = f"robot{self.robot} {name}"
         if done == 0:
             self.open[key] = _cpu()
         elif key in self.open:
-            self.cpu[key] = round(_cpu() - self.open.pop(key), 2)
+            self.cpu[key] = round(self.cpu.get(key, 0.0) + _cpu() - self.open.pop(key), 2)
 
     def finish(self) -> dict[str, float]:
         self._close_phase("done")
@@ -186,6 +197,8 @@ def plan_row(station: Any, name: str, seed: int, pages: Path | None = None) -> S
         None if replay is None else _finite(replay.min_distance),
         None if replay is None else replay.ok, tuple(rows), wall, cpu, wall_total,
         cpu_total, tuple(round(v, 2) for v in os.getloadavg()), p.interference,
+        tuple((round(c.model_cycle, 3), round(c.timed_cycle, 3), c.planned) for c in p.rounds),
+        None if rep.bound.at_study_poses is None else round(rep.bound.at_study_poses, 3),
     )  # fmt: skip
 
 
@@ -273,21 +286,35 @@ def format_page(rows: list[StationRow], command: str, machine: str) -> str:
            "Cycle times in s. *one robot*, *nearest robot*, *ours* and *bound* are the "
            "allocation's (its leg-time model: the robots' move times between the welds they "
            "reach plus the weld time); *timed* is the station's cycle over the robots' timed "
-           "programs on one clock, waits included. *vs bound* and *vs nearest*: ours over them.",
+           "programs on one clock, waits included. *vs bound* and *vs nearest*: ours over them. "
+           "*round 1*: the first allocation's model and timed cycle (no waits), before the "
+           "planned legs' timed values replace their model times; *ours* and *timed* are the "
+           "best round's (weldplan.multi.calibrate).",
            ""]  # fmt: skip
     head = ["station", "kind", "welds", "robots", "unreached", "one robot", "nearest robot",
             "ours", "bound", "ours vs bound", "ours vs nearest", "timed", "waits s",
-            "interlocks", "replay min mm", "wall s", "CPU s", "load"]  # fmt: skip
+            "interlocks", "replay min mm", "round 1 ours / timed", "rounds", "wall s", "CPU s",
+            "load"]  # fmt: skip
     body = [[r.name, r.kind, r.welds, r.robots, r.unreached, _s(r.one_robot), _s(r.nearest),
              _s(r.ours), _s(r.bound), _pct(r.ours, r.bound), _pct(r.ours, r.nearest),
              _s(r.timed), _s(r.waiting), "-" if r.interlocks is None else r.interlocks,
-             _replay(r), f"{r.wall_total:.1f}", f"{r.cpu_total:.1f}",
+             _replay(r), _first(r), len(r.rounds) or "-", f"{r.wall_total:.1f}",
+             f"{r.cpu_total:.1f}",
              " ".join(f"{v:.1f}" for v in r.load)] for r in rows]  # fmt: skip
     out += [table(head, body), ""]
     for r in rows:
         out += [f"## {r.name}", "", f"Bound: {r.bound_name}.", ""]
+        if r.bound_study is not None:
+            out += [f"The same bound over the study's gun poses (all IK branches): "
+                    f"{r.bound_study:.2f} s; it holds only where the plans keep those poses.",
+                    ""]  # fmt: skip
         if r.note:
             out += [f"Note: {r.note}.", ""]
+        if r.rounds:
+            rh = ["round", "ours (model) s", "timed s", "robots planned"]
+            body = [[k + 1, f"{m:.2f}", f"{t:.2f}", ", ".join(f"robot{i + 1}" for i in p)]
+                    for k, (m, t, p) in enumerate(r.rounds)]  # fmt: skip
+            out += [table(rh, body), ""]
         if r.robots_rows:
             rh = ["robot", "welds", "allocated s", "timed s", "utilisation", "waiting s"]
             out += [table(rh, [[n, w, f"{a:.2f}", _s(t), f"{u:.0%}", f"{ws:.2f}"]
@@ -296,6 +323,10 @@ def format_page(rows: list[StationRow], command: str, machine: str) -> str:
         body = [[k, _s(r.wall_s.get(k)), _s(r.cpu_s.get(k))] for k in stages]
         out += [table(["stage", "wall s", "CPU s"], body), ""]
     return "\n".join(out)
+
+
+def _first(r: StationRow) -> str:
+    return "-" if not r.rounds else f"{r.rounds[0][0]:.2f} / {r.rounds[0][1]:.2f}"
 
 
 def _replay(r: StationRow) -> str:

@@ -25,7 +25,9 @@ route over its welds), over every assignment of the served welds to robots that 
 
 The approach follows the "allocate, sequence, re-balance" loop of the station-balancing
 literature (Spensieri et al., IEEE T-ASE 2016; Åblad et al., IEEE T-ASE 2022) with the leg
-times of :mod:`weldplan.robot.route.legtime` in place of their path-planned ones.
+times of :mod:`weldplan.robot.route.legtime` in place of their path-planned ones; a planned
+station puts the timed legs of its plans back and allocates again
+(:mod:`weldplan.multi.calibrate`).
 """
 
 from __future__ import annotations

@@ -23,7 +23,7 @@ from numpy.typing import ArrayLike
 from weldplan.multi.allocate import allocate, make_allocation, sequence_share
 from weldplan.multi.bound import lower_bound
 from weldplan.multi.problem import AllocationProblem, AllocationSettings, ReachMap
-from weldplan.multi.result import Allocation, AllocationReport
+from weldplan.multi.result import Allocation, AllocationReport, LowerBound
 from weldplan.random import RNGLike, as_generator, seed_of
 
 
@@ -81,6 +81,7 @@ def allocation_report(
     rng: RNGLike = None,
     settings: AllocationSettings | None = None,
     bound_travel: Sequence[ArrayLike] | ArrayLike | None = None,
+    bound: LowerBound | None = None,
 ) -> AllocationReport:
     """Our allocation (:func:`weldplan.multi.allocate`, same arguments), its lower bound and
     the two baselines (module docstring), every order by the same sequencer and polish.
@@ -88,11 +89,16 @@ def allocation_report(
     ``bound_travel``: move times (``R`` matrices ``(W, W)`` s) never above the
     real ones, for the bound only (e.g. :mod:`weldplan.robot.route.legtime`'s ``bound`` over every
     branch while ``travel`` is its ``cost`` on the station branch): the bound is then one of
-    the timed cycle, not only of the cycle over ``travel``. Default: ``travel``."""
+    the timed cycle, not only of the cycle over ``travel``. Default: ``travel``.
+
+    ``bound``: a :class:`~weldplan.multi.result.LowerBound` already computed (e.g. once over
+    the all-branch times while ``travel`` is calibrated round after round,
+    :mod:`weldplan.multi.calibrate`); it is then reported as given and ``bound_travel`` is
+    not read."""
     settings = settings or AllocationSettings()
     problem = AllocationProblem.build(reach, weld_time, travel, settings.closed)
     for_bound = problem
-    if bound_travel is not None:
+    if bound is None and bound_travel is not None:
         for_bound = AllocationProblem.build(problem.reach, weld_time, bound_travel, settings.closed)
     seed = seed_of(rng)
     gen = as_generator(rng)
@@ -104,7 +110,8 @@ def allocation_report(
     sub = int(gen.integers(2**31))
     return AllocationReport(
         ours=ours,
-        bound=lower_bound(for_bound, nodes=settings.milp_nodes, seconds=settings.milp_seconds),
+        bound=bound
+        or lower_bound(for_bound, nodes=settings.milp_nodes, seconds=settings.milp_seconds),
         nearest=nearest_robot(problem, rng=sub, kicks=settings.final_kicks),
         one_robot=one_robot(problem, rng=sub, kicks=settings.final_kicks),
     )

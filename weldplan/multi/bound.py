@@ -258,3 +258,56 @@ def lower_bound(
         unique,
     )
     return LowerBound(value, f"max({', '.join(names)})", lp, unique, who, how, integer, status)
+
+
+#: bisection steps of :func:`tcp_leg_bound` (each halves the bracket; 60 reach float precision)
+TCP_BISECTIONS = 60
+
+
+def lever_arms(opw: Any, tcp_mm: float) -> NDArray[np.float64]:
+    """``(6,)`` mm: for each joint of an OPW arm (Brandstötter et al. 2014, figure 1: axis 1
+    vertical through the base, joint 2 at ``(a1, b, c1)`` on it, ``c2`` to joint 3, the wrist
+    centre ``sqrt(a2^2 + c3^2)`` beyond, the flange ``c4`` beyond that) an upper bound of the
+    distance from its axis to a TCP ``tcp_mm`` from the flange, in every configuration: the
+    sum of the link lengths from a point of the axis to the TCP (axes 4 and 5 pass through the
+    wrist centre, axis 6 through the flange)."""
+    t = abs(float(tcp_mm))
+    l5 = float(opw.c4) + t
+    l3 = float(np.hypot(opw.a2, opw.c3)) + l5
+    l2 = float(opw.c2) + l3
+    l1 = float(np.hypot(opw.a1, opw.b)) + l2
+    return np.array([l1, l2, l3, l5, l5, t])
+
+
+def tcp_leg_bound(
+    positions: Any, lever: Any, velocity: Any, acceleration: Any
+) -> NDArray[np.float64]:
+    """``(W, W)`` s: a lower bound of any rest-to-rest motion that takes the TCP from weld ``i``
+    to weld ``j`` (``positions (W, 3)`` mm), whatever the gun pose, IK branch and path.
+
+    The argument: a revolute joint ``k`` turning at ``q'_k`` moves the TCP at most
+    ``|q'_k| L_k`` (``L_k = lever[k]``, :func:`lever_arms`), so the TCP's path is at most
+    ``sum_k L_k int |q'_k| dt``. Starting and ending at rest with ``|q'_k| <= v_k`` and
+    ``|q''_k| <= a_k``, ``|q'_k(t)| <= min(v_k, a_k t, a_k (T - t))``, whose integral is
+    ``D_k(T) = a_k T^2 / 4`` (``T <= 2 v_k / a_k``) or ``v_k T - v_k^2 / a_k``. The TCP covers at
+    least ``d_ij = |p_j - p_i|``, so ``T`` is at least the root of ``sum_k L_k D_k(T) = d_ij``
+    (increasing in ``T``; found by bisection, the lower end kept). A timed program's leg
+    (toppra under the same limits, :func:`weldplan.robot.program.time_route`) is such a motion
+    or a chain of them; its detours only lengthen it.
+    """
+    P = np.asarray(positions, dtype=np.float64).reshape(-1, 3)
+    L = np.asarray(lever, dtype=np.float64)
+    v = np.asarray(velocity, dtype=np.float64)
+    a = np.asarray(acceleration, dtype=np.float64)
+    d = np.linalg.norm(P[:, None] - P[None], axis=2)
+    lo = np.zeros_like(d)
+    hi = (d + float(np.sum(L * v * v / a))) / float(np.sum(L * v))  # D_k(T) >= v T - v^2 / a
+    for _ in range(TCP_BISECTIONS):
+        mid = 0.5 * (lo + hi)
+        T = mid[..., None]
+        D = np.where(T <= 2 * v / a, a * T * T / 4, v * T - v * v / a)
+        reach = (D * L).sum(axis=-1)
+        short = reach < d
+        lo = np.where(short, mid, lo)
+        hi = np.where(short, hi, mid)
+    return lo

@@ -13,7 +13,21 @@ flange
   and the rest-to-rest times between them (:func:`~weldplan.robot.route.leg_times`):
   ``cost`` (on the station branch, what the sequencer minimises) or ``bound`` (over every
   branch: a proved lower bound of any timed leg, so that the allocation's bound is a bound of
-  the timed cycle of that pose choice).
+  the timed cycle of that pose choice);
+* ``approach (R, W)`` s (:func:`approach_times`): the rest-to-rest time from each weld's
+  configuration to the one with the TCP at the weld's virtual joint (orientation kept), where
+  the timed programs stop as they leave a weld and again as they reach the next (every demo
+  program stops there: no blend fits so near the part). The allocation's *model* of a leg
+  ``i -> j`` is ``approach_i + cost_ij + approach_j`` (:attr:`StudyInputs.model`); its bound
+  stays ``bound`` alone (a program that blends there, or a gun pose other than the study's,
+  may beat the approach term).
+
+Why the model adds the approach (measured on the demo two-robot station, docs/station.md): a
+timed leg is a sequence of rest-to-rest pieces (lift to the virtual joint, the transfer in
+pieces of the route's rows, lower), 2 to 3 times the single rest-to-rest move between the two
+weld configurations; the approach ends are the part of that a leg always has. What depends on
+the planned path (its pieces, an OMPL detour) is learnt from the timed programs by the
+allocate-plan rounds (:mod:`weldplan.multi.calibrate`).
 
 Only the study's configuration at each spot is checked against the part; the other
 configurations of the same pose are not (as for the single robot's ``--cost time``).
@@ -25,7 +39,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from weldplan.errors import ConfigError
 from weldplan.multi.problem import ReachMap
@@ -46,6 +60,8 @@ class StudyInputs:
         over every branch (0 where the robot does not reach both spots).
     branch
         ``(R,)``: each robot's station branch (-1: it reaches no spot).
+    approach
+        ``(R, W)`` s: :func:`approach_times` per robot (0 where not served or not given).
     """
 
     reach: ReachMap
@@ -53,6 +69,19 @@ class StudyInputs:
     cost: NDArray[np.float64]
     bound: NDArray[np.float64]
     branch: tuple[int, ...]
+    approach: NDArray[np.float64] | None = None
+
+    @property
+    def model(self) -> NDArray[np.float64]:
+        """``(R, W, W)`` s: the allocation's leg model, ``approach_i + cost_ij + approach_j``
+        off the diagonal (module docstring; ``cost`` without approach times)."""
+        if self.approach is None:
+            return self.cost
+        a = self.approach
+        out = self.cost + a[:, :, None] + a[:, None, :]
+        W = out.shape[1]
+        out[:, np.arange(W), np.arange(W)] = 0.0
+        return out
 
 
 def study_inputs(
@@ -63,6 +92,7 @@ def study_inputs(
     tool: str | int = 0,
     velocity_scale: float = 1.0,
     acceleration_scale: float = 1.0,
+    lift: ArrayLike | None = None,
 ) -> StudyInputs:
     """The allocation's inputs from ``study`` (module docstring).
 
@@ -79,6 +109,9 @@ def study_inputs(
         The study's tool whose reach is allocated.
     velocity_scale, acceleration_scale
         Factors on the robots' joint limits (as the robot stage's settings).
+    lift
+        ``(W, 3)`` mm: each weld's virtual joint less the weld (the cell's ``virtual_xyz -
+        joints.xyz``), for :attr:`StudyInputs.approach`; ``None``: no approach term.
 
     Raises
     ------
@@ -102,7 +135,7 @@ def study_inputs(
         )
     reach = ReachMap.from_study(study, t)
     cost, bound, branch = np.zeros((R, W, W)), np.zeros((R, W, W)), []
-    wt = np.zeros((R, W))
+    wt, approach = np.zeros((R, W)), np.zeros((R, W))
     from weldplan.robot.program.timing import check_weld_time
 
     for r, (robot, info) in enumerate(zip(robots, infos, strict=True)):
@@ -114,15 +147,39 @@ def study_inputs(
             continue
         q = np.array([study.spots[i].robots[t * R + r].q for i in idx])  # type: ignore[attr-defined]
         configs = weld_configurations(placed, placed.fk(q))  # the study's flange poses
-        legs = leg_times(
-            configs,
-            np.asarray(placed.velocity) * velocity_scale,  # type: ignore[attr-defined]
-            np.asarray(placed.acceleration) * acceleration_scale,  # type: ignore[attr-defined]
-        )
+        v = np.asarray(placed.velocity) * velocity_scale  # type: ignore[attr-defined]
+        a = np.asarray(placed.acceleration) * acceleration_scale  # type: ignore[attr-defined]
+        legs = leg_times(configs, v, a)
         cost[r][np.ix_(idx, idx)] = legs.cost
         bound[r][np.ix_(idx, idx)] = legs.bound
         branch.append(legs.branch)
-    return StudyInputs(reach, wt, cost, bound, tuple(branch))
+        if lift is not None:
+            approach[r, idx] = approach_times(placed, q, np.asarray(lift)[idx], v, a)
+    return StudyInputs(reach, wt, cost, bound, tuple(branch), approach)
+
+
+def approach_times(
+    robot: object, q: ArrayLike, lift: ArrayLike, velocity: ArrayLike, acceleration: ArrayLike
+) -> NDArray[np.float64]:
+    """``(n,)`` s: the straight rest-to-rest joint move (:func:`weldplan.robot.program.
+    pair_time`, the time law of a two-row segment of the timed program) from each
+    configuration ``q (n, 6)`` rad to the IK solution nearest it (wrapped joint differences)
+    of its flange pose translated by ``lift (n, 3)`` mm, orientation kept; 0 where no solution
+    exists (the model then has no approach term there).
+
+    ``robot``: the placed :class:`~weldplan.robot.model.Robot`."""
+    from weldplan.robot.program.timing import pair_time
+
+    Q = np.asarray(q, dtype=np.float64).reshape(-1, 6)
+    T = robot.fk(Q)  # type: ignore[attr-defined]
+    T[:, :3, 3] += np.asarray(lift, dtype=np.float64).reshape(-1, 3)
+    br = robot.ik_all(T)  # type: ignore[attr-defined]
+    d = np.angle(np.exp(1j * (br.q - Q[:, None, :])))  # (n, 8, 6) wrapped differences
+    err = np.where(br.exists, np.abs(d).max(axis=2), np.inf)
+    k = np.argmin(err, axis=1)
+    dq = d[np.arange(len(Q)), k]
+    t = pair_time(dq, velocity, acceleration)
+    return np.where(np.isfinite(err.min(axis=1, initial=np.inf)), t, 0.0)
 
 
 def stack_inputs(parts: Sequence[StudyInputs], names: Sequence[str]) -> StudyInputs:
@@ -148,4 +205,7 @@ def stack_inputs(parts: Sequence[StudyInputs], names: Sequence[str]) -> StudyInp
         np.concatenate([p.cost for p in parts]),
         np.concatenate([p.bound for p in parts]),
         tuple(b for p in parts for b in p.branch),
+        np.vstack(
+            [np.zeros(p.weld_time.shape) if p.approach is None else p.approach for p in parts]
+        ),  # fmt: skip
     )

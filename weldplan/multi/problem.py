@@ -175,6 +175,10 @@ class AllocationSettings:
     final_kicks
         Kicks of the final sequencing of every robot's share (``None``: the sequencer's
         default, 10 a weld).
+    rounds
+        Allocate-plan rounds of a planned station (:mod:`weldplan.multi.calibrate`: after
+        each, the planned legs' timed values replace their model times and the station is
+        allocated and planned again while its timed cycle drops; 1: allocate and plan once).
     """
 
     closed: bool = False
@@ -187,6 +191,7 @@ class AllocationSettings:
     milp_seconds: float = 60.0
     search_kicks: int = 0
     final_kicks: int | None = None
+    rounds: int = 3
 
     def __post_init__(self) -> None:
         if self.final_kicks is not None and not (
@@ -195,6 +200,9 @@ class AllocationSettings:
             raise ConfigError(
                 f"must be None or an integer >= 0, got {self.final_kicks!r}", field="final_kicks"
             )
+        if not (isinstance(self.rounds, int) and not isinstance(self.rounds, bool)
+                and self.rounds >= 1):  # fmt: skip
+            raise ConfigError(f"must be an integer >= 1, got {self.rounds!r}", field="rounds")
         for name in ("moves", "kicks", "kick_size", "resequence", "milp_nodes", "search_kicks"):
             v = getattr(self, name)
             if not (isinstance(v, int) and not isinstance(v, bool) and v >= 0):

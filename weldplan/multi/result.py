@@ -102,6 +102,11 @@ class LowerBound:
         s: HiGHS's dual bound of the same assignment in integers (0 when it found none).
     status
         HiGHS's word on that integer search (optimal, node limit, time limit).
+    at_study_poses
+        s: the same bound over the all-branch leg times of the study's weld poses, when the
+        bound itself is over pose-free times (:func:`weldplan.multi.bound.tcp_leg_bound`);
+        ``None`` otherwise. It bounds the timed cycle only where the plans weld with the
+        study's poses.
     """
 
     value: float
@@ -112,6 +117,7 @@ class LowerBound:
     unique_method: str = ""
     integer: float = 0.0
     status: str = ""
+    at_study_poses: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return dict(self.__dict__)
@@ -127,6 +133,7 @@ class LowerBound:
             str(d.get("unique_method", "")),
             float(d.get("integer", 0.0)),
             str(d.get("status", "")),
+            None if d.get("at_study_poses") is None else float(d["at_study_poses"]),
         )
 
 
@@ -281,6 +288,9 @@ class AllocationReport:
             gs = "" if g is None else f"{100 * g:+8.1f}%"
             out.append(f"{name:<16} {cs:>9} {gs:>9}")
         out.append(f"bound: {self.bound.name}")
+        if self.bound.at_study_poses is not None:
+            out.append(f"bound at the study's gun poses: {self.bound.at_study_poses:.2f} s "
+                       "(holds where the plans weld with those poses)")  # fmt: skip
         if self.ours.unreached:
             out.append(f"{len(self.ours.unreached)} welds no robot reaches:")
             out += [f"  {u.weld}: {'; '.join(u.reasons)}" for u in self.ours.unreached]

@@ -10,14 +10,19 @@
 3. per robot, at its base with its own tool, the feasibility study
    (:func:`weldplan.study.check_spots`: a free gun pose on a usable branch with the links
    clear, else why not) and its leg times between the welds it reaches
-   (:func:`weldplan.multi.inputs.study_inputs`);
+   (:func:`weldplan.multi.inputs.study_inputs`: the model, station-branch leg times with the
+   approach to each weld's virtual joint at both ends, and their all-branch lower bound);
 4. the allocation (:func:`weldplan.multi.allocation_report`: ours, the lower bound, the
-   one-robot and nearest-robot baselines) over the station-branch leg times, the bound over
-   the all-branch ones;
+   one-robot and nearest-robot baselines) over the model; the bound over pose-free leg
+   bounds (:func:`weldplan.multi.bound.tcp_leg_bound`), the one over the study's poses (all
+   branches) beside it;
 5. per robot with welds, the single-robot pipeline (:func:`weldplan.station.pipeline.plan`) on
    a sub-station: the same station (its part pose kept) with that robot alone at its base and
    the welds file restricted to its share (written in the file's own units and frame beside
-   nothing: a temporary folder, removed after).
+   nothing: a temporary folder, removed after). Steps 4-5 are repeated
+   (:func:`weldplan.multi.calibrate.allocate_and_plan`, at most ``settings.rounds`` times)
+   with the planned legs' timed values in place of their model times while the station's
+   timed cycle drops; the best round is kept.
 
 6. robot-robot interference (issue 30, item 4): the pairs of motions of two robots whose swept
    robots come closer than the station's ``clearance``
@@ -98,7 +103,11 @@ class StationPlan:
         ``None`` while interference is not checked.
     stats
         ``{"seconds": {stage: wall s}}``: the cell, each robot's study, the allocation, each
-        robot's plan, the interference, the zones, the replay.
+        robot's plan, the interference, the zones, the replay (the allocation and the plans
+        summed over the rounds).
+    rounds
+        The :class:`~weldplan.multi.calibrate.CalibrationRound` of every allocate-plan round
+        (the model's and the timed cycle); ``report`` and ``plans`` are the best round's.
     """
 
     station: Any
@@ -110,6 +119,7 @@ class StationPlan:
     stats: dict[str, Any] = field(default_factory=dict)
     schedule: StationSchedule | None = None
     replay: ReplayVerdict | None = None
+    rounds: tuple[Any, ...] = ()
 
     @property
     def allocation(self) -> Any:
@@ -151,6 +161,10 @@ class StationPlan:
                 )
             )
         rows.append(("station cycle", f"{top:.2f} s timed (the last robot, waits included)"))
+        if self.rounds:
+            said = "; ".join(f"{k + 1}: model {c.model_cycle:.2f} s, timed {c.timed_cycle:.2f} s"
+                             for k, c in enumerate(self.rounds))  # fmt: skip
+            rows.append(("allocate-plan rounds", said))
         rows += [("allocation", line) for line in self.report.lines()]
         rows.append(("interference", self.interference))
         caps = self.report.clock_caps()
@@ -227,9 +241,8 @@ def plan_station(
 ) -> StationPlan:
     """Plan a station of several robots (module docstring); ``seed`` as
     :func:`weldplan.station.pipeline.plan` draws it."""
-    from weldplan.multi.baselines import allocation_report
     from weldplan.multi.cell import place_robots
-    from weldplan.station.pipeline import cell_stage, plan
+    from weldplan.station.pipeline import cell_stage
 
     say = progress or (lambda stage, done, total: None)
     seconds: dict[str, float] = {}
@@ -245,38 +258,100 @@ def plan_station(
     # interference stage, the replay and the saved station read it
     station = dataclasses.replace(station, robots=tuple(spec for spec, _, _ in robots))
     studies, inputs = [], []
+    lift = cell.virtual_xyz - np.asarray(cell.joints.xyz)  # each weld to its virtual joint, mm
     for k, (spec, mounted, robot) in enumerate(robots):
         say("study", k, len(robots))
         t = time.perf_counter()
         study = layout.studies[k] or _study(cell, station, k, mounted, robot)
         studies.append(study)
-        inputs.append(study_inputs(study, [robot], [spec.settings.weld_time]))
+        inputs.append(study_inputs(study, [robot], [spec.settings.weld_time], lift=lift))
         seconds[f"study robot{k + 1}"] = time.perf_counter() - t
     say("study", len(robots), len(robots))
     inp: StudyInputs = stack_inputs(inputs, [f"robot{k + 1}" for k in range(len(robots))])
-    t = time.perf_counter()
-    report = allocation_report(
-        inp.reach, inp.weld_time, inp.cost, rng=seed, settings=settings, bound_travel=inp.bound
-    )
-    seconds["allocation"] = time.perf_counter() - t
-    plans: list[Any] = []
-    with tempfile.TemporaryDirectory(prefix="weldplan-station-") as tmp:
-        for k, (spec, _, _) in enumerate(robots):
-            ids = report.ours.welds_of(k)
-            if not ids:
-                plans.append(None)
-                continue
-            sub = _sub_station(station, spec, _welds_file(station, ids, Path(tmp), k))
-            log.info("station: robot %d plans its %d welds", k + 1, len(ids))
-            t = time.perf_counter()
-            plans.append(plan(sub, rng=seed, executor=executor, progress=progress))
-            seconds[f"plan robot{k + 1}"] = time.perf_counter() - t
+    plans, report, rounds = _allocate_and_plan(station, robots, inp, seed, settings, executor,
+                                               progress, seconds)  # fmt: skip
     names = report.ours.robots
+    say("interference", 0, len(robots))
     plans, schedule, replay, line = _interference(station, plans, names, seconds)
     return StationPlan(
         station, seed, report, tuple(plans), tuple(studies), interference=line,
-        stats={"seconds": seconds}, schedule=schedule, replay=replay,
+        stats={"seconds": seconds}, schedule=schedule, replay=replay, rounds=rounds,
     )  # fmt: skip
+
+
+def _tcp_bounds(robots: list[Any], inp: StudyInputs) -> Any:
+    """``(R, W, W)`` s: per robot the pose-free leg bounds between the welds
+    (:func:`weldplan.multi.bound.tcp_leg_bound`: its lever arms with its tool's TCP, its joint
+    limits, the welds' positions)."""
+    from weldplan.multi.bound import lever_arms, tcp_leg_bound
+
+    out = []
+    for _, mounted, robot in robots:
+        F = mounted.flange_tcp
+        tcp = 0.0 if F is None else float(np.linalg.norm(np.asarray(F)[:3, 3]))
+        L = lever_arms(robot.opw, tcp)
+        out.append(tcp_leg_bound(inp.reach.positions, L, robot.velocity, robot.acceleration))
+    return np.stack(out)
+
+
+def _allocate_and_plan(
+    station: Any,
+    robots: list[Any],
+    inp: StudyInputs,
+    seed: int | None,
+    settings: AllocationSettings | None,
+    executor: Any,
+    progress: Callable[[str, int, int], None] | None,
+    seconds: dict[str, float],
+) -> tuple[list[Any], AllocationReport, tuple[Any, ...]]:
+    """Steps 4-5 of the module docstring, iterated (:func:`weldplan.multi.calibrate.
+    allocate_and_plan`, ``settings.rounds``): ``(plans, the best round's report, the rounds)``.
+    The bound is computed once, over the pose-free leg bounds (:func:`_tcp_bounds`: true of
+    the timed cycle whatever gun poses the robots' plans choose), with the bound over the
+    study's poses beside it (``LowerBound.at_study_poses``: the planned gun poses may differ
+    from the study's, and then beat it leg by leg)."""
+    from weldplan.multi.baselines import allocation_report
+    from weldplan.multi.bound import lower_bound
+    from weldplan.multi.calibrate import allocate_and_plan
+    from weldplan.multi.problem import AllocationProblem
+    from weldplan.station.pipeline import plan
+
+    settings = settings or AllocationSettings()
+    say = progress or (lambda stage, done, total: None)
+    t = time.perf_counter()
+    bounds = []
+    for travel in (_tcp_bounds(robots, inp), inp.bound):
+        problem = AllocationProblem.build(inp.reach, inp.weld_time, travel, settings.closed)
+        bounds.append(lower_bound(problem, nodes=settings.milp_nodes,
+                                  seconds=settings.milp_seconds))  # fmt: skip
+    bound = dataclasses.replace(bounds[0], at_study_poses=bounds[1].value)
+    seconds["allocation"] = time.perf_counter() - t
+    calls = [0]
+
+    def allocate_once(travel: Any) -> AllocationReport:
+        say("allocation", calls[0], settings.rounds)
+        calls[0] += 1
+        t = time.perf_counter()
+        out = allocation_report(inp.reach, inp.weld_time, travel, rng=seed, settings=settings,
+                                bound=bound)  # fmt: skip
+        seconds["allocation"] += time.perf_counter() - t
+        return out
+
+    with tempfile.TemporaryDirectory(prefix="weldplan-station-") as tmp:
+
+        def plan_share(k: int, ids: tuple[str, ...]) -> Any:
+            spec = robots[k][0]
+            say("plan", k, len(robots))
+            sub = _sub_station(station, spec, _welds_file(station, ids, Path(tmp), k))
+            log.info("station: robot %d plans its %d welds", k + 1, len(ids))
+            t = time.perf_counter()
+            out = plan(sub, rng=seed, executor=executor, progress=progress)
+            key = f"plan robot{k + 1}"
+            seconds[key] = seconds.get(key, 0.0) + time.perf_counter() - t
+            return out
+
+        got = allocate_and_plan(allocate_once, plan_share, inp.model, settings.rounds)
+    return list(got.plans), got.report, got.rounds
 
 
 def _interference(
