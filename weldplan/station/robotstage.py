@@ -136,8 +136,8 @@ def reach_test(
     t0 = time.perf_counter()
     ts: ToolSettings = kw["tool"]
     F = mounted.flange_tcp
-    checker = RobotCollision(
-        robot, cell.part, None, F, contact_radius=ts.contact_radius, floor_z=kw["floor_z"]
+    checker = RobotCollision(  # the tool: the base search's transfer trial checks it on the legs
+        robot, cell.part, mounted.tool, F, contact_radius=ts.contact_radius, floor_z=kw["floor_z"]
     )
     placement = None
     if not base_fixed:
@@ -186,6 +186,8 @@ def joint_route_stage(
         rr.stats["placement"].update(
             searched=True, candidates=reach.placement.candidates, on="first-pass poses"
         )
+        if reach.placement.join is not None:  # the transfer trial at the chosen base
+            rr.stats["placement"]["joins"] = reach.placement.join.summary()
     if "ok" not in rr.status:
         raise PlanningError(f"{_none_served(rr)}; nothing written")
     if rr.stats.get("collision_free") is False:
