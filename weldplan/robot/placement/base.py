@@ -13,16 +13,22 @@ whole route (:func:`place`, used by :func:`weldplan.robot.route.plan_robot_route
 3. The best ``top`` are solved along the whole route (:func:`~weldplan.robot.route.joint_path`
    with the collision-free branches at the welds) and ranked by welds ok, then the smallest
    manipulability of the chosen configurations over every solved waypoint.
-4. With roadmap settings (``PlacementSettings.joins``, :mod:`weldplan.robot.settings`), those are
-   re-ranked by the welds the robot can **join** (issue 27, item 2), then by step 3's key
-   (:func:`rank_bases`, :func:`~weldplan.robot.placement.join_welds`): consecutive served welds
-   whose own leg is free are joined; the ends of the blocked legs are left by a retract and joined
-   where one joint-space roadmap on their IK branch (OMPL's PRM, :mod:`weldplan.motion.roadmap`, on
-   the same FCL checks as the detours: part, self-collision, floor) puts their retracts in one
-   component; a weld left out tries its other retracts and alternative poses first. Best first, a
-   candidate that serves no more welds than the best joined so far is skipped, so where the first
-   candidate joins all it serves, one roadmap is built (none when no leg is blocked). The chosen
-   base's roadmap goes on to the detours (:class:`~weldplan.robot.placement.LegRoadmap`).
+4. With a checker, those are re-ranked by the welds the robot can **join** in one group (issue
+   27, item 2), then by step 3's key (:func:`rank_bases`,
+   :func:`~weldplan.robot.placement.join_welds`).
+   By default (``PlacementSettings.trial``) the *transfer trial* alone: consecutive served welds
+   whose own leg is free are joined, and so are the ends of a blocked leg when a straight or
+   tucked-arm joint motion joins their retracts (the detours' own first tries, FCL: no
+   planner, the same work on any machine); each leg that stays split is named with its cause
+   (:attr:`~weldplan.robot.placement.roadmaps.WeldJoin.splits`). With roadmap settings
+   (``PlacementSettings.joins``) the ends of the legs still blocked go into one joint-space
+   roadmap on their IK branch (OMPL's PRM, :mod:`weldplan.motion.roadmap`, on the same FCL
+   checks as the detours: part, self-collision, floor) and are joined where it puts their
+   retracts in one component; a weld left out tries its other retracts and alternative poses
+   first; the chosen base's roadmap goes on to the detours
+   (:class:`~weldplan.robot.placement.LegRoadmap`). Best first, a candidate that serves no more
+   welds than the best joined so far is skipped, so where the first candidate joins all it
+   serves, it is the only one judged.
 
 With each weld's **alternative poses** (the tool's other free poses,
 :mod:`weldplan.robot.placement.altreach`; on request of the pose stage's search,
