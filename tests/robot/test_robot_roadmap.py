@@ -159,3 +159,21 @@ def test_the_transfer_trial_alone_rejects_the_base_whose_welds_no_planner_free_m
     assert wj.n_joined == 1 and wj.report is None and wj.roadmap is None
     assert len(wj.splits) == 1 and wj.splits[0].startswith("w1 -> w2: its own motion blocked")
     assert wj.summary()["split_legs"] == list(wj.splits)
+
+
+def test_stands_turned_about_a1_tie_and_the_order_of_the_candidates_decides(robot):
+    """The same stand turned 30 deg about its A1 axis: the welds' configurations differ only in
+    A1, so the manipulability is the same but for round-off, and the first candidate wins
+    whichever it is (before, the last bits of the sum chose, as they may differ by machine)."""
+    ang = np.radians([20.0, 0.0, -20.0])
+    T = np.tile(np.eye(4), (3, 1, 1))
+    T[:, :3, :3] = np.diag([1.0, -1.0, -1.0])  # the torch pointing down
+    T[:, 0, 3], T[:, 1, 3], T[:, 2, 3] = 1800 * np.cos(ang), 1800 * np.sin(ang), 600.0
+    T_fl, rows = T @ np.linalg.inv(TORCH_TCP), np.array([0, 2])
+    A, B = base_pose(0.0, 0.0, 0.0, 0.0), base_pose(0.0, 0.0, 0.0, 30.0)
+    by_reach = PlacementSettings(trial=False)
+    for first, second in ((A, B), (B, A)):
+        cands = [Placement(first, 2, 2, 0.0, 2, True), Placement(second, 2, 2, 0.0, 2, True)]
+        best, _ = rank_bases(robot, cands, [None, None], T_fl, rows, None, by_reach)
+        np.testing.assert_array_equal(best.base, first)
+        assert best.min_manipulability > 0.0
