@@ -151,8 +151,24 @@ def reach_test(
             log.warning("robot reach test skipped: no base for the first-pass poses (%s)", exc)
             return None
         robot = robot.with_base(placement.base)
+        _warn_splits(placement)
     test = ReachTest(robot, F, checker.with_robot(robot))
     return RobotAcceptance(test, robot, placement, time.perf_counter() - t0)
+
+
+def _warn_splits(placement: Any) -> None:
+    """Say at once which legs the transfer trial found split at the searched base
+    (:attr:`weldplan.robot.placement.roadmaps.WeldJoin.splits`): the robot stage's detours will
+    try them with the gun's exits and OMPL, and may not join them."""
+    wj = placement.join
+    if wj is None or not wj.splits:
+        return
+    x, y, z, yaw = placement.xyz_yaw()
+    log.warning(
+        "base (%.0f, %.0f, %.0f) yaw %.1f deg: %d of %d served welds joined in one group by free "
+        "legs and straight or tucked transfers; split: %s",
+        x, y, z, yaw, wj.n_joined, int((wj.group >= 0).sum()), "; ".join(wj.splits),
+    )  # fmt: skip
 
 
 def joint_route_stage(
