@@ -165,7 +165,7 @@ def test_the_transfer_trial_alone_rejects_the_base_whose_welds_no_planner_free_m
     with caplog.at_level(logging.WARNING, logger="weldplan.station.robotstage"):
         _warn_splits(dataclasses.replace(cands[0], join=wj))
     assert "base (0, 0, 0) yaw 0.0 deg: 1 of 2 served welds joined in one group" in caplog.text
-    assert "split: w1 -> w2: its own motion blocked" in caplog.text
+    assert "OMPL): w1 -> w2: its own motion blocked" in caplog.text
 
 
 def test_stands_turned_about_a1_tie_and_the_order_of_the_candidates_decides(robot):

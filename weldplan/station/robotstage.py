@@ -166,7 +166,8 @@ def _warn_splits(placement: Any) -> None:
     x, y, z, yaw = placement.xyz_yaw()
     log.warning(
         "base (%.0f, %.0f, %.0f) yaw %.1f deg: %d of %d served welds joined in one group by free "
-        "legs and straight or tucked transfers; split: %s",
+        "legs and straight or tucked transfers; split (left to the detours' gun exits and OMPL): "
+        "%s",
         x, y, z, yaw, wj.n_joined, int((wj.group >= 0).sum()), "; ".join(wj.splits),
     )  # fmt: skip
 
