@@ -21,9 +21,12 @@ from weldplan.robot.placement import (  # noqa: E402  # noqa: E402
     Placement,
     base_pose,
     branch_roadmap,
-    rank_bases,  # noqa: E402
+    join_welds,
+    rank_bases,
 )
 from weldplan.robot.route import Detour  # noqa: E402
+from weldplan.robot.route.configs import joint_path  # noqa: E402
+from weldplan.robot.settings import PlacementSettings  # noqa: E402
 from weldplan.tool import arc_torch  # noqa: E402
 
 SMALL = RoadmapSettings(milestones=10, neighbours=6, query_neighbours=6)
@@ -112,13 +115,72 @@ def test_the_base_that_reaches_as_well_but_cannot_join_its_welds_loses_to_the_on
     arm, chk, T_fl, A, B = wall_station(robot)
     rows = np.array([0, 2])
     cands = [Placement(A, 2, 2, 0.0, 2, True), Placement(B, 2, 2, 0.0, 2, True)]
-    plain, _ = rank_bases(arm, cands, [None, None], T_fl, rows, chk.with_robot, 5.0, 1000.0)
+    by_reach = PlacementSettings(trial=False)
+    plain, _ = rank_bases(arm, cands, [None, None], T_fl, rows, chk.with_robot, by_reach)
     np.testing.assert_array_equal(plain.base, A)  # by reach and manipulability, A first
     tiny = RoadmapSettings(milestones=5, neighbours=4, query_neighbours=4)
     with caplog.at_level(logging.INFO, logger="weldplan.robot.placement.base"):
         best, _ = rank_bases(
-            arm, cands, [None, None], T_fl, rows, chk.with_robot, 5.0, 1000.0, None, tiny
-        )
+            arm, cands, [None, None], T_fl, rows, chk.with_robot,
+            PlacementSettings(joins=tiny), ids=("w1", "w2"),
+        )  # fmt: skip
     np.testing.assert_array_equal(best.base, B)
     assert best.join.n_joined == 2 and best.join.blocked_legs == 0
     assert "base 0,0,0,0.0: 1/2 served welds joined (1 blocked legs" in caplog.text
+
+
+def test_the_transfer_trial_alone_rejects_the_base_whose_welds_no_planner_free_move_joins(
+    robot, caplog
+):
+    """The default step 4, no roadmap: from A the leg's own motion and every straight or tucked
+    transfer between the retracts hit the wall (the welds are in two components of the joint
+    space, wall_station), so A joins 1 of its 2 welds and says which leg splits and why; B
+    joins both."""
+    arm, chk, T_fl, A, B = wall_station(robot)
+    rows = np.array([0, 2])
+    cands = [Placement(A, 2, 2, 0.0, 2, True), Placement(B, 2, 2, 0.0, 2, True)]
+    with caplog.at_level(logging.INFO, logger="weldplan.robot.placement.base"):
+        best, _ = rank_bases(
+            arm, cands, [None, None], T_fl, rows, chk.with_robot, PlacementSettings(),
+            ids=("w1", "w2"),
+        )  # fmt: skip
+    np.testing.assert_array_equal(best.base, B)
+    assert best.join.n_joined == 2 and best.join.splits == () and best.join.report is None
+    assert (
+        "base 0,0,0,0.0: 1/2 served welds joined (1 blocked legs; split w1 -> w2: its own "
+        "motion blocked" in caplog.text
+    )
+    # the judgement at A on its own: the split leg named, no roadmap built
+    rb = arm.with_base(A)
+    det = Detour(rb, chk.with_robot(rb), T_fl @ TORCH_TCP, TORCH_TCP, 5.0, "rrtconnect", 1.0, 0)
+    q, branch, _, status = joint_path(rb, T_fl, singular_deg=5.0, flip_penalty=1000.0)
+    assert list(status[rows]) == ["ok", "ok"]
+    wj = join_welds(det, q, branch, rows, np.ones(2, dtype=bool), None, ids=("w1", "w2"))
+    assert wj.n_joined == 1 and wj.report is None and wj.roadmap is None
+    assert len(wj.splits) == 1 and wj.splits[0].startswith("w1 -> w2: its own motion blocked")
+    assert wj.summary()["split_legs"] == list(wj.splits)
+    # the reach stage says it at once, with the base
+    from weldplan.station.robotstage import _warn_splits
+
+    with caplog.at_level(logging.WARNING, logger="weldplan.station.robotstage"):
+        _warn_splits(dataclasses.replace(cands[0], join=wj))
+    assert "base (0, 0, 0) yaw 0.0 deg: 1 of 2 served welds joined in one group" in caplog.text
+    assert "OMPL): w1 -> w2: its own motion blocked" in caplog.text
+
+
+def test_stands_turned_about_a1_tie_and_the_order_of_the_candidates_decides(robot):
+    """The same stand turned 30 deg about its A1 axis: the welds' configurations differ only in
+    A1, so the manipulability is the same but for round-off, and the first candidate wins
+    whichever it is (before, the last bits of the sum chose, as they may differ by machine)."""
+    ang = np.radians([20.0, 0.0, -20.0])
+    T = np.tile(np.eye(4), (3, 1, 1))
+    T[:, :3, :3] = np.diag([1.0, -1.0, -1.0])  # the torch pointing down
+    T[:, 0, 3], T[:, 1, 3], T[:, 2, 3] = 1800 * np.cos(ang), 1800 * np.sin(ang), 600.0
+    T_fl, rows = T @ np.linalg.inv(TORCH_TCP), np.array([0, 2])
+    A, B = base_pose(0.0, 0.0, 0.0, 0.0), base_pose(0.0, 0.0, 0.0, 30.0)
+    by_reach = PlacementSettings(trial=False)
+    for first, second in ((A, B), (B, A)):
+        cands = [Placement(first, 2, 2, 0.0, 2, True), Placement(second, 2, 2, 0.0, 2, True)]
+        best, _ = rank_bases(robot, cands, [None, None], T_fl, rows, None, by_reach)
+        np.testing.assert_array_equal(best.base, first)
+        assert best.min_manipulability > 0.0

@@ -30,6 +30,7 @@ from weldplan.robot.settings import (
         (lambda: PlacementSettings(top=0), "top"),
         (lambda: PlacementSettings(top=2.5), "top"),
         (lambda: PlacementSettings(joins={"milestones": 40}), "joins"),
+        (lambda: PlacementSettings(trial="yes"), "trial"),
         (lambda: JointRouteSettings(singular_deg=95.0), "singular_deg"),
         (lambda: JointRouteSettings(search_top=0), "top"),
         (lambda: JointRouteSettings(contact_radius=-1.0), "contact_radius"),

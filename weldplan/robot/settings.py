@@ -197,19 +197,26 @@ class PlacementSettings:
         The best candidates of the search re-scored along the whole route.
     joins
         The joint-space roadmaps' work (:mod:`weldplan.motion.roadmap`): the candidates re-ranked
-        by the welds one roadmap joins; ``None``: not re-ranked.
+        by the welds the transfer trial and one roadmap join; ``None``: no roadmap.
+    trial
+        Re-rank the candidates by the welds the transfer trial joins in one group (consecutive
+        welds joined by their own free leg or by a straight or tucked-arm joint motion between
+        their retracts: no planner; :func:`weldplan.robot.placement.join_welds`), then by the
+        welds served; ``False``: by the welds served alone (unless ``joins`` is given).
     """
 
     singular_deg: float = DEFAULT_SINGULAR_DEG
     flip_penalty: float = FLIP_PENALTY_S
     top: int = SEARCH_TOP
     joins: RoadmapSettings | None = None
+    trial: bool = True
 
     def __post_init__(self) -> None:
         _number("singular_deg", self.singular_deg, 0.0, 90.0, hi_open=True)
         _number("flip_penalty", self.flip_penalty, 0.0)
         _count("top", self.top)
         _roadmap("joins", self.joins)
+        _flag("trial", self.trial)
 
 
 @dataclass(frozen=True)

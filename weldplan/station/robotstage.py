@@ -136,8 +136,8 @@ def reach_test(
     t0 = time.perf_counter()
     ts: ToolSettings = kw["tool"]
     F = mounted.flange_tcp
-    checker = RobotCollision(
-        robot, cell.part, None, F, contact_radius=ts.contact_radius, floor_z=kw["floor_z"]
+    checker = RobotCollision(  # the tool: the base search's transfer trial checks it on the legs
+        robot, cell.part, mounted.tool, F, contact_radius=ts.contact_radius, floor_z=kw["floor_z"]
     )
     placement = None
     if not base_fixed:
@@ -151,8 +151,25 @@ def reach_test(
             log.warning("robot reach test skipped: no base for the first-pass poses (%s)", exc)
             return None
         robot = robot.with_base(placement.base)
+        _warn_splits(placement)
     test = ReachTest(robot, F, checker.with_robot(robot))
     return RobotAcceptance(test, robot, placement, time.perf_counter() - t0)
+
+
+def _warn_splits(placement: Any) -> None:
+    """Say at once which legs the transfer trial found split at the searched base
+    (:attr:`weldplan.robot.placement.roadmaps.WeldJoin.splits`): the robot stage's detours will
+    try them with the gun's exits and OMPL, and may not join them."""
+    wj = placement.join
+    if wj is None or not wj.splits:
+        return
+    x, y, z, yaw = placement.xyz_yaw()
+    log.warning(
+        "base (%.0f, %.0f, %.0f) yaw %.1f deg: %d of %d served welds joined in one group by free "
+        "legs and straight or tucked transfers; split (left to the detours' gun exits and OMPL): "
+        "%s",
+        x, y, z, yaw, wj.n_joined, int((wj.group >= 0).sum()), "; ".join(wj.splits),
+    )  # fmt: skip
 
 
 def joint_route_stage(
@@ -186,6 +203,8 @@ def joint_route_stage(
         rr.stats["placement"].update(
             searched=True, candidates=reach.placement.candidates, on="first-pass poses"
         )
+        if reach.placement.join is not None:  # the transfer trial at the chosen base
+            rr.stats["placement"]["joins"] = reach.placement.join.summary()
     if "ok" not in rr.status:
         raise PlanningError(f"{_none_served(rr)}; nothing written")
     if rr.stats.get("collision_free") is False:

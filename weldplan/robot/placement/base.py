@@ -13,16 +13,22 @@ whole route (:func:`place`, used by :func:`weldplan.robot.route.plan_robot_route
 3. The best ``top`` are solved along the whole route (:func:`~weldplan.robot.route.joint_path`
    with the collision-free branches at the welds) and ranked by welds ok, then the smallest
    manipulability of the chosen configurations over every solved waypoint.
-4. With roadmap settings (``PlacementSettings.joins``, :mod:`weldplan.robot.settings`), those are
-   re-ranked by the welds the robot can **join** (issue 27, item 2), then by step 3's key
-   (:func:`rank_bases`, :func:`~weldplan.robot.placement.join_welds`): consecutive served welds
-   whose own leg is free are joined; the ends of the blocked legs are left by a retract and joined
-   where one joint-space roadmap on their IK branch (OMPL's PRM, :mod:`weldplan.motion.roadmap`, on
-   the same FCL checks as the detours: part, self-collision, floor) puts their retracts in one
-   component; a weld left out tries its other retracts and alternative poses first. Best first, a
-   candidate that serves no more welds than the best joined so far is skipped, so where the first
-   candidate joins all it serves, one roadmap is built (none when no leg is blocked). The chosen
-   base's roadmap goes on to the detours (:class:`~weldplan.robot.placement.LegRoadmap`).
+4. With a checker, those are re-ranked by the welds the robot can **join** in one group (issue
+   27, item 2), then by step 3's key (:func:`rank_bases`,
+   :func:`~weldplan.robot.placement.join_welds`).
+   By default (``PlacementSettings.trial``) the *transfer trial* alone: consecutive served welds
+   whose own leg is free are joined, and so are the ends of a blocked leg when a straight or
+   tucked-arm joint motion joins their retracts (the detours' own first tries, FCL: no
+   planner, the same work on any machine); each leg that stays split is named with its cause
+   (:attr:`~weldplan.robot.placement.roadmaps.WeldJoin.splits`). With roadmap settings
+   (``PlacementSettings.joins``) the ends of the legs still blocked go into one joint-space
+   roadmap on their IK branch (OMPL's PRM, :mod:`weldplan.motion.roadmap`, on the same FCL
+   checks as the detours: part, self-collision, floor) and are joined where it puts their
+   retracts in one component; a weld left out tries its other retracts and alternative poses
+   first; the chosen base's roadmap goes on to the detours
+   (:class:`~weldplan.robot.placement.LegRoadmap`). Best first, a candidate that serves no more
+   welds than the best joined so far is skipped, so where the first candidate joins all it
+   serves, it is the only one judged.
 
 With each weld's **alternative poses** (the tool's other free poses,
 :mod:`weldplan.robot.placement.altreach`; on request of the pose stage's search,
@@ -51,10 +57,17 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from weldplan.errors import PlanningError
-from weldplan.motion.roadmap import RoadmapSettings
 from weldplan.robot.model.arm import Robot
 from weldplan.robot.placement.altreach import alt_free
-from weldplan.robot.placement.reach import OK, PRESELECT, BaseSearch, Placement, search_base, usable
+from weldplan.robot.placement.reach import (
+    OK,
+    PRESELECT,
+    TIE_DECIMALS,
+    BaseSearch,
+    Placement,
+    search_base,
+    usable,
+)
 from weldplan.robot.placement.roadmaps import join_welds
 from weldplan.robot.route.configs import joint_path
 from weldplan.robot.route.replan import Detour
@@ -64,6 +77,8 @@ log = logging.getLogger(__name__)
 
 #: kinematically best candidates re-ranked by the collision test at the welds
 POOL = 48
+#: split legs a base's log line names (all of them are in its :class:`WeldJoin`)
+SPLITS_LOGGED = 3
 
 
 def free_branches(
@@ -120,17 +135,20 @@ def place(
     checker_for: Any,
     settings: PlacementSettings,
     alternatives: list[NDArray[np.float64]] | None = None,
+    ids: tuple[str, ...] | None = None,
 ) -> tuple[Placement, NDArray[np.bool_] | None]:
     """The base (given, the robot's own, or searched: module docstring) and, for a searched one,
     the allowed-branch mask of its weld rows (``None`` for a given base: the caller computes it).
 
-    ``checker_for(robot_at_base)`` builds the collision checker (``None``: no collision test).
-    ``settings``: the singular threshold, the flip penalty, the candidates re-scored along the
-    route (``top``) and, with a checker, ``joins``: step 4, the candidates of step 3 re-ranked by
-    the welds one roadmap joins (:func:`join_welds`; the placement's
-    :attr:`~weldplan.robot.placement.Placement.join`). ``alternatives``: per weld row, ``(k, 4, 4)``
-    mm flange poses of the weld's other free tool poses (:mod:`weldplan.robot.placement.altreach`);
-    a weld counts at a base when its pose or one of them serves there, at every step.
+    ``checker_for(robot_at_base)`` builds the collision checker (``None``: no collision test;
+    give it the tool for step 4 to check it on the legs). ``settings``: the singular threshold,
+    the flip penalty, the candidates re-scored along the route (``top``) and, with a checker,
+    step 4 (``trial``, ``joins``): the candidates of step 3 re-ranked by the welds joined in one
+    group (:func:`join_welds`; the placement's :attr:`~weldplan.robot.placement.Placement.join`).
+    ``alternatives``: per weld row, ``(k, 4, 4)`` mm flange poses of the weld's other free tool
+    poses (:mod:`weldplan.robot.placement.altreach`); a weld counts at a base when its pose or
+    one of them serves there, at every step. ``ids``: the welds' names (route order) in the
+    reports of step 4.
     """
     T_weld = T_fl[rows]
     if base is not None or search is None:
@@ -149,10 +167,7 @@ def place(
     masks: list[NDArray[np.bool_] | None] = [None] * len(cands)
     if checker_for is not None:
         cands, masks = _rerank(robot, cands, T_weld, checker_for, sd, top, alts)
-    return rank_bases(
-        robot, cands, masks, T_fl, rows, checker_for, sd, settings.flip_penalty, alts,
-        settings.joins,
-    )  # fmt: skip
+    return rank_bases(robot, cands, masks, T_fl, rows, checker_for, settings, alts, ids)
 
 
 def rank_bases(
@@ -162,19 +177,21 @@ def rank_bases(
     T_fl: NDArray[np.float64],
     rows: NDArray[np.int64],
     checker_for: Any,
-    singular_deg: float,
-    flip_penalty: float,
+    settings: PlacementSettings,
     alts: list[NDArray[np.float64]] | None = None,
-    joins: RoadmapSettings | None = None,
+    ids: tuple[str, ...] | None = None,
 ) -> tuple[Placement, NDArray[np.bool_] | None]:
     """Steps 3 and 4 of the module docstring: the best of ``cands`` (with their allowed-branch
     masks, ``None``: every branch) along the whole route (flange poses ``T_fl (m, 4, 4)`` mm,
-    welds at ``rows``), then, with ``joins`` and a checker, by the welds one roadmap joins
+    welds at ``rows``, named ``ids``), then, with a checker and ``settings.trial`` or
+    ``settings.joins``, by the welds joined in one group
     (:func:`~weldplan.robot.placement.join_welds`); ties keep the order of ``cands``."""
     scored = []
     for pl, mask in zip(cands, masks, strict=True):
         rb = robot.with_base(pl.base)
-        got = _route_score(rb, T_fl, rows, mask, checker_for, singular_deg, flip_penalty, alts)
+        got = _route_score(
+            rb, T_fl, rows, mask, checker_for, settings.singular_deg, settings.flip_penalty, alts
+        )
         if got is not None:
             scored.append((got[0], dataclasses.replace(pl, min_manipulability=got[0][1]), mask,
                            got[1]))  # fmt: skip
@@ -183,9 +200,9 @@ def rank_bases(
             f"no base among the {len(cands)} best candidates reaches a weld collision-free"
         )
     scored.sort(key=lambda s: s[0], reverse=True)  # stable: ties keep the search's order
-    if joins is None or checker_for is None:
+    if checker_for is None or (settings.joins is None and not settings.trial):
         return scored[0][1], scored[0][2]
-    return _by_joins(robot, scored, T_fl, rows, checker_for, singular_deg, joins, alts)
+    return _by_joins(robot, scored, T_fl, rows, checker_for, settings, alts, ids)
 
 
 def _by_joins(
@@ -194,16 +211,17 @@ def _by_joins(
     T_fl: NDArray[np.float64],
     rows: NDArray[np.int64],
     checker_for: Any,
-    singular_deg: float,
-    joins: RoadmapSettings,
+    settings: PlacementSettings,
     alts: list[NDArray[np.float64]] | None = None,
+    ids: tuple[str, ...] | None = None,
 ) -> tuple[Placement, NDArray[np.bool_] | None]:
-    """Step 4: the candidates of step 3 (best first) by the welds they join
-    (:func:`~weldplan.robot.placement.join_welds`, with each weld's alternative poses ``alts``),
-    then their step-3 key.
+    """Step 4: the candidates of step 3 (best first) by the welds they join in one group
+    (:func:`~weldplan.robot.placement.join_welds`: the transfer trial, and the roadmap of
+    ``settings.joins`` when given; with each weld's alternative poses ``alts``), then their
+    step-3 key (welds served, then manipulability).
     A candidate serving no more welds than the best joined count so far cannot beat it and is
-    not built (the welds it serves bound those it joins): when the first candidate joins every
-    weld it serves, one roadmap is built."""
+    not judged (the welds it serves bound those it joins): when the first candidate joins every
+    weld it serves, one is judged."""
     best: tuple[tuple[int, tuple[int, float]], Placement, Any] | None = None
     for key, pl, mask, (q, branch, status) in scored:
         served = np.array([status[r] == OK for r in rows], dtype=bool)
@@ -211,14 +229,15 @@ def _by_joins(
             continue
         rb = robot.with_base(pl.base)
         checker = checker_for(rb)
-        det = Detour(rb, checker, T_fl @ checker.flange_tcp, checker.flange_tcp, singular_deg,
-                     "rrtconnect", 1.0, 0)  # fmt: skip
-        wj = join_welds(det, q, branch, rows, served, joins, alts=alts)
+        det = Detour(rb, checker, T_fl @ checker.flange_tcp, checker.flange_tcp,
+                     settings.singular_deg, "rrtconnect", 1.0, 0)  # fmt: skip
+        wj = join_welds(det, q, branch, rows, served, settings.joins, alts=alts, ids=ids)
         x, y, z, yaw = pl.xyz_yaw()
         log.info(
-            "base %.0f,%.0f,%.0f,%.1f: %d/%d served welds joined (%d blocked legs%s)",
+            "base %.0f,%.0f,%.0f,%.1f: %d/%d served welds joined (%d blocked legs%s%s)",
             x, y, z, yaw, wj.n_joined, int(served.sum()), wj.blocked_legs,
             "" if wj.report is None else "; roadmap " + wj.report.line(),
+            "".join(f"; split {s}" for s in wj.splits[:SPLITS_LOGGED]),
         )  # fmt: skip
         if best is None or (wj.n_joined, key) > best[0]:
             best = ((wj.n_joined, key), dataclasses.replace(pl, join=wj), mask)
@@ -268,6 +287,7 @@ def _route_score(
         n_legs = len(set(legs[(legs >= 0) & (legs < len(rows) - 1)].tolist()))
         legs_said = f", {n_legs} legs with a link through the part"
     m = float(rb.manipulability(q[exact]).min()) if exact.any() else -np.inf
+    m = round(m, TIE_DECIMALS)  # bases equal but for round-off tie: the search's order decides
     x, y, z = rb.base[:3, 3]
     yaw = np.degrees(np.arctan2(rb.base[1, 0], rb.base[0, 0]))
     log.info(

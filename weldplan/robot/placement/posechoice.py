@@ -220,6 +220,7 @@ def place_for_poses(
         checker_for,
         PlacementSettings() if settings is None else settings,
         alternative_flange_poses(poses, route.order, F) if alternatives else None,
+        tuple(route.order),
     )
     if placement.join is not None and placement.join.roadmap is not None:
         placement.join.roadmap.close()  # the robot route builds its own for the new poses

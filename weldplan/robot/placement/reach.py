@@ -66,6 +66,11 @@ DEFAULT_EXTRA_YAWS = (-30.0, 30.0)
 #: weld was most of a 200-weld search)
 SCORE_WELDS = 48
 PRESELECT = 256
+#: decimals of the manipulability the rankings compare: candidates that differ only by round-off
+#: (the same stand turned about A1's axis, whose configurations differ only in A1, have the
+#: same manipulability up to 1e-16) tie, and the search's order (the facing yaw first) decides,
+#: not the last bits of a floating-point sum, which differ with the machine's BLAS
+TIE_DECIMALS = 9
 #: mm: how far beyond :func:`arm_reach` a wrist centre must lie for :func:`may_reach` to skip its
 #: IK (the solver's own out-of-reach test is exact; this only keeps round-off out of the way)
 REACH_SLACK_MM = 1.0
@@ -440,8 +445,10 @@ def search_base(
         # a first pass on evenly spread welds keeps the candidates worth scoring on all of them
         sub = T[np.linspace(0, len(T) - 1, SCORE_WELDS).round().astype(np.int64)]
         c_sub, m_sub = _score(robot, sub, bases, singular_deg, dist)
+        m_sub = np.round(m_sub, TIE_DECIMALS)
         bases = bases[np.lexsort((-m_sub, -c_sub))[:PRESELECT]]
     counts, mins = _score(robot, T, bases, singular_deg, dist, alternatives)
+    mins = np.round(mins, TIE_DECIMALS)  # round-off ties: the candidates' order decides
     if counts.max() == 0:
         raise PlanningError(
             f"no base among {len(bases)} candidates reaches any weld: widen the search"

@@ -2,12 +2,14 @@
 
 A base that reaches every weld may still be one from which the welds cannot be joined (the arm
 reaches each, not one from the next). :func:`join_welds` judges a base by the welds it can join:
-the route's own free legs, and one OMPL roadmap (:mod:`weldplan.motion.roadmap`) on the FCL
-checks of the detours (:class:`~weldplan.robot.route.Detour`) for the legs that are blocked; the
-base search ranks its best candidates by it (:func:`weldplan.robot.placement.rank_bases`,
-step 4), and the detours ask the chosen base's roadmap before OMPL (:class:`LegRoadmap`,
+the route's own free legs and, for the legs that are blocked, the *transfer trial* (the ends'
+retracts joined by a straight or tucked-arm joint motion, the detours' own first tries: no
+planner) and, when asked, one OMPL roadmap (:mod:`weldplan.motion.roadmap`) on the FCL checks of
+the detours (:class:`~weldplan.robot.route.Detour`). The base search ranks its best candidates by
+it (:func:`weldplan.robot.placement.rank_bases`, step 4: by default the trial alone), and the
+detours ask the chosen base's roadmap before OMPL (:class:`LegRoadmap`,
 :meth:`~weldplan.robot.route.Detour.via_roadmap`). Issue 27, item 2; docs/robot-placement.md,
-"Joining the welds: one roadmap per base".
+"Joining the welds".
 """
 
 from __future__ import annotations
@@ -58,6 +60,10 @@ class WeldJoin:
         The IK branch of the roadmap (-1: none built).
     roadmap
         The :class:`~weldplan.motion.roadmap.Roadmap` built (``None``: none needed).
+    splits
+        Per leg between consecutive served welds that stays split (its ends in different
+        groups): ``"A -> B: why"`` (the body blocking its own motion, and a missing retract or
+        transfer).
     """
 
     group: NDArray[np.int64]
@@ -68,6 +74,7 @@ class WeldJoin:
     causes: tuple[str, ...]
     branch: int = -1
     roadmap: Any = field(default=None, compare=False, repr=False)
+    splits: tuple[str, ...] = ()
 
     def summary(self) -> dict[str, Any]:
         """JSON-ready figures (the route's ``stats["placement"]["joins"]``)."""
@@ -78,6 +85,7 @@ class WeldJoin:
             "branch": self.branch,
             "roadmap": None if self.report is None else dataclasses.asdict(self.report),
             "left_out": list(self.causes),
+            "split_legs": list(self.splits),
         }
 
 
@@ -146,88 +154,162 @@ def join_welds(
     branch: NDArray[np.int64],
     rows: NDArray[np.int64],
     served: NDArray[np.bool_],
-    settings: RoadmapSettings,
+    settings: RoadmapSettings | None,
     seed: int | None = 0,
     alts: list[NDArray[np.float64]] | None = None,
+    ids: tuple[str, ...] | None = None,
 ) -> WeldJoin:
-    """Which served welds (``served (n,)``, route order, at route rows ``rows``) the robot of
-    ``det`` can join, on the route's joint path ``q (m, 6)`` rad / ``branch (m,)``, as the
-    detours would: consecutive served welds whose own leg is free (``path_hits``, the contact
-    zone exempt as on a point-tip route) are joined; so are the ends of a blocked leg whose
-    retracts (:meth:`~weldplan.robot.route.Detour.retract`) a straight or tucked-arm motion
-    joins (:meth:`~weldplan.robot.route.Detour.direct`). The retracts of the legs still
-    blocked go into one roadmap on the welds' branch (:func:`branch_roadmap`; built only for
-    them): welds whose retracts share a component are joined. A weld still outside the largest
-    group tries up to :data:`MORE_RETRACTS` other retracts (:func:`retracts`) and, with ``alts``
-    (per weld, ``(k, 4, 4)`` mm flange poses, the chosen one first:
-    :mod:`weldplan.robot.placement.altreach`), the retracts of its other poses usable on the branch
-    with no link in the part (a weld joined by another pose counts, as in
+    """Which served welds (``served (n,)``, route order, at route rows ``rows``; ``ids`` name
+    them, default their positions) the robot of ``det`` can join, on the route's joint path
+    ``q (m, 6)`` rad / ``branch (m,)``, as the detours would: consecutive served welds whose own
+    leg is free (``path_hits``, the contact zone exempt as on a point-tip route) are joined; so
+    are the ends of a blocked leg whose retracts (:meth:`~weldplan.robot.route.Detour.retract`)
+    a straight or tucked-arm motion joins (:meth:`~weldplan.robot.route.Detour.direct`): the
+    *transfer trial*, no planner. With roadmap ``settings`` (``None``: the trial alone) the
+    retracts of the legs still blocked go into one roadmap on the welds' branch
+    (:func:`branch_roadmap`; built only for them): welds whose retracts share a component are
+    joined. A weld still outside the largest group tries up to :data:`MORE_RETRACTS` other
+    retracts (:func:`retracts`) and, with ``alts`` (per weld, ``(k, 4, 4)`` mm flange poses, the
+    chosen one first: :mod:`weldplan.robot.placement.altreach`), the retracts of its other poses
+    usable on the branch with no link in the part (a weld joined by another pose counts, as in
     :func:`~weldplan.robot.placement.alt_free`: the pose stage picks it). Issue 27, item 2: a
     base is scored by the welds it can join, not only by those it reaches."""
     n = len(rows)
-    parent = np.arange(n)
-
-    def find(k: int) -> int:
-        while parent[k] != k:
-            parent[k] = parent[parent[k]]
-            k = int(parent[k])
-        return k
-
+    g = _Groups(n)
     idx = np.flatnonzero(served)
-    zone = np.ones(max(len(q) - 1, 0), dtype=bool)
-    hits = det.checker.path_hits(q, zone) if len(idx) > 1 else []
-    segs = np.array(sorted({h.segment for h in hits}), dtype=np.int64)
     keep = int(np.bincount(branch[rows[idx]]).argmax()) if len(idx) else -1
-    first: dict[int, NDArray[np.float64] | None] = {}
-
-    def leave(k: int) -> NDArray[np.float64] | None:
-        if k not in first:
-            r = int(rows[k])
-            got = det.retract(q[r], det.T_tcp[r], keep) if branch[r] == keep else None
-            first[k] = None if got is None else got[0]
-        return first[k]
-
-    legs, pending = 0, []
-    for a, b in zip(idx[:-1], idx[1:], strict=True):
-        if not np.any((segs >= rows[a]) & (segs < rows[b])):
-            parent[find(int(b))] = find(int(a))
-            continue
-        legs += 1
-        la, lb = leave(int(a)), leave(int(b))
-        if la is not None and lb is not None:
-            if det.direct(la, lb, keep) is not None:
-                parent[find(int(b))] = find(int(a))
-            else:
-                pending.append((int(a), int(b)))
+    trial = _trial(det, q, branch, rows, idx, keep, g)
     rm, report = None, None
-    if pending:
-        ends = sorted({k for leg in pending for k in leg})
-        pairs = [(k, first[k]) for k in ends if first[k] is not None]
+    if trial.pending and settings is not None:
+        ends = sorted({k for leg in trial.pending for k in leg})
+        pairs = [(k, trial.first[k]) for k in ends if trial.first[k] is not None]
         ref = np.vstack([q[rows[idx]], *(x for _, x in pairs)])
         rm = branch_roadmap(det, ref, keep, settings, seed)
-        _unite(rm, pairs, find, parent, [])
+        _unite(rm, pairs, g, [])
         for k in ends:  # welds outside the largest group: their other retracts, other poses
             r = int(rows[k])
             for more in (
                 lambda: retracts(det, q[r], r, keep)[1 : 1 + MORE_RETRACTS],  # noqa: B023
                 lambda: [] if alts is None else _alt_retracts(det, alts[k][1:], keep),  # noqa: B023
             ):
-                if not _in_main(k, served, find):
+                if not g.in_main(k, served):
                     got = [(k, x) for x in more()]
-                    _unite(rm, got, find, parent, pairs)
+                    _unite(rm, got, g, pairs)
                     pairs += got
         report = rm.report()
-    group = np.array([find(k) if served[k] else -1 for k in range(n)], dtype=np.int64)
+    return _weld_join(g, served, trial, report, keep if rm else -1, rm, ids)
+
+
+class _Groups:
+    """Union-find over the welds of one route (route order)."""
+
+    def __init__(self, n: int) -> None:
+        self.parent = np.arange(n)
+
+    def find(self, k: int) -> int:
+        while self.parent[k] != k:
+            self.parent[k] = self.parent[self.parent[k]]
+            k = int(self.parent[k])
+        return k
+
+    def join(self, a: int, b: int) -> None:
+        self.parent[self.find(b)] = self.find(a)
+
+    def in_main(self, k: int, served: NDArray[np.bool_]) -> bool:
+        """Whether weld ``k`` is in the largest group now."""
+        roots = [self.find(j) for j in np.flatnonzero(served)]
+        vals, counts = np.unique(roots, return_counts=True)
+        return self.find(k) == int(vals[np.argmax(counts)])
+
+
+@dataclass
+class _Trial:
+    """What the transfer trial (:func:`_trial`) found: blocked legs, the legs left for the
+    roadmap, each weld's first retract (``None``: none), the cause of each leg not joined."""
+
+    legs: int
+    pending: list[tuple[int, int]]
+    first: dict[int, NDArray[np.float64] | None]
+    cuts: dict[tuple[int, int], str]
+
+
+def _trial(
+    det: Detour,
+    q: NDArray[np.float64],
+    branch: NDArray[np.int64],
+    rows: NDArray[np.int64],
+    idx: NDArray[np.int64],
+    keep: int,
+    g: _Groups,
+) -> _Trial:
+    """The transfer trial of :func:`join_welds` over the consecutive served welds ``idx``:
+    joins in ``g`` the legs whose own motion is free (one ``path_hits`` of the whole path: the
+    sphere bound, then FCL) or whose ends' first retracts on branch ``keep`` a straight or
+    tucked-arm joint motion joins; the others are kept with their cause."""
+    zone = np.ones(max(len(q) - 1, 0), dtype=bool)
+    hits = det.checker.path_hits(q, zone) if len(idx) > 1 else []
+    segs = np.array(sorted({h.segment for h in hits}), dtype=np.int64)
+    body = {h.segment: h.body for h in hits}
+    out = _Trial(0, [], {}, {})
+
+    def leave(k: int) -> NDArray[np.float64] | None:
+        if k not in out.first:
+            r = int(rows[k])
+            got = det.retract(q[r], det.T_tcp[r], keep) if branch[r] == keep else None
+            out.first[k] = None if got is None else got[0]
+        return out.first[k]
+
+    for a, b in zip(idx[:-1], idx[1:], strict=True):
+        on = segs[(segs >= rows[a]) & (segs < rows[b])]
+        if len(on) == 0:
+            g.join(int(a), int(b))
+            continue
+        out.legs += 1
+        la, lb = leave(int(a)), leave(int(b))
+        own = f"its own motion blocked ({body[int(on[0])]})"
+        if la is None or lb is None:
+            end = "start" if la is None else "end"
+            out.cuts[(int(a), int(b))] = f"{own}, no free retract at its {end}"
+        elif det.direct(la, lb, keep) is not None:
+            g.join(int(a), int(b))
+        else:
+            out.pending.append((int(a), int(b)))
+            out.cuts[(int(a), int(b))] = f"{own}, no straight or tucked transfer"
+    return out
+
+
+def _weld_join(
+    g: _Groups,
+    served: NDArray[np.bool_],
+    trial: _Trial,
+    report: RoadmapReport | None,
+    branch: int,
+    rm: Any,
+    ids: tuple[str, ...] | None,
+) -> WeldJoin:
+    """The :class:`WeldJoin` of the groups ``g``: the largest, why each other served weld is
+    not in it, and the legs that stay split (:attr:`WeldJoin.splits`)."""
+    n = len(served)
+    name = (lambda k: ids[k]) if ids is not None else (lambda k: f"weld {k + 1} of the route order")
+    group = np.array([g.find(k) if served[k] else -1 for k in range(n)], dtype=np.int64)
     counts = np.bincount(group[group >= 0], minlength=n) if served.any() else np.zeros(n, int)
     top = int(np.argmax(counts)) if served.any() else -1
     main = (group == top) & served
     causes = tuple(
-        f"weld {k + 1} of the route order: in a group of {counts[group[k]]} weld(s), not the "
-        f"largest ({counts[top]}): no free leg, straight or tucked transfer nor roadmap "
-        "component joins them"
+        f"{name(int(k))}: in a group of {counts[group[k]]} weld(s), not the largest "
+        f"({counts[top]}): no free leg, straight or tucked transfer nor roadmap component "
+        "joins them"
         for k in np.flatnonzero(served & ~main)
     )
-    return WeldJoin(group, main, int(main.sum()), legs, report, causes, keep if rm else -1, rm)
+    splits = tuple(
+        f"{name(a)} -> {name(b)}: {why}"
+        + ("" if report is None else "; not in one roadmap component")
+        for (a, b), why in trial.cuts.items()
+        if g.find(a) != g.find(b)
+    )
+    return WeldJoin(
+        group, main, int(main.sum()), trial.legs, report, causes, branch, rm, splits=splits
+    )
 
 
 def _alt_retracts(det: Detour, T_fl: NDArray[np.float64], keep: int) -> list[NDArray]:
@@ -251,8 +333,7 @@ def _alt_retracts(det: Detour, T_fl: NDArray[np.float64], keep: int) -> list[NDA
 def _unite(
     rm: Roadmap,
     new: list[tuple[int, NDArray[np.float64]]],
-    find: Any,
-    parent: NDArray[np.int64],
+    g: _Groups,
     old: list[tuple[int, NDArray[np.float64]]],
 ) -> None:
     """Add the configurations of ``new`` ``(weld, q)`` to the roadmap and join the welds whose
@@ -268,16 +349,9 @@ def _unite(
         if c < 0:
             continue
         if c in by:
-            parent[find(k)] = find(by[c])
+            g.join(by[c], k)
         else:
             by[int(c)] = k
-
-
-def _in_main(k: int, served: NDArray[np.bool_], find: Any) -> bool:
-    """Whether weld ``k`` is in the largest group now."""
-    roots = [find(j) for j in np.flatnonzero(served)]
-    vals, counts = np.unique(roots, return_counts=True)
-    return find(k) == int(vals[np.argmax(counts)])
 
 
 class LegRoadmap:
