@@ -83,11 +83,17 @@ class TimedLegs:
         return self.head + float(self.legs.sum()) + self.weld_time * len(self.welds) + self.tail
 
 
+def timed_weld_ids(build: Any) -> dict[int, str]:
+    """``{timed row: weld id}`` of a :class:`~weldplan.robot.program.ProgramBuild`: its
+    program's weld targets named by the timed rows (:attr:`ProgramBuild.row`) they stand on."""
+    by_route = {t.row: t.joint_id for t in build.program.targets if t.kind == "weld"}
+    rows = build.row if build.row is not None else range(len(build.timing.row_times))
+    return {i: by_route[int(r)] for i, r in enumerate(rows) if int(r) in by_route}
+
+
 def timed_legs(robot: int, build: Any, welds: Sequence[str]) -> TimedLegs:
     """The legs of robot ``robot``'s :class:`~weldplan.robot.program.ProgramBuild` ``build``
     over the reach map's weld ids ``welds`` (module docstring, step 1)."""
-    from weldplan.multi.station import timed_weld_ids
-
     tm = build.timing
     ids = timed_weld_ids(build)  # every row standing on a weld, its dwell row among them
     rows = np.array([w for w in np.asarray(tm.weld_rows).tolist() if w in ids], dtype=np.intp)

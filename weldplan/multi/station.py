@@ -61,6 +61,7 @@ from typing import Any
 import numpy as np
 
 from weldplan.errors import ConfigError
+from weldplan.multi.calibrate import timed_weld_ids
 from weldplan.multi.inputs import StudyInputs, stack_inputs, study_inputs
 from weldplan.multi.problem import AllocationSettings
 from weldplan.multi.result import AllocationReport
@@ -441,14 +442,6 @@ def replay_robot(name: str, spec: Any, timing: Any, tool: Any) -> Any:
         None if mesh is None else np.asarray(mesh.faces),
         None if mesh is None else tool.flange_tcp,
     )  # fmt: skip
-
-
-def timed_weld_ids(build: Any) -> dict[int, str]:
-    """``{timed row: weld id}`` of a :class:`~weldplan.robot.program.ProgramBuild`: its
-    program's weld targets named by the timed rows (:attr:`ProgramBuild.row`) they stand on."""
-    by_route = {t.row: t.joint_id for t in build.program.targets if t.kind == "weld"}
-    rows = build.row if build.row is not None else range(len(build.timing.row_times))
-    return {i: by_route[int(r)] for i, r in enumerate(rows) if int(r) in by_route}
 
 
 def _demo_files(station: Any) -> Any:
