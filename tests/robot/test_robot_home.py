@@ -125,6 +125,12 @@ def test_the_posts_write_home_as_axis_values_and_read_them_back(builds):
     assert set(r.joints) == {"jhome"} and np.allclose(r.joints["jhome"], HOME_DEG, atol=1e-4)
     assert r.moves[0][:2] == ("MoveAbsJ", "jhome") and r.moves[-1][:2] == ("MoveAbsJ", "jhome")
     assert len(r.moves) == len(homed.program.targets)
+    # the plan's own check of what it writes: FK of every target read back (home: of its axes)
+    from weldplan.station.outputs import check_program
+
+    robot = shared_robot()
+    assert check_program("krl", {"post": src, "post_dat": dat}, homed.program, robot) < 0.01
+    assert check_program("rapid", {"post": text}, homed.program, robot) < 0.01
     _require("rapidchecker.cli")
     from pyparsing import ParseBaseException
     from rapidchecker.cli import check_file
