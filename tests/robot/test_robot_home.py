@@ -14,6 +14,7 @@ import os
 import numpy as np
 import pytest
 
+from tests.conftest import require_shared
 from tests.robot_fixtures import box_joint_route, gun_tcp, shared_robot
 from tests.route_fixtures import box_part
 from weldplan.errors import ConfigError
@@ -164,3 +165,44 @@ def test_a_robot_waits_at_home_behind_an_interlock(builds):
     src, _ = render_krl(dataclasses.replace(homed.program, signals=(set_,)))
     lines = [ln.strip() for ln in src.splitlines()]
     assert lines[-4:-1] == ["PTP XHOME", "WAIT SEC 0", f"$OUT[1] = TRUE ; {lock.name}"]
+
+
+def test_the_route_starts_and_ends_at_home_on_legs_an_independent_sampling_finds_free():
+    """The box route with the torch from BOX_BASE, home the conventional one: the joint route
+    starts and ends at home, the legs' rows are not exact and carry the first and last weld's
+    route rows, the welds' rows are those of the route without a home, and every motion of the
+    legs is free of the part and the robot itself under a dense FCL sampling of the
+    whole torch and every link (200 configurations a motion). A home out of the limits is
+    refused before any planning."""
+    from tests.robot_helpers import BOX_BASE, TORCH_TCP, down_poses
+    from tests.route_fixtures import box_route
+    from weldplan.robot import load_robot
+    from weldplan.robot.collision import RobotCollision
+    from weldplan.robot.route import plan_robot_route
+    from weldplan.robot.settings import JointRouteSettings, RobotCell, ToolOnRobot
+    from weldplan.tool import arc_torch
+
+    robot = load_robot(require_shared("robots", "kuka_kr150r3100_2", "kr150r3100_2.urdf"))
+    route = box_route()
+    poses = down_poses(route)
+    tool, cell = ToolOnRobot(TORCH_TCP, arc_torch()), RobotCell(box_part(), base=BOX_BASE)
+    plain = plan_robot_route(route, poses, robot, tool=tool, cell=cell, rng=0)
+    s = JointRouteSettings(home=tuple(np.radians(HOME_DEG)))
+    rr = plan_robot_route(route, poses, robot, tool=tool, cell=cell, settings=s, rng=0)
+    a, b = rr.stats["home"]["lead_rows"], rr.stats["home"]["trail_rows"]
+    assert a >= 1 and b >= 1 and len(rr.q) == len(plain.q) + a + b
+    assert np.allclose(rr.q[0], np.radians(HOME_DEG)) and np.array_equal(rr.q[0], rr.q[-1])
+    assert not rr.exact[:a].any() and not rr.exact[-b:].any()
+    assert set(rr.row[:a].tolist()) == {0} and set(rr.row[-b:].tolist()) == {plain.row[-1]}
+    np.testing.assert_array_equal(rr.q[a : len(rr.q) - b], plain.q)
+    assert rr.status == plain.status and rr.stats["collision_free"]
+    chk = RobotCollision(robot.with_base(rr.base), box_part(), arc_torch(), TORCH_TCP)
+    whole = set(rr.stats["whole_tool_motions"])
+    for i in [*range(a), *range(len(rr.q) - b - 1, len(rr.q) - 1)]:  # the legs' motions
+        qa, qb = rr.q[i], rr.q[i + 1]
+        assert all(chk.state_free(qa + t * (qb - qa), zone=i not in whole)
+                   for t in np.linspace(0.0, 1.0, 200))  # fmt: skip
+    with pytest.raises(ConfigError, match="home A2"):
+        bad = JointRouteSettings(home=(0.0, 0.0, 1.5, 0.0, 0.0, 0.0))
+        plan_robot_route(route, poses, robot, tool=tool, cell=cell, settings=bad, rng=0)
+
