@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -42,7 +43,7 @@ log = logging.getLogger(__name__)
 CONVENTIONAL_HOME_DEG = (0.0, -90.0, 90.0, 0.0, 0.0, 0.0)
 
 
-def check_home(robot: object, home_deg: ArrayLike, checker: object = None) -> NDArray[np.float64]:
+def check_home(robot: Any, home_deg: ArrayLike, checker: Any = None) -> NDArray[np.float64]:
     """``(6,)`` rad: the home ``home_deg`` (deg, one value per axis) of ``robot`` (a
     :class:`~weldplan.robot.model.Robot` at its base), refused with a
     :class:`~weldplan.errors.ConfigError` (field ``home``) when it has the wrong length, is
@@ -50,11 +51,11 @@ def check_home(robot: object, home_deg: ArrayLike, checker: object = None) -> ND
     (:class:`~weldplan.robot.collision.RobotCollision`, the whole tool), touches the part, the
     floor or the robot itself (the body or pair named)."""
     h = np.asarray(home_deg, dtype=np.float64).reshape(-1)
-    n = len(robot.joint_names)  # type: ignore[attr-defined]
+    n = len(robot.joint_names)
     if len(h) != n or not np.all(np.isfinite(h)):
         raise ConfigError(f"home needs {n} finite joint values (deg), got {len(h)}", field="home")
     q = np.radians(h)
-    lo, hi = robot.lower, robot.upper  # type: ignore[attr-defined]
+    lo, hi = robot.lower, robot.upper
     out = np.flatnonzero((q < lo) | (q > hi))
     if len(out):
         j = int(out[0])
@@ -64,7 +65,7 @@ def check_home(robot: object, home_deg: ArrayLike, checker: object = None) -> ND
             field="home",
         )
     if checker is not None:
-        hit = checker.states_blocked(q[None], zone=False)[0]  # type: ignore[attr-defined]
+        hit = checker.states_blocked(q[None], zone=False)[0]
         if hit is not None:
             what = hit.replace("/", " touches ") if "/" in hit else f"{hit} touches the part"
             raise ConfigError(
@@ -100,7 +101,7 @@ class HomeLegs:
 
 
 def home_legs(
-    det: object, home: NDArray[np.float64], first: tuple[NDArray, int, int, bool],
+    det: Any, home: NDArray[np.float64], first: tuple[NDArray, int, int, bool],
     last: tuple[NDArray, int, int, bool],
 ) -> HomeLegs:  # fmt: skip
     """The legs home -> ``first`` and ``last`` -> home (module docstring).
@@ -128,16 +129,16 @@ def home_legs(
 
 
 def _leg(
-    det: object, home: NDArray[np.float64], end: tuple[NDArray, int, int, bool], words: str
+    det: Any, home: NDArray[np.float64], end: tuple[NDArray, int, int, bool], words: str
 ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
     """``(rows (p + 1, 6) rad from home to the route's row, both included; zone (p,) bool per
     motion)``: the transfer from home to the clear end of the row's exit (or to the row itself
     when it is not exact or has none), then the exit reversed."""
     q, row, branch, exact = end
     q = np.asarray(q, dtype=np.float64)
-    out = det.leave(q, row, branch) if exact else None  # type: ignore[attr-defined]
+    out = det.leave(q, row, branch) if exact else None
     clear = q if out is None else np.asarray(out)[-1]
-    path = det.transfer(np.asarray(home, dtype=np.float64), clear)  # type: ignore[attr-defined]
+    path = det.transfer(np.asarray(home, dtype=np.float64), clear)
     if path is None:
         raise PlanningError(
             f"no collision-free motion {words} joint row (route row {row}): neither straight, "
