@@ -25,16 +25,18 @@
    pair under any timing (:func:`weldplan.multi.zones.resolve_zones`), each robot's program
    rebuilt with its interlock signals (:attr:`~weldplan.io.posts.program.RobotProgram.signals`),
    the schedule with the waits, and the independent replay
-   (:func:`weldplan.multi.replay.replay_station`). Conflicts no interlock can order (two robots
-   whose first rows, where each program starts, or last rows are closer than the clearance) are
-   left unordered rather than refused: the plan is returned whole, and its replay says
+   (:func:`weldplan.multi.replay.replay_station`). Every robot starts and ends at its home
+   (:func:`with_homes`, checked before any study: the homes clearance apart), so a robot whose
+   first weld is near another's waits there behind an interlock; a robot with no weld stands at
+   its home the whole cycle. Conflicts no interlock can order (a motion of one robot that meets
+   every configuration of another, e.g. its base; anything against an idle robot) are left
+   unordered rather than refused: the plan is returned whole, and its replay says
    ``ok=False`` naming the two robots and rows (the interference line too), so that a caller
    (the CLI: a partial result) reports it instead of losing the plan.
 
 The result (:class:`StationPlan`) holds each robot's :class:`~weldplan.station.pipeline.Plan`
 (its program carrying its signals), the allocation report, the studies, the schedule with the
-waits and the replay's verdict. An idle robot (no weld) is left out of the interference check:
-where it stands is not planned.
+waits and the replay's verdict.
 
 Frames: every base, study, leg time and plan is in the planning frame, one for all robots
 (:mod:`weldplan.multi.cell`). Every robot needs a ``urdf``; two given bases closer than their
@@ -359,7 +361,7 @@ def _interference(
 
     idle = _idle_at_home(station, plans)
     movers = [
-        MovingRobot(names[k], *idle[k]) if p is None else MovingRobot(
+        (MovingRobot(names[k], *idle[k]) if k in idle else None) if p is None else MovingRobot(
             names[k], p.robot.robot, p.program.timing, p.tool.tool if p.tool else None,
             p.tool.flange_tcp if p.tool else None,
         )
