@@ -4,11 +4,10 @@ bases (tests/test_multi_plan.py's), a station file written in ``tmp_path``.
 
 The fast tests are the bad inputs (one line, exit 2, naming the file and the key) and verify's
 re-run of the replay on two crossing robots (tests/multi_fixtures.py) saved by hand. The slow ones
-plan: the command line on five welds both robots reach (exit 3: the two guns at their first welds
-overlap, which no interlock can order; every file; verify re-runs the replay, agrees, exit 3
-naming the pair; a corrupted station JSON refused by name), and the library on six (weld 15 no
-robot reaches) with an interlock made by hand, written into both programs and re-checked
-against the schedule."""
+plan: the command line on five welds both robots reach (each robot from its home, its program's
+first and last motion; every file; verify re-runs the replay and agrees; a corrupted station
+JSON refused by name), and the library on six (weld 15 no robot reaches) with an interlock made
+by hand, written into both programs and re-checked against the schedule."""
 
 from __future__ import annotations
 
@@ -27,10 +26,16 @@ from tests.conftest import require_shared
 BASES = ((448.1, 95.3, 652.7, -7.5), (2450.0, -150.0, 652.7, 180.0))
 #: a demo weld neither robot reaches (A2 past its limit from both bases)
 UNREACHED = "15"
+#: deg: each robot's home, its arm turned away from the other (at the conventional home, A1 0,
+#: the two arms meet over the part)
+HOMES = ((90.0, -90.0, 90.0, 0.0, 0.0, 0.0),) * 2
 
 
-def _station_toml(folder: Path, ids, bases=BASES, extra: str = "", mesh: str | None = None):
-    """A station file in ``folder`` with the demo welds ``ids`` and a robot at each base."""
+def _station_toml(
+    folder: Path, ids, bases=BASES, extra: str = "", mesh: str | None = None, homes=HOMES
+):
+    """A station file in ``folder`` with the demo welds ``ids`` and a robot at each base, at
+    its home (``homes``; ``None``: no home key)."""
     from weldplan.io.joints import Joints, read_joints
     from weldplan.weld import demo_part
 
@@ -41,10 +46,12 @@ def _station_toml(folder: Path, ids, bases=BASES, extra: str = "", mesh: str | N
     k = [j.ids.index(i) for i in ids]
     welds = Joints(ids=tuple(ids), xyz=np.asarray(j.xyz)[k], directions=np.asarray(j.directions)[k])
     welds.to_csv(folder / "welds.csv")
+    homes = (None,) * len(bases) if homes is None else homes
     robots = "".join(
-        f'\n[[robot]]\nurdf = "{urdf}"\nbase = {list(b)}\nweld_time = 0.5\n{extra}'
-        f'\n[robot.tool]\nfile = "{gun}"\n'
-        for b in bases
+        f'\n[[robot]]\nurdf = "{urdf}"\nbase = {list(b)}\nweld_time = 0.5\n'
+        + ("" if h is None else f"home = {list(h)}\n")
+        + f'{extra}\n[robot.tool]\nfile = "{gun}"\n'
+        for b, h in zip(bases, homes, strict=True)
     )
     text = f'seed = 0\n[part]\nmesh = "{mesh or demo_part.DEMO_PART}"\nwelds = "welds.csv"\n'
     (folder / "station.toml").write_text(text + "[tool_settings]\ncone = 15.0\n" + robots)
@@ -134,7 +141,8 @@ def test_the_command_line_writes_every_robots_files_and_the_station_json(cli_run
 
     code, out = cli_run
     saved = load_station_plan(out / "route_station.json")
-    assert code == 3 and not saved.report.ours.unreached  # exit 3: the replay's, see below
+    assert not saved.report.ours.unreached and saved.replay is not None
+    assert code == (0 if saved.replay.ok else 3)  # exit 3: a replay that finds robots too close
     locks = saved.schedule.interlocks
     assert [r.name for r in saved.robots] == ["robot1", "robot2"]
     shares = [set(r.welds) for r in saved.robots]
@@ -149,12 +157,18 @@ def test_the_command_line_writes_every_robots_files_and_the_station_json(cli_run
         assert prog.name == f"route_robot{k}"
         welds = [ln.split("; weld ")[1] for ln in dat.splitlines() if "; weld " in ln]
         assert set(welds) == set(r.welds)
+        # the program starts and ends at the robot's home, its axis values as the file gives
+        assert prog.moves[0][:2] == ("PTP", "XHOME") and prog.moves[-1][:2] == ("PTP", "XHOME")
+        assert np.allclose(prog.axes["XHOME"], HOMES[k - 1], atol=1e-5)
         # the program carries its side of every interlock of the schedule, and no other signal
         mine = [("set", i.signal, i.name) for i in locks if i.first == k - 1]
         mine += [("wait", i.signal, i.name) for i in locks if i.second == k - 1]
         assert sorted(s[1:] for s in prog.signals) == sorted(mine)
-    assert saved.replay is not None and not saved.replay.ok
-    assert saved.replay.closest == (0, 0, 1, 0) and "REPLAY FAILED" in saved.interference
+    # the programs start at the homes, clear of each other: the two guns no longer stand
+    # overlapping at the cycle's start (before homes: at the programs' first welds, which no
+    # interlock can order); what the replay still finds is named
+    assert saved.replay.closest != (0, 0, 1, 0)
+    assert saved.replay.ok or "REPLAY FAILED" in saved.interference
     # --html: the station's page (both robots on one slider, the Gantt chart under it) and the
     # chart as a PNG beside it; no robot's own page
     page = (out / "route.html").read_text()
@@ -164,23 +178,26 @@ def test_the_command_line_writes_every_robots_files_and_the_station_json(cli_run
 
 
 @pytest.mark.slow
-def test_verify_of_the_station_json_re_runs_the_replay_and_names_the_pair(cli_run, capsys):
+def test_verify_of_the_station_json_re_runs_the_replay_and_agrees(cli_run, capsys):
     _, out = cli_run
     capsys.readouterr()
-    assert run_cli(["verify", str(out / "route_station.json")]) == 3
+    from weldplan.multi.saved import load_station_plan
+
+    ok = load_station_plan(out / "route_station.json").replay.ok
+    assert run_cli(["verify", str(out / "route_station.json")]) == (0 if ok else 3)
     said = capsys.readouterr()
     for name in ("allocation ok", "robot1 ok", "robot2 ok", "schedule ok"):
         assert name in said.out
-    # the re-run agrees with the record: robots too close, a partial plan naming where
-    assert "interference ok: re-run: robots closer than 5 mm" in said.out
-    assert "(robot1 row 0 / robot2 row 0)" in said.out
-    # said as robots too close, where each stands (its first weld), distance and clearance
-    assert re.search(
-        r"weldplan verify: ok, robots too close by the replay: robot1 at rest at row 0 "
-        r"\(weld \d+\) and robot2 at rest at row 0 \(weld \d+\): [0-9.]+ mm apart \(.+\), "
-        r"clearance 5 mm",
-        said.err,
-    )
+    # the re-run agrees with the record (the home legs re-checked in each robot's route, the
+    # replay re-run from the trajectory files, home to home)
+    assert "interference ok: re-run: " + ("ok over" if ok else "robots closer") in said.out
+    if not ok:
+        # said as robots too close: where each stands, the distance and the clearance
+        assert re.search(
+            r"weldplan verify: ok, robots too close by the replay: robot\d .+: [0-9.]+ mm apart "
+            r"\(.+\), clearance 5 mm",
+            said.err,
+        )
     assert "welds left out" not in said.err  # every weld is in a share
 
 
@@ -275,7 +292,9 @@ def test_an_interlock_is_written_into_both_programs_and_read_back(splan, tmp_pat
         assert [(a.action, a.signal, a.name) for a in prog.signals] == [(action, 7, lock.name)]
         ((point, act, n, name),) = mod.signals
         assert (act, n, name) == (action, 7, lock.name)
-        row = prog.targets[int(point[1:])].row  # p0005 -> target 5
+        # p0005 -> target 5; jhome: robot 1 sets it back home, robot 2 waits at home
+        at = {"set": -1, "wait": 0}[action] if point == "jhome" else int(point[1:])
+        row = prog.targets[at].row
         timed = lock.release_row if k == 0 else lock.wait_row
         assert row == int(np.asarray(plans[k].program.row)[timed])
         assert mod.resets == ([(7, lock.name)] if action == "set" else [])
@@ -293,12 +312,13 @@ def test_the_saved_station_round_trips_and_verify_checks_the_interlock(splan, tm
     assert saved.schedule.cycle_times == pytest.approx(sp.schedule.cycle_times, abs=1e-6)
     assert saved.report.ours.unreached[0].weld == UNREACHED
     v = saved.verify()
-    # left out: the weld no robot reaches, and the two robots the replay (recorded and re-run)
-    # finds too close at their first welds
-    assert v.ok and v.exit_code == 3 and v.left_out[0] == UNREACHED and len(v.left_out) == 2
-    assert re.match(
-        r"robot1 at rest at row 0 \(weld \d+\) and robot2 at rest at row 0 ", v.left_out[1]
-    )
+    # left out: the weld no robot reaches, and a pair the replay (recorded and re-run) finds
+    # too close, if any, named by where each robot is: robot 2 waits at home until robot 1 is
+    # back at its own
+    assert v.ok and v.exit_code == 3 and v.left_out[0] == UNREACHED
+    assert len(v.left_out) == (1 if sp.replay.ok else 2)
+    if not sp.replay.ok:
+        assert re.match(r"robot\d (at rest|moving)", v.left_out[1]), v.left_out[1]
     assert "1 interlock(s) hold" in v["schedule"].text
     # robot 2's wait taken out and its later activities moved up: it leaves before robot 1 is
     # ready, and only the interlock says so (its moves and welds still match its trajectory)
@@ -332,13 +352,15 @@ def test_the_summary_and_the_exit_say_what_is_left_out_and_a_failed_replay(splan
         assert f"interlocks: {sets} set, {waits} wait" in rows[f"robot {name}"]
     assert rows["station cycle"].startswith(f"{splan.schedule.cycle_time:.2f} s")
     unreached = f"1 weld(s) no robot reaches ({UNREACHED})"
-    # the guns at the two robots' first welds overlap: the replay failed, said and exit 3
-    assert rows["interference"].startswith("replay FAILED")
-    lines = station_partial(splan, plans)
-    assert lines[0] == unreached and len(lines) == 2
-    assert lines[1].startswith("the replay found robots too close") and "0.0 mm" in lines[1]
+    # the replay's verdict is said, and a failed one is a cause of exit 3
+    said = "replay ok" if splan.replay.ok else "replay FAILED"
+    assert rows["interference"].startswith(said)
     clear = ReplayVerdict(True, 5.0, 12.5, (0, 4, 1, 2), 12)
     assert station_partial(dataclasses.replace(splan, replay=clear), plans) == [unreached]
+    close = ReplayVerdict(False, 5.0, 0.0, (0, 0, 1, 0), 12, ("robot1 at rest at row 0 ...",))
+    lines = station_partial(dataclasses.replace(splan, replay=close), plans)
+    assert lines[0] == unreached and len(lines) == 2
+    assert lines[1].startswith("the replay found robots too close") and "0.0 mm" in lines[1]
 
 
 @pytest.mark.slow
@@ -348,14 +370,15 @@ def test_the_command_line_exits_3_on_a_failed_replay_alone(splan, capsys):
     from weldplan.multi.schedule import ReplayVerdict
 
     plans = robot_plans(splan)
-    assert _exit_code(splan, plans) == 3
-    assert "the replay found robots too close" in capsys.readouterr().err
+    assert _exit_code(splan, plans) == 3  # weld 15: no robot reaches it
+    capsys.readouterr()
     reached = dataclasses.replace(splan.report.ours, unreached=())
     report = dataclasses.replace(splan.report, ours=reached)
     clear = ReplayVerdict(True, 5.0, 12.5, (0, 4, 1, 2), 12)
     assert _exit_code(dataclasses.replace(splan, report=report, replay=clear), plans) == 0
     assert capsys.readouterr().err == ""
-    assert _exit_code(dataclasses.replace(splan, report=report), plans) == 3
+    close = ReplayVerdict(False, 5.0, 0.0, (0, 0, 1, 0), 12, ("robot1 at rest at row 0 ...",))
+    assert _exit_code(dataclasses.replace(splan, report=report, replay=close), plans) == 3
     (line,) = capsys.readouterr().err.splitlines()
     assert line.startswith("weldplan: the replay found robots too close")
 

@@ -65,8 +65,10 @@ def test_options_set_their_fields_and_no_flags_clear_them():
     assert (tool.cone, tool.slide, tool.order, tool.exit_check) == (12.5, False, "route", True)
     assert settings_from_args(m.CellSettings, args).approach_cone == 30.0
     robot = settings_from_args(m.RobotSettings, args)
-    assert (robot.weld_time, robot.roadmap) == (0.25, True)
+    assert (robot.weld_time, robot.roadmap, robot.home) == (0.25, True, None)
     assert args.clearance == 3.0
+    args = _subparser("plan").parse_args(argv + ["--home", "90,-90,90,0,0,0"])
+    assert settings_from_args(m.RobotSettings, args).home == (90.0, -90.0, 90.0, 0.0, 0.0, 0.0)
 
 
 @pytest.mark.parametrize(
@@ -77,6 +79,8 @@ def test_options_set_their_fields_and_no_flags_clear_them():
         ("--acc-scale", "1.5", "acc_scale must be a number in (0, 1]"),
         ("--aco", "2.5", "not an integer"),
         ("--moves", "fast", "moves must be one of linear, joint"),
+        ("--home", "0,-90,x", "not numbers"),
+        ("--home", "0,-90,nan,0,0,0", "home must be a number"),
     ],
 )
 def test_a_bad_value_is_refused_by_the_settings_own_check_naming_the_option(

@@ -419,6 +419,24 @@ def test_the_roadmap_is_one_flag_or_one_key_away(box):
     assert err.value.field == "robot.roadmap" and err.value.line == line, str(err.value)
 
 
+def test_a_robots_home_is_a_list_of_degrees_named_by_line_when_it_is_not(box):
+    import weldplan
+
+    tmp, mesh, joints, head = box
+    urdf = require_shared("robots", "kuka_kr150r3100_2", "kr150r3100_2.urdf")
+    robot = f"\n[[robot]]\nurdf = '{urdf}'\nhome = [90, -90, 90.5, 0, 0, 0]\n"
+    robot += "[robot.tool]\nbuiltin = 'arc_torch'\n"
+    filed = weldplan.load_station(_write(tmp, head + robot))
+    assert filed.robots[0].settings.home == (90.0, -90.0, 90.5, 0.0, 0.0, 0.0)
+    for value, words in (('"home"', "must be a list of degrees"), ("[0, true]", "list of degrees"),
+                         ("[0, 1e9]", r"home must be a number in \[-1000, 1000\]")):  # fmt: skip
+        bad = head + robot.replace("[90, -90, 90.5, 0, 0, 0]", value)
+        with pytest.raises(InputError, match=words) as err:
+            weldplan.load_station(_write(tmp, bad))
+        line = bad.splitlines().index(f"home = {value}") + 1
+        _located(err.value, tmp / "station.toml", line, "robot.home")
+
+
 @pytest.mark.slow
 def test_file_options_and_library_write_the_same_files_for_the_demo_with_the_gun_and_the_robot(
     tmp_path,

@@ -72,12 +72,14 @@ def _parser(cls: type, name: str) -> Callable[[str], Any]:
     t = next(f.type for f in dataclasses.fields(cls) if f.name == name)
     annotation = t if isinstance(t, str) else getattr(t, "__name__", None) or str(t)
     to: Callable[[str], Any] = {"str": str, "int": int}.get(annotation.split()[0], float)
+    if annotation.startswith("tuple"):  # numbers separated by commas, e.g. a robot's home
+        to = _numbers
 
     def parse(text: str) -> Any:
         try:
             value = to(text)
         except ValueError:
-            what = "an integer" if to is int else "a number"
+            what = "an integer" if to is int else "numbers" if "," in text else "a number"
             raise argparse.ArgumentTypeError(f"not {what}: {text!r}") from None
         try:
             cls(**{name: value})
@@ -87,6 +89,11 @@ def _parser(cls: type, name: str) -> Callable[[str], Any]:
         return value
 
     return parse
+
+
+def _numbers(text: str) -> tuple[float, ...]:
+    """``"0,-90,90"`` -> ``(0.0, -90.0, 90.0)``; ValueError on a word that is not a number."""
+    return tuple(float(v) for v in text.split(","))
 
 
 def _fmt(v: Any) -> str:

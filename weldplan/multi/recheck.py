@@ -301,13 +301,17 @@ def _where(saved: Any, text: str) -> str:
 
 def _replay_robot(saved: Any, station: Any, k: int) -> Any:
     """Robot ``k`` as the replay reads it from the files (module docstring)."""
-    from weldplan.multi.station import replay_robot
+    from weldplan.multi.station import home_timing, replay_robot
     from weldplan.robot import load_robot
     from weldplan.station.mount import mount_tool
 
     spec, robot = station.robots[k], saved.robots[k]
     if spec.base is None and robot.base is not None:  # a searched base: the plan records it
         spec = dataclasses.replace(spec, base=robot.base)
+    if robot.trajectory is None and spec.urdf is not None and spec.base is not None:
+        # an idle robot stands at its home the whole cycle, as the plan replayed it
+        arm = load_robot(spec.urdf, spec.opw)
+        return replay_robot(robot.name, spec, home_timing(spec, arm), mount_tool(spec.tool, arm))
     if robot.trajectory is None or not saved.schedule.of(k):
         return replay_robot(robot.name, spec, None, None)
     timing = file_timing(saved.schedule, k, robot.trajectory)

@@ -30,16 +30,18 @@
    pair under any timing (:func:`weldplan.multi.zones.resolve_zones`), each robot's program
    rebuilt with its interlock signals (:attr:`~weldplan.io.posts.program.RobotProgram.signals`),
    the schedule with the waits, and the independent replay
-   (:func:`weldplan.multi.replay.replay_station`). Conflicts no interlock can order (two robots
-   whose first rows, where each program starts, or last rows are closer than the clearance) are
-   left unordered rather than refused: the plan is returned whole, and its replay says
+   (:func:`weldplan.multi.replay.replay_station`). Every robot starts and ends at its home
+   (:func:`with_homes`, checked before any study: the homes clearance apart), so a robot whose
+   first weld is near another's waits there behind an interlock; a robot with no weld stands at
+   its home the whole cycle. Conflicts no interlock can order (a motion of one robot that meets
+   every configuration of another, e.g. its base; anything against an idle robot) are left
+   unordered rather than refused: the plan is returned whole, and its replay says
    ``ok=False`` naming the two robots and rows (the interference line too), so that a caller
    (the CLI: a partial result) reports it instead of losing the plan.
 
 The result (:class:`StationPlan`) holds each robot's :class:`~weldplan.station.pipeline.Plan`
 (its program carrying its signals), the allocation report, the studies, the schedule with the
-waits and the replay's verdict. An idle robot (no weld) is left out of the interference check:
-where it stands is not planned.
+waits and the replay's verdict.
 
 Frames: every base, study, leg time and plan is in the planning frame, one for all robots
 (:mod:`weldplan.multi.cell`). Every robot needs a ``urdf``; two given bases closer than their
@@ -56,6 +58,7 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -196,6 +199,72 @@ def _robots(station: Any) -> list[tuple[Any, Any, Any]]:
     return out
 
 
+def with_homes(station: Any, cell: Any, robots: list[tuple[Any, Any, Any]]) -> Any:
+    """The station with every robot's home (:attr:`~weldplan.station.model.RobotSettings.home`,
+    deg): the one its file gives, else the conventional one (:func:`home_deg`); each checked at
+    the robot's base (:func:`weldplan.robot.route.home.check_home`: its length, the joint
+    limits, the robot with its tool clear of the part, the floor and itself), and the robots at
+    their homes ``clearance`` apart (:func:`~weldplan.multi.interference.find_interference`).
+    Several robots need one each: a program that starts at a weld cannot wait for another robot
+    anywhere, nor two robots that stand too close at the cycle's start be ordered
+    (docs/station.md). Raises :class:`~weldplan.errors.InputError` naming the file, the line
+    and ``robot.home``."""
+    from weldplan.multi.cell import planning_floor
+    from weldplan.robot.collision.checker import RobotCollision
+    from weldplan.robot.route.home import check_home
+
+    specs = []
+    for k, (spec, mounted, robot) in enumerate(robots):
+        checker = RobotCollision(
+            robot, cell.part, mounted.tool, mounted.flange_tcp,
+            contact_radius=station.tool.contact_radius, floor_z=planning_floor(station),
+        )  # fmt: skip
+        try:
+            check_home(robot, home_deg(spec), checker)
+        except ConfigError as exc:
+            raise _home_error(station, k, spec, exc.message) from None
+        settings = dataclasses.replace(spec.settings, home=home_deg(spec))
+        specs.append(dataclasses.replace(spec, settings=settings))
+    _homes_apart(station, [(s, m, r) for s, (_, m, r) in zip(specs, robots, strict=True)])
+    return dataclasses.replace(station, robots=tuple(specs))
+
+
+def _home_error(station: Any, k: int, spec: Any, message: str) -> Exception:
+    """The :class:`~weldplan.errors.InputError` of robot ``k``'s home: the file, the line of its
+    ``home`` (else of its table) and the field ``robot.home``; a home not given asks for one."""
+    from weldplan.errors import InputError
+    from weldplan.station.load import key_line
+
+    given = spec.settings.home is not None
+    ask = "" if given else " (the conventional home: give robot.home)"
+    return InputError(
+        f"robot {k + 1}: {message}{ask}", path=station.source,
+        line=key_line(station.source, ("robot", k, "home") if given else ("robot", k)),
+        field="robot.home",
+    )  # fmt: skip
+
+
+def _homes_apart(station: Any, robots: list[tuple[Any, Any, Any]]) -> None:
+    """Refuse two robots that come closer than the station's clearance standing at their homes
+    (every link and tool, FCL: the planner's interference check of two rests)."""
+    from weldplan.multi.interference import InterferenceSettings, MovingRobot, find_interference
+
+    movers = [
+        MovingRobot(f"robot{k + 1}", robot, home_timing(spec, robot), mounted.tool,
+                    mounted.flange_tcp)
+        for k, (spec, mounted, robot) in enumerate(robots)
+    ]  # fmt: skip
+    found = find_interference(movers, InterferenceSettings(clearance=station.clearance))
+    if found.conflicts:
+        c = found.conflicts[0]
+        raise _home_error(
+            station, c.b, robots[c.b][0],
+            f"at its home it comes within {c.distance:.1f} mm of robot {c.a + 1} at its home "
+            f"({c.bodies}; clearance {station.clearance:g} mm): give each robot a home clear of "
+            "the others",
+        )  # fmt: skip
+
+
 def _study(cell: Any, station: Any, k: int, mounted: Any, robot: Any) -> Any:
     """Robot ``k``'s feasibility study of every weld with its own tool, at its base, in the
     planning frame (the cell's part and welds, the planning frame's floor)."""
@@ -258,6 +327,8 @@ def plan_station(
     # from here on the station holds every robot at its base, the searched ones included: the
     # interference stage, the replay and the saved station read it
     station = dataclasses.replace(station, robots=tuple(spec for spec, _, _ in robots))
+    station = with_homes(station, cell, robots)
+    robots = [(spec, m, r) for spec, (_, m, r) in zip(station.robots, robots, strict=True)]
     studies, inputs = [], []
     lift = cell.virtual_xyz - np.asarray(cell.joints.xyz)  # each weld to its virtual joint, mm
     for k, (spec, mounted, robot) in enumerate(robots):
@@ -364,8 +435,9 @@ def _interference(
     from weldplan.multi.replay import replay_station
     from weldplan.multi.zones import resolve_zones
 
+    idle = _idle_at_home(station, plans)
     movers = [
-        None if p is None else MovingRobot(
+        (MovingRobot(names[k], *idle[k]) if k in idle else None) if p is None else MovingRobot(
             names[k], p.robot.robot, p.program.timing, p.tool.tool if p.tool else None,
             p.tool.flange_tcp if p.tool else None,
         )
@@ -384,7 +456,7 @@ def _interference(
         weld_ids=[None if p is None else timed_weld_ids(p.program) for p in plans],
     )  # fmt: skip
     t = time.perf_counter()
-    verdict = replay_station(_replay_robots(station, plans, names), zones.interlocks,
+    verdict = replay_station(_replay_robots(station, plans, names, idle), zones.interlocks,
                              station.clearance)  # fmt: skip
     seconds["replay"] = time.perf_counter() - t
     md = "no pair may overlap" if np.isinf(verdict.min_distance) else (
@@ -417,13 +489,60 @@ def with_signals(plans: list[Any], interlocks: Sequence[Any], names: Sequence[st
     return out
 
 
-def _replay_robots(station: Any, plans: list[Any], names: tuple[str, ...]) -> list[Any]:
-    """The robots as the replay reads them: the station's URDF and base, the tool's mesh."""
-    return [
-        replay_robot(names[k], spec, None if p is None else p.program.timing,
-                     None if p is None else p.tool)
-        for k, (spec, p) in enumerate(zip(station.robots, plans, strict=True))
-    ]  # fmt: skip
+def _idle_at_home(station: Any, plans: list[Any]) -> dict[int, tuple[Any, Any, Any, Any]]:
+    """Per robot with no weld, ``(robot at its base, timing at home, tool mesh, flange_tcp)``:
+    it stands at its home the whole cycle (:func:`home_timing`), in the interference check
+    and the replay like any robot."""
+    from weldplan.robot import load_robot
+    from weldplan.robot.placement.reach import base_pose
+    from weldplan.station.mount import mount_tool
+
+    out = {}
+    for k, (spec, p) in enumerate(zip(station.robots, plans, strict=True)):
+        if p is None and spec.urdf is not None and spec.base is not None:
+            robot = load_robot(spec.urdf, spec.opw, base=base_pose(*spec.base))
+            mounted = mount_tool(spec.tool, robot)
+            out[k] = (robot, home_timing(spec, robot), mounted.tool, mounted.flange_tcp)
+    return out
+
+
+def home_deg(spec: Any) -> tuple[float, ...]:
+    """deg: robot ``spec``'s home in a station of several robots: its ``home``, else the
+    conventional one (:func:`with_homes` checked it at its base)."""
+    from weldplan.robot.route.home import CONVENTIONAL_HOME_DEG
+
+    return tuple(spec.settings.home or CONVENTIONAL_HOME_DEG)
+
+
+def home_timing(spec: Any, robot: Any) -> Any:
+    """The :class:`~weldplan.robot.program.TimedTrajectory` of a robot that stands at its home
+    (:func:`home_deg`) the whole cycle: one row, one rest. The live plan and ``weldplan
+    verify`` (:mod:`weldplan.multi.recheck`) build an idle robot here."""
+    from weldplan.robot.program.timing import time_route
+
+    q = np.radians(np.asarray(home_deg(spec), dtype=np.float64))[None]
+    return time_route(
+        q, robot.velocity, robot.acceleration, weld_rows=[], joint_names=robot.joint_names
+    )
+
+
+def _replay_robots(
+    station: Any, plans: list[Any], names: tuple[str, ...], idle: dict[int, Any] | None = None
+) -> list[Any]:
+    """The robots as the replay reads them: the station's URDF and base, the tool's mesh; an
+    idle robot at its home (``idle``: :func:`_idle_at_home`; default: built here)."""
+    idle = _idle_at_home(station, plans) if idle is None else idle
+    out = []
+    for k, (spec, p) in enumerate(zip(station.robots, plans, strict=True)):
+        if p is not None:
+            out.append(replay_robot(names[k], spec, p.program.timing, p.tool))
+        elif k in idle:
+            _, timing, tool, flange_tcp = idle[k]
+            at_home = SimpleNamespace(tool=tool, flange_tcp=flange_tcp)
+            out.append(replay_robot(names[k], spec, timing, at_home if tool is not None else None))
+        else:
+            out.append(replay_robot(names[k], spec, None, None))
+    return out
 
 
 def replay_robot(name: str, spec: Any, timing: Any, tool: Any) -> Any:

@@ -241,6 +241,10 @@ class JointRouteSettings:
         chosen by the welds one roadmap joins and a detour asks the roadmap of its base before
         OMPL. ``None`` (the default, docs/robot-placement.md says why): neither; :data:`ROADMAP` is
         the suggested setting.
+    home
+        ``(6,)`` rad: the robot's home configuration; the route starts and ends there, joined
+        to the first and last weld like a detour (:mod:`weldplan.robot.route.home`). ``None``
+        (the default): the route starts at its first weld and ends at its last.
     """
 
     singular_deg: float = DEFAULT_SINGULAR_DEG
@@ -252,9 +256,14 @@ class JointRouteSettings:
     replan_time_s: float = REPLAN_TIME_S
     search_top: int = SEARCH_TOP
     roadmap: RoadmapSettings | None = None
+    home: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
         from weldplan.motion.sampling import PLANNERS
+
+        if self.home is not None:
+            h = tuple(_number("home", v, -1e3, 1e3) for v in self.home)
+            object.__setattr__(self, "home", h)
 
         # the fields it shares with the base search, checked there
         PlacementSettings(self.singular_deg, self.flip_penalty, self.search_top, self.roadmap)
@@ -304,6 +313,11 @@ class ProgramSettings:
         mm/s: the constant TCP speed the cycle time is compared with.
     name
         The program's name.
+    home
+        The joint route starts and ends at the robot's home (its first and last joint rows,
+        :attr:`JointRouteSettings.home`): the program's first and last targets are ``home``
+        (a joint move), the timing runs from home to home. ``False``: the route starts at its
+        first weld, framed by an approach and a retreat.
     """
 
     moves: str = "linear"
@@ -313,8 +327,10 @@ class ProgramSettings:
     tolerance: float = DEFAULT_TOLERANCE_RAD
     tcp_speed: float = DEFAULT_TCP_SPEED
     name: str = "weldplan_route"
+    home: bool = False
 
     def __post_init__(self) -> None:
+        _flag("home", self.home)
         if self.moves not in MOVES:
             raise ConfigError(
                 f"moves must be 'linear' or 'joint', got {self.moves!r}", field="moves"

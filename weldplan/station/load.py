@@ -22,6 +22,7 @@ The file (docs/station.md)::
     [[robot]]                     # one table per robot
     urdf = "robots/kr150.urdf"    # opw, base = [x, y, z, yaw] or [robot.search]
     weld_time = 0.5               # acc_scale, vel_scale, tcp_speed, moves, cost
+    home = [0, -90, 90, 0, 0, 0]  # deg per axis: where the program starts and ends (optional)
     [robot.tool]
     file = "gun.urdf"             # or builtin = "arc_torch" with its parameters
     [robot.search]                # step, half_width, heights, extra_yaws, line
@@ -191,6 +192,14 @@ def load_station(path: str | PathLike[str]) -> m.Station:
     )  # fmt: skip
 
 
+def key_line(path: str | PathLike[str] | None, key: tuple[Any, ...]) -> int | None:
+    """The line of ``key`` (e.g. ``("robot", 1, "home")``) in the station file ``path``, for
+    an error found after loading (``None``: no file, or the key is not in it)."""
+    if path is None or not Path(path).is_file():
+        return None
+    return _Lines(Path(path).read_text(encoding="utf-8")).line(key)
+
+
 #: mm: two given bases closer than this on the floor (x, y) are the same place: two robots
 #: cannot stand there (a KR 150's foot is about 1 m across)
 MIN_BASE_SPACING = 500.0
@@ -261,7 +270,14 @@ def _robot(r: _Reader, d: Any, i: int) -> m.RobotSpec:
     r.table(d, key, _ROBOT)
     if "tool" not in d:
         raise r.error(key, "a robot needs a [robot.tool] table")
-    settings = {k: d[k] for k in _ROBOT_SETTINGS if k in d}
+    settings = {k: d[k] for k in _ROBOT_SETTINGS if k in d and k != "home"}
+    if "home" in d:  # a list: not a single value as the other settings
+        home = d["home"]
+        if not isinstance(home, list) or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) for v in home
+        ):
+            raise r.error((*key, "home"), f"must be a list of degrees, one per axis, got {home!r}")
+        settings["home"] = tuple(float(v) for v in home)
     base = d.get("base")
     if base is not None and not (isinstance(base, list) and len(base) == 4):
         raise r.error((*key, "base"), f"must be [x, y, z, yaw] (mm, degrees), got {base!r}")

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from weldplan.errors import PlanningError, WeldplanError
 from weldplan.station.model import OutputSpec
@@ -199,7 +200,8 @@ def _robot_texts(plan: Any, kinds: set[str], post: str | None, head: list[str]) 
 
 
 def check_program(post: str, texts: dict[str, str], program: Any, robot: Any) -> float:
-    """Parse the emitted program and re-solve every target by FK of the URDF chain.
+    """Parse the emitted program and re-solve every target by FK of the URDF chain (a target
+    written as axis values, the home, by FK of the values read back).
 
     Returns the largest position error (mm); raises :class:`PlanningError` past
     :data:`CHECK_MM` / :data:`CHECK_DEG`.
@@ -208,15 +210,20 @@ def check_program(post: str, texts: dict[str, str], program: Any, robot: Any) ->
 
     if post == "rapid":
         mod = parse_rapid(texts["post"])
-        frame, tool = mod.wobj, mod.tool
-        poses = [mod.targets[name][0] for _, name, _, _ in mod.moves]
+        frame, tool, points, axes = mod.wobj, mod.tool, mod.targets, mod.joints
     else:
         prog = parse_krl(texts["post"], texts["post_dat"])
-        frame, tool = prog.base, prog.tool
-        poses = [prog.points[name][0] for _, name, _, _ in prog.moves]
+        frame, tool, points, axes = prog.base, prog.tool, prog.points, prog.axes
+    names = [m[1] for m in (mod.moves if post == "rapid" else prog.moves)]
+
+    def flange(name: str) -> NDArray[np.float64]:  # in the robot base frame
+        if name in axes:
+            return np.linalg.solve(robot.base, robot.fk(np.radians(axes[name])[None])[0])
+        return frame @ points[name][0] @ np.linalg.inv(tool)
+
     Q = np.array([t.q for t in program.targets])
     T_fk = np.linalg.solve(robot.base, robot.fk(Q))  # flange in the robot base frame
-    T_prog = frame @ np.array(poses) @ np.linalg.inv(tool)
+    T_prog = np.array([flange(n) for n in names])
     mm = float(np.linalg.norm(T_fk[:, :3, 3] - T_prog[:, :3, 3], axis=1).max())
     c = (np.einsum("nij,nij->n", T_fk[:, :3, :3], T_prog[:, :3, :3]) - 1.0) / 2.0
     deg = float(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))).max())

@@ -74,14 +74,16 @@ def tool_on_robot(mounted: Any) -> ToolOnRobot:
     return ToolOnRobot(mounted.flange_tcp, mounted.tool, mounted.mass, mounted.cog)
 
 
-def route_settings(roadmap: bool) -> JointRouteSettings:
+def route_settings(roadmap: bool, home_deg: Any = None) -> JointRouteSettings:
     """The joint route's :class:`~weldplan.robot.settings.JointRouteSettings` of a station's robot:
     the defaults, with the roadmaps' work (:data:`weldplan.robot.settings.ROADMAP`) when
-    :attr:`RobotSettings.roadmap` asks for it. With :func:`program_settings`, the one place
-    where the station's :class:`RobotSettings` maps onto the robot stages' settings."""
+    :attr:`RobotSettings.roadmap` asks for it, and the home (``home_deg``, degrees; ``None``:
+    none). With :func:`program_settings`, the one place where the station's
+    :class:`RobotSettings` maps onto the robot stages' settings."""
     from weldplan.robot.settings import ROADMAP, JointRouteSettings
 
-    return JointRouteSettings(roadmap=ROADMAP if roadmap else None)
+    home = None if home_deg is None else tuple(math.radians(v) for v in home_deg)
+    return JointRouteSettings(roadmap=ROADMAP if roadmap else None, home=home)
 
 
 def program_settings(settings: RobotSettings, name: str) -> ProgramSettings:
@@ -91,7 +93,7 @@ def program_settings(settings: RobotSettings, name: str) -> ProgramSettings:
 
     return ProgramSettings(
         moves=settings.moves, weld_time=settings.weld_time, tcp_speed=settings.tcp_speed,
-        name=name,
+        name=name, home=settings.home is not None,
     )  # fmt: skip
 
 
@@ -195,7 +197,7 @@ def joint_route_stage(
     )  # fmt: skip
     rr = plan_robot_route(
         follow, poses if gun is None else gun.poses, robot, tool=tool_on_robot(mounted), cell=at,
-        settings=route_settings(kw.get("roadmap", False)), rng=kw["seed"],
+        settings=route_settings(kw.get("roadmap", False), kw["settings"].home), rng=kw["seed"],
         tcp_poses=None if gun is None else gun.tcp, zone=None if gun is None else gun.zone,
         exits=None if gun is None else gun.exits,
     )  # fmt: skip

@@ -258,6 +258,12 @@ class RobotSettings:
         Judge a searched base by the welds one joint-space roadmap joins, and ask it before
         OMPL for a blocked leg (:mod:`weldplan.robot.placement.roadmaps`; off by default: on car2_50
         it found the same base at twice the CPU time).
+    home
+        Degrees, one per axis (A1..A6): the robot's home; its route and program start and end
+        there (:mod:`weldplan.robot.route.home`). ``None``: one robot alone starts at its first
+        weld; a robot of several gets the conventional home
+        (:data:`weldplan.robot.route.home.CONVENTIONAL_HOME_DEG`) when it is free at its base
+        (docs/station.md).
     """
 
     weld_time: float = setting(
@@ -290,9 +296,23 @@ class RobotSettings:
         "PRM) joins, and ask it before OMPL for a blocked leg (off by default: slower, same "
         "answers measured)",
     )  # fmt: skip
+    home: tuple[float, ...] | None = setting(
+        None, "--home", "the robot's home, degrees per axis separated by commas (e.g. "
+        "0,-90,90,0,0,0): its route and program start and end there, the legs to and from it "
+        "planned and checked like any other (default: start at the first weld; a station of "
+        "several robots gives each the conventional home)",
+        metavar="A1,...,A6",
+    )  # fmt: skip
 
     def __post_init__(self) -> None:
         _flag("roadmap", self.roadmap)
+        if self.home is not None:
+            if isinstance(self.home, (str, bytes)) or not hasattr(self.home, "__len__"):
+                raise ConfigError(
+                    f"home must be a list of degrees, got {self.home!r}", field="home"
+                )
+            h = tuple(_number("home", v, -1e3, 1e3) for v in self.home)
+            object.__setattr__(self, "home", h)
         _number("weld_time", self.weld_time, 0.0, 3600.0)
         _number("acc_scale", self.acc_scale, 0.0, 1.0, lo_open=True)
         _number("vel_scale", self.vel_scale, 0.0, 1.0, lo_open=True)

@@ -35,6 +35,8 @@ back)::
   ``$VEL_AXIS`` 100 % (the URDF velocities the cycle time assumes).
 * the weld instruction: ``weld_template`` (placeholders ``{id}``, ``{target}``, ``{time}``),
   by default ``WAIT SEC <weld time>`` with a comment: replace with the gun's instruction.
+* home (a route that starts and ends at the robot's home): its axis values declared once as
+  ``DECL E6AXIS XHOME`` and moved to by ``PTP XHOME``, the program's first and last motion.
 * interlock signals (:attr:`RobotProgram.signals`, a station of several robots): every output
   the program sets is switched off before the first move (``$OUT[n] = FALSE``); a ``set``
   follows its (exact-stop) target and weld as ``WAIT SEC 0`` (an advance-run stop, so the
@@ -59,6 +61,7 @@ from weldplan.io.posts.program import (
     RobotProgram,
     SignalAction,
     fmt,
+    home_names,
     identifier,
     outputs_set,
     signal_notes,
@@ -139,8 +142,12 @@ def render_krl(
         f"  DECL FRAME WP_TOOL={frame_text(program.tool_frame)}",
         f"  DECL FRAME WP_BASE={frame_text(uframe @ oframe)}",
     ]
-    names = [f"XP{k:04d}" for k in range(len(tg))]
-    for n, t, s, tu in zip(names, tg, status, turn, strict=True):
+    homes = home_names(program, "XHOME")
+    names = [homes.get(k, f"XP{k:04d}") for k in range(len(tg))]
+    dat += _home_decls(program, homes)
+    for k, (n, t, s, tu) in enumerate(zip(names, tg, status, turn, strict=True)):
+        if k in homes:
+            continue
         e6 = frame_text(program.pose_in_part(t.pose))[:-1] + f", S {int(s)}, T {int(tu)}"
         e6 += ", E1 0.0, E2 0.0, E3 0.0, E4 0.0, E5 0.0, E6 0.0}"
         tag = f" ; weld {t.joint_id}" if t.kind == "weld" else f" ; {t.kind}, route row {t.row}"
@@ -180,6 +187,21 @@ def render_krl(
         src += [line for a in at.get(k, ()) for line in _signal_lines(a)]
     src += ["END", ""]
     return "\n".join(src), "\n".join(dat)
+
+
+def _home_decls(program: RobotProgram, homes: dict[int, str]) -> list[str]:
+    """``DECL E6AXIS XHOME={A1 .., ..., A6 .., E1 0.0, ...}`` once per home configuration: its
+    axis values in degrees (the URDF's joint values, the controller's axes as the posts' Status
+    and Turn take them), as KUKA declares ``XHOME``; ``PTP XHOME`` moves there."""
+    out: dict[str, str] = {}
+    for k, name in homes.items():
+        deg = np.degrees(program.targets[k].q)
+        axes = ", ".join(f"A{i + 1} {fmt(v, ANGLE_DECIMALS)}" for i, v in enumerate(deg))
+        out.setdefault(
+            name, f"  DECL E6AXIS {name}={{{axes}, E1 0.0, E2 0.0, E3 0.0, E4 0.0, E5 0.0, E6 0.0}}"
+            " ; home"
+        )  # fmt: skip
+    return list(out.values())
 
 
 def _out(a: SignalAction) -> str:

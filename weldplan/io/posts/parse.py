@@ -55,6 +55,8 @@ class RapidModule:
         default_factory=dict
     )
     moves: list[tuple[str, str, str, str]] = field(default_factory=list)  # instr, target, v, zone
+    #: ``jointtarget`` name -> ``(6,)`` axis values, deg (the home: ``MoveAbsJ``)
+    joints: dict[str, NDArray[np.float64]] = field(default_factory=dict)
     welds: list[tuple[str, str]] = field(default_factory=list)  # (after target, instruction)
     weld_time: float | None = None
     #: ``(after target, "set" | "wait", signal number, signal name)`` in program order
@@ -92,9 +94,16 @@ _RAPID = [
             r"\[9E\+09,9E\+09,9E\+09,9E\+09,9E\+09,9E\+09\]\];(?: ! (.*))?$"
         ),
     ),
+    (
+        "joints",
+        re.compile(
+            rf"^CONST jointtarget (\w+) := \[\[({_NUM}),({_NUM}),({_NUM}),({_NUM}),({_NUM}),"
+            rf"({_NUM})\],\[9E\+09,9E\+09,9E\+09,9E\+09,9E\+09,9E\+09\]\];(?: !.*)?$"
+        ),
+    ),
     ("proc", re.compile(r"^PROC \w+\((?:string id)?\)$")),
     ("conf", re.compile(r"^Conf[JL]\\On;$")),
-    ("move", re.compile(r"^(MoveJ|MoveL) (\w+),(\w+),(\w+),\w+\\WObj:=\w+;$")),
+    ("move", re.compile(r"^(MoveJ|MoveL|MoveAbsJ) (\w+),(\w+),(\w+),\w+\\WObj:=\w+;$")),
     ("waittime", re.compile(rf"^WaitTime ({_NUM});$")),
     ("setdo", re.compile(r"^SetDO (do(\d+)_\w+), ([01]);$")),
     ("waitdi", re.compile(r"^WaitDI (di(\d+)_\w+), 1;$")),
@@ -133,8 +142,11 @@ def parse_rapid(text: str, *, path: str = "<rapid>") -> RapidModule:
             mod.targets[g[0]] = (_pose_wxyz(list(g[1:8])), tuple(int(v) for v in g[8:12]))  # type: ignore[misc]
             if g[12] is not None:
                 mod.tags[g[0]] = g[12]
+        elif kind == "joints":
+            mod.joints[g[0]] = np.array([float(v) for v in g[1:7]])
         elif kind == "move":
-            if g[1] not in mod.targets or g[2] not in mod.speeds:
+            known = mod.joints if g[0] == "MoveAbsJ" else mod.targets
+            if g[1] not in known or g[2] not in mod.speeds:
                 raise InputError(f"undeclared target or speed in {line!r}", path=path, line=lineno)
             mod.moves.append(g)  # type: ignore[arg-type]
             mod.move_lines.append(lineno)
@@ -172,6 +184,8 @@ class KrlProgram:
     load_mass: float = float("nan")
     load_cog: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
     points: dict[str, tuple[NDArray[np.float64], int, int]] = field(default_factory=dict)
+    #: ``E6AXIS`` name -> ``(6,)`` axis values, deg (the home, ``XHOME``: ``PTP`` only)
+    axes: dict[str, NDArray[np.float64]] = field(default_factory=dict)
     moves: list[tuple[str, str, float, float]] = field(
         default_factory=list
     )  # instr, point, vel m/s, cdis (0: exact)
@@ -209,6 +223,14 @@ def parse_krl(src: str, dat: str, *, path: str = "<krl>") -> KrlProgram:
         ("skip", re.compile(r"^(;.*|ENDDAT|)$")),
         ("frame", re.compile(rf"^DECL FRAME (\w+)={_FRAME}\}}$")),
         (
+            "e6axis",
+            re.compile(
+                rf"^DECL E6AXIS (\w+)=\{{A1 ({_NUM}), A2 ({_NUM}), A3 ({_NUM}), A4 ({_NUM}), "
+                rf"A5 ({_NUM}), A6 ({_NUM}), E1 0\.0, E2 0\.0, E3 0\.0, E4 0\.0, E5 0\.0, "
+                r"E6 0\.0\}(?: ;.*)?$"
+            ),
+        ),
+        (
             "e6pos",
             re.compile(
                 rf"^DECL E6POS (\w+)={_FRAME}, S (\d+), T (\d+), E1 0\.0, E2 0\.0, E3 0\.0, "
@@ -232,6 +254,8 @@ def parse_krl(src: str, dat: str, *, path: str = "<krl>") -> KrlProgram:
             prog.points[g[0]] = (krl_frame(list(g[1:7])), int(g[7]), int(g[8]))
             if g[9] is not None:
                 prog.tags[g[0]] = g[9]
+        elif kind == "e6axis":
+            prog.axes[g[0]] = np.array([float(v) for v in g[1:7]])
     vel, cdis = float("nan"), 0.0
     src_rules = [
         ("def", re.compile(r"^DEF (\w+)\(\)$")),
@@ -279,7 +303,7 @@ def parse_krl(src: str, dat: str, *, path: str = "<krl>") -> KrlProgram:
         elif kind == "cdis":
             cdis = float(g[0])
         elif kind == "move":
-            if g[1] not in prog.points:
+            if g[1] not in prog.points and not (g[0] == "PTP" and g[1] in prog.axes):
                 raise InputError(f"undeclared point {g[1]}", path=f"{path}.src", line=lineno)
             prog.moves.append((g[0], g[1], vel, cdis if g[2] else 0.0))
             prog.move_lines.append(lineno)

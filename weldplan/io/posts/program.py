@@ -30,8 +30,9 @@ from weldplan.errors import PlanningError
 
 #: move types a target may have
 MOVES = ("joint", "linear")
-#: target kinds (``approach`` and ``retreat`` frame the route: the first and last virtual joints)
-KINDS = ("approach", "weld", "via", "retreat")
+#: target kinds (``approach`` and ``retreat`` frame the route: the first and last virtual joints;
+#: ``home``: the robot's home, the first and last target of a route that starts and ends there)
+KINDS = ("approach", "weld", "via", "retreat", "home")
 #: what a :class:`SignalAction` does
 SIGNAL_ACTIONS = ("set", "wait")
 
@@ -254,6 +255,24 @@ def signal_notes(
                 f"{a.row}, {peer} sets it; wiring: {peer} {o} -> this robot {i}"
             )
     return lines
+
+
+def home_names(program: RobotProgram, prefix: str) -> dict[int, str]:
+    """``{target index: name}`` of the program's ``home`` targets, written as axis values
+    (KRL ``E6AXIS``, RAPID ``jointtarget``) rather than poses: ``prefix`` for the first home
+    configuration (``XHOME``, ``jhome``), ``prefix2``... for another; the same configuration
+    (the start and the end) shares one name."""
+    names: dict[int, str] = {}
+    seen: list[tuple[NDArray[np.float64], str]] = []
+    for k, t in enumerate(program.targets):
+        if t.kind != "home":
+            continue
+        name = next((n for q, n in seen if np.array_equal(q, t.q)), None)
+        if name is None:
+            name = prefix if not seen else f"{prefix}{len(seen) + 1}"
+            seen.append((np.asarray(t.q), name))
+        names[k] = name
+    return names
 
 
 def identifier(text: str, default: str) -> str:

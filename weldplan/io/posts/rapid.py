@@ -35,6 +35,8 @@ reads back)::
   (:func:`weldplan.io.blending.rapid_zone`), ``fine`` where it is 0; weld spots are ``fine``.
 * speeds: ``speeddata`` with the target's TCP speed (mm/s, rounded up to 1 mm/s), reorientation
   500 deg/s, external axes as ABB's predefined ``v1000``.
+* home (a route that starts and ends at the robot's home): a ``jointtarget`` ``jhome`` (axis
+  values in degrees) and ``MoveAbsJ jhome``, the program's first and last motion.
 * the weld instruction: ``weld_template`` (placeholders ``{id}``, ``{target}``, ``{tool}``,
   ``{wobj}``, ``{time}``) after every weld target; the default calls the ``weld_spot`` routine
   above, which waits the weld time: replace it with the gun's own instruction (``SpotL``,
@@ -64,6 +66,7 @@ from weldplan.io.posts.program import (
     RobotProgram,
     SignalAction,
     fmt,
+    home_names,
     identifier,
     outputs_set,
     signal_notes,
@@ -129,6 +132,19 @@ def _signal_line(a: SignalAction) -> str:
     return f"SetDO {signal_do(a)}, 1;" if a.action == "set" else f"WaitDI {signal_di(a)}, 1;"
 
 
+def _home_decls(program: RobotProgram, homes: dict[int, str]) -> list[str]:
+    """``CONST jointtarget jhome := [[a1,...,a6],[9E+09 x 6]];`` once per home configuration:
+    its axis values in degrees (the URDF's joint values); ``MoveAbsJ jhome`` moves there."""
+    out: dict[str, str] = {}
+    for k, name in homes.items():
+        axes = ",".join(fmt(v, 4) for v in np.degrees(program.targets[k].q))
+        out.setdefault(
+            name, f"    CONST jointtarget {name} := [[{axes}],"
+            "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]; ! home"
+        )  # fmt: skip
+    return list(out.values())
+
+
 def speed_name(speed: float) -> tuple[str, int]:
     """The ``speeddata`` name and its TCP speed (mm/s, rounded up) for ``speed`` mm/s."""
     if not (math.isfinite(speed) and speed > 0):
@@ -180,8 +196,12 @@ def render_rapid(
     ]
     speeds = sorted({speed_name(t.speed) for t in tg}, key=lambda s: s[1])
     out += [f"    CONST speeddata {n} := [{v},{V_ORI},{V_LEAX},{V_REAX}];" for n, v in speeds]
-    names = [f"p{k:04d}" for k in range(len(tg))]
-    for name, t, c in zip(names, tg, conf, strict=True):
+    homes = home_names(program, "jhome")
+    names = [homes.get(k, f"p{k:04d}") for k in range(len(tg))]
+    out += _home_decls(program, homes)
+    for k, (name, t, c) in enumerate(zip(names, tg, conf, strict=True)):
+        if k in homes:
+            continue
         tag = f" ! weld {t.joint_id}" if t.kind == "weld" else f" ! {t.kind}, route row {t.row}"
         out.append(
             f"    CONST robtarget {name} := {_pose_text(program.pose_in_part(t.pose))[:-1]},"
@@ -191,7 +211,7 @@ def render_rapid(
     out += ["", "    PROC main()", "        ConfJ\\On;", "        ConfL\\On;"]
     out += [f"        SetDO {signal_do(a)}, 0;" for a in outputs_set(program)]
     for k, (name, t, z) in enumerate(zip(names, tg, zones, strict=True)):
-        move = "MoveJ" if t.move == "joint" else "MoveL"
+        move = "MoveAbsJ" if k in homes else "MoveJ" if t.move == "joint" else "MoveL"
         out.append(
             f"        {move} {name},{speed_name(t.speed)[0]},{z},{TOOL_NAME}\\WObj:={WOBJ_NAME};"
         )

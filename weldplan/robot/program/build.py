@@ -229,7 +229,10 @@ def robot_program(
     pts = np.array([[r["x"], r["y"], r["z"]] for r in rows], dtype=np.float64)
     _check_rows(poses, pts, at)
     kind_of = [rows[int(r)]["kind"] if X[i] and at[R[i]] == i else "via" for i, r in enumerate(R)]
-    po = _program_order(R, at, n, k, kind_of)
+    if s.home:
+        R = _home_rows(R, X, n)
+        kind_of[0] = kind_of[-1] = "home"
+    po = _program_order(R, at, n, k, kind_of, s.home)
     linear = np.zeros(len(po.order), dtype=bool)
     if s.moves == "linear":
         if checker is None:
@@ -256,7 +259,7 @@ def robot_program(
     cst = constant_speed_time(pts, len(welds), speed=s.tcp_speed, weld_time=timing.weld_time)
     if skipped:
         log.warning("the program passes %d weld(s) without welding: %s", len(skipped), skipped)
-    notes = _notes(route, len(targets), timing, cst, s.tcp_speed, c, s.moves, skipped)
+    notes = _notes(route, len(targets), timing, cst, s, c, skipped)
     program = _program(s.name, robot, targets, tool, timing.weld_time, notes)
     return ProgramBuild(program, timing, cst, float(s.tcp_speed), dev, tuple(skipped), R)
 
@@ -386,12 +389,26 @@ class _ProgramOrder:
     framed: bool
 
 
+def _home_rows(R: NDArray[np.int64], X: NDArray[np.bool_], n: int) -> NDArray[np.int64]:
+    """The route rows of a joint route that starts and ends at home
+    (:mod:`weldplan.robot.route.home`), its two home rows renamed ``-1`` (before the route) and
+    ``n`` (after it), so that a target and an interlock signal at home are not those of the
+    first or last weld; PlanningError when the first or last row is on the route."""
+    if len(R) < 2 or X[0] or X[-1]:
+        raise PlanningError("a program from home needs a joint route that starts and ends there")
+    out = R.copy()
+    out[0], out[-1] = -1, n
+    return out
+
+
 def _program_order(
-    R: NDArray[np.int64], at: NDArray[np.int64], n: int, k: int, kind_of: list[str]
-) -> _ProgramOrder:
+    R: NDArray[np.int64], at: NDArray[np.int64], n: int, k: int, kind_of: list[str],
+    home: bool = False,
+) -> _ProgramOrder:  # fmt: skip
     """Joint rows in program order and their kinds: approach (route row 1), every joint row,
-    retreat (route row ``n - 2``) when the route has at least three rows."""
-    if n < 3:
+    retreat (route row ``n - 2``) when the route has at least three rows; from ``home``, every
+    joint row (the first and last are home)."""
+    if n < 3 or home:
         return _ProgramOrder(list(range(k)), list(kind_of), False)
     order = [_first_on(R, at, 1, True), *range(k), _first_on(R, at, n - 2, False)]
     return _ProgramOrder(order, ["approach", *kind_of, "retreat"], True)
@@ -488,9 +505,8 @@ def _notes(
     n_targets: int,
     timing: TimedTrajectory,
     cst: float,
-    tcp_speed: float,
+    s: ProgramSettings,
     c: float,
-    moves: str,
     skipped: list[str],
 ) -> tuple[str, ...]:
     """The header comment lines of the program."""
@@ -500,13 +516,18 @@ def _notes(
         if skipped
         else ()
     )
+    span = (
+        "from home to home, the home legs joint moves"
+        if s.home
+        else "first weld to the end of the last, without the approach and retreat"
+    )
     return miss + (
         f"{len(route.joint_ids)} weld joints, {n_targets} targets, route length "
         f"{route.length:.2f} mm, order {'-'.join(route.order)}.",
         f"Cycle time {timing.total:.2f} s (toppra, URDF velocity and the run's acceleration "
-        f"limits, {timing.weld_time:g} s a weld; first weld to the end of the last, without the "
-        f"approach and retreat); at a constant {tcp_speed:g} mm/s TCP speed: {cst:.2f} s.",
-        f"Moves between route rows: {moves}. Speeds: the peak TCP speed of each move in the "
+        f"limits, {timing.weld_time:g} s a weld; {span}); at a constant {s.tcp_speed:g} mm/s "
+        f"TCP speed: {cst:.2f} s.",
+        f"Moves between route rows: {s.moves}. Speeds: the peak TCP speed of each move in the "
         "timed trajectory.",
         f"Zones: a linear move's via flies by within its free margin (distance to the part - "
         f"{c:g} mm clearance), else fine; joint moves stop.",

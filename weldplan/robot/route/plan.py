@@ -242,6 +242,7 @@ def plan_robot_route(
     stats = _ik_stats(placement, rb, q, exact, row_status, time.perf_counter() - t0)
     stats["floor_z"] = floor_z
     path = _JointPath(q, np.arange(len(q), dtype=np.int64), exact, branch, ())
+    det = None
     if checker is not None:
         det = Detour(
             rb, checker, T_tcp, F, s.singular_deg, s.planner, s.replan_time_s, rng,
@@ -253,6 +254,8 @@ def plan_robot_route(
             replan=s.replan, zone=own_zone,
         )  # fmt: skip
         _roadmap_stats(det, placement, stats)
+    if s.home is not None:
+        path = _with_home(det, rb, path, np.asarray(s.home), stats)
     _check_fk(rb, path.q, path.exact, T_fl, path.row, stats)
     stats["seconds_total"] = round(time.perf_counter() - t0, 3)
     return _robot_route(robot, placement.base, F, path, rows, route.order, status, detail, stats)
@@ -269,6 +272,41 @@ class _JointPath:
     exact: NDArray[np.bool_]
     branch: NDArray[np.int64]
     replanned: tuple[int, ...]
+
+
+def _with_home(
+    det: Detour | None, rb: Robot, path: _JointPath, home: NDArray, stats: dict[str, Any]
+) -> _JointPath:
+    """The joint route starting and ending at ``home`` ``(6,)`` rad
+    (:mod:`weldplan.robot.route.home`): the legs planned by ``det`` (``None``, no collision
+    check: straight joint moves), their rows not exact and labelled with the route row they
+    join; the motions checked with the whole tool go to ``stats["whole_tool_motions"]``, the
+    home to ``stats["home"]``."""
+    from weldplan.robot.route.home import HomeLegs, check_home, home_legs
+
+    q0 = check_home(rb, np.degrees(home), None if det is None else det.checker)
+    ends = [
+        (path.q[i], int(path.row[i]), int(path.branch[i]), bool(path.exact[i])) for i in (0, -1)
+    ]
+    if det is None:
+        legs = HomeLegs(q0[None], np.zeros(1, bool), q0[None], np.zeros(1, bool))
+    else:
+        legs = home_legs(det, q0, ends[0], ends[1])
+    a, b = len(legs.lead), len(legs.trail)
+    whole = stats.get("whole_tool_motions", [])
+    stats["whole_tool_motions"] = (
+        [int(i) for i in np.flatnonzero(~legs.lead_zone)]
+        + [int(i) + a for i in whole]
+        + [int(i) + a + len(path.q) - 1 for i in np.flatnonzero(~legs.trail_zone)]
+    )
+    stats["home"] = {"deg": [float(v) for v in np.degrees(q0)], "lead_rows": a, "trail_rows": b}
+    return _JointPath(
+        np.vstack([legs.lead, path.q, legs.trail]),
+        np.concatenate([np.full(a, ends[0][1]), path.row, np.full(b, ends[1][1])]),
+        np.concatenate([np.zeros(a, bool), path.exact, np.zeros(b, bool)]),
+        np.concatenate([np.full(a, -1), path.branch, np.full(b, -1)]),
+        tuple(int(i) for i in path.replanned),
+    )
 
 
 def _leg_roadmap(
