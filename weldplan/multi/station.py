@@ -16,8 +16,8 @@
    the all-branch ones;
 5. per robot with welds, the single-robot pipeline (:func:`weldplan.station.pipeline.plan`) on
    a sub-station: the same station (its part pose kept) with that robot alone at its base and
-   the welds file restricted to its share (written in the file's own units and frame beside
-   nothing: a temporary folder, removed after).
+   the welds file restricted to its share (:func:`weldplan.multi.shares.plan_shares`: in turn,
+   or side by side on a process pool or the executor given, the same plans either way).
 
 6. robot-robot interference (issue 30, item 4): the pairs of motions of two robots whose swept
    robots come closer than the station's ``clearance``
@@ -46,7 +46,6 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-import tempfile
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -194,29 +193,6 @@ def _study(cell: Any, station: Any, k: int, mounted: Any, robot: Any) -> Any:
     )  # fmt: skip
 
 
-def _welds_file(station: Any, ids: tuple[str, ...], folder: Path, k: int) -> Path:
-    """The station's welds file restricted to ``ids``, in the file's own units and frame (the
-    part frame: the sub-station places them with the station's part pose)."""
-    from weldplan.io.joints import Joints, read_joints
-    from weldplan.io.mesh import unit_scale
-
-    p = station.part
-    j = read_joints(p.welds, units=p.units)
-    keep = [j.ids.index(i) for i in ids]
-    f = unit_scale(p.units)
-    d = None if j.directions is None else np.asarray(j.directions)[keep]
-    out = folder / f"robot{k + 1}_welds.csv"
-    Joints(ids=ids, xyz=np.asarray(j.xyz)[keep] / f, directions=d).to_csv(out)
-    return out
-
-
-def _sub_station(station: Any, spec: Any, welds: Path) -> Any:
-    """The station with robot ``spec`` alone (its base fixed: :class:`~weldplan.multi.cell.
-    Layout`) and ``welds`` as its welds file; the part pose, the floor and the settings kept."""
-    part = dataclasses.replace(station.part, welds=welds)
-    return dataclasses.replace(station, part=part, robots=(spec,))
-
-
 def plan_station(
     station: Any,
     *,
@@ -229,7 +205,8 @@ def plan_station(
     :func:`weldplan.station.pipeline.plan` draws it."""
     from weldplan.multi.baselines import allocation_report
     from weldplan.multi.cell import place_robots
-    from weldplan.station.pipeline import cell_stage, plan
+    from weldplan.multi.shares import plan_shares
+    from weldplan.station.pipeline import cell_stage
 
     say = progress or (lambda stage, done, total: None)
     seconds: dict[str, float] = {}
@@ -259,23 +236,15 @@ def plan_station(
         inp.reach, inp.weld_time, inp.cost, rng=seed, settings=settings, bound_travel=inp.bound
     )
     seconds["allocation"] = time.perf_counter() - t
-    plans: list[Any] = []
-    with tempfile.TemporaryDirectory(prefix="weldplan-station-") as tmp:
-        for k, (spec, _, _) in enumerate(robots):
-            ids = report.ours.welds_of(k)
-            if not ids:
-                plans.append(None)
-                continue
-            sub = _sub_station(station, spec, _welds_file(station, ids, Path(tmp), k))
-            log.info("station: robot %d plans its %d welds", k + 1, len(ids))
-            t = time.perf_counter()
-            plans.append(plan(sub, rng=seed, executor=executor, progress=progress))
-            seconds[f"plan robot{k + 1}"] = time.perf_counter() - t
+    shares = plan_shares(station, report.ours, seed=seed, executor=executor, progress=progress)
+    seconds.update(shares.seconds)
+    plans = list(shares.plans)
     names = report.ours.robots
     plans, schedule, replay, line = _interference(station, plans, names, seconds)
     return StationPlan(
         station, seed, report, tuple(plans), tuple(studies), interference=line,
-        stats={"seconds": seconds}, schedule=schedule, replay=replay,
+        stats={"seconds": seconds, "cpu": shares.cpu, "shares": shares.ran},
+        schedule=schedule, replay=replay,
     )  # fmt: skip
 
 
