@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import functools
 import getpass
 import hashlib
 import io
@@ -248,22 +249,29 @@ def _rebuilt(cls: type, state: dict[str, Any]) -> Any:
     return obj
 
 
+@functools.cache
+def _live_types() -> tuple[type, type, type, type]:
+    """``(Tool, Robot, ReachTest, PosesResult)``, imported once."""
+    from weldplan.robot.model.arm import Robot
+    from weldplan.robot.placement.posechoice import ReachTest
+    from weldplan.station.toolstage import PosesResult
+    from weldplan.tool.model.tool import Tool
+
+    return Tool, Robot, ReachTest, PosesResult
+
+
 class _SharePickler(pickle.Pickler):
     """Pickles a share's result (module docstring, *What travels back*): the tool and robot
     models without their caches, the exit test's planner and the reach test's checker as
     ``None``."""
 
     def reducer_override(self, obj: Any) -> Any:
-        from weldplan.robot.model.arm import Robot
-        from weldplan.robot.placement.posechoice import ReachTest
-        from weldplan.station.toolstage import PosesResult
-        from weldplan.tool.model.tool import Tool
-
-        if isinstance(obj, (Tool, Robot)):
+        tool, robot, reach_test, poses = _live_types()
+        if isinstance(obj, (tool, robot)):
             return _rebuilt, (type(obj), {**vars(obj), "_cache": {}})
-        if isinstance(obj, ReachTest):
+        if isinstance(obj, reach_test):
             return _rebuilt, (type(obj), {**vars(obj), "checker": None})
-        if isinstance(obj, PosesResult):
+        if isinstance(obj, poses):
             return _rebuilt, (type(obj), {**vars(obj), "planner": None})
         return NotImplemented
 
