@@ -12,7 +12,7 @@ run (issue 30, item 6: the executor/Dask path the route's pair planning already 
   (``--dask``: a Dask ``Client.get_executor()``, or any ``concurrent.futures.Executor``), or, with
   ``station.jobs`` > 1, a local process pool of ``min(jobs, shares)`` workers. A task carries the
   sub-station (paths and settings) and its share of the welds as CSV text, so a worker needs no
-  folder of this process: it writes the share to its own temporary folder and plans it with
+  folder of this process: it writes the share to :func:`share_file` and plans it with
   ``jobs = jobs // workers`` processes (at least 1; 1 on an executor given). A worker of a remote
   Dask cluster must see the station's own files (mesh, URDF, tools) at the same paths.
 
@@ -199,8 +199,9 @@ class _Recorder:
 def run_share(
     task: ShareTask, *, executor: Executor | None = None, progress: Progress | None = None
 ) -> ShareResult:
-    """Plan one share (in this process): its welds written to a temporary folder, the
-    single-robot pipeline on its sub-station, its route's welds source made the station's."""
+    """Plan one share in this process: its welds written to :func:`share_file`, the
+    single-robot pipeline on its sub-station with ``task.jobs`` processes and ``executor`` for
+    its blocked pairs, its events named with the robot (passed on live to ``progress``)."""
     from weldplan.station.pipeline import plan
 
     rec = _Recorder(task.name, progress)
