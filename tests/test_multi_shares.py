@@ -122,6 +122,27 @@ def _two_robot_station(tmp_path: Path) -> Path:
     return toml
 
 
+class _Allocation:
+    robots = ("robot1", "robot2")
+
+    def welds_of(self, k):
+        return (("1", "5"), ("9", "13"))[k]
+
+
+def test_a_share_failing_in_a_worker_fails_the_station_with_its_own_one_line_error(tmp_path):
+    import dataclasses
+
+    import weldplan
+    from weldplan.errors import InputError
+
+    station = weldplan.load_station(_two_robot_station(tmp_path))
+    part = dataclasses.replace(station.part, mesh=tmp_path / "gone.stl")
+    station = dataclasses.replace(station, part=part, jobs=2)
+    with pytest.raises(InputError) as got:  # raised in a pool worker, re-raised here
+        sh.plan_shares(station, _Allocation(), seed=0)
+    assert "gone.stl" in str(got.value) and "\n" not in str(got.value)
+
+
 @pytest.mark.slow
 def test_a_station_planned_in_turn_and_on_a_pool_writes_the_same_files(tmp_path):
     import dataclasses
