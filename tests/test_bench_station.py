@@ -39,31 +39,36 @@ def test_the_synthetic_option_is_checked():
             bs.parse_synthetic(bad)
 
 
-def test_the_clock_gives_each_stage_of_a_station_plan_its_cpu():
+def test_the_clock_gives_each_phase_of_a_station_plan_its_cpu():
     clock = bs._StationClock()
     events = [("study", 0, 2), ("study", 1, 2), ("study", 2, 2), ("allocation", 0, 3)]
-    for k in (0, 1, 0):  # two robots' plans, each a sequence of stages; round 2 re-plans robot1
-        if k == 0 and len(events) > 4:
-            events.append(("allocation", 1, 3))
-        events.append(("plan", k, 2))
-        for stage in ("cell", "route", "robot", "program"):
-            events += [(stage, 0, 1), ("pairs", 3, 10), (stage, 1, 1)]
+    for rnd, robots in enumerate(((1, 2), (1,))):  # round 2 re-plans robot 1's new share
+        if rnd:
+            events.append(("allocation", rnd, 3))
+        events.append(("plan", 0, len(robots)))
+        for n, r in enumerate(robots, 1):  # each share's stages, named with its robot
+            for stage in ("cell", "route", "robot", "program"):
+                events += [(f"robot{r} {stage}", 0, 1), (f"robot{r} local", 3, 10),
+                           (f"robot{r} {stage}", 1, 1)]  # fmt: skip
+            events.append(("plan", n, len(robots)))
     events.append(("interference", 0, 2))
     for e in events:
-        sum(k * k for k in range(20000))  # some CPU in every stage
+        sum(k * k for k in range(20000))  # some CPU in every phase
         clock(*e)
+    sum(k * k for k in range(20000))  # the interference, after the last share
     cpu = clock.finish()
-    for key in ("cell", "study robot1", "study robot2", "allocation", "plan robot1", "plan robot2",
-                "interference"):  # fmt: skip
-        assert cpu[key] >= 0.0, key
-    for r in (1, 2):
-        assert {f"robot{r} {s}" for s in ("cell", "route", "robot", "program")} <= set(cpu)
-    assert not any("pairs" in k for k in cpu)
-    assert not any("robot3" in k for k in cpu)  # a re-plan adds to its robot's phase
+    phases = ("cell", "study robot1", "study robot2", "allocation", "shares", "interference")
+    assert set(cpu) == set(phases)
+    assert all(cpu[k] >= 0.0 for k in phases)
     # the phases cover the whole run: their sum is the CPU from start to finish
-    phases = ("cell", "study robot1", "study robot2", "allocation", "plan robot1", "plan robot2",
-              "interference")  # fmt: skip
     assert sum(cpu[k] for k in phases) == pytest.approx(bs._cpu() - clock.t0, abs=0.05)
+
+
+def test_the_jobs_option_is_checked():
+    assert bs._jobs("2") == 2
+    for bad in ("0", "-1", "x"):
+        with pytest.raises(argparse.ArgumentTypeError):
+            bs._jobs(bad)
 
 
 def test_the_page_puts_the_figures_side_by_side_and_says_what_was_not_checked():
@@ -137,3 +142,26 @@ def test_the_bench_stations_read_as_two_robots_at_given_bases():
     assert len(car2.robots) == 2 and all(r.base is not None for r in car2.robots)
     assert {r.tool.builtin for r in car2.robots} == {"arc_torch"}
     assert car2.part.welds.name == "car2_synthetic_200.csv" and car2.part_pose is None
+
+
+def test_the_car2_stations_stand_the_body_upright_with_two_and_four_robots_apart():
+    import weldplan
+    from weldplan.multi.cell import check_apart
+    from weldplan.robot import load_robot
+    from weldplan.robot.placement.reach import base_pose
+
+    require_shared("bodies", "car2.obj")
+    sizes = []
+    for f in bs.CAR2_STATIONS:
+        st = weldplan.load_station(ROOT / "examples" / f)
+        # on its wheels: the part's y turned to the cell's z, its lowest point 500 mm up
+        assert st.part_pose is not None and st.part_pose.fixture_z == 500.0
+        np.testing.assert_array_equal(st.part_pose.matrix[:3, 2], [0.0, -1.0, 0.0])
+        assert {r.tool.builtin for r in st.robots} == {"arc_torch"}
+        assert all(r.tool.params["bend_angle"] == 0.0 for r in st.robots)
+        # every base given, standing on the floor, the footprints clear of each other
+        assert all(r.base is not None and r.base[2] == 0.0 for r in st.robots)
+        robots = [(r, None, load_robot(r.urdf, r.opw, base=base_pose(*r.base))) for r in st.robots]
+        check_apart(robots)
+        sizes.append((len(st.robots), sum(1 for _ in open(st.part.welds)) - 2))
+    assert sizes == [(2, 200), (4, 400)]

@@ -148,7 +148,7 @@ def _loop(rounds: int, seed: int = 0):
     detours = (0.9, 0.0)  # robot 0 flies every leg through a raised via: far slower than modelled
     return allocate_and_plan(
         lambda travel: allocation_report(reach, wt, travel, rng=seed, settings=settings),
-        lambda r, ids: _plan(Q, r, ids, detours[r]),
+        lambda shares: {r: _plan(Q, r, ids, detours[r]) for r, ids in shares.items()},
         model,
         rounds,
     ), model
@@ -299,7 +299,9 @@ def test_a_round_that_plans_nothing_new_ends_the_loop_with_its_calibrated_report
         seen.append(travel)
         return allocation_report(reach, wt, model, rng=0, settings=AllocationSettings(moves=200))
 
-    got = allocate_and_plan(once, lambda r, ids: _plan(Q, r, ids, 0.5), model, 3)
+    got = allocate_and_plan(
+        once, lambda shares: {r: _plan(Q, r, ids, 0.5) for r, ids in shares.items()}, model, 3
+    )
     assert len(got.rounds) == 2 and got.rounds[1].planned == () and got.best == 1
     assert got.rounds[1].timed_cycle == got.rounds[0].timed_cycle
     assert got.report is not got.first

@@ -54,6 +54,9 @@ SYNTH_BASES = np.array([[-1200, -1800, 0], [1200, -1800, 0], [-1200, 1800, 0], [
 SYNTH_REACH_MM = 2600.0
 #: s a synthetic weld
 SYNTH_WELD_S = 0.5
+#: ``--car2``: car2 upright in a cell with the straight arc torch (examples/), 200 welds on two
+#: robots and 400 on four
+CAR2_STATIONS = ("car2_upright_200_2.toml", "car2_upright_400_4.toml")
 
 HELP = (
     "stations of several robots (weldplan.plan on station files): one-robot, nearest-robot, "
@@ -108,20 +111,20 @@ def _cpu() -> float:
 
 class _StationClock:
     """A ``progress`` callback for a station's :func:`weldplan.plan` that takes the CPU seconds
-    of each stage, named as :attr:`weldplan.multi.station.StationPlan.stats` names their wall
-    seconds: the cell (until the first study), each robot's study, the allocation (every
-    round's, :mod:`weldplan.multi.calibrate`) and each robot's plan (summed over the rounds
-    that plan it), whole and by stage. :func:`weldplan.multi.station.plan_station` says
-    ``("allocation", round, rounds)`` as an allocation starts, ``("plan", k, R)`` as robot
-    ``k``'s plan does and ``("interference", 0, R)`` as the robot-robot stages do (their CPU is
-    one figure, ``interference``, beside their wall seconds)."""
+    of its phases in this process, named as :attr:`weldplan.multi.station.StationPlan.stats`
+    names their wall seconds: the cell (until the first study), each robot's study, the
+    allocation (every round's, :mod:`weldplan.multi.calibrate`: from the last study or
+    ``("allocation", round, rounds)`` to ``("plan", 0, n)``, and from ``("plan", n, n)`` to the
+    next round), the robots' shares (``"shares"``, from ``("plan", 0, n)`` to ``("plan", n,
+    n)``, summed over the rounds: with a process pool, its workers' CPU too) and what follows
+    ``("interference", 0, R)`` (``"interference"``: the interference, the zones, the replay).
+    Each share's own CPU, whole and by stage, is measured where it ran
+    (:mod:`weldplan.multi.shares`) and read from the plan's ``stats["cpu"]``."""
 
     def __init__(self) -> None:
         self.t0 = _cpu()
         self.cpu: dict[str, float] = {}
-        self.robot = 0
         self.mark = self.t0
-        self.open: dict[str, float] = {}
         self.phase = "cell"
 
     def _close_phase(self, next_phase: str) -> None:
@@ -132,24 +135,16 @@ class _StationClock:
     def __call__(self, name: str, done: int, total: int) -> None:
         if name == "study":  # (study, k, R) as robot k's study starts; (study, R, R) at the end
             self._close_phase(f"study robot{done + 1}" if done < total else "allocation")
-            return
-        if name in ("allocation", "interference"):
+        elif name in ("allocation", "interference"):
             self._close_phase(name)
-            return
-        if name == "plan":
-            self.robot = done + 1
-            self._close_phase(f"plan robot{self.robot}")
-            return
-        if total != 1:
-            return
-        key = f"robot{self.robot} {name}"
-        if done == 0:
-            self.open[key] = _cpu()
-        elif key in self.open:
-            self.cpu[key] = round(self.cpu.get(key, 0.0) + _cpu() - self.open.pop(key), 2)
+        elif name == "plan" and done == total:
+            self._close_phase("allocation")
+        elif name == "plan" and done == 0:
+            self._close_phase("shares")
 
     def finish(self) -> dict[str, float]:
         self._close_phase("done")
+        self.cpu.pop("done", None)
         return self.cpu
 
 
@@ -163,15 +158,22 @@ def demo_two_robots() -> Any:
     return dataclasses.replace(st, robots=specs, name="demo-2-robots")
 
 
-def plan_row(station: Any, name: str, seed: int, pages: Path | None = None) -> StationRow:
+def plan_row(
+    station: Any, name: str, seed: int, pages: Path | None = None, jobs: int | None = None
+) -> StationRow:
     """Plan ``station`` with :func:`weldplan.plan` and measure it; with ``pages``, write its
-    station page and Gantt chart there (``<name>.html``, ``<name>_gantt.png``)."""
+    station page and Gantt chart there (``<name>.html``, ``<name>_gantt.png``) and the plan
+    (``<name>_station.json``, the robots' route JSONs beside it); with ``jobs``,
+    on that many processes (the robots' shares in parallel: :mod:`weldplan.multi.shares`)."""
     import weldplan
 
+    if jobs is not None:
+        station = dataclasses.replace(station, jobs=jobs)
     clock = _StationClock()
     t0 = time.perf_counter()
     p = weldplan.plan(station, rng=seed, progress=clock)
     wall_total, cpu = round(time.perf_counter() - t0, 2), clock.finish()
+    cpu |= {k: round(v, 2) for k, v in p.stats.get("cpu", {}).items() if k != "shares"}
     cpu_total = round(_cpu() - clock.t0, 2)
     if not hasattr(p, "schedule"):
         raise WeldplanError(f"{name}: one robot; `weldplan bench robot` measures single robots")
@@ -196,7 +198,9 @@ def plan_row(station: Any, name: str, seed: int, pages: Path | None = None) -> S
         round(sum(s.waiting), 3), len(s.interlocks),
         None if replay is None else _finite(replay.min_distance),
         None if replay is None else replay.ok, tuple(rows), wall, cpu, wall_total,
-        cpu_total, tuple(round(v, 2) for v in os.getloadavg()), p.interference,
+        cpu_total, tuple(round(v, 2) for v in os.getloadavg()),
+        f"{p.interference}; shares planned {p.stats.get('shares', 'in turn')} "
+        f"(jobs {station.jobs})",
         tuple((round(c.model_cycle, 3), round(c.timed_cycle, 3), c.planned) for c in p.rounds),
         None if rep.bound.at_study_poses is None else round(rep.bound.at_study_poses, 3),
     )  # fmt: skip
@@ -211,10 +215,12 @@ def _finite(v: float) -> float | None:
 
 
 def _write_pages(p: Any, name: str, folder: Path) -> None:
+    from weldplan.multi.saved import save_station_plan
     from weldplan.viz.gantt import gantt_png
     from weldplan.viz.station_page import station_page
 
     folder.mkdir(parents=True, exist_ok=True)
+    save_station_plan(p, folder / f"{name}_station.json")  # `weldplan verify` re-checks it
     gantt_png(p.schedule, folder / f"{name}_gantt.png", bound=p.report.bound.value,
               title=f"{name}: {len(p.schedule.robots)} robots")  # fmt: skip
     station_page(p, folder / f"{name}.html")
@@ -357,6 +363,23 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--seed", type=int, default=0, help="every station's seed (default 0)")
     p.add_argument("--pages", action="store_true",
                    help="write each planned station's page and Gantt chart to --out")  # fmt: skip
+    p.add_argument("--car2", action="store_true",
+                   help="plan the car2 stations too: upright in a cell, the straight arc "
+                   "torch, 200 welds on 2 robots and 400 on 4 (examples/car2_upright_*.toml; "
+                   "slow)")  # fmt: skip
+    p.add_argument("--jobs", type=_jobs, default=None, metavar="N",
+                   help="processes per planned station: the robots' shares in parallel "
+                   "(default: each station's own jobs)")  # fmt: skip
+
+
+def _jobs(text: str) -> int:
+    try:
+        n = int(text)
+    except ValueError:
+        n = 0
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"--jobs must be an integer >= 1, got {text!r}")
+    return n
 
 
 def run(args: argparse.Namespace) -> int:
@@ -369,9 +392,12 @@ def run(args: argparse.Namespace) -> int:
     before = conditions()
     try:
         stations = [] if args.no_demo else [(demo_two_robots(), "demo-2-robots")]
-        stations += [(load_station(f), Path(f).stem) for f in args.station]
+        files = [Path(f) for f in args.station]
+        if getattr(args, "car2", False):
+            files += [ROOT / "examples" / f for f in CAR2_STATIONS]
+        stations += [(load_station(f), f.stem) for f in files]
         for st, name in stations:
-            rows.append(plan_row(st, name, args.seed, pages))
+            rows.append(plan_row(st, name, args.seed, pages, getattr(args, "jobs", None)))
             print(f"{name}: timed cycle {rows[-1].timed:.2f} s", flush=True)
         for W, R in args.synthetic:
             rows.append(synthetic_row(W, R, args.seed))
@@ -398,4 +424,8 @@ def _argv(args: argparse.Namespace) -> list[str]:
         out.append(f"--seed {args.seed}")
     if args.pages:
         out.append("--pages")
+    if getattr(args, "car2", False):
+        out.append("--car2")
+    if getattr(args, "jobs", None) is not None:
+        out.append(f"--jobs {args.jobs}")
     return out

@@ -96,13 +96,17 @@ def _add_run_arguments(p: argparse.ArgumentParser) -> None:
         help="random seed, an integer >= 0 (default 0, or the station file's seed)",
     )
     g.add_argument(
-        "--jobs", type=int, help="processes planning local paths (default 1, or the station's)"
+        "--jobs",
+        type=int,
+        help="processes planning local paths, or a station's robots side by side (default 1, "
+        "or the station's)",
     )
     g.add_argument(
         "--dask",
         metavar="ADDR",
-        help="plan local paths on Dask: 'local' starts a LocalCluster of --jobs workers (at least "
-        "2), 'tcp://HOST:PORT' joins a running scheduler (needs the 'dask' extra)",
+        help="plan local paths (a station's robots) on Dask: 'local' starts a LocalCluster of "
+        "--jobs workers (at least 2), 'tcp://HOST:PORT' joins a running scheduler (needs the "
+        "'dask' extra)",
     )
     g.add_argument("--quiet", action="store_true", help="no progress bars and no summary on stdout")
 

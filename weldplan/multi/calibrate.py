@@ -208,7 +208,7 @@ class Calibrated:
 
 def allocate_and_plan(
     allocate_once: Callable[[NDArray[np.float64]], Any],
-    plan_share: Callable[[int, tuple[str, ...]], Any],
+    plan_shares: Callable[[dict[int, tuple[str, ...]]], dict[int, Any]],
     model: NDArray[np.float64],
     rounds: int,
 ) -> Calibrated:
@@ -218,8 +218,9 @@ def allocate_and_plan(
     ----------
     allocate_once
         ``travel (R, W, W) s -> AllocationReport``: one allocation (same seed every call).
-    plan_share
-        ``(robot, weld ids in order) -> Plan``: one robot's share planned.
+    plan_shares
+        ``{robot: weld ids in order} -> {robot: Plan}``: the round's new shares planned (in
+        turn or side by side: :func:`weldplan.multi.shares.plan_shares`).
     model
         ``(R, W, W)`` s: the leg-time model of the first round.
     rounds
@@ -236,14 +237,15 @@ def allocate_and_plan(
     for k in range(rounds):
         report = allocate_once(travel)
         first = first or report
-        plans, fresh = [], []
-        for r in range(len(report.ours.robots)):
-            ids = report.ours.welds_of(r)
-            key = (r, tuple(sorted(ids)))  # the robot's plan sequences its share itself
-            if ids and key not in cache:
-                cache[key] = plan_share(r, ids)
-                fresh.append(r)
-            plans.append(cache[key] if ids else None)
+        shares = {r: report.ours.welds_of(r) for r in range(len(report.ours.robots))}
+        # the robot's plan sequences its share itself: a share planned before is kept
+        keys = {r: (r, tuple(sorted(ids))) for r, ids in shares.items() if ids}
+        todo = {r: shares[r] for r, key in keys.items() if key not in cache}
+        if todo:
+            for r, p in plan_shares(todo).items():
+                cache[keys[r]] = p
+        fresh = sorted(todo)
+        plans = [cache[keys[r]] if r in keys else None for r in range(len(shares))]
         legs = [timed_legs(r, p.program, report.ours.welds) for r, p in enumerate(plans) if p]
         times = [0.0 if p is None else float(p.program.timing.total) for p in plans]
         out.append(CalibrationRound(report.ours.cycle_time, max(times), tuple(times), tuple(fresh)))

@@ -18,11 +18,12 @@
    branches) beside it;
 5. per robot with welds, the single-robot pipeline (:func:`weldplan.station.pipeline.plan`) on
    a sub-station: the same station (its part pose kept) with that robot alone at its base and
-   the welds file restricted to its share (written in the file's own units and frame beside
-   nothing: a temporary folder, removed after). Steps 4-5 are repeated
-   (:func:`weldplan.multi.calibrate.allocate_and_plan`, at most ``settings.rounds`` times)
-   with the planned legs' timed values in place of their model times while the station's
-   timed cycle drops; the best round is kept.
+   the welds file restricted to its share (:func:`weldplan.multi.shares.plan_shares`: in turn,
+   or side by side on a process pool or the executor given, the same plans either way).
+   Steps 4-5 are repeated (:func:`weldplan.multi.calibrate.allocate_and_plan`, at most
+   ``settings.rounds`` times) with the planned legs' timed values in place of their model
+   times while the station's timed cycle drops; the best round is kept, and a share planned
+   in an earlier round is not planned again.
 
 6. robot-robot interference (issue 30, item 4): the pairs of motions of two robots whose swept
    robots come closer than the station's ``clearance``
@@ -53,7 +54,6 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-import tempfile
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -278,29 +278,6 @@ def _study(cell: Any, station: Any, k: int, mounted: Any, robot: Any) -> Any:
     )  # fmt: skip
 
 
-def _welds_file(station: Any, ids: tuple[str, ...], folder: Path, k: int) -> Path:
-    """The station's welds file restricted to ``ids``, in the file's own units and frame (the
-    part frame: the sub-station places them with the station's part pose)."""
-    from weldplan.io.joints import Joints, read_joints
-    from weldplan.io.mesh import unit_scale
-
-    p = station.part
-    j = read_joints(p.welds, units=p.units)
-    keep = [j.ids.index(i) for i in ids]
-    f = unit_scale(p.units)
-    d = None if j.directions is None else np.asarray(j.directions)[keep]
-    out = folder / f"robot{k + 1}_welds.csv"
-    Joints(ids=ids, xyz=np.asarray(j.xyz)[keep] / f, directions=d).to_csv(out)
-    return out
-
-
-def _sub_station(station: Any, spec: Any, welds: Path) -> Any:
-    """The station with robot ``spec`` alone (its base fixed: :class:`~weldplan.multi.cell.
-    Layout`) and ``welds`` as its welds file; the part pose, the floor and the settings kept."""
-    part = dataclasses.replace(station.part, welds=welds)
-    return dataclasses.replace(station, part=part, robots=(spec,))
-
-
 def plan_station(
     station: Any,
     *,
@@ -340,14 +317,16 @@ def plan_station(
         seconds[f"study robot{k + 1}"] = time.perf_counter() - t
     say("study", len(robots), len(robots))
     inp: StudyInputs = stack_inputs(inputs, [f"robot{k + 1}" for k in range(len(robots))])
-    plans, report, rounds = _allocate_and_plan(station, robots, inp, seed, settings, executor,
-                                               progress, seconds)  # fmt: skip
+    plans, report, rounds, cpu, ran = _allocate_and_plan(
+        station, robots, inp, seed, settings, executor, progress, seconds
+    )
     names = report.ours.robots
     say("interference", 0, len(robots))
     plans, schedule, replay, line = _interference(station, plans, names, seconds)
     return StationPlan(
         station, seed, report, tuple(plans), tuple(studies), interference=line,
-        stats={"seconds": seconds}, schedule=schedule, replay=replay, rounds=rounds,
+        stats={"seconds": seconds, "cpu": cpu, "shares": ran}, schedule=schedule, replay=replay,
+        rounds=rounds,
     )  # fmt: skip
 
 
@@ -375,9 +354,11 @@ def _allocate_and_plan(
     executor: Any,
     progress: Callable[[str, int, int], None] | None,
     seconds: dict[str, float],
-) -> tuple[list[Any], AllocationReport, tuple[Any, ...]]:
+) -> tuple[list[Any], AllocationReport, tuple[Any, ...], dict[str, float], str]:
     """Steps 4-5 of the module docstring, iterated (:func:`weldplan.multi.calibrate.
-    allocate_and_plan`, ``settings.rounds``): ``(plans, the best round's report, the rounds)``.
+    allocate_and_plan`, ``settings.rounds``): ``(plans, the best round's report, the rounds,
+    CPU s of the shares, where they ran)``; each round's new shares planned by
+    :func:`weldplan.multi.shares.plan_shares`.
     The bound is computed once, over the pose-free leg bounds (:func:`_tcp_bounds`: true of
     the timed cycle whatever gun poses the robots' plans choose), with the bound over the
     study's poses beside it (``LowerBound.at_study_poses``: the planned gun poses may differ
@@ -386,9 +367,11 @@ def _allocate_and_plan(
     from weldplan.multi.bound import lower_bound
     from weldplan.multi.calibrate import allocate_and_plan
     from weldplan.multi.problem import AllocationProblem
-    from weldplan.station.pipeline import plan
+    from weldplan.multi.shares import plan_shares
 
     settings = settings or AllocationSettings()
+    cpu: dict[str, float] = {}
+    ran: list[str] = []
     say = progress or (lambda stage, done, total: None)
     t = time.perf_counter()
     bounds = []
@@ -409,21 +392,32 @@ def _allocate_and_plan(
         seconds["allocation"] += time.perf_counter() - t
         return out
 
-    with tempfile.TemporaryDirectory(prefix="weldplan-station-") as tmp:
+    def plan_fresh(shares: dict[int, tuple[str, ...]]) -> dict[int, Any]:
+        # the round's new shares, in turn or side by side (multi.shares.plan_shares)
+        got = plan_shares(station, _Shares(names, shares), seed=seed, executor=executor,
+                          progress=progress)  # fmt: skip
+        for key, v in got.seconds.items():
+            seconds[key] = seconds.get(key, 0.0) + v
+        for key, v in got.cpu.items():
+            cpu[key] = round(cpu.get(key, 0.0) + v, 2)
+        ran.append(got.ran)
+        return {k: got.plans[k] for k in shares}
 
-        def plan_share(k: int, ids: tuple[str, ...]) -> Any:
-            spec = robots[k][0]
-            say("plan", k, len(robots))
-            sub = _sub_station(station, spec, _welds_file(station, ids, Path(tmp), k))
-            log.info("station: robot %d plans its %d welds", k + 1, len(ids))
-            t = time.perf_counter()
-            out = plan(sub, rng=seed, executor=executor, progress=progress)
-            key = f"plan robot{k + 1}"
-            seconds[key] = seconds.get(key, 0.0) + time.perf_counter() - t
-            return out
+    names = tuple(f"robot{k + 1}" for k in range(len(robots)))
+    got = allocate_and_plan(allocate_once, plan_fresh, inp.model, settings.rounds)
+    return list(got.plans), got.report, got.rounds, cpu, ", ".join(dict.fromkeys(ran))
 
-        got = allocate_and_plan(allocate_once, plan_share, inp.model, settings.rounds)
-    return list(got.plans), got.report, got.rounds
+
+@dataclass(frozen=True)
+class _Shares:
+    """The shares one allocate-plan round plans (:func:`weldplan.multi.shares.plan_shares`
+    reads ``robots`` and ``welds_of``): the robots whose share is new, none for the others."""
+
+    robots: tuple[str, ...]
+    shares: dict[int, tuple[str, ...]]
+
+    def welds_of(self, k: int) -> tuple[str, ...]:
+        return self.shares.get(k, ())
 
 
 def _interference(
