@@ -8,7 +8,7 @@ from conftest import require_shared
 from scipy.sparse.csgraph import minimum_spanning_tree
 
 from weldplan.io.tsplib import read_tsplib
-from weldplan.optim.discrete.bounds import one_tree_bound
+from weldplan.optim.discrete.bounds import one_tree, one_tree_bound
 from weldplan.optim.discrete.sequence import solve_sequence
 
 
@@ -37,6 +37,18 @@ def test_fewer_iterations_give_a_weaker_but_valid_bound():
     weak, strong = one_tree_bound(D, max_iter=1), one_tree_bound(D, max_iter=300)
     assert weak == pytest.approx(minimum_spanning_tree(D).sum())  # pi = 0: the MST + 0 + 0
     assert strong > 1.02 * weak
+
+
+def test_a_spent_cpu_cap_is_reported_and_the_bound_stays_valid():
+    X = np.random.default_rng(3).uniform(0, 100, (60, 2))
+    D = np.linalg.norm(X[:, None] - X[None], axis=-1)
+    free = one_tree(D)
+    assert not free.clock_stopped and 1 < free.iterations <= 300
+    assert free.bound == one_tree_bound(D)  # the float API is the same ascent
+    capped = one_tree(D, max_seconds=0.0)  # one iteration (a finite bound), then the cap
+    assert capped.clock_stopped and capped.iterations == 1
+    assert capped.bound == pytest.approx(minimum_spanning_tree(D).sum())
+    assert not one_tree(D, max_seconds=600.0).clock_stopped
 
 
 @pytest.mark.parametrize("name", ["eil51", "berlin52", "st70"])

@@ -116,6 +116,25 @@ def test_bound_of_planned_legs_on_a_larger_cell_is_a_1tree_bound_below_the_route
     )
 
 
+def test_a_spent_refinement_cap_is_named_and_marks_the_route_not_reproducible(cell):
+    from weldplan.station.summary import clock_caps
+
+    free = plan_route(cell, config=PlanConfig(pairs="all"), rng=0)
+    assert free.stats["clock_stops"] == {
+        "refine_pairs": [], "lower_bound": False, "bound_planned": False,
+    }  # fmt: skip
+    assert clock_caps(free) == []
+    # a zero CPU cap: every refinement that has rounds to run is stopped by it
+    starved = plan_route(cell, config=PlanConfig(pairs="all", aco={"refine_budget": 0.0}), rng=0)
+    refined = sorted(k for k, v in starved.stats["local_paths"].items() if v["method"] == "exact")
+    pairs = starved.stats["clock_stops"]["refine_pairs"]
+    assert pairs and set(pairs) <= set(refined)
+    assert clock_caps(starved) == [
+        f"{len(pairs)} local path refinement(s) stopped by their CPU cap ("
+        + ", ".join(pairs[:5]) + (", ..." if len(pairs) > 5 else "") + ")"
+    ]  # fmt: skip
+
+
 def test_same_seed_same_route_and_executor_does_not_matter(cell):
     cfg = PlanConfig(pairs="all", aco={"n_iterations": 3, "n_ants": 4})
     a = plan_route(cell, config=cfg, rng=3)

@@ -89,6 +89,11 @@ def test_a_starved_budget_stops_at_the_shortcut(cube: CollisionModel) -> None:
     assert starved.length == pytest.approx(starved.shortcut_length)
     assert starved.length > full.length * 1.05
     assert cube.path_free(starved.points, R, method="fcl")
+    # the cap that cut it is said, so the route can be marked not reproducible; the work
+    # bounds alone (no cap, or one never reached) are not
+    assert starved.clock_stopped
+    assert not full.clock_stopped
+    assert not refine_path(detour(), cube, R, time_budget=60.0, **kw).clock_stopped
 
 
 def test_refined_path_touches_the_clearance(cube: CollisionModel) -> None:

@@ -1,9 +1,10 @@
 """Reproducibility (issue 27): the same command, inputs and seed write the same files.
 
-A station with the robot is planned twice, each in its own process (no shared cache, no shared
-random state), and every file the runs write is compared byte for byte, except the timings
-file, which holds the run's measured seconds and nothing else (:func:`weldplan.io.export.
-split_timings`).
+A station is planned twice, each in its own process (no shared cache, no shared random state,
+another ``PYTHONHASHSEED``; the point-tip route also once starved of CPU, pinned to one core
+beside a busy process), and every file the runs write is compared byte for byte, except the
+timings file, which holds the run's measured seconds and nothing else
+(:func:`weldplan.io.export.split_timings`).
 """
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ from __future__ import annotations
 import json
 import os
 import re
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -63,6 +65,70 @@ def test_two_runs_in_separate_processes_write_the_same_bytes(tmp_path):
     assert "seconds" not in json.loads((tmp_path / "a" / "route.json").read_text())["stats"]
 
 
+def _fin_station(folder: Path) -> tuple[Path, Path]:
+    """A 300 x 240 mm plate with a 80 mm fin across it and 40 spots, 20 each side: above
+    Held-Karp size, so the route runs the seeded nearest neighbour + polish, its warm and gap
+    rounds, the 1-tree bounds and the local planner (A*, refinement) on the pairs across the
+    fin."""
+    import numpy as np
+    import trimesh
+
+    plate = trimesh.creation.box(extents=(300.0, 240.0, 10.0))
+    plate.apply_translation((0.0, 0.0, -5.0))
+    fin = trimesh.creation.box(extents=(10.0, 240.0, 80.0))
+    fin.apply_translation((0.0, 0.0, 40.0))
+    trimesh.util.concatenate([plate, fin]).export(folder / "part.stl")
+    spots = [
+        (s * x, y + 7 * s) for s in (-1, 1) for y in np.linspace(-100, 100, 10) for x in (40, 110)
+    ]
+    rows = ["id,x,y,z,nx,ny,nz"] + [
+        f"{k},{x:.1f},{y:.1f},0.0,0,0,1" for k, (x, y) in enumerate(spots, 1)
+    ]
+    (folder / "joints.csv").write_text("\n".join(rows) + "\n")
+    return folder / "part.stl", folder / "joints.csv"
+
+
+def _busy_core(core: int) -> subprocess.Popen:
+    """A process spinning on ``core`` (the CPU-starved run shares it)."""
+    code = f"import os\nos.sched_setaffinity(0, {{{core}}})\nwhile True:\n    pass\n"
+    return subprocess.Popen([sys.executable, "-c", code])
+
+
+def _plan_route(folder: Path, part: Path, joints: Path, hashseed: int, core: int | None):
+    folder.mkdir()
+    argv = [sys.executable, "-m", "weldplan", "plan", str(part), str(joints), "-o", "route.csv",
+            "--json", "route.json", "--seed", "5"]  # fmt: skip
+    if core is not None:
+        argv = ["taskset", "-c", str(core), *argv]
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "PYTHONHASHSEED": str(hashseed)}
+    return subprocess.run(argv, cwd=folder, env=env, capture_output=True, text=True, timeout=600)
+
+
+@pytest.mark.slow
+def test_the_route_is_the_same_bytes_under_another_hash_seed_and_starved_of_cpu(tmp_path):
+    if shutil.which("taskset") is None or not hasattr(os, "sched_setaffinity"):
+        pytest.skip("needs taskset and sched_setaffinity (Linux)")
+    part, joints = _fin_station(tmp_path)
+    a = _plan_route(tmp_path / "a", part, joints, hashseed=1, core=None)
+    core = min(os.sched_getaffinity(0))
+    busy = _busy_core(core)
+    try:
+        b = _plan_route(tmp_path / "b", part, joints, hashseed=2, core=core)
+    finally:
+        busy.kill()
+        busy.wait()
+    for r in (a, b):
+        assert r.returncode == 0, r.stderr
+        assert re.search(r"^reproducible +yes", r.stdout, re.M), r.stdout
+    stats = json.loads((tmp_path / "a" / "route.json").read_text())["stats"]
+    assert stats["sequence_method"].endswith("+polish") and stats["pairs_planned"] > 0
+    assert stats["bound_planned_method"] == "1-tree" and stats["gap_rounds"]["rounds"] >= 1
+    assert stats["clock_stops"] == {"refine_pairs": [], "lower_bound": False,
+                                    "bound_planned": False}  # fmt: skip
+    for name in ("route.csv", "route.json"):
+        assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes(), name
+
+
 def _route(**kw):
     base = {"stats": {"sequence_method": "nn+polish"}, "settings": {}, "tool": {}}
     base.update(kw)
@@ -88,6 +154,16 @@ def test_the_summary_names_every_clock_cap_and_nothing_else():
     tool["robot"]["stats"]["ompl"]["clock"] = 0.0
     tool["transitions"]["stats"]["se3_runs"][1]["clock"] = False
     assert clock_caps(_route(tool=tool)) == []
+    # the route stage's CPU safety nets, once spent (Route.stats["clock_stops"])
+    stops = {"refine_pairs": [f"{k}-{k + 1}" for k in range(7)], "lower_bound": False,
+             "bound_planned": True}  # fmt: skip
+    stats = {"sequence_method": "nn+polish", "clock_stops": stops}
+    assert clock_caps(_route(stats=stats)) == [
+        "7 local path refinement(s) stopped by their CPU cap (0-1, 1-2, 2-3, 3-4, 4-5, ...)",
+        "the planned-leg 1-tree bound stopped by its CPU cap",
+    ]
+    stops.update(refine_pairs=[], bound_planned=False)
+    assert clock_caps(_route(stats=stats)) == []
 
 
 def test_the_ompl_local_planner_is_named_a_clock_cap_when_it_planned_a_pair():

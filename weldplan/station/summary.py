@@ -94,8 +94,9 @@ def clock_caps(route: Any) -> list[str]:
     command may write other files (empty: every search was budgeted by work and seeded).
 
     Read from the route's figures: the sequencer (fast-tsp has no seed; a ``--sequence-time``
-    budget), a clock budget of the local planner, the gun's SE(3) re-plans and the robot's
-    joint-space transfers that the clock safety net stopped."""
+    budget), a clock budget of the local planner, the route stage's CPU-time safety nets that
+    were spent (a pair's refinement, the 1-tree bounds: ``stats["clock_stops"]``), the gun's
+    SE(3) re-plans and the robot's joint-space transfers that the clock safety net stopped."""
     s, cfg = route.stats, route.settings
     caps = []
     if str(s.get("sequence_method", "")).startswith("fast-tsp"):
@@ -109,6 +110,7 @@ def clock_caps(route: Any) -> list[str]:
         from weldplan.weld.local_ompl import DEFAULT_TIME_S
 
         caps.append(f"the local paths of --planner ompl had a clock budget ({DEFAULT_TIME_S:g} s)")
+    caps += _route_clock_stops(s.get("clock_stops") or {})
     tr = _tool_route(route)
     runs = (tr.transitions.stats.get("se3_runs") or []) if tr.transitions is not None else []
     n = sum(bool(r.get("clock")) for r in runs)
@@ -117,6 +119,19 @@ def clock_caps(route: Any) -> list[str]:
     ompl = (tr.robot.route.stats.get("ompl") or {}) if tr.robot is not None else {}
     if ompl.get("clock"):
         caps.append(f"{int(ompl['clock'])} joint-space transfer(s) stopped by the clock")
+    return caps
+
+
+def _route_clock_stops(stops: dict[str, Any]) -> list[str]:
+    """The route stage's CPU-time safety nets that were spent (``Route.stats["clock_stops"]``)."""
+    caps = []
+    pairs = stops.get("refine_pairs") or []
+    if pairs:
+        shown = ", ".join(pairs[:5]) + (", ..." if len(pairs) > 5 else "")
+        caps.append(f"{len(pairs)} local path refinement(s) stopped by their CPU cap ({shown})")
+    for key, what in (("lower_bound", "straight-line"), ("bound_planned", "planned-leg")):
+        if stops.get(key):
+            caps.append(f"the {what} 1-tree bound stopped by its CPU cap")
     return caps
 
 

@@ -250,9 +250,11 @@ def _refine_inner(
     checks: _Checks,
     clearance: float,
     prm: LocalParams,
+    stats: dict[str, Any],
 ) -> tuple[NDArray[np.float64], bool]:
     """:func:`weldplan.weld.refine.refine_path` on the path between the virtual joints, its
-    checks and final check through python-fcl (counted in ``checks``)."""
+    checks and final check through python-fcl (counted in ``checks``); a spent CPU cap is
+    counted in ``stats["refine_clock_stops"]``."""
     from weldplan.weld.refine import RefineSettings, refine_path
 
     rp = refine_path(
@@ -263,6 +265,7 @@ def _refine_inner(
     )  # fmt: skip
     if not rp.refined:
         log.debug("refinement kept the grid path: %s", rp.status)
+    stats["refine_clock_stops"] = stats.get("refine_clock_stops", 0) + int(rp.clock_stopped)
     return np.asarray(rp.points), rp.refined
 
 
@@ -401,7 +404,7 @@ def plan_local_path(
     refined = False
     classes, second = 1, False
     if prm.refine:
-        inner, refined = _refine_inner(inner, collision, checks, grid.clearance, prm)
+        inner, refined = _refine_inner(inner, collision, checks, grid.clearance, prm, stats)
         # no path is shorter than the straight segment: when the refined path is within
         # CLASS_GAIN of it, another class cannot gain more than that and is not searched
         near = polyline_length(inner) <= (1.0 + CLASS_GAIN) * float(np.linalg.norm(vg - vs))
@@ -460,7 +463,7 @@ def _second_class(
     if not second_class_wins(so_first, so, prm.class_slack):
         return None
     inner, refined = _refine_inner(inner, collision=checks.collision, checks=checks,
-                                   clearance=grid.clearance, prm=prm)  # fmt: skip
+                                   clearance=grid.clearance, prm=prm, stats=stats)  # fmt: skip
     length = polyline_length(inner)
     log.debug("second class: %.3f mm (first %.3f mm)", length, best)
     if not length < best - 1e-6:

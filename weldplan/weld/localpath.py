@@ -297,6 +297,10 @@ class LocalPath:
         (:mod:`weldplan.weld.homotopy`) refined a candidate, else 1.
     second_class
         The path kept is the second-class candidate (it refined shorter than the first route).
+    refine_clock_stops
+        Refinements of this pair (first and second class) whose CPU-time cap
+        (:attr:`LocalParams.refine_budget`) was spent: the path may then depend on the machine
+        (:attr:`weldplan.weld.refine.RefinedPath.clock_stopped`); 0 when reproducible.
     """
 
     points: NDArray[np.float64]
@@ -323,6 +327,7 @@ class LocalPath:
     history: tuple[float, ...] = ()
     classes: int = 1
     second_class: bool = False
+    refine_clock_stops: int = 0
 
     def __post_init__(self) -> None:
         pts = np.array(self.points, dtype=np.float64).reshape(-1, 3)

@@ -257,21 +257,29 @@ def straight_lower_bound(xyz: NDArray[np.float64]) -> tuple[float, str]:
     (every open path is a spanning tree) and typically within 1-2 % of the optimum where the
     spanning tree is 10 % below it.
     """
+    bound, method, _ = _straight_bound(xyz)
+    return bound, method
+
+
+def _straight_bound(xyz: NDArray[np.float64]) -> tuple[float, str, bool]:
+    """:func:`straight_lower_bound` and whether its CPU-time cap stopped the 1-tree ascent."""
     n = len(xyz)
     if n < 2:
-        return 0.0, "trivial"
+        return 0.0, "trivial", False
     D = np.linalg.norm(xyz[:, None, :] - xyz[None, :, :], axis=-1)
     if n <= LOWER_BOUND_EXACT_MAX:
         from weldplan.optim.discrete.sequence import solve_sequence
 
-        return float(solve_sequence(D, method="exact").cost), "held-karp"
+        return float(solve_sequence(D, method="exact").cost), "held-karp", False
     from scipy.sparse.csgraph import minimum_spanning_tree
 
-    from weldplan.optim.discrete.bounds import one_tree_bound
+    from weldplan.optim.discrete.bounds import one_tree
 
     mst = float(minimum_spanning_tree(D).sum())
-    tree = one_tree_bound(D, open_path=True, max_seconds=LOWER_BOUND_SECONDS)
-    return (tree, "1-tree") if tree > mst else (mst, "mst")
+    tree = one_tree(D, open_path=True, max_seconds=LOWER_BOUND_SECONDS)
+    if tree.bound > mst:
+        return tree.bound, "1-tree", tree.clock_stopped
+    return mst, "mst", False
 
 
 def plan_route(
@@ -377,8 +385,9 @@ def _plan(
     order = list(seq.order)
     legs = _legs(work, order)
     t0 = time.perf_counter()
-    lb, lb_method = straight_lower_bound(work.P)
+    lb, lb_method, lb_clock = _straight_bound(work.P)
     bounds = _route_bounds(work, seq)
+    bounds["clock_stops"] = _clock_stops(work, lb_clock, bounds.pop("bound_planned_clock"))
     seconds["lower_bound"] = time.perf_counter() - t0
     seconds["total"] = time.perf_counter() - t_start
     route = Route(
@@ -457,24 +466,39 @@ def _route_bounds(work: PairPlanning, seq: Any) -> dict[str, Any]:
     # bounds every route built from this planner's local paths, the all-pairs route included.
     Cb = C.copy()
     Cb[iu, ju] = Cb[ju, iu] = np.where(np.isfinite(C[iu, ju]), C[iu, ju], est)
+    clock = False
     if n < 2:
         bound_planned, bound_planned_method = 0.0, "trivial"
     elif n <= LOWER_BOUND_EXACT_MAX:
         bound_planned = float(solve_sequence(Cb, method="exact").cost)
         bound_planned_method = "held-karp"
     else:
-        from weldplan.optim.discrete.bounds import one_tree_bound
+        from weldplan.optim.discrete.bounds import one_tree
 
-        bound_planned = one_tree_bound(
-            Cb, open_path=True, upper=float(seq.cost), max_seconds=LOWER_BOUND_SECONDS
-        )
+        tree = one_tree(Cb, open_path=True, upper=float(seq.cost), max_seconds=LOWER_BOUND_SECONDS)
+        bound_planned, clock = tree.bound, tree.clock_stopped
         bound_planned_method = "1-tree"
     return {
         "bound_with_approaches": bound_appr,
         "bound_virtual": bound_virtual,
         "bound_planned": bound_planned,
         "bound_planned_method": bound_planned_method,
+        "bound_planned_clock": clock,
     }
+
+
+def _clock_stops(work: PairPlanning, lower_bound: bool, bound_planned: bool) -> dict[str, Any]:
+    """Where a CPU-time safety net of the route stage stopped work before its work bounds
+    (``Route.stats["clock_stops"]``): the pairs whose refinement spent its cap
+    (:attr:`~weldplan.weld.localpath.LocalParams.refine_budget`) and the 1-tree bounds cut at
+    :data:`LOWER_BOUND_SECONDS`. All zero / False: the route and its figures do not depend on
+    the machine's speed or load."""
+    pairs = sorted(
+        f"{work.ids[work.iu[p]]}-{work.ids[work.ju[p]]}"
+        for p, lp in work.paths.items()
+        if getattr(lp, "refine_clock_stops", 0)
+    )
+    return {"refine_pairs": pairs, "lower_bound": lower_bound, "bound_planned": bound_planned}
 
 
 def _settings(cell: Any, config: PlanConfig, clearance: float) -> dict[str, Any]:

@@ -133,6 +133,10 @@ class RefinedPath:
         False when the input came back unchanged (see ``status``).
     status
         One line: what happened.
+    clock_stopped
+        The CPU-time cap (``time_budget``) was spent when the vertex optimisation ended: it
+        may have stopped it, so the path may depend on the machine's speed and load (a safety
+        net the caller reports; the work bounds are the rounds and sweeps).
     """
 
     points: FloatArray
@@ -144,6 +148,7 @@ class RefinedPath:
     seconds: float
     refined: bool
     status: str
+    clock_stopped: bool = False
 
     def __post_init__(self) -> None:
         pts = np.array(self.points, dtype=np.float64)
@@ -495,11 +500,13 @@ def refine_path(
     L0 = polyline_length(P)
     free = _Counter(check or obstacle.segments_free, float(clearance) + float(margin))
 
+    stopped = False  # set once the vertex optimisation has run
+
     def result(Q: FloatArray, Ls: float, sweeps: int, refined: bool, status: str) -> RefinedPath:
         return RefinedPath(
             points=Q, length=polyline_length(Q), input_length=L0, shortcut_length=Ls,
             checks=free.n, sweeps=sweeps, seconds=time.perf_counter() - t0, refined=refined,
-            status=status,
+            status=status, clock_stopped=stopped,
         )  # fmt: skip
 
     if len(P) < 3:
@@ -520,6 +527,10 @@ def refine_path(
             S, free, obstacle.distance, levels=st.levels, max_sweeps=st.max_sweeps, tol=st.tol,
             deadline=deadline,
         )  # fmt: skip
+    # the cap is a safety net: say when it was spent (it may have cut the rounds short)
+    stopped = deadline is not None and time.thread_time() >= deadline
+    if stopped:
+        log.info("refinement: the %.3g s CPU cap was spent (%d rounds)", time_budget, sweeps)
     Q[0], Q[-1] = P[0], P[-1]
     check = final_check or obstacle.segments_free
     final = _Counter(check, float(clearance))

@@ -20,9 +20,30 @@ gap is measured against a bound that means something.
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
+
+@dataclass(frozen=True)
+class OneTreeBound:
+    """The outcome of :func:`one_tree`.
+
+    Attributes
+    ----------
+    bound
+        The best bound seen (a valid lower bound however the ascent stopped).
+    iterations
+        Subgradient iterations run (each one minimum spanning tree).
+    clock_stopped
+        The CPU-time cap stopped the ascent before its work bounds (``max_iter``, the step
+        size) did: the bound then depends on the machine's speed and load.
+    """
+
+    bound: float
+    iterations: int
+    clock_stopped: bool
 
 
 def one_tree_bound(
@@ -34,6 +55,23 @@ def one_tree_bound(
     max_seconds: float | None = None,
     tol: float = 1e-6,
 ) -> float:
+    """Held-Karp 1-tree lower bound on the shortest tour (or open path) over ``cost``: the
+    ``bound`` of :func:`one_tree` (same parameters)."""
+    return one_tree(
+        cost, open_path=open_path, upper=upper, max_iter=max_iter, max_seconds=max_seconds,
+        tol=tol,
+    ).bound  # fmt: skip
+
+
+def one_tree(
+    cost: ArrayLike,
+    *,
+    open_path: bool = True,
+    upper: float | None = None,
+    max_iter: int = 300,
+    max_seconds: float | None = None,
+    tol: float = 1e-6,
+) -> OneTreeBound:
     """Held-Karp 1-tree lower bound on the shortest tour (or open path) over ``cost``.
 
     Parameters
@@ -59,21 +97,22 @@ def one_tree_bound(
 
     Returns
     -------
-    float
-        The best bound seen (a valid lower bound whatever ``max_iter`` is).
+    OneTreeBound
+        The best bound seen (a valid lower bound whatever ``max_iter`` is), the iterations
+        run and whether the CPU-time cap stopped them.
     """
     C = np.array(cost, dtype=np.float64)
     n0 = len(C)
     if C.shape != (n0, n0):
         raise ValueError(f"cost must be square, got shape {C.shape}")
     if n0 < 2:
-        return 0.0
+        return OneTreeBound(0.0, 0, False)
     if open_path:
         C = np.pad(C, ((0, 1), (0, 1)))  # node n0 joined to every node at cost 0
     C = 0.5 * (C + C.T)
     n = len(C)
     if n < 3:  # a closed tour of two nodes: there and back
-        return 2.0 * float(C[0, 1])
+        return OneTreeBound(2.0 * float(C[0, 1]), 0, False)
     if upper is None:
         upper = _nearest_neighbour_tour(C)
     special = n - 1  # the dummy node of an open path, else any node
@@ -82,8 +121,10 @@ def one_tree_bound(
     best = -np.inf
     lam, stall = 2.0, 0
     t_end = None if max_seconds is None else time.thread_time() + max_seconds
-    for _ in range(max_iter):
+    it, clock = 0, False
+    for it in range(1, max_iter + 1):  # noqa: B007 - the count is reported
         if t_end is not None and time.thread_time() > t_end and np.isfinite(best):
+            it, clock = it - 1, True
             break
         W = C + pi[:, None] + pi[None, :]
         w, parent = dense_mst(W[: n - 1, : n - 1])
@@ -109,7 +150,7 @@ def one_tree_bound(
         if step < tol * max(abs(best), 1.0) / n:
             break
         pi += step * g
-    return float(best)
+    return OneTreeBound(float(best), it, clock)
 
 
 def dense_mst(W: NDArray[np.float64]) -> tuple[float, NDArray[np.intp]]:
