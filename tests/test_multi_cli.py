@@ -384,33 +384,45 @@ def test_the_command_line_exits_3_on_a_failed_replay_alone(splan, capsys):
 
 
 # ------------------------------------------- verify re-runs the replay from the files (fast)
-def _crossing_saved(tmp_path):
+#: mm, deg: the bases of the crossing pair, as tests/multi_fixtures.py `pair` places them
+CROSSING_BASES = ((-2000.0, 0.0, 0.0, 0.0), (2000.0, 0.0, 0.0, 180.0))
+
+
+def _crossing_pair(tmp_path):
     """Two KR 150 4 m apart crossing in the middle (tests/multi_fixtures.py), each with the
-    station's spot gun, through the live interference stage; saved as a station plan would
-    record them: ``(station, SavedStationPlan, live verdict, live ReplayRobots)`` (trajectory
-    CSVs in ``tmp_path``)."""
+    station's spot gun: ``(station, timings, plans, names, the live interference stage's
+    (plans, schedule, verdict, line))``."""
     from tests import multi_fixtures as mf
     from tests.test_multi_plan import _synthetic_plan
     from weldplan import load_station
-    from weldplan.io.trajectory import trajectory_csv_text
-    from weldplan.multi.saved import SavedRobot, SavedStationPlan
-    from weldplan.multi.station import _interference, _replay_robots
+    from weldplan.multi.station import _interference
     from weldplan.station.mount import mount_tool
 
     robots, timings = mf.pair(distance=4000.0)  # 3 m apart the guns touch at the start
-    bases = ((-2000.0, 0.0, 0.0, 0.0), (2000.0, 0.0, 0.0, 180.0))  # as mf.pair places them
-    station = load_station(_station_toml(tmp_path, ["1", "9"], bases=bases))
+    station = load_station(_station_toml(tmp_path, ["1", "9"], bases=CROSSING_BASES))
     plans = [
         dataclasses.replace(_synthetic_plan(r, t), tool=mount_tool(spec.tool, r))
         for r, t, spec in zip(robots, timings, station.robots, strict=True)
     ]
     names = ("robot1", "robot2")
-    out, schedule, verdict, _ = _interference(station, plans, names, {})
+    return station, timings, plans, names, _interference(station, plans, names, {})
+
+
+def _crossing_saved(tmp_path):
+    """Two KR 150 4 m apart crossing in the middle (tests/multi_fixtures.py), each with the
+    station's spot gun, through the live interference stage; saved as a station plan would
+    record them: ``(station, SavedStationPlan, live verdict, live ReplayRobots)`` (trajectory
+    CSVs in ``tmp_path``)."""
+    from weldplan.io.trajectory import trajectory_csv_text
+    from weldplan.multi.saved import SavedRobot, SavedStationPlan
+    from weldplan.multi.station import _replay_robots
+
+    station, timings, plans, names, (out, schedule, verdict, _) = _crossing_pair(tmp_path)
     saved_robots = []
     for k, t in enumerate(timings):
         f = tmp_path / f"route_robot{k + 1}_trajectory.csv"
         f.write_text(trajectory_csv_text(t, header=["written by the test"]))
-        saved_robots.append(SavedRobot(names[k], None, bases[k], (), None, f, (), t.total))
+        saved_robots.append(SavedRobot(names[k], None, CROSSING_BASES[k], (), None, f, (), t.total))
     saved = SavedStationPlan(
         tmp_path / "route_station.json", None, tuple(saved_robots), None, schedule,
         schedule.cycle_time, "", verdict,

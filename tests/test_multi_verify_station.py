@@ -20,27 +20,15 @@ def _saved(tmp_path, post: str, locks=None, rows: bool = True):
     hand), each robot's trajectory CSV and program (its signals as
     :func:`weldplan.multi.station.with_signals` gives them) written in ``tmp_path``; ``rows``:
     the route row of each timed row recorded (the identity here), as a station JSON has it."""
-    from tests import multi_fixtures as mf
-    from tests.test_multi_cli import _station_toml
-    from tests.test_multi_plan import _synthetic_plan
-    from weldplan import load_station
+    from tests.test_multi_cli import CROSSING_BASES, _crossing_pair
     from weldplan.io.posts.krl import render_krl
     from weldplan.io.posts.rapid import render_rapid
     from weldplan.io.trajectory import trajectory_csv_text
     from weldplan.multi.saved import SavedRobot, SavedStationPlan
     from weldplan.multi.schedule import station_schedule
-    from weldplan.multi.station import _interference, timed_weld_ids, with_signals
-    from weldplan.station.mount import mount_tool
+    from weldplan.multi.station import timed_weld_ids, with_signals
 
-    robots, timings = mf.pair(distance=4000.0)
-    bases = ((-2000.0, 0.0, 0.0, 0.0), (2000.0, 0.0, 0.0, 180.0))  # as mf.pair places them
-    station = load_station(_station_toml(tmp_path, ["1", "9"], bases=bases))
-    plans = [
-        dataclasses.replace(_synthetic_plan(r, t), tool=mount_tool(spec.tool, r))
-        for r, t, spec in zip(robots, timings, station.robots, strict=True)
-    ]
-    names = ("robot1", "robot2")
-    out, schedule, verdict, _ = _interference(station, plans, names, {})
+    station, timings, plans, names, (out, schedule, verdict, _) = _crossing_pair(tmp_path)
     if locks is not None:
         ids = [timed_weld_ids(p.program) for p in plans]
         schedule = station_schedule(names, timings, locks, weld_ids=ids)
@@ -61,7 +49,7 @@ def _saved(tmp_path, post: str, locks=None, rows: bool = True):
             files[0].write_text(render_rapid(prog))
         ids = tuple(range(len(t.row_times))) if rows else None
         saved_robots.append(
-            SavedRobot(names[k], None, bases[k], (), None, traj, files, t.total, ids)
+            SavedRobot(names[k], None, CROSSING_BASES[k], (), None, traj, files, t.total, ids)
         )
     saved = SavedStationPlan(
         tmp_path / "route_station.json", None, tuple(saved_robots), None, schedule,
