@@ -107,6 +107,7 @@ def test_the_bench_plans_a_two_robot_station_file_and_draws_it(tmp_path):
 urdf = "{data}/robots/kuka_kr150r3100_2/kr150r3100_2.urdf"
 weld_time = 0.5
 base = {list(b)}
+home = {list(bs.DEMO_HOME)}
 [robot.tool]
 file = "{data}/tools/spot_welding_gun/spot_welding_gun.urdf"
 """

@@ -97,7 +97,7 @@ def test_where_the_shares_run(jobs, shares, given, ran, inner):
 
 def _two_robot_station(tmp_path: Path) -> Path:
     """The demo part, welds 1, 5, 9, 13 and two KR 150 with the spot gun at the bench's bases."""
-    from weldplan.bench.station import DEMO_BASES
+    from weldplan.bench.station import DEMO_BASES, DEMO_HOME
     from weldplan.io.joints import Joints, read_joints
     from weldplan.weld import demo_part
 
@@ -110,7 +110,7 @@ def _two_robot_station(tmp_path: Path) -> Path:
     )
     robots = "".join(
         f'\n[[robot]]\nurdf = "{data}/robots/kuka_kr150r3100_2/kr150r3100_2.urdf"\n'
-        f"base = {list(b)}\n[robot.tool]\n"
+        f"base = {list(b)}\nhome = {list(DEMO_HOME)}\n[robot.tool]\n"
         f'file = "{data}/tools/spot_welding_gun/spot_welding_gun.urdf"\n'
         for b in DEMO_BASES
     )

@@ -45,6 +45,9 @@ log = logging.getLogger(__name__)
 ROOT = Path(__file__).resolve().parents[2]
 #: (x, y, z mm, yaw deg), part frame: behind the demo part facing it, and in front facing back
 DEMO_BASES = ((448.1, 95.3, 652.7, -7.5), (2450.0, -150.0, 652.7, 180.0))
+#: deg, A1..A6: both robots' home, the arm turned a quarter away from the part (facing each other,
+#: their conventional homes A1 = 0 would touch: docs/station.md#home)
+DEMO_HOME = (90.0, -90.0, 90.0, 0.0, 0.0, 0.0)
 #: rad/s: joint velocity limits of a heavy six-axis arm (KR 150 class) for the synthetic
 #: stations; accelerations 3x
 SYNTH_VEL = np.radians([105.0, 101.0, 107.0, 136.0, 129.0, 206.0])
@@ -150,11 +153,14 @@ class _StationClock:
 
 def demo_two_robots() -> Any:
     """The demo station (``examples/demo_station.toml``: the demo part, its 15 welds, the
-    shared spot gun) with two KR 150 at :data:`DEMO_BASES` instead of its one searched base."""
+    shared spot gun) with two KR 150 at :data:`DEMO_BASES` instead of its one searched base, both
+    at home :data:`DEMO_HOME`."""
     from weldplan.station import load_station
 
     st = load_station(ROOT / "examples" / "demo_station.toml")
-    specs = tuple(dataclasses.replace(st.robots[0], base=b) for b in DEMO_BASES)
+    spec = st.robots[0]
+    spec = dataclasses.replace(spec, settings=dataclasses.replace(spec.settings, home=DEMO_HOME))
+    specs = tuple(dataclasses.replace(spec, base=b) for b in DEMO_BASES)
     return dataclasses.replace(st, robots=specs, name="demo-2-robots")
 
 

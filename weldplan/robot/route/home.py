@@ -14,6 +14,12 @@ legs to the assembled joint route, planned like any detour of :mod:`weldplan.rob
   tool and every link checked against the part, the floor and the robot itself);
 * *last row -> home*: the same, leaving the last weld.
 
+A weld that no leg joins to home costs that weld, not the route (issue 27, item 3):
+:func:`with_home` leaves out the first (the last) served weld whose lead (trail) leg fails, with
+status ``collision`` and the cause in its detail, and tries the next one, at most
+:data:`HOME_TRIES` welds at each end; a robot whose home joins none of them keeps no weld and
+stands at home.
+
 The new rows are not exact (no route pose): they carry the route row of the weld they join
 (the first or the last), as the rows of a re-planned leg do, so the program, the route JSON and
 ``weldplan verify`` treat them as the joint moves they are. :func:`check_home` refuses a home
@@ -27,6 +33,7 @@ The default home of a robot of several (:mod:`weldplan.multi.station`) is
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 from dataclasses import dataclass
 from typing import Any
@@ -35,6 +42,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from weldplan.errors import ConfigError, PlanningError
+from weldplan.robot.placement.reach import COLLISION, OK
 
 log = logging.getLogger(__name__)
 
@@ -122,13 +130,13 @@ def home_legs(
     PlanningError
         No leg: neither a straight, a tucked nor an OMPL transfer joins home to the row.
     """
-    lead, lead_zone = _leg(det, home, first, "from home to the first")
-    trail, trail_zone = _leg(det, home, last, "between home and the last")
+    lead, lead_zone = home_leg(det, home, first, "from home to the first")
+    trail, trail_zone = home_leg(det, home, last, "between home and the last")
     # the way back is the leg from home reversed: the same motions, each checked both ways
     return HomeLegs(lead[:-1], lead_zone, trail[::-1][1:], trail_zone[::-1])
 
 
-def _leg(
+def home_leg(
     det: Any, home: NDArray[np.float64], end: tuple[NDArray, int, int, bool], words: str
 ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
     """``(rows (p + 1, 6) rad from home to the route's row, both included; zone (p,) bool per
@@ -152,3 +160,102 @@ def _leg(
     zone = np.zeros(len(rows) - 1, dtype=bool)
     zone[-1] = True  # lowering the gun onto the weld: its contact zone exempt, as leaving it
     return rows, zone
+
+
+#: welds tried at each end of a route for a leg from (or to) home before the rest are left out
+HOME_TRIES = 8
+
+
+def with_home(
+    det: Any, rb: Any, path: Any, home: NDArray, welds: tuple[Any, list, list, tuple], stats: dict
+) -> Any:
+    """The joint route ``path`` (a frozen ``_JointPath`` of :mod:`weldplan.robot.route.plan`)
+    starting and ending at ``home`` ``(6,)`` rad: the legs planned by ``det`` (``None``, no
+    collision check: straight joint moves), their rows not exact and labelled with the route row
+    they join. ``welds`` is ``(rows, status, detail, ids)``: the welds' route rows, and their
+    status and detail lists, updated in place for the welds left out at either end (module
+    docstring). The motions checked with the whole tool go to ``stats["whole_tool_motions"]``,
+    the home and the welds left out to ``stats["home"]``."""
+    q0 = check_home(rb, np.degrees(home), None if det is None else det.checker)
+    rows, status, detail, ids = welds
+    dropped: list[str] = []
+    whole = list(stats.get("whole_tool_motions", []))
+    if det is None:
+        legs = HomeLegs(q0[None], np.zeros(1, bool), q0[None], np.zeros(1, bool))
+    else:
+        path, whole, legs = _legs_or_drop(det, q0, path, whole, welds, dropped)
+    a, b = len(legs.lead), len(legs.trail)
+    ends = (int(path.row[0]), int(path.row[-1])) if len(path.q) else (int(rows[0]), int(rows[0]))
+    stats["whole_tool_motions"] = (
+        [int(i) for i in np.flatnonzero(~legs.lead_zone)]
+        + [int(i) + a for i in whole]
+        + [int(i) + a + len(path.q) - 1 for i in np.flatnonzero(~legs.trail_zone)]
+    )
+    stats["home"] = {
+        "deg": [float(v) for v in np.degrees(q0)], "lead_rows": a, "trail_rows": b,
+        "left_out": dropped,
+    }  # fmt: skip
+    n = len(path.q)
+    return dataclasses.replace(
+        path,
+        q=np.vstack([legs.lead, path.q, legs.trail]),
+        row=np.concatenate([np.full(a, ends[0]), path.row, np.full(b, ends[1])]).astype(np.int64),
+        exact=np.concatenate([np.zeros(a, bool), path.exact, np.zeros(b, bool)]),
+        branch=np.concatenate([np.full(a, -1), path.branch, np.full(b, -1)]).astype(np.int64),
+        replanned=tuple(int(i) for i in path.replanned),
+    ) if n else dataclasses.replace(
+        path, q=q0[None], row=np.full(1, ends[0], np.int64), exact=np.zeros(1, bool),
+        branch=np.full(1, -1, np.int64), replanned=(),
+    )  # fmt: skip
+
+
+def _legs_or_drop(
+    det: Any, q0: NDArray, path: Any, whole: list[int], welds: tuple, dropped: list[str]
+) -> tuple[Any, list[int], HomeLegs]:
+    """``(path, whole-tool motions, legs)``: the lead leg from home to the first served weld and
+    the trail leg from the last one home; a served weld whose leg fails is left out (``welds``
+    updated in place, its id appended to ``dropped``) and the path cut to the next one."""
+    rows, status, detail, ids = welds
+    served = [k for k in range(len(rows)) if status[k] == OK]
+    at = {k: _exact_row(path, int(rows[k])) for k in served}
+    lead = trail = None
+    for end in ("lead", "trail"):
+        tries = 0
+        while served:
+            k = served[0] if end == "lead" else served[-1]
+            i = at[k]
+            row = (path.q[i], int(rows[k]), int(path.branch[i]), True)
+            words = f"{'from home to' if end == 'lead' else 'between home and'} weld {ids[k]}'s"
+            try:
+                got = home_leg(det, q0, row, words)
+            except PlanningError as exc:
+                got = None
+                why = f"no home leg: {exc}"
+            if got is not None:
+                lead, trail = (got, trail) if end == "lead" else (lead, got)
+                break
+            tries += 1
+            for j in served if tries >= HOME_TRIES else [k]:
+                status[j] = COLLISION
+                detail[j] = why if j == k else f"left out: no home leg at the route's {end}"
+                dropped.append(str(ids[j]))
+                log.info("weld %s left out: %s", ids[j], detail[j])
+            served = [] if tries >= HOME_TRIES else [j for j in served if j != k]
+    if not served:
+        empty = (np.zeros((0, 6)), np.zeros(0, bool))
+        return dataclasses.replace(path, q=np.zeros((0, 6))), [], HomeLegs(*empty, *empty)
+    s, e = at[served[0]], at[served[-1]]
+    cut = dataclasses.replace(
+        path, q=path.q[s : e + 1], row=path.row[s : e + 1], exact=path.exact[s : e + 1],
+        branch=path.branch[s : e + 1],
+    )  # fmt: skip
+    whole = [i - s for i in whole if s <= i < e]
+    (lq, lz), (tq, tz) = lead, trail
+    # the way back is the leg from home reversed: the same motions, each checked both ways
+    return cut, whole, HomeLegs(lq[:-1], lz, tq[::-1][1:], tz[::-1])
+
+
+def _exact_row(path: Any, r: int) -> int:
+    """The exact joint row of route row ``r`` in ``path``."""
+    on = np.flatnonzero((path.row == r) & path.exact)
+    return int(on[0])

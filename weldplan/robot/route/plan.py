@@ -255,7 +255,10 @@ def plan_robot_route(
         )  # fmt: skip
         _roadmap_stats(det, placement, stats)
     if s.home is not None:
-        path = _with_home(det, rb, path, np.asarray(s.home), stats)
+        from weldplan.robot.route.home import with_home
+
+        welds = (rows, status, detail, tuple(route.order))
+        path = with_home(det, rb, path, np.asarray(s.home), welds, stats)
     _check_fk(rb, path.q, path.exact, T_fl, path.row, stats)
     stats["seconds_total"] = round(time.perf_counter() - t0, 3)
     return _robot_route(robot, placement.base, F, path, rows, route.order, status, detail, stats)
@@ -272,41 +275,6 @@ class _JointPath:
     exact: NDArray[np.bool_]
     branch: NDArray[np.int64]
     replanned: tuple[int, ...]
-
-
-def _with_home(
-    det: Detour | None, rb: Robot, path: _JointPath, home: NDArray, stats: dict[str, Any]
-) -> _JointPath:
-    """The joint route starting and ending at ``home`` ``(6,)`` rad
-    (:mod:`weldplan.robot.route.home`): the legs planned by ``det`` (``None``, no collision
-    check: straight joint moves), their rows not exact and labelled with the route row they
-    join; the motions checked with the whole tool go to ``stats["whole_tool_motions"]``, the
-    home to ``stats["home"]``."""
-    from weldplan.robot.route.home import HomeLegs, check_home, home_legs
-
-    q0 = check_home(rb, np.degrees(home), None if det is None else det.checker)
-    ends = [
-        (path.q[i], int(path.row[i]), int(path.branch[i]), bool(path.exact[i])) for i in (0, -1)
-    ]
-    if det is None:
-        legs = HomeLegs(q0[None], np.zeros(1, bool), q0[None], np.zeros(1, bool))
-    else:
-        legs = home_legs(det, q0, ends[0], ends[1])
-    a, b = len(legs.lead), len(legs.trail)
-    whole = stats.get("whole_tool_motions", [])
-    stats["whole_tool_motions"] = (
-        [int(i) for i in np.flatnonzero(~legs.lead_zone)]
-        + [int(i) + a for i in whole]
-        + [int(i) + a + len(path.q) - 1 for i in np.flatnonzero(~legs.trail_zone)]
-    )
-    stats["home"] = {"deg": [float(v) for v in np.degrees(q0)], "lead_rows": a, "trail_rows": b}
-    return _JointPath(
-        np.vstack([legs.lead, path.q, legs.trail]),
-        np.concatenate([np.full(a, ends[0][1]), path.row, np.full(b, ends[1][1])]),
-        np.concatenate([np.zeros(a, bool), path.exact, np.zeros(b, bool)]),
-        np.concatenate([np.full(a, -1), path.branch, np.full(b, -1)]),
-        tuple(int(i) for i in path.replanned),
-    )
 
 
 def _leg_roadmap(
@@ -519,8 +487,11 @@ def _nothing_reached(
 
 
 def _weld_row(row: NDArray[np.int64], exact: NDArray[np.bool_], r: int) -> int:
-    """The joint row of route row ``r``: its exact one, else the first labelled ``r``."""
+    """The joint row of route row ``r``: its exact one, else the first labelled ``r``, else (a
+    weld left out at an end of the route for want of a home leg) the nearest labelled row."""
     on = np.flatnonzero(row == r)
+    if not len(on):
+        return int(np.argmin(np.abs(row - r)))
     at = on[exact[on]]
     return int(at[0] if len(at) else on[0])
 
