@@ -166,3 +166,21 @@ def test_the_car2_stations_stand_the_body_upright_with_two_and_four_robots_apart
         check_apart(robots)
         sizes.append((len(st.robots), sum(1 for _ in open(st.part.welds)) - 2))
     assert sizes == [(2, 200), (4, 400)]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["car2_two_robots", "car2_upright_200_2", "car2_upright_400_4"])
+def test_the_example_stations_give_every_robot_a_home_clear_of_the_part_and_the_others(name):
+    """The check ``weldplan plan`` runs before any study (:func:`weldplan.multi.station.with_homes`:
+    each home inside the limits, the robot at it clear of the part, the floor and itself, the
+    robots at their homes apart) accepts every example station as the file gives it."""
+    import weldplan
+    from weldplan.multi import station as ms
+    from weldplan.station.pipeline import cell_stage
+
+    require_shared("bodies", "car2.obj")
+    st = weldplan.load_station(ROOT / "examples" / f"{name}.toml")
+    assert all(r.settings.home is not None for r in st.robots)
+    robots = ms._robots(st)
+    homed = ms.with_homes(st, cell_stage(st), robots)
+    assert [r.settings.home for r in homed.robots] == [r.settings.home for r in st.robots]
