@@ -278,7 +278,8 @@ def _interlocked(splan):
 @pytest.mark.slow
 def test_an_interlock_is_written_into_both_programs_and_read_back(splan, tmp_path):
     from weldplan.io.posts.parse import parse_rapid
-    from weldplan.multi.saved import robot_plans, station_paths, write_station
+    from weldplan.multi.programcheck import signals_check
+    from weldplan.multi.saved import load_station_plan, robot_plans, station_paths, write_station
     from weldplan.station.model import OutputSpec
 
     sp, lock = _interlocked(splan)
@@ -298,6 +299,11 @@ def test_an_interlock_is_written_into_both_programs_and_read_back(splan, tmp_pat
         timed = lock.release_row if k == 0 else lock.wait_row
         assert row == int(np.asarray(plans[k].program.row)[timed])
         assert mod.resets == ([(7, lock.name)] if action == "set" else [])
+    # verify's program check finds each side at the target the schedule names, jhome included
+    saved = load_station_plan(paths.station)
+    for k in (0, 1):
+        got = signals_check(saved, k)
+        assert got.ok, got.text
 
 
 @pytest.mark.slow

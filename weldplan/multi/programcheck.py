@@ -110,9 +110,14 @@ def row_targets(saved: Any, k: int, program: Program, rows: set[int]) -> dict[in
     A timed row stands for a route row (the station JSON's ``rows``; a plan saved without
     them: the trajectory CSV's ``step`` at the arrival, which a stop reached without motion
     does not have). Its target is the weld target of the weld the schedule records on that
-    route row, else the last target of the route row."""
+    route row, else the last target of the route row; the first and the last timed rows of a
+    robot with a home are its home target (KRL ``XHOME``, RAPID ``jhome``: the program's first
+    and last move, to one untagged target), where it waits before it leaves and releases after
+    it is back."""
     s = saved.schedule
     route = _route_row(saved, k)
+    home = _home_target(program)
+    last = max((a.row for a in s.of(k)), default=-1)
     by_weld: dict[str, str] = {}
     by_row: dict[int, str] = {}
     for name, _ in program.moves:  # the last target of each weld and route row, in order
@@ -126,11 +131,22 @@ def row_targets(saved: Any, k: int, program: Program, rows: set[int]) -> dict[in
     out = {}
     for r in sorted(rows):
         R = route(r)
-        if welds.get(R) in by_weld:
+        if home is not None and r in (0, last):
+            out[r] = home
+        elif welds.get(R) in by_weld:
             out[r] = by_weld[welds[R]]
         elif R in by_row:
             out[r] = by_row[R]
     return out
+
+
+def _home_target(program: Program) -> str | None:
+    """The program's home target: its first and last move go to it and it is no weld's or
+    route row's (untagged); ``None`` for a program without a home."""
+    if not program.moves:
+        return None
+    first, last = program.moves[0][0], program.moves[-1][0]
+    return first if first == last and not program.tags.get(first) else None
 
 
 def _route_row(saved: Any, k: int) -> Any:
