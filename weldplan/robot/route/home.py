@@ -184,29 +184,45 @@ def with_home(
         legs = HomeLegs(q0[None], np.zeros(1, bool), q0[None], np.zeros(1, bool))
     else:
         path, whole, legs = _legs_or_drop(det, q0, path, whole, welds, dropped)
-    a, b = len(legs.lead), len(legs.trail)
-    ends = (int(path.row[0]), int(path.row[-1])) if len(path.q) else (int(rows[0]), int(rows[0]))
-    stats["whole_tool_motions"] = (
-        [int(i) for i in np.flatnonzero(~legs.lead_zone)]
-        + [int(i) + a for i in whole]
-        + [int(i) + a + len(path.q) - 1 for i in np.flatnonzero(~legs.trail_zone)]
-    )
-    stats["home"] = {
-        "deg": [float(v) for v in np.degrees(q0)], "lead_rows": a, "trail_rows": b,
-        "left_out": dropped,
-    }  # fmt: skip
     n = len(path.q)
+    if not n:  # no weld left: the robot stands at home, every weld's row there
+        stats["whole_tool_motions"] = []
+        stats["home"] = _home_stats(q0, len(rows), 0, dropped)
+        k = len(rows)
+        return dataclasses.replace(
+            path, q=np.repeat(q0[None], k, axis=0), row=np.asarray(rows, np.int64),
+            exact=np.zeros(k, bool), branch=np.full(k, -1, np.int64), replanned=(),
+        )  # fmt: skip
+    ends = (int(path.row[0]), int(path.row[-1]))
+    # every weld keeps a joint row labelled with its route row (the program's and the route
+    # JSON's map): one cut off an end of the route stands at home, where the robot is
+    kept = set(path.row.tolist())
+    pre = [int(r) for r in rows if int(r) not in kept and int(r) < ends[0]]
+    post = [int(r) for r in rows if int(r) not in kept and int(r) > ends[1]]
+    a, b = len(pre) + len(legs.lead), len(legs.trail) + len(post)
+    stats["whole_tool_motions"] = (
+        [int(i) + len(pre) for i in np.flatnonzero(~legs.lead_zone)]
+        + [int(i) + a for i in whole]
+        + [int(i) + a + n - 1 for i in np.flatnonzero(~legs.trail_zone)]
+    )
+    stats["home"] = _home_stats(q0, a, b, dropped)
+    row = [pre, np.full(len(legs.lead), ends[0]), path.row, np.full(len(legs.trail), ends[1]), post]
+    q = [np.repeat(q0[None], len(pre), axis=0), legs.lead, path.q, legs.trail]
     return dataclasses.replace(
         path,
-        q=np.vstack([legs.lead, path.q, legs.trail]),
-        row=np.concatenate([np.full(a, ends[0]), path.row, np.full(b, ends[1])]).astype(np.int64),
+        q=np.vstack(q + [np.repeat(q0[None], len(post), axis=0)]),
+        row=np.concatenate(row).astype(np.int64),
         exact=np.concatenate([np.zeros(a, bool), path.exact, np.zeros(b, bool)]),
         branch=np.concatenate([np.full(a, -1), path.branch, np.full(b, -1)]).astype(np.int64),
         replanned=tuple(int(i) for i in path.replanned),
-    ) if n else dataclasses.replace(
-        path, q=q0[None], row=np.full(1, ends[0], np.int64), exact=np.zeros(1, bool),
-        branch=np.full(1, -1, np.int64), replanned=(),
-    )  # fmt: skip
+    )
+
+
+def _home_stats(q0: NDArray, a: int, b: int, dropped: list[str]) -> dict[str, Any]:
+    """``stats["home"]``: the home (deg), the joint rows before and after the route's own, the
+    welds left out for want of a home leg."""
+    deg = [float(v) for v in np.degrees(q0)]
+    return {"deg": deg, "lead_rows": a, "trail_rows": b, "left_out": dropped}
 
 
 def _legs_or_drop(

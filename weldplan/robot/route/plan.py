@@ -487,11 +487,8 @@ def _nothing_reached(
 
 
 def _weld_row(row: NDArray[np.int64], exact: NDArray[np.bool_], r: int) -> int:
-    """The joint row of route row ``r``: its exact one, else the first labelled ``r``, else (a
-    weld left out at an end of the route for want of a home leg) the nearest labelled row."""
+    """The joint row of route row ``r``: its exact one, else the first labelled ``r``."""
     on = np.flatnonzero(row == r)
-    if not len(on):
-        return int(np.argmin(np.abs(row - r)))
     at = on[exact[on]]
     return int(at[0] if len(at) else on[0])
 
