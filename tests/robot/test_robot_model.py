@@ -310,3 +310,19 @@ def test_wrap_into_limits_is_the_three_turn_choice_to_the_bit():
         got = wrap_into_limits(q, lower, upper)
         want = _wrap_three_turns(q, lower, upper)
         np.testing.assert_array_equal(got.view(np.int64), want.view(np.int64))
+
+
+def test_link_frames_are_the_chain_of_each_joints_frame_to_the_bit(robot):
+    """link_frames (all six joints' frames in one pass) is the product, joint by joint, of each
+    joint's own frame (origin times Rodrigues rotation), the same bits one configuration at a
+    time and in a batch."""
+    q = _random_q(robot, 200, seed=9)
+    chain = np.empty((len(q), 7, 4, 4))
+    T = np.broadcast_to(robot.base, (len(q), 4, 4)).copy()
+    chain[:, 0] = T
+    for j in range(6):
+        T = T @ robot._joint_frames(j, q[:, j])
+        chain[:, j + 1] = T
+    assert np.array_equal(robot.link_frames(q), chain)
+    for k in range(0, 200, 37):
+        assert np.array_equal(robot.link_frames(q[k])[0], chain[k])

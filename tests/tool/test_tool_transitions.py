@@ -234,6 +234,36 @@ def test_a_blocked_move_is_replanned_in_se3_and_the_recheck_agrees():
     assert v.ok and v.checked == 1, v.describe()
 
 
+def test_the_replanned_path_is_not_checked_again_where_the_fast_check_proved_it(monkeypatch):
+    """The SE(3) path's motions that the fast check passed during the run are not given to the
+    exact check again: the same path and verdict as when every motion is checked again, fewer
+    exact samples, and the independent re-check passes it."""
+    pytest.importorskip("ompl")
+    import weldplan.tool.transitions.se3_replan as se3_replan
+
+    sheet = _box((400, 400, 2), (0, 0, -1))
+    wall = _box((400, 4, 80), (0, 0, 40))
+    part = trimesh.util.concatenate([sheet, wall])
+    poses = _poses([("a", (0, -100, 0)), ("b", (0, 100, 0))], DOWN)
+    stick = _stick(100.0)
+    settings = TransitionSettings(time_s=30.0, seed=1)
+    lean = plan_transitions(part, stick, poses, settings)
+    real = se3_replan.se3_path
+
+    def forgetful(*a, **k):
+        path, status, _ = real(*a, **k)
+        return path, status, set()  # nothing proven: every motion to the exact check
+
+    monkeypatch.setattr(se3_replan, "se3_path", forgetful)
+    full = plan_transitions(part, stick, poses, settings)
+    (t,), (u,) = lean.transitions, full.transitions
+    assert t.status == u.status == "replanned"
+    assert np.array_equal(t.positions, u.positions) and np.array_equal(t.quaternions, u.quaternions)
+    assert t.samples < u.samples
+    v = verify_sweeps(lean, poses, part, stick)
+    assert v.ok and v.checked == 1, v.describe()
+
+
 def test_slide_along_one_flange_where_the_fork_cannot_retract():
     # a 2 mm flange whose free edge is at x = 60; the fork straddles it (jaw 28 mm under it,
     # arm beyond the edge): the axial retract pulls the jaw through the sheet, the slide does not

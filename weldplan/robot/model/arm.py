@@ -174,10 +174,28 @@ class Robot:
         out = np.empty((n, 7, 4, 4))
         T = np.broadcast_to(self.base, (n, 4, 4)).copy()
         out[:, 0] = T
+        # the six joints' frames in one pass (the collision checks ask one configuration at a
+        # time, thousands of times: the per-joint calls cost more than the arithmetic); the
+        # same operations element by element as :meth:`_joint_frames`, so the same bits
+        A, B, C = self._rodrigues_all()
+        QT = np.ascontiguousarray(Q.T)
+        s = np.sin(QT)[:, :, None, None]
+        c = np.cos(QT)[:, :, None, None]
+        J = A[:, None] + s * B[:, None] + (1 - c) * C[:, None]  # (6, n, 4, 4)
         for j in range(6):
-            T = T @ self._joint_frames(j, Q[:, j])
+            T = T @ J[j]
             out[:, j + 1] = T
         return out
+
+    def _rodrigues_all(self) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray]:
+        """``(6, 4, 4)`` each: :meth:`_joint_frames`' cached terms ``A, B, C`` of the six joints."""
+        key = ("rodrigues", "all")
+        if key not in self._cache:
+            for j in range(6):
+                self._joint_frames(j, np.zeros(1))
+            terms = [self._cache[("rodrigues", j)] for j in range(6)]
+            self._cache[key] = tuple(np.stack([t[i] for t in terms]) for i in range(3))
+        return self._cache[key]  # type: ignore[no-any-return]
 
     def _joint_frames(self, j: int, angles: NDArray[np.float64]) -> NDArray[np.float64]:
         """``(n, 4, 4)``: ``origin_j @ rotation(axis_j, angle)`` (Rodrigues, terms cached)."""

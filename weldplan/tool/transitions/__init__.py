@@ -1,8 +1,8 @@
 """The whole tool from weld to weld: the order on the tool's costs, the swept-tool check,
 axial/slide/side exits, the SE(3) re-plan, the tool path.
 
-Modules: ``order``, ``plan``, ``reorder``, ``result``, ``se3_replan``, ``sweep``, ``sweep_bound``,
-``sweep_fast``, ``sweep_motion``.
+Modules: ``axis_walk``, ``order``, ``plan``, ``reorder``, ``result``, ``se3_replan``, ``sweep``,
+``sweep_bound``, ``sweep_fast``, ``sweep_motion``.
 
 The names below load on first use (PEP 562, :func:`weldplan.lazy.lazy_exports`): importing
 one module of this package does not load the others.
@@ -14,6 +14,7 @@ from weldplan.lazy import lazy_exports
 
 #: exported name -> the module of this package that defines it
 _EXPORTS = {
+    "AxisWalk": "axis_walk",
     "BLOCKED": "result",
     "DIRECT": "result",
     "FastSweep": "sweep_fast",
@@ -48,6 +49,7 @@ _EXPORTS = {
 }
 
 __all__ = [
+    "AxisWalk",
     "BLOCKED",
     "DIRECT",
     "FastSweep",

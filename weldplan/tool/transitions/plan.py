@@ -31,7 +31,9 @@ A transition none of these frees is reported :data:`~weldplan.tool.transitions.B
 listing every exit tried and where it was blocked; it is never silently repaired.
 
 Each weld's axial and side exits are checked once (with only its own contact zone exempt,
-stricter than a transition's two zones) and reused by the transitions into and out of it. The
+stricter than a transition's two zones) and reused by the transitions into and out of it; its
+lifts and its axial retract are one walk up its TCP axis, extended as far as the longest asked
+(:mod:`weldplan.tool.transitions.axis_walk`). The
 checker is focused on the part near the two welds
 (:meth:`~weldplan.tool.transitions.SweepChecker.focus`: the same answers, cheaper distance queries).
 
@@ -54,6 +56,7 @@ from numpy.typing import NDArray
 from weldplan.tool.model.tool import Tool
 from weldplan.tool.poses.result import WeldPoses
 from weldplan.tool.settings import TransitionSettings
+from weldplan.tool.transitions.axis_walk import AxisWalk
 from weldplan.tool.transitions.result import BLOCKED, DIRECT, ToolPath, Transition
 from weldplan.tool.transitions.se3_replan import entering, replan
 from weldplan.tool.transitions.sweep import SweepChecker, quat_to_matrix
@@ -121,6 +124,7 @@ class TransitionPlanner:
         self._axial: dict[tuple[Any, ...], tuple[NDArray | None, tuple[str, ...], str]] = {}
         self._sides: dict[tuple[Any, ...], tuple[NDArray | None, tuple[str, ...], str]] = {}
         self._lifts: dict[tuple[Any, ...], tuple[NDArray, str]] = {}
+        self._walks: dict[tuple[Any, ...], AxisWalk] = {}
         self._planned: dict[tuple[Any, ...], Transition] = {}
 
     @property
@@ -162,22 +166,6 @@ class TransitionPlanner:
                 return False, k, out.describe()
         return True, -1, ""
 
-    def _try(
-        self, w: Any, cands: list[tuple[list[NDArray], tuple[str, ...], str]]
-    ) -> tuple[NDArray | None, tuple[str, ...], str]:
-        """The first candidate exit from weld ``w`` whose motions are all free (orientation
-        kept, ``w``'s zone exempt), or ``None`` and why each one failed."""
-        p = np.asarray(w.position, dtype=np.float64)
-        q = np.asarray(w.quaternion, dtype=np.float64)
-        fails = []
-        for pts, kinds, label in cands:
-            P = np.array(pts)
-            ok, k, why = self._motions(P, np.repeat(q[None], len(P), axis=0), p[None], True)
-            if ok:
-                return P, kinds, ""
-            fails.append(f"{label}: {kinds[k]} {why}")
-        return None, (), "; ".join(fails)
-
     def _leave_axial(self, w: Any) -> tuple[NDArray | None, tuple[str, ...], str]:
         """Weld ``w``'s retract along its TCP axis (cached per weld; the approach is the same
         positions reversed, the same swept set)."""
@@ -187,9 +175,9 @@ class TransitionPlanner:
             if self.settings.retract <= 0:
                 self._axial[key] = (p[None], (), "")
             else:
-                z = quat_to_matrix(np.asarray(w.quaternion, dtype=np.float64))[:, 2]
-                cand = ([p, p - self.settings.retract * z], ("retract",), "retract")
-                self._axial[key] = self._try(w, [cand])
+                P, why = self._lift(w, self.settings.retract)
+                self._axial[key] = (P, ("retract",), "") if not why else (
+                    None, (), f"retract: retract {why}")  # fmt: skip
         return self._axial[key]
 
     def _lift(self, w: Any, lift: float) -> tuple[NDArray, str]:
@@ -198,12 +186,22 @@ class TransitionPlanner:
         stricter than a transition's two zones; lowering is the same swept set)."""
         key = (*_pose_key(w), float(lift))
         if key not in self._lifts:
-            p = np.asarray(w.position, dtype=np.float64)
-            q = np.asarray(w.quaternion, dtype=np.float64)
-            P = np.array([p, p - lift * quat_to_matrix(q)[:, 2]])
-            ok, _, why = self._motions(P, np.array([q, q]), p[None], True)
-            self._lifts[key] = (P, "" if ok else why)
+            walk = self._walk(w)
+            out = walk.lift(lift)
+            self.samples += out.samples
+            self._lifts[key] = (np.array([walk.p, walk.at(lift)]), "" if out.ok else out.describe())
         return self._lifts[key]
+
+    def _walk(self, w: Any) -> AxisWalk:
+        """Weld ``w``'s walk up its TCP axis (:mod:`weldplan.tool.transitions.axis_walk`), shared
+        by its lifts and its axial retract (one per pose)."""
+        key = _pose_key(w)
+        if key not in self._walks:
+            p = np.asarray(w.position, dtype=np.float64)
+            R = quat_to_matrix(np.asarray(w.quaternion, dtype=np.float64))
+            extent = max(*SIDE_LIFTS, *SLIDE_LIFTS, self.settings.retract)
+            self._walks[key] = AxisWalk(self.checker, p, R, extent)
+        return self._walks[key]
 
     def _side(self, w: Any) -> tuple[NDArray | None, tuple[str, ...], str]:
         """Weld ``w``'s side exits (cached): a lift of :data:`SIDE_LIFTS` mm along the axis, a

@@ -56,7 +56,7 @@ def replan(
     qa, qb = (np.asarray(w.quaternion, dtype=np.float64) for w in (a, b))
     exempt = np.array([pa, pb])
     start, goal = ((ends[0], qa), (ends[1], qb)) if ends is not None else ((pa, qa), (pb, qb))
-    path, status = se3_path(tp, start, goal, exempt)
+    path, status, proven = se3_path(tp, start, goal, exempt)
     if path is None:
         tried.append(f"SE(3): {status}")
         return done(*fallback, BLOCKED)
@@ -67,20 +67,37 @@ def replan(
         sp = np.concatenate([la[:-1], sp, lb[::-1][1:]])
         sq = np.concatenate([[qa] * (len(la) - 1), sq, [qb] * (len(lb) - 1)])
         skinds = (*ka, *skinds, *(entering(k) for k in reversed(kb)))
-    # the planner's answer, checked again (the whole path: the ends are known free; soft at
-    # the ends as OMPL's checks were: softness changes only where a check gives up early)
-    ok3, k3, why3 = tp._motions(path[:, :3], path[:, 3:], exempt, True, True)
-    if not ok3:
-        tried.append(f"SE(3) path motion {k3} {why3}")
-        return done(sp, sq, skinds, BLOCKED)
+    # the planner's answer, checked again by the exact check where the fast one did not prove
+    # it free during the run (the ends are known free; soft at the ends as OMPL's checks were:
+    # softness changes only where a check gives up early)
+    last = len(path) - 2
+    for k in range(len(path) - 1):
+        if _motion_key(path[k], path[k + 1]) in proven:
+            continue
+        ok3, _, why3 = tp._motions(path[k : k + 2, :3], path[k : k + 2, 3:], exempt, k == 0,
+                                   k == last)  # fmt: skip
+        if not ok3:
+            tried.append(f"SE(3) path motion {k} {why3}")
+            return done(sp, sq, skinds, BLOCKED)
     tried.append(f"SE(3): {status}")
     return done(sp, sq, skinds, REPLANNED)
 
 
+def _motion_key(s: NDArray, t: NDArray) -> bytes:
+    """The key of the motion between states ``s`` and ``t`` ``(7,)``, either way round (the
+    same swept set, the same soft ends)."""
+    a, b = np.asarray(s, dtype=np.float64).tobytes(), np.asarray(t, dtype=np.float64).tobytes()
+    return min(a, b) + max(a, b)
+
+
 def se3_path(
     tp: Any, start: tuple[NDArray, NDArray], goal: tuple[NDArray, NDArray], exempt: NDArray
-) -> tuple[NDArray | None, str]:
-    """OMPL's SE(3) path ``(n, 7)`` between two poses, or ``None`` and why not.
+) -> tuple[NDArray | None, str, set[bytes]]:
+    """OMPL's SE(3) path ``(n, 7)`` between two poses, or ``None`` and why not; and the motions
+    the fast check proved free during the run (:func:`_motion_key`), which :func:`replan` does
+    not ask the exact check again: both keep the clearance everywhere on a motion they pass
+    (:mod:`weldplan.tool.transitions.sweep_fast`), and the independent re-check
+    (:mod:`weldplan.tool.verify.sweeps`) tests every motion of the path with its own samples.
 
     The budget is work and holds: OMPL stops after ``se3_checks`` state and motion checks
     (:func:`~weldplan.motion.sampling.plan_se3`'s ``max_checks``), every check after
@@ -92,7 +109,7 @@ def se3_path(
     try:
         from weldplan.motion.sampling import plan_se3
     except ImportError as exc:  # the wrapper or OMPL itself is missing
-        return None, f"SE(3) re-planning unavailable ({exc})"
+        return None, f"SE(3) re-planning unavailable ({exc})", set()
     check = tp.fast
     run = {"states": 0, "motions": 0, "refused": 0, "samples": 0, "bound_states": 0,
            "bound_motions": 0, "clock": False}  # fmt: skip
@@ -143,10 +160,13 @@ def se3_path(
         tp.samples += out.samples
         run["refused"] += out.out_of_budget
         run["bound_motions"] += out.samples == 0 and out.ok
+        if out.ok:
+            proven.add(_motion_key(s, t))
         return out.ok
 
+    proven: set[bytes] = set()
     if not (check.state_ok(*start, exempt) and check.state_ok(*goal, exempt)):
-        return None, "an end pose of the re-plan is not free"
+        return None, "an end pose of the re-plan is not free", proven
     lo, hi = _se3_box(start[0], goal[0], tp.part, pad=tp.tool.reach)
     res = plan_se3(
         start[0], start[1], goal[0], goal[1], lo, hi, is_valid,
@@ -166,5 +186,5 @@ def se3_path(
         f"motions shown free by the sphere bound alone), {run['samples']} FCL samples{res_note}"
     )
     if not res.solved:
-        return None, f"{res.planner}: {res.status}; {tally}"
-    return np.asarray(res.points, dtype=np.float64), f"{res.planner}: {res.status}; {tally}"
+        return None, f"{res.planner}: {res.status}; {tally}", proven
+    return np.asarray(res.points, dtype=np.float64), f"{res.planner}: {res.status}; {tally}", proven
