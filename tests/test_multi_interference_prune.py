@@ -55,14 +55,14 @@ def test_the_sphere_bounds_hold_against_fcl_on_random_poses():
     rng = np.random.default_rng(0)
     seen_close = 0
     small = [k for k, b in enumerate(bodies) if len(covers[k].radii) < 1200]  # wrist links
-    for _ in range(30):
+    for _ in range(20):
         p, q = rng.choice(small), rng.integers(len(bodies))
         Ta, Tb = np.eye(4), _random_pose(rng)
         lb, ub = sphere_bounds(covers[p], Ta, covers[q], Tb)
         d = pair_distance(bodies[p].obj, Ta, other[q].obj, Tb)
         assert lb <= d + 1e-9 and d <= ub + 1e-9
         seen_close += d < 200.0
-    assert seen_close >= 5  # poses close enough for the bounds to matter
+    assert seen_close >= 3  # poses close enough for the bounds to matter
 
 
 def _two_sets():
@@ -106,7 +106,7 @@ def test_a_node_is_settled_only_as_its_fcl_distance_would_settle_it():
     assert said[CLEAR] > 0 and said[HALVE] > 0
 
 
-@pytest.mark.parametrize("clearance", [5.0, 150.0])
+@pytest.mark.parametrize("clearance", [5.0, pytest.param(150.0, marks=pytest.mark.slow)])
 def test_the_pruned_check_finds_what_the_full_check_finds_on_bare_arms(clearance):
     robots, timings = mf.pair()
     full, pruned = _both(mf.movers(robots, timings), clearance)

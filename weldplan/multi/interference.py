@@ -55,11 +55,12 @@ from numpy.typing import NDArray
 
 from weldplan.errors import ConfigError
 from weldplan.geometry.spherecover import sphere_cover
-from weldplan.multi.sweep import CLEAR, HALVE, Cover, body_cover, settled
+from weldplan.multi.sweep import CLEAR, HALVE, Cover, body_cover, cached, mesh_key, settled
 from weldplan.robot.collision.bodies import Body
 from weldplan.robot.collision.checker import SPHERE_CELL_MM
 from weldplan.robot.collision.motionbound import sphere_rates
 from weldplan.robot.collision.nearpart import fcl_tf
+from weldplan.tool.model.tool import bvh
 
 log = logging.getLogger(__name__)
 
@@ -224,7 +225,7 @@ class _Swept:
     step: NDArray[np.float64]  # (m - 1, b) mm motion bound between consecutive samples
     cum: NDArray[np.float64]  # (m, b) mm its running sum from the first sample
     spans: tuple[tuple[int, int], ...]  # per motion, its samples [i0, i1]
-    covers: tuple[Cover, ...]  # per body, its cover spheres (weldplan.multi.sweep)
+    covers: dict[int, Cover]  # per body asked, its cover spheres (weldplan.multi.sweep)
     origin: NDArray[np.float64]  # (3,) base origin
     reach: float  # mm
 
@@ -244,11 +245,19 @@ def robot_bodies(mover: MovingRobot) -> tuple[Body, ...]:
     return tuple(out)
 
 
+#: FCL BVHs of the bodies' meshes, by their digest (weldplan.multi.sweep.mesh_key): built once
+#: per process for every robot of one model, each body its own CollisionObject over it (an
+#: object is placed by each query; the BVH is read only)
+BVHS: dict[str, fcl.BVHModel] = {}
+
+
 def _body(name: str, frame: int, v: NDArray, f: NDArray) -> Body:
     c, r, g = sphere_cover(v, f, SPHERE_CELL_MM)
     centre = (v.min(axis=0) + v.max(axis=0)) / 2
     radius = float(np.linalg.norm(v - centre, axis=1).max()) * (1 + 1e-9) + 1e-9
-    return Body(name, frame, np.asarray(v), np.asarray(f), c, r, g, centre, radius)
+    model = cached(BVHS, mesh_key(v, f), lambda: bvh(v, f))
+    obj = {(): fcl.CollisionObject(model, fcl.Transform())}
+    return Body(name, frame, np.asarray(v), np.asarray(f), c, r, g, centre, radius, obj)
 
 
 def robot_motions(timing: Any) -> tuple[tuple[Motion, ...], tuple[tuple[int, int], ...]]:
@@ -294,12 +303,18 @@ def _swept(mover: MovingRobot) -> tuple[tuple[Motion, ...], _Swept]:
     offsets = np.linalg.norm(np.asarray(mover.robot.origins)[:, :3, 3], axis=1).sum()
     extent = max(float(np.linalg.norm(b.vertices, axis=1).max()) for b in bodies)
     cum = np.vstack([np.zeros((1, len(bodies))), np.cumsum(step, axis=0)])
-    covers = tuple(body_cover(b) for b in bodies)
-    sw = _Swept(bodies, F, C, radii, step, cum, spans, covers, origin, float(offsets + extent))
+    sw = _Swept(bodies, F, C, radii, step, cum, spans, {}, origin, float(offsets + extent))
     return motions, sw
 
 
 # ---------------------------------------------------------------------------- spheres
+def _cover(sw: _Swept, p: int) -> Cover:
+    """Body ``p``'s :class:`~weldplan.multi.sweep.Cover`, made when first asked."""
+    if p not in sw.covers:
+        sw.covers[p] = body_cover(sw.bodies[p])
+    return sw.covers[p]
+
+
 def _reach(sw: _Swept, span: tuple[int, int], lo: int, hi: int) -> tuple[int, NDArray]:
     """``(mid, (b,) mm)``: the middle sample of ``[lo, hi]`` (inside the motion's ``span``) and,
     per body, how far any of its points can be from where it is at ``mid`` over the samples
@@ -360,7 +375,7 @@ def _bodies_apart(
         Ta, Tb = sa.frames[ma, ba.frame], sb.frames[mb, bb.frame]
         leaf = a0 == a1 and b0 == b1
         known = 0 if not s.prune else settled(
-            sa.covers[p], Ta, sb.covers[q], Tb, float(ra[p] + rb[q]), s.clearance, leaf
+            _cover(sa, p), Ta, _cover(sb, q), Tb, float(ra[p] + rb[q]), s.clearance, leaf
         )  # fmt: skip
         if known == CLEAR:
             tally.skipped += 1

@@ -37,7 +37,9 @@ so a leaf is skipped only when it is proven clear.
 from __future__ import annotations
 
 import hashlib
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -56,10 +58,13 @@ FINE_EDGE_MM = 25.0
 FINE_CELL_MM = 25.0
 #: mm: the grid cell of the groups of small spheres (each group inside one sphere)
 GROUP_CELL_MM = 150.0
-#: small sphere pairs one node may compare; beyond, the FCL query decides
-MAX_FINE_PAIRS = 1_000_000
+#: small sphere pairs one node may compare (beyond, the FCL query decides), and the pairs of
+#: groups whose small spheres are compared at once (the closest first)
+MAX_FINE_PAIRS = 400_000
+FINE_CHUNK = 16
 
-#: covers made (:func:`body_cover`), by the digest of their mesh, at most MAX_COVERS
+#: covers made (:func:`body_cover`), by the digest of their mesh (:func:`mesh_key`), at most
+#: MAX_COVERS: made once per process for every robot of one model
 COVERS: dict[str, Cover] = {}
 MAX_COVERS = 64
 
@@ -105,13 +110,25 @@ def body_cover(body: Body) -> Cover:
     (:data:`COVERS`: the robots of one model share their links')."""
     v = np.ascontiguousarray(body.vertices, dtype=np.float64)
     f = np.ascontiguousarray(body.faces, dtype=np.int64)
-    key = hashlib.sha256(v.tobytes() + f.tobytes()).hexdigest()
-    got = COVERS.get(key)
+    return cached(COVERS, mesh_key(v, f), lambda: _make_cover(v, f))
+
+
+def mesh_key(v: NDArray[np.float64], f: NDArray[np.int64]) -> str:
+    """The digest of a mesh ``v (n, 3)``, ``f (m, 3)`` (its bytes as float64 and int64)."""
+    v = np.ascontiguousarray(v, dtype=np.float64)
+    f = np.ascontiguousarray(f, dtype=np.int64)
+    return hashlib.sha256(v.tobytes() + f.tobytes()).hexdigest()
+
+
+def cached(table: dict[str, Any], key: str, make: Callable[[], Any]) -> Any:
+    """``table[key]``, made by ``make()`` when missing; the oldest entries dropped beyond
+    :data:`MAX_COVERS`."""
+    got = table.get(key)
     if got is None:
-        got = _make_cover(v, f)
-        while len(COVERS) >= MAX_COVERS:
-            COVERS.pop(next(iter(COVERS)))
-        COVERS[key] = got
+        got = make()
+        while len(table) >= MAX_COVERS:
+            table.pop(next(iter(table)))
+        table[key] = got
     return got
 
 
@@ -153,7 +170,7 @@ def _upper(Pa: NDArray, Pb: NDArray, gap: NDArray) -> float:
 
 @dataclass
 class _Placed:
-    """Two covers placed at their frames, the small spheres placed on demand."""
+    """Two covers placed at their frames: the groups' gaps, the small spheres on demand."""
 
     ca: Cover
     Ta: NDArray[np.float64]
@@ -161,36 +178,65 @@ class _Placed:
     Tb: NDArray[np.float64]
     gap: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 0)))
 
-    def groups(self) -> NDArray[np.float64]:
+    def groups(self) -> float:
+        """mm: the least gap between the groups' spheres (and keeps them all)."""
         self.gap = _gaps(
             _placed(self.ca.group_centres, self.Ta), self.ca.group_radii,
             _placed(self.cb.group_centres, self.Tb), self.cb.group_radii,
         )  # fmt: skip
-        return self.gap
+        return float(self.gap.min())
 
     def group_upper(self) -> float:
+        """mm: an upper bound from the groups' points."""
         Pa, Pb = _placed(self.ca.group_points, self.Ta), _placed(self.cb.group_points, self.Tb)
         return _upper(Pa, Pb, self.gap)
 
-    def fine(self, below: float) -> tuple[float, float] | None:
-        """``(lb, ub)`` over the small spheres of the groups that come within ``below`` mm of
-        a group of the other body (``lb``: exact when below ``below``); ``None`` when that is
-        more than :data:`MAX_FINE_PAIRS` pairs; ``(inf, inf)`` when no group comes so close."""
+    def _close(self, below: float) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+        """The pairs of groups whose spheres come within ``below`` mm, the closest first."""
         ia, ib = np.nonzero(self.gap < below)
+        order = np.argsort(self.gap[ia, ib], kind="stable")
+        return ia[order], ib[order]
+
+    def _fine(self, ia: NDArray, ib: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+        """The small sphere pairs of the group pairs ``(ia, ib)``: ``(gaps, a's, b's)``."""
+        na = self.ca.starts[ia + 1] - self.ca.starts[ia]
+        nb = self.cb.starts[ib + 1] - self.cb.starts[ib]
+        size = na * nb
+        pair = np.repeat(np.arange(len(ia)), size)
+        local = np.arange(int(size.sum())) - np.repeat(np.cumsum(size) - size, size)
+        fa = self.ca.starts[ia][pair] + local // nb[pair]
+        fb = self.cb.starts[ib][pair] + local % nb[pair]
+        A, B = _placed(self.ca.centres[fa], self.Ta), _placed(self.cb.centres[fb], self.Tb)
+        gap = np.sqrt(((A - B) ** 2).sum(axis=1)) - self.ca.radii[fa] - self.cb.radii[fb]
+        return gap, fa, fb
+
+    def at_least(self, bound: float) -> bool:
+        """Whether no small sphere of one body comes within ``bound`` mm of one of the other
+        (the group pairs asked closest first, :data:`FINE_CHUNK` at a time: the first gap
+        below ``bound`` ends it); ``False`` also beyond :data:`MAX_FINE_PAIRS` pairs."""
+        ia, ib = self._close(bound)
+        asked = 0
+        for k in range(0, len(ia), FINE_CHUNK):
+            gap, _, _ = self._fine(ia[k : k + FINE_CHUNK], ib[k : k + FINE_CHUNK])
+            if gap.size and float(gap.min()) < bound:
+                return False
+            asked += gap.size
+            if asked > MAX_FINE_PAIRS:
+                return False
+        return True
+
+    def fine_upper(self, below: float) -> float:
+        """mm: an upper bound from the small spheres' points of the :data:`FINE_CHUNK` group
+        pairs of least gap (``inf`` when none comes within ``below`` mm)."""
+        ia, ib = self._close(below)
         if len(ia) == 0:
-            return np.inf, np.inf
-        ka, kb = _members(self.ca, np.unique(ia)), _members(self.cb, np.unique(ib))
-        if len(ka) * len(kb) > MAX_FINE_PAIRS:
-            return None
-        A, B = _placed(self.ca.centres[ka], self.Ta), _placed(self.cb.centres[kb], self.Tb)
-        gap = _gaps(A, self.ca.radii[ka], B, self.cb.radii[kb])
-        Pa, Pb = _placed(self.ca.points[ka], self.Ta), _placed(self.cb.points[kb], self.Tb)
-        return float(gap.min()), _upper(Pa, Pb, gap)
-
-
-def _members(c: Cover, groups: NDArray[np.int64]) -> NDArray[np.int64]:
-    """The small spheres of ``groups``, in order."""
-    return np.concatenate([np.arange(c.starts[k], c.starts[k + 1]) for k in groups])
+            return np.inf
+        gap, fa, fb = self._fine(ia[:FINE_CHUNK], ib[:FINE_CHUNK])
+        k = min(UB_PAIRS, gap.size)
+        pick = np.argpartition(gap, k - 1)[:k] if k < gap.size else np.arange(gap.size)
+        Pa = _placed(self.ca.points[fa[pick]], self.Ta)
+        Pb = _placed(self.cb.points[fb[pick]], self.Tb)
+        return float(np.linalg.norm(Pa - Pb, axis=1).min())
 
 
 def sphere_bounds(
@@ -222,14 +268,14 @@ def settled(
     clear, low = clearance + reach + EPS_MM, clearance + EPS_MM
     high = clearance + reach - EPS_MM
     p = _Placed(ca, Ta, cb, Tb)
-    if float(p.groups().min()) >= clear:
+    if p.groups() >= clear:
         return CLEAR
-    if not leaf and p.group_upper() < high:  # halved if nothing within the clearance
-        got = p.fine(low)
-        return HALVE if got is not None and got[0] >= low else UNKNOWN
-    got = p.fine(clear)
-    if got is None or got[0] < low:
+    if leaf:
+        return CLEAR if p.at_least(clear) else UNKNOWN
+    if p.group_upper() < high:  # not clear: halved if nothing comes within the clearance
+        return HALVE if p.at_least(low) else UNKNOWN
+    if p.at_least(clear):
+        return CLEAR
+    if not p.at_least(low):
         return UNKNOWN
-    if got[0] >= clear:
-        return CLEAR
-    return HALVE if not leaf and got[1] < high else UNKNOWN
+    return HALVE if p.fine_upper(clear) < high else UNKNOWN
