@@ -55,7 +55,16 @@ from numpy.typing import NDArray
 
 from weldplan.errors import ConfigError
 from weldplan.geometry.spherecover import sphere_cover
-from weldplan.multi.sweep import CLEAR, HALVE, Cover, body_cover, cached, mesh_key, settled
+from weldplan.multi.sweep import (
+    CLEAR,
+    HALVE,
+    Cover,
+    body_cover,
+    cached,
+    mesh_key,
+    settled,
+    worth_asking,
+)
 from weldplan.robot.collision.bodies import Body
 from weldplan.robot.collision.checker import SPHERE_CELL_MM
 from weldplan.robot.collision.motionbound import sphere_rates
@@ -363,6 +372,7 @@ def _bodies_apart(
     there over its range (:func:`_reach`); else the longer range is halved. Two single samples
     not proven: a conflict (witnessed when ``d < clearance``)."""
     ba, bb = sa.bodies[p], sb.bodies[q]
+    ask = s.prune and worth_asking(ba, bb)
     stack = [(span_a[0], span_a[1], span_b[0], span_b[1])]
     worst: tuple[float, bool] | None = None
     while stack:
@@ -374,7 +384,7 @@ def _bodies_apart(
             continue
         Ta, Tb = sa.frames[ma, ba.frame], sb.frames[mb, bb.frame]
         leaf = a0 == a1 and b0 == b1
-        known = 0 if not s.prune else settled(
+        known = 0 if not ask else settled(
             _cover(sa, p), Ta, _cover(sb, q), Tb, float(ra[p] + rb[q]), s.clearance, leaf
         )  # fmt: skip
         if known == CLEAR:

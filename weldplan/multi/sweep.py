@@ -54,14 +54,19 @@ EPS_MM = 1e-6
 #: sphere pairs of least gap whose points bound the distance from above
 UB_PAIRS = 64
 #: mm: the longest triangle edge of a body's small spheres' mesh, and their grid cell
-FINE_EDGE_MM = 25.0
-FINE_CELL_MM = 25.0
+FINE_EDGE_MM = 40.0
+FINE_CELL_MM = 40.0
 #: mm: the grid cell of the groups of small spheres (each group inside one sphere)
 GROUP_CELL_MM = 150.0
 #: small sphere pairs one node may compare (beyond, the FCL query decides), and the pairs of
 #: groups whose small spheres are compared at once (the closest first)
 MAX_FINE_PAIRS = 400_000
-FINE_CHUNK = 16
+FINE_CHUNK = 8
+#: a pair of bodies is asked to the spheres only when one of them has at least this many
+#: triangles (a tool): FCL on two links of a few hundred triangles each costs less than the
+#: spheres' bounds (a synthetic crossing pair: 1785 queries of 1.1 ms on average; the spheres
+#: cost 2-3 ms a node)
+MIN_TRIANGLES = 2000
 
 #: covers made (:func:`body_cover`), by the digest of their mesh (:func:`mesh_key`), at most
 #: MAX_COVERS: made once per process for every robot of one model
@@ -103,6 +108,12 @@ def _nearest(points: NDArray, group: NDArray, centres: NDArray) -> NDArray[np.in
     dist = np.linalg.norm(points - centres[group], axis=1)
     order = np.lexsort((dist, group))  # per group, its nearest point first
     return order[np.searchsorted(group[order], np.arange(len(centres)))]
+
+
+def worth_asking(a: Body, b: Body) -> bool:
+    """Whether the spheres are asked for the pair of bodies ``a``, ``b``
+    (:data:`MIN_TRIANGLES`)."""
+    return max(len(a.faces), len(b.faces)) >= MIN_TRIANGLES
 
 
 def body_cover(body: Body) -> Cover:
@@ -177,6 +188,7 @@ class _Placed:
     cb: Cover
     Tb: NDArray[np.float64]
     gap: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 0)))
+    members: dict[tuple[int, int], tuple[NDArray, NDArray, int]] = field(default_factory=dict)
 
     def groups(self) -> float:
         """mm: the least gap between the groups' spheres (and keeps them all)."""
@@ -197,28 +209,32 @@ class _Placed:
         order = np.argsort(self.gap[ia, ib], kind="stable")
         return ia[order], ib[order]
 
-    def _fine(self, ia: NDArray, ib: NDArray) -> tuple[NDArray, NDArray, NDArray]:
-        """The small sphere pairs of the group pairs ``(ia, ib)``: ``(gaps, a's, b's)``."""
-        na = self.ca.starts[ia + 1] - self.ca.starts[ia]
-        nb = self.cb.starts[ib + 1] - self.cb.starts[ib]
-        size = na * nb
-        pair = np.repeat(np.arange(len(ia)), size)
-        local = np.arange(int(size.sum())) - np.repeat(np.cumsum(size) - size, size)
-        fa = self.ca.starts[ia][pair] + local // nb[pair]
-        fb = self.cb.starts[ib][pair] + local % nb[pair]
-        A, B = _placed(self.ca.centres[fa], self.Ta), _placed(self.cb.centres[fb], self.Tb)
-        gap = np.sqrt(((A - B) ** 2).sum(axis=1)) - self.ca.radii[fa] - self.cb.radii[fb]
-        return gap, fa, fb
+    def _members(self, side: int, g: int) -> tuple[NDArray, NDArray, int]:
+        """Group ``g``'s small spheres of body ``side`` (0: a, 1: b) placed: ``(centres
+        (n, 3) mm, radii (n,) mm, index of the first)``, placed once per node."""
+        key = (side, int(g))
+        if key not in self.members:
+            c, T = (self.ca, self.Ta) if side == 0 else (self.cb, self.Tb)
+            lo, hi = int(c.starts[g]), int(c.starts[g + 1])
+            self.members[key] = (_placed(c.centres[lo:hi], T), c.radii[lo:hi], lo)
+        return self.members[key]
+
+    def _fine(self, ga: int, gb: int) -> NDArray[np.float64]:
+        """``(na, nb)`` mm: the gaps between the small spheres of group ``ga`` of a and group
+        ``gb`` of b."""
+        A, ra, _ = self._members(0, ga)
+        B, rb, _ = self._members(1, gb)
+        return _gaps(A, ra, B, rb)
 
     def at_least(self, bound: float) -> bool:
         """Whether no small sphere of one body comes within ``bound`` mm of one of the other
-        (the group pairs asked closest first, :data:`FINE_CHUNK` at a time: the first gap
-        below ``bound`` ends it); ``False`` also beyond :data:`MAX_FINE_PAIRS` pairs."""
+        (the group pairs asked closest first: the first gap below ``bound`` ends it);
+        ``False`` also beyond :data:`MAX_FINE_PAIRS` pairs."""
         ia, ib = self._close(bound)
         asked = 0
-        for k in range(0, len(ia), FINE_CHUNK):
-            gap, _, _ = self._fine(ia[k : k + FINE_CHUNK], ib[k : k + FINE_CHUNK])
-            if gap.size and float(gap.min()) < bound:
+        for ga, gb in zip(ia.tolist(), ib.tolist(), strict=True):
+            gap = self._fine(ga, gb)
+            if float(gap.min()) < bound:
                 return False
             asked += gap.size
             if asked > MAX_FINE_PAIRS:
@@ -229,14 +245,15 @@ class _Placed:
         """mm: an upper bound from the small spheres' points of the :data:`FINE_CHUNK` group
         pairs of least gap (``inf`` when none comes within ``below`` mm)."""
         ia, ib = self._close(below)
-        if len(ia) == 0:
-            return np.inf
-        gap, fa, fb = self._fine(ia[:FINE_CHUNK], ib[:FINE_CHUNK])
-        k = min(UB_PAIRS, gap.size)
-        pick = np.argpartition(gap, k - 1)[:k] if k < gap.size else np.arange(gap.size)
-        Pa = _placed(self.ca.points[fa[pick]], self.Ta)
-        Pb = _placed(self.cb.points[fb[pick]], self.Tb)
-        return float(np.linalg.norm(Pa - Pb, axis=1).min())
+        ub = np.inf
+        for ga, gb in zip(ia[:FINE_CHUNK].tolist(), ib[:FINE_CHUNK].tolist(), strict=True):
+            gap = self._fine(ga, gb)
+            la, lb = self._members(0, ga)[2], self._members(1, gb)[2]
+            i, j = np.unravel_index(int(np.argmin(gap)), gap.shape)
+            pa = _placed(self.ca.points[la + i : la + i + 1], self.Ta)
+            pb = _placed(self.cb.points[lb + j : lb + j + 1], self.Tb)
+            ub = min(ub, float(np.linalg.norm(pa - pb)))
+        return ub
 
 
 def sphere_bounds(
