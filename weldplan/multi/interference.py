@@ -37,7 +37,13 @@ under any timing. It is proven, with no sample-pair left out, by three levels:
    two single samples the range is the half intervals to their neighbours: ``d < clearance``
    there is a **conflict** witnessed at two samples; ``d >= clearance`` without the proof is a
    conflict too, marked *unproven* (the motions pass within the motion bound of each other):
-   conservative.
+   conservative. Where a tool is one of the two bodies, its small spheres and the other's
+   (:mod:`weldplan.multi.sweep`) bound ``d`` from below and above first; a node they settle as
+   ``d`` would is not asked to FCL (``InterferenceSettings(prune=False)`` asks every one): the
+   conflicts, their distances and bodies are the same.
+
+Timing does not prune: the interlocks come after this check, and under them any robot may be
+early or late at any wait, so every motion of one robot may overlap every motion of the other.
 
 The bound is the planner's own (:mod:`weldplan.robot.collision.motionbound`, FK by
 :meth:`weldplan.robot.model.Robot.link_frames`); the replay checks with its own FK and bound.
