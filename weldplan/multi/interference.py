@@ -37,7 +37,13 @@ under any timing. It is proven, with no sample-pair left out, by three levels:
    two single samples the range is the half intervals to their neighbours: ``d < clearance``
    there is a **conflict** witnessed at two samples; ``d >= clearance`` without the proof is a
    conflict too, marked *unproven* (the motions pass within the motion bound of each other):
-   conservative.
+   conservative. Where a tool is one of the two bodies, its small spheres and the other's
+   (:mod:`weldplan.multi.sweep`) bound ``d`` from below and above first; a node they settle as
+   ``d`` would is not asked to FCL (``InterferenceSettings(prune=False)`` asks every one): the
+   conflicts, their distances and bodies are the same.
+
+Timing does not prune: the interlocks come after this check, and under them any robot may be
+early or late at any wait, so every motion of one robot may overlap every motion of the other.
 
 The bound is the planner's own (:mod:`weldplan.robot.collision.motionbound`, FK by
 :meth:`weldplan.robot.model.Robot.link_frames`); the replay checks with its own FK and bound.
@@ -55,10 +61,21 @@ from numpy.typing import NDArray
 
 from weldplan.errors import ConfigError
 from weldplan.geometry.spherecover import sphere_cover
+from weldplan.multi.sweep import (
+    CLEAR,
+    HALVE,
+    Cover,
+    body_cover,
+    cached,
+    mesh_key,
+    settled,
+    worth_asking,
+)
 from weldplan.robot.collision.bodies import Body
 from weldplan.robot.collision.checker import SPHERE_CELL_MM
 from weldplan.robot.collision.motionbound import sphere_rates
 from weldplan.robot.collision.nearpart import fcl_tf
+from weldplan.tool.model.tool import bvh
 
 log = logging.getLogger(__name__)
 
@@ -74,9 +91,14 @@ class InterferenceSettings:
     ----------
     clearance
         mm: the smallest distance allowed between any two bodies (links, tools) of two robots.
+    prune
+        ``True``: skip the FCL queries whose answer the bodies' sphere covers already give
+        (:mod:`weldplan.multi.sweep`); ``False``: ask FCL at every node the bounding spheres
+        do not settle. The conflicts are the same (tested); only the work differs.
     """
 
     clearance: float = 5.0
+    prune: bool = True
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.clearance) and self.clearance >= 0):
@@ -181,7 +203,9 @@ class Interference:
     fcl_calls
         FCL distance queries.
     min_distance
-        mm: the smallest FCL distance measured (``inf`` when none was needed).
+        mm: the smallest distance of a conflict (``inf`` when there is none).
+    fcl_skipped
+        FCL distance queries whose answer the sphere covers gave (:mod:`weldplan.multi.sweep`).
     """
 
     robots: tuple[str, ...]
@@ -192,14 +216,15 @@ class Interference:
     pairs_checked: int
     fcl_calls: int
     min_distance: float
+    fcl_skipped: int = 0
 
     def line(self) -> str:
         """One line: what was checked and found."""
-        md = "none measured" if np.isinf(self.min_distance) else f"{self.min_distance:.1f} mm"
+        md = "" if np.isinf(self.min_distance) else f", the closest {self.min_distance:.1f} mm"
         return (
             f"{len(self.robot_pairs)} robot pairs within reach, {self.pairs_checked} motion "
-            f"pairs checked, {len(self.conflicts)} closer than {self.clearance:g} mm "
-            f"(FCL, smallest distance measured {md})"
+            f"pairs checked, {len(self.conflicts)} not proven {self.clearance:g} mm apart "
+            f"(FCL{md})"
         )
 
 
@@ -215,6 +240,7 @@ class _Swept:
     step: NDArray[np.float64]  # (m - 1, b) mm motion bound between consecutive samples
     cum: NDArray[np.float64]  # (m, b) mm its running sum from the first sample
     spans: tuple[tuple[int, int], ...]  # per motion, its samples [i0, i1]
+    covers: dict[int, Cover]  # per body asked, its cover spheres (weldplan.multi.sweep)
     origin: NDArray[np.float64]  # (3,) base origin
     reach: float  # mm
 
@@ -234,11 +260,19 @@ def robot_bodies(mover: MovingRobot) -> tuple[Body, ...]:
     return tuple(out)
 
 
+#: FCL BVHs of the bodies' meshes, by their digest (weldplan.multi.sweep.mesh_key): built once
+#: per process for every robot of one model, each body its own CollisionObject over it (an
+#: object is placed by each query; the BVH is read only)
+BVHS: dict[str, fcl.BVHModel] = {}
+
+
 def _body(name: str, frame: int, v: NDArray, f: NDArray) -> Body:
     c, r, g = sphere_cover(v, f, SPHERE_CELL_MM)
     centre = (v.min(axis=0) + v.max(axis=0)) / 2
     radius = float(np.linalg.norm(v - centre, axis=1).max()) * (1 + 1e-9) + 1e-9
-    return Body(name, frame, np.asarray(v), np.asarray(f), c, r, g, centre, radius)
+    model = cached(BVHS, mesh_key(v, f), lambda: bvh(v, f))
+    obj = {(): fcl.CollisionObject(model, fcl.Transform())}
+    return Body(name, frame, np.asarray(v), np.asarray(f), c, r, g, centre, radius, obj)
 
 
 def robot_motions(timing: Any) -> tuple[tuple[Motion, ...], tuple[tuple[int, int], ...]]:
@@ -284,11 +318,18 @@ def _swept(mover: MovingRobot) -> tuple[tuple[Motion, ...], _Swept]:
     offsets = np.linalg.norm(np.asarray(mover.robot.origins)[:, :3, 3], axis=1).sum()
     extent = max(float(np.linalg.norm(b.vertices, axis=1).max()) for b in bodies)
     cum = np.vstack([np.zeros((1, len(bodies))), np.cumsum(step, axis=0)])
-    sw = _Swept(bodies, F, C, radii, step, cum, spans, origin, float(offsets + extent))
+    sw = _Swept(bodies, F, C, radii, step, cum, spans, {}, origin, float(offsets + extent))
     return motions, sw
 
 
 # ---------------------------------------------------------------------------- spheres
+def _cover(sw: _Swept, p: int) -> Cover:
+    """Body ``p``'s :class:`~weldplan.multi.sweep.Cover`, made when first asked."""
+    if p not in sw.covers:
+        sw.covers[p] = body_cover(sw.bodies[p])
+    return sw.covers[p]
+
+
 def _reach(sw: _Swept, span: tuple[int, int], lo: int, hi: int) -> tuple[int, NDArray]:
     """``(mid, (b,) mm)``: the middle sample of ``[lo, hi]`` (inside the motion's ``span``) and,
     per body, how far any of its points can be from where it is at ``mid`` over the samples
@@ -322,7 +363,7 @@ def pair_distance(
 @dataclass
 class _Tally:
     fcl_calls: int = 0
-    min_distance: float = float("inf")
+    skipped: int = 0
 
 
 def _bodies_apart(
@@ -337,6 +378,7 @@ def _bodies_apart(
     there over its range (:func:`_reach`); else the longer range is halved. Two single samples
     not proven: a conflict (witnessed when ``d < clearance``)."""
     ba, bb = sa.bodies[p], sb.bodies[q]
+    ask = s.prune and worth_asking(ba, bb)
     stack = [(span_a[0], span_a[1], span_b[0], span_b[1])]
     worst: tuple[float, bool] | None = None
     while stack:
@@ -346,14 +388,24 @@ def _bodies_apart(
         gap = np.linalg.norm(sa.centres[ma, p] - sb.centres[mb, q]) - ba.radius - bb.radius
         if gap - ra[p] - rb[q] >= s.clearance:
             continue
-        d = pair_distance(ba.obj, sa.frames[ma, ba.frame], bb.obj, sb.frames[mb, bb.frame])
-        tally.fcl_calls += 1
-        tally.min_distance = min(tally.min_distance, d)
-        if d < s.clearance:
-            return d, True
-        if d - ra[p] - rb[q] >= s.clearance:
+        Ta, Tb = sa.frames[ma, ba.frame], sb.frames[mb, bb.frame]
+        leaf = a0 == a1 and b0 == b1
+        known = 0 if not ask else settled(
+            _cover(sa, p), Ta, _cover(sb, q), Tb, float(ra[p] + rb[q]), s.clearance, leaf
+        )  # fmt: skip
+        if known == CLEAR:
+            tally.skipped += 1
             continue
-        if a0 == a1 and b0 == b1:
+        if known == HALVE:
+            tally.skipped += 1
+        else:
+            d = pair_distance(ba.obj, Ta, bb.obj, Tb)
+            tally.fcl_calls += 1
+            if d < s.clearance:
+                return d, True
+            if d - ra[p] - rb[q] >= s.clearance:
+                continue
+        if leaf:
             worst = (d, False) if worst is None or d < worst[0] else worst
         elif b0 == b1 or (a0 < a1 and ra[p] >= rb[q]):
             stack += [(a0, ma, b0, b1), (ma + 1, a1, b0, b1)] if a1 > a0 else []
@@ -447,9 +499,10 @@ def find_interference(
             found, n = _robot_pair(a, sa, b, sb, s, tally)
             conflicts += found
             checked += n
-    log.info("interference: %d robot pairs, %d motion pairs, %d conflicts, %d FCL calls",
-             len(pairs), checked, len(conflicts), tally.fcl_calls)  # fmt: skip
+    log.info("interference: %d robot pairs, %d motion pairs, %d conflicts, %d FCL calls "
+             "(%d skipped)", len(pairs), checked, len(conflicts), tally.fcl_calls,
+             tally.skipped)  # fmt: skip
     return Interference(
         names, s.clearance, motions, tuple(conflicts), tuple(pairs), checked, tally.fcl_calls,
-        tally.min_distance,
+        min((c.distance for c in conflicts), default=float("inf")), tally.skipped,
     )  # fmt: skip
