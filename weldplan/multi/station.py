@@ -195,7 +195,7 @@ def _robots(station: Any) -> list[tuple[Any, Any, Any]]:
         base = None if spec.base is None else base_pose(*spec.base)
         robot = load_robot(spec.urdf, spec.opw, base=base)
         out.append((spec, mount_tool(spec.tool, robot), robot))
-    check_apart(out)
+    check_apart(out, source=station.source)
     return out
 
 
