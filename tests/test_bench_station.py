@@ -6,6 +6,7 @@ chart."""
 from __future__ import annotations
 
 import argparse
+import json
 from pathlib import Path
 
 import numpy as np
@@ -77,8 +78,12 @@ def test_the_page_puts_the_figures_side_by_side_and_says_what_was_not_checked():
         interlocks=1, robots_rows=(("robot1", 7, 2.2, 2.6, 0.9, 0.0),),
         wall_s={"cell": 1.0}, cpu_s={"cell": 0.9}, load=(1.0, 1.0, 1.0),
         rounds=((2.0, 3.1, (0, 1)), (2.2, 2.6, (0,))),
+        baselines=(("one-robot", 5.5, 6.5), ("nearest-robot", 3.6, 3.25), ("ours", 2.2, 2.6)),
     )  # fmt: skip
     page = bs.format_page([row], "weldplan bench station", "vm")
+    # the baselines planned and timed beside their modelled cycles, ours timed against each
+    assert "| nearest-robot | 3.60 | 3.25 | -20.0 % |" in page
+    assert "| one-robot | 5.50 | 6.50 | -60.0 % |" in page and "| ours | 2.20 | 2.60 | - |" in page
     line = next(x for x in page.splitlines() if x.startswith("| st |"))
     cells = [c.strip() for c in line.strip("|").split("|")]
     assert cells[5:11] == ["5.50", "3.60", "2.20", "2.00", "+10.0 %", "-38.9 %"]
@@ -90,6 +95,7 @@ def test_the_page_puts_the_figures_side_by_side_and_says_what_was_not_checked():
 
 @pytest.mark.slow
 def test_the_bench_plans_a_two_robot_station_file_and_draws_it(tmp_path):
+    import weldplan
     from tests.conftest import require_shared
     from weldplan.io.joints import Joints, read_joints
     from weldplan.weld import demo_part
@@ -120,13 +126,24 @@ file = "{data}/tools/spot_welding_gun/spot_welding_gun.urdf"
     )
     out = tmp_path / "out"
     args = argparse.Namespace(out=str(out), station=[str(toml)], no_demo=True, synthetic=(),
-                              seed=0, pages=True)  # fmt: skip
+                              seed=0, pages=True, plan_baselines=True)  # fmt: skip
     assert bs.run(args) == 0
     page = (out / "station.md").read_text()
     row = next(x for x in page.splitlines() if x.startswith("| two |"))
     cells = [c.strip() for c in row.strip("|").split("|")]
     assert cells[1:5] == ["planned", "6", "2", "1"]  # weld 15: no robot reaches it
     assert float(cells[7]) >= float(cells[8])  # ours >= bound
+    # the baselines planned and timed: ours timed is the kept round's, as the station JSON
+    # records it; the nearest split timed, and every timed cycle above the bound
+    (got,) = json.loads((out / "station.json").read_text())
+    saved = weldplan.load_station_plan(out / "two_station.json")
+    names = [b[0] for b in got["baselines"]]
+    assert names[-1] == "ours" and "nearest-robot" in names
+    assert got["baselines"][-1][2] == pytest.approx(
+        saved.rounds[saved.kept_round].timed_cycle, abs=1e-3
+    )
+    assert all(b[2] >= got["bound"] - 1e-9 for b in got["baselines"])
+    assert "Baselines planned and timed" in page and "--plan-baselines" in page
     html = (out / "two.html").read_text()
     assert "weldplan-gantt" in html and "robot2" in html
     assert (out / "two_gantt.png").read_bytes().startswith(b"\x89PNG")

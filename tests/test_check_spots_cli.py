@@ -164,6 +164,37 @@ def test_two_tools_get_their_own_columns(tmp_path):
         assert r["feasible"] == ("yes" if sp.feasible else "no")
 
 
+def test_the_built_in_arc_torch_is_studied_as_a_station_mounts_it(tmp_path, capsys):
+    """``--tool builtin:arc_torch,bend_angle=0`` (a station's ``tool.builtin``): its column
+    named by the builtin, each verdict the one of the study run in Python on the tool a
+    station's ``[robot.tool] builtin = "arc_torch"`` mounts; ``--tcp`` with it is refused."""
+    from weldplan.io.joints import read_joints
+    from weldplan.io.mesh import load_part
+    from weldplan.station.model import ToolSpec
+    from weldplan.station.mount import mount_tool
+    from weldplan.study import StudyTool, check_spots
+
+    spots = _spots_with_directions(tmp_path, off=False)
+    torch = "builtin:arc_torch,bend_angle=0"
+    argv = ["check-spots", PART, str(spots), "--quiet", "-o", str(tmp_path / "t.csv"),
+            "--tool", torch, "--json", str(tmp_path / "s.json")]  # fmt: skip
+    rc = run_cli(argv)
+    study = FeasibilityStudy.from_json((tmp_path / "s.json").read_text())
+    assert study.tools == ("arc_torch",)
+    assert rc == (EXIT_OK if study.all_feasible else EXIT_PARTIAL)
+    spec = ToolSpec(builtin="arc_torch", params={"bend_angle": 0.0})
+    tool = StudyTool("arc_torch", mount_tool(spec).tool, spec)
+    live = check_spots(load_part(PART), read_joints(spots), [tool], [])
+    assert [s.guns[0].status for s in study.spots] == [s.guns[0].status for s in live.spots]
+    rows = list(csv.DictReader((tmp_path / "t.csv").read_text().splitlines()[1:]))
+    assert [r["gun:arc_torch"] for r in rows] == [s.guns[0].status for s in live.spots]
+    bad = [*argv[:-2], "--tcp", "0,0,0,0,0,0", "-o", str(tmp_path / "u.csv")]
+    assert run_cli(bad) == EXIT_INPUT
+    assert "the built-in tool carries its own TCP" in one_line_error(capsys)
+    assert run_cli([*argv[:-4], "--tool", "builtin:arc_torch,reach=3"]) == EXIT_INPUT
+    assert "reach" in one_line_error(capsys)
+
+
 def test_mismatched_options_are_one_line_errors(tmp_path, capsys):
     spots = tmp_path / "s.csv"
     spots.write_text(SPOTS)

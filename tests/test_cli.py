@@ -256,3 +256,26 @@ def test_progress_bars_draw_on_a_terminal_only():
     text = tty.getvalue()
     assert "local paths" in text and "3/3" in text and "verifying" in text
     assert ProgressBars(enabled=False, stream=tty).enabled is False
+
+
+def test_a_station_s_progress_names_the_robot_and_its_stage_in_words():
+    """A station's shares report ``"robot2 local"`` (weldplan.multi.shares): the bar says
+    ``robot 2: local paths``, and a stage it has no words for keeps its name."""
+    import io
+
+    from weldplan.commands._progress import ProgressBars, label
+
+    class Tty(io.StringIO):
+        def isatty(self):
+            return True
+
+    tty = Tty()
+    bars = ProgressBars(stream=tty)
+    bars("robot2 local", 1, 3)
+    bars("robot12 poses", 0, 1)
+    bars("allocation", 0, 3)
+    bars.close()
+    text = tty.getvalue()
+    assert "robot 2: local paths" in text and "robot 12: gun poses" in text
+    assert "robot2" not in text and "allocation" in text
+    assert label("robot3 new-stage") == "robot 3: new-stage" and label("odd") == "odd"

@@ -153,21 +153,21 @@ def test_two_robots_at_one_base_or_closer_than_their_footprints_are_refused(demo
     """Refused before anything slow: the same base, and bases 1 m apart (a KR 150's base
     link reaches 767 mm from A1, so two of them need 1534 mm)."""
     import weldplan
-    from weldplan.errors import ConfigError
+    from weldplan.errors import InputError
 
     b = PART_BASES[0]
-    with pytest.raises(ConfigError, match="robots 1 and 2 stand at the same base") as e:
+    with pytest.raises(InputError, match="robots 1 and 2 stand at the same base") as e:
         weldplan.plan(_with(demo, [b, b]), rng=0)
-    assert e.value.field == "base"
+    assert e.value.field == "robot.base" and e.value.path == str(demo.source)
     near = (b[0], b[1] + 1000.0, b[2], 0.0)
-    with pytest.raises(ConfigError, match=r"robots 1 and 2 stand 1000.0 mm apart.* 1535 mm"):
+    with pytest.raises(InputError, match=r"robots 1 and 2 stand 1000.0 mm apart.* 1535 mm"):
         weldplan.plan(_with(demo, [b, near]), rng=0)
 
 
 def test_a_given_base_in_the_part_is_refused_saying_which(demo):
     """In the solid (the base link through the part, at a weld), and under the part (the base
     link clear below it, its origin inside the part's footprint on the floor)."""
-    from weldplan.errors import ConfigError
+    from weldplan.errors import InputError
     from weldplan.multi.cell import place_robots
     from weldplan.multi.station import _robots
     from weldplan.station.pipeline import cell_stage
@@ -184,9 +184,9 @@ def test_a_given_base_in_the_part_is_refused_saying_which(demo):
     }  # fmt: skip
     for words, base in cases.items():
         st = _with(demo, [(-3000.0, 0.0, 0.0, 0.0), base])  # robot 1 far off, clear
-        with pytest.raises(ConfigError, match=f"robot 2's base .*{words}") as e:
+        with pytest.raises(InputError, match=f"robot 2's base .*{words}") as e:
             place_robots(cell, st, _robots(st))
-        assert e.value.field == "base"
+        assert e.value.field == "robot.base" and e.value.path == str(demo.source)
 
 
 def test_the_base_search_keeps_out_of_the_discs_it_is_given():

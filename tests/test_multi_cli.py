@@ -317,7 +317,9 @@ def test_the_saved_station_round_trips_and_verify_checks_the_interlock(splan, tm
     assert saved.schedule.interlocks == (lock,)
     assert saved.schedule.cycle_times == pytest.approx(sp.schedule.cycle_times, abs=1e-6)
     assert saved.report.ours.unreached[0].weld == UNREACHED
+    assert saved.rounds == tuple(sp.rounds) and saved.rounds  # the allocate-plan rounds
     v = saved.verify()
+    assert v["rounds"].ok, v["rounds"].text
     # left out: the weld no robot reaches, and a pair the replay (recorded and re-run) finds
     # too close, if any, named by where each robot is: robot 2 waits at home until robot 1 is
     # back at its own

@@ -75,7 +75,9 @@ class StationRow:
     empty or None for an allocation-only (synthetic) station. ``robots_rows``: per robot
     ``(name, welds, allocated s, timed s or None, utilisation, waiting s)``; ``rounds``: per
     allocate-plan round (:mod:`weldplan.multi.calibrate`) ``(model cycle s, timed cycle s,
-    robots planned)``, ``ours`` being the best round's model cycle."""
+    robots planned)``, ``ours`` being the best round's model cycle; ``baselines`` (with
+    ``--plan-baselines``, :func:`timed_baselines`): per allocation ``(name, modelled cycle s,
+    planned and timed cycle s or None)``."""
 
     name: str
     kind: str
@@ -101,6 +103,7 @@ class StationRow:
     note: str = ""
     rounds: tuple[tuple[float, float, tuple[int, ...]], ...] = ()
     bound_study: float | None = None
+    baselines: tuple[tuple[str, float | None, float | None], ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         return dataclasses.asdict(self)
@@ -165,12 +168,19 @@ def demo_two_robots() -> Any:
 
 
 def plan_row(
-    station: Any, name: str, seed: int, pages: Path | None = None, jobs: int | None = None
+    station: Any,
+    name: str,
+    seed: int,
+    pages: Path | None = None,
+    jobs: int | None = None,
+    baselines: bool = False,
 ) -> StationRow:
     """Plan ``station`` with :func:`weldplan.plan` and measure it; with ``pages``, write its
     station page and Gantt chart there (``<name>.html``, ``<name>_gantt.png``) and the plan
     (``<name>_station.json``, the robots' route JSONs beside it); with ``jobs``,
-    on that many processes (the robots' shares in parallel: :mod:`weldplan.multi.shares`)."""
+    on that many processes (the robots' shares in parallel: :mod:`weldplan.multi.shares`);
+    with ``baselines``, the baselines' allocations planned and timed too
+    (:func:`timed_baselines`)."""
     import weldplan
 
     if jobs is not None:
@@ -197,6 +207,7 @@ def plan_row(
                      round(s.waiting[r], 3)))  # fmt: skip
     if pages is not None:
         _write_pages(p, name, pages)
+    planned = timed_baselines(p, seed, wall, cpu) if baselines else ()
     return StationRow(
         name, "planned", len(rep.ours.welds), len(s.robots), len(rep.ours.unreached),
         _cycle(rep.one_robot), _cycle(rep.nearest), round(rep.ours.cycle_time, 3),
@@ -209,7 +220,40 @@ def plan_row(
         f"(jobs {station.jobs})",
         tuple((round(c.model_cycle, 3), round(c.timed_cycle, 3), c.planned) for c in p.rounds),
         None if rep.bound.at_study_poses is None else round(rep.bound.at_study_poses, 3),
+        planned,
     )  # fmt: skip
+
+
+def timed_baselines(
+    p: Any, seed: int, wall: dict[str, float], cpu: dict[str, float]
+) -> tuple[tuple[str, float | None, float | None], ...]:
+    """The baselines of ``p``'s report (:mod:`weldplan.multi.baselines`: one robot, nearest
+    robot) planned as our allocation is: each robot's share through the single-robot
+    pipeline at its base (:func:`weldplan.multi.shares.plan_shares`, the station's seed) and
+    timed by its program; ``(name, modelled cycle s, timed cycle s)`` per allocation, ours
+    (the best round's plans) last. The timed cycle is the slowest robot's program, without
+    interlock waits (the rounds' measure: no interference stage runs for a baseline); None
+    when the report has no such baseline. Each baseline's wall and CPU seconds go to
+    ``wall`` and ``cpu`` (``"baseline nearest-robot"``...)."""
+    from weldplan.multi.shares import plan_shares
+
+    out = []
+    for a in (p.report.one_robot, p.report.nearest):
+        if a is None:
+            continue
+        t0, c0 = time.perf_counter(), _cpu()
+        got = plan_shares(p.station, a, seed=seed)
+        wall[f"baseline {a.method}"] = round(time.perf_counter() - t0, 2)
+        cpu[f"baseline {a.method}"] = round(_cpu() - c0, 2)
+        times = [pl.program.timing.total for pl in got.plans if pl is not None]
+        out.append((a.method, round(a.cycle_time, 3), round(max(times, default=0.0), 3)))
+    best = min((r.timed_cycle for r in p.rounds), default=None)
+    out.append(("ours", round(p.report.ours.cycle_time, 3), _round3(best)))
+    return tuple(out)
+
+
+def _round3(v: float | None) -> float | None:
+    return None if v is None else round(float(v), 3)
 
 
 def _cycle(a: Any) -> float | None:
@@ -322,6 +366,14 @@ def format_page(rows: list[StationRow], command: str, machine: str) -> str:
                     ""]  # fmt: skip
         if r.note:
             out += [f"Note: {r.note}.", ""]
+        if r.baselines:
+            ours = r.baselines[-1][2]
+            bh = ["allocation", "modelled s", "planned and timed s", "ours (timed) vs it"]
+            body = [[n, _s(m), _s(t), _pct(ours, t) if n != "ours" else "-"]
+                    for n, m, t in r.baselines]  # fmt: skip
+            out += ["Baselines planned and timed (each share through the single-robot "
+                    "pipeline; the slowest program, no interlock waits):", "",
+                    table(bh, body), ""]  # fmt: skip
         if r.rounds:
             rh = ["round", "ours (model) s", "timed s", "robots planned"]
             body = [[k + 1, f"{m:.2f}", f"{t:.2f}", ", ".join(f"robot{i + 1}" for i in p)]
@@ -373,6 +425,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="plan the car2 stations too: upright in a cell, the straight arc "
                    "torch, 200 welds on 2 robots and 400 on 4 (examples/car2_upright_*.toml; "
                    "slow)")  # fmt: skip
+    p.add_argument("--plan-baselines", action="store_true",
+                   help="also plan and time the one-robot and nearest-robot allocations of "
+                   "each planned station (each a full plan of its shares; slow)")  # fmt: skip
     p.add_argument("--jobs", type=_jobs, default=None, metavar="N",
                    help="processes per planned station: the robots' shares in parallel "
                    "(default: each station's own jobs)")  # fmt: skip
@@ -403,7 +458,8 @@ def run(args: argparse.Namespace) -> int:
             files += [ROOT / "examples" / f for f in CAR2_STATIONS]
         stations += [(load_station(f), f.stem) for f in files]
         for st, name in stations:
-            rows.append(plan_row(st, name, args.seed, pages, getattr(args, "jobs", None)))
+            rows.append(plan_row(st, name, args.seed, pages, getattr(args, "jobs", None),
+                                 getattr(args, "plan_baselines", False)))  # fmt: skip
             print(f"{name}: timed cycle {rows[-1].timed:.2f} s", flush=True)
         for W, R in args.synthetic:
             rows.append(synthetic_row(W, R, args.seed))
@@ -434,4 +490,6 @@ def _argv(args: argparse.Namespace) -> list[str]:
         out.append("--car2")
     if getattr(args, "jobs", None) is not None:
         out.append(f"--jobs {args.jobs}")
+    if getattr(args, "plan_baselines", False):
+        out.append("--plan-baselines")
     return out

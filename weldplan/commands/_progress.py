@@ -8,6 +8,7 @@ stream is a terminal and ``--quiet`` was not given, so pipes, logs and CI output
 
 from __future__ import annotations
 
+import re
 import sys
 import time
 from typing import TextIO
@@ -15,12 +16,35 @@ from typing import TextIO
 #: stage name -> label shown on the bar
 LABELS = {
     "cell": "cell (grid)",
+    "cost": "leg times",
     "straight": "straight pairs",
     "local": "local paths",
     "sequence": "sequencing",
+    "route": "route",
     "verify": "verifying",
+    "reach": "reach",
+    "poses": "gun poses",
+    "transitions": "transitions",
+    "robot": "robot motion",
+    "program": "program",
     "export": "writing",
+    "study": "robot studies",
+    "allocation": "allocation",
+    "plan": "robots' shares",
+    "interference": "interference",
 }
+
+#: a station's event of one robot's share: ``"robot2 local"`` (weldplan.multi.shares)
+_ROBOT_STAGE = re.compile(r"robot(\d+) (.+)")
+
+
+def label(stage: str) -> str:
+    """The words a bar shows for ``stage``: its :data:`LABELS` entry, and for one robot's
+    stage of a station ``"robot 2: local paths"`` (not the raw ``"robot2 local"``)."""
+    m = _ROBOT_STAGE.fullmatch(stage)
+    if m is not None:
+        return f"robot {m.group(1)}: {LABELS.get(m.group(2), m.group(2))}"
+    return LABELS.get(stage, stage)
 
 
 class ProgressBars:
@@ -59,13 +83,13 @@ class ProgressBars:
         width = 28
         frac = 1.0 if total <= 0 else min(done / total, 1.0)
         fill = int(round(frac * width))
-        label = LABELS.get(stage, stage)
+        words = label(stage)
         elapsed = now - self._t0
         eta = ""
         if 0 < done < total and done > self._done0 and elapsed > 0.5:
             eta = f"  ETA {elapsed / (done - self._done0) * (total - done):6.1f} s"
         self.stream.write(
-            f"\r{label:<15} [{'#' * fill}{'.' * (width - fill)}] {done}/{total} "
+            f"\r{words:<15} [{'#' * fill}{'.' * (width - fill)}] {done}/{total} "
             f"{elapsed:6.2f} s{eta}  "
         )
         self.stream.flush()

@@ -26,6 +26,8 @@ HELP = "weld feasibility study: which spots each gun closes on and each robot re
 
 #: the ``--robot-base`` word for a base searched on the floor
 SEARCHED = "searched"
+#: the ``--tool`` prefix of a built-in tool (``builtin:arc_torch[,bend_angle=0,...]``)
+BUILTIN = "builtin:"
 #: this command's exit codes (``weldplan check-spots --help``)
 EPILOG = """exit codes:
   0  every spot is feasible (some robot reaches it with some gun; without --robot: some gun
@@ -58,8 +60,10 @@ def _add_tool_arguments(p: argparse.ArgumentParser) -> None:
         "--tool",
         action="append",
         required=True,
-        metavar="URDF|MESH",
-        help="a gun: URDF (TCP its last fixed joint) or a mesh with --tcp",
+        metavar="URDF|MESH|builtin:arc_torch",
+        help="a gun: URDF (TCP its last fixed joint), a mesh with --tcp, or the built-in arc "
+        "torch 'builtin:arc_torch[,bend_angle=0,stickout=15,...]' (a station's tool.builtin; "
+        "weldplan.tool.arc_torch)",
     )
     g.add_argument(
         "--tcp",
@@ -136,11 +140,36 @@ def _tools(args: argparse.Namespace) -> list[Any]:
     from weldplan.study.feasibility import load_study_tool
 
     tcps = _paired(args.tcp, len(args.tool), "--tcp", "--tool")
-    names = _names(args.tool)
+    names = _names([_builtin_name(p) or p for p in args.tool])
     return [
-        load_study_tool(path, tcp=tcp, units=args.tool_units, name=name)
+        _builtin_tool(path, tcp, name)
+        if _builtin_name(path)
+        else load_study_tool(path, tcp=tcp, units=args.tool_units, name=name)
         for path, tcp, name in zip(args.tool, tcps, names, strict=True)
     ]
+
+
+def _builtin_name(text: str) -> str | None:
+    """``"arc_torch"`` for ``--tool builtin:arc_torch[,k=v...]``, ``None`` for a file."""
+    return text[len(BUILTIN) :].split(",")[0] if text.startswith(BUILTIN) else None
+
+
+def _builtin_tool(text: str, tcp: str | None, name: str) -> Any:
+    """The built-in tool of ``--tool builtin:arc_torch[,bend_angle=0,...]`` as ``weldplan
+    plan --tool`` and a station's ``tool.builtin`` read it
+    (:func:`weldplan.commands._station_args.tool_spec`), with its own TCP."""
+    from weldplan.commands._station_args import tool_spec
+    from weldplan.station.mount import load_tool_spec
+    from weldplan.study.feasibility import StudyTool
+
+    if tcp is not None:
+        raise InputError(
+            f"{text}: the built-in tool carries its own TCP; --tcp goes with a tool file",
+            field="--tcp",
+        )
+    spec = tool_spec(argparse.Namespace(tool=text, tcp=None, tool_units=None, tool_mesh=None))
+    tool, _ = load_tool_spec(spec)
+    return StudyTool(name, tool, spec)
 
 
 def _robots(args: argparse.Namespace) -> list[Any]:

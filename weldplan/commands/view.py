@@ -99,13 +99,16 @@ def run(args: argparse.Namespace) -> int:
 
 def _view_station(args: argparse.Namespace) -> int:
     """A station JSON: its page rebuilt from the saved files, written (``--html``, ``--png``)
-    or served live (the scene without the chart)."""
+    or served live (the scene without the chart); its allocate-plan rounds, one line each, on
+    stdout first (none for a file written before they were recorded)."""
     from weldplan.errors import WeldplanError
     from weldplan.multi.saved import load_station_plan
 
     if args.mesh is not None:
         raise WeldplanError(f"{args.route} is a station JSON: give no mesh (its station names it)")
     saved = load_station_plan(args.route)
+    for line in saved.rounds_lines():
+        print(line)
     if args.station is not None:
         from weldplan.station.load import load_station
 

@@ -42,7 +42,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from weldplan.errors import ConfigError, PlanningError
+from weldplan.errors import ConfigError, InputError, PlanningError
 from weldplan.multi.bases import base_link_hits
 
 log = logging.getLogger(__name__)
@@ -116,9 +116,11 @@ def footprint_radius(robot: Any) -> float:
     return max(float(np.linalg.norm(lk.vertices[:, :2], axis=1).max()) for lk in robot.links[:2])
 
 
-def check_apart(robots: Any, settings: LayoutSettings | None = None) -> None:
+def check_apart(robots: Any, settings: LayoutSettings | None = None, source: Any = None) -> None:
     """Refuse two robots whose given bases stand closer in x, y than
-    :meth:`LayoutSettings.apart` (ConfigError ``base`` naming both)."""
+    :meth:`LayoutSettings.apart` (a ConfigError ``base`` naming both; with the station file
+    ``source``, an :class:`~weldplan.errors.InputError` naming it, the line of the second
+    robot's ``base`` and the key ``robot.base``)."""
     settings = settings or LayoutSettings()
     given = [
         (k, s.base, footprint_radius(r)) for k, (s, _, r) in enumerate(robots) if s.base is not None
@@ -129,31 +131,45 @@ def check_apart(robots: Any, settings: LayoutSettings | None = None) -> None:
             need = settings.apart(ra, rb)
             if d < need:
                 same = "at the same base" if d < 1e-6 else f"{d:.1f} mm apart"
-                raise ConfigError(
+                raise _base_error(
                     f"robots {ka + 1} and {kb + 1} stand {same}: two bases must be at least "
                     f"{need:.0f} mm apart in x, y (their footprints)",
-                    field="base",
+                    source,
+                    kb,
                 )
 
 
-def check_in_part(part: Any, k: int, spec: Any, robot: Any) -> None:
+def _base_error(message: str, source: Any, k: int) -> ConfigError | InputError:
+    """The refusal of robot ``k``'s base: located in the station file ``source`` when there
+    is one (its line of ``robot.base``), else a ConfigError ``base``."""
+    if source is None:
+        return ConfigError(message, field="base")
+    from weldplan.station.load import key_line
+
+    line = key_line(source, ("robot", k, "base")) or key_line(source, ("robot", k))
+    return InputError(message, path=source, line=line, field="robot.base")
+
+
+def check_in_part(part: Any, k: int, spec: Any, robot: Any, source: Any = None) -> None:
     """Refuse robot ``k``'s given base when it stands in the part's solid or inside its
-    footprint on the floor (module docstring; ConfigError ``base``)."""
+    footprint on the floor (module docstring; ConfigError ``base``, located in the station
+    file ``source`` as :func:`check_apart` does)."""
     p = np.asarray([spec.base[:3]], dtype=np.float64)
     where = ", ".join(f"{v:.0f}" for v in spec.base[:3])
     hit = base_link_hits(part, robot)
     if hit or (part.is_watertight and bool(part.contains(p)[0])):
         what = f"its base link {robot.links[0].name!r} meets the part" if hit else "inside it"
-        raise ConfigError(
-            f"robot {k + 1}'s base ({where}) stands in the part's solid: {what}", field="base"
+        raise _base_error(
+            f"robot {k + 1}'s base ({where}) stands in the part's solid: {what}", source, k
         )
     lo, hi = np.asarray(part.bounds)[:, :2]
     if np.all(p[0, :2] >= lo) and np.all(p[0, :2] <= hi):
-        raise ConfigError(
+        raise _base_error(
             f"robot {k + 1}'s base ({where}) lies inside the part's footprint on the floor "
             f"(its bounding box x {lo[0]:.0f}..{hi[0]:.0f}, y {lo[1]:.0f}..{hi[1]:.0f} mm): a "
             "robot cannot stand under the part",
-            field="base",
+            source,
+            k,
         )
 
 
@@ -194,7 +210,7 @@ def place_robots(
     settings = settings or LayoutSettings()
     for k, (spec, _, robot) in enumerate(robots):
         if spec.base is not None:
-            check_in_part(cell.part, k, spec, robot)
+            check_in_part(cell.part, k, spec, robot, station.source)
     out, studies = list(robots), [None] * len(robots)
     for k, (spec, mounted, robot) in enumerate(robots):
         if spec.base is not None:

@@ -75,6 +75,9 @@ def verify_station(saved: Any, *, station: Any = None) -> Verdict:
             path=saved.path, field="robots",
         )  # fmt: skip
     checks = [allocation_check(saved, _weld_ids(station))]
+    rounds = rounds_check(saved)
+    if rounds is not None:
+        checks.append(rounds)
     routes = []
     for k in range(len(saved.robots)):
         check, route = robot_check(saved, station, k)
@@ -137,6 +140,43 @@ def allocation_check(saved: Any, ids: list[str]) -> CheckResult:
         f"(each with its reasons); {len(a.shares)} shares disjoint"
     )
     return CheckResult("allocation", True, text, left_out=tuple(sorted(unreached)))
+
+
+#: s: a round's recorded cycles and the robots' recorded timed cycles agree to this
+ROUND_TOL_S = 1e-6
+
+
+def rounds_check(saved: Any) -> CheckResult | None:
+    """The allocate-plan rounds as recorded (``None``: a file without them): every round
+    times every robot and its timed cycle is its slowest robot's, it names robots of the
+    station, and the kept round (the least timed cycle, :attr:`~weldplan.multi.saved.
+    SavedStationPlan.kept_round`) timed each robot as the robot's recorded program."""
+    rounds = tuple(getattr(saved, "rounds", ()) or ())
+    if not rounds:
+        return None
+    R = len(saved.robots)
+    problems = []
+    for k, c in enumerate(rounds):
+        if len(c.timed) != R or any(not 0 <= i < R for i in c.planned):
+            problems.append(f"round {k + 1} is not over the station's {R} robots")
+        elif abs(max(c.timed, default=0.0) - c.timed_cycle) > ROUND_TOL_S:
+            problems.append(f"round {k + 1}: timed cycle {c.timed_cycle:.6f} s is not its "
+                            f"slowest robot's {max(c.timed):.6f} s")  # fmt: skip
+    kept = saved.kept_round
+    if not problems:
+        for r, robot in enumerate(saved.robots):
+            have = 0.0 if robot.timed_cycle is None else robot.timed_cycle
+            got = rounds[kept].timed[r]
+            if abs(got - have) > ROUND_TOL_S:
+                problems.append(f"{robot.name}: round {kept + 1} timed it {got:.3f} s, its "
+                                f"program {have:.3f} s")  # fmt: skip
+    if problems:
+        return CheckResult("rounds", False, "; ".join(problems[:3]))
+    text = (
+        f"{len(rounds)} allocate-plan round(s); round {kept + 1} kept, its timed cycle "
+        f"{rounds[kept].timed_cycle:.2f} s the robots' programs'"
+    )
+    return CheckResult("rounds", True, text)
 
 
 def robot_check(saved: Any, station: Any, k: int) -> tuple[CheckResult | None, Any]:

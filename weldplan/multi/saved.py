@@ -13,8 +13,10 @@ writes them as one set, whole or not at all (:func:`weldplan.io.outputset.write_
 The station JSON (``route_station.json`` beside ``route.json``) holds what no robot's file
 can: the allocation report (ours, the baselines, the lower bound), the station's schedule
 (:meth:`~weldplan.multi.schedule.StationSchedule.to_dict`, interlocks included), the replay's
-verdict (``null``: robot-robot interference not checked), and per robot the names of its route
-JSON, trajectory and program, relative to the station JSON's folder. :func:`load_station_plan`
+verdict (``null``: robot-robot interference not checked), the allocate-plan rounds (``rounds``:
+per round the allocation's cycle, the timed cycle, each robot's timed cycle and the robots
+re-planned; a file without them reads as none), and per robot the names of its route JSON,
+trajectory and program, relative to the station JSON's folder. :func:`load_station_plan`
 reads it into a frozen :class:`SavedStationPlan`; :meth:`SavedStationPlan.verify` re-checks it
 (:mod:`weldplan.multi.recheck`), which is what ``weldplan verify STATION_JSON`` runs::
 
@@ -33,6 +35,8 @@ from dataclasses import dataclass
 from os import PathLike
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from weldplan.errors import InputError
 from weldplan.multi.result import AllocationReport
@@ -186,6 +190,7 @@ def station_dict(splan: Any, paths: StationPaths) -> dict[str, Any]:
         "cycle_time": splan.cycle_time if sched is None else sched.cycle_time,
         "interference": splan.interference,
         "replay": None if splan.replay is None else splan.replay.to_dict(),
+        "rounds": [c.to_dict() for c in getattr(splan, "rounds", ())],
     }
 
 
@@ -291,6 +296,10 @@ class SavedStationPlan:
     replay
         The replay's :class:`~weldplan.multi.schedule.ReplayVerdict`; ``None``: the plan says
         interference was not checked.
+    rounds
+        The allocate-plan rounds (:class:`~weldplan.multi.calibrate.CalibrationRound`: the
+        allocation's cycle, the timed cycle, the robots re-planned), in order; empty in a file
+        written before they were recorded.
     """
 
     path: Path
@@ -301,6 +310,36 @@ class SavedStationPlan:
     cycle_time: float
     interference: str
     replay: ReplayVerdict | None
+    rounds: tuple[Any, ...] = ()
+
+    @property
+    def kept_round(self) -> int | None:
+        """The index of the round the station keeps, by the rule of
+        :func:`weldplan.multi.calibrate.allocate_and_plan`: a round whose timed cycle drops
+        (by more than its ``EPS_S``) is kept, and so is one that re-planned nothing at the
+        kept cycle (the same plans, a newer allocation); ``None``: no round recorded."""
+        from weldplan.multi.calibrate import EPS_S
+
+        kept = None
+        for k, c in enumerate(self.rounds):
+            best = np.inf if kept is None else self.rounds[kept].timed_cycle
+            if c.timed_cycle < best - EPS_S or (not c.planned and c.timed_cycle <= best + EPS_S):
+                kept = k
+        return kept
+
+    def rounds_lines(self) -> list[str]:
+        """One line a round: its allocation's cycle, its timed cycle and the robots it
+        re-planned (the kept one marked); empty when none is recorded."""
+        kept = self.kept_round
+        names = [r.name for r in self.robots]
+        out = []
+        for k, c in enumerate(self.rounds):
+            planned = ", ".join(names[i] if i < len(names) else str(i) for i in c.planned)
+            out.append(
+                f"round {k + 1}: allocation {c.model_cycle:.2f} s, timed {c.timed_cycle:.2f} s, "
+                f"re-planned {planned or 'none'}{' (kept)' if k == kept else ''}"
+            )
+        return out
 
     def load_station(self) -> Any:
         """The :class:`~weldplan.station.model.Station` the plan records (its station file,
@@ -383,13 +422,26 @@ def load_station_plan(path: str | PathLike[str]) -> SavedStationPlan:
         cycle = float(d[key])
         key = "interference"
         note = str(d[key])
+        key = "rounds"
+        rounds = tuple(_round(c) for c in d.get(key) or ())
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
         why = f"missing {exc}" if isinstance(exc, KeyError) else str(exc)
         raise InputError(f"not a valid entry: {why}", path=path, field=key) from None
     source = d.get("station_file")
     return SavedStationPlan(
-        path, None if source is None else str(source), robots, report, sched, cycle, note, replay
-    )
+        path, None if source is None else str(source), robots, report, sched, cycle, note, replay,
+        rounds,
+    )  # fmt: skip
+
+
+def _round(d: dict[str, Any]) -> Any:
+    """A :class:`~weldplan.multi.calibrate.CalibrationRound` from its ``to_dict()``."""
+    from weldplan.multi.calibrate import CalibrationRound
+
+    return CalibrationRound(
+        float(d["model_cycle"]), float(d["timed_cycle"]), tuple(float(v) for v in d["timed"]),
+        tuple(int(v) for v in d["planned"]),
+    )  # fmt: skip
 
 
 def _robot(path: Path, r: dict[str, Any]) -> SavedRobot:

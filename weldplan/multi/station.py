@@ -195,7 +195,7 @@ def _robots(station: Any) -> list[tuple[Any, Any, Any]]:
         base = None if spec.base is None else base_pose(*spec.base)
         robot = load_robot(spec.urdf, spec.opw, base=base)
         out.append((spec, mount_tool(spec.tool, robot), robot))
-    check_apart(out)
+    check_apart(out, source=station.source)
     return out
 
 
@@ -330,19 +330,17 @@ def plan_station(
     )  # fmt: skip
 
 
-def _tcp_bounds(robots: list[Any], inp: StudyInputs) -> Any:
-    """``(R, W, W)`` s: per robot the pose-free leg bounds between the welds
-    (:func:`weldplan.multi.bound.tcp_leg_bound`: its lever arms with its tool's TCP, its joint
-    limits, the welds' positions)."""
-    from weldplan.multi.bound import lever_arms, tcp_leg_bound
+def _tcp_bounds(robots: list[Any], inp: StudyInputs) -> tuple[Any, Any]:
+    """``((R, W, W) s, (R, W) s)``: per robot the pose-free bounds of its legs between the
+    welds and between its home and each weld (:func:`weldplan.multi.bound.pose_free_legs`:
+    the TCP's distance and axis 1's turn, whatever gun poses the plans pick)."""
+    from weldplan.multi.bound import pose_free_legs
 
-    out = []
-    for _, mounted, robot in robots:
-        F = mounted.flange_tcp
-        tcp = 0.0 if F is None else float(np.linalg.norm(np.asarray(F)[:3, 3]))
-        L = lever_arms(robot.opw, tcp)
-        out.append(tcp_leg_bound(inp.reach.positions, L, robot.velocity, robot.acceleration))
-    return np.stack(out)
+    legs = [
+        pose_free_legs(robot, mounted.flange_tcp, inp.reach.positions, np.radians(home_deg(spec)))
+        for spec, mounted, robot in robots
+    ]
+    return np.stack([g.travel for g in legs]), np.stack([g.home for g in legs])
 
 
 def _allocate_and_plan(
@@ -375,10 +373,11 @@ def _allocate_and_plan(
     say = progress or (lambda stage, done, total: None)
     t = time.perf_counter()
     bounds = []
-    for travel in (_tcp_bounds(robots, inp), inp.bound):
+    free, home = _tcp_bounds(robots, inp)
+    for travel in (free, inp.bound):
         problem = AllocationProblem.build(inp.reach, inp.weld_time, travel, settings.closed)
         bounds.append(lower_bound(problem, nodes=settings.milp_nodes,
-                                  seconds=settings.milp_seconds))  # fmt: skip
+                                  seconds=settings.milp_seconds, home=home))  # fmt: skip
     bound = dataclasses.replace(bounds[0], at_study_poses=bounds[1].value)
     seconds["allocation"] = time.perf_counter() - t
     calls = [0]
