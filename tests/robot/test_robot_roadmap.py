@@ -184,3 +184,50 @@ def test_stands_turned_about_a1_tie_and_the_order_of_the_candidates_decides(robo
         best, _ = rank_bases(robot, cands, [None, None], T_fl, rows, None, by_reach)
         np.testing.assert_array_equal(best.base, first)
         assert best.min_manipulability > 0.0
+
+
+def test_each_judged_base_says_which_welds_it_leaves_out_and_the_summary_names_them(robot):
+    """Step 4's verdicts (Placement.verdicts): at A the trial joins one of the two welds and
+    names the other and the split leg; B joins both; the summary rows say it per base."""
+    from weldplan.robot.placement.base import BaseVerdict
+    from weldplan.station.summary import base_trial_rows
+
+    arm, chk, T_fl, A, B = wall_station(robot)
+    rows = np.array([0, 2])
+    cands = [Placement(A, 2, 2, 0.0, 2, True), Placement(B, 2, 2, 0.0, 2, True)]
+    best, _ = rank_bases(
+        arm, cands, [None, None], T_fl, rows, chk.with_robot, PlacementSettings(),
+        ids=("w1", "w2"),
+    )  # fmt: skip
+    at_a, at_b = best.verdicts
+    assert at_a.base == pytest.approx((0.0, 0.0, 0.0, 0.0))
+    assert (at_a.served, at_a.joined, at_a.unserved) == (2, 1, ())
+    assert len(at_a.left_out) == 1 and at_a.left_out[0] in ("w1", "w2")
+    assert len(at_a.splits) == 1 and at_a.splits[0].startswith("w1 -> w2: ")
+    assert (at_b.served, at_b.joined, at_b.left_out, at_b.splits) == (2, 2, (), ())
+    assert at_a.summary()["left_out"] == at_a.left_out
+    rows_said = dict(base_trial_rows(best))
+    assert rows_said["base trial"].startswith("1 of the 2 base(s) judged join all 2 welds")
+    assert rows_said["  base 0,0,0,0.0"].startswith(
+        f"1 of 2 served welds joined; left out: {at_a.left_out[0]}; split w1 -> w2: "
+    )
+    assert rows_said["  base -5171,0,0,0.0"] == "2 of 2 served welds joined"
+    # the same order whichever comes first: A is first by manipulability, and B, serving more
+    # welds than A joins, is judged too
+    again, _ = rank_bases(
+        arm, cands[::-1], [None, None], T_fl, rows, chk.with_robot, PlacementSettings(),
+        ids=("w1", "w2"),
+    )  # fmt: skip
+    assert again.verdicts == best.verdicts
+    skipped = BaseVerdict((0.0, 0.0, 0.0, 0.0), 1, -1, ("w2",), ())
+    assert skipped.line() == "serves 1: not judged (no more than a base judged before joins)"
+
+
+def test_step_four_judges_one_candidate_per_floor_position_before_a_second():
+    """_by_stand: the heights and yaws of a stand after the first candidate of every other."""
+    from weldplan.robot.placement.base import _by_stand
+
+    at = [(0, 0, 0, 0), (0, 0, 0, 30), (0, 0, 400, 0), (250, 0, 0, 0), (0, 250, 0, 0)]
+    cands = [Placement(base_pose(*p), 2, 2, 0.0, 5, True) for p in at]
+    assert _by_stand(cands, [0, 1, 2, 3, 4]) == [0, 3, 4, 1, 2]
+    assert _by_stand(cands, [2, 4, 1, 0, 3]) == [2, 4, 3, 1, 0]

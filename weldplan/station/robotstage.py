@@ -207,6 +207,8 @@ def joint_route_stage(
         )
         if reach.placement.join is not None:  # the transfer trial at the chosen base
             rr.stats["placement"]["joins"] = reach.placement.join.summary()
+        if reach.placement.verdicts:  # per base judged: the welds it leaves out and why
+            rr.stats["placement"]["bases"] = [v.summary() for v in reach.placement.verdicts]
     if "ok" not in rr.status:
         raise PlanningError(f"{_none_served(rr)}; nothing written")
     if rr.stats.get("collision_free") is False:

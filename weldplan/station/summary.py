@@ -438,7 +438,35 @@ def reach_rows(reach: Any) -> list[tuple[str, str]]:
             + (f" ({why})" if why else "")
             + f"; base {base} ({reach.seconds:.1f} s)",
         )
+    ] + base_trial_rows(reach.placement)
+
+
+def base_trial_rows(placement: Any) -> list[tuple[str, str]]:
+    """Per base the search's transfer trial judged, what it leaves out and why
+    (:class:`weldplan.robot.placement.base.BaseVerdict`), under a row that says whether any
+    of them joins every weld."""
+    verdicts = () if placement is None else placement.verdicts
+    if not verdicts:
+        return []
+    judged = [v for v in verdicts if v.joined >= 0]
+    n = verdicts[0].served + len(verdicts[0].unserved)  # the welds of the search's route
+    whole = [v for v in judged if v.joined == n]
+    head = (
+        f"{len(whole)} of the {len(judged)} base(s) judged join all {n} welds"
+        if whole
+        else f"none of the {len(judged)} base(s) judged joins all {n} welds"
+    )
+    rows = [
+        (
+            "base trial",
+            f"{head} (free legs, straight or tucked transfers between retracts; on the poses "
+            "chosen without the robot: the detours still try a split leg)",
+        )
     ]
+    for v in verdicts:
+        x, y, z, yaw = v.base
+        rows.append((f"  base {x:.0f},{y:.0f},{z:.0f},{yaw:.1f}", v.line()))
+    return rows
 
 
 def cost_rows(route: Any, cycle: float | None) -> list[tuple[str, str]]:

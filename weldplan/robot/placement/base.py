@@ -28,7 +28,11 @@ whole route (:func:`place`, used by :func:`weldplan.robot.route.plan_robot_route
    first; the chosen base's roadmap goes on to the detours
    (:class:`~weldplan.robot.placement.LegRoadmap`). Best first, a candidate that serves no more
    welds than the best joined so far is skipped, so where the first candidate joins all it
-   serves, it is the only one judged.
+   serves, it is the only one judged. With the trial (or a roadmap) to come, step 2 hands on one
+   candidate per floor position before a second of any (:func:`_by_stand`), so the trial judges
+   different stands; each judged base's verdict (the welds it does not serve, the served welds it
+   leaves out of the largest group, the legs that stay split) is kept
+   (:attr:`~weldplan.robot.placement.Placement.verdicts`, :class:`BaseVerdict`).
 
 With each weld's **alternative poses** (the tool's other free poses,
 :mod:`weldplan.robot.placement.altreach`; on request of the pose stage's search,
@@ -51,6 +55,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -79,6 +84,60 @@ log = logging.getLogger(__name__)
 POOL = 48
 #: split legs a base's log line names (all of them are in its :class:`WeldJoin`)
 SPLITS_LOGGED = 3
+
+
+@dataclass(frozen=True)
+class BaseVerdict:
+    """What step 4 found at one of the best bases: the welds it leaves out and why.
+
+    Judged on the poses and order the search was given (before the pose stage re-chooses the
+    poses at the chosen base, and before the tool stage's order): a weld left out here is a
+    doubt, not a verdict on the program, whose detours still try the split legs.
+
+    Attributes
+    ----------
+    base
+        ``(x, y, z, yaw)`` mm and deg (the ``--robot-base`` form).
+    served
+        Welds with a usable IK branch and no link in the part at their pose (step 3).
+    joined
+        Served welds in the largest group the transfer trial joins; ``-1``: not judged (it
+        serves no more welds than a base judged before it joins: it cannot do better).
+    unserved
+        The welds (by id) not served there: the reach verdict.
+    left_out
+        The served welds (by id) outside the largest group: the transfer verdict.
+    splits
+        The legs that stay split, ``"A -> B: why"``
+        (:attr:`~weldplan.robot.placement.roadmaps.WeldJoin.splits`).
+    """
+
+    base: tuple[float, float, float, float]
+    served: int
+    joined: int
+    unserved: tuple[str, ...]
+    left_out: tuple[str, ...]
+    splits: tuple[str, ...] = ()
+
+    def summary(self) -> dict[str, Any]:
+        """JSON-ready (the route's ``stats["placement"]["bases"]``)."""
+        return dataclasses.asdict(self)
+
+    def line(self) -> str:
+        """One line: ``"served S, joined J; not served: ...; left out: ...; split A -> B: ..."``."""
+        if self.joined < 0:
+            return f"serves {self.served}: not judged (no more than a base judged before joins)"
+        out = f"{self.joined} of {self.served} served welds joined"
+        for label, ids in (("not served", self.unserved), ("left out", self.left_out)):
+            if ids:
+                out += f"; {label}: {_id_list(ids)}"
+        return out + "".join(f"; split {s}" for s in self.splits[:SPLITS_LOGGED])
+
+
+def _id_list(ids: tuple[str, ...], most: int = 12) -> str:
+    """``"a, b, c"``, or the first ``most`` and how many more."""
+    more = len(ids) - most
+    return ", ".join(ids[:most]) + (f" and {more} more" if more > 0 else "")
 
 
 def free_branches(
@@ -166,7 +225,8 @@ def place(
     )  # fmt: skip
     masks: list[NDArray[np.bool_] | None] = [None] * len(cands)
     if checker_for is not None:
-        cands, masks = _rerank(robot, cands, T_weld, checker_for, sd, top, alts)
+        judged = settings.trial or settings.joins is not None
+        cands, masks = _rerank(robot, cands, T_weld, checker_for, sd, top, alts, judged)
     return rank_bases(robot, cands, masks, T_fl, rows, checker_for, settings, alts, ids)
 
 
@@ -223,9 +283,13 @@ def _by_joins(
     not judged (the welds it serves bound those it joins): when the first candidate joins every
     weld it serves, one is judged."""
     best: tuple[tuple[int, tuple[int, float]], Placement, Any] | None = None
+    names = ids if ids is not None else tuple(f"weld {k + 1}" for k in range(len(rows)))
+    verdicts: list[BaseVerdict] = []
     for key, pl, mask, (q, branch, status) in scored:
         served = np.array([status[r] == OK for r in rows], dtype=bool)
+        unserved = tuple(names[k] for k in np.flatnonzero(~served))
         if best is not None and served.sum() <= best[0][0]:
+            verdicts.append(BaseVerdict(pl.xyz_yaw(), int(served.sum()), -1, unserved, ()))
             continue
         rb = robot.with_base(pl.base)
         checker = checker_for(rb)
@@ -239,10 +303,14 @@ def _by_joins(
             "" if wj.report is None else "; roadmap " + wj.report.line(),
             "".join(f"; split {s}" for s in wj.splits[:SPLITS_LOGGED]),
         )  # fmt: skip
+        verdicts.append(BaseVerdict(
+            pl.xyz_yaw(), int(served.sum()), wj.n_joined, unserved,
+            tuple(names[k] for k in np.flatnonzero(served & ~wj.main)), wj.splits,
+        ))  # fmt: skip
         if best is None or (wj.n_joined, key) > best[0]:
             best = ((wj.n_joined, key), dataclasses.replace(pl, join=wj), mask)
     assert best is not None
-    return best[1], best[2]
+    return dataclasses.replace(best[1], verdicts=tuple(verdicts)), best[2]
 
 
 def _route_score(
@@ -305,12 +373,14 @@ def _rerank(
     singular_deg: float,
     top: int,
     alts: list[NDArray[np.float64]] | None,
+    spread: bool = False,
 ) -> tuple[list[Placement], list[NDArray[np.bool_] | None]]:
     """The ``top`` of ``cands`` by the welds they serve without a link in the part at the weld
     pose, then manipulability; with their free-branch masks of the given poses. With ``alts``
     (module docstring) a weld counts when one of its poses serves, and the candidates (best
     first by reach) are checked until :data:`POOL` are and the next one's reach count is below
-    the best count served."""
+    the best count served. With ``spread`` (step 4 follows) each floor position gives one
+    candidate before any gives a second (:func:`_by_stand`)."""
     keys: list[tuple[int, float]] = []
     given: list[tuple[int, float]] = []
     masks: list[NDArray[np.bool_] | None] = []
@@ -329,7 +399,8 @@ def _rerank(
         masks.append(None)
         keys.append((int(served.sum()), pl.min_manipulability))
         given.append((int(first.sum()), pl.min_manipulability))
-    order = sorted(range(len(keys)), key=lambda c: keys[c], reverse=True)[:top]
+    order = sorted(range(len(keys)), key=lambda c: keys[c], reverse=True)
+    order = _by_stand(cands, order)[:top] if spread else order[:top]
     if alts is not None:  # and the best by the given poses alone (module docstring)
         by_given = sorted(range(len(given)), key=lambda c: given[c], reverse=True)[:top]
         order += [c for c in by_given if c not in order]
@@ -346,6 +417,21 @@ def _rerank(
             rb = robot.with_base(pl.base)
             masks[c] = free_branches(rb, checker_for(rb), T_weld, singular_deg, tool=False)[0]
     return out, [masks[c] for c in order]
+
+
+def _by_stand(cands: list[Placement], order: list[int]) -> list[int]:
+    """``order`` (indices of ``cands``, best first) with the first candidate of each floor
+    position ``(x, y)`` ahead of the others, each part in its order. The pedestal heights and
+    yaws of one stand mostly serve the same welds and split the same legs (the trial tells
+    them apart rarely: on car2_200 every one of the top five, one stand turned five ways,
+    split at the same leg), so step 4 judges different stands first."""
+    seen: set[tuple[float, float]] = set()
+    first, rest = [], []
+    for c in order:
+        xy = (round(float(cands[c].base[0, 3]), 3), round(float(cands[c].base[1, 3]), 3))
+        (rest if xy in seen else first).append(c)
+        seen.add(xy)
+    return first + rest
 
 
 def _allowed(m: int, rows: NDArray[np.int64], mask: NDArray[np.bool_] | None) -> NDArray | None:

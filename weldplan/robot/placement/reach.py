@@ -209,6 +209,9 @@ class Placement:
     #: which welds one roadmap joins at this base
     #: (:class:`weldplan.robot.placement.roadmaps.WeldJoin`; ``None``: not judged)
     join: Any = field(default=None, compare=False, repr=False)
+    #: per base the transfer trial judged, best first: the welds it leaves out and why
+    #: (:class:`weldplan.robot.placement.base.BaseVerdict`; empty: none judged)
+    verdicts: tuple[Any, ...] = field(default=(), compare=False, repr=False)
 
     def xyz_yaw(self) -> tuple[float, float, float, float]:
         """``(x, y, z, yaw_deg)`` of :attr:`base` (the ``--robot-base`` form)."""
