@@ -111,5 +111,46 @@ def test_charging_the_pairs_that_meet_uncrosses_the_shares_at_the_best_cycle_wit
     free = _brute_force(problem, lambda a: crossed.count(a) == 0)
     assert ours.cycle_time == pytest.approx(free) and free > plain.cycle_time
     # no pair charged: the same answer as without the argument
-    none = allocate(ok, wt, T, rng=0, settings=settings, conflicts=PairCost(np.zeros_like(pair), 10.0))
+    nothing = PairCost(np.zeros_like(pair), 10.0)
+    none = allocate(ok, wt, T, rng=0, settings=settings, conflicts=nothing)
     assert none.assignment == plain.assignment and none.shares == plain.shares
+
+
+def test_a_conflict_is_blamed_on_the_welds_its_motions_belong_to():
+    from weldplan.multi.conflicts import blamed, weld_at
+    from weldplan.multi.interference import Conflict, Motion
+
+    ids = {2: "w1", 5: "w2", 8: "w3"}  # timed rows standing on welds; 0 and 10: home
+    assert weld_at(ids, 5, 5) == "w2"
+    assert weld_at(ids, 0, 2) == "w1" and weld_at(ids, 10, 8) == "w3"  # home legs
+    assert weld_at(ids, 6, 8) == "w3" and weld_at(ids, 6, 5) == "w2"  # between: toward the move
+    assert weld_at({}, 3, 4) is None
+
+    def motions(rows):
+        out = [Motion(0, "rest", rows[0], rows[0], 0.0, 1.0)]
+        for k, (a, b) in enumerate(zip(rows[:-1], rows[1:], strict=True)):
+            out.append(Motion(2 * k + 1, "move", a, b, 0.0, 1.0))
+            out.append(Motion(2 * k + 2, "rest", b, b, 0.0, 1.0))
+        return tuple(out)
+
+    m = (motions([0, 2, 5, 8, 10]), motions([0, 3, 6]))
+    ids2 = {3: "v1"}
+    got = blamed([Conflict(0, 1, 1, 4, 0.0, True), Conflict(0, 6, 1, 0, 0.0, True)], m, [ids, ids2])
+    # robot 1 moving home -> w1 against robot 2 at rest at row 6 (its home after v1: v1's);
+    # robot 1 at rest at w3 against robot 2 at its home before v1
+    assert got == [(0, "w1", 1, "v1"), (0, "w3", 1, "v1")]
+    assert blamed([Conflict(0, 1, 1, 0, 0.0, True)], m, [ids, None]) == [(0, "w1", 1, "")]
+
+
+def test_a_blamed_weld_goes_from_the_robot_that_moved_there_to_one_that_can_take_it():
+    from weldplan.multi.passes import _left_line, _repairs
+
+    ok = np.array([[True, True, True], [True, False, True]])
+    welds, names = ("a", "b", "c"), ("robot1", "robot2")
+    # robot 1 at a meets robot 2 at c: a can go to robot 2
+    assert list(_repairs([(0, "a", 1, "c")], ok, {}, welds, names)) == [(0, 0)]
+    # robot 1 at b meets robot 2 at c: only robot 1 serves b, so robot 2 gives c away
+    assert list(_repairs([(0, "b", 1, "c")], ok, {}, welds, names)) == [(1, 2)]
+    # c already kept from robot 1: nothing left to move, the conflict is named instead
+    assert _repairs([(0, "b", 1, "c")], ok, {(0, 2): "kept"}, welds, names) == {}
+    assert _left_line([(0, "b", 1, "")], names) == "robot1 at b / robot2 at home"
