@@ -326,6 +326,8 @@ class _State:
     gen: np.random.Generator
     kicks: int
     conflicts: PairCost | None = None
+    charge: NDArray[np.float64] | None = None  # (R,) s: the charges of ``assign``
+    _next: NDArray[np.float64] | None = None  # the last trial's charges
 
     @classmethod
     def start(cls, problem, assign, gen, kicks, conflicts=None) -> _State:
@@ -336,7 +338,8 @@ class _State:
         for r in range(R):
             s.orders[r] = sequence_share(problem, r, np.flatnonzero(assign == r), s.seed(), kicks)
             s.cyc[r] = problem.cycle(r, s.orders[r])
-        s.cyc += s.charges(s.assign)
+        s.charge = s.charges(s.assign)
+        s.cyc += s.charge
         return s
 
     def charges(self, assign: NDArray[np.intp]) -> NDArray[np.float64]:
@@ -354,10 +357,11 @@ class _State:
         assign = self.assign.copy()
         for r, o in pair.items():
             assign[list(o)] = r
-        new = new - self.charges(self.assign)
+        self._next = self.charges(assign)
+        new = new - self.charge
         for r, o in pair.items():
             new[r] = self.problem.cycle(r, o)
-        return new + self.charges(assign)
+        return new + self._next
 
     def seed(self) -> int:
         return int(self.gen.integers(2**31))
@@ -373,6 +377,8 @@ class _State:
         for r, o in pairs.items():
             self.orders[r] = o
             self.assign[list(o)] = r
+        if self.conflicts is not None:
+            self.charge = self._next
 
     def polish(self, kicks: int | None) -> None:
         self.apply({r: self.resequence(r, o, kicks) for r, o in enumerate(self.orders)})
@@ -444,6 +450,7 @@ def _iterated_search(
             improved += 1
         else:
             st.assign, st.orders, st.cyc = best[0].copy(), list(best[1]), best[2].copy()
+            st.charge = st.charges(st.assign)
     stats.update(
         kicks=kicks, kicks_improved=improved, budget_spent=stats["tried"] >= settings.moves
     )

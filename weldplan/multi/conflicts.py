@@ -20,10 +20,11 @@ that cross cost more than shares side by side (the pairwise interference cost of
 EJOR 2017, and Åblad et al., IEEE T-ASE 2022, over rests instead of swept paths).
 
 Every configuration pair is checked (deterministic, bounded: ``(1 + W_r)(1 + W_s)``
-configuration pairs per robot pair): the bodies' bounding spheres first, then the FCL distance
-(python-fcl, :func:`weldplan.multi.interference.pair_distance`) of the body pairs whose spheres
-are not ``clearance + margin`` apart, closest first. ``margin`` covers what the table does not
-see: the planned gun pose is not always the study's, and the moves between the welds.
+configuration pairs per robot pair): the bodies' bounding spheres first, then their sphere
+covers, then the FCL distance (python-fcl, :func:`weldplan.multi.interference.pair_distance`)
+of the body pairs whose spheres are not ``clearance + margin`` apart, closest first. ``margin``
+covers what the table does not see: the planned gun pose is not always the study's, and the
+moves between the welds.
 """
 
 from __future__ import annotations
@@ -178,8 +179,10 @@ def conflict_table(
                 g = gaps[x, y]
                 near = np.argwhere(g < thr)
                 for p, q in near[np.argsort(g[near[:, 0], near[:, 1]], kind="stable")]:
-                    dist = pair_distance(ba[p].obj, Fa[x, ba[p].frame], bb[q].obj,
-                                         Fb[y, bb[q].frame])  # fmt: skip
+                    Ta, Tb = Fa[x, ba[p].frame], Fb[y, bb[q].frame]
+                    if _cover_gap(ba[p], Ta, bb[q], Tb) >= thr:
+                        continue
+                    dist = pair_distance(ba[p].obj, Ta, bb[q].obj, Tb)
                     calls += 1
                     if dist < thr:
                         said = (ba[p].name, bb[q].name, dist)
@@ -188,6 +191,16 @@ def conflict_table(
     out = ConflictTable(tuple(r.name for r in robots), at_home, pair, where, thr, calls)
     log.info("%s", out.line())
     return out
+
+
+def _cover_gap(ba: Any, Ta: NDArray, bb: Any, Tb: NDArray) -> float:
+    """mm: the least gap between the sphere covers of two bodies (each
+    :class:`~weldplan.robot.collision.bodies.Body`'s union of spheres holds its triangles) at
+    link frames ``Ta``, ``Tb`` ``(4, 4)``: a lower bound of their FCL distance."""
+    ca = ba.centres @ Ta[:3, :3].T + Ta[:3, 3]
+    cb = bb.centres @ Tb[:3, :3].T + Tb[:3, 3]
+    d = np.linalg.norm(ca[:, None, :] - cb[None, :, :], axis=-1)
+    return float((d - ba.radii[:, None] - bb.radii[None, :]).min())
 
 
 def _mark(
