@@ -135,10 +135,12 @@ def test_a_conflict_is_blamed_on_the_welds_its_motions_belong_to():
 
     m = (motions([0, 2, 5, 8, 10]), motions([0, 3, 6]))
     ids2 = {3: "v1"}
-    got = blamed([Conflict(0, 1, 1, 4, 0.0, True), Conflict(0, 6, 1, 0, 0.0, True)], m, [ids, ids2])
+    got = blamed([Conflict(0, 1, 1, 4, 0.0, True), Conflict(0, 6, 1, 0, 0.0, True),
+                  Conflict(0, 6, 1, 3, 0.0, True)], m, [ids, ids2])  # fmt: skip
     # robot 1 moving home -> w1 against robot 2 at rest at row 6 (its home after v1: v1's);
-    # robot 1 at rest at w3 against robot 2 at its home before v1
-    assert got == [(0, "w1", 1, "v1"), (0, "w3", 1, "v1")]
+    # robot 1 at rest at w3 against robot 2 at its home before v1; and against robot 2
+    # moving v1 -> home: the moving robot first
+    assert got == [(0, "w1", 1, "v1"), (0, "w3", 1, "v1"), (1, "v1", 0, "w3")]
     assert blamed([Conflict(0, 1, 1, 0, 0.0, True)], m, [ids, None]) == [(0, "w1", 1, "")]
 
 

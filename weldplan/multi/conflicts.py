@@ -272,10 +272,10 @@ def weld_at(ids: dict[int, str], row: int, toward: int) -> str | None:
 def blamed(
     conflicts: Sequence[Any], motions: Any, ids: Sequence[dict[int, str] | None]
 ) -> list[tuple[int, str, int, str]]:
-    """``(robot a, its weld, robot b, its weld)`` per conflict no interlock orders (a
+    """``(robot, its weld, other robot, its weld)`` per conflict no interlock orders (a
     :class:`~weldplan.multi.interference.Conflict` with motions ``x`` of ``a`` and ``y`` of
     ``b``): the weld each motion belongs to (:func:`weld_at`; ``""`` for a robot with no
-    weld or a motion away from any)."""
+    weld or a motion away from any), the moving robot first when the other is at rest."""
     out = []
     for c in conflicts:
         got = []
@@ -284,6 +284,8 @@ def blamed(
             w = None if ids[r] is None else weld_at(ids[r], mo.start_row, mo.end_row)
             if mo.kind == "move" and ids[r] is not None and mo.end_row in ids[r]:
                 w = ids[r][mo.end_row]
-            got.append(w or "")
-        out.append((c.a, got[0], c.b, got[1]))
+            got.append((r, w or "", mo.kind))
+        if got[0][2] == "rest" and got[1][2] == "move":
+            got.reverse()
+        out.append((got[0][0], got[0][1], got[1][0], got[1][1]))
     return out

@@ -35,10 +35,17 @@
    (:func:`with_homes`, checked before any study: the homes clearance apart), so a robot whose
    first weld is near another's waits there behind an interlock; a robot with no weld stands at
    its home the whole cycle. Conflicts no interlock can order (a motion of one robot that meets
-   every configuration of another, e.g. its base; anything against an idle robot) are left
-   unordered rather than refused: the plan is returned whole, and its replay says
-   ``ok=False`` naming the two robots and rows (the interference line too), so that a caller
-   (the CLI: a partial result) reports it instead of losing the plan.
+   every configuration of another, e.g. its column; anything against an idle robot) are
+   re-allocated and planned again (:func:`weldplan.multi.passes.plan_and_repair`); those left
+   are unordered rather than refused: the plan is returned whole, and its replay says
+   ``ok=False`` naming the two robots and rows (the interference line names their welds), so
+   that a caller (the CLI: a partial result) reports it instead of losing the plan.
+
+Between steps 3 and 4 the robots' rests are checked against each other
+(:mod:`weldplan.multi.conflicts`: every robot at its home and at each weld, the study's
+configuration), and the allocation keeps a weld from a robot that would meet another at its
+home there and charges pairs of welds of two robots that meet
+(:mod:`weldplan.multi.passes`).
 
 The result (:class:`StationPlan`) holds each robot's :class:`~weldplan.station.pipeline.Plan`
 (its program carrying its signals), the allocation report, the studies, the schedule with the
