@@ -112,7 +112,8 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("station", ("weldplan.station",)),
     ("study", ("weldplan.study",)),
     # several robots: their bases and the study per robot, then the single-robot pipeline per share
-    ("stations", ("weldplan.multi.station", "weldplan.multi.cell", "weldplan.multi.shares")),
+    ("stations", ("weldplan.multi.station", "weldplan.multi.cell", "weldplan.multi.shares",
+                  "weldplan.multi.passes")),
     ("viz", ("weldplan.viz",)),
     # a plan's files: rendered by the exporters and the viewers
     ("outputs", ("weldplan.station.outputs",)),

@@ -49,6 +49,40 @@ log = logging.getLogger(__name__)
 EPS = 1e-9
 
 
+@dataclass(frozen=True, eq=False)
+class PairCost:
+    """Pairs of welds of two robots that must not be welded at the same time, and what each
+    pair costs the search (:mod:`weldplan.multi.conflicts`: two robots at rest that meet).
+
+    Attributes
+    ----------
+    pair
+        ``(R, W, R, W) bool``, symmetric: robot ``r`` at weld ``i`` meets robot ``s`` at ``j``.
+    seconds
+        s charged to each of the two robots' cycles per such pair of the assignment: the wait
+        an interlock of the two costs at least (the other's weld), so that crossing shares
+        cost more than shares side by side.
+    """
+
+    pair: NDArray[np.bool_]
+    seconds: float
+
+    def loads(self, assign: NDArray[np.intp], R: int) -> NDArray[np.float64]:
+        """``(R,)`` s: per robot, the conflicting pairs of ``assign`` it is in, times
+        :attr:`seconds`."""
+        idx = np.flatnonzero(assign >= 0)
+        a = assign[idx]
+        M = self.pair[a[:, None], idx[:, None], a[None, :], idx[None, :]]
+        M &= a[:, None] != a[None, :]
+        return self.seconds * np.bincount(a, weights=M.sum(axis=1), minlength=R)[:R]
+
+    def count(self, assign: NDArray[np.intp]) -> int:
+        """The conflicting pairs ``assign`` keeps."""
+        R = self.pair.shape[0]
+        return int(round(self.loads(np.asarray(assign), R).sum() / self.seconds / 2)) if (
+            self.seconds > 0) else 0  # fmt: skip
+
+
 def allocate(
     reach: ReachMap | ArrayLike,
     weld_time: ArrayLike,
@@ -56,6 +90,7 @@ def allocate(
     *,
     rng: RNGLike = None,
     settings: AllocationSettings | None = None,
+    conflicts: PairCost | None = None,
 ) -> Allocation:
     """Assign every served weld to one robot and order each robot's welds (module docstring).
 
@@ -71,6 +106,10 @@ def allocate(
         Seed or Generator (the local search's tie-breaks and the sequencer's kicks).
     settings
         :class:`~weldplan.multi.problem.AllocationSettings` (the route kind and the budgets).
+    conflicts
+        :class:`PairCost`: pairs of welds of two robots that meet, each charged to both
+        robots' cycles in the search (``None``: none). The shares' cycle times reported stay
+        the model's; ``stats["conflict_pairs"]`` counts the pairs the answer keeps.
 
     Returns
     -------
@@ -86,10 +125,12 @@ def allocate(
     problem = AllocationProblem.build(reach, weld_time, travel, settings.closed)
     gen = as_generator(rng)
     assign, stats = initial_assignment(problem, settings)
-    state = _State.start(problem, assign, gen, settings.search_kicks)
+    state = _State.start(problem, assign, gen, settings.search_kicks, conflicts)
     stats["start_cycle_time"] = float(state.cyc.max(initial=0.0))
     stats.update(_iterated_search(problem, state, settings, gen))
     state.polish(settings.final_kicks)
+    if conflicts is not None:
+        stats["conflict_pairs"] = conflicts.count(state.assign)
     stats["settings"] = asdict(settings)
     out = make_allocation(problem, "ours", state.assign, state.orders, seed_of(rng), stats)
     log.info(
@@ -284,29 +325,60 @@ class _State:
     cyc: NDArray[np.float64]
     gen: np.random.Generator
     kicks: int
+    conflicts: PairCost | None = None
+    charge: NDArray[np.float64] | None = None  # (R,) s: the charges of ``assign``
+    _next: NDArray[np.float64] | None = None  # the last trial's charges
 
     @classmethod
-    def start(cls, problem, assign, gen, kicks) -> _State:
+    def start(cls, problem, assign, gen, kicks, conflicts=None) -> _State:
         R = problem.ok.shape[0]
-        s = cls(problem, assign.copy(), [()] * R, np.zeros(R), gen, kicks)
+        if conflicts is not None and not conflicts.pair.any():
+            conflicts = None  # nothing to charge: the plain search
+        s = cls(problem, assign.copy(), [()] * R, np.zeros(R), gen, kicks, conflicts)
         for r in range(R):
             s.orders[r] = sequence_share(problem, r, np.flatnonzero(assign == r), s.seed(), kicks)
             s.cyc[r] = problem.cycle(r, s.orders[r])
+        s.charge = s.charges(s.assign)
+        s.cyc += s.charge
         return s
+
+    def charges(self, assign: NDArray[np.intp]) -> NDArray[np.float64]:
+        """``(R,)`` s: the conflicting pairs' charge per robot (0 without conflicts)."""
+        R = len(self.cyc)
+        return np.zeros(R) if self.conflicts is None else self.conflicts.loads(assign, R)
+
+    def trial(self, pair: dict[int, tuple[int, ...]]) -> NDArray[np.float64]:
+        """``(R,)`` s: the cycles (charges included) if ``pair``'s orders replaced theirs."""
+        new = self.cyc.copy()
+        if self.conflicts is None:
+            for r, o in pair.items():
+                new[r] = self.problem.cycle(r, o)
+            return new
+        assign = self.assign.copy()
+        for r, o in pair.items():
+            assign[list(o)] = r
+        self._next = self.charges(assign)
+        new = new - self.charge
+        for r, o in pair.items():
+            new[r] = self.problem.cycle(r, o)
+        return new + self._next
 
     def seed(self) -> int:
         return int(self.gen.integers(2**31))
 
     def resequence(self, r: int, o: tuple[int, ...], kicks: int | None) -> tuple[int, ...]:
-        """The better of ``o`` and the sequencer's order over the same welds."""
+        """The better of ``o`` and the sequencer's order over the same welds (the same welds:
+        the same charges)."""
         q = sequence_share(self.problem, r, o, self.seed(), kicks)
         return q if self.problem.cycle(r, q) < self.problem.cycle(r, o) - EPS else o
 
     def apply(self, pairs: dict[int, tuple[int, ...]]) -> None:
+        self.cyc = self.trial(pairs)
         for r, o in pairs.items():
             self.orders[r] = o
             self.assign[list(o)] = r
-            self.cyc[r] = self.problem.cycle(r, o)
+        if self.conflicts is not None:
+            self.charge = self._next
 
     def polish(self, kicks: int | None) -> None:
         self.apply({r: self.resequence(r, o, kicks) for r, o in enumerate(self.orders)})
@@ -378,6 +450,7 @@ def _iterated_search(
             improved += 1
         else:
             st.assign, st.orders, st.cyc = best[0].copy(), list(best[1]), best[2].copy()
+            st.charge = st.charges(st.assign)
     stats.update(
         kicks=kicks, kicks_improved=improved, budget_spent=stats["tried"] >= settings.moves
     )
@@ -402,14 +475,13 @@ def _descent(problem: AllocationProblem, st: _State, moves: int, resequence: int
                 b: _edit(T[b], st.orders[b], problem.closed, i, jj),
                 r: _edit(T[r], st.orders[r], problem.closed, jj, i),
             }
-            new = st.cyc.copy()
-            new[b], new[r] = problem.cycle(b, pair[b]), problem.cycle(r, pair[r])
+            new = st.trial(pair)
             if not lex_lower(new, st.cyc):
                 if left == 0:
                     break  # candidates are best first: the rest estimate no better
                 left -= 1
                 pair = {k: st.resequence(k, o, st.kicks) for k, o in pair.items()}
-                new[b], new[r] = problem.cycle(b, pair[b]), problem.cycle(r, pair[r])
+                new = st.trial(pair)
                 if not lex_lower(new, st.cyc):
                     continue
             else:

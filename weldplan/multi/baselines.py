@@ -20,7 +20,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
-from weldplan.multi.allocate import allocate, make_allocation, sequence_share
+from weldplan.multi.allocate import PairCost, allocate, make_allocation, sequence_share
 from weldplan.multi.bound import lower_bound
 from weldplan.multi.problem import AllocationProblem, AllocationSettings, ReachMap
 from weldplan.multi.result import Allocation, AllocationReport, LowerBound
@@ -82,6 +82,7 @@ def allocation_report(
     settings: AllocationSettings | None = None,
     bound_travel: Sequence[ArrayLike] | ArrayLike | None = None,
     bound: LowerBound | None = None,
+    conflicts: PairCost | None = None,
 ) -> AllocationReport:
     """Our allocation (:func:`weldplan.multi.allocate`, same arguments), its lower bound and
     the two baselines (module docstring), every order by the same sequencer and polish.
@@ -94,7 +95,10 @@ def allocation_report(
     ``bound``: a :class:`~weldplan.multi.result.LowerBound` already computed (e.g. once over
     the all-branch times while ``travel`` is calibrated round after round,
     :mod:`weldplan.multi.calibrate`); it is then reported as given and ``bound_travel`` is
-    not read."""
+    not read.
+
+    ``conflicts``: the pairs of welds of two robots that meet (:class:`~weldplan.multi.
+    allocate.PairCost`), charged in our allocation's search only (the baselines ignore them)."""
     settings = settings or AllocationSettings()
     problem = AllocationProblem.build(reach, weld_time, travel, settings.closed)
     for_bound = problem
@@ -102,7 +106,8 @@ def allocation_report(
         for_bound = AllocationProblem.build(problem.reach, weld_time, bound_travel, settings.closed)
     seed = seed_of(rng)
     gen = as_generator(rng)
-    ours = allocate(problem.reach, problem.weld_time, problem.travel, rng=gen, settings=settings)
+    ours = allocate(problem.reach, problem.weld_time, problem.travel, rng=gen, settings=settings,
+                    conflicts=conflicts)  # fmt: skip
     if seed is not None:
         from dataclasses import replace
 

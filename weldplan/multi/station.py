@@ -35,10 +35,17 @@
    (:func:`with_homes`, checked before any study: the homes clearance apart), so a robot whose
    first weld is near another's waits there behind an interlock; a robot with no weld stands at
    its home the whole cycle. Conflicts no interlock can order (a motion of one robot that meets
-   every configuration of another, e.g. its base; anything against an idle robot) are left
-   unordered rather than refused: the plan is returned whole, and its replay says
-   ``ok=False`` naming the two robots and rows (the interference line too), so that a caller
-   (the CLI: a partial result) reports it instead of losing the plan.
+   every configuration of another, e.g. its column; anything against an idle robot) are
+   re-allocated and planned again (:func:`weldplan.multi.passes.plan_and_repair`); those left
+   are unordered rather than refused: the plan is returned whole, and its replay says
+   ``ok=False`` naming the two robots and rows (the interference line names their welds), so
+   that a caller (the CLI: a partial result) reports it instead of losing the plan.
+
+Between steps 3 and 4 the robots' rests are checked against each other
+(:mod:`weldplan.multi.conflicts`: every robot at its home and at each weld, the study's
+configuration), and the allocation keeps a weld from a robot that would meet another at its
+home there and charges pairs of welds of two robots that meet
+(:mod:`weldplan.multi.passes`).
 
 The result (:class:`StationPlan`) holds each robot's :class:`~weldplan.station.pipeline.Plan`
 (its program carrying its signals), the allocation report, the studies, the schedule with the
@@ -65,7 +72,9 @@ import numpy as np
 
 from weldplan.errors import ConfigError
 from weldplan.multi.calibrate import timed_weld_ids
+from weldplan.multi.conflicts import ConflictSettings, conflict_table
 from weldplan.multi.inputs import StudyInputs, stack_inputs, study_inputs
+from weldplan.multi.passes import Context, plan_and_repair, rested
 from weldplan.multi.problem import AllocationSettings
 from weldplan.multi.result import AllocationReport
 from weldplan.multi.schedule import ReplayVerdict, StationSchedule, station_schedule
@@ -317,113 +326,36 @@ def plan_station(
         seconds[f"study robot{k + 1}"] = time.perf_counter() - t
     say("study", len(robots), len(robots))
     inp: StudyInputs = stack_inputs(inputs, [f"robot{k + 1}" for k in range(len(robots))])
-    plans, report, rounds, cpu, ran = _allocate_and_plan(
-        station, robots, inp, seed, settings, executor, progress, seconds
-    )
-    names = report.ours.robots
-    say("interference", 0, len(robots))
-    plans, schedule, replay, line = _interference(station, plans, names, seconds)
-    return StationPlan(
-        station, seed, report, tuple(plans), tuple(studies), interference=line,
-        stats={"seconds": seconds, "cpu": cpu, "shares": ran}, schedule=schedule, replay=replay,
-        rounds=rounds,
-    )  # fmt: skip
-
-
-def _tcp_bounds(robots: list[Any], inp: StudyInputs) -> tuple[Any, Any]:
-    """``((R, W, W) s, (R, W) s)``: per robot the pose-free bounds of its legs between the
-    welds and between its home and each weld (:func:`weldplan.multi.bound.pose_free_legs`:
-    the TCP's distance and axis 1's turn, whatever gun poses the plans pick)."""
-    from weldplan.multi.bound import pose_free_legs
-
-    legs = [
-        pose_free_legs(robot, mounted.flange_tcp, inp.reach.positions, np.radians(home_deg(spec)))
-        for spec, mounted, robot in robots
-    ]
-    return np.stack([g.travel for g in legs]), np.stack([g.home for g in legs])
-
-
-def _allocate_and_plan(
-    station: Any,
-    robots: list[Any],
-    inp: StudyInputs,
-    seed: int | None,
-    settings: AllocationSettings | None,
-    executor: Any,
-    progress: Callable[[str, int, int], None] | None,
-    seconds: dict[str, float],
-) -> tuple[list[Any], AllocationReport, tuple[Any, ...], dict[str, float], str]:
-    """Steps 4-5 of the module docstring, iterated (:func:`weldplan.multi.calibrate.
-    allocate_and_plan`, ``settings.rounds``): ``(plans, the best round's report, the rounds,
-    CPU s of the shares, where they ran)``; each round's new shares planned by
-    :func:`weldplan.multi.shares.plan_shares`.
-    The bound is computed once, over the pose-free leg bounds (:func:`_tcp_bounds`: true of
-    the timed cycle whatever gun poses the robots' plans choose), with the bound over the
-    study's poses beside it (``LowerBound.at_study_poses``: the planned gun poses may differ
-    from the study's, and then beat it leg by leg)."""
-    from weldplan.multi.baselines import allocation_report
-    from weldplan.multi.bound import lower_bound
-    from weldplan.multi.calibrate import allocate_and_plan
-    from weldplan.multi.problem import AllocationProblem
-    from weldplan.multi.shares import plan_shares
-
-    settings = settings or AllocationSettings()
-    cpu: dict[str, float] = {}
-    ran: list[str] = []
-    say = progress or (lambda stage, done, total: None)
     t = time.perf_counter()
-    bounds = []
-    free, home = _tcp_bounds(robots, inp)
-    for travel in (free, inp.bound):
-        problem = AllocationProblem.build(inp.reach, inp.weld_time, travel, settings.closed)
-        bounds.append(lower_bound(problem, nodes=settings.milp_nodes,
-                                  seconds=settings.milp_seconds, home=home))  # fmt: skip
-    bound = dataclasses.replace(bounds[0], at_study_poses=bounds[1].value)
-    seconds["allocation"] = time.perf_counter() - t
-    calls = [0]
-
-    def allocate_once(travel: Any) -> AllocationReport:
-        say("allocation", calls[0], settings.rounds)
-        calls[0] += 1
-        t = time.perf_counter()
-        out = allocation_report(inp.reach, inp.weld_time, travel, rng=seed, settings=settings,
-                                bound=bound)  # fmt: skip
-        seconds["allocation"] += time.perf_counter() - t
-        return out
-
-    def plan_fresh(shares: dict[int, tuple[str, ...]]) -> dict[int, Any]:
-        # the round's new shares, in turn or side by side (multi.shares.plan_shares)
-        got = plan_shares(station, _Shares(names, shares), seed=seed, executor=executor,
-                          progress=progress)  # fmt: skip
-        for key, v in got.seconds.items():
-            seconds[key] = seconds.get(key, 0.0) + v
-        for key, v in got.cpu.items():
-            cpu[key] = round(cpu.get(key, 0.0) + v, 2)
-        ran.append(got.ran)
-        return {k: got.plans[k] for k in shares}
-
-    names = tuple(f"robot{k + 1}" for k in range(len(robots)))
-    got = allocate_and_plan(allocate_once, plan_fresh, inp.model, settings.rounds)
-    return list(got.plans), got.report, got.rounds, cpu, ", ".join(dict.fromkeys(ran))
-
-
-@dataclass(frozen=True)
-class _Shares:
-    """The shares one allocate-plan round plans (:func:`weldplan.multi.shares.plan_shares`
-    reads ``robots`` and ``welds_of``): the robots whose share is new, none for the others."""
-
-    robots: tuple[str, ...]
-    shares: dict[int, tuple[str, ...]]
-
-    def welds_of(self, k: int) -> tuple[str, ...]:
-        return self.shares.get(k, ())
+    homes = [home_deg(spec) for spec, _, _ in robots]
+    table = conflict_table(rested(robots, studies, homes),
+                           ConflictSettings(clearance=station.clearance))  # fmt: skip
+    seconds["conflicts"] = time.perf_counter() - t
+    ctx = Context(station, robots, inp, seed, settings or AllocationSettings(), executor,
+                  progress, seconds, table, interfere)  # fmt: skip
+    got = plan_and_repair(ctx)
+    return StationPlan(
+        station, seed, got.report, tuple(got.plans), tuple(studies), interference=got.line,
+        stats={"seconds": seconds, "cpu": ctx.cpu, "shares": ", ".join(dict.fromkeys(ctx.ran)),
+               "conflicts": got.conflicts},
+        schedule=got.schedule, replay=got.replay, rounds=got.rounds,
+    )  # fmt: skip
 
 
 def _interference(
     station: Any, plans: list[Any], names: tuple[str, ...], seconds: dict[str, float]
 ) -> tuple[list[Any], StationSchedule, ReplayVerdict, str]:
-    """Step 5 of the module docstring: ``(plans with their signals, schedule with the waits,
-    replay verdict, the interference line)``."""
+    """:func:`interfere` without the conflicts left."""
+    return interfere(station, plans, names, seconds)[:4]
+
+
+def interfere(
+    station: Any, plans: list[Any], names: tuple[str, ...], seconds: dict[str, float]
+) -> tuple[list[Any], StationSchedule, ReplayVerdict, str, list[tuple[int, str, int, str]]]:
+    """Step 6 of the module docstring: ``(plans with their signals, schedule with the waits,
+    replay verdict, the interference line, the conflicts no interlock orders as (robot, weld,
+    robot, weld): :func:`weldplan.multi.conflicts.blamed`)``."""
+    from weldplan.multi.conflicts import blamed
     from weldplan.multi.interference import InterferenceSettings, MovingRobot, find_interference
     from weldplan.multi.replay import replay_station
     from weldplan.multi.zones import resolve_zones
@@ -438,10 +370,12 @@ def _interference(
     ]  # fmt: skip
     t = time.perf_counter()
     found = find_interference(movers, InterferenceSettings(clearance=station.clearance))
-    seconds["interference"] = time.perf_counter() - t
+    seconds["interference"] = seconds.get("interference", 0.0) + time.perf_counter() - t
     t = time.perf_counter()
     zones = resolve_zones(found, strict=False)
-    seconds["zones"] = time.perf_counter() - t
+    seconds["zones"] = seconds.get("zones", 0.0) + time.perf_counter() - t
+    ids = [None if p is None else timed_weld_ids(p.program) for p in plans]
+    left = blamed(zones.unresolved, found.motions, ids)
     plans = with_signals(plans, zones.interlocks, names)
     timings = [None if p is None else p.program.timing for p in plans]
     schedule = station_schedule(
@@ -451,7 +385,7 @@ def _interference(
     t = time.perf_counter()
     verdict = replay_station(_replay_robots(station, plans, names, idle), zones.interlocks,
                              station.clearance)  # fmt: skip
-    seconds["replay"] = time.perf_counter() - t
+    seconds["replay"] = seconds.get("replay", 0.0) + time.perf_counter() - t
     md = "no pair may overlap" if np.isinf(verdict.min_distance) else (
         f"min distance {verdict.min_distance:.1f} mm")  # fmt: skip
     if verdict.ok:
@@ -459,7 +393,7 @@ def _interference(
     else:
         said = f"REPLAY FAILED over {verdict.pairs} pairs: {verdict.failures[0]}"
         log.warning("station: %s", said)
-    return plans, schedule, verdict, f"{found.line()}; {zones.line()}; {said}"
+    return plans, schedule, verdict, f"{found.line()}; {zones.line()}; {said}", left
 
 
 def with_signals(plans: list[Any], interlocks: Sequence[Any], names: Sequence[str]) -> list[Any]:
