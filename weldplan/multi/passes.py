@@ -174,12 +174,13 @@ def _left_line(left: list[tuple[int, str, int, str]], names: tuple[str, ...]) ->
 def _tcp_bounds(robots: list[Any], inp: StudyInputs) -> tuple[Any, Any]:
     """``((R, W, W) s, (R, W) s)``: per robot the pose-free bounds of its legs between the
     welds and between its home and each weld (:func:`weldplan.multi.bound.pose_free_legs`:
-    the TCP's distance and axis 1's turn, whatever gun poses the plans pick)."""
+    the TCP's distance and axis 1's turn, whatever gun poses the plans pick); each robot's
+    home is its settings' (``multi.station.with_homes`` gave every robot one)."""
     from weldplan.multi.bound import pose_free_legs
-    from weldplan.multi.station import home_deg
 
     legs = [
-        pose_free_legs(robot, mounted.flange_tcp, inp.reach.positions, np.radians(home_deg(spec)))
+        pose_free_legs(robot, mounted.flange_tcp, inp.reach.positions,
+                       np.radians(spec.settings.home))  # fmt: skip
         for spec, mounted, robot in robots
     ]
     return np.stack([g.travel for g in legs]), np.stack([g.home for g in legs])
