@@ -87,6 +87,11 @@ RETRY_LEG_CHECKS = 4_000
 #: the most checks all the retries of one route may take together (the 120 CPU s before;
 #: then a leg gets one run)
 RETRY_TOTAL_CHECKS = 8_000
+#: factor by which each further retry of one transfer grows its checks (a restart with a fresh
+#: seed and twice the work: the work-budgeted form of restarts for heavy-tailed run lengths;
+#: car2_200 seed 1's leg Z4L-134 -> Z4L-3 took rrtconnect 2,921 checks, more than a retry's
+#: 2,000)
+RETRY_GROWTH = 2
 #: configurations on a joint motion at which a transfer's IK branch is checked
 #: (:meth:`Detour.on_branch`)
 BRANCH_SAMPLES = 9
@@ -217,6 +222,12 @@ class Detour:
                 return P
         return None
 
+    def joins_directly(self, qa: NDArray, qb: NDArray) -> NDArray | None:
+        """:meth:`direct` on the branch :meth:`transfer` keeps: the transfer ``qa -> qb`` that
+        needs no planner, ``None`` when there is none (the walk's trial,
+        :func:`weldplan.robot.route.legtrial.leg_trial`)."""
+        return self.direct(qa, qb, self._kept_branch(qa, qb))
+
     def via_roadmap(self, qa: NDArray, qb: NDArray, keep: int) -> NDArray | None:
         """``(p, 6)`` rad from ``qa`` to ``qb`` along :attr:`roadmap`'s branch ``keep`` when one
         of its components holds both (every edge a motion :meth:`motion_ok` proved free). Else
@@ -331,13 +342,15 @@ class Detour:
 
     def _run_checks(self, k: int, leg_retry: int) -> int:
         """Checks of OMPL run ``k`` of a transfer whose retries have spent ``leg_retry``: the
-        first ``checks``; a retry ``retry_checks`` or what is left of this leg's
-        ``retry_leg_checks`` or of the route's ``retry_total_checks``, whichever is least
-        (0: no run)."""
+        first ``checks``; retry ``k`` ``retry_checks`` x 2^(k - 1) (each fresh seed gets twice
+        the last one's work: a leg that needs more than one retry's checks gets them in few
+        restarts, :data:`RETRY_GROWTH`) or what is left of this leg's ``retry_leg_checks`` or
+        of the route's ``retry_total_checks``, whichever is least (0: no run)."""
         if not k:
             return int(self.checks)
         left = min(
             self.retry_leg_checks - leg_retry,
             self.retry_total_checks - int(self.ompl.get("retry_checks", 0)),
         )
-        return max(0, min(int(self.retry_checks), int(left)))
+        grown = int(self.retry_checks) * RETRY_GROWTH ** (k - 1)
+        return max(0, min(grown, int(left)))
