@@ -67,9 +67,17 @@ class ScriptedDetour:
     def retract(self, q, T, branch):
         return q + 0.5, np.zeros(3)
 
+    retry_leg_checks: int = 4_000
+    retry_total_checks: int = 8_000
+
     def transfer(self, qa, qb):
         a, b = int(round(qa[0] - 0.5)), int(round(qb[0] - 0.5))
         self.tried.append((a, b))
+        return self.joins_directly(qa, qb)
+
+    def joins_directly(self, qa, qb):
+        """The trial's straight or tucked transfer: here the same oracle as :meth:`transfer`."""
+        a, b = int(round(qa[0] - 0.5)), int(round(qb[0] - 0.5))
         if a in self.traps or b in self.pockets:
             return None
         return np.vstack([qa, qb])
@@ -264,3 +272,34 @@ def test_a_new_first_weld_with_no_way_in_is_where_the_robot_starts():
     np.testing.assert_array_equal(_walk.path[:3], [1, 1, 2])
     assert _walk.zone[0]
 
+
+def test_the_trial_names_the_split_legs_before_the_walk_and_shares_the_retries(caplog):
+    # W2 leads nowhere (its leg to W3 split: no transfer), W4 has no way in (W3 -> W4 split at
+    # its end, W4 -> W5 at its start): the trial names these three legs at once, in route order,
+    # before any transfer is tried; each may take the fixed per-leg cap of OMPL retries (a
+    # third of the route's would be less)
+    with caplog.at_level("WARNING", logger="weldplan.robot.route.walk"):
+        _walk(6, traps={2}, stuck={4})
+    s = _walk.stats
+    assert s.legs_blocked == 5
+    assert s.split_legs == (
+        "W2 -> W3: link_5 on its own motion, no straight or tucked transfer",
+        "W3 -> W4: link_5 on its own motion, no gun exit or retract at its end",
+        "W4 -> W5: link_5 on its own motion, no gun exit or retract at its start",
+    )
+    assert s.retry_share == 4_000
+    said = [r.getMessage() for r in caplog.records if "transfer trial" in r.getMessage()]
+    assert len(said) == 1 and "3 of 5 leg(s) split (5 blocked, 2 joined" in said[0]
+    assert WalkStats.from_dict(s.to_dict()) == s
+    assert "3 of 5 blocked leg(s) split before the walk" in s.describe()
+
+
+def test_a_route_with_one_split_leg_gives_it_the_whole_retry_budget():
+    # one hard leg (W1's exit leads nowhere but W2 is reached back along the path): its transfer
+    # may take every retry check of the route, not the fixed per-leg cap
+    _walk(4, traps={1})
+    s = _walk.stats
+    assert s.split_legs == ("W1 -> W2: link_5 on its own motion, no straight or tucked transfer",)
+    assert s.retry_share == 8_000
+    _walk(4, free={0, 1, 2})  # no blocked leg: the share is the whole budget too, untouched
+    assert _walk.stats.legs_blocked == 0 and _walk.stats.split_legs == ()

@@ -66,6 +66,7 @@ last served configuration held (the program ends at that weld).
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 from collections import deque
 from dataclasses import dataclass, field
@@ -77,6 +78,7 @@ from numpy.typing import NDArray
 from weldplan.robot.collision.selfcollision import hit_words
 from weldplan.robot.model.arm import Robot
 from weldplan.robot.placement.reach import COLLISION, OK
+from weldplan.robot.route.legtrial import LegTrial, leg_hits, leg_trial
 from weldplan.robot.route.replan import Detour
 from weldplan.robot.route.walkstats import (
     BUDGET,
@@ -223,6 +225,7 @@ def assemble(
         for i in range(len(q)):
             w.out.add(q[i], i, bool(ex[i]), int(branch[i]), bool(own[i]))
         return w.result()
+    w.start_trial(served)
     w.head(served[0])
     a, fails = served[0], []
     queue = deque(served[1:])
@@ -274,6 +277,31 @@ class _Walk:
     cause: dict[int, str] = field(default_factory=dict)
     #: counters of :class:`WalkStats`
     count: dict[str, int] = field(default_factory=dict)
+    #: per route row of a weld, its way off (:meth:`leave`, cached: the trial asks it first)
+    left: dict[int, NDArray[np.float64] | None] = field(default_factory=dict)
+    #: the transfer trial before the walk (:meth:`start_trial`)
+    trial: LegTrial | None = None
+
+    def leave(self, r: int) -> NDArray[np.float64] | None:
+        """:meth:`Detour.leave` of the weld at route row ``r`` (its configuration and branch on
+        the route), cached: the same rows, computed once."""
+        if r not in self.left:
+            self.left[r] = self.det.leave(self.q[r], r, int(self.branch[r]))
+        return self.left[r]
+
+    def start_trial(self, served: list[int]) -> None:
+        """Run the transfer trial on the legs between the ``served`` welds
+        (:func:`~weldplan.robot.route.legtrial.leg_trial`), say at once which it leaves split,
+        and give each split leg its share of the route's OMPL retries
+        (:meth:`~weldplan.robot.route.legtrial.LegTrial.retry_share`)."""
+        d = self.det
+        self.trial = leg_trial(d, self.q, self.rows, served, self.own, self.blocked, self.leave)
+        share = self.trial.retry_share(d.retry_total_checks, d.retry_leg_checks)
+        self.det = dataclasses.replace(d, retry_leg_checks=share)  # same ompl and left_by dicts
+        if self.trial.split:
+            log.warning("robot walk: the transfer trial on the route at this base: %s; each is "
+                        "left to OMPL with up to %d retry checks", self.trial.describe(self.ids),
+                        share)  # fmt: skip
 
     def mark(self) -> Mark:
         return (*self.out.mark(), len(self.replanned))
@@ -294,6 +322,9 @@ class _Walk:
                 for k in sorted(self.cause)
                 if self.status[k] != OK  # fmt: skip
             ),
+            legs_blocked=0 if self.trial is None else self.trial.blocked,
+            split_legs=() if self.trial is None else self.trial.names(self.ids),
+            retry_share=int(self.det.retry_leg_checks),
             **self.count,
         )
         q, row, exact, branch, zone = self.out.arrays()
@@ -305,11 +336,11 @@ class _Walk:
         approach (a gun exit or a retract, reversed), else at ``k``'s configuration."""
         rk = int(self.rows[k])
         q, br, own = self.q, self.branch, self.own
-        if rk == 0 or not _leg_hits(self.det, q, own, 0, rk, self.blocked):
+        if rk == 0 or not leg_hits(self.det, q, own, 0, rk, self.blocked):
             for i in range(rk + 1):
                 self.out.add(q[i], i, bool(self.ex[i]), int(br[i]), bool(own[i]))
             return
-        lv = self.det.leave(q[rk], rk, int(br[rk]))
+        lv = self.leave(rk)
         A = q[rk][None] if lv is None else lv[::-1]  # the approach, its clear end first
         pb = self.det.robot.branch_of(A)
         for i in range(rk):  # held: no motion (at the weld itself, its contact zone exempt)
@@ -327,7 +358,7 @@ class _Walk:
         why)`` (the path unchanged; cause one of :data:`CAUSES`)."""
         ia, ib = int(self.rows[a]), int(self.rows[b])
         q, br, own = self.q, self.branch, self.own
-        hits = _leg_hits(self.det, q, own, ia, ib, self.blocked)
+        hits = leg_hits(self.det, q, own, ia, ib, self.blocked)
         if not hits:
             self.out.zone[-1] = bool(own[ia])
             for i in range(ia + 1, ib + 1):
@@ -349,13 +380,13 @@ class _Walk:
         weld ``b`` (leave ``a``, transfer, approach ``b``; rad), else ``(None, (cause, why))``:
         which end has no way off its weld, or why the transfer failed."""
         ia, ib = int(self.rows[a]), int(self.rows[b])
-        q, br = self.q, self.branch
+        q = self.q
         if self.tries.get(b, 0) >= TRANSFERS_PER_WELD:  # untried: not even its ends
             return self.transfer(q[ia], q[ib], b, "")
-        la = self.det.leave(q[ia], ia, int(br[ia]))
+        la = self.leave(ia)
         if la is None:
             return None, (NO_EXIT, f"weld {self.ids[a]} has no free gun exit or retract")
-        lb = self.det.leave(q[ib], ib, int(br[ib]))
+        lb = self.leave(ib)
         if lb is None:
             return None, (NO_APPROACH, f"weld {self.ids[b]} has no free gun exit or retract")
         mid, why = self.transfer(la[-1], lb[-1], b, f"weld {self.ids[a]}'s exit")
@@ -407,7 +438,7 @@ class _Walk:
                                               for g in hubs):  # fmt: skip
                 hubs.append(h)
         hubs = hubs[:RETRACE_HUBS]
-        lb = self.det.leave(self.q[ib], ib, int(self.branch[ib])) if hubs else None
+        lb = self.leave(ib) if hubs else None
         if lb is None:
             return False
         self.retraced_from[a] = self.retraced_from.get(a, 0) + 1
@@ -509,19 +540,6 @@ class _Walk:
         return a, fails, []
 
 
-def _leg_hits(
-    det: Detour, q: NDArray, own: NDArray, ia: int, ib: int, blocked: set[int] | None
-) -> list[Any]:
-    """The first blocked motion of the route's own rows ``ia..ib`` (``[]``: free), from the
-    caller's ``blocked`` motions when given, else checked here."""
-    if blocked is None:
-        return det.checker.path_hits(q[ia : ib + 1], own[ia:ib], first_only=True)
-    at = sorted(s for s in blocked if ia <= s < ib)
-    if not at:
-        return []
-    return det.checker.path_hits(q[at[0] : at[0] + 2], own[at[0] : at[0] + 1])
-
-
 def _add_detour(
     out: JointPath,
     robot: Robot,
@@ -567,7 +585,7 @@ def _tail(
     m = len(q)
     if ia + 1 >= m:
         return
-    if not _leg_hits(det, q, own, ia, m - 1, blocked):
+    if not leg_hits(det, q, own, ia, m - 1, blocked):
         out.zone[-1] = bool(own[ia])
         for i in range(ia + 1, m):
             out.add(q[i], i, bool(ex[i]), int(branch[i]), bool(own[i]))
