@@ -99,7 +99,7 @@ def leg_trial(
     served: list[int],
     own: NDArray[np.bool_],
     blocked: set[int] | None,
-    leave: Callable[[int], NDArray[np.float64] | None],
+    pair: Callable[[int, int], tuple[Any, Any, Any]],
 ) -> LegTrial:
     """The transfer trial over the consecutive ``served`` welds (positions in route order, at
     route rows ``rows``) of the joint path ``q (m, 6)`` rad (module docstring).
@@ -111,9 +111,10 @@ def leg_trial(
     own, blocked
         As :func:`leg_hits`: the route's own motions with the contact zone exempt, and those the
         caller's check found blocked (``None``: checked here).
-    leave
-        ``leave(route row) -> (p, 6) rad | None``: the way off that weld (the walk's own,
-        cached: :meth:`~weldplan.robot.route.Detour.leave`), its last row clear.
+    pair
+        ``pair(route row a, route row b) -> (way off a, way into b, transfer)``: the walk's own
+        join without a planner (cached), each ``(p, 6)`` rad or ``None`` (no way off that weld;
+        no straight or tucked transfer between any of their ways).
     """
     n_blocked, split = 0, []
     for a, b in zip(served[:-1], served[1:], strict=True):
@@ -122,12 +123,12 @@ def leg_trial(
         if not hits:
             continue
         n_blocked += 1
-        la, lb = leave(ia), leave(ib)
+        la, lb, mid = pair(ia, ib)
         if la is None or lb is None:
             end = "start" if la is None else "end"
             split.append((a, b, f"{hits[0].body} on its own motion, no gun exit or retract at its "
                                 f"{end}"))  # fmt: skip
-        elif det.joins_directly(la[-1], lb[-1]) is None:
+        elif mid is None:
             split.append((a, b, f"{hits[0].body} on its own motion, no straight or tucked "
                                 "transfer"))  # fmt: skip
     return LegTrial(max(len(served) - 1, 0), n_blocked, tuple(split))

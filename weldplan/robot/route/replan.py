@@ -92,6 +92,11 @@ RETRY_TOTAL_CHECKS = 8_000
 #: car2_200 seed 1's leg Z4L-134 -> Z4L-3 took rrtconnect 2,921 checks, more than a retry's
 #: 2,000)
 RETRY_GROWTH = 2
+#: ways off one weld (:meth:`Detour.ways_off`) whose pairs the walk joins by a straight or
+#: tucked-arm transfer before it asks OMPL (the first, :meth:`Detour.leave`'s, included): a leg
+#: whose first retracts no straight transfer joins may be joined from another side, for a few
+#: checks instead of an OMPL run
+WAYS_OFF = 4
 #: configurations on a joint motion at which a transfer's IK branch is checked
 #: (:meth:`Detour.on_branch`)
 BRANCH_SAMPLES = 9
@@ -176,6 +181,38 @@ class Detour:
             return None
         self.left_by["retract"] = self.left_by.get("retract", 0) + 1
         return got[0][None]
+
+    def ways_off(
+        self, q: NDArray, row: int, branch: int, first: NDArray | None = None
+    ) -> list[NDArray]:
+        """Up to :data:`WAYS_OFF` ways off the weld at route row ``row``, each as
+        :meth:`leave` returns one (``(p, 6)`` rad, its last row clear): :meth:`leave`'s first
+        (``first`` when the caller has it), then the other gun exits that work, then the first
+        working retract (of :data:`RETRACT_MM`) of each other direction of
+        :data:`RETRACT_DIRS`."""
+        first = self.leave(q, row, branch) if first is None else first
+        if first is None:
+            return []
+        out = [first]
+        for T in self.exits.get(row, ()):
+            P = self.follow(q, T, branch) if len(out) < WAYS_OFF else None
+            if P is not None and not any(np.array_equal(P, x) for x in out):
+                out.append(P)
+        Tw = self.T_tcp[row]
+        for axis, sign in RETRACT_DIRS:
+            for d in RETRACT_MM:
+                if len(out) >= WAYS_OFF:
+                    return out
+                qr = self.offset(q, Tw, branch, sign * d * Tw[:3, axis])
+                if (
+                    qr is not None
+                    and self.checker.state_free(qr)
+                    and self.checker.motion_free(q, qr, zone=True)
+                ):
+                    if not any(np.array_equal(qr[None], x) for x in out):
+                        out.append(qr[None])
+                    break  # the first distance of this direction that works
+        return out
 
     def follow(self, q: NDArray, T: NDArray, branch: int) -> NDArray | None:
         """``(k - 1, 6)`` rad: IK along the TCP poses ``T[1:]`` (``T (k, 4, 4)`` mm, ``T[0]`` the

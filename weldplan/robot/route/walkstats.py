@@ -51,6 +51,9 @@ class WalkStats:
         gun exit or retract and straight or tucked transfer joins (left to OMPL).
     retry_share
         The OMPL retry checks one split leg may take (its share of the route's).
+    other_ways
+        Legs joined without a planner by another pair of the welds' ways off than their first
+        (:meth:`~weldplan.robot.route.Detour.ways_off`), in the trial and the walk.
     """
 
     transfers: int = 0
@@ -64,6 +67,7 @@ class WalkStats:
     ompl_solved: int = 0
     ompl_cpu_s: float = 0.0
     dropped: tuple[tuple[str, str], ...] = ()
+    other_ways: int = 0
     legs_blocked: int = 0
     split_legs: tuple[str, ...] = ()
     retry_share: int = 0
