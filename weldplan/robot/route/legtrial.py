@@ -1,5 +1,5 @@
-"""The legs the walk will have to plan, named before it starts: the transfer trial on the robot's
-own path at its base (:func:`leg_trial`).
+"""The legs the walk will have to plan, named before it starts: the transfer trial on the
+robot's own path at its base (:func:`leg_trial`).
 
 The base search judges its best candidates by the transfers of the point-tip route's order
 (:func:`weldplan.robot.placement.join_welds`); it does not run for a base given with
@@ -8,12 +8,13 @@ The base search judges its best candidates by the transfers of the point-tip rou
 with the walk's own first tries: for every two consecutive served welds whose own leg is blocked,
 the ways off both welds (:meth:`~weldplan.robot.route.Detour.leave`: the gun's proven exits, else
 a retract) joined by a straight or tucked-arm joint motion
-(:meth:`~weldplan.robot.route.Detour.joins_directly`). No planner runs: the trial costs a few
-FCL checks a leg and gives the same answer on any machine. Each leg it leaves *split* is named
-at once with its cause (a warning: the run says within seconds which legs are in doubt, whatever
-the OMPL runs after it take), and the walk shares its route-wide OMPL retry budget among those
-legs (:meth:`LegTrial.retry_share`): a base with one hard leg gives it the whole budget, a base
-with forty gives each a fortieth, so a turned base that cannot serve stops in bounded work.
+(:meth:`~weldplan.robot.route.Detour.joins_directly`), else another pair of their ways off
+(:meth:`~weldplan.robot.route.Detour.ways_off`; the walk's ``pair``, whose answers it reuses).
+No planner runs: the trial costs a few FCL checks a leg and gives the same answer on any machine.
+Each leg it leaves *split* is named at once with its cause (a warning: the run says within
+seconds which legs are in doubt, whatever the OMPL runs after it take), and the walk shares its
+route-wide OMPL retry budget among those legs (:meth:`LegTrial.retry_share`): a route with one
+hard leg gives it the whole budget, one with many keeps each to one leg's cap.
 
 Issue 27, targets 1-2 ("says within 60 s which welds cannot be joined and why").
 """
