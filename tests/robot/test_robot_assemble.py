@@ -308,15 +308,17 @@ def test_the_trial_names_the_split_legs_before_the_walk_and_shares_the_retries(c
     assert "3 of 5 blocked leg(s) split before the walk" in s.describe()
 
 
-def test_a_route_with_one_split_leg_gives_it_the_whole_retry_budget():
-    # one hard leg (W1's exit leads nowhere but W2 is reached back along the path): its transfer
-    # may take every retry check of the route, not the fixed per-leg cap
+def test_one_split_leg_keeps_a_share_for_the_legs_the_trial_cannot_foresee():
+    # one hard leg (W1's exit leads nowhere but W2 is reached back along the path): it shares
+    # the route's retries with the legs that come after a drop or a way back (half each), while
+    # a route with no split leg lets one leg take them all
     _walk(4, traps={1}, easy={0, 2})
     s = _walk.stats
     assert s.split_legs == ("W1 -> W2: link_5 on its own motion, no straight or tucked transfer",)
-    assert s.retry_share == 8_000
-    _walk(4, free={0, 1, 2})  # no blocked leg: the share is the whole budget too, untouched
+    assert s.retry_share == 4_000
+    _walk(4, free={0, 1, 2})  # no blocked leg
     assert _walk.stats.legs_blocked == 0 and _walk.stats.split_legs == ()
+    assert _walk.stats.retry_share == 8_000
 
 
 def test_a_leg_whose_first_exit_leads_nowhere_is_joined_from_another_way_off():

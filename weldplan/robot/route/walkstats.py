@@ -50,7 +50,7 @@ class WalkStats:
         between served welds whose own motion is blocked, and ``"A -> B: why"`` for each that no
         gun exit or retract and straight or tucked transfer joins (left to OMPL).
     retry_share
-        The OMPL retry checks one split leg may take (its share of the route's).
+        The OMPL retry checks one leg may take (its share of the route's).
     other_ways
         Legs joined without a planner by another pair of the welds' ways off than their first
         (:meth:`~weldplan.robot.route.Detour.ways_off`), in the trial and the walk.
