@@ -48,6 +48,32 @@ def test_the_options_parse_as_the_issue_writes_them():
             _parser().parse_args(bad)
 
 
+def test_the_trial_clock_takes_the_robot_stages_seconds_at_the_trials_line():
+    """The row's ``said_at``: seconds from the robot stage's start to the walk's trial line;
+    none before the robot stage starts, the first line only, other lines ignored."""
+    import logging
+
+    clock = robot_runs._StageClock()
+    said = robot_runs._TrialClock(clock)
+
+    def line(msg):
+        return logging.LogRecord("weldplan.robot.route.walk", 30, "", 0, msg, (), None)
+
+    said.emit(line("robot walk: the transfer trial on the route at this base: ..."))
+    assert said.at is None  # the robot stage has not started
+    clock("robot", 0, 1)
+    said.emit(line("weld W1 dropped: ..."))
+    assert said.at is None
+    said.emit(line("robot walk: the transfer trial on the route at this base: ..."))
+    first = said.at
+    assert first is not None and all(0.0 <= v < 60.0 for v in first)
+    said.emit(line("robot walk: the transfer trial on the route at this base: again"))
+    assert said.at is first
+    assert robot_runs._walk_cell({"detours": 2, "split_legs": ["a", "b"]}, (3.14, 9.0)).endswith(
+        "; 2 split at 3 s"
+    )
+
+
 def test_a_turned_base_keeps_its_place_and_wraps_its_yaw(tmp_path):
     from weldplan.station import model as m
 

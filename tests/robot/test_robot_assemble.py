@@ -56,6 +56,8 @@ class ScriptedDetour:
     traps: set[int] = field(default_factory=set)
     pockets: set[int] = field(default_factory=set)
     stuck: set[int] = field(default_factory=set)
+    second: set[int] = field(default_factory=set)
+    easy: set[int] = field(default_factory=set)
     tried: list[tuple[int, int]] = field(default_factory=list)
     ompl: dict[str, float] = field(default_factory=dict)
     robot: _Branchless = field(default_factory=_Branchless)
@@ -67,12 +69,31 @@ class ScriptedDetour:
     def retract(self, q, T, branch):
         return q + 0.5, np.zeros(3)
 
+    retry_leg_checks: int = 4_000
+    retry_total_checks: int = 8_000
+
     def transfer(self, qa, qb):
         a, b = int(round(qa[0] - 0.5)), int(round(qb[0] - 0.5))
         self.tried.append((a, b))
         if a in self.traps or b in self.pockets:
             return None
         return np.vstack([qa, qb])
+
+    def joins_directly(self, qa, qb):
+        """A transfer with no planner (the trial's, :meth:`transfer`'s first try): only from
+        the welds in ``easy`` (as :meth:`transfer` would) or from a second way off (``q +
+        0.25``, :meth:`ways_off`, which leads anywhere but into a pocket)."""
+        a, b = int(np.floor(qa[0])), int(np.floor(qb[0]))
+        if b in self.pockets or not (a in self.easy or qa[0] - a == 0.25):
+            return None
+        if a in self.traps and qa[0] - a == 0.5:
+            return None
+        return np.vstack([qa, qb])
+
+    def ways_off(self, q, row, branch, first=None):
+        """The first way off, and ``q + 0.25`` for the rows in ``second``."""
+        first = self.leave(q, row, branch) if first is None else first
+        return [first, (q + 0.25)[None]] if row in self.second else [first]
 
     @property
     def T_tcp(self):
@@ -94,7 +115,8 @@ def _walk(n, free=(), **kw):
     welded = [int(r) for r in row[exact]]
     assert len(set(welded)) == len(welded)
     assert welded == [k for k in range(n) if status[k] == OK]
-    assert got.stats.transfers == len(det.tried)
+    if not (det.easy or det.second):  # else some transfers need no det.transfer call
+        assert got.stats.transfers == len(det.tried)
     assert max(Counter(b for _, b in det.tried).values(), default=0) <= TRANSFERS_PER_WELD
     _walk.path, _walk.zone, _walk.stats = got.q[:, 0], got.zone, got.stats
     return status, detail, welded, det, list(got.replanned)
@@ -264,3 +286,55 @@ def test_a_new_first_weld_with_no_way_in_is_where_the_robot_starts():
     np.testing.assert_array_equal(_walk.path[:3], [1, 1, 2])
     assert _walk.zone[0]
 
+
+def test_the_trial_names_the_split_legs_before_the_walk_and_shares_the_retries(caplog):
+    # W2 leads nowhere (its leg to W3 split: no transfer), W4 has no way in (W3 -> W4 split at
+    # its end, W4 -> W5 at its start): the trial names these three legs at once, in route order,
+    # before any transfer is tried; each may take the fixed per-leg cap of OMPL retries (a
+    # third of the route's would be less)
+    with caplog.at_level("WARNING", logger="weldplan.robot.route.walk"):
+        _walk(6, traps={2}, stuck={4}, easy={0, 1})
+    s = _walk.stats
+    assert s.legs_blocked == 5
+    assert s.split_legs == (
+        "W2 -> W3: link_5 on its own motion, no straight or tucked transfer",
+        "W3 -> W4: link_5 on its own motion, no gun exit or retract at its end",
+        "W4 -> W5: link_5 on its own motion, no gun exit or retract at its start",
+    )
+    assert s.retry_share == 4_000
+    said = [r.getMessage() for r in caplog.records if "transfer trial" in r.getMessage()]
+    assert len(said) == 1 and "3 of 5 leg(s) split (5 blocked, 2 joined" in said[0]
+    assert WalkStats.from_dict(s.to_dict()) == s
+    assert "3 of 5 blocked leg(s) split before the walk" in s.describe()
+
+
+def test_one_split_leg_keeps_a_share_for_the_legs_the_trial_cannot_foresee():
+    # one hard leg (W1's exit leads nowhere but W2 is reached back along the path): it shares
+    # the route's retries with the legs that come after a drop or a way back (half each), while
+    # a route with no split leg lets one leg take them all
+    _walk(4, traps={1}, easy={0, 2})
+    s = _walk.stats
+    assert s.split_legs == ("W1 -> W2: link_5 on its own motion, no straight or tucked transfer",)
+    assert s.retry_share == 4_000
+    _walk(4, free={0, 1, 2})  # no blocked leg
+    assert _walk.stats.legs_blocked == 0 and _walk.stats.split_legs == ()
+    assert _walk.stats.retry_share == 8_000
+
+
+def test_a_leg_whose_first_exit_leads_nowhere_is_joined_from_another_way_off():
+    # W2's first way off leads nowhere, its second (2.25) joins W3 with no planner: the trial
+    # finds it (no split leg), the walk takes it (no transfer tried from W2's first way, no
+    # going back along the path), every weld served
+    status, _, welded, det, _ = _walk(5, traps={2}, second={2}, easy={0, 1, 3})
+    assert status == [OK] * 5 and welded == list(range(5))
+    assert det.tried == []  # no planner asked
+    at = int(np.flatnonzero(_walk.path == 2)[0])
+    np.testing.assert_array_equal(_walk.path[at : at + 4], [2, 2.25, 3.5, 3])
+    s = _walk.stats
+    assert s.split_legs == () and s.other_ways == 1 and s.retraces == 0
+    assert (s.transfers, s.transfers_found) == (4, 4)
+    # without the second way W2 -> W3 is split and goes back along the path (a planner's run)
+    _walk(5, traps={2}, easy={0, 1, 3})
+    assert _walk.stats.split_legs == (
+        "W2 -> W3: link_5 on its own motion, no straight or tucked transfer",
+    )

@@ -190,7 +190,8 @@ def test_a_tail_retract_leaves_the_weld_with_the_contact_zone_exempt():
     from weldplan.robot import load_robot
     from weldplan.robot.collision import RobotCollision
     from weldplan.robot.route import Detour
-    from weldplan.robot.route.walk import JointPath, _tail
+    from weldplan.robot.route.walkpath import JointPath
+    from weldplan.robot.route.walkpath import tail as _tail
     from weldplan.tool import arc_torch
 
     robot = load_robot(robot_urdf()).with_base(BOX_BASE)

@@ -106,6 +106,18 @@ def test_one_leg_takes_at_most_its_share_of_the_route_retries(robot):
     assert det._run_checks(1, 0) == 1
 
 
+def test_each_retry_of_a_leg_gets_twice_the_last_ones_checks(robot):
+    """Retry k of one transfer runs ``retry_checks`` x 2^(k - 1) checks (a fresh seed, twice the
+    work), cut to what is left of the leg's and the route's retry budgets."""
+    chk = RobotCollision(robot, make_plate(np.zeros(3), 1, size=10.0), arc_torch(), TORCH_TCP)
+    args = (robot, chk, np.zeros((0, 4, 4)), TORCH_TCP, 5.0, "rrtconnect", 10.0, 3)
+    det = Detour(*args, checks=5, retry_checks=10, retry_leg_checks=60, retry_total_checks=100)
+    assert [det._run_checks(k, 0) for k in range(4)] == [5, 10, 20, 40]
+    assert det._run_checks(3, 10 + 20) == 30  # the leg has 30 left
+    det.ompl["retry_checks"] = 95.0
+    assert det._run_checks(2, 0) == 5  # the route has 5 left
+
+
 def test_a_transfer_keeps_its_ends_ik_branch(robot):
     """Arm reaching back over its shoulder (elbow and shoulder bits set, branch 3), A1 sweeping
     the torch through a plate: the tucked arm (A3 at +90 deg) would pass it by flipping the

@@ -14,7 +14,11 @@ that offset. Each run gives a :class:`RunRow`:
 - **verified**: the robot route re-checked by :func:`weldplan.robot.program.verify_robot_route`
   (FK, joint limits, robot + tool collision on the whole path, the code ``weldplan verify --robot``
   runs): ``ok``, ``partial`` (checked, but welds are left out) or ``FAIL``;
-- the robot walk's work (detours, transfers, OMPL runs, traps: what a slow robot stage spent);
+- the robot walk's work (detours, transfers, OMPL runs, traps: what a slow robot stage spent)
+  and the legs its transfer trial left split (:mod:`weldplan.robot.route.legtrial`), with
+  **said at**: the CPU and wall seconds from the robot stage's start to the trial's line (the
+  run says which legs are in doubt that soon, whatever the OMPL runs after it take; issue 27's
+  "within 60 s");
 - wall and CPU seconds per stage (CPU: this process and its finished children, so that a shared
   machine's load shows apart), and a **digest** of the route (order, base, joint path): two runs
   with the same digest gave the same program.
@@ -64,6 +68,9 @@ class RunRow:
     note: str = ""
     load: tuple[float, float, float] = (0.0, 0.0, 0.0)
     walk: Mapping[str, Any] = field(default_factory=dict)
+    #: ``(CPU s, wall s)`` from the robot stage's start to the walk's transfer trial (``None``:
+    #: no trial ran, no leg was blocked)
+    said_at: tuple[float, float] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
@@ -83,13 +90,31 @@ class _StageClock:
 
     def __init__(self) -> None:
         self.start: dict[str, float] = {}
+        self.wall: dict[str, float] = {}
         self.cpu: dict[str, float] = {}
 
     def __call__(self, name: str, done: int, total: int) -> None:
         if done == 0 and name not in self.start:
-            self.start[name] = _cpu()
+            self.start[name], self.wall[name] = _cpu(), time.perf_counter()
         elif done >= total and name in self.start and name not in self.cpu:
             self.cpu[name] = round(_cpu() - self.start[name], 2)
+
+
+class _TrialClock(logging.Handler):
+    """Takes the CPU and wall seconds, from the robot stage's start (``clock``), at which the
+    walk's transfer trial says which legs are split (its first record of
+    :func:`weldplan.robot.route.legtrial.leg_trial`'s outcome)."""
+
+    def __init__(self, clock: _StageClock) -> None:
+        super().__init__(logging.DEBUG)
+        self.clock = clock
+        self.at: tuple[float, float] | None = None
+
+    def emit(self, record: logging.LogRecord) -> None:
+        if self.at is None and "transfer trial" in record.getMessage():
+            c, w = self.clock.start.get("robot"), self.clock.wall.get("robot")
+            if c is not None and w is not None:
+                self.at = (round(_cpu() - c, 2), round(time.perf_counter() - w, 2))
 
 
 def reachable_welds(p: Any) -> int:
@@ -139,17 +164,22 @@ def run_one(station: Any, seed: int, label: str) -> RunRow:
     import weldplan
 
     clock = _StageClock()
+    said = _TrialClock(clock)
+    walk_log = logging.getLogger("weldplan.robot.route.walk")
     t0, c0 = time.perf_counter(), _cpu()
     spec = station.robots[0] if station.robots else None
     given = None if spec is None or spec.base is None else tuple(spec.base)
+    walk_log.addHandler(said)
     try:
         p = weldplan.plan(station, rng=seed, progress=clock)
     except WeldplanError as exc:
         return RunRow(
             label, seed, given, given is None, 0, 0, _n_welds(station), 0, "-",
             wall_total=round(time.perf_counter() - t0, 2), cpu_total=round(_cpu() - c0, 2),
-            note=f"error: {exc}", load=os.getloadavg(),
+            note=f"error: {exc}", load=os.getloadavg(), said_at=said.at,
         )  # fmt: skip
+    finally:
+        walk_log.removeHandler(said)
     wall, cpu = round(time.perf_counter() - t0, 2), round(_cpu() - c0, 2)
     total = len(p.cell.joints.ids)
     walk: dict[str, Any] = {}
@@ -169,18 +199,21 @@ def run_one(station: Any, seed: int, label: str) -> RunRow:
         label, seed, base, given is None, served, reach, total, flips, verified,
         wall_s={s.name: round(s.seconds, 2) for s in p.stages}, cpu_s=dict(clock.cpu),
         wall_total=wall, cpu_total=cpu, digest=_digest(p), note="; ".join(p.partial())[:300],
-        load=os.getloadavg(), walk=walk,
+        load=os.getloadavg(), walk=walk, said_at=said.at,
     )  # fmt: skip
 
 
-def _walk_cell(w: Mapping[str, Any]) -> str:
-    """``detours; transfers found/tried; OMPL solved/runs CPU s; traps`` of the robot's walk."""
+def _walk_cell(w: Mapping[str, Any], said_at: tuple[float, float] | None = None) -> str:
+    """``detours; transfers found/tried; OMPL solved/runs CPU s; traps; split legs (said at CPU
+    s)`` of the robot's walk."""
     if not w:
         return "-"
+    split = len(w.get("split_legs", ()))
+    at = "" if said_at is None else f" at {said_at[0]:.0f} s"
     return (
         f"{w.get('detours', 0)}; {w.get('transfers_found', 0)}/{w.get('transfers', 0)}; "
         f"{w.get('ompl_solved', 0)}/{w.get('ompl_runs', 0)} {w.get('ompl_cpu_s', 0.0):.0f} s; "
-        f"{w.get('traps', 0)}"
+        f"{w.get('traps', 0)}; {split} split{at}"
     )
 
 
@@ -247,8 +280,8 @@ def table_head(title: str = "") -> list[str]:
 def format_row(r: RunRow) -> str:
     """One run as a table row; a stage cell is ``wall s (CPU s)``; walk: the robot walk's
     detours; transfers found / tried; OMPL runs solved / run and their CPU s; welds set aside
-    as traps (:class:`~weldplan.robot.route.WalkStats`); load the 1-min average at the
-    run's end."""
+    as traps (:class:`~weldplan.robot.route.WalkStats`); the legs the trial left split and the
+    robot stage's CPU s when it said so; load the 1-min average at the run's end."""
     base = "-" if r.base is None else ", ".join(f"{v:.1f}" for v in r.base[:3])
     if r.base is not None:
         base += f", {r.base[3]:.1f}"
@@ -258,7 +291,7 @@ def format_row(r: RunRow) -> str:
     )
     return (
         f"| {r.label} | {base} | {r.in_program} / {r.reachable} / {r.total} | {r.flips} | "
-        f"{r.verified} | {stages} | {_walk_cell(r.walk)} | {r.wall_total:.1f} | "
+        f"{r.verified} | {stages} | {_walk_cell(r.walk, r.said_at)} | {r.wall_total:.1f} | "
         f"{r.cpu_total:.1f} | {r.load[0]:.1f} | {r.digest} | {r.note} |"
     )
 

@@ -1,8 +1,8 @@
 """The joint route: configurations per waypoint, the walk over the welds, detours re-planned with
 OMPL, the route that follows the gun, linear moves, leg times.
 
-Modules: ``configs``, ``gunpath``, ``legtime``, ``linear``, ``plan``, ``replan``, ``walk``,
-``walkstats``.
+Modules: ``configs``, ``gunpath``, ``legtime``, ``legtrial``, ``linear``, ``plan``, ``replan``,
+``walk``, ``walkpath``, ``walkstats``.
 
 The names below load on first use (PEP 562, :func:`weldplan.lazy.lazy_exports`): importing
 one module of this package does not load the others.
@@ -19,7 +19,7 @@ _EXPORTS = {
     "Detour": "replan",
     "FLIP_PENALTY_S": "configs",
     "GunRoute": "gunpath",
-    "JointPath": "walk",
+    "JointPath": "walkpath",
     "LegTimes": "legtime",
     "NO_APPROACH": "walkstats",
     "NO_EXIT": "walkstats",
@@ -48,7 +48,7 @@ _EXPORTS = {
     "motion_cost": "configs",
     "plan_robot_route": "plan",
     "rest_to_rest_bound": "legtime",
-    "subdivide": "walk",
+    "subdivide": "walkpath",
     "tcp_waypoint_poses": "plan",
     "time_stats": "legtime",
     "tool_flange_tcp": "plan",

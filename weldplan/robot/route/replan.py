@@ -87,6 +87,16 @@ RETRY_LEG_CHECKS = 4_000
 #: the most checks all the retries of one route may take together (the 120 CPU s before;
 #: then a leg gets one run)
 RETRY_TOTAL_CHECKS = 8_000
+#: factor by which each further retry of one transfer grows its checks (a restart with a fresh
+#: seed and twice the work: the work-budgeted form of restarts for heavy-tailed run lengths;
+#: car2_200 seed 1's leg Z4L-134 -> Z4L-3 took rrtconnect 2,921 checks, more than a retry's
+#: 2,000)
+RETRY_GROWTH = 2
+#: ways off one weld (:meth:`Detour.ways_off`) whose pairs the walk joins by a straight or
+#: tucked-arm transfer before it asks OMPL (the first, :meth:`Detour.leave`'s, included): a leg
+#: whose first retracts no straight transfer joins may be joined from another side, for a few
+#: checks instead of an OMPL run
+WAYS_OFF = 4
 #: configurations on a joint motion at which a transfer's IK branch is checked
 #: (:meth:`Detour.on_branch`)
 BRANCH_SAMPLES = 9
@@ -172,6 +182,38 @@ class Detour:
         self.left_by["retract"] = self.left_by.get("retract", 0) + 1
         return got[0][None]
 
+    def ways_off(
+        self, q: NDArray, row: int, branch: int, first: NDArray | None = None
+    ) -> list[NDArray]:
+        """Up to :data:`WAYS_OFF` ways off the weld at route row ``row``, each as
+        :meth:`leave` returns one (``(p, 6)`` rad, its last row clear): :meth:`leave`'s first
+        (``first`` when the caller has it), then the other gun exits that work, then the first
+        working retract (of :data:`RETRACT_MM`) of each other direction of
+        :data:`RETRACT_DIRS`."""
+        first = self.leave(q, row, branch) if first is None else first
+        if first is None:
+            return []
+        out = [first]
+        for T in self.exits.get(row, ()):
+            P = self.follow(q, T, branch) if len(out) < WAYS_OFF else None
+            if P is not None and not any(np.array_equal(P, x) for x in out):
+                out.append(P)
+        Tw = self.T_tcp[row]
+        for axis, sign in RETRACT_DIRS:
+            for d in RETRACT_MM:
+                if len(out) >= WAYS_OFF:
+                    return out
+                qr = self.offset(q, Tw, branch, sign * d * Tw[:3, axis])
+                if (
+                    qr is not None
+                    and self.checker.state_free(qr)
+                    and self.checker.motion_free(q, qr, zone=True)
+                ):
+                    if not any(np.array_equal(qr[None], x) for x in out):
+                        out.append(qr[None])
+                    break  # the first distance of this direction that works
+        return out
+
     def follow(self, q: NDArray, T: NDArray, branch: int) -> NDArray | None:
         """``(k - 1, 6)`` rad: IK along the TCP poses ``T[1:]`` (``T (k, 4, 4)`` mm, ``T[0]`` the
         weld's) on ``branch``, each at the turn nearest the previous, from configuration ``q``;
@@ -216,6 +258,12 @@ class Detour:
             if all(self._motion_ok(x, y, keep) for x, y in zip(P[:-1], P[1:], strict=True)):
                 return P
         return None
+
+    def joins_directly(self, qa: NDArray, qb: NDArray) -> NDArray | None:
+        """:meth:`direct` on the branch :meth:`transfer` keeps: the transfer ``qa -> qb`` that
+        needs no planner, ``None`` when there is none (the walk's trial,
+        :func:`weldplan.robot.route.legtrial.leg_trial`)."""
+        return self.direct(qa, qb, self._kept_branch(qa, qb))
 
     def via_roadmap(self, qa: NDArray, qb: NDArray, keep: int) -> NDArray | None:
         """``(p, 6)`` rad from ``qa`` to ``qb`` along :attr:`roadmap`'s branch ``keep`` when one
@@ -331,13 +379,15 @@ class Detour:
 
     def _run_checks(self, k: int, leg_retry: int) -> int:
         """Checks of OMPL run ``k`` of a transfer whose retries have spent ``leg_retry``: the
-        first ``checks``; a retry ``retry_checks`` or what is left of this leg's
-        ``retry_leg_checks`` or of the route's ``retry_total_checks``, whichever is least
-        (0: no run)."""
+        first ``checks``; retry ``k`` ``retry_checks`` x 2^(k - 1) (each fresh seed gets twice
+        the last one's work: a leg that needs more than one retry's checks gets them in few
+        restarts, :data:`RETRY_GROWTH`) or what is left of this leg's ``retry_leg_checks`` or
+        of the route's ``retry_total_checks``, whichever is least (0: no run)."""
         if not k:
             return int(self.checks)
         left = min(
             self.retry_leg_checks - leg_retry,
             self.retry_total_checks - int(self.ompl.get("retry_checks", 0)),
         )
-        return max(0, min(int(self.retry_checks), int(left)))
+        grown = int(self.retry_checks) * RETRY_GROWTH ** (k - 1)
+        return max(0, min(grown, int(left)))

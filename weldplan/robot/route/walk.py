@@ -66,6 +66,7 @@ last served configuration held (the program ends at that weld).
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 from collections import deque
 from dataclasses import dataclass, field
@@ -75,9 +76,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from weldplan.robot.collision.selfcollision import hit_words
-from weldplan.robot.model.arm import Robot
 from weldplan.robot.placement.reach import COLLISION, OK
+from weldplan.robot.route.legtrial import LegTrial, leg_hits, leg_trial
 from weldplan.robot.route.replan import Detour
+from weldplan.robot.route.walkpath import JointPath, add_detour, tail
 from weldplan.robot.route.walkstats import (
     BUDGET,
     NO_APPROACH,
@@ -113,70 +115,6 @@ TRANSFERS_PER_WELD = 2 * (1 + RETRACE_HUBS) + 1
 #: a place in a :class:`JointPath` (its rows, the zone flag of its last row) and how many legs
 #: had been detoured then
 Mark = tuple[int, bool, int]
-
-
-@dataclass
-class JointPath:
-    """A joint route being assembled: rows and, per row, the zone flag of the motion leaving it."""
-
-    q: list[NDArray[np.float64]] = field(default_factory=list)
-    row: list[int] = field(default_factory=list)
-    exact: list[bool] = field(default_factory=list)
-    branch: list[int] = field(default_factory=list)
-    zone: list[bool] = field(default_factory=list)
-
-    #: the per-row lists, in order
-    LISTS = ("q", "row", "exact", "branch", "zone")
-
-    def add(self, q: NDArray, row: int, exact: bool, branch: int, zone: bool = True) -> None:
-        self.q.append(np.asarray(q, dtype=np.float64))
-        self.row.append(int(row))
-        self.exact.append(bool(exact))
-        self.branch.append(int(branch))
-        self.zone.append(bool(zone))
-
-    def mark(self) -> tuple[int, bool]:
-        """Where the path ends now (:meth:`cut` returns to it)."""
-        return len(self.q), bool(self.zone[-1]) if self.zone else True
-
-    def cut(self, mark: tuple[int, bool]) -> tuple[Any, ...]:
-        """Remove every row after ``mark`` and return them (:meth:`paste` puts them back)."""
-        n, z = mark
-        saved = tuple(getattr(self, k)[n:] for k in self.LISTS) + (self.zone[n - 1] if n else True,)
-        for k in self.LISTS:
-            del getattr(self, k)[n:]
-        if n:
-            self.zone[n - 1] = z
-        return saved
-
-    def paste(self, saved: tuple[Any, ...]) -> None:
-        """Put back what :meth:`cut` removed (the path must end where it did then)."""
-        *lists, z = saved
-        if self.zone:
-            self.zone[-1] = z
-        for k, v in zip(self.LISTS, lists, strict=True):
-            getattr(self, k).extend(v)
-
-    def arrays(self) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
-        """``q (k, 6)``, ``row (k,)``, ``exact (k,)``, ``branch (k,)``, ``zone (k - 1,)``."""
-        return (
-            np.array(self.q).reshape(-1, 6),
-            np.array(self.row, dtype=np.int64),
-            np.array(self.exact, dtype=bool),
-            np.array(self.branch, dtype=np.int64),
-            np.array(self.zone[:-1], dtype=bool),
-        )
-
-
-def subdivide(P: NDArray[np.float64], inner: int) -> NDArray[np.float64]:
-    """``P (p, 6)`` with points added on its longest segments (halving them) until it has at
-    least ``inner`` rows strictly between its ends; the polyline itself is unchanged."""
-    P = np.asarray(P, dtype=np.float64)
-    while len(P) - 2 < inner:
-        seg = np.linalg.norm(np.diff(P, axis=0), axis=1)
-        i = int(np.argmax(seg))
-        P = np.insert(P, i + 1, (P[i] + P[i + 1]) / 2, axis=0)
-    return P
 
 
 def assemble(
@@ -223,6 +161,7 @@ def assemble(
         for i in range(len(q)):
             w.out.add(q[i], i, bool(ex[i]), int(branch[i]), bool(own[i]))
         return w.result()
+    w.start_trial(served)
     w.head(served[0])
     a, fails = served[0], []
     queue = deque(served[1:])
@@ -240,7 +179,7 @@ def assemble(
             test = w.without if a in w.prev else w.restart  # a without prev: the first weld
             a, fails, again = test(a, fails)
             queue.extendleft(reversed(again))
-    _tail(det, w.out, q, ex, branch, int(rows[a]), own, blocked)
+    tail(det, w.out, q, ex, branch, int(rows[a]), own, blocked)
     return w.result()
 
 
@@ -274,6 +213,68 @@ class _Walk:
     cause: dict[int, str] = field(default_factory=dict)
     #: counters of :class:`WalkStats`
     count: dict[str, int] = field(default_factory=dict)
+    #: per route row of a weld, its way off (:meth:`leave`, cached: the trial asks it first)
+    left: dict[int, NDArray[np.float64] | None] = field(default_factory=dict)
+    #: per two route rows, :meth:`pair`'s answer (cached: the trial asks it first)
+    pairs: dict[tuple[int, int], tuple[Any, Any, Any]] = field(default_factory=dict)
+    #: the transfer trial before the walk (:meth:`start_trial`)
+    trial: LegTrial | None = None
+
+    def leave(self, r: int) -> NDArray[np.float64] | None:
+        """:meth:`Detour.leave` of the weld at route row ``r`` (its configuration and branch on
+        the route), cached: the same rows, computed once."""
+        if r not in self.left:
+            self.left[r] = self.det.leave(self.q[r], r, int(self.branch[r]))
+        return self.left[r]
+
+    def pair(self, ia: int, ib: int) -> tuple[Any, Any, Any]:
+        """``(way off a, way into b, transfer)`` between the welds at route rows ``ia`` and
+        ``ib`` without a planner: their first ways off (:meth:`leave`) joined by a straight or
+        tucked transfer, else another pair of their :data:`~weldplan.robot.route.replan.WAYS_OFF`
+        ways (:meth:`~weldplan.robot.route.Detour.ways_off`, the first ways' sides first); the
+        transfer ``None`` when none joins (then the first ways, for OMPL), a way ``None`` when
+        that weld has none. Cached."""
+        if (ia, ib) in self.pairs:
+            return self.pairs[(ia, ib)]
+        la, lb = self.leave(ia), self.leave(ib)
+        got: tuple[Any, Any, Any] = (la, lb, None)
+        if la is not None and lb is not None:
+            mid = self.det.joins_directly(la[-1], lb[-1])
+            if mid is not None:
+                got = (la, lb, mid)
+            else:
+                got = self._other_pair(ia, ib, la, lb)
+        self.pairs[(ia, ib)] = got
+        return got
+
+    def _other_pair(self, ia: int, ib: int, la: NDArray, lb: NDArray) -> tuple[Any, Any, Any]:
+        """:meth:`pair` past the first ways: the other ways off ``ia`` and into ``ib``, pairs
+        in order of the sum of their places (the first ways' sides first)."""
+        d = self.det
+        wa = d.ways_off(self.q[ia], ia, int(self.branch[ia]), la)
+        wb = d.ways_off(self.q[ib], ib, int(self.branch[ib]), lb)
+        order = sorted(((i, j) for i in range(len(wa)) for j in range(len(wb))),
+                       key=lambda ij: (ij[0] + ij[1], ij))  # fmt: skip
+        for i, j in order[1:]:
+            mid = d.joins_directly(wa[i][-1], wb[j][-1])
+            if mid is not None:
+                self.tally("other_ways")
+                return wa[i], wb[j], mid
+        return la, lb, None
+
+    def start_trial(self, served: list[int]) -> None:
+        """Run the transfer trial on the legs between the ``served`` welds
+        (:func:`~weldplan.robot.route.legtrial.leg_trial`), say at once which it leaves split,
+        and give each split leg its share of the route's OMPL retries
+        (:meth:`~weldplan.robot.route.legtrial.LegTrial.retry_share`)."""
+        d = self.det
+        self.trial = leg_trial(d, self.q, self.rows, served, self.own, self.blocked, self.pair)
+        share = self.trial.retry_share(d.retry_total_checks, d.retry_leg_checks)
+        self.det = dataclasses.replace(d, retry_leg_checks=share)  # same ompl and left_by dicts
+        if self.trial.split:
+            log.warning("robot walk: the transfer trial on the route at this base: %s; each is "
+                        "left to OMPL with up to %d retry checks", self.trial.describe(self.ids),
+                        share)  # fmt: skip
 
     def mark(self) -> Mark:
         return (*self.out.mark(), len(self.replanned))
@@ -294,6 +295,9 @@ class _Walk:
                 for k in sorted(self.cause)
                 if self.status[k] != OK  # fmt: skip
             ),
+            legs_blocked=0 if self.trial is None else self.trial.blocked,
+            split_legs=() if self.trial is None else self.trial.names(self.ids),
+            retry_share=int(self.det.retry_leg_checks),
             **self.count,
         )
         q, row, exact, branch, zone = self.out.arrays()
@@ -305,11 +309,11 @@ class _Walk:
         approach (a gun exit or a retract, reversed), else at ``k``'s configuration."""
         rk = int(self.rows[k])
         q, br, own = self.q, self.branch, self.own
-        if rk == 0 or not _leg_hits(self.det, q, own, 0, rk, self.blocked):
+        if rk == 0 or not leg_hits(self.det, q, own, 0, rk, self.blocked):
             for i in range(rk + 1):
                 self.out.add(q[i], i, bool(self.ex[i]), int(br[i]), bool(own[i]))
             return
-        lv = self.det.leave(q[rk], rk, int(br[rk]))
+        lv = self.leave(rk)
         A = q[rk][None] if lv is None else lv[::-1]  # the approach, its clear end first
         pb = self.det.robot.branch_of(A)
         for i in range(rk):  # held: no motion (at the weld itself, its contact zone exempt)
@@ -327,7 +331,7 @@ class _Walk:
         why)`` (the path unchanged; cause one of :data:`CAUSES`)."""
         ia, ib = int(self.rows[a]), int(self.rows[b])
         q, br, own = self.q, self.branch, self.own
-        hits = _leg_hits(self.det, q, own, ia, ib, self.blocked)
+        hits = leg_hits(self.det, q, own, ia, ib, self.blocked)
         if not hits:
             self.out.zone[-1] = bool(own[ia])
             for i in range(ia + 1, ib + 1):
@@ -339,7 +343,7 @@ class _Walk:
                 return None
             return why[0], f"{hits[0].body} on the leg from weld {self.ids[a]}; {why[1]}"
         n0 = len(self.out.q)
-        _add_detour(self.out, self.det.robot, got[0], ia, ib, self.rows, q, br)
+        add_detour(self.out, self.det.robot, got[0], ia, ib, self.rows, q, br)
         self.replanned.append(a)
         self._hubs_at(n0, got[1:], (-1, b))
         return None
@@ -347,20 +351,26 @@ class _Walk:
     def detour(self, a: int, b: int) -> tuple[Any, tuple[str, str]]:
         """``((path, transfer start, transfer end), None)`` of a detour from weld ``a`` to
         weld ``b`` (leave ``a``, transfer, approach ``b``; rad), else ``(None, (cause, why))``:
-        which end has no way off its weld, or why the transfer failed."""
+        which end has no way off its weld, or why the transfer failed. The transfer: one that
+        needs no planner between any of their ways off (:meth:`pair`), else OMPL's from the
+        first ways (:meth:`transfer`)."""
         ia, ib = int(self.rows[a]), int(self.rows[b])
-        q, br = self.q, self.branch
+        q = self.q
         if self.tries.get(b, 0) >= TRANSFERS_PER_WELD:  # untried: not even its ends
             return self.transfer(q[ia], q[ib], b, "")
-        la = self.det.leave(q[ia], ia, int(br[ia]))
+        la, lb, mid = self.pair(ia, ib)
         if la is None:
             return None, (NO_EXIT, f"weld {self.ids[a]} has no free gun exit or retract")
-        lb = self.det.leave(q[ib], ib, int(br[ib]))
         if lb is None:
             return None, (NO_APPROACH, f"weld {self.ids[b]} has no free gun exit or retract")
-        mid, why = self.transfer(la[-1], lb[-1], b, f"weld {self.ids[a]}'s exit")
-        if mid is None:
-            return None, why
+        if mid is not None:  # a transfer tried and found, no planner
+            self.tries[b] = self.tries.get(b, 0) + 1
+            self.tally("transfers")
+            self.tally("transfers_found")
+        else:
+            mid, why = self.transfer(la[-1], lb[-1], b, f"weld {self.ids[a]}'s exit")
+            if mid is None:
+                return None, why
         return (np.vstack([la[:-1], mid, lb[:-1][::-1]]), la[-1], lb[-1]), ("", "")
 
     def transfer(self, qa: NDArray, qb: NDArray, b: int, src: str) -> tuple[Any, tuple[str, str]]:
@@ -407,7 +417,7 @@ class _Walk:
                                               for g in hubs):  # fmt: skip
                 hubs.append(h)
         hubs = hubs[:RETRACE_HUBS]
-        lb = self.det.leave(self.q[ib], ib, int(self.branch[ib])) if hubs else None
+        lb = self.leave(ib) if hubs else None
         if lb is None:
             return False
         self.retraced_from[a] = self.retraced_from.get(a, 0) + 1
@@ -422,7 +432,7 @@ class _Walk:
                 out.add(out.q[j], ia, False, out.branch[j])
             n0 = len(out.q)
             P = np.vstack([mid, lb[:-1][::-1]])  # mid[0]: the hub, reached by the motion h + 1 -> h
-            _add_detour(out, self.det.robot, P, ia, ib, self.rows, self.q, self.branch, zones[h])
+            add_detour(out, self.det.robot, P, ia, ib, self.rows, self.q, self.branch, zones[h])
             self.replanned.append(a)
             self.retraced_from[a] = 0
             self.tally("retraces_found")
@@ -507,84 +517,3 @@ class _Walk:
         log.info("weld %s kept: the path does not go on from %s either", self.ids[a],
                  self.ids[s])  # fmt: skip
         return a, fails, []
-
-
-def _leg_hits(
-    det: Detour, q: NDArray, own: NDArray, ia: int, ib: int, blocked: set[int] | None
-) -> list[Any]:
-    """The first blocked motion of the route's own rows ``ia..ib`` (``[]``: free), from the
-    caller's ``blocked`` motions when given, else checked here."""
-    if blocked is None:
-        return det.checker.path_hits(q[ia : ib + 1], own[ia:ib], first_only=True)
-    at = sorted(s for s in blocked if ia <= s < ib)
-    if not at:
-        return []
-    return det.checker.path_hits(q[at[0] : at[0] + 2], own[at[0] : at[0] + 1])
-
-
-def _add_detour(
-    out: JointPath,
-    robot: Robot,
-    path: NDArray,
-    ia: int,
-    ib: int,
-    rows: NDArray[np.int64],
-    q: NDArray,
-    branch: NDArray,
-    leave_zone: bool = True,
-) -> None:
-    """Rows of a detour from the weld at route row ``ia`` to the one at ``ib``: the retract
-    (labelled ``ia``), inner points (labelled ``ia``, then one per weld passed between), the
-    approach (labelled ``ib``) and the weld ``ib`` itself. ``leave_zone``: the motion from the
-    path's end to ``path[0]`` is checked with the contact zone exempt (it leaves a weld; not so
-    from a clear configuration, :meth:`_Walk.retrace`)."""
-    passed = [int(r) for r in rows if ia < r < ib]
-    P = subdivide(path, len(passed))
-    pb = robot.branch_of(P)
-    labels = [ia] * len(P)
-    labels[-1] = ib
-    for j, r in enumerate(passed):  # the last inner points stand for the welds passed
-        labels[len(P) - 1 - len(passed) + j] = r
-    out.zone[-1] = leave_zone  # weld -> retract: contact zone exempt
-    for p, lab, b in zip(P, labels, pb, strict=True):
-        out.add(p, lab, False, int(b), zone=False)
-    out.zone[-1] = True  # approach -> weld
-    out.add(q[ib], ib, True, int(branch[ib]))
-
-
-def _tail(
-    det: Detour,
-    out: JointPath,
-    q: NDArray,
-    ex: NDArray,
-    branch: NDArray,
-    ia: int,
-    own: NDArray[np.bool_],
-    blocked: set[int] | None = None,
-) -> None:
-    """The route's rows after the last served weld (module docstring); ``own[i]``: the contact
-    zone is exempt on the route's own motion leaving row ``i``."""
-    m = len(q)
-    if ia + 1 >= m:
-        return
-    if not _leg_hits(det, q, own, ia, m - 1, blocked):
-        out.zone[-1] = bool(own[ia])
-        for i in range(ia + 1, m):
-            out.add(q[i], i, bool(ex[i]), int(branch[i]), bool(own[i]))
-        return
-    got = det.retract(q[ia], det.T_tcp[ia], int(branch[ia]))
-    out.zone[-1] = True  # weld -> retract (or no motion): contact zone exempt, as checked
-    if got is None:
-        # no way off the last served weld: the robot stays there (zero motions), the route's
-        # later welds are passed without welding; before, the route's own blocked rows were
-        # kept and the final check refused the whole route
-        log.info("no retract from the last served weld: the program ends there")
-        for i in range(ia + 1, m):
-            out.add(q[ia], i, False, int(branch[ia]))
-        return
-    # the rest of the route's rows as points on the retract from the last served weld (a motion
-    # retract() checked), the last of them the retract configuration itself
-    P = subdivide(np.vstack([q[ia], got[0]]), m - 2 - ia)[1:]
-    pb = det.robot.branch_of(P)
-    for j, i in enumerate(range(ia + 1, m)):
-        out.add(P[j], i, False, int(pb[j]))

@@ -45,6 +45,15 @@ class WalkStats:
     dropped
         ``(weld id, cause)`` of every weld the walk left out, in route order; the cause one
         of :data:`CAUSES` (the weld's ``detail`` says the rest: which end, which body).
+    legs_blocked, split_legs
+        The transfer trial before the walk (:mod:`weldplan.robot.route.legtrial`): the legs
+        between served welds whose own motion is blocked, and ``"A -> B: why"`` for each that no
+        gun exit or retract and straight or tucked transfer joins (left to OMPL).
+    retry_share
+        The OMPL retry checks one leg may take (its share of the route's).
+    other_ways
+        Legs joined without a planner by another pair of the welds' ways off than their first
+        (:meth:`~weldplan.robot.route.Detour.ways_off`), in the trial and the walk.
     """
 
     transfers: int = 0
@@ -58,16 +67,22 @@ class WalkStats:
     ompl_solved: int = 0
     ompl_cpu_s: float = 0.0
     dropped: tuple[tuple[str, str], ...] = ()
+    other_ways: int = 0
+    legs_blocked: int = 0
+    split_legs: tuple[str, ...] = ()
+    retry_share: int = 0
 
     def to_dict(self) -> dict[str, Any]:
         d = asdict(self)
         d["dropped"] = [list(x) for x in self.dropped]
+        d["split_legs"] = list(self.split_legs)
         return d
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> WalkStats:
         d = dict(d)
         d["dropped"] = tuple((str(w), str(c)) for w, c in d.get("dropped", ()))
+        d["split_legs"] = tuple(str(x) for x in d.get("split_legs", ()))
         return cls(**{k: v for k, v in d.items() if k in cls.__dataclass_fields__})
 
     def describe(self) -> str:
@@ -79,6 +94,12 @@ class WalkStats:
             f"({self.retraces_found} found), {self.trap_tests} trap test(s) "
             f"({self.traps} weld(s) set aside)"
         )
+        if self.split_legs:
+            line += (
+                f"; {len(self.split_legs)} of {self.legs_blocked} blocked leg(s) split before the "
+                f"walk, left to OMPL ({'; '.join(self.split_legs[:3])}"
+                f"{' ...' if len(self.split_legs) > 3 else ''})"
+            )
         by: dict[str, list[str]] = {}
         for w, c in self.dropped:
             by.setdefault(c, []).append(w)
