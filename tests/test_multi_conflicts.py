@@ -156,3 +156,35 @@ def test_a_blamed_weld_goes_from_the_robot_that_moved_there_to_one_that_can_take
     # c already kept from robot 1: nothing left to move, the conflict is named instead
     assert _repairs([(0, "b", 1, "c")], ok, {(0, 2): "kept"}, welds, names) == {}
     assert _left_line([(0, "b", 1, "")], names) == "robot1 at b / robot2 at home"
+
+
+def test_a_share_with_no_plan_keeps_its_welds_from_that_robot_with_the_pipelines_words():
+    """A robot's share the single-robot pipeline cannot plan (``ShareFailed``, raised in a
+    worker and read back in the parent) costs that robot those welds: each is kept from it
+    with the pipeline's words, so the allocation gives it to another robot or lists it
+    unreached with them."""
+    import pickle
+    from types import SimpleNamespace
+
+    from weldplan.multi.allocate import allocate
+    from weldplan.multi.conflicts import without
+    from weldplan.multi.passes import _share_failed
+    from weldplan.multi.problem import ReachMap
+    from weldplan.multi.shares import ShareFailed
+
+    exc = pickle.loads(pickle.dumps(ShareFailed(1, ("b", "c"), "no home leg for weld b")))
+    assert (exc.k, exc.welds) == (1, ("b", "c")) and str(exc).startswith("robot 2: no home leg")
+    ok = np.array([[True, False, True], [True, True, True]])
+    reach = ReachMap(welds=("a", "b", "c"), robots=("robot1", "robot2"), ok=ok,
+                     reasons=(("", "out of reach", ""), ("", "", "")),
+                     positions=np.zeros((3, 3)))  # fmt: skip
+    ctx = SimpleNamespace(inp=SimpleNamespace(reach=reach))
+    forbid = _share_failed(exc, ctx, {(1, 2): "kept before"})
+    assert forbid == {(1, 1): "its share had no plan: no home leg for weld b"}
+    kept = without(reach, {(1, 2): "kept before", **forbid})
+    assert not kept.ok[1, 1] and kept.reasons[1][1] == forbid[(1, 1)]
+    T = np.ones((2, 3, 3))
+    a = allocate(kept.ok, np.full((2, 3), 0.5), T, rng=0, settings=AllocationSettings())
+    # the allocation names welds by column: b (1) no robot serves now, c (2) goes to robot 1
+    assert [u.weld for u in a.unreached] == ["1"]
+    assert "2" in a.welds_of(0) and "2" not in a.welds_of(1)

@@ -107,17 +107,32 @@ def plan_and_repair(ctx: Context) -> _Passed:
     the robot that met the other there (the moving robot's first, where another robot serves
     it) and again; the pass with the fewest such conflicts is kept (the later on a tie). A
     conflict neither ordered nor re-allocated is said in the interference line, naming the
-    robots and the welds."""
+    robots and the welds. A robot's share that has no plan (:class:`~weldplan.multi.shares.
+    ShareFailed`: e.g. none of its welds joined to its home) costs that robot those welds, not
+    the station: they are kept from it, with the pipeline's words, and the station allocated
+    again (at most once per robot); the interference line names it."""
     from weldplan.multi.allocate import PairCost
     from weldplan.multi.conflicts import home_forbidden
+    from weldplan.multi.shares import ShareFailed
 
     ok = np.asarray(ctx.inp.reach.ok, dtype=bool)
     forbid = home_forbidden(ctx.table, ok)
     at_home = len(forbid)
     cost = PairCost(ctx.table.pair, CONFLICT_S)
     best: tuple[Any, ...] | None = None
-    for k in range(REPAIRS + 1):
-        plans, report, rounds = _allocate_and_plan(ctx, forbid, cost)
+    failed: list[str] = []
+    k = n_failed = 0
+    while True:
+        try:
+            plans, report, rounds = _allocate_and_plan(ctx, forbid, cost)
+        except ShareFailed as exc:  # that robot's share has no plan: its welds go elsewhere
+            new = _share_failed(exc, ctx, forbid)
+            if not new or len(failed) >= len(ctx.robots):
+                raise
+            failed.append(f"robot{exc.k + 1} ({len(new)} welds: {exc.message})")
+            log.warning("station: robot %d's share failed, re-allocated: %s", exc.k + 1, exc)
+            forbid, n_failed = {**forbid, **new}, n_failed + len(new)
+            continue
         names = report.ours.robots
         (ctx.progress or (lambda *a: None))("interference", 0, len(ctx.robots))
         got = ctx.interfere(ctx.station, plans, names, ctx.seconds)
@@ -128,17 +143,31 @@ def plan_and_repair(ctx: Context) -> _Passed:
             break
         log.info("station: re-allocation %d keeps %d welds away from a robot", k + 1, len(new))
         forbid = {**forbid, **new}
+        k += 1
     report, (plans, schedule, replay, line, left), rounds, forbid = best
     said = [
         ctx.table.line(), f"{at_home} kept from a robot that meets another at its home",
-        f"{len(forbid) - at_home} re-allocated after the interference ({k + 1} passes)",
+        f"{len(forbid) - at_home - n_failed} re-allocated after the interference ({k + 1} passes)",
     ]  # fmt: skip
+    if failed:
+        said.append(f"shares with no plan, re-allocated: {'; '.join(failed)}")
     if left:
         said.append(f"NOT ordered nor re-allocated: {_left_line(left, names)}")
-    stats = {"at_home": at_home, "repaired": len(forbid) - at_home, "passes": k + 1,
+    stats = {"at_home": at_home, "repaired": len(forbid) - at_home - n_failed, "passes": k + 1,
              "pairs_kept": report.ours.stats.get("conflict_pairs", 0),
-             "left": [list(x) for x in left]}  # fmt: skip
+             "left": [list(x) for x in left], "failed": failed}  # fmt: skip
     return _Passed(plans, report, rounds, schedule, replay, f"{line}; {'; '.join(said)}", stats)
+
+
+def _share_failed(
+    exc: Any, ctx: Context, forbid: dict[tuple[int, int], str]
+) -> dict[tuple[int, int], str]:
+    """``{(robot, weld): reason}``: every weld of the share ``exc``
+    (:class:`~weldplan.multi.shares.ShareFailed`) kept from its robot, the pipeline's words
+    as the reason (a weld no other robot serves is then listed unreached with them)."""
+    pos = {w: i for i, w in enumerate(ctx.inp.reach.welds)}
+    why = f"its share had no plan: {exc.message}"
+    return {(exc.k, pos[w]): why for w in exc.welds if w in pos and (exc.k, pos[w]) not in forbid}
 
 
 def _repairs(
@@ -179,8 +208,9 @@ def _tcp_bounds(robots: list[Any], inp: StudyInputs) -> tuple[Any, Any]:
     from weldplan.multi.bound import pose_free_legs
 
     legs = [
-        pose_free_legs(robot, mounted.flange_tcp, inp.reach.positions,
-                       np.radians(spec.settings.home))  # fmt: skip
+        pose_free_legs(
+            robot, mounted.flange_tcp, inp.reach.positions, np.radians(spec.settings.home)
+        )  # fmt: skip
         for spec, mounted, robot in robots
     ]
     return np.stack([g.travel for g in legs]), np.stack([g.home for g in legs])
@@ -272,5 +302,3 @@ class _Shares:
 
     def welds_of(self, k: int) -> tuple[str, ...]:
         return self.shares.get(k, ())
-
-

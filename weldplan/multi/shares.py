@@ -57,6 +57,8 @@ from typing import Any
 
 import numpy as np
 
+from weldplan.errors import PlanningError
+
 log = logging.getLogger(__name__)
 
 Progress = Callable[[str, int, int], None]
@@ -114,6 +116,21 @@ class ShareResult:
     seconds: float
     cpu: float
     stage_cpu: dict[str, float] = field(default_factory=dict)
+
+
+class ShareFailed(PlanningError):
+    """One robot's share has no plan: the single-robot pipeline's
+    :class:`~weldplan.errors.PlanningError` for it (e.g. every weld of it without a leg from
+    or to its home). ``k``: the robot's index; ``welds``: its share's weld ids; ``message``:
+    the pipeline's words. Picklable, so a share planned in a worker raises it in the parent.
+    :mod:`weldplan.multi.passes` re-allocates the share's welds away from that robot."""
+
+    def __init__(self, k: int, welds: tuple[str, ...], message: str) -> None:
+        super().__init__(f"robot {k + 1}: {message}")
+        self.k, self.welds, self.message = int(k), tuple(welds), str(message)
+
+    def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:
+        return (ShareFailed, (self.k, self.welds, self.message))
 
 
 @dataclass(frozen=True, eq=False)
@@ -209,7 +226,14 @@ def run_share(
     part = dataclasses.replace(task.station.part, welds=share_file(task.welds_csv, task.name))
     sub = dataclasses.replace(task.station, part=part, jobs=task.jobs)
     log.info("station: %s plans its share", task.name)
-    p = plan(sub, rng=task.seed, executor=executor, progress=rec)
+    try:
+        p = plan(sub, rng=task.seed, executor=executor, progress=rec)
+    except ShareFailed:
+        raise
+    except PlanningError as exc:  # this robot has no plan of its share: re-allocated above
+        from weldplan.io.joints import read_joints
+
+        raise ShareFailed(task.k, read_joints(part.welds).ids, str(exc)) from None
     stages = {f"{task.name} {s.name}" for s in p.stages}
     stage_cpu = {k: v for k, v in rec.cpu.items() if k in stages}
     return ShareResult(
