@@ -128,9 +128,12 @@ def test_every_timed_leg_of_a_planned_robot_is_above_its_pose_free_bound():
     between two welds, and its legs out of its home and back, take at least their bound
     over the welds' TCP positions."""
     import weldplan
+    from tests.conftest import require_shared
     from weldplan.bench.station import demo_two_robots
     from weldplan.multi.bound import pose_free_legs
 
+    require_shared("tools", "spot_welding_gun", "spot_welding_gun.urdf")  # the station's gun
+    require_shared("robots", "kuka_kr150r3100_2", "kr150r3100_2.urdf")
     st = demo_two_robots()
     st = dataclasses.replace(st, robots=st.robots[:1], name="demo-robot-1")
     plan = weldplan.plan(st, rng=0)
