@@ -510,7 +510,8 @@ def _pose_errors(
 def _blamed_weld(hit: Hit, row: NDArray[np.int64], rows: NDArray[np.int64]) -> int | None:
     """The weld a blocked motion is charged to: the weld it leaves or reaches when it has one as
     an end (the nearer end when both), else the weld its leg leads to."""
-    a, b = int(row[hit.segment]), int(row[hit.segment + 1])
+    end = min(hit.segment + 1, len(row) - 1)  # a one-row path: its row blocked where it stands
+    a, b = int(row[hit.segment]), int(row[end])
     at_a, at_b = np.flatnonzero(rows == a), np.flatnonzero(rows == b)
     if len(at_a) and (hit.t <= 0.5 or not len(at_b)):
         return int(at_a[0])
