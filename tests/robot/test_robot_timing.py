@@ -184,3 +184,23 @@ def test_toppra_is_imported_without_pyplot_and_its_plots_still_load_it() -> None
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([root, os.environ.get("PYTHONPATH", "")])}
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
     assert out.returncode == 0, out.stderr
+
+
+def test_a_program_names_the_welds_it_welds_not_the_ones_it_passes():
+    """``ProgramBuild.welded_ids``: one id per timed weld row, in their order; a weld the
+    program passes without welding (no weld target) is not one (the pages label the weld rows
+    with it: the route's ``weld_ids`` also hold the passed welds)."""
+    from types import SimpleNamespace as NS
+
+    from weldplan.robot.program.build import ProgramBuild
+
+    targets = [NS(kind="via", row=0, joint_id=""), NS(kind="weld", row=2, joint_id="7"),
+               NS(kind="weld", row=5, joint_id="3")]  # fmt: skip
+    # timed rows 0..4 stand on route rows 0, 2, 3, 5, 6 (route rows 1 and 4 only passed)
+    timing = NS(row_times=np.arange(5.0), weld_rows=np.array([1, 3]))
+    build = ProgramBuild(NS(targets=targets), timing, 0.0, 1.0, 0.0, skipped=("9",),
+                         row=np.array([0, 2, 3, 5, 6]))  # fmt: skip
+    assert build.welded_ids() == ("7", "3")
+    bare = ProgramBuild(NS(targets=targets), NS(row_times=np.arange(6.0),
+                        weld_rows=np.array([5, 2])), 0.0, 1.0, 0.0)  # fmt: skip
+    assert bare.welded_ids() == ("3", "7")

@@ -194,7 +194,7 @@ def _robot_texts(plan: Any, kinds: set[str], post: str | None, head: list[str]) 
         texts["robot_html"] = robot_html(
             joint.robot, build.timing, joint.robot_route.flange_tcp, part=plan.cell.part,
             tool=plan.tool.tool, route_points=joint.follow.waypoints(),
-            weld_ids=joint.robot_route.weld_ids,
+            weld_ids=build.welded_ids(),
         )  # fmt: skip
     return texts
 

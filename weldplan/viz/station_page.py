@@ -135,7 +135,7 @@ def station_robots(station_plan: Any) -> list[StationRobot]:
                 plan.program.timing,
                 plan.tool.tool if plan.tool is not None else None,
                 np.asarray(joint.follow.waypoints()),
-                tuple(joint.robot_route.weld_ids),
+                plan.program.welded_ids(),
             )  # fmt: skip
         )
     return out

@@ -104,6 +104,14 @@ class ProgramBuild:
     skipped: tuple[str, ...] = ()
     row: NDArray[np.int64] | None = None
 
+    def welded_ids(self) -> tuple[str, ...]:
+        """The weld id of each of :attr:`timing`'s weld rows, in their order: the welds the
+        program welds (a weld it passes, :attr:`skipped`, is not one; the route's
+        ``weld_ids`` name those too)."""
+        by_route = {t.row: t.joint_id for t in self.program.targets if t.kind == "weld"}
+        rows = self.row if self.row is not None else np.arange(len(self.timing.row_times))
+        return tuple(str(by_route[int(rows[int(w)])]) for w in self.timing.weld_rows)
+
 
 def _segment_distance(P: NDArray, A: NDArray, B: NDArray) -> NDArray:
     """``(m,)`` distance of points ``P (m, 3)`` to segments ``A -> B`` (each ``(m, 3)``)."""
