@@ -110,6 +110,40 @@ def test_a_link_below_the_floor_is_refused(robot, gun_checker):
     assert free.state_free(DOWN) and free.path_hits(np.stack([HOME, DOWN])) == []
 
 
+def test_a_long_motion_through_the_floor_is_blocked_and_a_turn_of_a1_costs_no_floor_call(
+    robot, gun_checker
+):
+    """A wide motion whose gun dips 130 mm below the floor half-way (both ends clear) is
+    blocked: before, its bound on the gun's motion (27 m, A1 turning 265 deg) raised the floor
+    box past its own side, and the check found nothing below it. A turn of A1 alone (an upright
+    base) moves no point up or down: proven clear of the floor at once."""
+    from weldplan.robot.collision import selfcollision as sc
+
+    chk = gun_checker
+    qa = np.radians([-170.0, -41.2, 56.9, -330.1, 54.8, -338.8])
+    qb = np.radians([95.4, -70.8, 147.6, -303.7, 85.3, -303.3])
+    assert chk.state_free(qa) and chk.state_free(qb)
+    hits = chk.path_hits(np.stack([qa, qb]))
+    assert [h.body for h in hits] == ["tool/floor"] and 0.3 < hits[0].t < 0.9
+    Q = qa + np.linspace(0.0, 1.0, 50)[:, None] * (qb - qa)
+    assert "tool/floor" in chk.states_blocked(Q)  # the judge agrees: below the floor
+    calls = []
+    orig = sc.SelfCheck._height
+
+    def counted(self, b, F):
+        calls.append(b)
+        return orig(self, b, F)
+
+    sc.SelfCheck._height = counted
+    try:
+        turned = HOME.copy()
+        turned[0] += np.radians(180.0)
+        assert chk.path_hits(np.stack([HOME, turned])) == []
+    finally:
+        sc.SelfCheck._height = orig
+    assert len(calls) <= 7  # one height a body at most: no bisection
+
+
 def test_ordinary_motions_pass_and_free_verdicts_hold_under_dense_sampling(gun_checker):
     """Random motions about the ordinary pose, and A4 sweeps through the fold with random
     offsets: what path_hits calls free, 200 state checks along the motion find free; both

@@ -24,13 +24,14 @@ part's state check does (likewise a body whose bounding sphere stays above the f
 Motions (linear in joint space): during a motion the points of body ``a`` move relative to the
 frame of body ``b`` (the lower link) only through the joints between them, at most ``sum_j |dq_j|
 R_j`` mm (``R_j`` bounding their distance to joint j's axis: the checker's motion radii); against
-the floor the whole chain counts. A pair whose bounding spheres, at either end of the motion, are
+the floor the whole chain counts but A1 when it turns about the vertical (an upright base: it
+moves no point up or down). A pair whose bounding spheres, at either end of the motion, are
 farther apart than that bound plus the gap is free; the others are advanced conservatively with
 FCL distance (from a configuration at distance ``d`` nothing can touch before the bodies have
 moved ``d`` relative to each other; closer than :data:`SELF_GAP_MM` counts as a collision), as the
-part check does. Against the floor the motion is bisected on FCL collide instead
-(:meth:`SelfCheck._floor_motion`: FCL's distance to a box is slow). A motion's hit is the pair
-that meets first.
+part check does. Against the floor the motion is bisected on the body's height over it, the
+lowest vertex of its convex hull (:meth:`SelfCheck._floor_motion`: exact for a mesh and a plane,
+with no FCL call); a hit's gap is FCL's. A motion's hit is the pair that meets first.
 
 A hit names the pair ``"tool/link_3"`` (the body on the later link first) or ``"link_2/floor"``.
 """
@@ -129,6 +130,15 @@ class SelfCheck:
             self.on_floor = [
                 b for b, body in enumerate(self.bodies) if world.allowed(body.name, FLOOR) is None
             ]
+        # per body the vertices of its convex hull (its link frame): the lowest point of a body
+        # is one of them, so its height over the floor is exact with no FCL call
+        self.hull = {b: _hull_points(self.bodies[b].vertices) for b in self.on_floor}
+
+    def _height(self, b: int, F: NDArray[np.float64]) -> float:
+        """mm: the height of body ``b``'s lowest point over the floor at link frames ``F (7, 4,
+        4)`` (negative below it): the least z of its hull's vertices."""
+        T = F[self.bodies[b].frame]
+        return float(np.min(self.hull[b] @ T[2, :3]) + T[2, 3] - self.floor_z)  # type: ignore[operator]
 
     def _names(self, i: int, j: int) -> str:
         return pair_label(self.bodies[i].name, FLOOR if j < 0 else self.bodies[j].name)
@@ -234,8 +244,11 @@ class SelfCheck:
             for k in np.flatnonzero(lb <= SELF_GAP_MM):
                 out[k].append((i, j, float(rate[k])))
         if self.floor_z is not None:
+            # the vertical motion of a body's points: A1 turning about a vertical axis (an
+            # upright base) moves none of them up or down
+            up = slice(1, None) if _a1_vertical(robot) else slice(None)
             for b in self.on_floor:
-                rate = dq @ self.R[:, b]
+                rate = dq[:, up] @ self.R[up, b]
                 lb = np.maximum(ca[:, b, 2], cb[:, b, 2]) - self.radius[b] - self.floor_z - rate
                 for k in np.flatnonzero(lb <= SELF_GAP_MM):
                     out[k].append((b, -1, float(rate[k])))
@@ -322,11 +335,14 @@ class SelfCheck:
         than ``rate`` mm: ``(t, distance)`` where it comes within :data:`SELF_GAP_MM`, ``None``
         when it never does.
 
-        Bisection on FCL collide with the floor box (FCL's box distance is slow, tens of ms
-        against the tool): an interval of length ``dt`` is free when the body at its middle is
-        clear of the floor raised by ``SELF_GAP_MM + rate dt / 2`` (no point moves farther than
-        that within it); else it is split, down to :data:`FLOOR_TOL_MM` of motion, where a body
-        not yet proven clear counts as a hit.
+        Bisection on the body's height over the floor (:meth:`_height`: the lowest of its hull's
+        vertices, exact for a mesh against a plane; before, FCL collide with the floor box, a few
+        ms a call and most of an OMPL run's time near a floor): an interval of length ``dt`` is
+        free when the body at its middle stands more than ``SELF_GAP_MM + rate dt / 2`` above
+        the floor (no point rises or sinks farther than that within it); else it is split, down
+        to :data:`FLOOR_TOL_MM` of motion, where a body not yet proven clear counts as a hit
+        (its gap measured by FCL). ``rate`` bounds the vertical motion only: a turn about a
+        vertical A1 moves no point up or down (:meth:`_suspects`).
         """
         todo = [(0.0, 1.0)]
         for _ in range(MAX_FLOOR_SPLITS):
@@ -335,9 +351,28 @@ class SelfCheck:
             t0, t1 = todo.pop()
             tc, h = (t0 + t1) / 2, rate * (t1 - t0) / 2
             F = robot.link_frames(qa + tc * (qb - qa))[0]
-            if not self._below(robot, b, F, SELF_GAP_MM + h):
+            d = self._height(b, F)
+            if d > SELF_GAP_MM + h:
                 continue
-            if h <= FLOOR_TOL_MM or self._below(robot, b, F, SELF_GAP_MM):
+            if h <= FLOOR_TOL_MM or d <= SELF_GAP_MM:
                 return tc, self._floor_gap(robot, b, F)
             todo.extend([(tc, t1), (t0, tc)])  # the earlier half first
         return todo[-1][0], 0.0
+
+
+def _hull_points(vertices: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The vertices of the convex hull of ``vertices (n, 3)`` (all of them when the hull is
+    degenerate: a flat or tiny body)."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    v = np.asarray(vertices, dtype=np.float64)
+    try:
+        return np.ascontiguousarray(v[ConvexHull(v).vertices])
+    except (QhullError, ValueError):
+        return np.ascontiguousarray(v)
+
+
+def _a1_vertical(robot: Any) -> bool:
+    """Whether ``robot``'s first axis is vertical in the planning frame (its base upright)."""
+    z = (robot.base @ robot.origins[0])[:3, :3] @ robot.axes[0]
+    return bool(np.linalg.norm(np.cross(z, [0.0, 0.0, 1.0])) < 1e-9)
