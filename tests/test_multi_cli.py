@@ -156,7 +156,10 @@ def test_the_command_line_writes_every_robots_files_and_the_station_json(cli_run
         prog = parse_krl(src, dat)
         assert prog.name == f"route_robot{k}"
         welds = [ln.split("; weld ")[1] for ln in dat.splitlines() if "; weld " in ln]
-        assert set(welds) == set(r.welds)
+        # the program welds its share but the welds its route left out, each with its cause
+        served, out = _route_verdicts(r.route)
+        assert set(served) | set(out) == set(r.welds) and set(welds) == set(served)
+        assert all(out.values())
         # the program starts and ends at the robot's home, its axis values as the file gives
         assert prog.moves[0][:2] == ("PTP", "XHOME") and prog.moves[-1][:2] == ("PTP", "XHOME")
         assert np.allclose(prog.axes["XHOME"], HOMES[k - 1], atol=1e-5)
@@ -198,7 +201,24 @@ def test_verify_of_the_station_json_re_runs_the_replay_and_agrees(cli_run, capsy
             r"\(.+\), clearance 5 mm",
             said.err,
         )
-    assert "welds left out" not in said.err  # every weld is in a share
+    # every weld is in a share: only a weld a robot's route left out (with its cause in the
+    # route JSON) is said left out
+    left = set().union(*(_route_verdicts(r.route)[1] for r in _saved(out).robots if r.welds))
+    assert ("welds left out" in said.err) == bool(left)
+
+
+def _route_verdicts(route: Path) -> tuple[list[str], dict[str, str]]:
+    """``(welds served, {weld left out: its cause})`` of a robot's route JSON."""
+    rr = json.loads(route.read_text())["tool"]["robot"]
+    detail = rr.get("detail") or [""] * len(rr["status"])
+    rows = list(zip(rr["weld_ids"], rr["status"], detail, strict=True))
+    return [w for w, st, _ in rows if st == "ok"], {w: d for w, st, d in rows if st != "ok"}
+
+
+def _saved(out: Path):
+    from weldplan.multi.saved import load_station_plan
+
+    return load_station_plan(out / "route_station.json")
 
 
 def _corrupt(out: Path, tmp: Path, edit) -> Path:
@@ -254,6 +274,17 @@ def splan(tmp_path_factory):
     return weldplan.plan(weldplan.load_station(f), rng=0)
 
 
+def _both_planned(splan) -> None:
+    """The interlock tests need a program on each robot: where the planner leaves a robot
+    idle, an expected failure naming it (issue 30: on the demo part the two robots facing each
+    other meet at their homes, and the passes that keep those welds apart can give one robot
+    every weld)."""
+    idle = [n for n, p in zip(splan.allocation.robots, splan.plans, strict=True) if p is None]
+    if idle:
+        pytest.xfail(f"issue 30: the planned station leaves {', '.join(idle)} idle, so there is "
+                     "no interlock between two programs to write")  # fmt: skip
+
+
 def _interlocked(splan):
     """``splan`` with one interlock: robot 2 may not leave its first stop before robot 1 is
     at rest, its weld done, at its last stop (in the schedule, in both programs as the planner
@@ -278,6 +309,8 @@ def _interlocked(splan):
 @pytest.mark.slow
 def test_an_interlock_is_written_into_both_programs_and_read_back(splan, tmp_path):
     from weldplan.io.posts.parse import parse_rapid
+
+    _both_planned(splan)
     from weldplan.multi.programcheck import signals_check
     from weldplan.multi.saved import load_station_plan, robot_plans, station_paths, write_station
     from weldplan.station.model import OutputSpec
@@ -310,6 +343,7 @@ def test_an_interlock_is_written_into_both_programs_and_read_back(splan, tmp_pat
 def test_the_saved_station_round_trips_and_verify_checks_the_interlock(splan, tmp_path, capsys):
     import weldplan
 
+    _both_planned(splan)
     sp, lock = _interlocked(splan)
     path = weldplan.save_station_plan(sp, tmp_path / "cell_station.json")
     assert (tmp_path / "cell_robot1.json").is_file()
@@ -355,6 +389,9 @@ def test_the_summary_and_the_exit_say_what_is_left_out_and_a_failed_replay(splan
     locks = splan.schedule.interlocks
     for r, name in enumerate(splan.allocation.robots):
         n = len(splan.allocation.welds_of(r))
+        if not n:  # a robot the allocation gave no weld stands at its home
+            assert splan.plans[r] is None and rows[f"robot {name}"].startswith("idle")
+            continue
         assert rows[f"robot {name}"].startswith(f"{n} welds, cycle ")
         sets, waits = sum(i.first == r for i in locks), sum(i.second == r for i in locks)
         assert f"interlocks: {sets} set, {waits} wait" in rows[f"robot {name}"]
@@ -363,12 +400,15 @@ def test_the_summary_and_the_exit_say_what_is_left_out_and_a_failed_replay(splan
     # the replay's verdict is said, and a failed one is a cause of exit 3
     said = "replay ok" if splan.replay.ok else "replay FAILED"
     assert rows["interference"].startswith(said)
+    # and each weld a robot's plan left out, under its name
+    left = [f"{n}: {ln}" for n, p in zip(splan.allocation.robots, plans, strict=True)
+            if p is not None for ln in p.partial()]  # fmt: skip
     clear = ReplayVerdict(True, 5.0, 12.5, (0, 4, 1, 2), 12)
-    assert station_partial(dataclasses.replace(splan, replay=clear), plans) == [unreached]
+    assert station_partial(dataclasses.replace(splan, replay=clear), plans) == [unreached, *left]
     close = ReplayVerdict(False, 5.0, 0.0, (0, 0, 1, 0), 12, ("robot1 at rest at row 0 ...",))
     lines = station_partial(dataclasses.replace(splan, replay=close), plans)
-    assert lines[0] == unreached and len(lines) == 2
-    assert lines[1].startswith("the replay found robots too close") and "0.0 mm" in lines[1]
+    assert lines[: 1 + len(left)] == [unreached, *left] and len(lines) == 2 + len(left)
+    assert lines[-1].startswith("the replay found robots too close") and "0.0 mm" in lines[-1]
 
 
 @pytest.mark.slow
@@ -382,11 +422,15 @@ def test_the_command_line_exits_3_on_a_failed_replay_alone(splan, capsys):
     capsys.readouterr()
     reached = dataclasses.replace(splan.report.ours, unreached=())
     report = dataclasses.replace(splan.report, ours=reached)
+    # the replay alone: every plan as if it left no weld out
+    from types import SimpleNamespace
+
+    whole = tuple(None if p is None else SimpleNamespace(partial=list) for p in plans)
     clear = ReplayVerdict(True, 5.0, 12.5, (0, 4, 1, 2), 12)
-    assert _exit_code(dataclasses.replace(splan, report=report, replay=clear), plans) == 0
+    assert _exit_code(dataclasses.replace(splan, report=report, replay=clear), whole) == 0
     assert capsys.readouterr().err == ""
     close = ReplayVerdict(False, 5.0, 0.0, (0, 0, 1, 0), 12, ("robot1 at rest at row 0 ...",))
-    assert _exit_code(dataclasses.replace(splan, report=report, replay=close), plans) == 3
+    assert _exit_code(dataclasses.replace(splan, report=report, replay=close), whole) == 3
     (line,) = capsys.readouterr().err.splitlines()
     assert line.startswith("weldplan: the replay found robots too close")
 

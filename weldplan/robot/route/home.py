@@ -10,9 +10,8 @@ legs to the assembled joint route, planned like any detour of :mod:`weldplan.rob
   along one of the gun's proven exits or a retract (:meth:`~weldplan.robot.route.Detour.leave`),
   reversed, so the last motion lowers the gun onto the weld with its contact zone exempt; the
   transfer from home to the start of that approach straight in joint space when free, else
-  through a tucked arm, else one OMPL run with no retries
-  (:meth:`~weldplan.robot.route.Detour.transfer`: the whole tool and every link checked against
-  the part, the floor and the robot itself);
+  through a tucked arm, else OMPL (:meth:`~weldplan.robot.route.Detour.transfer`: the whole
+  tool and every link checked against the part, the floor and the robot itself);
 * *last row -> home*: the same, leaving the last weld.
 
 A weld that no leg joins to home costs that weld, not the route (issue 27, item 3):
@@ -147,10 +146,7 @@ def home_leg(
     q = np.asarray(q, dtype=np.float64)
     out = det.leave(q, row, branch) if exact else None
     clear = q if out is None else np.asarray(out)[-1]
-    # one OMPL run (the first run's checks), no retries: a leg home is tried for several welds
-    # at each end (:data:`HOME_TRIES`), and the route's retry budget stays with its own legs
-    once = dataclasses.replace(det, retry_checks=0)
-    path = once.transfer(np.asarray(home, dtype=np.float64), clear)
+    path = det.transfer(np.asarray(home, dtype=np.float64), clear)
     if path is None:
         raise PlanningError(
             f"no collision-free motion {words} joint row (route row {row}): neither straight, "
@@ -167,9 +163,9 @@ def home_leg(
 
 
 #: welds tried at each end of a route for a leg from (or to) home before the rest are left out
-#: (each try: a straight, a tucked and one OMPL run of the first run's checks, about 10 CPU s with
-#: the KR 150 and the spot gun; 8 tries at both ends and the retries took a two-robot demo
-#: station's plan past 30 minutes)
+#: (each try: a straight, a tucked move, then OMPL with the route's retries, about 10 CPU s a
+#: run with the KR 150 and the spot gun: 8 tries at both ends took a two-robot demo station's
+#: plan past 30 minutes; without the retries, the demo's weld 1 found no home leg)
 HOME_TRIES = 4
 
 
