@@ -142,8 +142,8 @@ def test_the_command_line_writes_every_robots_files_and_the_station_json(cli_run
     code, out = cli_run
     saved = load_station_plan(out / "route_station.json")
     assert not saved.report.ours.unreached and saved.replay is not None
-    assert code == (0 if saved.replay.ok else 3)  # exit 3: a replay that finds robots too close
     locks = saved.schedule.interlocks
+    partial = False  # a weld some robot's route left out
     assert [r.name for r in saved.robots] == ["robot1", "robot2"]
     shares = [set(r.welds) for r in saved.robots]
     assert shares[0] | shares[1] == {"1", "5", "7", "9", "13"} and not shares[0] & shares[1]
@@ -157,9 +157,10 @@ def test_the_command_line_writes_every_robots_files_and_the_station_json(cli_run
         assert prog.name == f"route_robot{k}"
         welds = [ln.split("; weld ")[1] for ln in dat.splitlines() if "; weld " in ln]
         # the program welds its share but the welds its route left out, each with its cause
-        served, out = _route_verdicts(r.route)
-        assert set(served) | set(out) == set(r.welds) and set(welds) == set(served)
-        assert all(out.values())
+        served, left = _route_verdicts(r.route)
+        assert set(served) | set(left) == set(r.welds) and set(welds) == set(served)
+        assert all(left.values())
+        partial = partial or bool(left)
         # the program starts and ends at the robot's home, its axis values as the file gives
         assert prog.moves[0][:2] == ("PTP", "XHOME") and prog.moves[-1][:2] == ("PTP", "XHOME")
         assert np.allclose(prog.axes["XHOME"], HOMES[k - 1], atol=1e-5)
@@ -167,6 +168,8 @@ def test_the_command_line_writes_every_robots_files_and_the_station_json(cli_run
         mine = [("set", i.signal, i.name) for i in locks if i.first == k - 1]
         mine += [("wait", i.signal, i.name) for i in locks if i.second == k - 1]
         assert sorted(s[1:] for s in prog.signals) == sorted(mine)
+    # exit 3: a replay that finds robots too close, or a weld left out
+    assert code == (0 if saved.replay.ok and not partial else 3)
     # the programs start at the homes, clear of each other: the two guns no longer stand
     # overlapping at the cycle's start (before homes: at the programs' first welds, which no
     # interlock can order); what the replay still finds is named
@@ -396,7 +399,11 @@ def test_the_summary_and_the_exit_say_what_is_left_out_and_a_failed_replay(splan
         sets, waits = sum(i.first == r for i in locks), sum(i.second == r for i in locks)
         assert f"interlocks: {sets} set, {waits} wait" in rows[f"robot {name}"]
     assert rows["station cycle"].startswith(f"{splan.schedule.cycle_time:.2f} s")
-    unreached = f"1 weld(s) no robot reaches ({UNREACHED})"
+    # weld 15 no robot reaches, and any weld a robot's failed share gave up that no other
+    # robot reaches (in the allocation's unreached, with the planner's words)
+    un = [u.weld for u in splan.allocation.unreached]
+    assert UNREACHED in un
+    unreached = f"{len(un)} weld(s) no robot reaches ({', '.join(un)})"
     # the replay's verdict is said, and a failed one is a cause of exit 3
     said = "replay ok" if splan.replay.ok else "replay FAILED"
     assert rows["interference"].startswith(said)
