@@ -165,7 +165,9 @@ def test_a_station_planned_in_turn_and_on_a_pool_writes_the_same_files(tmp_path)
         write_station(p, station_paths(spec, len(p.plans)))
         out[jobs] = (p, events, folder)
     (p1, ev1, f1), (p2, ev2, f2) = out[1], out[2]
-    assert p1.stats["shares"] == "in turn" and p2.stats["shares"] == "process pool of 2"
+    # a later pass with one new share plans it in turn (a pool of one is no pool)
+    assert set(p1.stats["shares"].split(", ")) == {"in turn"}
+    assert p2.stats["shares"].split(", ")[0] == "process pool of 2"
     assert all(p is not None for p in p2.plans)  # both robots had welds: both went to the pool
     names = sorted(x.name for x in f1.iterdir())
     assert names == sorted(x.name for x in f2.iterdir()) and len(names) >= 5
