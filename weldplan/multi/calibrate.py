@@ -86,9 +86,7 @@ class TimedLegs:
 def timed_weld_ids(build: Any) -> dict[int, str]:
     """``{timed row: weld id}`` of a :class:`~weldplan.robot.program.ProgramBuild`: its
     program's weld targets named by the timed rows (:attr:`ProgramBuild.row`) they stand on."""
-    by_route = {t.row: t.joint_id for t in build.program.targets if t.kind == "weld"}
-    rows = build.row if build.row is not None else range(len(build.timing.row_times))
-    return {i: by_route[int(r)] for i, r in enumerate(rows) if int(r) in by_route}
+    return build.weld_ids_by_row()
 
 
 def timed_legs(robot: int, build: Any, welds: Sequence[str]) -> TimedLegs:

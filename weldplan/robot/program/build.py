@@ -108,9 +108,15 @@ class ProgramBuild:
         """The weld id of each of :attr:`timing`'s weld rows, in their order: the welds the
         program welds (a weld it passes, :attr:`skipped`, is not one; the route's
         ``weld_ids`` name those too)."""
+        ids = self.weld_ids_by_row()
+        return tuple(str(ids[int(w)]) for w in self.timing.weld_rows)
+
+    def weld_ids_by_row(self) -> dict[int, str]:
+        """``{timed row: weld id}``: the program's weld targets named by the timed rows
+        (:attr:`row`) they stand on."""
         by_route = {t.row: t.joint_id for t in self.program.targets if t.kind == "weld"}
-        rows = self.row if self.row is not None else np.arange(len(self.timing.row_times))
-        return tuple(str(by_route[int(rows[int(w)])]) for w in self.timing.weld_rows)
+        rows = self.row if self.row is not None else range(len(self.timing.row_times))
+        return {i: by_route[int(r)] for i, r in enumerate(rows) if int(r) in by_route}
 
 
 def _segment_distance(P: NDArray, A: NDArray, B: NDArray) -> NDArray:
