@@ -143,6 +143,38 @@ def test_a_share_failing_in_a_worker_fails_the_station_with_its_own_one_line_err
     assert "gone.stl" in str(got.value) and "\n" not in str(got.value)
 
 
+def test_a_share_that_fails_on_an_executor_reports_the_events_it_gave_in_turn(
+    tmp_path, monkeypatch
+):
+    """A share the pipeline cannot plan raises ``ShareFailed`` carrying its progress events up
+    to the failure: planned on an executor (a worker: its events come back with the error) the
+    parent reports the same events as a share planned in turn gave live."""
+    import weldplan
+    from weldplan.errors import PlanningError
+    from weldplan.station import pipeline
+
+    station = weldplan.load_station(_two_robot_station(tmp_path))
+
+    def fails(sub, rng=None, executor=None, progress=None):
+        progress("reach", 0, 1)
+        progress("reach", 1, 1)
+        raise PlanningError("no home leg for weld 1")
+
+    monkeypatch.setattr(pipeline, "plan", fails)
+    got = {}
+    for ran, ex in (("in turn", None), ("executor", ThreadPoolExecutor(2))):
+        events = []
+        with pytest.raises(sh.ShareFailed) as err:
+            sh.plan_shares(station, _Allocation(), seed=0, executor=ex,
+                           progress=lambda *e, ev=events: ev.append(e))  # fmt: skip
+        got[ran] = events
+        back = pickle.loads(pickle.dumps(err.value))
+        assert (back.k, back.welds, back.events) == (0, ("1", "5"), err.value.events)
+        assert "no home leg for weld 1" in str(back)
+    want = [("plan", 0, 2), ("robot1 reach", 0, 1), ("robot1 reach", 1, 1)]
+    assert got["in turn"] == got["executor"] == want
+
+
 @pytest.mark.slow
 def test_a_station_planned_in_turn_and_on_a_pool_writes_the_same_files(tmp_path):
     import dataclasses

@@ -122,15 +122,24 @@ class ShareFailed(PlanningError):
     """One robot's share has no plan: the single-robot pipeline's
     :class:`~weldplan.errors.PlanningError` for it (e.g. every weld of it without a leg from
     or to its home). ``k``: the robot's index; ``welds``: its share's weld ids; ``message``:
-    the pipeline's words. Picklable, so a share planned in a worker raises it in the parent.
+    the pipeline's words; ``events``: the share's progress events up to the failure (a share
+    planned in a worker reports them in the parent as one planned in turn did live).
+    Picklable, so a share planned in a worker raises it in the parent.
     :mod:`weldplan.multi.passes` re-allocates the share's welds away from that robot."""
 
-    def __init__(self, k: int, welds: tuple[str, ...], message: str) -> None:
+    def __init__(
+        self,
+        k: int,
+        welds: tuple[str, ...],
+        message: str,
+        events: tuple[tuple[str, int, int], ...] = (),
+    ) -> None:
         super().__init__(f"robot {k + 1}: {message}")
         self.k, self.welds, self.message = int(k), tuple(welds), str(message)
+        self.events = tuple(events)
 
     def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:
-        return (ShareFailed, (self.k, self.welds, self.message))
+        return (ShareFailed, (self.k, self.welds, self.message, self.events))
 
 
 @dataclass(frozen=True, eq=False)
@@ -233,7 +242,8 @@ def run_share(
     except PlanningError as exc:  # this robot has no plan of its share: re-allocated above
         from weldplan.io.joints import read_joints
 
-        raise ShareFailed(task.k, read_joints(part.welds).ids, str(exc)) from None
+        ids = read_joints(part.welds).ids
+        raise ShareFailed(task.k, ids, str(exc), tuple(rec.events)) from None
     stages = {f"{task.name} {s.name}" for s in p.stages}
     stage_cpu = {k: v for k, v in rec.cpu.items() if k in stages}
     return ShareResult(
@@ -365,7 +375,12 @@ def plan_shares(
         else:
             futures = [ex.submit(_remote, dataclasses.replace(task, jobs=jobs)) for task in tasks]
             for n, (task, fut) in enumerate(zip(tasks, futures, strict=True)):
-                results[task.k] = pickle.loads(fut.result())
+                try:
+                    results[task.k] = pickle.loads(fut.result())
+                except ShareFailed as exc:  # its events, as a share planned in turn gave them
+                    for event in exc.events:
+                        say(*event)
+                    raise
                 for event in results[task.k].events:
                     say(*event)
                 say("plan", n + 1, len(tasks))
