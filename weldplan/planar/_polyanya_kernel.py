@@ -181,7 +181,14 @@ def _search(mesh, query, cap):  # type: ignore[no-untyped-def]
     (:func:`_final_node`) are functions: they run a few times a query, not per expansion.
     Splitting the expansion itself into functions inlined by numba (``inline="always"``) kept
     the nodes but cost 0.60 us of CPU a node expansion against 0.35 (aurora, 2,990 queries)
-    and 98 s of compilation: the inlined arguments still carry reference counts.
+    and 98 s of compilation: the inlined arguments still carry reference counts. Tried again
+    with the arrays in namedtuples: helpers taking the tuples as calls made the
+    aurora queries 4x slower (every member of a tuple argument is incref'd and decref'd per
+    call, unpruned where a helper calls another, has a raise path or uses an array last in a
+    branch); with ``error_model="numpy"`` and the arrays taken out of the tuples in the entry
+    block the helpers carry no reference counts, yet as calls they cost +50 % of CPU and
+    inlined into this loop +11-20 % (same nodes and lengths, bench on 2 loaded cores). So the
+    loop stays one function.
     """
     vx, vy, ptr, pv, pnb, pop, corner, nexits, max_sides, eps = mesh
     sx, sy, tx, ty, spolys, gpolys, prune = query
