@@ -17,12 +17,7 @@ ALLOWED: dict[str, str] = {}
 #: the most parameters a function may take, ``self`` and ``cls`` not counted
 MAX_PARAMS = 10
 #: files (relative to weldplan/) whose functions may take more, each with its reason
-WIDE_FILES: dict[str, str] = {
-    "planar/_polyanya_kernel.py": (
-        "numba-compiled kernels: nopython functions take flat arrays and scalars, not "
-        "dataclasses, so the mesh's arrays and the search's state are passed one by one"
-    ),
-}
+WIDE_FILES: dict[str, str] = {}
 
 
 def long_functions(root: Path, limit: int) -> dict[str, int]:

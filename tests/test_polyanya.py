@@ -225,7 +225,7 @@ def test_pruning_off_gives_the_same_lengths_with_more_work():
 def test_a_search_that_outgrows_its_room_is_rerun_with_more_and_agrees():
     """The kernel's node arrays have a fixed room per try; with room for 16 nodes every query
     of the U room overflows at least once and must give the same answer as with ample room."""
-    from weldplan.planar._polyanya_kernel import search
+    from weldplan.planar._polyanya_kernel import Query, search
 
     mesh, world, _ = _u_room()
     pa = Polyanya(mesh)
@@ -237,14 +237,12 @@ def test_a_search_that_outgrows_its_room_is_rerun_with_more_and_agrees():
         sp, tp = mesh.locate(s), mesh.locate(t)
         if set(sp) & set(tp):
             continue
-        args = (pa._vx, pa._vy, mesh.ptr, mesh.pv, mesh.pnb, mesh.popp, pa._corner, pa._nexits,
-                pa._max_sides, np.array(sp), np.array(tp), *map(float, (*s, *t)), mesh.eps,
-                True)  # fmt: skip
-        (la, pts_a), ea, ga = search(*args, 16)
-        (lb, pts_b), eb, gb = search(*args, 1 << 15)
+        q = Query(*map(float, (*s, *t)), np.array(sp), np.array(tp), True)
+        (la, pts_a), ea, ga = search(pa._kernel_mesh, q, 16)
+        (lb, pts_b), eb, gb = search(pa._kernel_mesh, q, 1 << 15)
         assert la == lb and (ea, ga) == (eb, gb)
         np.testing.assert_array_equal(pts_a, pts_b)
-        overflowed += gb + 3 * pa._max_sides + 4 > 16
+        overflowed += gb + 3 * pa._kernel_mesh.max_sides + 4 > 16
     assert overflowed > 0
 
 

@@ -18,9 +18,10 @@ straight, through ``R``. Root records ``(x, y, parent)`` give the path back.
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
+from numpy.typing import NDArray
 
 try:  # pragma: no cover - exercised when numba is installed (a runtime dependency)
     from numba import njit
@@ -110,12 +111,44 @@ def _heap_pop(H, size):  # type: ignore[no-untyped-def]
     return k, size
 
 
+class KernelMesh(NamedTuple):
+    """The mesh as the kernels read it, built once per mesh (:class:`weldplan.planar.polyanya.
+    Polyanya`): vertices ``vx, vy (n_v,) float``; polygon ``p``'s vertex and edge slots
+    ``ptr[p]:ptr[p + 1]`` into ``pv`` (vertex), ``pnb`` (the polygon across the edge, -1 an
+    obstacle) and ``pop`` (the edge's slot in that polygon); ``corner (n_v,) bool`` (where a path
+    may turn); ``nexits (n_p,) int`` (edges that are not obstacles); ``max_sides`` (the most
+    sides of a polygon); ``eps`` (the mesh's tolerance)."""
+
+    vx: NDArray[np.float64]
+    vy: NDArray[np.float64]
+    ptr: NDArray[np.int64]
+    pv: NDArray[np.int64]
+    pnb: NDArray[np.int64]
+    pop: NDArray[np.int64]
+    corner: NDArray[np.bool_]
+    nexits: NDArray[np.int64]
+    max_sides: int
+    eps: float
+
+
+class Query(NamedTuple):
+    """One query: from ``(sx, sy)`` (in the polygons ``spolys``) to ``(tx, ty)`` (in
+    ``gpolys``), with or without the paper's pruning (``prune``)."""
+
+    sx: float
+    sy: float
+    tx: float
+    ty: float
+    spolys: NDArray[np.int64]
+    gpolys: NDArray[np.int64]
+    prune: bool
+
+
 @njit(cache=True)
-def search(vx, vy, ptr, pv, pnb, pop, corner, nexits, max_sides, spolys, gpolys, sx, sy, tx, ty,
-           eps, prune, cap=1 << 15):  # type: ignore[no-untyped-def]  # fmt: skip
-    """A* over Polyanya search nodes from ``(sx, sy)`` (in the polygons ``spolys``) to
-    ``(tx, ty)`` (in ``gpolys``). Returns ``(length, path (k, 2), expanded, generated)``;
-    length ``inf`` and an empty path when the goal cannot be reached.
+def search(mesh, query, cap=1 << 15):  # type: ignore[no-untyped-def]
+    """A* over Polyanya search nodes for one :class:`Query` on a :class:`KernelMesh`. Returns
+    ``(length, path (k, 2), expanded, generated)``; length ``inf`` and an empty path when the
+    goal cannot be reached.
 
     The node arrays have a fixed capacity during one search (:func:`_search`); a search that
     outgrows it is run again with four times the room (rare: 32768 nodes hold every aurora
@@ -123,17 +156,14 @@ def search(vx, vy, ptr, pv, pnb, pop, corner, nexits, max_sides, spolys, gpolys,
     counts of all five arrays on every expansion. ``cap``: the first room (nodes).
     """
     while True:
-        done, res, expanded, generated = _search(vx, vy, ptr, pv, pnb, pop, corner, nexits,
-                                                 max_sides, spolys, gpolys, sx, sy, tx, ty, eps,
-                                                 prune, cap)  # fmt: skip
+        done, res, expanded, generated = _search(mesh, query, cap)
         if done:
             return res, expanded, generated
         cap *= 4
 
 
 @njit(cache=True)
-def _search(vx, vy, ptr, pv, pnb, pop, corner, nexits, max_sides, spolys, gpolys, sx, sy, tx, ty,
-            eps, prune, cap):  # type: ignore[no-untyped-def]  # fmt: skip
+def _search(mesh, query, cap):  # type: ignore[no-untyped-def]
     """One search with room for ``cap`` nodes and root records; returns ``(done, (length,
     path), expanded, generated)``, ``done`` False when the room ran out.
 
@@ -151,8 +181,17 @@ def _search(vx, vy, ptr, pv, pnb, pop, corner, nexits, max_sides, spolys, gpolys
     (:func:`_final_node`) are functions: they run a few times a query, not per expansion.
     Splitting the expansion itself into functions inlined by numba (``inline="always"``) kept
     the nodes but cost 0.60 us of CPU a node expansion against 0.35 (aurora, 2,990 queries)
-    and 98 s of compilation: the inlined arguments still carry reference counts.
+    and 98 s of compilation: the inlined arguments still carry reference counts. Tried again
+    with the arrays in namedtuples: helpers taking the tuples as calls made the
+    aurora queries 4x slower (every member of a tuple argument is incref'd and decref'd per
+    call, unpruned where a helper calls another, has a raise path or uses an array last in a
+    branch); with ``error_model="numpy"`` and the arrays taken out of the tuples in the entry
+    block the helpers carry no reference counts, yet as calls they cost +50 % of CPU and
+    inlined into this loop +11-20 % (same nodes and lengths, bench on 2 loaded cores). So the
+    loop stays one function.
     """
+    vx, vy, ptr, pv, pnb, pop, corner, nexits, max_sides, eps = mesh
+    sx, sy, tx, ty, spolys, gpolys, prune = query
     best = np.full(vx.shape[0], np.inf)
     is_goal = np.zeros(nexits.shape[0], dtype=np.bool_)
     for p in gpolys:
@@ -205,7 +244,7 @@ def _search(vx, vy, ptr, pv, pnb, pop, corner, nexits, max_sides, spolys, gpolys
             lx, ly, qx, qy = NF[k, 4], NF[k, 5], NF[k, 6], NF[k, 7]
             rec, rv, poly, j = NI[k, 0], NI[k, 1], NI[k, 2], NI[k, 3]
             if is_goal[poly]:  # the final node
-                hs = _final_node(NF, NI, H, hs, nn, g, rx, ry, lx, ly, qx, qy, tx, ty, rec, rv)
+                hs = _final_node(NF, NI, H, k, nn, hs, tx, ty)
                 nn += 1
                 k = -1
                 continue
@@ -352,10 +391,12 @@ def _start_edges(SC, SE, p, ptr, pv, vx, vy, sx, sy, eps):  # type: ignore[no-un
 
 
 @njit(cache=True)
-def _final_node(NF, NI, H, hs, nn, g, rx, ry, lx, ly, qx, qy, tx, ty, rec, rv):  # type: ignore[no-untyped-def]  # noqa: E501
-    """Store node ``nn``: the final node of a node whose polygon holds the goal (polygon -2,
-    its turning point in ``lx, ly``, ``j`` the side it turns to), and push it; returns the
-    heap's new size."""
+def _final_node(NF, NI, H, k, nn, hs, tx, ty):  # type: ignore[no-untyped-def]
+    """Store node ``nn``: the final node of node ``k``, whose polygon holds the goal ``(tx,
+    ty)`` (polygon -2, its turning point in ``lx, ly``, ``j`` the side it turns to), and push
+    it on the heap ``H``; returns the heap's new size."""
+    g, rx, ry = NF[k, 1], NF[k, 2], NF[k, 3]
+    lx, ly, qx, qy = NF[k, 4], NF[k, 5], NF[k, 6], NF[k, 7]
     _, via = heuristic(rx, ry, lx, ly, qx, qy, tx, ty)
     if via == 0:  # the final length in math.hypot (see _norm)
         h = math.hypot(tx - rx, ty - ry)
@@ -368,8 +409,8 @@ def _final_node(NF, NI, H, hs, nn, g, rx, ry, lx, ly, qx, qy, tx, ty, rec, rv): 
     NF[nn, 3] = ry
     NF[nn, 4] = lx if via == -1 else qx
     NF[nn, 5] = ly if via == -1 else qy
-    NI[nn, 0] = rec
-    NI[nn, 1] = rv
+    NI[nn, 0] = NI[k, 0]
+    NI[nn, 1] = NI[k, 1]
     NI[nn, 2] = -2
     NI[nn, 3] = via
     return _heap_push(H, hs, g + h, nn)

@@ -58,7 +58,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from weldplan.planar._polyanya_kernel import search
+from weldplan.planar._polyanya_kernel import KernelMesh, Query, search
 from weldplan.planar.navmesh import NavMesh
 
 log = logging.getLogger(__name__)
@@ -104,12 +104,19 @@ class Polyanya:
     def __init__(self, mesh: NavMesh, *, prune: bool = True) -> None:
         self.mesh = mesh
         self.prune = bool(prune)
-        self._vx = np.asarray(mesh.vx, dtype=np.float64)
-        self._vy = np.asarray(mesh.vy, dtype=np.float64)
-        self._corner = np.asarray(mesh.corner, dtype=np.bool_)
-        self._nexits = np.asarray(mesh.n_exits, dtype=np.int64)
         sizes = np.diff(mesh.ptr)
-        self._max_sides = int(sizes.max()) if len(sizes) else 3
+        self._kernel_mesh = KernelMesh(
+            vx=np.asarray(mesh.vx, dtype=np.float64),
+            vy=np.asarray(mesh.vy, dtype=np.float64),
+            ptr=mesh.ptr,
+            pv=mesh.pv,
+            pnb=mesh.pnb,
+            pop=mesh.popp,
+            corner=np.asarray(mesh.corner, dtype=np.bool_),
+            nexits=np.asarray(mesh.n_exits, dtype=np.int64),
+            max_sides=int(sizes.max()) if len(sizes) else 3,
+            eps=float(mesh.eps),
+        )
         self._component = _components(mesh)
 
     def distance(self, start: ArrayLike, goal: ArrayLike) -> float:
@@ -132,25 +139,16 @@ class Polyanya:
             # no mesh path: answered without a search (the starved variant would otherwise
             # exhaust its open list, which without pruning can outgrow memory)
             return PolyanyaResult(math.inf, np.zeros((0, 2)))
-        (length, pts), expanded, generated = search(
-            self._vx,
-            self._vy,
-            m.ptr,
-            m.pv,
-            m.pnb,
-            m.popp,
-            self._corner,
-            self._nexits,
-            self._max_sides,
-            np.asarray(spolys, dtype=np.int64),
-            np.asarray(tpolys, dtype=np.int64),
-            float(s[0]),
-            float(s[1]),
-            float(t[0]),
-            float(t[1]),
-            m.eps,
-            self.prune,
+        q = Query(
+            sx=float(s[0]),
+            sy=float(s[1]),
+            tx=float(t[0]),
+            ty=float(t[1]),
+            spolys=np.asarray(spolys, dtype=np.int64),
+            gpolys=np.asarray(tpolys, dtype=np.int64),
+            prune=self.prune,
         )
+        (length, pts), expanded, generated = search(self._kernel_mesh, q)
         if len(pts) > 2:  # a turn at an interval end that is also the root: listed once
             keep = np.ones(len(pts), dtype=bool)
             keep[1:] = np.abs(np.diff(pts, axis=0)).max(axis=1) > m.eps
