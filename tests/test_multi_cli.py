@@ -294,13 +294,13 @@ def _interlocked(splan):
     puts it, and the replay run again under it, as the planner runs it)."""
     from weldplan.multi.replay import replay_station
     from weldplan.multi.schedule import Interlock, station_schedule
-    from weldplan.multi.station import _replay_robots, timed_weld_ids, with_signals
+    from weldplan.multi.station import _replay_robots, with_signals
 
     timings = [p.program.timing for p in splan.plans]
     last = int(np.flatnonzero(timings[0].stops)[-1])
     first = int(np.flatnonzero(timings[1].stops)[0])
     lock = Interlock("Z1", first=0, release_row=last, second=1, wait_row=first, signal=7)
-    ids = [timed_weld_ids(p.program) for p in splan.plans]
+    ids = [p.program.weld_ids_by_row() for p in splan.plans]
     sched = station_schedule(splan.allocation.robots, timings, [lock], weld_ids=ids)
     names = splan.allocation.robots
     plans = with_signals(list(splan.plans), [lock], names)

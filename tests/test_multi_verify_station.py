@@ -26,11 +26,11 @@ def _saved(tmp_path, post: str, locks=None, rows: bool = True):
     from weldplan.io.trajectory import trajectory_csv_text
     from weldplan.multi.saved import SavedRobot, SavedStationPlan
     from weldplan.multi.schedule import station_schedule
-    from weldplan.multi.station import timed_weld_ids, with_signals
+    from weldplan.multi.station import with_signals
 
     station, timings, plans, names, (out, schedule, verdict, _) = _crossing_pair(tmp_path)
     if locks is not None:
-        ids = [timed_weld_ids(p.program) for p in plans]
+        ids = [p.program.weld_ids_by_row() for p in plans]
         schedule = station_schedule(names, timings, locks, weld_ids=ids)
         out = with_signals(list(plans), locks, names)
     saved_robots = []

@@ -83,17 +83,11 @@ class TimedLegs:
         return self.head + float(self.legs.sum()) + self.weld_time * len(self.welds) + self.tail
 
 
-def timed_weld_ids(build: Any) -> dict[int, str]:
-    """``{timed row: weld id}`` of a :class:`~weldplan.robot.program.ProgramBuild`: its
-    program's weld targets named by the timed rows (:attr:`ProgramBuild.row`) they stand on."""
-    return build.weld_ids_by_row()
-
-
 def timed_legs(robot: int, build: Any, welds: Sequence[str]) -> TimedLegs:
     """The legs of robot ``robot``'s :class:`~weldplan.robot.program.ProgramBuild` ``build``
     over the reach map's weld ids ``welds`` (module docstring, step 1)."""
     tm = build.timing
-    ids = timed_weld_ids(build)  # every row standing on a weld, its dwell row among them
+    ids = build.weld_ids_by_row()  # every row standing on a weld, its dwell row among them
     rows = np.array([w for w in np.asarray(tm.weld_rows).tolist() if w in ids], dtype=np.intp)
     pos = {str(w): i for i, w in enumerate(welds)}
     order = np.array([pos[str(ids[int(k)])] for k in rows], dtype=np.intp)

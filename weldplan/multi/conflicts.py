@@ -255,7 +255,8 @@ def without(reach: Any, forbid: dict[tuple[int, int], str]) -> Any:
 
 def weld_at(ids: dict[int, str], row: int, toward: int) -> str | None:
     """The weld a motion at timed row ``row`` belongs to (``ids``: ``{timed row: weld id}``,
-    :func:`weldplan.multi.calibrate.timed_weld_ids`): the weld at ``row``, else the nearest
+    :meth:`ProgramBuild.weld_ids_by_row
+    <weldplan.robot.program.ProgramBuild.weld_ids_by_row>`): the weld at ``row``, else the nearest
     weld row in the direction of ``toward`` (a move's other end), else the nearest on the
     other side (a home leg belongs to the weld it joins); ``None``: no weld."""
     if row in ids:

@@ -71,7 +71,6 @@ from typing import Any
 import numpy as np
 
 from weldplan.errors import ConfigError
-from weldplan.multi.calibrate import timed_weld_ids
 from weldplan.multi.conflicts import ConflictSettings, conflict_table
 from weldplan.multi.inputs import StudyInputs, stack_inputs, study_inputs
 from weldplan.multi.passes import Context, plan_and_repair, rested
@@ -374,13 +373,13 @@ def interfere(
     t = time.perf_counter()
     zones = resolve_zones(found, strict=False)
     seconds["zones"] = seconds.get("zones", 0.0) + time.perf_counter() - t
-    ids = [None if p is None else timed_weld_ids(p.program) for p in plans]
+    ids = [None if p is None else p.program.weld_ids_by_row() for p in plans]
     left = blamed(zones.unresolved, found.motions, ids)
     plans = with_signals(plans, zones.interlocks, names)
     timings = [None if p is None else p.program.timing for p in plans]
     schedule = station_schedule(
         names, timings, zones.interlocks,
-        weld_ids=[None if p is None else timed_weld_ids(p.program) for p in plans],
+        weld_ids=[None if p is None else p.program.weld_ids_by_row() for p in plans],
     )  # fmt: skip
     t = time.perf_counter()
     verdict = replay_station(_replay_robots(station, plans, names, idle), zones.interlocks,
